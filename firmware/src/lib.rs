@@ -1,0 +1,2 @@
+//! Plinth field box: acquisition pipeline and drivers (target independent).
+#![no_std]

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Plinth's whole test suite: the one command the README gives and CI runs.
+# Installs what it needs (the thumbv7em-none-eabihf target, qemu-system-arm).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n=== %s\n' "$*"; }
+
+step "toolchain: thumbv7em-none-eabihf target"
+if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
+  rustup target add thumbv7em-none-eabihf
+fi
+
+step "qemu-system-arm"
+if ! command -v qemu-system-arm >/dev/null 2>&1; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm >/dev/null
+fi
+
+step "format"
+cargo fmt --all -- --check
+
+step "clippy (host crates)"
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "clippy (firmware and shared for thumbv7em-none-eabihf)"
+cargo clippy -p plinth-shared -p plinth-firmware --target thumbv7em-none-eabihf -- -D warnings
+
+step "cross-build: plinth-shared and the firmware image for thumbv7em-none-eabihf"
+cargo build -p plinth-shared --target thumbv7em-none-eabihf --release
+cargo build -p plinth-firmware --target thumbv7em-none-eabihf --release
+
+step "tests (host, simulated hardware, QEMU end to end)"
+cargo test --workspace --release
