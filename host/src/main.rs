@@ -1,1 +1,55 @@
-fn main() {}
+//! `plinth`: the laptop side of Plinth.
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "plinth",
+    version,
+    about = "Identify bearing-pedestal mass, stiffness and damping from run-down vibration data (Feng & Hahn 1997)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Batch least-squares identification of every pedestal in a run directory.
+    Identify(plinth::identify::cli::Args),
+    /// Unbalance response of a machine file, written as a run directory.
+    Simulate(plinth::sim::cli::SimulateArgs),
+    /// Sampled sensor signals of a run-down, for the field box.
+    Signals(plinth::sim::cli::SignalsArgs),
+    /// Re-predict a machine with identified pedestals and compare with a run.
+    Predict(plinth::sim::cli::PredictArgs),
+    /// Reproduce Feng & Hahn (1997): Tables 1 and 2 and the figures.
+    Paper(plinth::paper::Args),
+    /// Stream from the field box over a serial port.
+    Stream(plinth::stream::Args),
+    /// The whole chain on the bundled paper machine.
+    Demo(plinth::demo::Args),
+    /// Find, name and fix what the pedestal model is missing.
+    Diagnose(plinth::diagnose::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Identify(a) => plinth::identify::cli::run(&a),
+        Command::Simulate(a) => plinth::sim::cli::simulate(&a),
+        Command::Signals(a) => plinth::sim::cli::signals(&a),
+        Command::Predict(a) => plinth::sim::cli::predict(&a),
+        Command::Paper(a) => plinth::paper::run(&a),
+        Command::Stream(a) => plinth::stream::run(&a),
+        Command::Demo(a) => plinth::demo::run(&a),
+        Command::Diagnose(a) => plinth::diagnose::run(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! Plots an engineer puts in a report (amplitude, phase, phase difference).

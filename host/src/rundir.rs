@@ -1,0 +1,1 @@
+//! Run directories (formats.md): measurements.csv, bearings.csv, truth.json.

@@ -1,0 +1,2 @@
+//! Rotor-bearing-pedestal machine simulator.
+pub mod cli;

@@ -1,0 +1,1 @@
+//! Keyphasor-synchronous 1X phasor extraction (not yet implemented).

@@ -1,0 +1,1 @@
+//! Wire protocol between the field box and the host (not yet implemented).
