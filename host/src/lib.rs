@@ -5,6 +5,7 @@
 
 pub mod demo;
 pub mod diagnose;
+pub mod effects;
 pub mod identify;
 pub mod paper;
 pub mod plots;

@@ -1,0 +1,91 @@
+//! The effects a real machine may have beyond the paper's pedestal model
+//! (formats.md, "Effect names"), shared by the simulator (which injects them)
+//! and the model-discrepancy workflow (which names them).
+//!
+//! Physics and parameters of each, as Plinth defines them:
+//!
+//! | name | physics | parameters (SI) |
+//! | --- | --- | --- |
+//! | `pedestal_damping` | viscous pedestal damping C = diag(c_y, c_z) | `c_y`, `c_z` [N·s/m] |
+//! | `structural_damping` | hysteretic pedestal damping: K → K·(1 + iη) | `eta` [-] |
+//! | `pedestal_cross_coupling` | pedestal stiffness k_yz = k_zy off the diagonal | `k_yz` [N/m] |
+//! | `pedestal_mass_anisotropy` | M = diag(m_y, m_z), m_y ≠ m_z | `m_y`, `m_z` [kg] |
+//! | `probe_runout` | a constant (speed-independent) 1X vector r added to the `rel` readings of one bearing | `r_y_re`, `r_y_im`, `r_z_re`, `r_z_im` [m] |
+//! | `sensor_delay` | a time delay τ on the pedestal (seismic) channels of one bearing: ped_meas = ped·e^{−iΩτ} | `tau` [s] |
+//! | `foundation_coupling` | the pedestals stand on a flexible base: a coupling spring k_c between the named pedestal and its neighbour, in y and z | `k_c_y`, `k_c_z` [N/m] |
+
+/// An effect the pedestal model may be missing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum EffectKind {
+    /// Viscous pedestal damping.
+    PedestalDamping,
+    /// Hysteretic (loss-factor) pedestal damping.
+    StructuralDamping,
+    /// Off-diagonal pedestal stiffness.
+    PedestalCrossCoupling,
+    /// Different pedestal masses in y and z.
+    PedestalMassAnisotropy,
+    /// Constant vector added to a proximity probe's 1X reading.
+    ProbeRunout,
+    /// Time delay in the pedestal channels.
+    SensorDelay,
+    /// Pedestals coupled through a flexible base.
+    FoundationCoupling,
+}
+
+impl EffectKind {
+    /// Every effect Plinth knows, in the order of formats.md's table.
+    pub const ALL: [EffectKind; 7] = [
+        EffectKind::PedestalDamping,
+        EffectKind::StructuralDamping,
+        EffectKind::PedestalCrossCoupling,
+        EffectKind::PedestalMassAnisotropy,
+        EffectKind::ProbeRunout,
+        EffectKind::SensorDelay,
+        EffectKind::FoundationCoupling,
+    ];
+
+    /// The identifier used in files and on the command line (formats.md).
+    pub const fn name(self) -> &'static str {
+        match self {
+            EffectKind::PedestalDamping => "pedestal_damping",
+            EffectKind::StructuralDamping => "structural_damping",
+            EffectKind::PedestalCrossCoupling => "pedestal_cross_coupling",
+            EffectKind::PedestalMassAnisotropy => "pedestal_mass_anisotropy",
+            EffectKind::ProbeRunout => "probe_runout",
+            EffectKind::SensorDelay => "sensor_delay",
+            EffectKind::FoundationCoupling => "foundation_coupling",
+        }
+    }
+
+    /// Parses an identifier.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|e| e.name() == name)
+    }
+
+    /// Names of the effect's own parameters, SI units as in the module table.
+    pub const fn parameter_names(self) -> &'static [&'static str] {
+        match self {
+            EffectKind::PedestalDamping => &["c_y", "c_z"],
+            EffectKind::StructuralDamping => &["eta"],
+            EffectKind::PedestalCrossCoupling => &["k_yz"],
+            EffectKind::PedestalMassAnisotropy => &["m_y", "m_z"],
+            EffectKind::ProbeRunout => &["r_y_re", "r_y_im", "r_z_re", "r_z_im"],
+            EffectKind::SensorDelay => &["tau"],
+            EffectKind::FoundationCoupling => &["k_c_y", "k_c_z"],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for e in EffectKind::ALL {
+            assert_eq!(EffectKind::from_name(e.name()), Some(e));
+        }
+        assert_eq!(EffectKind::from_name("gremlins"), None);
+    }
+}
