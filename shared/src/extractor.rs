@@ -1,1 +1,0 @@
-//! Keyphasor-synchronous 1X phasor extraction (not yet implemented).

@@ -1,0 +1,601 @@
+//! Keyphasor-synchronous 1X phasor extraction, sample by sample, during a
+//! run-down.
+//!
+//! # What a phasor is here
+//!
+//! For revolution j, between keyphasor edges at times τ_{j−1} and τ_j, the
+//! extracted phasor of a channel x is its first Fourier coefficient with the
+//! **shaft angle** θ as the independent variable:
+//!
+//! Q_j = (1/π) ∫₀^{2π} x(θ)·e^{−iθ} dθ,  θ = 0 at τ_{j−1}, θ = 2π at τ_j,
+//!
+//! so that x = Re{Q·e^{iθ}} + (DC and harmonics of θ) gives exactly Q, the
+//! convention of `formats.md` (q(t) = Re{Q·e^{iΩt}}, t = 0 at the keyphasor)
+//! with Ωt replaced by the shaft angle. It is attributed to the revolution's
+//! mean speed 1/(τ_j − τ_{j−1}) [Hz]. At constant speed this is the usual
+//! time-domain 1X phasor; while the speed changes (a revolution at 5 Hz
+//! decelerating 5 Hz/s spans a 20 % speed change) DC, 2X, 3X, … still
+//! integrate to zero, which they would not in the time domain. Velocity and
+//! acceleration channels are converted to displacement with the revolution's
+//! kinematics (see [`Conversion`]: exact for a displacement phasor constant
+//! over the revolution, reducing to ÷iΩ and ÷(−Ω²) at constant speed). With
+//! R revolutions per output the phasors of R consecutive valid revolutions
+//! are averaged (the angle-domain coefficient over 2πR) and the speed is
+//! R/(their total duration).
+//!
+//! # How
+//!
+//! The shaft angle within a revolution is modelled with constant angular
+//! acceleration ([`ShaftModel`]), predicted from the two previous periods. A
+//! chirp [`Rotator`] follows the predicted angle θ̂ with no trigonometric call
+//! per sample; each sample adds x·θ̂'·e^{−iθ̂} to each channel's sum
+//! ([`RevolutionIntegrator`]: one complex multiply-accumulate per channel),
+//! with trapezoid weights split fractionally at the keyphasor edges (the
+//! caller gives each edge's sub-sample position from the timer capture). At
+//! the closing edge the true angle is known (quadratic through the last
+//! three edges) and 16 segment sums are rotated onto it. Memory is fixed and
+//! independent of speed; nothing is buffered.
+//!
+//! # Faults
+//!
+//! An edge well before the predicted one (an extra pulse), no edge well after
+//! it (a missing pulse), no edge at all within 1/`min_speed_hz` (timeout), or
+//! an implausible speed change while acquiring emit a [`Fault`] event; the
+//! revolutions that pulse could have corrupted (the open one and the one
+//! before it, which is why every revolution is held back until the next one
+//! closes cleanly) and any partial average are discarded, and the extractor
+//! re-acquires from the next edges: 3 edges to predict, then one revolution to
+//! integrate and one to confirm it.
+
+mod integrator;
+mod rotator;
+mod sensor;
+mod shaft;
+
+#[cfg(test)]
+mod tests;
+
+pub use integrator::{RevolutionIntegrator, CHUNK, SEGMENTS};
+pub use rotator::{expi_neg, expi_neg_small, Rotator};
+pub use sensor::{Conversion, Kinematics, Sensor, SensorKind};
+pub use shaft::{EdgeTime, ShaftModel};
+
+use crate::phasor::Phasor;
+
+const ZERO: Phasor = Phasor::new(0.0, 0.0);
+
+/// Settings of a [`PhasorExtractor`] with N channels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExtractorConfig<const N: usize> {
+    /// Sampling rate of every channel [Hz] (51 200 on the field box).
+    pub sample_rate_hz: f32,
+    /// The transducer on each channel.
+    pub sensors: [Sensor; N],
+    /// Revolutions averaged into one output, R ≥ 1.
+    pub revolutions_per_output: u16,
+    /// Lowest speed tracked [Hz]: no edge within 1/`min_speed_hz` is a timeout.
+    pub min_speed_hz: f32,
+    /// Highest speed accepted [Hz]; at most `sample_rate_hz`/64.
+    pub max_speed_hz: f32,
+    /// Largest accepted relative deviation of a period from its prediction
+    /// (dimensionless, in (0, 0.5)); beyond it the pulse counts as extra or
+    /// missing.
+    pub period_tolerance: f32,
+    /// Largest plausible |d(speed)/dt| while acquiring [Hz/s].
+    pub max_acceleration_hz_per_s: f32,
+}
+
+impl<const N: usize> ExtractorConfig<N> {
+    /// Defaults for a run-down: one revolution per output, 1-400 Hz, 5 %
+    /// period tolerance, speed changes up to 50 Hz/s.
+    pub fn new(sample_rate_hz: f32, sensors: [Sensor; N]) -> Self {
+        Self {
+            sample_rate_hz,
+            sensors,
+            revolutions_per_output: 1,
+            min_speed_hz: 1.0,
+            max_speed_hz: 400.0,
+            period_tolerance: 0.05,
+            max_acceleration_hz_per_s: 50.0,
+        }
+    }
+}
+
+/// A setting of [`ExtractorConfig`] that cannot work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConfigError {
+    /// `sample_rate_hz` is not finite and positive.
+    SampleRate,
+    /// The sensitivity of sensor `channel` is not finite and positive.
+    Sensitivity {
+        /// Channel index.
+        channel: usize,
+    },
+    /// `revolutions_per_output` is 0.
+    Revolutions,
+    /// Not 0 < `min_speed_hz` < `max_speed_hz` ≤ `sample_rate_hz`/64, or a
+    /// revolution at `min_speed_hz` would last 2²² samples or more.
+    SpeedRange,
+    /// `period_tolerance` is not in (0, 0.5).
+    PeriodTolerance,
+    /// `max_acceleration_hz_per_s` is not finite and positive.
+    Acceleration,
+}
+
+/// A keyphasor edge inside a block of samples, from the timer capture.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct KeyphasorEdge {
+    /// Index in the block of the first sample after the edge; 0 means the
+    /// edge came after the previous block's last sample.
+    pub index: usize,
+    /// Where in the sample interval before `index` the edge happened, [0, 1):
+    /// 0 at the previous sample, → 1 at sample `index`.
+    pub fraction: f32,
+}
+
+/// A bad [`KeyphasorEdge`] list; nothing of the block was processed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum InputError {
+    /// Edge number `edge` points at or past the end of the block.
+    EdgeIndex {
+        /// Position in the edge list.
+        edge: usize,
+    },
+    /// Edge number `edge` has a fraction outside [0, 1) or NaN.
+    EdgeFraction {
+        /// Position in the edge list.
+        edge: usize,
+    },
+    /// Edge number `edge` is not after the one before it.
+    EdgeOrder {
+        /// Position in the edge list.
+        edge: usize,
+    },
+}
+
+/// 1X displacement phasors of all channels over one revolution, or the
+/// average over R consecutive revolutions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Phasors<const N: usize> {
+    /// Displacement phasor of each channel [m], q(θ) = Re{Q·e^{iθ}} with θ
+    /// the shaft angle, 0 at the keyphasor edge.
+    pub displacement: [Phasor; N],
+    /// Mean speed over the revolution(s): revolutions / duration [Hz].
+    pub speed_hz: f32,
+    /// Number of keyphasor edges received up to and including the one that
+    /// closed the (last) revolution: a monotonic revolution id.
+    pub revolution: u32,
+    /// How many revolutions were averaged (R).
+    pub revolutions: u16,
+    /// When the (last) revolution closed.
+    pub end: EdgeTime,
+}
+
+/// What went wrong with the keyphasor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FaultKind {
+    /// No edge by (1 + tolerance) × the predicted period.
+    MissingPulse,
+    /// An edge before (1 − tolerance) × the predicted period, or faster than
+    /// `max_speed_hz`.
+    ExtraPulse,
+    /// While acquiring, two consecutive periods differ by more than
+    /// `max_acceleration_hz_per_s` allows.
+    IrregularPulses,
+    /// No edge within 1/`min_speed_hz`: keyphasor lost or machine too slow.
+    Timeout,
+    /// A phasor came out NaN or infinite (a non-finite sample).
+    NonFinite,
+}
+
+/// A keyphasor fault; the affected revolutions were discarded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Fault {
+    /// What happened.
+    pub kind: FaultKind,
+    /// Absolute index of the sample at which it was detected.
+    pub sample: u64,
+    /// Keyphasor edges received so far.
+    pub edges: u32,
+}
+
+/// What the extractor reports.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Event<const N: usize> {
+    /// A revolution (or R of them) completed and validated.
+    Phasors(Phasors<N>),
+    /// A keyphasor fault.
+    Fault(Fault),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    /// No edge since the start, a reset or a timeout.
+    Idle,
+    /// `edges` (1 or 2) consecutive plausible edges seen.
+    Acquiring { edges: u8 },
+    /// Integrating a revolution along a predicted angle.
+    Tracking,
+}
+
+/// A closed revolution waiting for the next one to confirm its closing edge.
+#[derive(Clone, Copy, Debug)]
+struct Pending<const N: usize> {
+    displacement: [Phasor; N],
+    period: f32,
+    revolution: u32,
+    end: EdgeTime,
+}
+
+/// The keyphasor-synchronous 1X phasor extractor for N channels sampled
+/// together.
+#[derive(Clone, Debug)]
+pub struct PhasorExtractor<const N: usize> {
+    config: ExtractorConfig<N>,
+    /// Shortest and longest accepted period [samples].
+    min_period: f32,
+    max_period: f32,
+    state: State,
+    /// Absolute index of the next sample.
+    now: u64,
+    /// The last sample of the previous block [V].
+    last: [f32; N],
+    /// Keyphasor edges received.
+    edges: u32,
+    /// The most recent accepted edge: the open revolution's start.
+    last_edge: EdgeTime,
+    /// Period of the revolution before the open one [samples].
+    previous_period: f32,
+    /// Predicted period of the open revolution [samples].
+    predicted_period: f32,
+    /// Time after the open revolution's start at which it times out [samples].
+    timeout: f32,
+    integrator: RevolutionIntegrator<N>,
+    pending: Option<Pending<N>>,
+    /// Running average: Σ displacement [m], Σ period [samples], count.
+    sum: [Phasor; N],
+    sum_period: f32,
+    count: u16,
+}
+
+impl<const N: usize> PhasorExtractor<N> {
+    /// An extractor with `config`, waiting for the first keyphasor edge.
+    pub fn new(config: ExtractorConfig<N>) -> Result<Self, ConfigError> {
+        let fs = config.sample_rate_hz;
+        if !(fs.is_finite() && fs > 0.0) {
+            return Err(ConfigError::SampleRate);
+        }
+        if let Some(channel) = config.sensors.iter().position(|s| !s.is_valid()) {
+            return Err(ConfigError::Sensitivity { channel });
+        }
+        if config.revolutions_per_output == 0 {
+            return Err(ConfigError::Revolutions);
+        }
+        let (lo, hi) = (config.min_speed_hz, config.max_speed_hz);
+        // The rotator's Taylor step needs ≤ 0.1 rad/sample; f32 sample counts
+        // within a revolution must stay exact.
+        if !(lo > 0.0 && lo < hi && hi <= fs / 64.0 && fs / lo < 4_194_304.0) {
+            return Err(ConfigError::SpeedRange);
+        }
+        let tol = config.period_tolerance;
+        if !(tol > 0.0 && tol < 0.5) {
+            return Err(ConfigError::PeriodTolerance);
+        }
+        let a = config.max_acceleration_hz_per_s;
+        if !(a.is_finite() && a > 0.0) {
+            return Err(ConfigError::Acceleration);
+        }
+        Ok(Self {
+            config,
+            min_period: fs / hi,
+            max_period: fs / lo,
+            state: State::Idle,
+            now: 0,
+            last: [0.0; N],
+            edges: 0,
+            last_edge: EdgeTime {
+                sample: 0,
+                fraction: 0.0,
+            },
+            previous_period: 0.0,
+            predicted_period: 0.0,
+            timeout: 0.0,
+            integrator: RevolutionIntegrator::default(),
+            pending: None,
+            sum: [ZERO; N],
+            sum_period: 0.0,
+            count: 0,
+        })
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &ExtractorConfig<N> {
+        &self.config
+    }
+
+    /// Whether a revolution is being integrated (synchronised to the keyphasor).
+    pub fn is_tracking(&self) -> bool {
+        self.state == State::Tracking
+    }
+
+    /// Absolute index of the next sample to be fed.
+    pub fn sample_index(&self) -> u64 {
+        self.now
+    }
+
+    /// Forget the keyphasor history, pending revolutions and partial average
+    /// (the sample count keeps running).
+    pub fn reset(&mut self) {
+        self.state = State::Idle;
+        self.discard();
+    }
+
+    /// Feed one sample vector [V]; `edge` is the position in [0, 1) of a
+    /// keyphasor edge within the interval since the previous sample, if one
+    /// occurred. Events go to `sink`.
+    pub fn update(
+        &mut self,
+        sample: &[f32; N],
+        edge: Option<f32>,
+        sink: &mut impl FnMut(Event<N>),
+    ) -> Result<(), InputError> {
+        let edges = edge.map(|fraction| KeyphasorEdge { index: 0, fraction });
+        self.update_block(core::slice::from_ref(sample), edges.as_slice(), sink)
+    }
+
+    /// Feed a block of consecutive sample vectors [V] with the keyphasor edges
+    /// that occurred during it (sorted); events go to `sink` in time order.
+    /// Between edges this runs the per-sample path only: one shared rotator
+    /// step and one complex multiply-accumulate per channel.
+    pub fn update_block(
+        &mut self,
+        samples: &[[f32; N]],
+        edges: &[KeyphasorEdge],
+        sink: &mut impl FnMut(Event<N>),
+    ) -> Result<(), InputError> {
+        let mut before: Option<&KeyphasorEdge> = None;
+        for (edge, e) in edges.iter().enumerate() {
+            if e.index >= samples.len() {
+                return Err(InputError::EdgeIndex { edge });
+            }
+            if !(e.fraction >= 0.0 && e.fraction < 1.0) {
+                return Err(InputError::EdgeFraction { edge });
+            }
+            if let Some(b) = before {
+                if e.index < b.index || (e.index == b.index && e.fraction <= b.fraction) {
+                    return Err(InputError::EdgeOrder { edge });
+                }
+            }
+            before = Some(e);
+        }
+        let mut start = 0;
+        for e in edges {
+            self.run(&samples[start..e.index], sink);
+            let previous = if e.index == 0 {
+                self.last
+            } else {
+                samples[e.index - 1]
+            };
+            self.edge(&previous, &samples[e.index], e.fraction, sink);
+            start = e.index;
+        }
+        self.run(&samples[start..], sink);
+        if let Some(last) = samples.last() {
+            self.last = *last;
+        }
+        Ok(())
+    }
+
+    /// Samples between edges: integrate, or count, until a timeout.
+    fn run(&mut self, mut samples: &[[f32; N]], sink: &mut impl FnMut(Event<N>)) {
+        while !samples.is_empty() {
+            let (next, limit) = match self.state {
+                State::Idle => {
+                    self.now += samples.len() as u64;
+                    return;
+                }
+                State::Acquiring { .. } => {
+                    let since = self.now.wrapping_sub(self.last_edge.sample) as f32;
+                    (since + 1.0 - self.last_edge.fraction, self.max_period)
+                }
+                State::Tracking => (self.integrator.next_time(), self.timeout),
+            };
+            let allowed = if next > limit {
+                0
+            } else {
+                (limit - next) as usize + 1
+            };
+            let take = allowed.min(samples.len());
+            let (now, rest) = samples.split_at(take);
+            if self.state == State::Tracking {
+                self.integrator.accumulate(now);
+            }
+            self.now += take as u64;
+            samples = rest;
+            if !samples.is_empty() {
+                let kind = if self.state == State::Tracking && self.timeout < self.max_period {
+                    FaultKind::MissingPulse
+                } else {
+                    FaultKind::Timeout
+                };
+                self.fault(kind, sink);
+                self.state = State::Idle;
+            }
+        }
+    }
+
+    /// A keyphasor edge at `fraction` of the interval between `previous` and
+    /// `current`, which is sample number `self.now`.
+    fn edge(
+        &mut self,
+        previous: &[f32; N],
+        current: &[f32; N],
+        fraction: f32,
+        sink: &mut impl FnMut(Event<N>),
+    ) {
+        let edge = EdgeTime {
+            sample: self.now,
+            fraction,
+        };
+        self.edges = self.edges.wrapping_add(1);
+        let period = edge.since(self.last_edge);
+        match self.state {
+            State::Idle => self.restart(edge),
+            State::Acquiring { edges } => {
+                if period < self.min_period {
+                    self.fault(FaultKind::ExtraPulse, sink);
+                    self.restart(edge);
+                } else if period > self.max_period {
+                    self.fault(FaultKind::Timeout, sink);
+                    self.restart(edge);
+                } else if edges == 1 {
+                    self.previous_period = period;
+                    self.last_edge = edge;
+                    self.state = State::Acquiring { edges: 2 };
+                } else if !self.plausible(self.previous_period, period) {
+                    self.fault(FaultKind::IrregularPulses, sink);
+                    self.restart(edge);
+                } else {
+                    let model = ShaftModel::fit(self.previous_period, period).advance(period);
+                    self.begin(model, edge, period, previous, current);
+                }
+            }
+            State::Tracking => {
+                let tol = self.config.period_tolerance;
+                if period < (1.0 - tol) * self.predicted_period || period < self.min_period {
+                    self.fault(FaultKind::ExtraPulse, sink);
+                    self.restart(edge);
+                } else if period > (1.0 + tol) * self.predicted_period || period > self.max_period {
+                    self.fault(FaultKind::MissingPulse, sink);
+                    self.restart(edge);
+                } else {
+                    let actual = ShaftModel::fit(self.previous_period, period);
+                    self.close(&actual, period, edge, previous, current, sink);
+                    self.begin(actual.advance(period), edge, period, previous, current);
+                }
+            }
+        }
+    }
+
+    /// Whether the speed change from a period of `first` to `second` samples
+    /// is within `max_acceleration_hz_per_s` (plus the period tolerance).
+    fn plausible(&self, first: f32, second: f32) -> bool {
+        let fs = self.config.sample_rate_hz;
+        let change_hz = fs * libm::fabsf(1.0 / second - 1.0 / first);
+        let elapsed_s = 0.5 * (first + second) / fs;
+        let allowed_hz = self.config.max_acceleration_hz_per_s * elapsed_s + self.config.period_tolerance * fs / first;
+        change_hz <= allowed_hz
+    }
+
+    /// Open a revolution at `edge` along the predicted angle `model`.
+    fn begin(&mut self, model: ShaftModel, edge: EdgeTime, period: f32, previous: &[f32; N], current: &[f32; N]) {
+        self.predicted_period = match model.period() {
+            Some(p) if p < self.max_period => p,
+            _ => self.max_period,
+        };
+        self.timeout = ((1.0 + self.config.period_tolerance) * self.predicted_period).min(self.max_period);
+        self.previous_period = period;
+        self.last_edge = edge;
+        self.state = State::Tracking;
+        self.integrator.start(model, edge.fraction, previous, current);
+    }
+
+    /// Close the open revolution along its true angle `actual`, convert to
+    /// displacement, and hold it until the next edge confirms it.
+    fn close(
+        &mut self,
+        actual: &ShaftModel,
+        period: f32,
+        edge: EdgeTime,
+        previous: &[f32; N],
+        current: &[f32; N],
+        sink: &mut impl FnMut(Event<N>),
+    ) {
+        let mut phasors = [ZERO; N];
+        self.integrator
+            .close(actual, period, edge.fraction, previous, current, &mut phasors);
+        let fs = self.config.sample_rate_hz;
+        let kinematics = Kinematics {
+            omega_start: actual.speed * fs,
+            omega_end: actual.rate(period) * fs,
+            alpha: actual.accel * fs * fs,
+        };
+        let conversions = [SensorKind::Displacement, SensorKind::Velocity, SensorKind::Acceleration]
+            .map(|kind| Conversion::new(kind, &kinematics));
+        let mut finite = true;
+        for (q, sensor) in phasors.iter_mut().zip(&self.config.sensors) {
+            let conversion = &conversions[match sensor.kind {
+                SensorKind::Displacement => 0,
+                SensorKind::Velocity => 1,
+                SensorKind::Acceleration => 2,
+            }];
+            *q = conversion.to_displacement(*q / sensor.sensitivity);
+            finite &= q.re.is_finite() && q.im.is_finite();
+        }
+        if !finite {
+            self.fault(FaultKind::NonFinite, sink);
+            return;
+        }
+        let closed = Pending {
+            displacement: phasors,
+            period,
+            revolution: self.edges,
+            end: edge,
+        };
+        if let Some(confirmed) = self.pending.replace(closed) {
+            self.average(confirmed, sink);
+        }
+    }
+
+    /// Add a confirmed revolution to the average; emit it when R are in.
+    fn average(&mut self, revolution: Pending<N>, sink: &mut impl FnMut(Event<N>)) {
+        for (s, d) in self.sum.iter_mut().zip(&revolution.displacement) {
+            *s += *d;
+        }
+        self.sum_period += revolution.period;
+        self.count += 1;
+        let r = self.config.revolutions_per_output;
+        if self.count >= r {
+            let scale = 1.0 / r as f32;
+            sink(Event::Phasors(Phasors {
+                displacement: self.sum.map(|s| s * scale),
+                speed_hz: self.config.sample_rate_hz * r as f32 / self.sum_period,
+                revolution: revolution.revolution,
+                revolutions: r,
+                end: revolution.end,
+            }));
+            self.sum = [ZERO; N];
+            self.sum_period = 0.0;
+            self.count = 0;
+        }
+    }
+
+    /// Start acquiring afresh with `edge` as the first edge.
+    fn restart(&mut self, edge: EdgeTime) {
+        self.last_edge = edge;
+        self.state = State::Acquiring { edges: 1 };
+    }
+
+    /// Drop the pending revolution and the partial average.
+    fn discard(&mut self) {
+        self.pending = None;
+        self.sum = [ZERO; N];
+        self.sum_period = 0.0;
+        self.count = 0;
+    }
+
+    /// Report a fault and drop everything it may have corrupted.
+    fn fault(&mut self, kind: FaultKind, sink: &mut impl FnMut(Event<N>)) {
+        self.discard();
+        sink(Event::Fault(Fault {
+            kind,
+            sample: self.now,
+            edges: self.edges,
+        }));
+    }
+}
