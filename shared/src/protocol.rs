@@ -1,1 +1,0 @@
-//! Wire protocol between the field box and the host (not yet implemented).
