@@ -488,21 +488,32 @@ impl<const N: usize> PhasorExtractor<N> {
         let fs = self.config.sample_rate_hz;
         let change_hz = fs * libm::fabsf(1.0 / second - 1.0 / first);
         let elapsed_s = 0.5 * (first + second) / fs;
-        let allowed_hz = self.config.max_acceleration_hz_per_s * elapsed_s + self.config.period_tolerance * fs / first;
+        let allowed_hz = self.config.max_acceleration_hz_per_s * elapsed_s
+            + self.config.period_tolerance * fs / first;
         change_hz <= allowed_hz
     }
 
     /// Open a revolution at `edge` along the predicted angle `model`.
-    fn begin(&mut self, model: ShaftModel, edge: EdgeTime, period: f32, previous: &[f32; N], current: &[f32; N]) {
+    fn begin(
+        &mut self,
+        model: ShaftModel,
+        edge: EdgeTime,
+        period: f32,
+        previous: &[f32; N],
+        current: &[f32; N],
+    ) {
         self.predicted_period = match model.period() {
             Some(p) if p < self.max_period => p,
             _ => self.max_period,
         };
-        self.timeout = ((1.0 + self.config.period_tolerance) * self.predicted_period).min(self.max_period);
+        self.timeout =
+            ((1.0 + self.config.period_tolerance) * self.predicted_period).min(self.max_period);
         self.previous_period = period;
         self.last_edge = edge;
         self.state = State::Tracking;
-        self.integrator.start(model, edge.fraction, previous, current);
+        let reach = model.angle(self.timeout);
+        self.integrator
+            .start(model, reach, edge.fraction, previous, current);
     }
 
     /// Close the open revolution along its true angle `actual`, convert to
@@ -517,16 +528,26 @@ impl<const N: usize> PhasorExtractor<N> {
         sink: &mut impl FnMut(Event<N>),
     ) {
         let mut phasors = [ZERO; N];
-        self.integrator
-            .close(actual, period, edge.fraction, previous, current, &mut phasors);
+        self.integrator.close(
+            actual,
+            period,
+            edge.fraction,
+            previous,
+            current,
+            &mut phasors,
+        );
         let fs = self.config.sample_rate_hz;
         let kinematics = Kinematics {
             omega_start: actual.speed * fs,
             omega_end: actual.rate(period) * fs,
             alpha: actual.accel * fs * fs,
         };
-        let conversions = [SensorKind::Displacement, SensorKind::Velocity, SensorKind::Acceleration]
-            .map(|kind| Conversion::new(kind, &kinematics));
+        let conversions = [
+            SensorKind::Displacement,
+            SensorKind::Velocity,
+            SensorKind::Acceleration,
+        ]
+        .map(|kind| Conversion::new(kind, &kinematics));
         let mut finite = true;
         for (q, sensor) in phasors.iter_mut().zip(&self.config.sensors) {
             let conversion = &conversions[match sensor.kind {

@@ -22,7 +22,8 @@ use num_complex::Complex;
 pub fn expi_neg_small(x: f32) -> Complex<f32> {
     let x2 = x * x;
     let cos = 1.0 - x2 * (0.5 - x2 * (1.0 / 24.0 - x2 * (1.0 / 720.0 - x2 / 40320.0)));
-    let sin = x * (1.0 - x2 * (1.0 / 6.0 - x2 * (1.0 / 120.0 - x2 * (1.0 / 5040.0 - x2 / 362880.0))));
+    let sin =
+        x * (1.0 - x2 * (1.0 / 6.0 - x2 * (1.0 / 120.0 - x2 * (1.0 / 5040.0 - x2 / 362880.0))));
     Complex::new(cos, -sin)
 }
 
@@ -86,7 +87,7 @@ impl Rotator {
         // One Newton step of 1/√(|r|²) about 1: |r|² − 1 is ~1e-6, so the
         // result is unit to ~1e-12.
         let norm = self.r.re * self.r.re + self.r.im * self.r.im;
-        self.r = self.r * (1.5 - 0.5 * norm);
+        self.r *= 1.5 - 0.5 * norm;
         self.s = expi_neg_small(model.rate(t + 0.5));
         self.weight = model.rate(t);
     }
@@ -97,8 +98,8 @@ impl Rotator {
     #[inline(always)]
     pub fn update(&mut self) -> Complex<f32> {
         let g = Complex::new(self.r.re * self.weight, self.r.im * self.weight);
-        self.r = self.r * self.s;
-        self.s = self.s * self.chirp;
+        self.r *= self.s;
+        self.s *= self.chirp;
         self.weight += self.accel;
         g
     }

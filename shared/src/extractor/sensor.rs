@@ -97,7 +97,11 @@ pub struct Conversion {
 impl Conversion {
     /// The map for sensor `kind` over a revolution with `kinematics`.
     pub fn new(kind: SensorKind, kinematics: &Kinematics) -> Self {
-        let (w0, w1, alpha) = (kinematics.omega_start, kinematics.omega_end, kinematics.alpha);
+        let (w0, w1, alpha) = (
+            kinematics.omega_start,
+            kinematics.omega_end,
+            kinematics.alpha,
+        );
         let i = Complex::new(0.0f32, 1.0);
         match kind {
             SensorKind::Displacement => Self {
@@ -196,18 +200,34 @@ mod tests {
             c2im -= w * (2.0 * th).sin() / n as f64;
         }
         let conv = Conversion::new(SensorKind::Velocity, &k);
-        assert!((conv.p.im as f64 - mean).abs() / mean < 2e-6, "{} {mean}", conv.p.im);
+        assert!(
+            (conv.p.im as f64 - mean).abs() / mean < 2e-6,
+            "{} {mean}",
+            conv.p.im
+        );
         // q = −i·C₂ → C₂ = i·q.
         let c2 = Complex::new(0.0f32, 1.0) * conv.q;
-        assert!((c2.re as f64 - c2re).abs() / mean < 1e-6, "{} {c2re}", c2.re);
-        assert!((c2.im as f64 - c2im).abs() / mean < 1e-6, "{} {c2im}", c2.im);
+        assert!(
+            (c2.re as f64 - c2re).abs() / mean < 1e-6,
+            "{} {c2re}",
+            c2.re
+        );
+        assert!(
+            (c2.im as f64 - c2im).abs() / mean < 1e-6,
+            "{} {c2im}",
+            c2.im
+        );
     }
 
     #[test]
     fn inverse_undoes_forward() {
         let k = kin(5.0, 5.0);
         let d = Complex::new(3e-6f32, 1e-6);
-        for kind in [SensorKind::Displacement, SensorKind::Velocity, SensorKind::Acceleration] {
+        for kind in [
+            SensorKind::Displacement,
+            SensorKind::Velocity,
+            SensorKind::Acceleration,
+        ] {
             let c = Conversion::new(kind, &k);
             let back = c.to_displacement(c.from_displacement(d));
             assert!((back - d).norm() / d.norm() < 1e-6, "{kind:?}");

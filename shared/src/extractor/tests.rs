@@ -100,7 +100,10 @@ impl Channel {
             SensorKind::Acceleration => re(-w * w, a, d),
         };
         let harmonic = |k: f64, h: (f64, f64)| h.0 * (k * th).cos() - h.1 * (k * th).sin();
-        self.sensor.sensitivity as f64 * physical + self.dc + harmonic(2.0, self.h2) + harmonic(3.0, self.h3)
+        self.sensor.sensitivity as f64 * physical
+            + self.dc
+            + harmonic(2.0, self.h2)
+            + harmonic(3.0, self.h3)
     }
 }
 
@@ -164,7 +167,9 @@ fn simulate<const N: usize>(
         for i in 0..len {
             let k = start + i;
             let t = k as f64 / FS;
-            samples.push(core::array::from_fn(|c| channels[c].volts(&shaft, t) as f32));
+            samples.push(core::array::from_fn(|c| {
+                channels[c].volts(&shaft, t) as f32
+            }));
             // Edges in (k − 1, k] belong to sample k.
             while next_edge < edges.len() && edges[next_edge] <= k as f64 {
                 let p = edges[next_edge];
@@ -190,9 +195,21 @@ fn relative_error(got: Phasor, want: (f64, f64)) -> f64 {
 /// accelerometer with offsets and harmonics of their own.
 fn three_sensors() -> [Channel; 3] {
     [
-        Channel::new(Sensor::displacement(7870.0), (30e-6, -12e-6)).with_extras(-9.0, (0.2, 0.1), (-0.05, 0.08)),
-        Channel::new(Sensor::velocity(20.0), (-4e-6, 6e-6)).with_extras(0.01, (0.01, -0.02), (0.004, 0.0)),
-        Channel::new(Sensor::acceleration(0.1), (2e-6, 5e-6)).with_extras(0.02, (0.05, 0.01), (0.0, -0.03)),
+        Channel::new(Sensor::displacement(7870.0), (30e-6, -12e-6)).with_extras(
+            -9.0,
+            (0.2, 0.1),
+            (-0.05, 0.08),
+        ),
+        Channel::new(Sensor::velocity(20.0), (-4e-6, 6e-6)).with_extras(
+            0.01,
+            (0.01, -0.02),
+            (0.004, 0.0),
+        ),
+        Channel::new(Sensor::acceleration(0.1), (2e-6, 5e-6)).with_extras(
+            0.02,
+            (0.05, 0.01),
+            (0.0, -0.03),
+        ),
     ]
 }
 
@@ -226,12 +243,24 @@ fn constant_speed_with_non_integer_samples_per_revolution() {
             rate: 0.0,
             offset: 0.41,
         };
-        let run = simulate(ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)), shaft, &channels, 12.0 / f, 1000, |_| {});
+        let run = simulate(
+            ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
+            shaft,
+            &channels,
+            12.0 / f,
+            1000,
+            |_| {},
+        );
         let n = run.phasors().count();
         assert!(n >= 6, "{f} Hz: only {n} outputs");
         assert!(run.faults().is_empty(), "{:?}", run.faults());
         let worst = check(&run, &channels, 1e-4);
-        std::println!("{f} Hz: worst relative errors {:.1e} {:.1e} {:.1e}", worst[0], worst[1], worst[2]);
+        std::println!(
+            "{f} Hz: worst relative errors {:.1e} {:.1e} {:.1e}",
+            worst[0],
+            worst[1],
+            worst[2]
+        );
     }
 }
 
@@ -243,17 +272,31 @@ fn run_down_200_to_5_hz_at_5_hz_per_s() {
         rate: 5.0,
         offset: 0.73,
     };
-    let run = simulate(ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)), shaft, &channels, 39.0, 4096, |_| {});
+    let run = simulate(
+        ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
+        shaft,
+        &channels,
+        39.0,
+        4096,
+        |_| {},
+    );
     assert!(run.faults().is_empty(), "{:?}", run.faults());
     // Every revolution but the first acquisition ones and the one still held back.
     let outputs = run.phasors().count();
-    assert!(outputs + 6 >= run.edges.len(), "{outputs} outputs from {} edges", run.edges.len());
+    assert!(
+        outputs + 6 >= run.edges.len(),
+        "{outputs} outputs from {} edges",
+        run.edges.len()
+    );
     // Worst error per speed band, down to the slowest revolutions.
     let bands = [(150.0, 201.0), (50.0, 150.0), (15.0, 50.0), (5.0, 15.0)];
     for (lo, hi) in bands {
         let mut worst = [0.0f64; 3];
         let mut count = 0;
-        for p in run.phasors().filter(|p| p.speed_hz >= lo && p.speed_hz < hi) {
+        for p in run
+            .phasors()
+            .filter(|p| p.speed_hz >= lo && p.speed_hz < hi)
+        {
             count += 1;
             for c in 0..3 {
                 worst[c] = worst[c].max(relative_error(p.displacement[c], channels[c].d));
@@ -261,7 +304,9 @@ fn run_down_200_to_5_hz_at_5_hz_per_s() {
         }
         std::println!(
             "{lo}-{hi} Hz: {count} revolutions, worst relative errors {:.1e} {:.1e} {:.1e}",
-            worst[0], worst[1], worst[2]
+            worst[0],
+            worst[1],
+            worst[2]
         );
         assert!(count > 0, "no revolution in {lo}-{hi} Hz");
     }
@@ -280,7 +325,14 @@ fn dc_and_harmonics_are_rejected_during_the_run_down() {
         rate: 5.0,
         offset: 0.2,
     };
-    let run = simulate(ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)), shaft, &channels, 11.0, 777, |_| {});
+    let run = simulate(
+        ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
+        shaft,
+        &channels,
+        11.0,
+        777,
+        |_| {},
+    );
     let worst = check(&run, &channels, 1e-4);
     std::println!("clean {:.1e}, with DC+2X+3X {:.1e}", worst[0], worst[1]);
     assert!(run.phasors().count() > 200);
@@ -295,13 +347,23 @@ fn missing_pulse_is_flagged_and_tracking_recovers() {
         offset: 0.5,
     };
     let dropped = 60;
-    let run = simulate(ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)), shaft, &channels, 4.0, 1000, |e| {
-        e.remove(dropped);
-    });
+    let run = simulate(
+        ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
+        shaft,
+        &channels,
+        4.0,
+        1000,
+        |e| {
+            e.remove(dropped);
+        },
+    );
     assert_eq!(run.faults(), [FaultKind::MissingPulse]);
     // Nothing garbled came out, and outputs resume after the gap.
     check(&run, &channels, 1e-4);
-    let after = run.phasors().filter(|p| p.revolution as usize > dropped + 1).count();
+    let after = run
+        .phasors()
+        .filter(|p| p.revolution as usize > dropped + 1)
+        .count();
     assert!(after > 50, "{after} outputs after the missing pulse");
     // The revolution spanning the gap (ids dropped and dropped+1) was not emitted.
     assert!(run.phasors().all(|p| p.revolution as usize != dropped + 1));
@@ -318,17 +380,35 @@ fn extra_pulse_is_flagged_and_tracking_recovers() {
     // A glitch in mid-revolution, and one just before the true edge (which
     // passes the period check and is only caught by the next revolution).
     for position in [0.4, 0.985] {
-        let run = simulate(ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)), shaft, &channels, 4.0, 1000, |e| {
-            let p = e[70] + position * (e[71] - e[70]);
-            e.insert(71, p);
-        });
+        let run = simulate(
+            ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
+            shaft,
+            &channels,
+            4.0,
+            1000,
+            |e| {
+                let p = e[70] + position * (e[71] - e[70]);
+                e.insert(71, p);
+            },
+        );
         let faults = run.faults();
-        assert_eq!(faults.first(), Some(&FaultKind::ExtraPulse), "{position}: {faults:?}");
+        assert_eq!(
+            faults.first(),
+            Some(&FaultKind::ExtraPulse),
+            "{position}: {faults:?}"
+        );
         check(&run, &channels, 1e-4);
         let after = run.phasors().filter(|p| p.revolution > 75).count();
-        assert!(after > 35, "{position}: {after} outputs after the extra pulse");
-        // Neither revolution touching the glitch was emitted.
-        assert!(run.phasors().all(|p| !(71..=73).contains(&p.revolution)), "{position}");
+        assert!(
+            after > 35,
+            "{position}: {after} outputs after the extra pulse"
+        );
+        // Neither revolution touching the glitch (closed by edge counts 72,
+        // the glitch, and 73) was emitted.
+        assert!(
+            run.phasors().all(|p| !(72..=73).contains(&p.revolution)),
+            "{position}"
+        );
     }
 }
 
@@ -340,18 +420,32 @@ fn timeout_when_the_keyphasor_stops() {
         rate: 0.0,
         offset: 0.1,
     };
-    let run = simulate(ExtractorConfig::new(FS as f32, [channels[0].sensor]), shaft, &channels, 3.0, 512, |e| {
-        e.truncate(20);
-    });
+    let run = simulate(
+        ExtractorConfig::new(FS as f32, [channels[0].sensor]),
+        shaft,
+        &channels,
+        3.0,
+        512,
+        |e| {
+            e.truncate(20);
+        },
+    );
     // While tracking, the first missing edge is flagged once; the extractor
     // then waits for a new edge without further events.
     assert_eq!(run.faults(), [FaultKind::MissingPulse]);
     check(&run, &channels, 1e-4);
     assert!(run.phasors().all(|p| p.revolution <= 20));
     // While acquiring (two edges seen), silence beyond 1/min_speed_hz is a timeout.
-    let run = simulate(ExtractorConfig::new(FS as f32, [channels[0].sensor]), shaft, &channels, 3.0, 512, |e| {
-        e.truncate(2);
-    });
+    let run = simulate(
+        ExtractorConfig::new(FS as f32, [channels[0].sensor]),
+        shaft,
+        &channels,
+        3.0,
+        512,
+        |e| {
+            e.truncate(2);
+        },
+    );
     assert_eq!(run.faults(), [FaultKind::Timeout]);
     assert_eq!(run.phasors().count(), 0);
 }
@@ -421,16 +515,23 @@ fn sample_by_sample_equals_block_feeding() {
 
 #[test]
 fn bad_edges_are_rejected_before_anything_happens() {
-    let mut x = PhasorExtractor::new(ExtractorConfig::new(51_200.0, [Sensor::displacement(1.0)])).unwrap();
+    let mut x =
+        PhasorExtractor::new(ExtractorConfig::new(51_200.0, [Sensor::displacement(1.0)])).unwrap();
     let samples = [[0.0f32]; 4];
     let mut sink = |_e: Event<1>| panic!("no event expected");
     let edge = |index, fraction| KeyphasorEdge { index, fraction };
-    assert_eq!(x.update_block(&samples, &[edge(4, 0.5)], &mut sink), Err(InputError::EdgeIndex { edge: 0 }));
+    assert_eq!(
+        x.update_block(&samples, &[edge(4, 0.5)], &mut sink),
+        Err(InputError::EdgeIndex { edge: 0 })
+    );
     assert_eq!(
         x.update_block(&samples, &[edge(1, 0.5), edge(2, f32::NAN)], &mut sink),
         Err(InputError::EdgeFraction { edge: 1 })
     );
-    assert_eq!(x.update_block(&samples, &[edge(1, 1.0)], &mut sink), Err(InputError::EdgeFraction { edge: 0 }));
+    assert_eq!(
+        x.update_block(&samples, &[edge(1, 1.0)], &mut sink),
+        Err(InputError::EdgeFraction { edge: 0 })
+    );
     assert_eq!(
         x.update_block(&samples, &[edge(2, 0.5), edge(1, 0.5)], &mut sink),
         Err(InputError::EdgeOrder { edge: 1 })
@@ -440,11 +541,17 @@ fn bad_edges_are_rejected_before_anything_happens() {
 
 #[test]
 fn bad_configurations_are_named() {
-    let ok = ExtractorConfig::new(51_200.0, [Sensor::displacement(1.0), Sensor::velocity(20.0)]);
+    let ok = ExtractorConfig::new(
+        51_200.0,
+        [Sensor::displacement(1.0), Sensor::velocity(20.0)],
+    );
     assert!(PhasorExtractor::new(ok).is_ok());
     let mut c = ok;
     c.sensors[1].sensitivity = 0.0;
-    assert_eq!(PhasorExtractor::new(c).err(), Some(ConfigError::Sensitivity { channel: 1 }));
+    assert_eq!(
+        PhasorExtractor::new(c).err(),
+        Some(ConfigError::Sensitivity { channel: 1 })
+    );
     let mut c = ok;
     c.max_speed_hz = 1000.0;
     assert_eq!(PhasorExtractor::new(c).err(), Some(ConfigError::SpeedRange));
@@ -453,8 +560,14 @@ fn bad_configurations_are_named() {
     assert_eq!(PhasorExtractor::new(c).err(), Some(ConfigError::SampleRate));
     let mut c = ok;
     c.revolutions_per_output = 0;
-    assert_eq!(PhasorExtractor::new(c).err(), Some(ConfigError::Revolutions));
+    assert_eq!(
+        PhasorExtractor::new(c).err(),
+        Some(ConfigError::Revolutions)
+    );
     let mut c = ok;
     c.period_tolerance = 0.7;
-    assert_eq!(PhasorExtractor::new(c).err(), Some(ConfigError::PeriodTolerance));
+    assert_eq!(
+        PhasorExtractor::new(c).err(),
+        Some(ConfigError::PeriodTolerance)
+    );
 }
