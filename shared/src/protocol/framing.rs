@@ -28,19 +28,19 @@ pub const CRC_LEN: usize = 4;
 /// The frame delimiter; COBS guarantees it occurs nowhere else.
 pub const DELIMITER: u8 = 0x00;
 
-/// Largest frame on the wire [bytes], both delimiters included. Encoding a
+/// Largest frame on the wire \[bytes], both delimiters included. Encoding a
 /// larger frame fails; a receiver discards one as oversize.
 pub const MAX_FRAME_SIZE: usize = 512;
 
-/// Largest COBS body between the two delimiters [bytes]: the receive buffer.
+/// Largest COBS body between the two delimiters \[bytes]: the receive buffer.
 pub const MAX_BODY_SIZE: usize = MAX_FRAME_SIZE - 2;
 
-/// Largest postcard-serialized `Frame` [bytes] guaranteed to fit in
+/// Largest postcard-serialized `Frame` \[bytes] guaranteed to fit in
 /// [`MAX_FRAME_SIZE`] whatever its bytes are (worst-case COBS overhead). Every
 /// message type at full capacity stays below it (checked by a test).
 pub const MAX_MESSAGE_SIZE: usize = 500;
 
-/// Wire size bound [bytes] of a frame whose postcard serialization is
+/// Wire size bound \[bytes] of a frame whose postcard serialization is
 /// `message_len` bytes: CRC, worst-case COBS overhead (one code byte per 254
 /// bytes, plus one) and both delimiters.
 pub const fn max_wire_size(message_len: usize) -> usize {
@@ -70,7 +70,7 @@ pub enum LinkError {
     /// More than [`MAX_BODY_SIZE`] bytes without a delimiter; `len` bytes
     /// (saturating at `u32::MAX`) were discarded up to the next 0x00.
     Oversize {
-        /// Length of the discarded body [bytes].
+        /// Length of the discarded body \[bytes].
         len: u32,
     },
     /// The body is not valid COBS.

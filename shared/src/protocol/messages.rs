@@ -178,9 +178,9 @@ pub struct Capabilities {
     pub max_bearings: u8,
     /// Rows each bearing's coefficient table can hold.
     pub bearing_table_capacity: u16,
-    /// ADC sample rate per channel [Hz].
+    /// ADC sample rate per channel \[Hz].
     pub sample_rate_hz: f32,
-    /// ADC step: an ADC code c stands for the voltage c · this [V].
+    /// ADC step: an ADC code c stands for the voltage c · this \[V].
     pub adc_volts_per_code: f32,
 }
 
@@ -251,7 +251,7 @@ pub struct RlsSettings {
     pub forgetting_factor: f32,
     /// Stiffness column scale [N/m].
     pub scale_k: f32,
-    /// Mass column scale [kg].
+    /// Mass column scale \[kg].
     pub scale_m: f32,
     /// Damping column scale [N·s/m].
     pub scale_c: f32,
@@ -282,7 +282,7 @@ impl RlsSettings {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BearingTableRow {
-    /// Rotor speed [Hz]; rows must increase in speed across the whole table.
+    /// Rotor speed \[Hz]; rows must increase in speed across the whole table.
     pub speed_hz: f32,
     /// Coefficients at that speed: k [N/m], c [N·s/m].
     pub coefficients: BearingCoefficients<f32>,
@@ -355,7 +355,7 @@ pub struct TableTooLong {
 pub enum Samples {
     /// Raw ADC codes; volts = code · [`Capabilities::adc_volts_per_code`].
     AdcCodes(heapless::Vec<i16, MAX_BLOCK_VALUES>),
-    /// Transducer output voltages [V] (the channel's sensitivity still applies).
+    /// Transducer output voltages \[V] (the channel's sensitivity still applies).
     Volts(heapless::Vec<f32, MAX_BLOCK_VALUES>),
 }
 
@@ -514,9 +514,9 @@ impl From<WirePhasor> for Complex<f32> {
 pub struct BearingPhasors {
     /// Bearing index (0-based).
     pub bearing: u8,
-    /// Rotor relative to pedestal, (y, z) [m].
+    /// Rotor relative to pedestal, (y, z) \[m].
     pub rel: [WirePhasor; 2],
-    /// Absolute pedestal, (y, z) [m].
+    /// Absolute pedestal, (y, z) \[m].
     pub ped: [WirePhasor; 2],
 }
 
@@ -527,13 +527,13 @@ pub struct PhasorFrame {
     pub revolution: u32,
     /// Revolutions averaged.
     pub revolutions: u16,
-    /// Mean rotor speed over the averaged revolutions [Hz].
+    /// Mean rotor speed over the averaged revolutions \[Hz].
     pub speed_hz: f32,
     /// Phasors per configured bearing.
     pub bearings: heapless::Vec<BearingPhasors, MAX_BEARINGS>,
 }
 
-/// One pedestal's estimate on the wire: θ = (k_y [N/m], k_z [N/m], m [kg],
+/// One pedestal's estimate on the wire: θ = (k_y [N/m], k_z [N/m], m \[kg],
 /// c_y [N·s/m], c_z [N·s/m]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -546,7 +546,7 @@ pub struct PedestalEstimateEntry {
     pub std_err: [f32; PARAMETERS],
     /// Number of equations folded in (effective, with forgetting).
     pub equations: f32,
-    /// RMS of the equation residuals [N].
+    /// RMS of the equation residuals \[N].
     pub residual_rms: f32,
 }
 
@@ -618,7 +618,7 @@ pub struct DeviceCounters {
 pub struct StatusFrame {
     /// Current state.
     pub state: DeviceState,
-    /// Time since boot [ms] (wrapping).
+    /// Time since boot \[ms] (wrapping).
     pub uptime_ms: u32,
     /// Processing counters.
     pub counters: DeviceCounters,

@@ -26,7 +26,7 @@
 //! up to that many new frames are dropped as stale.
 
 /// How far behind the last accepted sequence number a frame still counts as a
-/// repeat rather than a restart [frames].
+/// repeat rather than a restart \[frames].
 pub const DUPLICATE_WINDOW: u32 = 16;
 
 /// Number of sequence numbers in the ring 1 ..= `u32::MAX`.
