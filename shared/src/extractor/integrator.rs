@@ -9,9 +9,12 @@
 //! per-revolution segment sums, chosen by the predicted angle. At the closing
 //! edge, when the true revolution is known, each segment sum is rotated by
 //! the angle error e^{−iφ} and scaled by the speed ratio θ'/θ̂' at its angle
-//! centroid, which corrects a prediction error φ(t) = θ(t) − θ̂(t) to second
-//! order in φ's variation within a segment (≈ (Φ/16)²/24 for a total error Φ).
-//! Memory is fixed: N·(1 + SEGMENTS) complex sums, whatever the speed.
+//! centroid, which corrects a prediction error φ(t) = θ(t) − θ̂(t) up to
+//! φ's variation within a segment. Measured (see the tests): a prediction
+//! 0.13-0.24 rad off by the closing edge, with DC and 2X/3X riding on the 1X,
+//! leaves 5e-5 relative error instead of 0.13-0.24 uncorrected.
+//! Memory is fixed: N·(1 + SEGMENTS) complex sums (4.6 KiB for N = 8),
+//! whatever the speed.
 
 use super::rotator::{expi_neg, expi_neg_small, Rotator};
 use super::shaft::ShaftModel;

@@ -33,7 +33,7 @@
 //! with trapezoid weights split fractionally at the keyphasor edges (the
 //! caller gives each edge's sub-sample position from the timer capture). At
 //! the closing edge the true angle is known (quadratic through the last
-//! three edges) and 16 segment sums are rotated onto it. Memory is fixed and
+//! three edges) and the 64 segment sums are rotated onto it. Memory is fixed and
 //! independent of speed; nothing is buffered.
 //!
 //! # Faults
@@ -46,6 +46,18 @@
 //! closes cleanly) and any partial average are discarded, and the extractor
 //! re-acquires from the next edges: 3 edges to predict, then one revolution to
 //! integrate and one to confirm it.
+//!
+//! # Accuracy and cost (measured, see the tests)
+//!
+//! On clean synthetic signals at 51.2 kHz, constant speed (5.3, 37.3,
+//! 199.7 Hz) and the 200 → 5 Hz run-down at 5 Hz/s: ≤ 5e-5 relative error for
+//! a proximity probe riding on a −9 V gap voltage (36× its 1X) with 2X and
+//! 3X, ≤ 4e-5 for velocity and acceleration channels. DC leaks at ~1.5e-6 of
+//! its size (f32 rounding and the O(h²) edge quadrature), so a DC offset
+//! 60× the 1X is the limit for 1e-4. The per-sample path compiles for
+//! thumbv7em (opt-level 3, N = 8) to a loop of 114 instructions per two
+//! samples — 7.1 per channel-sample, with the accumulators in FPU registers —
+//! plus about one per channel-sample of per-chunk work.
 
 mod integrator;
 mod rotator;
