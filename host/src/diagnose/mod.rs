@@ -1,4 +1,26 @@
-//! `plinth diagnose` (not yet implemented).
+//! `plinth diagnose`: find, name and fix what the pedestal model is missing.
+//!
+//! The workflow (one module per idea):
+//! - [`data`]: the run arranged per bearing and speed, with the complex bearing
+//!   stiffness and every number's noise standard deviation;
+//! - [`noise`]: the noise floor the data support (digits written, scatter);
+//! - [`model`]: augmented pedestal models, linear in their parameters apart
+//!   from a loss factor or a delay;
+//! - [`fit`]: noise-weighted least squares (errors in variables propagated)
+//!   and the 1-D profile search;
+//! - [`gap`]: the disagreement measure (defined there) and its noise floor;
+//! - [`candidates`]: the library of effects (every formats.md name);
+//! - [`criterion`]: the significance test and ranking of candidates;
+//! - [`workflow`]: greedy forward selection.
+
+pub mod candidates;
+pub mod criterion;
+pub mod data;
+pub mod fit;
+pub mod gap;
+pub mod model;
+pub mod noise;
+pub mod workflow;
 
 /// Command-line arguments of `plinth diagnose`.
 #[derive(clap::Args, Debug)]

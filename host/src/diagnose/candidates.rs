@@ -1,0 +1,286 @@
+//! The library of candidate effects (every name of formats.md, physics as in
+//! `crate::effects`), each an augmented pedestal model with its own extra
+//! parameters and the null hypothesis that removes it again.
+//!
+//! | effect | augmentation | extra parameters (null) |
+//! | --- | --- | --- |
+//! | `pedestal_damping` | iΩ·c on the diagonal (only when the base lacks c) | c_y, c_z (= 0) |
+//! | `structural_damping` | stiffness terms k → k·(1 + iη) | η (= 0), profiled |
+//! | `pedestal_cross_coupling` | k_yz·X_z in the y equation, k_yz·X_y in the z equation | k_yz (= 0) |
+//! | `pedestal_mass_anisotropy` | m split into m_y, m_z | m_y − m_z (= 0) |
+//! | `probe_runout` | F = K*·(rel − r), r constant | r_y, r_z complex, 4 real (= 0) |
+//! | `sensor_delay` | a delayed channel reads q·e^{−iΩτ}: on both pedestal channels (the simulator's definition), one of them, both rel probes or one | τ (= 0), profiled; six variants per bearing, each counted as a candidate |
+//! | `foundation_coupling` | −k_c·X_other in each equation of two neighbouring pedestals (neighbours in bearing order) | k_c_y, k_c_z (= 0) |
+
+use super::model::{DelayChannels, Model, Nonlinear, Term};
+use crate::effects::EffectKind;
+
+/// A parameter of a model: a linear term or a nonlinear scalar, by index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamRef {
+    /// Index into [`Model::terms`].
+    Term(usize),
+    /// Index into [`Model::nonlinear`].
+    Nonlinear(usize),
+}
+
+/// One candidate: the current model augmented by one effect at one place.
+#[derive(Clone, Debug)]
+pub struct Candidate {
+    /// The effect.
+    pub effect: EffectKind,
+    /// Bearing index it acts on (the first of the pair for foundation coupling).
+    pub bearing: usize,
+    /// The other bearing of a foundation coupling.
+    pub partner: Option<usize>,
+    /// Delay variant (`ped`, `ped_y`, `rel`, ...), for sensor delay.
+    pub variant: Option<String>,
+    /// The augmented model.
+    pub model: Model,
+    /// The effect's own parameters in the augmented model, with their names.
+    pub parameters: Vec<(String, ParamRef)>,
+    /// The null hypothesis as linear constraints Σ coef·param = 0.
+    pub null: Vec<Vec<(ParamRef, f64)>>,
+    /// A nonlinear scalar the candidate adds (profiled before testing).
+    pub new_nonlinear: Option<usize>,
+}
+
+/// Every candidate effect not yet in `model`, over `n_bearings` bearings.
+pub fn library(model: &Model, n_bearings: usize) -> Vec<Candidate> {
+    let mut out = Vec::new();
+    for b in 0..n_bearings {
+        // Pedestal damping: only the directions the model lacks.
+        let missing: Vec<usize> = (0..2)
+            .filter(|&d| !model.terms.contains(&Term::Damping { bearing: b, dir: d }))
+            .collect();
+        if !missing.is_empty() {
+            let terms = missing
+                .iter()
+                .map(|&d| Term::Damping { bearing: b, dir: d })
+                .collect();
+            out.push(add_terms(
+                model,
+                EffectKind::PedestalDamping,
+                b,
+                None,
+                terms,
+            ));
+        }
+        let has_stiffness = model
+            .terms
+            .iter()
+            .any(|t| matches!(t, Term::Stiffness { bearing, .. } if *bearing == b));
+        let has_loss = model
+            .nonlinear
+            .iter()
+            .any(|p| matches!(p, Nonlinear::LossFactor { bearing } if *bearing == b));
+        if has_stiffness && !has_loss {
+            out.push(add_nonlinear(
+                model,
+                EffectKind::StructuralDamping,
+                b,
+                None,
+                Nonlinear::LossFactor { bearing: b },
+            ));
+        }
+        if !model.terms.contains(&Term::CrossStiffness { bearing: b }) {
+            out.push(add_terms(
+                model,
+                EffectKind::PedestalCrossCoupling,
+                b,
+                None,
+                vec![Term::CrossStiffness { bearing: b }],
+            ));
+        }
+        if let Some(k) = model.terms.iter().position(|t| {
+            *t == Term::Mass {
+                bearing: b,
+                dir: None,
+            }
+        }) {
+            let mut m = model.clone();
+            m.terms.remove(k);
+            let ky = m.terms.len();
+            m.terms.push(Term::Mass {
+                bearing: b,
+                dir: Some(0),
+            });
+            m.terms.push(Term::Mass {
+                bearing: b,
+                dir: Some(1),
+            });
+            out.push(Candidate {
+                effect: EffectKind::PedestalMassAnisotropy,
+                bearing: b,
+                partner: None,
+                variant: None,
+                model: m,
+                parameters: vec![
+                    ("m_y".into(), ParamRef::Term(ky)),
+                    ("m_z".into(), ParamRef::Term(ky + 1)),
+                ],
+                null: vec![vec![
+                    (ParamRef::Term(ky), 1.0),
+                    (ParamRef::Term(ky + 1), -1.0),
+                ]],
+                new_nonlinear: None,
+            });
+        }
+        if !model
+            .terms
+            .iter()
+            .any(|t| matches!(t, Term::Runout { bearing, .. } if *bearing == b))
+        {
+            let terms = [(0, false), (0, true), (1, false), (1, true)]
+                .into_iter()
+                .map(|(dir, imag)| Term::Runout {
+                    bearing: b,
+                    dir,
+                    imag,
+                })
+                .collect();
+            out.push(add_terms(model, EffectKind::ProbeRunout, b, None, terms));
+        }
+        let has_delay = model
+            .nonlinear
+            .iter()
+            .any(|p| matches!(p, Nonlinear::Delay { bearing, .. } if *bearing == b));
+        if !has_delay {
+            for channels in DelayChannels::VARIANTS {
+                let mut c = add_nonlinear(
+                    model,
+                    EffectKind::SensorDelay,
+                    b,
+                    None,
+                    Nonlinear::Delay {
+                        bearing: b,
+                        channels,
+                    },
+                );
+                c.variant = Some(channels.label());
+                out.push(c);
+            }
+        }
+    }
+    for a in 0..n_bearings.saturating_sub(1) {
+        let b = a + 1;
+        let coupled = model
+            .terms
+            .iter()
+            .any(|t| matches!(t, Term::Coupling { a: x, b: y, .. } if *x == a && *y == b));
+        if !coupled {
+            let terms = (0..2).map(|dir| Term::Coupling { a, b, dir }).collect();
+            out.push(add_terms(
+                model,
+                EffectKind::FoundationCoupling,
+                a,
+                Some(b),
+                terms,
+            ));
+        }
+    }
+    out
+}
+
+fn add_terms(
+    model: &Model,
+    effect: EffectKind,
+    bearing: usize,
+    partner: Option<usize>,
+    terms: Vec<Term>,
+) -> Candidate {
+    let mut m = model.clone();
+    let first = m.terms.len();
+    m.terms.extend(terms);
+    let refs: Vec<ParamRef> = (first..m.terms.len()).map(ParamRef::Term).collect();
+    Candidate {
+        effect,
+        bearing,
+        partner,
+        variant: None,
+        parameters: refs
+            .iter()
+            .map(|r| match r {
+                ParamRef::Term(k) => (m.terms[*k].name(), *r),
+                ParamRef::Nonlinear(_) => (String::new(), *r),
+            })
+            .collect(),
+        null: refs.iter().map(|r| vec![(*r, 1.0)]).collect(),
+        model: m,
+        new_nonlinear: None,
+    }
+}
+
+fn add_nonlinear(
+    model: &Model,
+    effect: EffectKind,
+    bearing: usize,
+    partner: Option<usize>,
+    p: Nonlinear,
+) -> Candidate {
+    let mut m = model.clone();
+    let k = m.nonlinear.len();
+    m.nonlinear.push(p);
+    Candidate {
+        effect,
+        bearing,
+        partner,
+        variant: None,
+        parameters: vec![(p.name().to_string(), ParamRef::Nonlinear(k))],
+        null: vec![vec![(ParamRef::Nonlinear(k), 1.0)]],
+        model: m,
+        new_nonlinear: Some(k),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper_model(nb: usize) -> Model {
+        let mut terms = Vec::new();
+        for b in 0..nb {
+            terms.push(Term::Stiffness { bearing: b, dir: 0 });
+            terms.push(Term::Stiffness { bearing: b, dir: 1 });
+            terms.push(Term::Mass {
+                bearing: b,
+                dir: None,
+            });
+            terms.push(Term::Damping { bearing: b, dir: 0 });
+            terms.push(Term::Damping { bearing: b, dir: 1 });
+        }
+        Model {
+            terms,
+            nonlinear: vec![],
+        }
+    }
+
+    #[test]
+    fn library_covers_every_effect_name() {
+        let mut undamped = paper_model(2);
+        undamped
+            .terms
+            .retain(|t| !matches!(t, Term::Damping { .. }));
+        let lib = library(&undamped, 2);
+        for e in EffectKind::ALL {
+            assert!(lib.iter().any(|c| c.effect == e), "{}", e.name());
+        }
+        // With damping in the base, pedestal damping is not a candidate.
+        let lib = library(&paper_model(2), 2);
+        assert!(lib.iter().all(|c| c.effect != EffectKind::PedestalDamping));
+        // Per bearing: loss, cross, mass, runout, 6 delays; plus one pair.
+        assert_eq!(lib.len(), 2 * 10 + 1);
+    }
+
+    #[test]
+    fn effect_parameters_use_the_effects_module_names() {
+        let mut undamped = paper_model(2);
+        undamped
+            .terms
+            .retain(|t| !matches!(t, Term::Damping { .. }));
+        for c in library(&undamped, 2) {
+            let names: Vec<&str> = c.parameters.iter().map(|(n, _)| n.as_str()).collect();
+            assert_eq!(names, c.effect.parameter_names(), "{}", c.effect.name());
+        }
+    }
+}

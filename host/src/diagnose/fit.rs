@@ -1,0 +1,310 @@
+//! Weighted least squares of an augmented pedestal model (eq. 4 extended),
+//! the noise weights that whiten it, and the 1-D profile search of a
+//! nonlinear scalar (loss factor, delay).
+//!
+//! Errors in variables: noise enters the equations through the pedestal
+//! motion (a regressor) and through `rel` (the force). For fixed parameters
+//! the equation residual r = M·X + g − K*·rel is linear in both, so each real
+//! equation's noise variance is the sum over every measured real number of
+//! (∂r/∂number)²·σ². Each real equation is divided by that standard deviation;
+//! the weights come from a reference fit (the current model) and are held
+//! fixed while candidates are compared, so their residual sums are comparable.
+
+use super::data::Prepared;
+use super::model::{Model, Params};
+use anyhow::{anyhow, bail, Result};
+use nalgebra::{DMatrix, DVector};
+use num_complex::Complex;
+
+/// Noise standard deviation of each real equation: `sigma[b][j]` holds
+/// (y re, y im, z re, z im) of bearing `b` at speed index `j` [N].
+#[derive(Clone, Debug)]
+pub struct Weights {
+    /// Per bearing and speed; `None` where the bearing was not measured.
+    pub sigma: Vec<Vec<Option<[f64; 4]>>>,
+}
+
+impl Weights {
+    /// Propagates the measurement noise of `prep` through the equations of
+    /// `model` at parameter values `params` (the reference fit).
+    pub fn propagate(prep: &Prepared, model: &Model, params: &Params) -> Self {
+        let mut sigma = vec![vec![None; prep.speeds_hz.len()]; prep.bearings.len()];
+        for group in model.groups(prep.bearings.len()) {
+            for j in Model::group_speeds(prep, &group) {
+                let Some(a) = model.assemble(prep, &group, j, &params.nl, Some(&params.beta))
+                else {
+                    continue;
+                };
+                let Some(m) = a.matrix.as_ref() else { continue };
+                for (pb, &b) in group.iter().enumerate() {
+                    let Some(point) = prep.points[b][j].as_ref() else {
+                        continue;
+                    };
+                    let mut out = [0.0; 4];
+                    for d in 0..2 {
+                        let e = 2 * pb + d;
+                        let (mut var_re, mut var_im) = (0.0, 0.0);
+                        let mut add = |a: Complex<f64>, s_re: f64, s_im: f64| {
+                            var_re += a.re * a.re * s_re * s_re + a.im * a.im * s_im * s_im;
+                            var_im += a.im * a.im * s_re * s_re + a.re * a.re * s_im * s_im;
+                        };
+                        for (qc, &q) in group.iter().enumerate() {
+                            let Some(pq) = prep.points[q][j].as_ref() else {
+                                continue;
+                            };
+                            for dc in 0..2 {
+                                let c = 2 * qc + dc;
+                                let coef = m[(e, c)] * a.ped_phase[c];
+                                add(coef, pq.sigma[4 + 2 * dc], pq.sigma[5 + 2 * dc]);
+                            }
+                        }
+                        for dc in 0..2 {
+                            let coef = -point.kstar[d][dc] * a.rel_phase[2 * pb + dc];
+                            add(coef, point.sigma[2 * dc], point.sigma[2 * dc + 1]);
+                        }
+                        out[2 * d] = var_re.sqrt().max(f64::MIN_POSITIVE);
+                        out[2 * d + 1] = var_im.sqrt().max(f64::MIN_POSITIVE);
+                    }
+                    sigma[b][j] = Some(out);
+                }
+            }
+        }
+        Self { sigma }
+    }
+}
+
+/// A weighted linear least-squares fit of one group of pedestals with the
+/// nonlinear scalars held fixed.
+#[derive(Clone, Debug)]
+pub struct LinearFit {
+    /// Bearing indices of the group.
+    pub group: Vec<usize>,
+    /// Global indices of the fitted terms (design columns).
+    pub terms: Vec<usize>,
+    /// Fitted values of those terms (SI units).
+    pub beta: Vec<f64>,
+    /// Weighted residual sum of squares (noise-normalised, dimensionless).
+    pub rss: f64,
+    /// Whitened design matrix (rows = real equations).
+    pub design: DMatrix<f64>,
+    /// Whitened residual model − measurement of every row.
+    pub residual: DVector<f64>,
+    /// Speed index of every row.
+    pub row_speed: Vec<usize>,
+    /// Condition number of the column-normalised design.
+    pub condition: f64,
+}
+
+/// Builds the whitened design and right-hand side of `group`.
+fn design(
+    prep: &Prepared,
+    model: &Model,
+    nl: &[f64],
+    weights: &Weights,
+    group: &[usize],
+) -> Result<(Vec<usize>, DMatrix<f64>, DVector<f64>, Vec<usize>)> {
+    let terms = model.group_terms(group);
+    let speeds = Model::group_speeds(prep, group);
+    let n_rows = speeds.len() * 4 * group.len();
+    let mut x = DMatrix::zeros(n_rows, terms.len());
+    let mut y = DVector::zeros(n_rows);
+    let mut row_speed = Vec::with_capacity(n_rows);
+    let mut r = 0;
+    for &j in &speeds {
+        let a = model.assemble(prep, group, j, nl, None).ok_or_else(|| {
+            anyhow!(
+                "speed {} Hz: a bearing of the group is missing",
+                prep.speeds_hz[j]
+            )
+        })?;
+        for (pb, &b) in group.iter().enumerate() {
+            let s = weights.sigma[b][j].ok_or_else(|| {
+                anyhow!(
+                    "no noise weights for bearing {} at {} Hz",
+                    prep.bearings[b],
+                    prep.speeds_hz[j]
+                )
+            })?;
+            for d in 0..2 {
+                let e = 2 * pb + d;
+                for (part, sd) in [(0, s[2 * d]), (1, s[2 * d + 1])] {
+                    let pick = |z: Complex<f64>| if part == 0 { z.re } else { z.im };
+                    for (c, (_, col)) in a.columns.iter().enumerate() {
+                        x[(r, c)] = pick(col[e]) / sd;
+                    }
+                    y[r] = pick(a.force[e]) / sd;
+                    row_speed.push(j);
+                    r += 1;
+                }
+            }
+        }
+    }
+    Ok((terms, x, y, row_speed))
+}
+
+/// Solves a least-squares problem with column normalisation; returns the
+/// solution, residual Xβ − y and the condition number.
+pub fn solve_normalised(
+    x: &DMatrix<f64>,
+    y: &DVector<f64>,
+) -> Result<(DVector<f64>, DVector<f64>, f64)> {
+    let p = x.ncols();
+    if x.nrows() < p {
+        bail!("{} equations for {} unknowns", x.nrows(), p);
+    }
+    let norms: Vec<f64> = (0..p).map(|c| x.column(c).norm()).collect();
+    if let Some(c) = norms.iter().position(|&n| n == 0.0 || !n.is_finite()) {
+        bail!("regression column {c} is zero or not finite: the parameter is not identifiable from these data");
+    }
+    let mut xn = x.clone();
+    for (c, n) in norms.iter().enumerate() {
+        xn.column_mut(c).scale_mut(1.0 / n);
+    }
+    let svd = xn.svd(true, true);
+    let smax = svd.singular_values.max();
+    let smin = svd.singular_values.min();
+    let condition = smax / smin;
+    if !(condition.is_finite() && condition < 1e13) {
+        bail!("the regression is singular (condition number {condition:.3e})");
+    }
+    let bn = svd
+        .solve(y, 0.0)
+        .map_err(|e| anyhow!("least-squares solve failed: {e}"))?;
+    let beta = DVector::from_iterator(p, bn.iter().zip(&norms).map(|(b, n)| b / n));
+    let residual = x * &beta - y;
+    Ok((beta, residual, condition))
+}
+
+/// Fits the linear parameters of `group` for fixed nonlinear values `nl`.
+pub fn fit_group(
+    prep: &Prepared,
+    model: &Model,
+    nl: &[f64],
+    weights: &Weights,
+    group: &[usize],
+) -> Result<LinearFit> {
+    let (terms, x, y, row_speed) = design(prep, model, nl, weights, group)?;
+    let (beta, residual, condition) = solve_normalised(&x, &y)?;
+    Ok(LinearFit {
+        group: group.to_vec(),
+        terms,
+        beta: beta.iter().copied().collect(),
+        rss: residual.norm_squared(),
+        design: x,
+        residual,
+        row_speed,
+        condition,
+    })
+}
+
+/// The search interval of a nonlinear scalar over `group`'s speeds: a delay
+/// up to half a period at the highest speed (|Ω_max·τ| ≤ π, beyond which a
+/// phase is ambiguous); a loss factor within ±1.
+pub fn search_interval(prep: &Prepared, model: &Model, k: usize, group: &[usize]) -> (f64, f64) {
+    match model.nonlinear[k] {
+        super::model::Nonlinear::LossFactor { .. } => (-1.0, 1.0),
+        super::model::Nonlinear::Delay { .. } => {
+            let f_max = Model::group_speeds(prep, group)
+                .iter()
+                .map(|&j| prep.speeds_hz[j])
+                .fold(0.0, f64::max);
+            let t = 0.5 / f_max.max(f64::MIN_POSITIVE);
+            (-t, t)
+        }
+    }
+}
+
+/// Profiles nonlinear scalar `k` of `model` over its search interval (grid,
+/// then golden-section refinement of the best bracket), the other scalars
+/// fixed at `nl`; returns the best value and its fit.
+pub fn profile(
+    prep: &Prepared,
+    model: &Model,
+    nl: &[f64],
+    weights: &Weights,
+    group: &[usize],
+    k: usize,
+    interval: (f64, f64),
+) -> Result<(f64, LinearFit)> {
+    const GRID: usize = 81;
+    let mut values = nl.to_vec();
+    let mut eval = |s: f64| -> Result<LinearFit> {
+        values[k] = s;
+        fit_group(prep, model, &values, weights, group)
+    };
+    let (lo, hi) = interval;
+    let step = (hi - lo) / (GRID - 1) as f64;
+    let mut best: Option<(usize, f64)> = None;
+    let mut grid_rss = vec![f64::INFINITY; GRID];
+    for (i, g) in grid_rss.iter_mut().enumerate() {
+        if let Ok(f) = eval(lo + step * i as f64) {
+            *g = f.rss;
+            if best.is_none_or(|(_, r)| f.rss < r) {
+                best = Some((i, f.rss));
+            }
+        }
+    }
+    let (ib, _) =
+        best.ok_or_else(|| anyhow!("no value of the nonlinear parameter gives a solvable fit"))?;
+    let (mut a, mut b) = (
+        lo + step * ib.saturating_sub(1) as f64,
+        lo + step * (ib + 1).min(GRID - 1) as f64,
+    );
+    let phi = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - phi * (b - a);
+    let mut d = a + phi * (b - a);
+    let mut fc = eval(c).map(|f| f.rss).unwrap_or(f64::INFINITY);
+    let mut fd = eval(d).map(|f| f.rss).unwrap_or(f64::INFINITY);
+    for _ in 0..60 {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - phi * (b - a);
+            fc = eval(c).map(|f| f.rss).unwrap_or(f64::INFINITY);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + phi * (b - a);
+            fd = eval(d).map(|f| f.rss).unwrap_or(f64::INFINITY);
+        }
+        if (b - a).abs() <= 1e-12 * (hi - lo) {
+            break;
+        }
+    }
+    let s = if fc < fd { c } else { d };
+    let fit = eval(s)?;
+    Ok((s, fit))
+}
+
+/// The whitened Jacobian [X | ∂r/∂s] of `fit` with respect to its linear
+/// parameters and the group's nonlinear scalars `nl_index` (central finite
+/// differences at fixed β), for the covariance of all parameters.
+pub fn jacobian(
+    prep: &Prepared,
+    model: &Model,
+    nl: &[f64],
+    weights: &Weights,
+    fit: &LinearFit,
+    nl_index: &[usize],
+) -> Result<DMatrix<f64>> {
+    let p = fit.design.ncols();
+    let mut j = DMatrix::zeros(fit.design.nrows(), p + nl_index.len());
+    j.columns_mut(0, p).copy_from(&fit.design);
+    let beta = DVector::from_column_slice(&fit.beta);
+    for (c, &k) in nl_index.iter().enumerate() {
+        let (lo, hi) = search_interval(prep, model, k, &fit.group);
+        let h = 1e-4 * (hi - lo);
+        let resid = |s: f64| -> Result<DVector<f64>> {
+            let mut v = nl.to_vec();
+            v[k] = s;
+            let (_, x, y, _) = design(prep, model, &v, weights, &fit.group)?;
+            Ok(x * &beta - y)
+        };
+        let plus = resid(nl[k] + h)?;
+        let minus = resid(nl[k] - h)?;
+        j.column_mut(p + c).copy_from(&((plus - minus) / (2.0 * h)));
+    }
+    Ok(j)
+}

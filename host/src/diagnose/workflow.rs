@@ -1,0 +1,321 @@
+//! The discrepancy workflow: fit the base model, measure the gap, then add
+//! the best-supported missing effect, one at a time (greedy forward
+//! selection), while the evidence is significant relative to the noise floor.
+
+use super::candidates::{library, Candidate, ParamRef};
+use super::criterion::{Evidence, Inference};
+use super::data::Prepared;
+use super::fit::{fit_group, jacobian, profile, search_interval, Weights};
+use super::gap::{Gap, Prediction};
+use super::model::{Model, Params, Term};
+use anyhow::{anyhow, Result};
+use nalgebra::{DMatrix, DVector};
+use plinth_shared::regression::Parameter;
+
+/// Settings of the workflow.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Parameters of the base pedestal model (default: the paper's five).
+    pub base: Vec<Parameter>,
+    /// Family-wise significance level per step (Bonferroni over candidates).
+    pub alpha: f64,
+    /// Most effects to add.
+    pub max_steps: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            base: Parameter::ALL.to_vec(),
+            alpha: 1e-3,
+            max_steps: 8,
+        }
+    }
+}
+
+/// The paper's pedestal model (eq. 3) restricted to `base`, for every bearing.
+pub fn base_model(base: &[Parameter], n_bearings: usize) -> Model {
+    let mut terms = Vec::new();
+    for b in 0..n_bearings {
+        for p in base {
+            terms.push(match p {
+                Parameter::Ky => Term::Stiffness { bearing: b, dir: 0 },
+                Parameter::Kz => Term::Stiffness { bearing: b, dir: 1 },
+                Parameter::M => Term::Mass {
+                    bearing: b,
+                    dir: None,
+                },
+                Parameter::Cy => Term::Damping { bearing: b, dir: 0 },
+                Parameter::Cz => Term::Damping { bearing: b, dir: 1 },
+            });
+        }
+    }
+    Model {
+        terms,
+        nonlinear: Vec::new(),
+    }
+}
+
+/// A fitted model with the weights it was fitted with.
+#[derive(Clone, Debug)]
+pub struct State {
+    /// The model.
+    pub model: Model,
+    /// Its parameter values.
+    pub params: Params,
+    /// Noise weights propagated from these parameters.
+    pub weights: Weights,
+}
+
+impl State {
+    /// Fits `model` from scratch: weights from the rel noise alone, then
+    /// reweighted with the fitted parameters until they settle (3 passes);
+    /// nonlinear scalars start from `nl` and are re-profiled each pass.
+    pub fn fit(prep: &Prepared, model: Model, nl: Vec<f64>) -> Result<Self> {
+        let mut params = Params {
+            beta: vec![0.0; model.terms.len()],
+            nl,
+        };
+        for pass in 0..3 {
+            let weights = Weights::propagate(prep, &model, &params);
+            params = fit_all(
+                prep,
+                &model,
+                &params,
+                &weights,
+                pass > 0 || params.nl.iter().all(|v| *v == 0.0),
+            )?;
+        }
+        let weights = Weights::propagate(prep, &model, &params);
+        Ok(Self {
+            model,
+            params,
+            weights,
+        })
+    }
+
+    /// The pedestal-level prediction and gap of this state.
+    pub fn gap(&self, prep: &Prepared) -> (Prediction, Gap) {
+        let pred = Prediction::new(prep, &self.model, &self.params);
+        let gap = pred.gap(prep, None);
+        (pred, gap)
+    }
+
+    /// Parameter inference per group: (group, inference, parameter of each
+    /// estimate entry).
+    pub fn inference(
+        &self,
+        prep: &Prepared,
+    ) -> Result<Vec<(Vec<usize>, Inference, Vec<ParamRef>)>> {
+        let mut out = Vec::new();
+        for group in self.model.groups(prep.bearings.len()) {
+            let (inf, refs) = infer_group(prep, &self.model, &self.params, &self.weights, &group)?;
+            out.push((group, inf, refs));
+        }
+        Ok(out)
+    }
+}
+
+/// Fits every group's linear parameters at the nonlinear values of `start`,
+/// re-profiling each nonlinear scalar first when `profile_nl` is set.
+fn fit_all(
+    prep: &Prepared,
+    model: &Model,
+    start: &Params,
+    weights: &Weights,
+    profile_nl: bool,
+) -> Result<Params> {
+    let mut params = start.clone();
+    for group in model.groups(prep.bearings.len()) {
+        if profile_nl {
+            for k in model.group_nonlinear(&group) {
+                let full = search_interval(prep, model, k, &group);
+                // Refine around the current value: ± two grid steps of the full search.
+                let w = (full.1 - full.0) / 40.0;
+                let s = params.nl[k];
+                let (best, _) =
+                    profile(prep, model, &params.nl, weights, &group, k, (s - w, s + w))?;
+                params.nl[k] = best;
+            }
+        }
+        let fit = fit_group(prep, model, &params.nl, weights, &group)?;
+        for (t, v) in fit.terms.iter().zip(&fit.beta) {
+            params.beta[*t] = *v;
+        }
+    }
+    Ok(params)
+}
+
+/// Inference for one group: the Jacobian over its linear terms and nonlinear
+/// scalars at the fitted values.
+fn infer_group(
+    prep: &Prepared,
+    model: &Model,
+    params: &Params,
+    weights: &Weights,
+    group: &[usize],
+) -> Result<(Inference, Vec<ParamRef>)> {
+    let fit = fit_group(prep, model, &params.nl, weights, group)?;
+    let nl_index = model.group_nonlinear(group);
+    let jac = jacobian(prep, model, &params.nl, weights, &fit, &nl_index)?;
+    let mut estimate: Vec<f64> = fit.beta.clone();
+    estimate.extend(nl_index.iter().map(|&k| params.nl[k]));
+    let mut refs: Vec<ParamRef> = fit.terms.iter().map(|&t| ParamRef::Term(t)).collect();
+    refs.extend(nl_index.iter().map(|&k| ParamRef::Nonlinear(k)));
+    let inf = Inference::new(
+        &jac,
+        &fit.residual,
+        &fit.row_speed,
+        DVector::from_vec(estimate),
+    )?;
+    Ok((inf, refs))
+}
+
+/// A candidate fitted and tested.
+#[derive(Clone, Debug)]
+pub struct Evaluated {
+    /// The candidate.
+    pub candidate: Candidate,
+    /// Parameters of the augmented model (whole machine).
+    pub params: Params,
+    /// Inference over the candidate's group.
+    pub inference: Inference,
+    /// Parameter of each inference entry.
+    pub refs: Vec<ParamRef>,
+    /// Evidence for the effect.
+    pub evidence: Evidence,
+}
+
+impl Evaluated {
+    /// The effect's own parameters: (name, value, standard error), SI units.
+    pub fn effect_parameters(&self) -> Vec<(String, f64, f64)> {
+        self.candidate
+            .parameters
+            .iter()
+            .filter_map(|(name, r)| {
+                let i = self.refs.iter().position(|x| x == r)?;
+                Some((
+                    name.clone(),
+                    self.inference.estimate[i],
+                    self.inference.std_err(i),
+                ))
+            })
+            .collect()
+    }
+}
+
+/// Fits a candidate on top of `state` and tests its null hypothesis.
+pub fn evaluate(
+    prep: &Prepared,
+    state: &State,
+    candidate: Candidate,
+    tried: usize,
+    n_total: usize,
+) -> Result<Evaluated> {
+    let model = &candidate.model;
+    let nb = prep.bearings.len();
+    let group = model
+        .groups(nb)
+        .into_iter()
+        .find(|g| g.contains(&candidate.bearing))
+        .ok_or_else(|| anyhow!("bearing index {} out of range", candidate.bearing))?;
+    let mut nl = state.params.nl.clone();
+    nl.resize(model.nonlinear.len(), 0.0);
+    let fit = match candidate.new_nonlinear {
+        Some(k) => {
+            let interval = search_interval(prep, model, k, &group);
+            let (s, fit) = profile(prep, model, &nl, &state.weights, &group, k, interval)?;
+            nl[k] = s;
+            fit
+        }
+        None => fit_group(prep, model, &nl, &state.weights, &group)?,
+    };
+    // Whole-machine parameters: the current values, the group refitted.
+    let mut beta: Vec<f64> = model
+        .terms
+        .iter()
+        .map(|t| {
+            state
+                .model
+                .terms
+                .iter()
+                .position(|u| u == t)
+                .map_or(0.0, |i| state.params.beta[i])
+        })
+        .collect();
+    for (t, v) in fit.terms.iter().zip(&fit.beta) {
+        beta[*t] = *v;
+    }
+    let params = Params { beta, nl };
+    let nl_index = model.group_nonlinear(&group);
+    let jac = jacobian(prep, model, &params.nl, &state.weights, &fit, &nl_index)?;
+    let mut estimate = fit.beta.clone();
+    estimate.extend(nl_index.iter().map(|&k| params.nl[k]));
+    let mut refs: Vec<ParamRef> = fit.terms.iter().map(|&t| ParamRef::Term(t)).collect();
+    refs.extend(nl_index.iter().map(|&k| ParamRef::Nonlinear(k)));
+    let inference = Inference::new(
+        &jac,
+        &fit.residual,
+        &fit.row_speed,
+        DVector::from_vec(estimate),
+    )?;
+    let mut c = DMatrix::zeros(candidate.null.len(), refs.len());
+    for (row, constraint) in candidate.null.iter().enumerate() {
+        for (r, coef) in constraint {
+            let col = refs
+                .iter()
+                .position(|x| x == r)
+                .ok_or_else(|| anyhow!("constraint on a parameter outside the group"))?;
+            c[(row, col)] = *coef;
+        }
+    }
+    let evidence = inference.evidence(&c, tried, n_total)?;
+    Ok(Evaluated {
+        candidate,
+        params,
+        inference,
+        refs,
+        evidence,
+    })
+}
+
+/// The outcome of one step of the greedy search.
+#[derive(Clone, Debug)]
+pub struct StepOutcome {
+    /// Candidates tried (all count in the Bonferroni correction).
+    pub tried: usize,
+    /// Candidates that could be fitted, best first (largest ΔBIC).
+    pub ranked: Vec<Evaluated>,
+    /// Candidates that could not be fitted, with the reason.
+    pub failed: Vec<(Candidate, String)>,
+    /// Whether the best candidate is significant.
+    pub accepted: bool,
+}
+
+/// Tries every candidate on `state` and ranks them.
+pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
+    let cands = library(&state.model, prep.bearings.len());
+    let tried = cands.len();
+    let n_total: usize = (0..prep.bearings.len())
+        .map(|b| 4 * prep.points[b].iter().flatten().count())
+        .sum();
+    let mut ranked = Vec::new();
+    let mut failed = Vec::new();
+    for c in cands {
+        match evaluate(prep, state, c.clone(), tried, n_total) {
+            Ok(e) if e.evidence.wald.is_finite() => ranked.push(e),
+            Ok(_) => failed.push((c, "non-finite test statistic".to_string())),
+            Err(err) => failed.push((c, format!("{err:#}"))),
+        }
+    }
+    ranked.sort_by(|a, b| b.evidence.delta_bic.total_cmp(&a.evidence.delta_bic));
+    let accepted = ranked
+        .first()
+        .is_some_and(|e| e.evidence.delta_bic > 0.0 && e.evidence.p_adjusted < alpha);
+    StepOutcome {
+        tried,
+        ranked,
+        failed,
+        accepted,
+    }
+}
