@@ -21,6 +21,11 @@
 //! a version matches. Every other host message is a command answered by
 //! exactly one [`DeviceMessage::Ack`] or [`DeviceMessage::Nack`] carrying the
 //! command's sequence number (sample blocks included: the acks pace a replay).
+//!
+//! Sequence numbers restart with the session: the host restarts its
+//! [`Transmitter`](super::Transmitter) before each `Hello` (so `Hello` is frame
+//! 0) and the box restarts its own on accepting a `Hello` (so `HelloAck` is
+//! frame 0). A receiver takes frame 0 as a restart, not as a loss.
 
 use crate::bearing::BearingCoefficients;
 use crate::phasor::Complex;

@@ -40,7 +40,10 @@ pub struct LinkStats {
     pub resyncs: u32,
     /// Frames missing according to sequence numbers (sum of the gaps).
     pub sequence_gaps: u32,
-    /// Frames dropped because their sequence number was already accepted.
+    /// Valid frames dropped, not delivered, because their sequence number is
+    /// the last accepted one or at most
+    /// [`DUPLICATE_WINDOW`](super::DUPLICATE_WINDOW) behind it (rules 2 and 5
+    /// of [`sequence`](super::sequence)); each copy counts once.
     pub duplicates: u32,
     /// Times the sender restarted its numbering (new session or reboot).
     pub restarts: u32,
