@@ -1,8 +1,40 @@
 //! `plinth simulate`, `plinth signals`, `plinth predict`.
 
+use super::inject::{EffectRequest, EffectSet};
+use super::machine::Machine;
+use super::response::{unbalance_response, Noise};
+use crate::rundir::{DigitsMode, WriteOptions};
+use anyhow::{bail, Context};
+use std::path::PathBuf;
+
 /// Command-line arguments of `plinth simulate`.
 #[derive(clap::Args, Debug)]
-pub struct SimulateArgs {}
+pub struct SimulateArgs {
+    /// Machine file (TOML, SI units; see the `plinth::sim::machine` docs).
+    pub machine: PathBuf,
+    /// Run directory to write (created if needed).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Speeds [Hz] as START:STOP:STEP (inclusive), or a comma-separated list.
+    #[arg(long, default_value = "5:200:1")]
+    pub speeds: String,
+    /// Significant digits of the measured phasors (the paper used 12, 3, 2).
+    #[arg(long)]
+    pub digits: Option<u32>,
+    /// Truncate to --digits instead of rounding (as the paper did).
+    #[arg(long)]
+    pub truncate: bool,
+    /// Complex Gaussian noise, RMS relative to each channel's RMS over speed.
+    #[arg(long)]
+    pub noise: Option<f64>,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Effect to inject: NAME[:BEARING][=SIZE] (repeatable; see `plinth::sim::inject`).
+    #[arg(long = "effect")]
+    pub effects: Vec<String>,
+}
+
 /// Command-line arguments of `plinth signals`.
 #[derive(clap::Args, Debug)]
 pub struct SignalsArgs {}
@@ -10,9 +42,83 @@ pub struct SignalsArgs {}
 #[derive(clap::Args, Debug)]
 pub struct PredictArgs {}
 
+/// Parses a speed list: `START:STOP:STEP` (inclusive, to within STEP/1e6) or
+/// `a,b,c` [Hz].
+pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
+    let num = |s: &str| -> anyhow::Result<f64> {
+        let v: f64 = s
+            .trim()
+            .parse()
+            .with_context(|| format!("--speeds: {s:?} is not a number"))?;
+        if !(v.is_finite() && v >= 0.0) {
+            bail!("--speeds: {v} must be finite and >= 0 Hz");
+        }
+        Ok(v)
+    };
+    let parts: Vec<&str> = text.split(':').collect();
+    let speeds = match parts.as_slice() {
+        [a, b, c] => {
+            let (start, stop, step) = (num(a)?, num(b)?, num(c)?);
+            if step <= 0.0 || stop < start {
+                bail!("--speeds {text}: need STOP >= START and STEP > 0");
+            }
+            let n = ((stop - start) / step + 1e-6).floor() as usize + 1;
+            if n > 10_000_000 {
+                bail!("--speeds {text}: {n} speeds is too many");
+            }
+            (0..n).map(|i| start + i as f64 * step).collect()
+        }
+        [_] => text
+            .split(',')
+            .map(num)
+            .collect::<anyhow::Result<Vec<_>>>()?,
+        _ => bail!("--speeds {text}: use START:STOP:STEP or a comma-separated list"),
+    };
+    if speeds.is_empty() {
+        bail!("--speeds {text}: no speeds");
+    }
+    Ok(speeds)
+}
+
 /// Runs `plinth simulate`.
-pub fn simulate(_args: &SimulateArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`plinth simulate` is not available in this build yet")
+pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
+    let machine = Machine::from_toml_path(&args.machine)?;
+    let speeds = parse_speeds(&args.speeds)?;
+    let mut effects = EffectSet::none();
+    for e in &args.effects {
+        let req: EffectRequest = e.parse().map_err(anyhow::Error::msg)?;
+        effects.requests.push(req);
+    }
+    if let Some(d) = args.digits {
+        if d == 0 {
+            bail!("--digits must be at least 1");
+        }
+    }
+    let response = unbalance_response(&machine, &speeds, &effects)
+        .with_context(|| format!("simulating {}", args.machine.display()))?;
+    let noise = args.noise.map(|fraction| Noise {
+        fraction,
+        seed: args.seed,
+    });
+    let run = response.to_run_dir(noise)?;
+    let options = WriteOptions {
+        digits: args.digits,
+        digits_mode: if args.truncate {
+            DigitsMode::Truncate
+        } else {
+            DigitsMode::Round
+        },
+    };
+    run.write_with(&args.out, &options)
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    println!(
+        "{}: {} speeds x {} bearings -> {}",
+        machine.name,
+        speeds.len(),
+        machine.bearings.len(),
+        args.out.display()
+    );
+    Ok(())
 }
 /// Runs `plinth signals`.
 pub fn signals(_args: &SignalsArgs) -> anyhow::Result<()> {
@@ -21,4 +127,19 @@ pub fn signals(_args: &SignalsArgs) -> anyhow::Result<()> {
 /// Runs `plinth predict`.
 pub fn predict(_args: &PredictArgs) -> anyhow::Result<()> {
     anyhow::bail!("`plinth predict` is not available in this build yet")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn speed_ranges_are_inclusive() {
+        let s = parse_speeds("5:200:1").unwrap();
+        assert_eq!(s.len(), 196);
+        assert_eq!(*s.last().unwrap(), 200.0);
+        assert_eq!(parse_speeds("1.5, 2").unwrap(), vec![1.5, 2.0]);
+        assert!(parse_speeds("5:1:1").is_err());
+        assert!(parse_speeds("a:b").is_err());
+    }
 }

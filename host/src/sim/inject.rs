@@ -1,0 +1,120 @@
+//! Effects the simulator can put into a machine beyond the paper's pedestal
+//! model (names, physics and parameters as defined in `crate::effects`), with
+//! the default sizes the tests use.
+//!
+//! An effect is requested as `NAME[:BEARING][=SIZE]` (the `--effect` option).
+//! Without a bearing it acts on every bearing (`foundation_coupling`: on the
+//! first bearing with a pedestal). SIZE and its default, per effect:
+//!
+//! | name | SIZE means | default | resulting parameters |
+//! | --- | --- | --- | --- |
+//! | `pedestal_damping` | damping ratio ζ of each pedestal direction | 0.02 | c_y = 2ζ·sqrt(k_y·m), c_z = 2ζ·sqrt(k_z·m) [N·s/m] |
+//! | `structural_damping` | loss factor η | 0.06 | `eta`; K → K·(1 + iη) on the pedestal |
+//! | `pedestal_cross_coupling` | fraction of sqrt(k_y·k_z) | 0.25 | k_yz = k_zy = SIZE·sqrt(k_y·k_z) [N/m] |
+//! | `pedestal_mass_anisotropy` | relative extra horizontal mass | 0.30 | m_y = m, m_z = (1 + SIZE)·m [kg] |
+//! | `probe_runout` | fraction of the median \|rel\| of that bearing | 0.25 | r = a·(e^{i30°}, e^{−i60°}), a = SIZE·median over speeds and y, z of \|rel\| [m] |
+//! | `sensor_delay` | delay τ [s] | 0.35e-3 | ped channels × e^{−iΩτ} |
+//! | `foundation_coupling` | fraction of the geometric mean of the two pedestals' stiffness | 0.20 | springs k_c_y = SIZE·sqrt(k_y,a·k_y,b), k_c_z likewise [N/m] between the named pedestal and its neighbour (the next bearing with a pedestal in file order, the previous one for the last) |
+
+use crate::effects::EffectKind;
+use std::str::FromStr;
+
+/// One requested effect: kind, optional bearing, optional size (see the module table).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EffectRequest {
+    /// Which effect.
+    pub kind: EffectKind,
+    /// Bearing it acts on; `None` = every bearing (see module docs).
+    pub bearing: Option<String>,
+    /// Size in the effect's own unit (module table); `None` = default.
+    pub size: Option<f64>,
+}
+
+/// The effects to inject into one simulation.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EffectSet {
+    /// Requests, applied in order.
+    pub requests: Vec<EffectRequest>,
+}
+
+impl EffectSet {
+    /// No effects: the paper's model.
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// Adds a request (builder style).
+    pub fn with(mut self, kind: EffectKind, bearing: Option<&str>, size: Option<f64>) -> Self {
+        self.requests.push(EffectRequest {
+            kind,
+            bearing: bearing.map(str::to_string),
+            size,
+        });
+        self
+    }
+}
+
+/// Default SIZE of each effect (module table).
+pub fn default_size(kind: EffectKind) -> f64 {
+    match kind {
+        EffectKind::PedestalDamping => 0.02,
+        EffectKind::StructuralDamping => 0.06,
+        EffectKind::PedestalCrossCoupling => 0.25,
+        EffectKind::PedestalMassAnisotropy => 0.30,
+        EffectKind::ProbeRunout => 0.25,
+        EffectKind::SensorDelay => 0.35e-3,
+        EffectKind::FoundationCoupling => 0.20,
+    }
+}
+
+impl FromStr for EffectRequest {
+    type Err = String;
+
+    /// Parses `NAME[:BEARING][=SIZE]`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (head, size) = match s.split_once('=') {
+            Some((h, v)) => {
+                let v: f64 = v
+                    .trim()
+                    .parse()
+                    .map_err(|_| format!("effect {s:?}: SIZE {v:?} is not a number"))?;
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(format!("effect {s:?}: SIZE must be finite and >= 0"));
+                }
+                (h, Some(v))
+            }
+            None => (s, None),
+        };
+        let (name, bearing) = match head.split_once(':') {
+            Some((n, b)) if !b.is_empty() => (n, Some(b.to_string())),
+            Some((_, _)) => return Err(format!("effect {s:?}: empty bearing name after ':'")),
+            None => (head, None),
+        };
+        let kind = EffectKind::from_name(name.trim()).ok_or_else(|| {
+            let known: Vec<&str> = EffectKind::ALL.iter().map(|e| e.name()).collect();
+            format!("unknown effect {name:?} (known: {})", known.join(", "))
+        })?;
+        Ok(EffectRequest {
+            kind,
+            bearing,
+            size,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_name_bearing_and_size() {
+        let r: EffectRequest = "sensor_delay:left=0.001".parse().unwrap();
+        assert_eq!(r.kind, EffectKind::SensorDelay);
+        assert_eq!(r.bearing.as_deref(), Some("left"));
+        assert_eq!(r.size, Some(0.001));
+        let r: EffectRequest = "probe_runout".parse().unwrap();
+        assert_eq!((r.bearing, r.size), (None, None));
+        assert!("gremlins:left".parse::<EffectRequest>().is_err());
+        assert!("sensor_delay=abc".parse::<EffectRequest>().is_err());
+    }
+}

@@ -1,0 +1,71 @@
+//! Pedestals: the flexible supports between each bearing and the rigid ground.
+
+use num_complex::Complex;
+
+/// The paper's pedestal (Feng & Hahn eq. 3): one mass, direct stiffness and
+/// viscous damping in y (vertical) and z (horizontal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PedestalParams {
+    /// Mass [kg], the same in y and z.
+    pub m: f64,
+    /// Vertical stiffness to ground [N/m].
+    pub k_y: f64,
+    /// Horizontal stiffness to ground [N/m].
+    pub k_z: f64,
+    /// Vertical viscous damping to ground [N·s/m].
+    pub c_y: f64,
+    /// Horizontal viscous damping to ground [N·s/m].
+    pub c_z: f64,
+}
+
+impl PedestalParams {
+    /// Undamped natural frequencies (vertical, horizontal) [Hz] of the
+    /// pedestal alone on its springs, sqrt(k/m)/2π.
+    pub fn natural_frequencies_hz(&self) -> (f64, f64) {
+        let f = |k: f64| (k / self.m).sqrt() / std::f64::consts::TAU;
+        (f(self.k_y), f(self.k_z))
+    }
+}
+
+/// A pedestal with everything the simulator can give it beyond the paper's
+/// model (the effects of `crate::effects`): M = diag(m_y, m_z), full 2×2
+/// stiffness and damping, and a structural loss factor η (K → K·(1 + iη)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PedestalDynamics {
+    /// Masses (m_y, m_z) [kg].
+    pub m: [f64; 2],
+    /// Stiffness to ground [[k_y, k_yz], [k_zy, k_z]] [N/m].
+    pub k: [[f64; 2]; 2],
+    /// Viscous damping to ground [[c_y, c_yz], [c_zy, c_z]] [N·s/m].
+    pub c: [[f64; 2]; 2],
+    /// Structural (hysteretic) loss factor η [-].
+    pub eta: f64,
+}
+
+impl From<PedestalParams> for PedestalDynamics {
+    fn from(p: PedestalParams) -> Self {
+        Self {
+            m: [p.m, p.m],
+            k: [[p.k_y, 0.0], [0.0, p.k_z]],
+            c: [[p.c_y, 0.0], [0.0, p.c_z]],
+            eta: 0.0,
+        }
+    }
+}
+
+impl PedestalDynamics {
+    /// Dynamic stiffness −Ω²M + iΩC + K(1 + iη) at Ω [rad/s], [N/m].
+    pub fn impedance(&self, omega: f64) -> [[Complex<f64>; 2]; 2] {
+        let mut z = [[Complex::new(0.0, 0.0); 2]; 2];
+        for (i, row) in z.iter_mut().enumerate() {
+            for (j, zij) in row.iter_mut().enumerate() {
+                let mass = if i == j { self.m[i] } else { 0.0 };
+                *zij = Complex::new(
+                    self.k[i][j] - omega * omega * mass,
+                    omega * self.c[i][j] + self.eta * self.k[i][j],
+                );
+            }
+        }
+        z
+    }
+}

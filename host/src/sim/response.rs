@@ -1,0 +1,522 @@
+//! Synchronous unbalance response of a machine over a list of speeds, with
+//! effects injected, and its conversion to a run directory.
+//!
+//! Unbalance m·e at angle φ (from +y towards +z at the keyphasor instant
+//! t = 0) gives the rotating force f_y = m·e·Ω²·cos(Ωt + φ),
+//! f_z = m·e·Ω²·sin(Ωt + φ), i.e. phasors F_y = m·e·Ω²·e^{iφ},
+//! F_z = −i·F_y. Every phasor X here means x(t) = Re{X·e^{iΩt}} (formats.md).
+
+use super::assembly::Assembly;
+use super::banded::C64;
+use super::inject::{default_size, EffectSet};
+use super::machine::{Machine, MachineError};
+use super::pedestal::PedestalDynamics;
+use crate::effects::EffectKind;
+use crate::rundir::{BearingRow, EffectTruth, Measurement, PedestalTruth, RunDir, Truth};
+use plinth_shared::bearing::BearingCoefficients;
+use plinth_shared::phasor::Phasor2;
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use std::collections::BTreeMap;
+
+/// Why a simulation failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// A problem with the machine or a request about it.
+    #[error(transparent)]
+    Machine(#[from] MachineError),
+    /// An effect request that cannot be applied.
+    #[error("effect {effect}: {message}")]
+    Effect {
+        /// Effect name.
+        effect: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A bad speed list.
+    #[error("speeds: {0}")]
+    Speeds(String),
+    /// The dynamic stiffness matrix is singular at a speed (an unsupported
+    /// rigid-body mode or an undamped resonance hit exactly).
+    #[error("the machine's dynamic stiffness is singular at {speed_hz} Hz ({detail})")]
+    Singular {
+        /// Speed [Hz].
+        speed_hz: f64,
+        /// Solver detail.
+        detail: String,
+    },
+    /// Model assembly failed.
+    #[error("model: {0}")]
+    Model(String),
+}
+
+/// Response at one bearing and speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BearingResponse {
+    /// Rotor relative to pedestal, x_shaft − x_ped (y, z) [m], as the
+    /// physical motion (sensor effects not applied).
+    pub rel: Phasor2<f64>,
+    /// Absolute pedestal motion (y, z) [m] (zero on rigid ground).
+    pub ped: Phasor2<f64>,
+    /// Bearing coefficients at this speed.
+    pub coefficients: BearingCoefficients<f64>,
+}
+
+/// Sensor-side effects applied when the response is read as measurements.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SensorEffects {
+    /// Constant vector added to the `rel` readings (y, z) [m].
+    pub runout: Phasor2<f64>,
+    /// Delay of the `ped` channels [s].
+    pub ped_delay: f64,
+}
+
+/// Seeded complex Gaussian measurement noise.
+///
+/// Each measured channel (rel_y, rel_z, ped_y, ped_z of each bearing) gets
+/// n = σ·(a + i·b)/√2 with a, b independent standard normal (so E|n|² = σ²),
+/// σ = `fraction` × the RMS of that channel's |phasor| over all speeds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Noise {
+    /// Noise RMS relative to each channel's RMS over speed [-].
+    pub fraction: f64,
+    /// RNG seed (ChaCha12 `StdRng`; same seed and input, same noise).
+    pub seed: u64,
+}
+
+/// The unbalance response of a machine over speeds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Response {
+    /// Machine name.
+    pub machine_name: String,
+    /// Speeds [Hz], as requested.
+    pub speeds_hz: Vec<f64>,
+    /// Bearing names, in machine order.
+    pub bearing_names: Vec<String>,
+    /// `bearings[s][b]`: response at speed s, bearing b.
+    pub bearings: Vec<Vec<BearingResponse>>,
+    /// Axial node positions [m].
+    pub node_positions: Vec<f64>,
+    /// `shaft[s][node]`: shaft displacement phasors (y, z) [m] at every node.
+    pub shaft: Vec<Vec<Phasor2<f64>>>,
+    /// Sensor effects per bearing (applied by [`Response::measurements`]).
+    pub sensors: Vec<SensorEffects>,
+    /// What the data were made from: pedestals and injected effects.
+    pub truth: Truth,
+}
+
+fn pedestal_dynamics_of(machine: &Machine) -> Vec<Option<PedestalDynamics>> {
+    machine
+        .bearings
+        .iter()
+        .map(|b| b.pedestal.map(PedestalDynamics::from))
+        .collect()
+}
+
+fn effect_err(kind: EffectKind, message: impl Into<String>) -> SimError {
+    SimError::Effect {
+        effect: kind.name().to_string(),
+        message: message.into(),
+    }
+}
+
+/// A machine prepared for repeated solves: effects resolved into the model,
+/// matrices assembled once.
+#[derive(Clone, Debug)]
+pub struct UnbalanceSolver {
+    machine: Machine,
+    assembly: Assembly,
+    /// Unbalance phasor Σ m·e·e^{iφ} per shaft node [kg·m].
+    unbalance: Vec<C64>,
+    pedestals: Vec<Option<PedestalDynamics>>,
+    details: Vec<EffectTruth>,
+    sensor_requests: Vec<(EffectKind, Vec<usize>, f64)>,
+}
+
+impl UnbalanceSolver {
+    /// Resolves `effects` on `machine` and assembles the model.
+    pub fn new(machine: &Machine, effects: &EffectSet) -> Result<Self, SimError> {
+        machine.validate()?;
+        let mut pedestals = pedestal_dynamics_of(machine);
+        let mut couplings = Vec::new();
+        let mut details = Vec::new();
+        let mut sensor_requests = Vec::new();
+        for req in &effects.requests {
+            let kind = req.kind;
+            let size = req.size.unwrap_or_else(|| default_size(kind));
+            let targets: Vec<usize> = match &req.bearing {
+                Some(name) => vec![machine.bearing_index(name)?],
+                None => match kind {
+                    EffectKind::FoundationCoupling => {
+                        vec![pedestals
+                            .iter()
+                            .position(Option::is_some)
+                            .ok_or_else(|| effect_err(kind, "the machine has no pedestals"))?]
+                    }
+                    EffectKind::ProbeRunout | EffectKind::SensorDelay => {
+                        (0..machine.bearings.len()).collect()
+                    }
+                    _ => (0..machine.bearings.len())
+                        .filter(|&b| pedestals[b].is_some())
+                        .collect(),
+                },
+            };
+            for b in targets {
+                let name = machine.bearings[b].name.clone();
+                let mut params = BTreeMap::new();
+                match kind {
+                    EffectKind::ProbeRunout | EffectKind::SensorDelay => {
+                        sensor_requests.push((kind, vec![b], size));
+                        continue; // recorded once the response is known
+                    }
+                    _ => {}
+                }
+                let p = pedestals[b]
+                    .as_mut()
+                    .ok_or_else(|| effect_err(kind, format!("bearing {name:?} has no pedestal")))?;
+                match kind {
+                    EffectKind::PedestalDamping => {
+                        p.c[0][0] = 2.0 * size * (p.k[0][0] * p.m[0]).sqrt();
+                        p.c[1][1] = 2.0 * size * (p.k[1][1] * p.m[1]).sqrt();
+                        params.insert("c_y".into(), p.c[0][0]);
+                        params.insert("c_z".into(), p.c[1][1]);
+                    }
+                    EffectKind::StructuralDamping => {
+                        p.eta = size;
+                        params.insert("eta".into(), size);
+                    }
+                    EffectKind::PedestalCrossCoupling => {
+                        let kyz = size * (p.k[0][0] * p.k[1][1]).sqrt();
+                        p.k[0][1] = kyz;
+                        p.k[1][0] = kyz;
+                        params.insert("k_yz".into(), kyz);
+                    }
+                    EffectKind::PedestalMassAnisotropy => {
+                        p.m[1] = (1.0 + size) * p.m[0];
+                        params.insert("m_y".into(), p.m[0]);
+                        params.insert("m_z".into(), p.m[1]);
+                    }
+                    EffectKind::FoundationCoupling => {
+                        let with_ped: Vec<usize> = (0..machine.bearings.len())
+                            .filter(|&i| machine.bearings[i].pedestal.is_some())
+                            .collect();
+                        let pos = with_ped.iter().position(|&i| i == b).unwrap_or(0);
+                        let other = if pos + 1 < with_ped.len() {
+                            with_ped[pos + 1]
+                        } else if pos > 0 {
+                            with_ped[pos - 1]
+                        } else {
+                            return Err(effect_err(kind, "needs two bearings with pedestals"));
+                        };
+                        let (ka, kb) =
+                            (p.k, pedestals[other].map(|q| q.k).unwrap_or([[0.0; 2]; 2]));
+                        let kcy = size * (ka[0][0] * kb[0][0]).sqrt();
+                        let kcz = size * (ka[1][1] * kb[1][1]).sqrt();
+                        couplings.push((b, other, kcy, kcz));
+                        params.insert("k_c_y".into(), kcy);
+                        params.insert("k_c_z".into(), kcz);
+                    }
+                    EffectKind::ProbeRunout | EffectKind::SensorDelay => {}
+                }
+                details.push(EffectTruth {
+                    name: kind.name().into(),
+                    bearing: name,
+                    parameters: params,
+                });
+            }
+        }
+        let assembly = Assembly::new(machine, &pedestals, &couplings).map_err(SimError::Model)?;
+        let mut unbalance = vec![C64::new(0.0, 0.0); machine.node_positions.len()];
+        for u in &machine.unbalances {
+            unbalance[u.node] += C64::from_polar(u.magnitude, u.angle_deg.to_radians());
+        }
+        Ok(Self {
+            machine: machine.clone(),
+            assembly,
+            unbalance,
+            pedestals,
+            details,
+            sensor_requests,
+        })
+    }
+
+    /// The assembled model.
+    pub fn assembly(&self) -> &Assembly {
+        &self.assembly
+    }
+
+    /// Pedestal dynamics actually simulated (effects applied), per bearing.
+    pub fn pedestals(&self) -> &[Option<PedestalDynamics>] {
+        &self.pedestals
+    }
+
+    /// Bearing coefficients of every bearing at `speed_hz` [Hz].
+    pub fn bearing_coefficients(
+        &self,
+        speed_hz: f64,
+    ) -> Result<Vec<BearingCoefficients<f64>>, SimError> {
+        (0..self.machine.bearings.len())
+            .map(|b| Ok(self.machine.bearing_coefficients(b, speed_hz)?))
+            .collect()
+    }
+
+    /// Solves one speed [Hz]: the full DOF vector X (x(t) = Re{X e^{iΩt}})
+    /// into `x` (length = DOF count), using `work` as the matrix storage
+    /// (from `assembly().new_matrix()`); returns the bearing coefficients.
+    pub fn solve_speed(
+        &self,
+        speed_hz: f64,
+        work: &mut super::banded::BandMatrix,
+        x: &mut [C64],
+    ) -> Result<Vec<BearingCoefficients<f64>>, SimError> {
+        let coefs = self.bearing_coefficients(speed_hz)?;
+        let omega = std::f64::consts::TAU * speed_hz;
+        self.assembly.fill(work, omega, &coefs);
+        let singular = |e: super::banded::BandError| SimError::Singular {
+            speed_hz,
+            detail: e.to_string(),
+        };
+        work.factor().map_err(singular)?;
+        x.fill(C64::new(0.0, 0.0));
+        let w2 = omega * omega;
+        for (node, u) in self.unbalance.iter().enumerate() {
+            let d = self.assembly.node_dof[node];
+            x[d] = *u * w2;
+            x[d + 1] = *u * w2 * C64::new(0.0, -1.0);
+        }
+        self.assembly.solve(work, x).map_err(singular)?;
+        Ok(coefs)
+    }
+
+    /// Unbalance response at every speed in `speeds_hz` [Hz].
+    pub fn run(&self, speeds_hz: &[f64]) -> Result<Response, SimError> {
+        for (i, &s) in speeds_hz.iter().enumerate() {
+            if !(s.is_finite() && s >= 0.0) {
+                return Err(SimError::Speeds(format!(
+                    "speed #{i} is {s} Hz: speeds must be finite and >= 0"
+                )));
+            }
+        }
+        let nb = self.machine.bearings.len();
+        let nn = self.machine.node_positions.len();
+        let mut work = self.assembly.new_matrix();
+        let mut x = vec![C64::new(0.0, 0.0); self.assembly.n_dof];
+        let mut bearings = Vec::with_capacity(speeds_hz.len());
+        let mut shaft = Vec::with_capacity(speeds_hz.len());
+        for &s in speeds_hz {
+            let coefs = self.solve_speed(s, &mut work, &mut x)?;
+            let mut row = Vec::with_capacity(nb);
+            for (b, coefficients) in coefs.into_iter().enumerate() {
+                let sd = self.assembly.node_dof[self.assembly.bearing_node[b]];
+                let ped = match self.assembly.pedestal_dof[b] {
+                    Some(p) => [x[p], x[p + 1]],
+                    None => [C64::new(0.0, 0.0); 2],
+                };
+                row.push(BearingResponse {
+                    rel: [x[sd] - ped[0], x[sd + 1] - ped[1]],
+                    ped,
+                    coefficients,
+                });
+            }
+            bearings.push(row);
+            shaft.push(
+                (0..nn)
+                    .map(|n| {
+                        let d = self.assembly.node_dof[n];
+                        [x[d], x[d + 1]]
+                    })
+                    .collect(),
+            );
+        }
+        // Sensor effects, now that the typical readings are known.
+        let mut sensors = vec![SensorEffects::default(); nb];
+        let mut details = self.details.clone();
+        for (kind, targets, size) in &self.sensor_requests {
+            for &b in targets {
+                let mut params = BTreeMap::new();
+                match kind {
+                    EffectKind::ProbeRunout => {
+                        let mut mags: Vec<f64> = bearings
+                            .iter()
+                            .flat_map(|row: &Vec<BearingResponse>| {
+                                [row[b].rel[0].norm(), row[b].rel[1].norm()]
+                            })
+                            .collect();
+                        mags.sort_by(f64::total_cmp);
+                        let median = if mags.is_empty() {
+                            0.0
+                        } else if mags.len() % 2 == 1 {
+                            mags[mags.len() / 2]
+                        } else {
+                            0.5 * (mags[mags.len() / 2 - 1] + mags[mags.len() / 2])
+                        };
+                        let a = size * median;
+                        let r = [
+                            C64::from_polar(a, 30f64.to_radians()),
+                            C64::from_polar(a, -60f64.to_radians()),
+                        ];
+                        sensors[b].runout =
+                            [sensors[b].runout[0] + r[0], sensors[b].runout[1] + r[1]];
+                        params.insert("r_y_re".into(), r[0].re);
+                        params.insert("r_y_im".into(), r[0].im);
+                        params.insert("r_z_re".into(), r[1].re);
+                        params.insert("r_z_im".into(), r[1].im);
+                    }
+                    EffectKind::SensorDelay => {
+                        sensors[b].ped_delay += size;
+                        params.insert("tau".into(), *size);
+                    }
+                    _ => continue,
+                }
+                details.push(EffectTruth {
+                    name: kind.name().into(),
+                    bearing: self.machine.bearings[b].name.clone(),
+                    parameters: params,
+                });
+            }
+        }
+        let mut effects: Vec<String> = Vec::new();
+        for d in &details {
+            if !effects.contains(&d.name) {
+                effects.push(d.name.clone());
+            }
+        }
+        let pedestals = self
+            .machine
+            .bearings
+            .iter()
+            .filter_map(|b| {
+                b.pedestal.map(|p| PedestalTruth {
+                    bearing: b.name.clone(),
+                    k_y: p.k_y,
+                    k_z: p.k_z,
+                    m: p.m,
+                    c_y: p.c_y,
+                    c_z: p.c_z,
+                })
+            })
+            .collect();
+        Ok(Response {
+            machine_name: self.machine.name.clone(),
+            speeds_hz: speeds_hz.to_vec(),
+            bearing_names: self.machine.bearing_names(),
+            bearings,
+            node_positions: self.machine.node_positions.clone(),
+            shaft,
+            sensors,
+            truth: Truth {
+                pedestals,
+                effects,
+                effect_details: details,
+            },
+        })
+    }
+}
+
+/// Unbalance response of `machine` at `speeds_hz` [Hz] with `effects` injected.
+pub fn unbalance_response(
+    machine: &Machine,
+    speeds_hz: &[f64],
+    effects: &EffectSet,
+) -> Result<Response, SimError> {
+    UnbalanceSolver::new(machine, effects)?.run(speeds_hz)
+}
+
+impl Response {
+    /// The readings as instruments give them: `rel` plus runout, `ped` times
+    /// e^{−iΩτ} (sensor delay), one row per (speed, bearing) in speed order.
+    pub fn measurements(&self) -> Vec<Measurement> {
+        let mut out = Vec::with_capacity(self.speeds_hz.len() * self.bearing_names.len());
+        for (s, row) in self.bearings.iter().enumerate() {
+            let omega = std::f64::consts::TAU * self.speeds_hz[s];
+            for (b, r) in row.iter().enumerate() {
+                let sen = self.sensors[b];
+                let delay = C64::from_polar(1.0, -omega * sen.ped_delay);
+                out.push(Measurement {
+                    speed_hz: self.speeds_hz[s],
+                    bearing: self.bearing_names[b].clone(),
+                    rel: [r.rel[0] + sen.runout[0], r.rel[1] + sen.runout[1]],
+                    ped: [r.ped[0] * delay, r.ped[1] * delay],
+                });
+            }
+        }
+        out
+    }
+
+    /// The bearing coefficients as `bearings.csv` rows.
+    pub fn bearing_rows(&self) -> Vec<BearingRow> {
+        let mut out = Vec::new();
+        for (s, row) in self.bearings.iter().enumerate() {
+            for (b, r) in row.iter().enumerate() {
+                out.push(BearingRow {
+                    speed_hz: self.speeds_hz[s],
+                    bearing: self.bearing_names[b].clone(),
+                    coefficients: r.coefficients,
+                });
+            }
+        }
+        out
+    }
+
+    /// Shaft displacement phasors (y, z) [m] at `node` for every speed.
+    pub fn node_response(&self, node: usize) -> Option<Vec<Phasor2<f64>>> {
+        if node >= self.node_positions.len() {
+            return None;
+        }
+        Some(self.shaft.iter().map(|row| row[node]).collect())
+    }
+
+    /// A run directory (measurements with sensor effects and optional noise,
+    /// bearing coefficients, truth). Digit reduction happens when writing
+    /// (`RunDir::write_with`).
+    pub fn to_run_dir(&self, noise: Option<Noise>) -> Result<RunDir, SimError> {
+        let mut measurements = self.measurements();
+        if let Some(n) = noise {
+            if !(n.fraction.is_finite() && n.fraction >= 0.0) {
+                return Err(SimError::Speeds(format!(
+                    "noise fraction must be finite and >= 0 (got {})",
+                    n.fraction
+                )));
+            }
+            add_noise(&mut measurements, &self.bearing_names, n);
+        }
+        Ok(RunDir {
+            measurements,
+            bearings: self.bearing_rows(),
+            truth: Some(self.truth.clone()),
+        })
+    }
+}
+
+/// Adds seeded complex Gaussian noise (see [`Noise`]) to every channel.
+fn add_noise(measurements: &mut [Measurement], bearings: &[String], noise: Noise) {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(noise.seed);
+    for name in bearings {
+        let idx: Vec<usize> = (0..measurements.len())
+            .filter(|&i| &measurements[i].bearing == name)
+            .collect();
+        if idx.is_empty() {
+            continue;
+        }
+        for ch in 0..4 {
+            let get = |m: &Measurement| if ch < 2 { m.rel[ch] } else { m.ped[ch - 2] };
+            let ms: f64 = idx
+                .iter()
+                .map(|&i| get(&measurements[i]).norm_sqr())
+                .sum::<f64>()
+                / idx.len() as f64;
+            let sigma = noise.fraction * ms.sqrt() / std::f64::consts::SQRT_2;
+            for &i in &idx {
+                let a: f64 = StandardNormal.sample(&mut rng);
+                let b: f64 = StandardNormal.sample(&mut rng);
+                let n = C64::new(a * sigma, b * sigma);
+                let m = &mut measurements[i];
+                if ch < 2 {
+                    m.rel[ch] += n;
+                } else {
+                    m.ped[ch - 2] += n;
+                }
+            }
+        }
+    }
+}
