@@ -1,10 +1,218 @@
-//! `plinth identify`.
+//! `plinth identify`: batch identification of every pedestal in a run directory.
+
+use super::{
+    identify_run, mode_label, EquationMode, Identification, Model, Options, Parameter, PedestalFit,
+    DEFAULT_MAX_CONDITION_NUMBER,
+};
+use crate::rundir::{RunDir, Truth};
+use anyhow::Context;
+use std::path::PathBuf;
+
+/// How eq. 4 is used (the paper's Table 2 variants).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Equations {
+    /// R&I: the four real equations of every speed used independently (right with damping).
+    RAndI,
+    /// R+I: the real-part and imaginary-part equations added together.
+    RPlusI,
+    /// R: only the real-part equations.
+    Real,
+    /// I: only the imaginary-part equations.
+    Imag,
+}
+
+impl From<Equations> for EquationMode {
+    fn from(e: Equations) -> Self {
+        match e {
+            Equations::RAndI => EquationMode::RealAndImag,
+            Equations::RPlusI => EquationMode::RealPlusImag,
+            Equations::Real => EquationMode::Real,
+            Equations::Imag => EquationMode::Imag,
+        }
+    }
+}
 
 /// Command-line arguments of `plinth identify`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+#[command(after_help = "\
+Reads DIR/measurements.csv and DIR/bearings.csv (and DIR/truth.json when present, to show \
+the errors), computes each bearing's force on its pedestal from the known bearing \
+coefficients, and fits k_y, k_z [N/m], m [kg], c_y, c_z [N·s/m] of every pedestal by least \
+squares on Feng & Hahn's eq. 4. Prints value ± standard error per parameter, the residual RMS \
+[N] and the condition number; warnings go to stderr (and into the JSON), and a pedestal whose \
+fit cannot be trusted is marked UNTRUSTED.
 
-/// Runs `plinth identify`.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("`plinth identify` is not available in this build yet")
+Default model: all five parameters for --equations r-and-i; k_y,k_z,m for real, imag and \
+r-plus-i, which the paper used on undamped pedestals only (with damping they are biased: use \
+r-and-i).")]
+pub struct Args {
+    /// Run directory (measurements.csv, bearings.csv, optional truth.json).
+    pub dir: PathBuf,
+    /// Print the identification as JSON (formats.md) instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// How the real and imaginary parts of eq. 4 are used.
+    #[arg(long, value_enum, default_value_t = Equations::RAndI)]
+    pub equations: Equations,
+    /// Parameters to estimate, comma-separated from k_y,k_z,m,c_y,c_z; the
+    /// others are fixed at 0 [default: see below].
+    #[arg(long, value_name = "LIST")]
+    pub model: Option<Model>,
+    /// Condition number of the column-scaled regression above which a fit is
+    /// not trusted.
+    #[arg(long, default_value_t = DEFAULT_MAX_CONDITION_NUMBER)]
+    pub max_condition: f64,
+}
+
+impl Args {
+    /// The identification options these arguments ask for.
+    pub fn options(&self) -> Options {
+        Options {
+            mode: self.equations.into(),
+            model: self.model,
+            max_condition_number: self.max_condition,
+            ..Options::default()
+        }
+    }
+}
+
+/// Runs `plinth identify`: the table (or JSON) on stdout, warnings on stderr.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let run = RunDir::read(&args.dir)?;
+    let identification = identify_run(&run, &args.options())
+        .with_context(|| format!("identifying {}", args.dir.display()))?;
+    for p in &identification.pedestals {
+        for w in &p.warnings {
+            eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&identification)?);
+    } else {
+        print!("{}", table(&identification, run.truth.as_ref()));
+    }
+    Ok(())
+}
+
+/// The identification as an aligned text table: value ± standard error per
+/// parameter in MN/m, kg and N·s/m, residual RMS [N], condition number and
+/// whether the fit can be trusted; with `truth`, a row of the true values and
+/// one of the relative errors under each pedestal.
+pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
+    let mode = super::parse_mode(&identification.equations).map_or("?", mode_label);
+    let mut out = format!(
+        "equations {mode}, model {}\n\n",
+        identification.model.join(",")
+    );
+    let units = |p: Parameter| match p {
+        Parameter::Ky | Parameter::Kz => ("MN/m", 1.0e6),
+        Parameter::M => ("kg", 1.0),
+        Parameter::Cy | Parameter::Cz => ("N·s/m", 1.0),
+    };
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    let mut header = vec!["bearing".to_string()];
+    header.extend(
+        Parameter::ALL
+            .iter()
+            .map(|&p| format!("{} [{}]", p.name(), units(p).0)),
+    );
+    header.extend(["rms [N]", "cond", "fit"].map(String::from));
+    rows.push(header);
+    for fit in &identification.pedestals {
+        let mut row = vec![fit.bearing.clone()];
+        for p in Parameter::ALL {
+            let scale = units(p).1;
+            row.push(if is_fixed(fit, p) {
+                "0 (fixed)".to_string()
+            } else {
+                let se = fit.std_errs()[p as usize] / scale;
+                let se = if se.is_finite() {
+                    sig(se, 2)
+                } else {
+                    "∞".into()
+                };
+                format!("{} ± {se}", sig(fit.get(p) / scale, 6))
+            });
+        }
+        row.push(sig(fit.residual_rms, 3));
+        row.push(if fit.condition_number.is_finite() {
+            format!("{:.1e}", fit.condition_number)
+        } else {
+            "∞".into()
+        });
+        row.push(if fit.trusted { "ok" } else { "UNTRUSTED" }.into());
+        rows.push(row);
+
+        if let Some(t) = truth.and_then(|t| t.pedestals.iter().find(|t| t.bearing == fit.bearing)) {
+            let values = [t.k_y, t.k_z, t.m, t.c_y, t.c_z];
+            let mut truth_row = vec!["  truth".to_string()];
+            let mut error_row = vec!["  error".to_string()];
+            for p in Parameter::ALL {
+                let v = values[p as usize];
+                truth_row.push(sig(v / units(p).1, 6));
+                let e = fit.get(p) - v;
+                error_row.push(if v != 0.0 {
+                    format!("{:+.2}%", 100.0 * e / v.abs())
+                } else {
+                    format!("{:+} abs", sig(e / units(p).1, 2))
+                });
+            }
+            rows.push(truth_row);
+            rows.push(error_row);
+        }
+    }
+    let widths: Vec<usize> = (0..rows[0].len())
+        .map(|c| {
+            rows.iter()
+                .map(|r| r.get(c).map_or(0, |s| s.chars().count()))
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    for r in &rows {
+        let mut line = String::new();
+        for (c, cell) in r.iter().enumerate() {
+            let pad = widths[c].saturating_sub(cell.chars().count());
+            line.push_str(cell);
+            line.push_str(&" ".repeat(pad + 2));
+        }
+        out.push_str(line.trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+fn is_fixed(fit: &PedestalFit, p: Parameter) -> bool {
+    fit.fixed.iter().any(|f| f == p.name())
+}
+
+/// `x` with `digits` significant digits, in plain notation for moderate
+/// magnitudes.
+fn sig(x: f64, digits: usize) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    if x == 0.0 {
+        return "0".into();
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    if !(-4..9).contains(&magnitude) {
+        return format!("{:.*e}", digits.saturating_sub(1), x);
+    }
+    let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
+    format!("{x:.decimals$}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sig;
+
+    #[test]
+    fn significant_digit_formatting() {
+        assert_eq!(sig(10.00213, 6), "10.0021");
+        assert_eq!(sig(0.0031, 2), "0.0031");
+        assert_eq!(sig(150.0, 6), "150.000");
+        assert_eq!(sig(1.5e-7, 2), "1.5e-7");
+        assert_eq!(sig(-2.0, 3), "-2.00");
+    }
 }

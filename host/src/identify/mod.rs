@@ -1,2 +1,429 @@
 //! Batch least-squares identification of pedestals (Feng & Hahn eq. 4), in f64.
+//!
+//! Per pedestal (one per bearing), every measured speed gives the force the
+//! bearing transmits, F = (K_b + iΩ·C_b)·rel (eq. 2, with the known bearing
+//! coefficients interpolated to that speed), and eq. 3,
+//! (k − Ω²m + iΩc)·ped = F per direction, gives up to four real equations
+//! linear in θ = (k_y, k_z, m, c_y, c_z). They are stacked over speeds and
+//! solved by column-scaled least squares ([`lsq`]); the fit reports standard
+//! errors, the residual and the condition number, and warns ([`Warning`])
+//! whenever the data cannot support what it returns.
+//!
+//! Library entry points: [`identify_run`] (a whole [`RunDir`]),
+//! [`pedestal_points`] + [`fit_pedestal`] (one pedestal from data in memory).
+
+mod checks;
 pub mod cli;
+pub mod lsq;
+pub mod model;
+pub mod synthetic;
+
+pub use model::{mode_label, mode_name, parse_mode, Model, ModelError};
+pub use plinth_shared::regression::{EquationMode, Parameter};
+
+use crate::rundir::{BearingSchedule, Measurement, OutOfRange, RunDir, RunDirError};
+use nalgebra::{DMatrix, DVector};
+use plinth_shared::phasor::{omega_from_hz, Phasor2};
+use plinth_shared::regression::{equations_for_mode, PARAMETERS};
+use serde::{Deserialize, Deserializer, Serialize};
+use std::path::Path;
+
+/// One speed's data for one pedestal: what eq. 3 relates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PedestalPoint {
+    /// Rotor speed [Hz].
+    pub speed_hz: f64,
+    /// Absolute pedestal 1X displacement (y, z) [m].
+    pub ped: Phasor2<f64>,
+    /// Force the bearing transmits to the pedestal (y, z) [N].
+    pub force: Phasor2<f64>,
+}
+
+/// How to identify: which equations and which parameters, and when to stop
+/// trusting a fit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Options {
+    /// How the real and imaginary parts of eq. 3 are used (Table 2).
+    pub mode: EquationMode,
+    /// The parameters to estimate; `None` = [`Model::default_for`] the mode.
+    pub model: Option<Model>,
+    /// Condition number (of the column-scaled regression matrix) above which
+    /// a fit is not trusted [-].
+    pub max_condition_number: f64,
+    /// Fewest distinct speeds for a trusted fit.
+    pub min_speeds: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            mode: EquationMode::RealAndImag,
+            model: None,
+            max_condition_number: DEFAULT_MAX_CONDITION_NUMBER,
+            min_speeds: DEFAULT_MIN_SPEEDS,
+        }
+    }
+}
+
+/// Default [`Options::max_condition_number`]: with unit-norm columns, data
+/// accurate to a relative ε give parameters accurate to roughly κ·ε at best,
+/// so beyond 1e4 even 12-digit data lose most of their digits, and 2-digit
+/// data give nothing.
+pub const DEFAULT_MAX_CONDITION_NUMBER: f64 = 1.0e4;
+
+/// Default [`Options::min_speeds`].
+pub const DEFAULT_MIN_SPEEDS: usize = 3;
+
+impl Options {
+    /// Options for an equation mode with its default model.
+    pub fn with_mode(mode: EquationMode) -> Self {
+        Self {
+            mode,
+            ..Self::default()
+        }
+    }
+
+    /// The model in effect: the explicit one or the mode's default.
+    pub fn model(&self) -> Model {
+        self.model.unwrap_or_else(|| Model::default_for(self.mode))
+    }
+}
+
+/// What a warning is about. Serialised in snake_case.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WarningKind {
+    /// Fewer distinct speeds than [`Options::min_speeds`], or no more
+    /// equations than parameters (no variance estimate). Fit not trusted.
+    TooFewSpeeds,
+    /// Some parameters are not determined at all (linearly dependent columns,
+    /// e.g. a dead sensor). Fit not trusted.
+    RankDeficient,
+    /// Condition number above [`Options::max_condition_number`]: the data
+    /// barely separate some parameters. Fit not trusted.
+    IllConditioned,
+    /// A stiffness or mass whose standard error exceeds its value. Fit not trusted.
+    Undetermined,
+    /// A damping whose standard error exceeds its value: the data do not
+    /// resolve the damping (it is consistent with zero). Informative.
+    DampingNotResolved,
+    /// k − Ω²m keeps its sign over the measured speeds in both directions:
+    /// no pedestal resonance in range, so m rests on the curvature alone.
+    NoResonance,
+    /// Some speeds had non-finite numbers and were left out.
+    NonFiniteInput,
+}
+
+impl WarningKind {
+    /// True when a warning of this kind means the fit must not be trusted.
+    pub fn makes_untrusted(self) -> bool {
+        matches!(
+            self,
+            WarningKind::TooFewSpeeds
+                | WarningKind::RankDeficient
+                | WarningKind::IllConditioned
+                | WarningKind::Undetermined
+        )
+    }
+}
+
+/// Something the user must know about a fit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Warning {
+    /// What it is about.
+    pub kind: WarningKind,
+    /// A sentence for people, naming parameters, speeds and figures.
+    pub message: String,
+}
+
+/// Standard errors of the pedestal parameters, in their units
+/// (k [N/m], m [kg], c [N·s/m]); 0 for parameters fixed by the model,
+/// infinite (`null` in JSON) when not estimable.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StdErr {
+    /// Of k_y [N/m].
+    #[serde(deserialize_with = "null_is_infinite")]
+    pub k_y: f64,
+    /// Of k_z [N/m].
+    #[serde(deserialize_with = "null_is_infinite")]
+    pub k_z: f64,
+    /// Of m [kg].
+    #[serde(deserialize_with = "null_is_infinite")]
+    pub m: f64,
+    /// Of c_y [N·s/m].
+    #[serde(deserialize_with = "null_is_infinite")]
+    pub c_y: f64,
+    /// Of c_z [N·s/m].
+    #[serde(deserialize_with = "null_is_infinite")]
+    pub c_z: f64,
+}
+
+/// The identified pedestal at one bearing, serialised exactly as an element
+/// of formats.md's `"pedestals"` (plus the extra keys `fixed`, `trusted`,
+/// `speeds`, `equations`, `speed_range_hz`, `warnings`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PedestalFit {
+    /// Bearing name.
+    pub bearing: String,
+    /// Vertical stiffness [N/m].
+    #[serde(deserialize_with = "null_is_nan")]
+    pub k_y: f64,
+    /// Horizontal stiffness [N/m].
+    #[serde(deserialize_with = "null_is_nan")]
+    pub k_z: f64,
+    /// Mass [kg].
+    #[serde(deserialize_with = "null_is_nan")]
+    pub m: f64,
+    /// Vertical damping [N·s/m] (0 when fixed).
+    #[serde(deserialize_with = "null_is_nan")]
+    pub c_y: f64,
+    /// Horizontal damping [N·s/m] (0 when fixed).
+    #[serde(deserialize_with = "null_is_nan")]
+    pub c_z: f64,
+    /// Standard errors.
+    pub std_err: StdErr,
+    /// RMS of the equation residuals [N].
+    #[serde(deserialize_with = "null_is_nan")]
+    pub residual_rms: f64,
+    /// Condition number of the column-scaled regression matrix [-]
+    /// (infinite, `null` in JSON, when rank deficient).
+    #[serde(deserialize_with = "null_is_infinite")]
+    pub condition_number: f64,
+    /// Parameters the model fixed at zero (not estimated).
+    pub fixed: Vec<String>,
+    /// False when a warning says the numbers cannot be relied on.
+    pub trusted: bool,
+    /// Number of distinct speeds used.
+    pub speeds: usize,
+    /// Number of real equations in the regression.
+    pub equations: usize,
+    /// Lowest and highest speed used [Hz].
+    pub speed_range_hz: [f64; 2],
+    /// Everything the user must know about this fit.
+    pub warnings: Vec<Warning>,
+}
+
+impl PedestalFit {
+    /// θ = (k_y [N/m], k_z [N/m], m [kg], c_y [N·s/m], c_z [N·s/m]).
+    pub fn params(&self) -> [f64; PARAMETERS] {
+        [self.k_y, self.k_z, self.m, self.c_y, self.c_z]
+    }
+
+    /// Standard errors in θ order and units.
+    pub fn std_errs(&self) -> [f64; PARAMETERS] {
+        let s = &self.std_err;
+        [s.k_y, s.k_z, s.m, s.c_y, s.c_z]
+    }
+
+    /// The value of one parameter (its unit: see [`Parameter`]).
+    pub fn get(&self, p: Parameter) -> f64 {
+        self.params()[p as usize]
+    }
+
+    /// True when some warning is of `kind`.
+    pub fn has_warning(&self, kind: WarningKind) -> bool {
+        self.warnings.iter().any(|w| w.kind == kind)
+    }
+}
+
+/// The identification of every pedestal in a run: formats.md's output of
+/// `plinth identify --json` (plus the key `equations`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Identification {
+    /// Names of the estimated parameters.
+    pub model: Vec<String>,
+    /// How eq. 4 was used: `r-and-i`, `r-plus-i`, `real` or `imag`.
+    pub equations: String,
+    /// One fit per measured bearing, in order of first appearance.
+    pub pedestals: Vec<PedestalFit>,
+}
+
+impl Identification {
+    /// The fit of the pedestal at `bearing`.
+    pub fn pedestal(&self, bearing: &str) -> Option<&PedestalFit> {
+        self.pedestals.iter().find(|p| p.bearing == bearing)
+    }
+}
+
+/// Why an identification could not run at all (as opposed to a fit that ran
+/// but cannot be trusted, which carries [`Warning`]s).
+#[derive(Debug, thiserror::Error)]
+pub enum IdentifyError {
+    /// The run has no measurements.
+    #[error("the run has no measurements")]
+    NoMeasurements,
+    /// No finite data for a pedestal.
+    #[error("pedestal `{bearing}`: no usable (finite) data")]
+    NoData {
+        /// Bearing name.
+        bearing: String,
+    },
+    /// A measured bearing with no coefficients.
+    #[error("bearing `{bearing}` has no coefficients (no rows in bearings.csv)")]
+    UnknownBearing {
+        /// Bearing name.
+        bearing: String,
+    },
+    /// A measurement speed outside the bearing's coefficient table.
+    #[error("bearing `{bearing}`: {source}")]
+    BearingRange {
+        /// Bearing name.
+        bearing: String,
+        /// The speed and the table's range.
+        #[source]
+        source: OutOfRange,
+    },
+    /// The run directory could not be read.
+    #[error(transparent)]
+    RunDir(#[from] RunDirError),
+}
+
+/// The per-speed data of one pedestal: the measured pedestal phasors and the
+/// bearing forces F = (K_b + iΩC_b)·rel with the coefficients interpolated
+/// from `schedule` at each speed (formats.md; no extrapolation).
+pub fn pedestal_points<'a>(
+    measurements: impl IntoIterator<Item = &'a Measurement>,
+    schedule: &BearingSchedule,
+) -> Result<Vec<PedestalPoint>, OutOfRange> {
+    measurements
+        .into_iter()
+        .map(|m| {
+            let coefficients = schedule.at(m.speed_hz)?;
+            let force = coefficients.force(omega_from_hz(m.speed_hz), &m.rel);
+            Ok(PedestalPoint {
+                speed_hz: m.speed_hz,
+                ped: m.ped,
+                force,
+            })
+        })
+        .collect()
+}
+
+/// Identifies one pedestal from its per-speed data by least squares on
+/// eq. 4 (rows from [`plinth_shared::regression`]). Never fails on
+/// poor data: the fit carries warnings and `trusted = false` instead. Fails
+/// only when no point is finite.
+pub fn fit_pedestal(
+    bearing: &str,
+    points: &[PedestalPoint],
+    options: &Options,
+) -> Result<PedestalFit, IdentifyError> {
+    let model = options.model();
+    let columns = model.parameters();
+    let finite = |p: &&PedestalPoint| {
+        p.speed_hz.is_finite()
+            && p.ped
+                .iter()
+                .chain(&p.force)
+                .all(|c| c.re.is_finite() && c.im.is_finite())
+    };
+    let mut used: Vec<PedestalPoint> = points.iter().filter(finite).copied().collect();
+    let skipped = points.len() - used.len();
+    if used.is_empty() {
+        return Err(IdentifyError::NoData {
+            bearing: bearing.to_string(),
+        });
+    }
+    used.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
+
+    let mut rows: Vec<f64> = Vec::new();
+    let mut rhs: Vec<f64> = Vec::new();
+    for p in &used {
+        let (eqs, n) =
+            equations_for_mode(options.mode, omega_from_hz(p.speed_hz), &p.ped, &p.force);
+        for eq in &eqs[..n] {
+            rows.extend(columns.iter().map(|&c| eq.row[c as usize]));
+            rhs.push(eq.rhs);
+        }
+    }
+    let a = DMatrix::from_row_slice(rhs.len(), columns.len(), &rows);
+    let b = DVector::from_vec(rhs);
+    let solution = lsq::solve(&a, &b);
+
+    let mut theta = [0.0; PARAMETERS];
+    let mut se = [0.0; PARAMETERS];
+    for (k, &c) in columns.iter().enumerate() {
+        theta[c as usize] = solution.theta[k];
+        se[c as usize] = solution.std_err[k];
+    }
+    let mut speeds: Vec<f64> = used.iter().map(|p| p.speed_hz).collect();
+    speeds.dedup();
+
+    let mut fit = PedestalFit {
+        bearing: bearing.to_string(),
+        k_y: theta[0],
+        k_z: theta[1],
+        m: theta[2],
+        c_y: theta[3],
+        c_z: theta[4],
+        std_err: StdErr {
+            k_y: se[0],
+            k_z: se[1],
+            m: se[2],
+            c_y: se[3],
+            c_z: se[4],
+        },
+        residual_rms: solution.residual_rms(),
+        condition_number: solution.condition_number,
+        fixed: model.fixed().iter().map(|p| p.name().to_string()).collect(),
+        trusted: true,
+        speeds: speeds.len(),
+        equations: solution.equations,
+        speed_range_hz: [used[0].speed_hz, used[used.len() - 1].speed_hz],
+        warnings: Vec::new(),
+    };
+    fit.warnings = checks::warnings(&fit, &used, skipped, &solution, &columns, options);
+    fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
+    Ok(fit)
+}
+
+/// Identifies every measured pedestal of a run, in the order the bearings
+/// first appear in `measurements.csv`.
+pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
+    let bearings = run.measured_bearings();
+    if bearings.is_empty() {
+        return Err(IdentifyError::NoMeasurements);
+    }
+    let schedules = run.bearing_schedules();
+    let mut pedestals = Vec::with_capacity(bearings.len());
+    for bearing in bearings {
+        let schedule = schedules
+            .get(bearing)
+            .ok_or_else(|| IdentifyError::UnknownBearing {
+                bearing: bearing.to_string(),
+            })?;
+        let points = pedestal_points(
+            run.measurements.iter().filter(|m| m.bearing == bearing),
+            schedule,
+        )
+        .map_err(|source| IdentifyError::BearingRange {
+            bearing: bearing.to_string(),
+            source,
+        })?;
+        pedestals.push(fit_pedestal(bearing, &points, options)?);
+    }
+    Ok(Identification {
+        model: options.model().names(),
+        equations: mode_name(options.mode).to_string(),
+        pedestals,
+    })
+}
+
+/// Reads the run directory `dir` and identifies every pedestal in it.
+pub fn identify_dir(
+    dir: impl AsRef<Path>,
+    options: &Options,
+) -> Result<Identification, IdentifyError> {
+    let run = RunDir::read(dir)?;
+    identify_run(&run, options)
+}
+
+/// serde: JSON `null` (how serde_json writes a non-finite number) reads as NaN.
+fn null_is_nan<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// serde: JSON `null` reads as +∞ (an unbounded standard error or condition number).
+fn null_is_infinite<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
+}
