@@ -1,11 +1,27 @@
 //! Plinth field box: acquisition pipeline and drivers, target independent so
 //! that the host runs them against simulated hardware.
 //!
-//! Only [`stm32`] touches hardware registers (and is only built for the MCU).
+//! - [`device`]: the protocol endpoint and main-loop step ([`device::Device`]).
+//! - [`config`]: the host's configuration commands, validated.
+//! - [`pipeline`]: samples → phasors → bearing forces → pedestal RLS → frames.
+//! - [`source`]: the [`source::SampleSource`] trait; [`replay`] (host-fed
+//!   blocks, used under QEMU) and [`adc_source`] (the [`ad7606`] ADC with
+//!   keyphasor capture) implement it.
+//! - [`link`], [`watchdog`], [`uptime`]: the loop's I/O, feed hook and clock.
+//! - `stm32` (MCU only): the one module with register access.
 #![no_std]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod ad7606;
+pub mod adc_source;
+pub mod config;
+pub mod device;
 pub mod link;
+pub mod pipeline;
+pub mod replay;
+pub mod source;
 #[cfg(target_os = "none")]
 pub mod stm32;
+pub mod uptime;
+pub mod watchdog;

@@ -1,4 +1,11 @@
 //! Plinth field box image (thumbv7em-none-eabihf).
+//!
+//! Runs on an STM32F405/407 and unchanged under
+//! `qemu-system-arm -M netduinoplus2` (see `.cargo/config.toml`). The host
+//! link is USART1; with no sensors attached the samples come from the host
+//! (replay). Under QEMU (the default `semihosting` feature) the image exits
+//! with status 0 through semihosting once a `Stop` has been acknowledged and
+//! every queued frame has been sent, so a test can run it to completion.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
 
@@ -12,7 +19,7 @@ fn main() {
 mod image {
     #[cfg(all(feature = "rtt", feature = "semihosting"))]
     compile_error!(
-        "choose one log transport: `semihosting` (default) or `rtt` (--no-default-features)"
+        "choose one log transport: `semihosting` (default) or `rtt` (--no-default-features --features rtt)"
     );
 
     #[cfg(feature = "rtt")]
@@ -23,27 +30,78 @@ mod image {
     use panic_semihosting as _;
 
     use cortex_m_rt::entry;
-    use cortex_m_semihosting::debug;
-    use plinth_firmware::link::ByteLink;
-    use plinth_firmware::stm32::Usart1;
+    use plinth_firmware::ad7606::Range;
+    use plinth_firmware::device::Device;
+    use plinth_firmware::replay::ReplaySource;
+    use plinth_firmware::stm32::{Iwdg, Usart1};
+    use plinth_firmware::uptime::Uptime;
+    use plinth_firmware::watchdog::Watchdog;
 
-    /// APB2 clock after reset (HSI) [Hz].
+    /// APB2 clock after reset (HSI) [Hz]: the USART1 baud rate base.
     const PCLK2_HZ: u32 = 16_000_000;
+    /// Core clock that SysTick counts [Hz] (QEMU's netduinoplus2 model).
+    const CORE_HZ: u32 = 168_000_000;
     /// Host link speed [bit/s].
     const BAUD: u32 = 115_200;
+    /// Watchdog timeout [ms]: far above one bounded main-loop pass.
+    const WATCHDOG_MS: u32 = 500;
+
+    #[cfg(feature = "rtt")]
+    #[panic_handler]
+    fn panic(info: &core::panic::PanicInfo) -> ! {
+        defmt::error!("panic: {}", defmt::Display2Format(info));
+        loop {
+            cortex_m::asm::udf();
+        }
+    }
 
     #[entry]
     fn main() -> ! {
-        let mut usart = Usart1::init(PCLK2_HZ, BAUD);
-        defmt::info!("plinth-firmware up");
+        let Some(cp) = cortex_m::Peripherals::take() else {
+            // Only reachable if something took the core peripherals before
+            // main, which nothing does.
+            loop {
+                cortex_m::asm::udf();
+            }
+        };
+        let mut link = Usart1::init(PCLK2_HZ, BAUD);
+        let mut watchdog = Iwdg::start(WATCHDOG_MS);
+        let mut uptime = Uptime::new(cp.SYST, CORE_HZ);
+        // Statics (counted by `size`), not stack: the device is ~20 KiB.
+        let device =
+            cortex_m::singleton!(: Device = Device::new(Range::PlusMinus10V.volts_per_code()));
+        let source = cortex_m::singleton!(: ReplaySource = ReplaySource::new(Range::PlusMinus10V.volts_per_code()));
+        let (Some(device), Some(source)) = (device, source) else {
+            loop {
+                cortex_m::asm::udf();
+            }
+        };
+        defmt::info!("plinth-firmware {=str} up", env!("CARGO_PKG_VERSION"));
+        let mut stopping = false;
         loop {
-            if let Some(b) = usart.read_byte() {
-                if b == b'q' {
-                    defmt::info!("bye");
-                    debug::exit(debug::EXIT_SUCCESS);
-                }
-                while !usart.write_byte(b) {}
+            watchdog.feed();
+            let now = uptime.now_ms();
+            device.poll(&mut link, source, now);
+            if device.take_stopped() {
+                defmt::info!("stop: counters {}", device.counters());
+                stopping = true;
+            }
+            if stopping && device.tx_idle() {
+                stopping = false;
+                finish();
             }
         }
     }
+
+    /// Ends the run after a `Stop`: under semihosting (QEMU) the process
+    /// exits with status 0; on hardware the box keeps serving the link.
+    #[cfg(feature = "semihosting")]
+    fn finish() {
+        defmt::info!("exit");
+        cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
+    }
+
+    /// Hardware build: a `Stop` just returns to idle.
+    #[cfg(not(feature = "semihosting"))]
+    fn finish() {}
 }

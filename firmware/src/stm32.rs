@@ -1,5 +1,5 @@
-//! STM32F4 registers the image touches: the USART1 host link, and the
-//! clocks and pins it needs. This is the one module with `unsafe`: every
+//! STM32F4 registers the image touches: the USART1 host link with the
+//! clocks and pins it needs, and the independent watchdog. This is the one module with `unsafe`: every
 //! access is a volatile read or write of a documented memory-mapped register.
 //!
 //! The same code runs on an STM32F405/407 board and under
@@ -9,6 +9,7 @@
 #![allow(unsafe_code)]
 
 use crate::link::ByteLink;
+use crate::watchdog::Watchdog;
 
 /// RCC AHB1 peripheral clock enable register (GPIOAEN = bit 0).
 const RCC_AHB1ENR: usize = 0x4002_3830;
@@ -117,5 +118,39 @@ impl ByteLink for Usart1 {
 
     fn receive_errors(&self) -> u32 {
         self.receive_errors
+    }
+}
+
+/// IWDG key register.
+const IWDG_KR: usize = 0x4000_3000;
+/// IWDG prescaler register.
+const IWDG_PR: usize = 0x4000_3004;
+/// IWDG reload register.
+const IWDG_RLR: usize = 0x4000_3008;
+/// DBGMCU APB1 freeze register (DBG_IWDG_STOP = bit 12).
+const DBGMCU_APB1_FZ: usize = 0xE004_2008;
+
+/// The independent watchdog, clocked by the ~32 kHz LSI.
+#[derive(Debug)]
+pub struct Iwdg(());
+
+impl Iwdg {
+    /// Starts the watchdog with a timeout of about `timeout_ms` [ms]
+    /// (prescaler 32: 1 ms per count, at most 4095 ms). It stops while a
+    /// debugger halts the core. Once started it cannot be stopped.
+    pub fn start(timeout_ms: u32) -> Self {
+        set_bits(DBGMCU_APB1_FZ, 1 << 12, 1 << 12);
+        write(IWDG_KR, 0xCCCC); // start
+        write(IWDG_KR, 0x5555); // unlock PR and RLR
+        write(IWDG_PR, 0b011); // LSI / 32
+        write(IWDG_RLR, timeout_ms.clamp(1, 0xFFF));
+        write(IWDG_KR, 0xAAAA); // reload
+        Self(())
+    }
+}
+
+impl Watchdog for Iwdg {
+    fn feed(&mut self) {
+        write(IWDG_KR, 0xAAAA);
     }
 }

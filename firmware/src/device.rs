@@ -1,0 +1,405 @@
+//! The box's side of the wire protocol: session state, command handling,
+//! the outgoing frame queue, and the main-loop step that ties the link, the
+//! sample source and the pipeline together.
+//!
+//! # What the host sees
+//!
+//! 1. Host `Hello` → box `HelloAck` (frame seq 0 of the session) or
+//!    `VersionMismatch`. Anything else before that → `Nack(NoSession)`.
+//! 2. Host configures (while stopped): `ConfigureChannels`,
+//!    `ConfigureAveraging`, `ConfigureRls`, `BearingTable` chunks; each →
+//!    `Ack` or `Nack(reason)`.
+//! 3. `Start` → `Ack` once every configured bearing has a complete table,
+//!    else `Nack(WrongState)`.
+//! 4. While running, each `Samples` block → `Ack` after it was processed
+//!    (or `Nack`); the phasor/estimate frames it produced are queued before
+//!    the `Ack`. With an ADC source, frames come as revolutions complete.
+//! 5. `Stop` → `Ack`, then the final `Estimates` (if any) and a `Status`.
+//! 6. A `Status` frame every [`STATUS_PERIOD_MS`] while a session is open.
+//!
+//! Replies (`Ack`, `Nack`, `HelloAck`) are never dropped for data: data
+//! frames only go into the queue if [`REPLY_RESERVE`] bytes stay free, and a
+//! data frame that does not fit is counted in `queue_full_drops`.
+
+use crate::config::Configuration;
+use crate::link::ByteLink;
+use crate::pipeline::Pipeline;
+use crate::source::{SampleBuffer, SampleSource, CHANNELS};
+use plinth_shared::protocol::{
+    Ack, Capabilities, DeviceCounters, DeviceMessage, DeviceState, FirmwareVersion, HelloAck,
+    HostMessage, Nack, NackReason, Receiver, StatusFrame, Transmitter, VersionMismatch,
+    MAX_BEARINGS, MAX_FRAME_SIZE, PROTOCOL_VERSION,
+};
+
+/// Bytes of encoded frames waiting for the transmitter.
+pub const TX_QUEUE_BYTES: usize = 4096;
+
+/// Queue bytes kept free for replies when a data frame is queued.
+pub const REPLY_RESERVE: usize = 256;
+
+/// Interval between status frames while a session is open [ms].
+pub const STATUS_PERIOD_MS: u32 = 1000;
+
+/// Received bytes handled per [`Device::poll`] (bounds one loop pass).
+pub const RX_BUDGET: usize = 1024;
+
+/// Bytes handed to the transmitter per [`Device::poll`].
+pub const TX_BUDGET: usize = 1024;
+
+/// ADC sample rate per channel [Hz].
+pub const SAMPLE_RATE_HZ: f32 = 51_200.0;
+
+/// This image's version (from Cargo.toml).
+pub fn firmware_version() -> FirmwareVersion {
+    let parse = |s: &str| s.parse::<u16>().unwrap_or(0);
+    FirmwareVersion {
+        major: parse(env!("CARGO_PKG_VERSION_MAJOR")),
+        minor: parse(env!("CARGO_PKG_VERSION_MINOR")),
+        patch: parse(env!("CARGO_PKG_VERSION_PATCH")),
+    }
+}
+
+/// What the box can do, for `HelloAck`: `volts_per_code` is the ADC step [V].
+pub fn capabilities(volts_per_code: f32) -> Capabilities {
+    Capabilities {
+        max_channels: CHANNELS as u8,
+        max_bearings: MAX_BEARINGS as u8,
+        bearing_table_capacity: crate::config::TABLE_ROWS as u16,
+        sample_rate_hz: SAMPLE_RATE_HZ,
+        adc_volts_per_code: volts_per_code,
+    }
+}
+
+/// What one [`Device::poll`] did (for the caller's idle/exit decisions).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Activity {
+    /// Bytes received.
+    pub received: usize,
+    /// Bytes sent.
+    pub sent: usize,
+    /// Sample vectors processed.
+    pub samples: usize,
+}
+
+/// The box: protocol endpoint, configuration and pipeline.
+pub struct Device {
+    state: DeviceState,
+    rx: Receiver<HostMessage>,
+    outbox: Outbox,
+    config: Configuration,
+    pipeline: Option<Pipeline>,
+    buffer: SampleBuffer,
+    counters: DeviceCounters,
+    capabilities: Capabilities,
+    last_status_ms: u32,
+    stopped: bool,
+}
+
+impl Device {
+    /// A box waiting for `Hello`, whose ADC step is `volts_per_code` [V].
+    pub fn new(volts_per_code: f32) -> Self {
+        Self {
+            state: DeviceState::AwaitingHello,
+            rx: Receiver::new(),
+            outbox: Outbox::new(),
+            config: Configuration::new(),
+            pipeline: None,
+            buffer: SampleBuffer::default(),
+            counters: DeviceCounters::default(),
+            capabilities: capabilities(volts_per_code),
+            last_status_ms: 0,
+            stopped: false,
+        }
+    }
+
+    /// Session state.
+    pub fn state(&self) -> DeviceState {
+        self.state
+    }
+
+    /// Health counters of the session.
+    pub fn counters(&self) -> DeviceCounters {
+        let mut c = self.counters.clone();
+        c.frames_sent = self.outbox.frames_sent;
+        c.queue_full_drops = self.outbox.drops;
+        if let Some(p) = &self.pipeline {
+            p.counters.fold_into(&mut c);
+        }
+        c
+    }
+
+    /// The session's configuration.
+    pub fn config(&self) -> &Configuration {
+        &self.config
+    }
+
+    /// True once after each accepted `Stop` (the QEMU image exits then).
+    pub fn take_stopped(&mut self) -> bool {
+        core::mem::take(&mut self.stopped)
+    }
+
+    /// True when every queued byte has gone to the transmitter.
+    pub fn tx_idle(&self) -> bool {
+        self.outbox.queue.is_empty()
+    }
+
+    /// One bounded pass of the main loop: received bytes → commands, source
+    /// samples → pipeline, periodic status, queued bytes → link. `now_ms` is
+    /// the time since boot [ms] (wrapping).
+    pub fn poll<L: ByteLink, S: SampleSource>(
+        &mut self,
+        link: &mut L,
+        source: &mut S,
+        now_ms: u32,
+    ) -> Activity {
+        let mut activity = Activity::default();
+        while activity.received < RX_BUDGET {
+            let Some(byte) = link.read_byte() else { break };
+            activity.received += 1;
+            if let Some(Ok(frame)) = self.rx.push_byte(byte) {
+                self.command(frame.seq, &frame.message, source, now_ms);
+                activity.samples += self.drain_source(source);
+            }
+        }
+        activity.samples += self.drain_source(source);
+        if self.state != DeviceState::AwaitingHello
+            && now_ms.wrapping_sub(self.last_status_ms) >= STATUS_PERIOD_MS
+        {
+            self.send_status(now_ms);
+        }
+        while activity.sent < TX_BUDGET {
+            let Some(&byte) = self.outbox.queue.front() else {
+                break;
+            };
+            if !link.write_byte(byte) {
+                break;
+            }
+            self.outbox.queue.pop_front();
+            activity.sent += 1;
+        }
+        activity
+    }
+
+    /// Runs whatever the source has through the pipeline.
+    fn drain_source<S: SampleSource>(&mut self, source: &mut S) -> usize {
+        if self.state != DeviceState::Running {
+            return 0;
+        }
+        self.buffer.clear();
+        source.poll(&mut self.buffer);
+        let n = self.buffer.samples.len();
+        if n == 0 && self.buffer.lost_before == 0 {
+            return 0;
+        }
+        for (total, add) in self
+            .counters
+            .adc_saturation
+            .iter_mut()
+            .zip(self.buffer.saturated)
+        {
+            *total = total.saturating_add(add);
+        }
+        if let Some(mut pipeline) = self.pipeline.take() {
+            let outbox = &mut self.outbox;
+            let mut out = |m: DeviceMessage| outbox.push(&m, REPLY_RESERVE);
+            pipeline.process(&self.buffer, &self.config.tables, &mut out);
+            self.pipeline = Some(pipeline);
+        }
+        n
+    }
+
+    /// Handles one host command.
+    fn command<S: SampleSource>(
+        &mut self,
+        seq: u32,
+        message: &HostMessage,
+        source: &mut S,
+        now_ms: u32,
+    ) {
+        if let HostMessage::Hello(hello) = message {
+            self.hello(hello, source, now_ms);
+            return;
+        }
+        if self.state == DeviceState::AwaitingHello {
+            self.nack(seq, NackReason::NoSession);
+            return;
+        }
+        let running = self.state == DeviceState::Running;
+        let result = match message {
+            HostMessage::Hello(_) => Ok(()),
+            HostMessage::Ping => Ok(()),
+            HostMessage::ConfigureChannels(_)
+            | HostMessage::ConfigureAveraging(_)
+            | HostMessage::ConfigureRls(_)
+            | HostMessage::BearingTable(_)
+                if running =>
+            {
+                Err(NackReason::WrongState)
+            }
+            HostMessage::ConfigureChannels(set) => self.config.set_channels(set),
+            HostMessage::ConfigureAveraging(a) => self.config.set_averaging(a),
+            HostMessage::ConfigureRls(r) => self.config.set_rls(r),
+            HostMessage::BearingTable(chunk) => self.config.add_table_chunk(chunk),
+            HostMessage::Start if running => Err(NackReason::WrongState),
+            HostMessage::Start => self.start(source),
+            HostMessage::Stop => {
+                self.ack(seq);
+                self.stop(source, now_ms);
+                return;
+            }
+            HostMessage::Samples(_) if !running => Err(NackReason::WrongState),
+            HostMessage::Samples(block) => source.replay(block, &self.config.layout()),
+        };
+        match result {
+            Ok(()) => self.ack(seq),
+            Err(reason) => self.nack(seq, reason),
+        }
+    }
+
+    /// Opens a session (or refuses the version).
+    fn hello<S: SampleSource>(
+        &mut self,
+        hello: &plinth_shared::protocol::Hello,
+        source: &mut S,
+        now_ms: u32,
+    ) {
+        if hello.protocol_version != PROTOCOL_VERSION {
+            self.state = DeviceState::AwaitingHello;
+            self.pipeline = None;
+            source.stop();
+            self.enqueue_reply(&DeviceMessage::VersionMismatch(VersionMismatch {
+                device_protocol_version: PROTOCOL_VERSION,
+                host_protocol_version: hello.protocol_version,
+                host_nonce: hello.host_nonce,
+            }));
+            return;
+        }
+        source.stop();
+        self.pipeline = None;
+        self.config = Configuration::new();
+        self.counters = DeviceCounters::default();
+        for _ in 0..CHANNELS {
+            let _ = self.counters.adc_saturation.push(0);
+        }
+        self.rx.clear_stats();
+        self.outbox = Outbox::new();
+        self.state = DeviceState::Idle;
+        self.last_status_ms = now_ms;
+        self.enqueue_reply(&DeviceMessage::HelloAck(HelloAck {
+            protocol_version: PROTOCOL_VERSION,
+            host_nonce: hello.host_nonce,
+            firmware_version: firmware_version(),
+            capabilities: self.capabilities,
+        }));
+    }
+
+    /// Starts acquisition if the configuration is complete.
+    fn start<S: SampleSource>(&mut self, source: &mut S) -> Result<(), NackReason> {
+        if !self.config.ready() {
+            return Err(NackReason::WrongState);
+        }
+        let pipeline = Pipeline::new(&self.config, self.capabilities.sample_rate_hz)
+            .map_err(|_| NackReason::BadValue)?;
+        self.pipeline = Some(pipeline);
+        source.start();
+        self.state = DeviceState::Running;
+        Ok(())
+    }
+
+    /// Stops acquisition; sends the final estimates and a status frame.
+    fn stop<S: SampleSource>(&mut self, source: &mut S, now_ms: u32) {
+        if self.state == DeviceState::Running {
+            source.stop();
+            if let Some(p) = &self.pipeline {
+                let estimates = p.estimates();
+                if !estimates.pedestals.is_empty() {
+                    self.enqueue_data(&DeviceMessage::Estimates(estimates));
+                }
+            }
+            self.state = DeviceState::Idle;
+        }
+        self.send_status(now_ms);
+        self.stopped = true;
+    }
+
+    /// Queues a status frame.
+    fn send_status(&mut self, now_ms: u32) {
+        self.last_status_ms = now_ms;
+        let status = StatusFrame {
+            state: self.state,
+            uptime_ms: now_ms,
+            counters: self.counters(),
+            link: *self.rx.stats(),
+        };
+        self.enqueue_data(&DeviceMessage::Status(status));
+    }
+
+    fn ack(&mut self, seq: u32) {
+        self.enqueue_reply(&DeviceMessage::Ack(Ack { command_seq: seq }));
+    }
+
+    fn nack(&mut self, seq: u32, reason: NackReason) {
+        self.counters.commands_rejected = self.counters.commands_rejected.saturating_add(1);
+        self.enqueue_reply(&DeviceMessage::Nack(Nack {
+            command_seq: seq,
+            reason,
+        }));
+    }
+
+    /// Queues a reply; may use the reserve.
+    fn enqueue_reply(&mut self, m: &DeviceMessage) {
+        self.outbox.push(m, 0);
+    }
+
+    /// Queues a data frame, keeping [`REPLY_RESERVE`] bytes free.
+    fn enqueue_data(&mut self, m: &DeviceMessage) {
+        self.outbox.push(m, REPLY_RESERVE);
+    }
+}
+
+/// Encoded frames waiting for the transmitter, with the session's sequence
+/// numbering.
+struct Outbox {
+    tx: Transmitter,
+    queue: heapless::Deque<u8, TX_QUEUE_BYTES>,
+    frame: [u8; MAX_FRAME_SIZE],
+    /// Frames queued.
+    frames_sent: u32,
+    /// Frames dropped because the queue was full.
+    drops: u32,
+}
+
+impl Outbox {
+    /// An empty queue; the next frame is numbered 0.
+    fn new() -> Self {
+        Self {
+            tx: Transmitter::new(),
+            queue: heapless::Deque::new(),
+            frame: [0; MAX_FRAME_SIZE],
+            frames_sent: 0,
+            drops: 0,
+        }
+    }
+
+    /// Encodes `m` and queues it if it fits with `reserve` bytes to spare;
+    /// otherwise counts a drop. A dropped frame still used up its sequence
+    /// number, so the host also sees the drop as a sequence gap.
+    fn push(&mut self, m: &DeviceMessage, reserve: usize) {
+        let free = self.queue.capacity() - self.queue.len();
+        let fits = match self.tx.encode(m, &mut self.frame) {
+            Ok((_, encoded)) if encoded.len() + reserve <= free => {
+                for &b in encoded.iter() {
+                    // Cannot fail: the room was checked above.
+                    let _ = self.queue.push_back(b);
+                }
+                true
+            }
+            _ => false,
+        };
+        if fits {
+            self.frames_sent = self.frames_sent.saturating_add(1);
+        } else {
+            self.drops = self.drops.saturating_add(1);
+        }
+    }
+}
