@@ -1,1 +1,38 @@
 //! Shared helpers for integration tests.
+
+use plinth::identify::synthetic::SyntheticRun;
+use plinth::rundir::{DigitsMode, RunDir, WriteOptions};
+
+/// Writes `run` to a fresh temporary run directory, the measured phasors
+/// rounded to `digits` significant digits (`None`: full precision).
+pub fn write_run(run: &RunDir, digits: Option<u32>) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    run.write_with(
+        dir.path(),
+        &WriteOptions {
+            digits,
+            digits_mode: DigitsMode::Round,
+        },
+    )
+    .expect("writing the run directory");
+    dir
+}
+
+/// The paper-like synthetic run (see [`SyntheticRun::paper_like`]) with the
+/// pedestal damping multiplied by `damping_factor` (0 = undamped), written
+/// with `digits` significant digits and read back as `plinth identify` would.
+pub fn paper_like_run(speeds: usize, damping_factor: f64, digits: Option<u32>) -> RunDir {
+    let mut recipe = SyntheticRun::paper_like(true, speeds);
+    for p in &mut recipe.pedestals {
+        p.c_y *= damping_factor;
+        p.c_z *= damping_factor;
+    }
+    let run = recipe.build().expect("synthetic run");
+    let dir = write_run(&run, digits);
+    RunDir::read(dir.path()).expect("reading back the run directory")
+}
+
+/// |a − b| / |b|.
+pub fn rel_err(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
