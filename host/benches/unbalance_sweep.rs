@@ -8,7 +8,10 @@ use plinth::sim::{EffectSet, Machine, UnbalanceSolver};
 use std::hint::black_box;
 
 fn sweep(c: &mut Criterion) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/reference/ross/machine-a.toml");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../tests/reference/ross/machine-a.toml"
+    );
     let machine = match Machine::from_toml_path(path) {
         Ok(m) => m,
         Err(e) => panic!("bench machine: {e}"),

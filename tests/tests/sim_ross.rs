@@ -42,8 +42,17 @@ fn compare(name: &str) -> f64 {
                 let c = resp.bearings[s][b].coefficients;
                 let got = if is_k { c.k[i][j] } else { c.c[i][j] };
                 let want = v.as_f64().unwrap();
-                let scale = if is_k { c.k[0][0].abs() } else { c.c[0][0].abs() }.max(1e-30);
-                assert!((got - want).abs() <= 1e-9 * scale, "{name} {bname} {key} at {} Hz: {got} vs {want}", speeds[s]);
+                let scale = if is_k {
+                    c.k[0][0].abs()
+                } else {
+                    c.c[0][0].abs()
+                }
+                .max(1e-30);
+                assert!(
+                    (got - want).abs() <= 1e-9 * scale,
+                    "{name} {bname} {key} at {} Hz: {got} vs {want}",
+                    speeds[s]
+                );
             }
         }
         for (ch, pick) in [("rel_y", 0usize), ("rel_z", 1), ("ped_y", 2), ("ped_z", 3)] {
@@ -57,7 +66,13 @@ fn compare(name: &str) -> f64 {
             let got: Vec<Complex<f64>> = resp
                 .bearings
                 .iter()
-                .map(|row| if pick < 2 { row[b].rel[pick] } else { row[b].ped[pick - 2] })
+                .map(|row| {
+                    if pick < 2 {
+                        row[b].rel[pick]
+                    } else {
+                        row[b].ped[pick - 2]
+                    }
+                })
                 .collect();
             let max = want.iter().map(|w| w.norm()).fold(0.0, f64::max);
             assert!(max > 0.0, "{name} {bname} {ch}: reference is all zero");
@@ -71,7 +86,11 @@ fn compare(name: &str) -> f64 {
                 );
                 if w.norm() > 0.01 * max {
                     let pointwise = (g - w).norm() / w.norm();
-                    assert!(pointwise < 1e-2, "{name} {bname} {ch} at {} Hz: point-wise {pointwise:.2e}", speeds[s]);
+                    assert!(
+                        pointwise < 1e-2,
+                        "{name} {bname} {ch} at {} Hz: point-wise {pointwise:.2e}",
+                        speeds[s]
+                    );
                 }
             }
         }
