@@ -35,12 +35,8 @@ pub struct SimulateArgs {
     pub effects: Vec<String>,
 }
 
-/// Command-line arguments of `plinth signals`.
-#[derive(clap::Args, Debug)]
-pub struct SignalsArgs {}
-/// Command-line arguments of `plinth predict`.
-#[derive(clap::Args, Debug)]
-pub struct PredictArgs {}
+pub use super::predict::{predict, PredictArgs};
+pub use super::signals::{signals, SignalsArgs};
 
 /// Parses a speed list: `START:STOP:STEP` (inclusive, to within STEP/1e6) or
 /// `a,b,c` [Hz].
@@ -119,14 +115,6 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
         args.out.display()
     );
     Ok(())
-}
-/// Runs `plinth signals`.
-pub fn signals(_args: &SignalsArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`plinth signals` is not available in this build yet")
-}
-/// Runs `plinth predict`.
-pub fn predict(_args: &PredictArgs) -> anyhow::Result<()> {
-    anyhow::bail!("`plinth predict` is not available in this build yet")
 }
 
 #[cfg(test)]

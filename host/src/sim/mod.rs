@@ -28,7 +28,9 @@ pub mod machine;
 pub mod modal;
 pub mod oil_film;
 pub mod pedestal;
+pub mod predict;
 pub mod response;
+pub mod signals;
 pub mod timoshenko;
 
 pub use inject::{default_size, EffectRequest, EffectSet};
