@@ -3,31 +3,54 @@
 //! Opens the serial port (or QEMU's pseudo-terminal), shakes hands, sends the
 //! configuration, optionally replays simulated time signals to the box, and
 //! receives its phasor, estimate and status frames. Every received byte goes
-//! to an append-only raw log first; at the end the run directory is re-derived
-//! from the whole log, fitted in batch, and compared with the box's own
-//! recursive estimates.
+//! to an append-only raw log first; at the end the run directory is
+//! re-derived from the whole log (so a restarted host keeps what an earlier
+//! one received), fitted in batch, and compared with the box's own recursive
+//! estimates.
 //!
 //! One file per idea: [`port`] (opening and reopening the link), [`rawlog`]
 //! (the append-only byte log), [`config`] (the configuration file),
-//! [`progress`] (the live status line).
+//! [`replay`] (signals cut into sample blocks, and the replay journal),
+//! [`session`] (handshake, configuration, replay pacing, receive loop: the
+//! exact flow is documented there), [`derive`] (raw log → run directory),
+//! [`progress`] (the live status line), [`report`] (box vs batch).
+//!
+//! Files in the output directory: `raw.bin` (every received byte, appended
+//! across runs), `replay-journal.json` (replay position), `stream.toml` (a
+//! copy of the configuration), `measurements.csv` and `bearings.csv`
+//! (formats.md), `stream-report.json` (link counters, box vs batch).
 
 pub mod config;
+pub mod derive;
 pub mod port;
 pub mod progress;
 pub mod rawlog;
+pub mod replay;
+pub mod report;
+pub mod session;
 
-use std::path::PathBuf;
+use anyhow::{bail, Context, Result};
+use config::{BearingTables, StreamConfig};
+use port::{Connector, SerialConnector};
+use progress::Progress;
+use rawlog::{RawLog, RAW_LOG_FILE};
+use replay::{ReplayPlan, ReplaySource};
+use report::{LinkSummary, StreamReport, REPORT_FILE};
+use session::{Replay, Session, SessionOptions, SessionOutcome};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 /// Command-line arguments of `plinth stream`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Serial port of the field box, e.g. /dev/ttyUSB0 or QEMU's /dev/pts/N.
-    #[arg(long)]
-    pub port: String,
+    #[arg(long, required_unless_present = "offline")]
+    pub port: Option<String>,
     /// Line speed [bit/s] (pseudo-terminals ignore it).
     #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
-    /// Stream configuration (TOML: channel map, averaging, RLS, bearings.csv).
+    /// Stream configuration (TOML: channel map, averaging, RLS, bearings.csv;
+    /// documented in `plinth::stream::config`).
     #[arg(long)]
     pub config: PathBuf,
     /// Run directory to write (created; raw.bin in it is appended to, never truncated).
@@ -36,9 +59,233 @@ pub struct Args {
     /// Replay these simulated time signals (`plinth signals` output) to the box.
     #[arg(long)]
     pub replay: Option<PathBuf>,
+    /// Sample blocks in flight without an acknowledgement.
+    #[arg(long, default_value_t = 4)]
+    pub window: usize,
+    /// Without --replay: how long to stream [s] (default: until the port is gone for good).
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Give up reopening a lost port after this long [s].
+    #[arg(long, default_value_t = 60.0)]
+    pub reconnect_timeout: f64,
+    /// Do not open the port: rebuild the run directory from OUT/raw.bin.
+    #[arg(long)]
+    pub offline: bool,
+    /// No progress line.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Runs `plinth stream`.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("`plinth stream` is not available in this build yet")
+pub fn run(args: &Args) -> Result<()> {
+    let config = StreamConfig::load(&args.config)?;
+    let tables = config.load_bearing_tables()?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create the output directory {}", args.out.display()))?;
+    std::fs::copy(&args.config, args.out.join("stream.toml")).with_context(|| {
+        format!(
+            "cannot copy {} into {}",
+            args.config.display(),
+            args.out.display()
+        )
+    })?;
+    let outcome = if args.offline {
+        None
+    } else {
+        let port = args.port.as_deref().unwrap_or_default();
+        let mut connector = SerialConnector::new(port, args.baud);
+        let mut options = SessionOptions {
+            window: args.window,
+            duration: args.duration.map(Duration::from_secs_f64),
+            ..SessionOptions::default()
+        };
+        if !(args.reconnect_timeout.is_finite() && args.reconnect_timeout >= 0.0) {
+            bail!("--reconnect-timeout must be a non-negative number of seconds");
+        }
+        options.backoff.give_up = Duration::from_secs_f64(args.reconnect_timeout);
+        if let Some(d) = args.duration {
+            if !(d.is_finite() && d >= 0.0) {
+                bail!("--duration must be a non-negative number of seconds");
+            }
+        }
+        let signals = match &args.replay {
+            Some(path) => Some((path.clone(), load_replay_signals(path, &config)?)),
+            None => None,
+        };
+        let replay = signals
+            .as_ref()
+            .map(|(p, s)| (p.as_path(), s as &dyn ReplaySource));
+        let progress = if args.quiet {
+            Progress::hidden()
+        } else {
+            Progress::stderr()
+        };
+        Some(stream(
+            &mut connector,
+            &args.out,
+            &config,
+            &tables,
+            replay,
+            options,
+            progress,
+        )?)
+    };
+    let report = finish(&args.out, &config, &tables, outcome.as_ref())?;
+    print!("{}", summary(&report));
+    if let Some(e) = &report.error {
+        bail!("the stream did not complete: {e}");
+    }
+    Ok(())
+}
+
+/// Streams over links from `connector` into `out` (raw log and journal);
+/// returns how the session ended. The run directory is written by [`finish`].
+pub fn stream(
+    connector: &mut dyn Connector,
+    out: &Path,
+    config: &StreamConfig,
+    tables: &BearingTables,
+    replay: Option<(&Path, &dyn ReplaySource)>,
+    options: SessionOptions,
+    progress: Progress,
+) -> Result<SessionOutcome> {
+    let log = RawLog::open(&out.join(RAW_LOG_FILE))?;
+    let replay = match replay {
+        Some((path, source)) => {
+            let columns: Vec<u8> = config.channels.iter().map(|c| c.adc).collect();
+            if source.adc_channels() != columns.as_slice() {
+                bail!(
+                    "{}: the signals carry ADC channels {:?} but the configuration assigns {:?}",
+                    path.display(),
+                    source.adc_channels(),
+                    columns
+                );
+            }
+            Some(Replay {
+                source,
+                plan: ReplayPlan::new(source)?,
+                path: path.to_path_buf(),
+            })
+        }
+        None => None,
+    };
+    let session = Session::new(
+        connector, log, out, config, tables, replay, options, progress,
+    )?;
+    if session.replay_already_finished() {
+        eprintln!(
+            "the replay journal in {} says this replay already finished: rebuilding the run directory only",
+            out.display()
+        );
+        return Ok(SessionOutcome {
+            completed: true,
+            error: None,
+            link: Default::default(),
+            reconnects: 0,
+            bytes: 0,
+            device: None,
+            last_estimates: None,
+            last_status: None,
+            replay: None,
+        });
+    }
+    session.run()
+}
+
+/// Rebuilds the run directory in `out` from the whole raw log, fits it in
+/// batch, compares with the box's last estimates, and writes
+/// `stream-report.json`.
+pub fn finish(
+    out: &Path,
+    config: &StreamConfig,
+    tables: &BearingTables,
+    outcome: Option<&SessionOutcome>,
+) -> Result<StreamReport> {
+    let raw_path = out.join(RAW_LOG_FILE);
+    let raw = RawLog::read_all(&raw_path)?;
+    let derived = derive::derive(&raw, config, tables);
+    derived
+        .run
+        .write(out)
+        .with_context(|| format!("cannot write the run directory {}", out.display()))?;
+    let (batch, batch_error) = if derived.run.measurements.is_empty() {
+        (None, Some("no phasor frames were received".to_string()))
+    } else {
+        match crate::identify::identify_run(&derived.run, &crate::identify::Options::default()) {
+            Ok(id) => (Some(id), None),
+            Err(e) => (None, Some(e.to_string())),
+        }
+    };
+    let pedestals = report::compare(
+        &config.bearings,
+        derived.last_estimates.as_ref(),
+        batch.as_ref(),
+    );
+    let report = StreamReport {
+        completed: outcome.is_none_or(|o| o.completed),
+        error: outcome.and_then(|o| o.error.clone()),
+        link_this_process: outcome.map(|o| LinkSummary::from(o.link)),
+        link_raw_log: LinkSummary::from(derived.link),
+        link_box: outcome
+            .and_then(|o| o.last_status.as_ref())
+            .map(|s| LinkSummary::from(s.link)),
+        raw_log_bytes: raw.len() as u64,
+        reconnects: outcome.map_or(0, |o| o.reconnects),
+        phasor_frames: derived.phasor_frames,
+        measurement_rows: derived.run.measurements.len(),
+        merged_rows: derived.merged_rows,
+        dropped_rows: derived.dropped_rows.clone(),
+        replay_blocks: outcome.and_then(|o| o.replay),
+        pedestals,
+        batch_error,
+    };
+    let path = out.join(REPORT_FILE);
+    let text = serde_json::to_string_pretty(&report).context("cannot encode the stream report")?;
+    std::fs::write(&path, text + "\n")
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(report)
+}
+
+/// The end-of-stream text: link counters, run directory, box vs batch.
+pub fn summary(report: &StreamReport) -> String {
+    let mut s = String::new();
+    if let Some(l) = &report.link_this_process {
+        s.push_str(&report::render_link("link (this run)", l));
+        s.push('\n');
+    }
+    s.push_str(&report::render_link(
+        "link (whole raw log)",
+        &report.link_raw_log,
+    ));
+    s.push('\n');
+    if let Some(l) = &report.link_box {
+        s.push_str(&report::render_link("link (box side, last status)", l));
+        s.push('\n');
+    }
+    s.push_str(&format!(
+        "raw log: {} bytes; {} phasor frames -> {} measurement rows ({} merged, {} dropped)\n",
+        report.raw_log_bytes,
+        report.phasor_frames,
+        report.measurement_rows,
+        report.merged_rows,
+        report.dropped_rows.len()
+    ));
+    for d in report.dropped_rows.iter().take(5) {
+        s.push_str(&format!("  dropped: {d}\n"));
+    }
+    if let Some(e) = &report.batch_error {
+        s.push_str(&format!("batch fit: not possible: {e}\n"));
+    }
+    s.push_str(&report::render(&report.pedestals));
+    s
+}
+
+/// Reads replay signals written by `plinth signals` as the configured
+/// channels would see them.
+pub fn load_replay_signals(path: &Path, config: &StreamConfig) -> Result<replay::Signals> {
+    let _ = config;
+    bail!(
+        "{}: reading `plinth signals` output is not available in this build yet",
+        path.display()
+    )
 }

@@ -1,0 +1,270 @@
+//! The end of a stream: the box's final recursive estimates beside the batch
+//! fit of the whole run directory, with their differences, and a JSON record
+//! of the session (`stream-report.json`) for scripts and tests.
+
+use crate::identify::Identification;
+use plinth_shared::protocol::{EstimateFrame, LinkStats};
+use plinth_shared::regression::Parameter;
+use serde::Serialize;
+
+/// File name of the JSON session report inside the run directory.
+pub const REPORT_FILE: &str = "stream-report.json";
+
+/// The unit of a parameter's value.
+pub fn unit(p: Parameter) -> &'static str {
+    match p {
+        Parameter::Ky | Parameter::Kz => "N/m",
+        Parameter::M => "kg",
+        Parameter::Cy | Parameter::Cz => "N·s/m",
+    }
+}
+
+/// One parameter of one pedestal: the box's value, the batch value, and
+/// their differences.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ParameterComparison {
+    /// Parameter name (formats.md).
+    pub parameter: &'static str,
+    /// Its unit.
+    pub unit: &'static str,
+    /// The box's final recursive estimate (`null` if it sent none).
+    pub box_value: Option<f64>,
+    /// Its standard error.
+    pub box_std_err: Option<f64>,
+    /// The batch least-squares value (`null` if the fit failed).
+    pub batch_value: Option<f64>,
+    /// Its standard error.
+    pub batch_std_err: Option<f64>,
+    /// box − batch, in the parameter's unit.
+    pub difference: Option<f64>,
+    /// (box − batch) / |batch| · 100 [%]; `null` where batch is 0.
+    pub difference_percent: Option<f64>,
+}
+
+/// The comparison for one pedestal.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PedestalComparison {
+    /// Bearing name.
+    pub bearing: String,
+    /// Per parameter, in θ order.
+    pub parameters: Vec<ParameterComparison>,
+    /// Equations the box folded in (effective, with forgetting).
+    pub box_equations: Option<f64>,
+    /// The batch fit is trusted (no warning says otherwise).
+    pub batch_trusted: Option<bool>,
+}
+
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+/// Compares the box's last estimates with the batch fit, per configured bearing.
+pub fn compare(
+    bearings: &[String],
+    estimates: Option<&EstimateFrame>,
+    batch: Option<&Identification>,
+) -> Vec<PedestalComparison> {
+    bearings
+        .iter()
+        .enumerate()
+        .map(|(index, name)| {
+            let entry =
+                estimates.and_then(|e| e.pedestals.iter().find(|p| p.bearing as usize == index));
+            let fit = batch.and_then(|b| b.pedestal(name));
+            let parameters = Parameter::ALL
+                .iter()
+                .map(|&p| {
+                    let i = p as usize;
+                    let box_value = entry.and_then(|e| finite(e.theta[i] as f64));
+                    let batch_value = fit.and_then(|f| finite(f.params()[i]));
+                    let difference = match (box_value, batch_value) {
+                        (Some(a), Some(b)) => Some(a - b),
+                        _ => None,
+                    };
+                    let difference_percent = match (difference, batch_value) {
+                        (Some(d), Some(b)) if b != 0.0 => Some(100.0 * d / b.abs()),
+                        _ => None,
+                    };
+                    ParameterComparison {
+                        parameter: p.name(),
+                        unit: unit(p),
+                        box_value,
+                        box_std_err: entry.and_then(|e| finite(e.std_err[i] as f64)),
+                        batch_value,
+                        batch_std_err: fit.and_then(|f| finite(f.std_errs()[i])),
+                        difference,
+                        difference_percent,
+                    }
+                })
+                .collect();
+            PedestalComparison {
+                bearing: name.clone(),
+                parameters,
+                box_equations: entry.map(|e| e.equations as f64),
+                batch_trusted: fit.map(|f| f.trusted),
+            }
+        })
+        .collect()
+}
+
+fn num(x: Option<f64>) -> String {
+    match x {
+        Some(v) => format!("{v:.5e}"),
+        None => "—".to_string(),
+    }
+}
+
+/// The comparison as a text table for the terminal.
+pub fn render(comparisons: &[PedestalComparison]) -> String {
+    let mut s = String::new();
+    for c in comparisons {
+        s.push_str(&format!(
+            "pedestal {}: box RLS ({} equations) vs batch least squares{}\n",
+            c.bearing,
+            c.box_equations
+                .map_or("no".to_string(), |n| format!("{n:.0}")),
+            match c.batch_trusted {
+                Some(false) => " (batch fit NOT trusted: see `plinth identify`)",
+                _ => "",
+            }
+        ));
+        s.push_str(&format!(
+            "  {:<4} {:>13} {:>11} {:>13} {:>11} {:>13} {:>9}  unit\n",
+            "", "box", "± std err", "batch", "± std err", "box − batch", "%"
+        ));
+        for p in &c.parameters {
+            s.push_str(&format!(
+                "  {:<4} {:>13} {:>11} {:>13} {:>11} {:>13} {:>9}  {}\n",
+                p.parameter,
+                num(p.box_value),
+                num(p.box_std_err),
+                num(p.batch_value),
+                num(p.batch_std_err),
+                num(p.difference),
+                p.difference_percent
+                    .map_or("—".to_string(), |v| format!("{v:+.3}")),
+                p.unit
+            ));
+        }
+    }
+    s
+}
+
+/// Link health as reported at the end.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LinkSummary {
+    /// Frames accepted.
+    pub frames_ok: u32,
+    /// Frames missing by sequence number.
+    pub sequence_gaps: u32,
+    /// CRC failures (line corruption).
+    pub crc_failures: u32,
+    /// Invalid COBS.
+    pub cobs_failures: u32,
+    /// Good CRC but undecodable (protocol mismatch).
+    pub decode_failures: u32,
+    /// Longer than any frame.
+    pub oversize: u32,
+    /// Times frame sync was regained after failures.
+    pub resyncs: u32,
+    /// Repeated frames dropped.
+    pub duplicates: u32,
+    /// Sequence restarts (new box sessions).
+    pub restarts: u32,
+}
+
+impl From<LinkStats> for LinkSummary {
+    fn from(s: LinkStats) -> Self {
+        Self {
+            frames_ok: s.frames_ok,
+            sequence_gaps: s.sequence_gaps,
+            crc_failures: s.crc_failures,
+            cobs_failures: s.cobs_failures,
+            decode_failures: s.decode_failures,
+            oversize: s.oversize,
+            resyncs: s.resyncs,
+            duplicates: s.duplicates,
+            restarts: s.restarts,
+        }
+    }
+}
+
+/// One line of link counters for the terminal.
+pub fn render_link(label: &str, s: &LinkSummary) -> String {
+    format!(
+        "{label}: {} frames, {} lost (sequence gaps), {} CRC failures, {} COBS failures, {} undecodable, {} oversize, {} resyncs, {} duplicates, {} restarts",
+        s.frames_ok,
+        s.sequence_gaps,
+        s.crc_failures,
+        s.cobs_failures,
+        s.decode_failures,
+        s.oversize,
+        s.resyncs,
+        s.duplicates,
+        s.restarts
+    )
+}
+
+/// `stream-report.json`: everything a script needs to judge a stream.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StreamReport {
+    /// The session ran to its end.
+    pub completed: bool,
+    /// Why not.
+    pub error: Option<String>,
+    /// Counters of this host process's receive link.
+    pub link_this_process: Option<LinkSummary>,
+    /// Counters from decoding the whole raw log (every host process).
+    pub link_raw_log: LinkSummary,
+    /// The box's own receive counters (frames from the host), last reported.
+    pub link_box: Option<LinkSummary>,
+    /// Bytes in the raw log.
+    pub raw_log_bytes: u64,
+    /// Times this process reopened the link.
+    pub reconnects: u64,
+    /// Phasor frames in the raw log.
+    pub phasor_frames: usize,
+    /// Rows of measurements.csv.
+    pub measurement_rows: usize,
+    /// Rows merged (same bearing and speed).
+    pub merged_rows: usize,
+    /// Rows dropped, and why.
+    pub dropped_rows: Vec<String>,
+    /// Replay blocks acknowledged and in total.
+    pub replay_blocks: Option<(usize, usize)>,
+    /// Box vs batch per pedestal.
+    pub pedestals: Vec<PedestalComparison>,
+    /// Why the batch fit could not run, if it could not.
+    pub batch_error: Option<String>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plinth_shared::protocol::PedestalEstimateEntry;
+
+    #[test]
+    fn differences_are_box_minus_batch_in_units_and_percent() {
+        let mut e = EstimateFrame {
+            revolution: 10,
+            pedestals: Default::default(),
+        };
+        e.pedestals
+            .push(PedestalEstimateEntry {
+                bearing: 0,
+                theta: [1.01e7, 2.0e7, 100.0, 50.0, 0.0],
+                std_err: [1e4, 1e4, 0.1, f32::NAN, 1.0],
+                equations: 40.0,
+                residual_rms: 0.1,
+            })
+            .unwrap();
+        let c = compare(&["left".to_string(), "right".to_string()], Some(&e), None);
+        assert_eq!(c.len(), 2);
+        assert_eq!(c[0].parameters[0].box_value, Some(1.01e7));
+        assert_eq!(c[0].parameters[3].box_std_err, None);
+        assert_eq!(c[0].parameters[0].difference, None);
+        assert!(c[1].parameters.iter().all(|p| p.box_value.is_none()));
+        let text = render(&c);
+        assert!(text.contains("pedestal left") && text.contains("k_y") && text.contains("N·s/m"));
+    }
+}
