@@ -70,10 +70,11 @@ pub fn eccentricity_from_sommerfeld(modified_sommerfeld: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// Dimensionless short-bearing coefficients at eccentricity ratio ε, in the
-/// load frame (u along the static load on the journal, v 90° ahead of u in the
-/// direction of rotation): `(a, b)` with K = (W/c)·a and C = (W/(c·Ω))·b,
-/// indexed `[row][col]` over (u, v) (Friswell et al. 2010, eq. 5.83).
+/// Dimensionless short-bearing coefficients at eccentricity ratio ε in
+/// Friswell's frame (u horizontal, v along the static load line):
+/// `(a, b)` with K = (W/c)·a and C = (W/(c·Ω))·b, indexed `[row][col]` over
+/// (u, v) (Friswell et al. 2010, §5.5; the same forms as ROSS
+/// `CylindricalBearing`). [`OilFilmBearing::coefficients`] maps them to (y, z).
 pub fn dimensionless_coefficients(e: f64) -> ([[f64; 2]; 2], [[f64; 2]; 2]) {
     let e2 = e * e;
     let pi2 = PI * PI;
@@ -138,11 +139,13 @@ impl OilFilmBearing {
         let (a, b) = dimensionless_coefficients(e);
         let ks = self.load / self.clearance;
         let cs = self.load / (self.clearance * omega);
-        // (u, v) = (−y, −z): the load frame is the (y, z) frame turned by 180°,
-        // which leaves every coefficient unchanged.
+        // Friswell's frame has u horizontal and v along the load line; in
+        // (y, z) with rotation y → z the published forms become
+        // K_yy = a_vv, K_yz = −a_vu, K_zy = −a_uv, K_zz = a_uu (and C alike),
+        // as the numerical derivatives of the film force confirm (tests).
         Ok(BearingCoefficients {
-            k: [[ks * a[0][0], ks * a[0][1]], [ks * a[1][0], ks * a[1][1]]],
-            c: [[cs * b[0][0], cs * b[0][1]], [cs * b[1][0], cs * b[1][1]]],
+            k: [[ks * a[1][1], -ks * a[1][0]], [-ks * a[0][1], ks * a[0][0]]],
+            c: [[cs * b[1][1], -cs * b[1][0]], [-cs * b[0][1], cs * b[0][0]]],
         })
     }
 }

@@ -19,7 +19,7 @@ carry over unchanged: kyy -> kxx, kyz -> kxy, kzy -> kyx, kzz -> kyy, and the
 response phasors map one to one (both use x(t) = Re{X e^{i Omega t}}).
 Gravity plays no part in the linear response; oil-film coefficients are
 computed here (short-bearing theory, the same closed form as
-host/src/sim/oil_film.rs) in the load frame and passed to ROSS as speed tables
+host/src/sim/oil_film.rs, mapped to (y, z)) and passed to ROSS as speed tables
 at exactly the simulated speeds.
 """
 import json
@@ -119,8 +119,11 @@ def ocvirk(of, W, speed_hz):
     b = [[h0 * 2 * math.pi * s * (pi2 * (1 + 2 * e * e) - 16 * e * e) / e, buv],
          [buv, h0 * 2 * math.pi * (pi2 * (1 - e * e) ** 2 + 48 * e * e) / (e * s)]]
     ks, cs = W / of["clearance"], W / (of["clearance"] * Om)
-    # Load frame (u, v) = (-y, -z): a 180-degree turn, coefficients unchanged.
-    return [[ks * a[i][j] for j in range(2)] for i in range(2)], [[cs * b[i][j] for j in range(2)] for i in range(2)]
+    # Friswell's frame: u horizontal, v along the load line. In (y, z) with
+    # rotation y -> z: Kyy = avv, Kyz = -avu, Kzy = -auv, Kzz = auu (C alike).
+    K = [[ks * a[1][1], -ks * a[1][0]], [-ks * a[0][1], ks * a[0][0]]]
+    C = [[cs * b[1][1], -cs * b[1][0]], [-cs * b[0][1], cs * b[0][0]]]
+    return K, C
 
 
 def build(spec, speeds_hz):
