@@ -10,7 +10,7 @@
 //! | `pedestal_mass_anisotropy` | m split into m_y, m_z | m_y − m_z (= 0) |
 //! | `probe_runout` | F = K*·(rel − r), r constant | r_y, r_z complex, 4 real (= 0) |
 //! | `sensor_delay` | a delayed channel reads q·e^{−iΩτ}: on both pedestal channels (the simulator's definition), one of them, both rel probes or one | τ (= 0), profiled; six variants per bearing, each counted as a candidate |
-//! | `foundation_coupling` | −k_c·X_other in each equation of two neighbouring pedestals (neighbours in bearing order) | k_c_y, k_c_z (= 0) |
+//! | `foundation_coupling` | a spring k_c between two neighbouring pedestals (neighbours in bearing order): k_c·(X_own − X_other) in each one's equation | k_c_y, k_c_z (= 0) |
 
 use super::model::{DelayChannels, Model, Nonlinear, Term};
 use crate::effects::EffectKind;

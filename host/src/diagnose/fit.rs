@@ -197,19 +197,25 @@ pub fn fit_group(
     })
 }
 
-/// The search interval of a nonlinear scalar over `group`'s speeds: a delay
-/// up to half a period at the highest speed (|Ω_max·τ| ≤ π, beyond which a
-/// phase is ambiguous); a loss factor within ±1.
+/// The physically admissible interval of a nonlinear scalar over `group`'s
+/// speeds. A delay is causal (τ ≥ 0: a sensor cannot read before the motion;
+/// this is what tells a delay on the pedestal channels from an advance on the
+/// rel channels, which the pedestal equation cannot) and at most half a period
+/// at the highest speed (Ω_max·τ ≤ π, beyond which a phase is ambiguous). A
+/// loss factor dissipates energy (η ≥ 0) and is below 1.
+///
+/// Both nulls (τ = 0, η = 0) lie on the boundary, where the Wald statistic
+/// is a 50:50 mixture of χ²(0) and χ²(1); testing against χ²(1) is
+/// conservative.
 pub fn search_interval(prep: &Prepared, model: &Model, k: usize, group: &[usize]) -> (f64, f64) {
     match model.nonlinear[k] {
-        super::model::Nonlinear::LossFactor { .. } => (-1.0, 1.0),
+        super::model::Nonlinear::LossFactor { .. } => (0.0, 1.0),
         super::model::Nonlinear::Delay { .. } => {
             let f_max = Model::group_speeds(prep, group)
                 .iter()
                 .map(|&j| prep.speeds_hz[j])
                 .fold(0.0, f64::max);
-            let t = 0.5 / f_max.max(f64::MIN_POSITIVE);
-            (-t, t)
+            (0.0, 0.5 / f_max.max(f64::MIN_POSITIVE))
         }
     }
 }

@@ -11,15 +11,21 @@
 //! - [`gap`]: the disagreement measure (defined there) and its noise floor;
 //! - [`candidates`]: the library of effects (every formats.md name);
 //! - [`criterion`]: the significance test and ranking of candidates;
-//! - [`workflow`]: greedy forward selection.
+//! - [`locate`]: where the disagreement lives;
+//! - [`workflow`]: greedy forward selection;
+//! - [`report`]: the diagnosis as JSON and text.
+
+pub use workflow::{diagnose, Options, Outcome};
 
 pub mod candidates;
 pub mod criterion;
 pub mod data;
 pub mod fit;
 pub mod gap;
+pub mod locate;
 pub mod model;
 pub mod noise;
+pub mod report;
 pub mod workflow;
 
 /// Command-line arguments of `plinth diagnose`.

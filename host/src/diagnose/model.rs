@@ -74,8 +74,8 @@ pub enum Term {
         imag: bool,
     },
     /// Coupling spring k_c [N/m] of a flexible base between two pedestals in
-    /// one direction: each pedestal's equation gains −k_c·X_other (the direct
-    /// part k_c·X_own is part of that pedestal's identified k).
+    /// one direction: each pedestal's equation gains k_c·(X_own − X_other), so
+    /// the pedestals' own k stay their stiffness to ground.
     Coupling {
         /// First bearing index.
         a: usize,
@@ -414,10 +414,13 @@ impl Model {
                     entry(2 * p + 1, 2 * p, loss(p), &mut col);
                 }
                 Term::Coupling { a, b, dir } => {
+                    // A spring between the pedestals: k_c·(X_own − X_other).
                     let (pa, pb) = (pos(a)?, pos(b)?);
-                    let v = Complex::new(-1.0, 0.0);
-                    entry(2 * pa + dir, 2 * pb + dir, v, &mut col);
-                    entry(2 * pb + dir, 2 * pa + dir, v, &mut col);
+                    let (ea, eb) = (2 * pa + dir, 2 * pb + dir);
+                    entry(ea, ea, one, &mut col);
+                    entry(ea, eb, -one, &mut col);
+                    entry(eb, eb, one, &mut col);
+                    entry(eb, ea, -one, &mut col);
                 }
                 Term::Runout { bearing, dir, imag } => {
                     let p = pos(bearing)?;

@@ -7,10 +7,15 @@ use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
 use super::fit::{fit_group, jacobian, profile, search_interval, Weights};
 use super::gap::{Gap, Prediction};
+use super::locate::locate;
 use super::model::{Model, Params, Term};
+use super::noise::{CHANNELS, COMPLEX_CHANNELS};
+use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
+use crate::rundir::RunDir;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
 use plinth_shared::regression::Parameter;
+use std::collections::BTreeMap;
 
 /// Settings of the workflow.
 #[derive(Clone, Debug)]
@@ -133,8 +138,8 @@ fn fit_all(
                 // Refine around the current value: ± two grid steps of the full search.
                 let w = (full.1 - full.0) / 40.0;
                 let s = params.nl[k];
-                let (best, _) =
-                    profile(prep, model, &params.nl, weights, &group, k, (s - w, s + w))?;
+                let around = ((s - w).max(full.0), (s + w).min(full.1));
+                let (best, _) = profile(prep, model, &params.nl, weights, &group, k, around)?;
                 params.nl[k] = best;
             }
         }
@@ -318,4 +323,195 @@ pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
         failed,
         accepted,
     }
+}
+
+/// Everything a diagnosis computed: the report and the fitted states (base
+/// model first, then after each step) for plots.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The report.
+    pub diagnosis: Diagnosis,
+    /// The arranged measurements.
+    pub prep: Prepared,
+    /// The base model's fit, then the fit after each step.
+    pub states: Vec<State>,
+}
+
+/// Runs the whole workflow on a run directory at the pedestal level.
+pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
+    let prep = Prepared::from_run(run)?;
+    let nb = prep.bearings.len();
+    let mut state = State::fit(&prep, base_model(&opts.base, nb), Vec::new())?;
+    let (pred0, gap0) = state.gap(&prep);
+    let where_before = locate(&prep, &state.model, &state.params, &pred0);
+    let pedestals_before = pedestals(&prep, &state)?;
+    let mut states = vec![state.clone()];
+    let mut steps = Vec::new();
+    let mut best_rejected = None;
+    for _ in 0..opts.max_steps {
+        let outcome = step(&prep, &state, opts.alpha);
+        if !outcome.accepted {
+            best_rejected = outcome.ranked.first().map(|e| summary(&prep, e));
+            break;
+        }
+        let win = &outcome.ranked[0];
+        let (_, before) = state.gap(&prep);
+        let next = State::fit(&prep, win.candidate.model.clone(), win.params.nl.clone())?;
+        let (_, after) = next.gap(&prep);
+        let parameters = effect_estimates(&prep, &next, &win.candidate)?;
+        steps.push(Step {
+            effect: win.candidate.effect.name().to_string(),
+            bearing: prep.bearings[win.candidate.bearing].clone(),
+            gap_before: before.gap,
+            gap_after: after.gap,
+            gap_floor_after: after.floor,
+            machine_gap_before: None,
+            machine_gap_after: None,
+            partner: win.candidate.partner.map(|b| prep.bearings[b].clone()),
+            channels: win.candidate.variant.clone(),
+            parameters,
+            evidence: win.evidence,
+            runner_up: outcome.ranked.get(1).map(|e| summary(&prep, e)),
+            candidates_tried: outcome.tried,
+            candidates_failed: outcome.failed.len(),
+        });
+        state = next;
+        states.push(state.clone());
+    }
+    let (pred1, gap1) = state.gap(&prep);
+    let where_after = locate(&prep, &state.model, &state.params, &pred1);
+    let pedestals_after = pedestals(&prep, &state)?;
+    let effects_added: Vec<String> = steps.iter().map(|s| s.effect.clone()).collect();
+    let verdict = if steps.is_empty() {
+        if gap0.gap <= 3.0 * gap0.floor {
+            format!(
+                "No significant missing effect: the base model agrees with the measurements to the noise floor (gap {:.4}, floor {:.4}).",
+                gap0.gap, gap0.floor
+            )
+        } else {
+            format!(
+                "No effect of the library explains the remaining disagreement significantly (gap {:.4}, floor {:.4}); nothing added.",
+                gap0.gap, gap0.floor
+            )
+        }
+    } else {
+        format!(
+            "Added {}: the pedestal-level gap fell from {:.4} to {:.4} (noise floor {:.4}).",
+            steps
+                .iter()
+                .map(|s| format!("{} at {}", s.effect, s.bearing))
+                .collect::<Vec<_>>()
+                .join(", then "),
+            gap0.gap,
+            gap1.gap,
+            gap1.floor
+        )
+    };
+    let mut digits = BTreeMap::new();
+    for (c, q) in prep.noise.columns.iter().enumerate() {
+        digits.insert(CHANNELS[c].to_string(), q.digits);
+    }
+    let mut relative_scatter = BTreeMap::new();
+    for (b, name) in prep.bearings.iter().enumerate() {
+        let mut m = BTreeMap::new();
+        for (c, s) in prep.noise.scatter[b].iter().enumerate() {
+            if let Some(s) = s {
+                m.insert(COMPLEX_CHANNELS[c].to_string(), *s);
+            }
+        }
+        relative_scatter.insert(name.clone(), m);
+    }
+    let diagnosis = Diagnosis {
+        base_model: opts.base.iter().map(|p| p.name().to_string()).collect(),
+        steps,
+        effects_added,
+        gap_before: gap0.gap,
+        gap_after: gap1.gap,
+        machine_gap_before: None,
+        machine_gap_after: None,
+        noise: NoiseSummary {
+            digits,
+            relative_scatter,
+            gap_floor_before: gap0.floor,
+            gap_floor_after: gap1.floor,
+        },
+        where_before,
+        where_after,
+        pedestals_before,
+        pedestals_after,
+        best_rejected,
+        significance_level: opts.alpha,
+        verdict,
+    };
+    Ok(Outcome {
+        diagnosis,
+        prep,
+        states,
+    })
+}
+
+/// The candidate as a report entry.
+fn summary(prep: &Prepared, e: &Evaluated) -> CandidateSummary {
+    CandidateSummary {
+        effect: e.candidate.effect.name().to_string(),
+        bearing: prep.bearings[e.candidate.bearing].clone(),
+        partner: e.candidate.partner.map(|b| prep.bearings[b].clone()),
+        channels: e.candidate.variant.clone(),
+        evidence: e.evidence,
+        parameters: e
+            .effect_parameters()
+            .into_iter()
+            .map(|(name, value, std_err)| Estimate {
+                name,
+                value,
+                std_err,
+            })
+            .collect(),
+    }
+}
+
+/// The effect's own parameters in a refitted state.
+fn effect_estimates(prep: &Prepared, state: &State, cand: &Candidate) -> Result<Vec<Estimate>> {
+    let infs = state.inference(prep)?;
+    let mut out = Vec::new();
+    for (name, r) in &cand.parameters {
+        for (_, inf, refs) in &infs {
+            if let Some(i) = refs.iter().position(|x| x == r) {
+                out.push(Estimate {
+                    name: name.clone(),
+                    value: inf.estimate[i],
+                    std_err: inf.std_err(i),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The pedestal parameters (k, m, c terms) of every bearing with standard errors.
+pub fn pedestals(prep: &Prepared, state: &State) -> Result<Vec<Pedestal>> {
+    let infs = state.inference(prep)?;
+    let mut out: Vec<Pedestal> = prep
+        .bearings
+        .iter()
+        .map(|b| Pedestal {
+            bearing: b.clone(),
+            values: BTreeMap::new(),
+            std_err: BTreeMap::new(),
+        })
+        .collect();
+    for (_, inf, refs) in &infs {
+        for (i, r) in refs.iter().enumerate() {
+            let ParamRef::Term(k) = r else { continue };
+            let t = state.model.terms[*k];
+            if !t.is_pedestal() {
+                continue;
+            }
+            if let [Some(b), None] = t.bearings() {
+                out[b].values.insert(t.name(), inf.estimate[i]);
+                out[b].std_err.insert(t.name(), inf.std_err(i));
+            }
+        }
+    }
+    Ok(out)
 }

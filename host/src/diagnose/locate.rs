@@ -1,0 +1,210 @@
+//! Where the disagreement lives: which bearing, which direction, which speed
+//! band, and how it relates to the identified pedestal resonance.
+
+use super::data::Prepared;
+use super::gap::Prediction;
+use super::model::{Model, Params, Term, DIR_NAMES};
+use serde::Serialize;
+
+/// Number of equal-width speed bands the range is split into.
+pub const BANDS: usize = 5;
+
+/// The disagreement of one pedestal channel in one speed band.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Band {
+    /// Lower band edge [Hz].
+    pub from_hz: f64,
+    /// Upper band edge [Hz].
+    pub to_hz: f64,
+    /// Relative RMS disagreement within the band (the gap's definition) [-].
+    pub gap: f64,
+    /// Share of the channel's squared disagreement in the band [-].
+    pub share: f64,
+}
+
+/// The disagreement of one pedestal channel (bearing, direction).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Location {
+    /// Bearing name.
+    pub bearing: String,
+    /// Direction: `y` (vertical) or `z` (horizontal).
+    pub direction: String,
+    /// Share of the whole machine's squared disagreement [-].
+    pub share: f64,
+    /// Relative RMS disagreement of this channel [-].
+    pub gap: f64,
+    /// The gap noise alone would give on this channel [-].
+    pub floor: f64,
+    /// Speed of the largest disagreement |X_pred − X_meas| [Hz].
+    pub peak_hz: f64,
+    /// Identified pedestal natural frequency √(k/m)/2π in this direction [Hz].
+    pub resonance_hz: Option<f64>,
+    /// Rank correlation of the relative disagreement with speed [-1, 1]:
+    /// positive = growing with speed.
+    pub trend: f64,
+    /// The speed bands, low to high.
+    pub bands: Vec<Band>,
+    /// One-line description for the report.
+    pub summary: String,
+}
+
+/// Locates the disagreement of `pred` (the prediction of `model` at `params`),
+/// largest share first.
+pub fn locate(prep: &Prepared, model: &Model, params: &Params, pred: &Prediction) -> Vec<Location> {
+    let f_lo = prep.speeds_hz.first().copied().unwrap_or(0.0);
+    let f_hi = prep.speeds_hz.last().copied().unwrap_or(0.0);
+    let width = ((f_hi - f_lo) / BANDS as f64).max(f64::MIN_POSITIVE);
+    let mut total = 0.0;
+    let mut out = Vec::new();
+    for (b, name) in prep.bearings.iter().enumerate() {
+        for d in 0..2 {
+            let mut num = [0.0; BANDS];
+            let mut den = [0.0; BANDS];
+            let (mut n_all, mut d_all, mut v_all) = (0.0, 0.0, 0.0);
+            let mut peak = (0.0, f_lo);
+            let mut rel: Vec<(f64, f64)> = Vec::new();
+            for (j, p) in prep.points[b].iter().enumerate() {
+                let Some(p) = p else { continue };
+                let diff = match pred.ped[b][j] {
+                    Some(x) => (x[d] - p.ped[d]).norm_sqr(),
+                    None => p.ped[d].norm_sqr(),
+                };
+                let band = (((p.speed_hz - f_lo) / width) as usize).min(BANDS - 1);
+                num[band] += diff;
+                den[band] += p.ped[d].norm_sqr();
+                n_all += diff;
+                d_all += p.ped[d].norm_sqr();
+                v_all += pred.noise_var[b][j].map_or(0.0, |v| v[d]);
+                if diff > peak.0 {
+                    peak = (diff, p.speed_hz);
+                }
+                if p.ped[d].norm() > 0.0 {
+                    rel.push((p.speed_hz, diff.sqrt() / p.ped[d].norm()));
+                }
+            }
+            total += n_all;
+            let bands = (0..BANDS)
+                .map(|i| Band {
+                    from_hz: f_lo + width * i as f64,
+                    to_hz: f_lo + width * (i + 1) as f64,
+                    gap: if den[i] > 0.0 {
+                        (num[i] / den[i]).sqrt()
+                    } else {
+                        0.0
+                    },
+                    share: if n_all > 0.0 { num[i] / n_all } else { 0.0 },
+                })
+                .collect();
+            out.push(Location {
+                bearing: name.clone(),
+                direction: DIR_NAMES[d].to_string(),
+                share: n_all,
+                gap: if d_all > 0.0 {
+                    (n_all / d_all).sqrt()
+                } else {
+                    0.0
+                },
+                floor: if d_all > 0.0 {
+                    (v_all / d_all).sqrt()
+                } else {
+                    0.0
+                },
+                peak_hz: peak.1,
+                resonance_hz: resonance(model, params, b, d),
+                trend: spearman(&rel),
+                bands,
+                summary: String::new(),
+            });
+        }
+    }
+    for l in &mut out {
+        l.share = if total > 0.0 { l.share / total } else { 0.0 };
+        l.summary = describe(l, width);
+    }
+    out.sort_by(|a, b| b.share.total_cmp(&a.share));
+    out
+}
+
+/// √(k/m)/2π of bearing `b` in direction `d` from the model's terms [Hz].
+fn resonance(model: &Model, params: &Params, b: usize, d: usize) -> Option<f64> {
+    let mut k = None;
+    let mut m = None;
+    for (t, v) in model.terms.iter().zip(&params.beta) {
+        match *t {
+            Term::Stiffness { bearing, dir } if bearing == b && dir == d => k = Some(*v),
+            Term::Mass { bearing, dir } if bearing == b && (dir.is_none() || dir == Some(d)) => {
+                m = Some(*v)
+            }
+            _ => {}
+        }
+    }
+    let (k, m) = (k?, m?);
+    (k > 0.0 && m > 0.0).then(|| (k / m).sqrt() / std::f64::consts::TAU)
+}
+
+/// Spearman rank correlation of the pairs (x, y).
+fn spearman(xy: &[(f64, f64)]) -> f64 {
+    let n = xy.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let rank = |key: &dyn Fn(&(f64, f64)) -> f64| -> Vec<f64> {
+        let mut idx: Vec<usize> = (0..n).collect();
+        idx.sort_by(|&a, &b| key(&xy[a]).total_cmp(&key(&xy[b])));
+        let mut r = vec![0.0; n];
+        for (pos, &i) in idx.iter().enumerate() {
+            r[i] = pos as f64;
+        }
+        r
+    };
+    let rx = rank(&|p| p.0);
+    let ry = rank(&|p| p.1);
+    let mean = (n as f64 - 1.0) / 2.0;
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for i in 0..n {
+        let (a, b) = (rx[i] - mean, ry[i] - mean);
+        sxy += a * b;
+        sxx += a * a;
+        syy += b * b;
+    }
+    if sxx * syy > 0.0 {
+        sxy / (sxx * syy).sqrt()
+    } else {
+        0.0
+    }
+}
+
+fn describe(l: &Location, band_width: f64) -> String {
+    let mut s = format!(
+        "{} {}: {:.0}% of the disagreement, gap {:.3} (noise floor {:.3}), largest at {:.1} Hz",
+        l.bearing,
+        l.direction,
+        100.0 * l.share,
+        l.gap,
+        l.floor,
+        l.peak_hz
+    );
+    if let Some(f) = l.resonance_hz {
+        if (l.peak_hz - f).abs() <= 0.5 * band_width {
+            s += &format!(", around the pedestal resonance ({f:.1} Hz)");
+        }
+    }
+    if let Some((i, _)) = l
+        .bands
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.share.total_cmp(&b.1.share))
+    {
+        if i == 0 {
+            s += ", mostly at low speed";
+        } else if i == l.bands.len() - 1 {
+            s += ", mostly at high speed";
+        }
+    }
+    if l.trend > 0.5 {
+        s += ", relative disagreement growing with speed";
+    } else if l.trend < -0.5 {
+        s += ", relative disagreement falling with speed";
+    }
+    s
+}

@@ -1,0 +1,232 @@
+//! The diagnosis as data (serialised by `--json`, formats.md keys first) and
+//! as the text report an engineer reads.
+
+use super::criterion::Evidence;
+use super::locate::Location;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt::Write;
+
+/// A parameter estimate with its standard error (SI units of the parameter).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Estimate {
+    /// Parameter name (`k_yz`, `tau`, ...).
+    pub name: String,
+    /// Value [SI].
+    pub value: f64,
+    /// Standard error [SI] (the larger of noise-floor and robust values).
+    pub std_err: f64,
+}
+
+/// A candidate effect with its evidence.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CandidateSummary {
+    /// Effect name (formats.md).
+    pub effect: String,
+    /// Bearing it acts on.
+    pub bearing: String,
+    /// Other bearing of a foundation coupling.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub partner: Option<String>,
+    /// Delayed channels of a sensor delay (`ped`, `ped_y`, `rel`, ...).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub channels: Option<String>,
+    /// The evidence for it.
+    pub evidence: Evidence,
+    /// Its own parameters as fitted.
+    pub parameters: Vec<Estimate>,
+}
+
+/// One step of the greedy search: an effect added.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Step {
+    /// Effect name (formats.md).
+    pub effect: String,
+    /// Bearing it acts on (the first of the pair for foundation coupling).
+    pub bearing: String,
+    /// Pedestal-level gap before adding it [-].
+    pub gap_before: f64,
+    /// Pedestal-level gap after adding it and refitting [-].
+    pub gap_after: f64,
+    /// Noise floor of the gap after the step [-].
+    pub gap_floor_after: f64,
+    /// Machine-level gaps (re-simulated machine), with `--machine`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine_gap_before: Option<f64>,
+    /// Machine-level gap after the step, with `--machine`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine_gap_after: Option<f64>,
+    /// Other bearing of a foundation coupling.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub partner: Option<String>,
+    /// Delayed channels of a sensor delay.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub channels: Option<String>,
+    /// The effect's own parameters after the refit.
+    pub parameters: Vec<Estimate>,
+    /// Evidence for the effect.
+    pub evidence: Evidence,
+    /// The next-best candidate of the step.
+    pub runner_up: Option<CandidateSummary>,
+    /// Candidates tried in the step (the Bonferroni count).
+    pub candidates_tried: usize,
+    /// Candidates that could not be fitted (not identifiable from these data).
+    pub candidates_failed: usize,
+}
+
+/// Identified parameters of one pedestal.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Pedestal {
+    /// Bearing name.
+    pub bearing: String,
+    /// Parameter values by name [SI].
+    #[serde(flatten)]
+    pub values: BTreeMap<String, f64>,
+    /// Standard errors by name [SI].
+    pub std_err: BTreeMap<String, f64>,
+}
+
+/// The measurement noise the criterion used.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NoiseSummary {
+    /// Significant digits of each `measurements.csv` column (by column name).
+    pub digits: BTreeMap<String, u32>,
+    /// Relative scatter between neighbouring speeds per bearing and channel.
+    pub relative_scatter: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Noise floor of the pedestal-level gap with the base model [-].
+    pub gap_floor_before: f64,
+    /// Noise floor of the pedestal-level gap with the final model [-].
+    pub gap_floor_after: f64,
+}
+
+/// The whole diagnosis.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Diagnosis {
+    /// Parameters of the base pedestal model.
+    pub base_model: Vec<String>,
+    /// The effects added, in order.
+    pub steps: Vec<Step>,
+    /// Names of the effects added (empty: no significant missing effect).
+    pub effects_added: Vec<String>,
+    /// Pedestal-level gap of the base model [-].
+    pub gap_before: f64,
+    /// Pedestal-level gap of the final model [-].
+    pub gap_after: f64,
+    /// Machine-level gap of the base model, with `--machine` [-].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine_gap_before: Option<f64>,
+    /// Machine-level gap of the final model, with `--machine` [-].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine_gap_after: Option<f64>,
+    /// The noise floor.
+    pub noise: NoiseSummary,
+    /// Where the base model's disagreement lives, largest first.
+    pub where_before: Vec<Location>,
+    /// Where the final model's disagreement lives, largest first.
+    pub where_after: Vec<Location>,
+    /// Identified pedestals with the base model.
+    pub pedestals_before: Vec<Pedestal>,
+    /// Identified pedestals with the final model.
+    pub pedestals_after: Vec<Pedestal>,
+    /// The best candidate left when the search stopped (not significant).
+    pub best_rejected: Option<CandidateSummary>,
+    /// Family-wise significance level per step.
+    pub significance_level: f64,
+    /// One-paragraph conclusion.
+    pub verdict: String,
+}
+
+impl Diagnosis {
+    /// The text report.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "Base model: {}", self.base_model.join(", "));
+        let _ = writeln!(
+            s,
+            "Pedestal-level gap {:.4} (noise floor {:.4}){}",
+            self.gap_before,
+            self.noise.gap_floor_before,
+            self.machine_gap_before
+                .map_or(String::new(), |g| format!("; machine-level gap {g:.4}"))
+        );
+        let digits: Vec<String> = self
+            .noise
+            .digits
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect();
+        let _ = writeln!(s, "Digits written: {}", digits.join(", "));
+        let _ = writeln!(s, "\nWhere the disagreement lives (base model):");
+        for l in self.where_before.iter().take(4) {
+            let _ = writeln!(s, "  {}", l.summary);
+        }
+        if self.steps.is_empty() {
+            let _ = writeln!(s, "\nNo significant missing effect.");
+        } else {
+            let _ = writeln!(
+                s,
+                "\n{:<4} {:<26} {:<10} {:>10} {:>10}  parameters (± std err)",
+                "step", "effect", "bearing", "gap before", "gap after"
+            );
+            for (i, st) in self.steps.iter().enumerate() {
+                let params: Vec<String> = st
+                    .parameters
+                    .iter()
+                    .map(|p| format!("{} = {:.4e} ± {:.2e}", p.name, p.value, p.std_err))
+                    .collect();
+                let mut where_ = st.bearing.clone();
+                if let Some(p) = &st.partner {
+                    where_ += &format!("+{p}");
+                }
+                let mut effect = st.effect.clone();
+                if let Some(c) = &st.channels {
+                    effect += &format!(" ({c})");
+                }
+                let _ = writeln!(
+                    s,
+                    "{:<4} {:<26} {:<10} {:>10.4} {:>10.4}  {}",
+                    i + 1,
+                    effect,
+                    where_,
+                    st.gap_before,
+                    st.gap_after,
+                    params.join(", ")
+                );
+                let e = &st.evidence;
+                let mut ev = format!(
+                    "     evidence: Wald {:.3e} (floor {:.3e}, robust {:.3e}), q = {}, ΔBIC {:.1}, p = {:.2e} (×{} candidates: {:.2e})",
+                    e.wald, e.wald_floor, e.wald_robust, e.extra_parameters, e.delta_bic, e.p_value, st.candidates_tried, e.p_adjusted
+                );
+                if let Some(r) = &st.runner_up {
+                    ev += &format!(
+                        "; runner-up {} at {}: ΔBIC {:.1}",
+                        r.effect, r.bearing, r.evidence.delta_bic
+                    );
+                }
+                let _ = writeln!(s, "{ev}");
+            }
+        }
+        if let Some(r) = &self.best_rejected {
+            let _ = writeln!(
+                s,
+                "Best remaining candidate, not significant: {} at {} (ΔBIC {:.1}, adjusted p {:.2e}, level {})",
+                r.effect, r.bearing, r.evidence.delta_bic, r.evidence.p_adjusted, self.significance_level
+            );
+        }
+        let _ = writeln!(s, "\nPedestals (before → after):");
+        for (a, b) in self.pedestals_before.iter().zip(&self.pedestals_after) {
+            let mut parts = Vec::new();
+            for (k, v) in &b.values {
+                let before = a
+                    .values
+                    .get(k)
+                    .map_or("—".to_string(), |x| format!("{x:.4e}"));
+                let se = b.std_err.get(k).copied().unwrap_or(f64::NAN);
+                parts.push(format!("{k} {before} → {v:.4e} ± {se:.1e}"));
+            }
+            let _ = writeln!(s, "  {}: {}", b.bearing, parts.join(", "));
+        }
+        let _ = writeln!(s, "\n{}", self.verdict);
+        s
+    }
+}
