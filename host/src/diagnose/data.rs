@@ -5,9 +5,8 @@
 
 use super::noise::{NoiseModel, CHANNELS};
 use crate::rundir::RunDir;
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use num_complex::Complex;
-use plinth_shared::bearing::BearingCoefficients;
 use plinth_shared::phasor::{omega_from_hz, Phasor2};
 
 /// Complex 2×2 matrix indexed `[row][col]` over (y, z).
@@ -91,6 +90,7 @@ impl Prepared {
         speeds_hz.sort_by(f64::total_cmp);
         speeds_hz.dedup();
         let noise = NoiseModel::estimate(run, &bearings)?;
+        let schedules = run.bearing_schedules();
         let mut points: Vec<Vec<Option<Point>>> = vec![vec![None; speeds_hz.len()]; bearings.len()];
         for (row, m) in run.measurements.iter().enumerate() {
             let finite = m.speed_hz.is_finite()
@@ -109,7 +109,13 @@ impl Prepared {
             }
             let b = bearings.iter().position(|n| *n == m.bearing).unwrap_or(0);
             let j = speeds_hz.partition_point(|&s| s < m.speed_hz);
-            let coefficients = coefficients_at(run, &m.bearing, m.speed_hz)?;
+            let coefficients = schedules
+                .get(&m.bearing)
+                .ok_or_else(|| {
+                    anyhow!("bearings.csv has no coefficients for bearing {}", m.bearing)
+                })?
+                .at(m.speed_hz)
+                .with_context(|| format!("bearings.csv, bearing {}", m.bearing))?;
             let omega = omega_from_hz(m.speed_hz);
             let mut kstar = [[Complex::new(0.0, 0.0); 2]; 2];
             for (r, row_k) in kstar.iter_mut().enumerate() {
@@ -159,37 +165,4 @@ pub fn point_magnitude(p: &Point, c: usize) -> f64 {
     } else {
         p.ped[(c - 4) / 2].norm()
     }
-}
-
-/// The bearing coefficients of `bearing` at `speed_hz`, interpolated linearly
-/// in speed between the two nearest listed speeds of `bearings.csv`; outside
-/// the listed range is an error (formats.md: no extrapolation).
-pub fn coefficients_at(
-    run: &RunDir,
-    bearing: &str,
-    speed_hz: f64,
-) -> Result<BearingCoefficients<f64>> {
-    let mut rows: Vec<_> = run
-        .bearings
-        .iter()
-        .filter(|r| r.bearing == bearing)
-        .collect();
-    if rows.is_empty() {
-        bail!("bearings.csv has no coefficients for bearing {bearing}");
-    }
-    rows.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
-    let first = rows[0].speed_hz;
-    let last = rows[rows.len() - 1].speed_hz;
-    if !(speed_hz >= first && speed_hz <= last) {
-        bail!(
-            "bearings.csv lists bearing {bearing} from {first} Hz to {last} Hz; the measurement at {speed_hz} Hz lies outside (no extrapolation)"
-        );
-    }
-    let hi = rows.partition_point(|r| r.speed_hz < speed_hz);
-    if rows[hi].speed_hz == speed_hz || hi == 0 {
-        return Ok(rows[hi].coefficients);
-    }
-    let (a, b) = (rows[hi - 1], rows[hi]);
-    let t = (speed_hz - a.speed_hz) / (b.speed_hz - a.speed_hz);
-    Ok(a.coefficients.lerp(&b.coefficients, t))
 }

@@ -13,26 +13,25 @@
 //! - [`criterion`]: the significance test and ranking of candidates;
 //! - [`locate`]: where the disagreement lives;
 //! - [`workflow`]: greedy forward selection;
-//! - [`report`]: the diagnosis as JSON and text.
+//! - [`report`]: the diagnosis as JSON and text;
+//! - [`machine`]: the machine-level re-simulation (`--machine`);
+//! - [`plots`]: measured-versus-predicted figures;
+//! - [`cli`]: the `plinth diagnose` command.
 
 pub use workflow::{diagnose, Options, Outcome};
 
 pub mod candidates;
+pub mod cli;
 pub mod criterion;
 pub mod data;
 pub mod fit;
 pub mod gap;
 pub mod locate;
+pub mod machine;
 pub mod model;
 pub mod noise;
+pub mod plots;
 pub mod report;
 pub mod workflow;
 
-/// Command-line arguments of `plinth diagnose`.
-#[derive(clap::Args, Debug)]
-pub struct Args {}
-
-/// Runs `plinth diagnose`.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("`plinth diagnose` is not available in this build yet")
-}
+pub use cli::{run, Args};

@@ -1,0 +1,104 @@
+//! `plinth diagnose DIR [--machine MACHINE.toml] [--base ...] [--json] [--plots DIR]`.
+
+use super::machine::{machine_gap, resimulate};
+use super::plots::{write_machine_figure, write_pedestal_figures};
+use super::workflow::{diagnose, Options};
+use crate::rundir::RunDir;
+use crate::sim::Machine;
+use anyhow::{bail, Context, Result};
+use plinth_shared::regression::Parameter;
+use std::path::PathBuf;
+
+/// Command-line arguments of `plinth diagnose`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Run directory (`measurements.csv`, `bearings.csv`).
+    pub dir: PathBuf,
+    /// Machine file: also re-simulate the whole machine with the identified
+    /// pedestals and compare every channel (machine-level gap).
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    /// Parameters of the base pedestal model, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "k_y,k_z,m,c_y,c_z")]
+    pub base: Vec<String>,
+    /// Print the diagnosis as JSON (formats.md) instead of the text report.
+    #[arg(long)]
+    pub json: bool,
+    /// Write measured-vs-predicted figures (PNG and SVG) into this directory.
+    #[arg(long)]
+    pub plots: Option<PathBuf>,
+    /// Family-wise significance level of each step (Bonferroni over candidates).
+    #[arg(long, default_value_t = 1e-3)]
+    pub alpha: f64,
+}
+
+/// Parses the `--base` list: known names (formats.md), no repeats, and
+/// at least the two stiffnesses.
+pub fn parse_base(names: &[String]) -> Result<Vec<Parameter>> {
+    let mut out = Vec::new();
+    for n in names {
+        let p = Parameter::from_name(n.trim()).with_context(|| {
+            format!("--base: unknown parameter {n:?} (known: k_y, k_z, m, c_y, c_z)")
+        })?;
+        if out.contains(&p) {
+            bail!("--base: {n} given twice");
+        }
+        out.push(p);
+    }
+    if !(out.contains(&Parameter::Ky) && out.contains(&Parameter::Kz)) {
+        bail!("--base must include k_y and k_z (the pedestal model needs its stiffnesses)");
+    }
+    Ok(out)
+}
+
+/// Runs `plinth diagnose`.
+pub fn run(args: &Args) -> Result<()> {
+    if !(args.alpha > 0.0 && args.alpha < 1.0) {
+        bail!(
+            "--alpha must lie strictly between 0 and 1 (got {})",
+            args.alpha
+        );
+    }
+    let options = Options {
+        base: parse_base(&args.base)?,
+        alpha: args.alpha,
+        ..Options::default()
+    };
+    let run = RunDir::read(&args.dir).with_context(|| format!("reading {}", args.dir.display()))?;
+    let mut outcome = diagnose(&run, &options)?;
+    if let Some(path) = &args.machine {
+        let machine =
+            Machine::from_toml_path(path).with_context(|| format!("reading {}", path.display()))?;
+        let mut gaps = Vec::new();
+        for (i, state) in outcome.states.iter().enumerate() {
+            let readings = resimulate(&machine, &outcome.prep, state)?;
+            gaps.push(machine_gap(&outcome.prep, &readings));
+            if let Some(dir) = &args.plots {
+                if i == 0 || i + 1 == outcome.states.len() {
+                    let (stem, label) = if i == 0 {
+                        ("machine_before", "base model")
+                    } else {
+                        ("machine_after", "with the effects added")
+                    };
+                    write_machine_figure(&outcome.prep, &readings, dir, stem, label)?;
+                }
+            }
+        }
+        let d = &mut outcome.diagnosis;
+        d.machine_gap_before = gaps.first().copied();
+        d.machine_gap_after = gaps.last().copied();
+        for (i, s) in d.steps.iter_mut().enumerate() {
+            s.machine_gap_before = gaps.get(i).copied();
+            s.machine_gap_after = gaps.get(i + 1).copied();
+        }
+    }
+    if let Some(dir) = &args.plots {
+        write_pedestal_figures(&outcome, dir)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&outcome.diagnosis)?);
+    } else {
+        print!("{}", outcome.diagnosis.to_text());
+    }
+    Ok(())
+}
