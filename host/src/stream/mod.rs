@@ -109,7 +109,7 @@ pub fn run(args: &Args) -> Result<()> {
             }
         }
         let signals = match &args.replay {
-            Some(path) => Some((path.clone(), load_replay_signals(path, &config)?)),
+            Some(path) => Some((path.clone(), replay::SignalSetReplay::load(path, &config)?)),
             None => None,
         };
         let replay = signals
@@ -278,14 +278,4 @@ pub fn summary(report: &StreamReport) -> String {
     }
     s.push_str(&report::render(&report.pedestals));
     s
-}
-
-/// Reads replay signals written by `plinth signals` as the configured
-/// channels would see them.
-pub fn load_replay_signals(path: &Path, config: &StreamConfig) -> Result<replay::Signals> {
-    let _ = config;
-    bail!(
-        "{}: reading `plinth signals` output is not available in this build yet",
-        path.display()
-    )
 }

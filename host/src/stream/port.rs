@@ -65,6 +65,22 @@ impl Connector for SerialConnector {
     }
 }
 
+pub use serialport::{SerialPort, TTYPort};
+
+/// A pseudo-terminal pair for simulated hardware: the master end (the
+/// "device" side, e.g. the firmware compiled for the host) and the path of
+/// the slave end, which `plinth stream --port PATH` opens like a serial port.
+/// The slave is closed here so that the host can open it exclusively.
+pub fn pseudo_terminal() -> io::Result<(TTYPort, String)> {
+    use serialport::SerialPort;
+    let (master, slave) = TTYPort::pair().map_err(io::Error::from)?;
+    let path = slave
+        .name()
+        .ok_or_else(|| io::Error::other("the pseudo-terminal has no path"))?;
+    drop(slave);
+    Ok((master, path))
+}
+
 /// True for the errors that only mean "nothing happened within the timeout".
 pub fn is_quiet(e: &io::Error) -> bool {
     matches!(

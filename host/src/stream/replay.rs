@@ -3,6 +3,8 @@
 //! how far the box has acknowledged them so that a restarted host resumes
 //! where the last one stopped.
 
+use super::config::{SensorKind, StreamConfig};
+use crate::sim::signals::{SensorKind as SetKind, SignalSet};
 use anyhow::{bail, Context, Result};
 use plinth_shared::protocol::{
     KeyphasorEdge, SampleBlock, Samples, MAX_BLOCK_VALUES, MAX_KEYPHASOR_EDGES,
@@ -106,6 +108,107 @@ impl ReplaySource for Signals {
     }
     fn keyphasor_edges(&self) -> &[f64] {
         &self.edges
+    }
+}
+
+/// A `plinth signals` signal set laid out as the configured ADC channels see
+/// it: column c of a sample vector is the signal channel that measures what
+/// configured channel c (in ADC order) measures.
+#[derive(Clone, Debug)]
+pub struct SignalSetReplay {
+    set: SignalSet,
+    columns: Vec<usize>,
+    adc: Vec<u8>,
+}
+
+impl SignalSetReplay {
+    /// Reads the signal set in `dir` and maps it onto `config`'s channels;
+    /// every configured channel must be in the set with the same sensor kind
+    /// and sensitivity (the box converts volts with the configured ones).
+    pub fn load(dir: &Path, config: &StreamConfig) -> Result<Self> {
+        let set = SignalSet::read(dir)?;
+        Self::new(set, config).with_context(|| format!("replaying {}", dir.display()))
+    }
+
+    /// Maps an in-memory signal set onto `config`'s channels (see [`Self::load`]).
+    pub fn new(set: SignalSet, config: &StreamConfig) -> Result<Self> {
+        let mut columns = Vec::with_capacity(config.channels.len());
+        for ch in &config.channels {
+            let found =
+                set.header.channels.iter().position(|s| {
+                    s.bearing == ch.bearing && s.quantity.name() == ch.quantity.name()
+                });
+            let Some(col) = found else {
+                bail!(
+                    "configured ADC channel {} ({} {}) is not in the signal set (it has {})",
+                    ch.adc,
+                    ch.bearing,
+                    ch.quantity,
+                    set.header
+                        .channels
+                        .iter()
+                        .map(|s| s.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            };
+            let s = &set.header.channels[col];
+            let kind_matches = matches!(
+                (s.kind, ch.sensor),
+                (SetKind::Displacement, SensorKind::Proximity)
+                    | (SetKind::Velocity, SensorKind::Velocity)
+                    | (SetKind::Acceleration, SensorKind::Acceleration)
+            );
+            if !kind_matches {
+                bail!(
+                    "configured ADC channel {} ({} {}) is a {:?} sensor but the signal set's {} is {:?}",
+                    ch.adc,
+                    ch.bearing,
+                    ch.quantity,
+                    ch.sensor,
+                    s.name,
+                    s.kind
+                );
+            }
+            if (s.sensitivity - ch.sensitivity).abs() > 1e-6 * ch.sensitivity.abs() {
+                bail!(
+                    "configured ADC channel {} ({} {}) has sensitivity {} {} but the signal set's {} was made with {}",
+                    ch.adc,
+                    ch.bearing,
+                    ch.quantity,
+                    ch.sensitivity,
+                    ch.sensor.sensitivity_unit(),
+                    s.name,
+                    s.sensitivity
+                );
+            }
+            columns.push(col);
+        }
+        let adc = config.channels.iter().map(|c| c.adc).collect();
+        Ok(Self { set, columns, adc })
+    }
+
+    /// The signal set.
+    pub fn set(&self) -> &SignalSet {
+        &self.set
+    }
+}
+
+impl ReplaySource for SignalSetReplay {
+    fn sample_rate_hz(&self) -> f64 {
+        self.set.header.sample_rate_hz
+    }
+    fn adc_channels(&self) -> &[u8] {
+        &self.adc
+    }
+    fn sample_vectors(&self) -> usize {
+        self.set.len()
+    }
+    fn volts(&self, vector: usize, column: usize) -> f32 {
+        self.set.volts(vector, self.columns[column]) as f32
+    }
+    fn keyphasor_edges(&self) -> &[f64] {
+        &self.set.keyphasor
     }
 }
 
