@@ -183,17 +183,17 @@ impl Assembly {
         let mut bearing_idx = Vec::new();
         for (b, brg) in machine.bearings.iter().enumerate() {
             let s = node_dof[brg.node];
-            let mut blocks = [[[usize::MAX; 2]; 2]; 4];
-            for i in 0..2 {
-                for j in 0..2 {
-                    blocks[0][i][j] = idx(s + i, s + j);
-                    if let Some(p) = pedestal_dof[b] {
-                        blocks[1][i][j] = idx(s + i, p + j);
-                        blocks[2][i][j] = idx(p + i, s + j);
-                        blocks[3][i][j] = idx(p + i, p + j);
-                    }
-                }
-            }
+            let block = |r0: usize, c0: usize| {
+                [
+                    [idx(r0, c0), idx(r0, c0 + 1)],
+                    [idx(r0 + 1, c0), idx(r0 + 1, c0 + 1)],
+                ]
+            };
+            let absent = [[usize::MAX; 2]; 2];
+            let blocks = match pedestal_dof[b] {
+                Some(p) => [block(s, s), block(s, p), block(p, s), block(p, p)],
+                None => [block(s, s), absent, absent, absent],
+            };
             bearing_idx.push(blocks);
         }
         let mut springs = Vec::new();

@@ -743,7 +743,7 @@ impl Machine {
             })?;
             for b in weight_share {
                 let w = loads[b];
-                if !(w > 0.0) {
+                if w.is_nan() || w <= 0.0 {
                     return Err(ctx.err(
                         format!("bearings[{b}].oil_film.load"),
                         format!("\"weight\" gives {w:.6e} N: the film would be unloaded or pulled (overhung rotor?); give a load in N"),
@@ -904,7 +904,7 @@ impl Machine {
             }
         }
         for d in &self.disks {
-            if d.node >= nn || !(d.mass > 0.0) {
+            if d.node >= nn || d.mass.is_nan() || d.mass <= 0.0 {
                 return bad(format!("disk {d:?}: node out of range or mass not > 0"));
             }
         }
