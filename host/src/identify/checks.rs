@@ -59,7 +59,13 @@ pub(super) fn warnings(
                 WarningKind::RankDeficient,
                 format!(
                     "the data do not determine {} (rank {} of {}): collinear or missing response",
-                    names_of(&solution.weakest_direction),
+                    names_of(
+                        &solution
+                            .undetermined
+                            .iter()
+                            .map(|u| u.sqrt())
+                            .collect::<Vec<_>>()
+                    ),
                     solution.rank,
                     p
                 ),

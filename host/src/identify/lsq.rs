@@ -24,6 +24,11 @@ pub struct LeastSquares {
     /// column-scaled unknowns and normalised: the direction in parameter space
     /// the data determine worst (which parameters are confounded).
     pub weakest_direction: Vec<f64>,
+    /// Per unknown, the squared length of its share of the numerical null
+    /// space (Σ over singular values counted as zero of V_ij², in [0, 1]):
+    /// near 1 for an unknown the data say nothing about, 0 for a fully
+    /// determined one. All zero when the rank is full.
+    pub undetermined: Vec<f64>,
 }
 
 impl LeastSquares {
@@ -103,6 +108,21 @@ pub fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> LeastSquares {
         vec![1.0 / (p as f64).sqrt(); p]
     };
 
+    // The null space: the rows of Vᵀ with zero singular values, plus (when
+    // n < p) the directions nalgebra does not return, i.e. everything the
+    // returned rows do not span.
+    let undetermined: Vec<f64> = (0..p)
+        .map(|i| {
+            let determined: f64 = sv
+                .iter()
+                .enumerate()
+                .filter(|(_, &s)| s > tol)
+                .map(|(j, _)| v_t[(j, i)].powi(2))
+                .sum();
+            (1.0 - determined).clamp(0.0, 1.0)
+        })
+        .collect();
+
     let std_err = if rank == p && n > p {
         let sigma2 = rss / (n - p) as f64;
         (0..p)
@@ -127,6 +147,7 @@ pub fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> LeastSquares {
         condition_number,
         rank,
         weakest_direction,
+        undetermined,
     }
 }
 
@@ -139,6 +160,7 @@ fn degenerate(n: usize, p: usize) -> LeastSquares {
         condition_number: f64::INFINITY,
         rank: 0,
         weakest_direction: vec![f64::NAN; p],
+        undetermined: vec![1.0; p],
     }
 }
 
@@ -188,7 +210,19 @@ mod tests {
         assert!(fit.std_err.iter().all(|s| s.is_infinite()));
         // Both columns share the weak direction.
         assert!(fit.weakest_direction.iter().all(|v| v.abs() > 0.5));
+        assert!(fit.undetermined.iter().all(|&u| (u - 0.5).abs() < 1e-12));
         assert!(fit.rss < 1e-20);
+    }
+
+    #[test]
+    fn zero_columns_are_the_null_space() {
+        let a = DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 2.0, 2.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+        let b = DVector::from_column_slice(&[1.0, 2.0, 3.0]);
+        let fit = solve(&a, &b);
+        assert_eq!(fit.rank, 2);
+        assert!(fit.undetermined[0] < 1e-12 && fit.undetermined[2] < 1e-12);
+        assert!((fit.undetermined[1] - 1.0).abs() < 1e-12);
+        assert_eq!(fit.theta[1], 0.0);
     }
 
     #[test]
