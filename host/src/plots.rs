@@ -586,6 +586,13 @@ fn light_ticks(major: &[f64], range: (f64, f64)) -> Vec<f64> {
     ticks_with_step(range, step)
 }
 
+/// Title font size [px] that fits `title` into `width` pixels (DejaVu Sans
+/// averages about 0.55 em per character), at most 26.
+fn title_size(title: &str, width: u32) -> f64 {
+    let chars = title.chars().count().max(1) as f64;
+    (0.95 * f64::from(width) / (0.55 * chars)).clamp(12.0, 26.0)
+}
+
 /// Tick label: at most 4 significant digits, no trailing zeros.
 fn format_tick(v: f64) -> String {
     if v == 0.0 {
@@ -640,7 +647,12 @@ impl PhasorFigure {
             anyhow!("drawing figure '{}': {e:?}", self.title)
         };
         root.fill(&WHITE).map_err(err)?;
-        let body = root.titled(&self.title, (FONT, 26)).map_err(err)?;
+        let body = root
+            .titled(
+                &self.title,
+                (FONT, title_size(&self.title, root.dim_in_pixel().0)),
+            )
+            .map_err(err)?;
         let rows: Vec<usize> = match self.rows {
             Rows::Both => vec![0, 1],
             Rows::First => vec![0],
@@ -726,7 +738,12 @@ impl ScalarFigure {
             anyhow!("drawing figure '{}': {e:?}", self.title)
         };
         root.fill(&WHITE).map_err(err)?;
-        let body = root.titled(&self.title, (FONT, 26)).map_err(err)?;
+        let body = root
+            .titled(
+                &self.title,
+                (FONT, title_size(&self.title, root.dim_in_pixel().0)),
+            )
+            .map_err(err)?;
         let names: Vec<&str> = self.series.iter().map(|s| s.name.as_str()).collect();
         let curves: Vec<Curve> = self
             .series
