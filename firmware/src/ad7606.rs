@@ -140,3 +140,99 @@ where
         (self.spi, self.convst, self.busy)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use embedded_hal_mock::eh1::digital::{
+        Mock as PinMock, State as PinState, Transaction as PinTransaction,
+    };
+    use embedded_hal_mock::eh1::spi::{Mock as SpiMock, Transaction as SpiTransaction};
+    use std::vec::Vec;
+
+    /// The 16 bytes an AD7606 shifts out for these codes (MSB first).
+    fn wire(codes: [i16; 8]) -> Vec<u8> {
+        codes.iter().flat_map(|c| c.to_be_bytes()).collect()
+    }
+
+    #[test]
+    fn one_conversion_pulses_convst_waits_for_busy_and_reads_eight_words() {
+        let codes = [0, 1, -1, 32767, -32768, 12345, -12345, 256];
+        let mut spi = SpiMock::new(&[
+            SpiTransaction::transaction_start(),
+            SpiTransaction::read_vec(wire(codes)),
+            SpiTransaction::transaction_end(),
+        ]);
+        let mut convst = PinMock::new(&[
+            PinTransaction::set(PinState::Low), // new(): idle low
+            PinTransaction::set(PinState::Low), // start(): edge from low
+            PinTransaction::set(PinState::High),
+            PinTransaction::set(PinState::Low), // after the read
+        ]);
+        // BUSY high twice (converting), then low.
+        let mut busy = PinMock::new(&[
+            PinTransaction::get(PinState::High),
+            PinTransaction::get(PinState::High),
+            PinTransaction::get(PinState::Low),
+        ]);
+        let mut adc = Ad7606::new(
+            spi.clone(),
+            convst.clone(),
+            busy.clone(),
+            Range::PlusMinus10V,
+            100,
+        )
+        .unwrap();
+        assert_eq!(adc.convert().unwrap(), codes);
+        spi.done();
+        convst.done();
+        busy.done();
+    }
+
+    #[test]
+    fn busy_stuck_high_is_a_timeout_not_a_hang() {
+        let mut spi = SpiMock::<u8>::new(&[]);
+        let mut convst = PinMock::new(&[
+            PinTransaction::set(PinState::Low),
+            PinTransaction::set(PinState::Low),
+            PinTransaction::set(PinState::High),
+            PinTransaction::set(PinState::Low), // left low for the next edge
+        ]);
+        let mut busy = PinMock::new(&[
+            PinTransaction::get(PinState::High),
+            PinTransaction::get(PinState::High),
+            PinTransaction::get(PinState::High),
+        ]);
+        let mut adc = Ad7606::new(
+            spi.clone(),
+            convst.clone(),
+            busy.clone(),
+            Range::PlusMinus5V,
+            3,
+        )
+        .unwrap();
+        assert_eq!(adc.convert(), Err(Error::BusyTimeout));
+        spi.done();
+        convst.done();
+        busy.done();
+    }
+
+    #[test]
+    fn codes_scale_to_the_selected_range() {
+        let spi = SpiMock::<u8>::new(&[]);
+        let convst = PinMock::new(&[PinTransaction::set(PinState::Low)]);
+        let busy = PinMock::new(&[]);
+        let adc = Ad7606::new(spi, convst, busy, Range::PlusMinus5V, 1).unwrap();
+        let v = adc.to_volts(&[16384, -32768, 0, 1, 0, 0, 0, 0]);
+        assert_eq!(v[0], 2.5);
+        assert_eq!(v[1], -5.0);
+        assert_eq!(v[2], 0.0);
+        assert_eq!(v[3], 5.0 / 32768.0);
+        assert_eq!(Range::PlusMinus10V.volts_per_code(), 10.0 / 32768.0);
+        let (mut spi, mut convst, mut busy) = adc.release();
+        spi.done();
+        convst.done();
+        busy.done();
+    }
+}

@@ -82,21 +82,20 @@ where
             let Some(edge) = self.held_edge.take().or_else(|| self.timer.take_edge()) else {
                 return;
             };
+            if stamp.wrapping_sub(edge) as i32 <= 0 {
+                // At or after this conversion: belongs to the next interval.
+                self.held_edge = Some(edge);
+                return;
+            }
             let Some(last) = self.last_stamp else {
-                // Before the first sample: no interval to place it in.
+                // Before the first sample (or a gap): no interval to place it in.
                 self.counters.dropped_edges += 1;
                 continue;
             };
             let from_last = edge.wrapping_sub(last) as i32;
-            let to_stamp = stamp.wrapping_sub(edge) as i32;
             if from_last < 0 {
                 self.counters.dropped_edges += 1;
                 continue;
-            }
-            if to_stamp <= 0 {
-                // At or after this conversion: belongs to the next interval.
-                self.held_edge = Some(edge);
-                return;
             }
             let span = stamp.wrapping_sub(last) as f32;
             let fraction = (from_last as f32 / span).clamp(0.0, 0.999_999);
@@ -181,5 +180,139 @@ where
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::ad7606::Range;
+    use embedded_hal_mock::eh1::digital::{
+        Mock as PinMock, State as PinState, Transaction as PinTransaction,
+    };
+    use embedded_hal_mock::eh1::spi::{Mock as SpiMock, Transaction as SpiTransaction};
+    use std::collections::VecDeque;
+    use std::vec::Vec;
+
+    /// A timer whose count advances by a script, with queued captures.
+    struct ScriptedTimer {
+        counts: VecDeque<u32>,
+        edges: VecDeque<u32>,
+    }
+
+    impl CaptureTimer for ScriptedTimer {
+        fn now(&mut self) -> u32 {
+            self.counts
+                .pop_front()
+                .expect("timer read more often than scripted")
+        }
+        fn take_edge(&mut self) -> Option<u32> {
+            self.edges.pop_front()
+        }
+    }
+
+    /// Mocks for `n` conversions returning channel k = sample index + k.
+    fn adc_for(n: usize) -> (SpiMock<u8>, PinMock, PinMock) {
+        let mut spi = Vec::new();
+        let mut convst = std::vec![PinTransaction::set(PinState::Low)];
+        let mut busy = Vec::new();
+        for i in 0..n {
+            let codes: Vec<u8> = (0..8)
+                .flat_map(|k| ((i * 10 + k) as i16).to_be_bytes())
+                .collect();
+            spi.extend([
+                SpiTransaction::transaction_start(),
+                SpiTransaction::read_vec(codes),
+                SpiTransaction::transaction_end(),
+            ]);
+            convst.extend([
+                PinTransaction::set(PinState::Low),
+                PinTransaction::set(PinState::High),
+                PinTransaction::set(PinState::Low),
+            ]);
+            busy.push(PinTransaction::get(PinState::Low));
+        }
+        (
+            SpiMock::new(&spi),
+            PinMock::new(&convst),
+            PinMock::new(&busy),
+        )
+    }
+
+    #[test]
+    fn paces_conversions_and_places_keyphasor_edges_between_samples() {
+        let (mut spi, mut convst, mut busy) = adc_for(3);
+        let adc = Ad7606::new(
+            spi.clone(),
+            convst.clone(),
+            busy.clone(),
+            Range::PlusMinus10V,
+            10,
+        )
+        .unwrap();
+        // 100 ticks per sample from t = 1000. Reads: start, then per loop
+        // pass one `now`: 1000 (due), 1100 (due), 1150 (not yet), then in a
+        // second poll 1200 (due), 1250 (not yet).
+        let timer = ScriptedTimer {
+            counts: [1000, 1000, 1100, 1150, 1200, 1250].into(),
+            // Stale: captured while stopped, drained by start().
+            edges: [500, 700].into(),
+        };
+        let mut source = AdcSource::new(adc, timer, 100);
+        source.start();
+        assert!(source.timer.edges.is_empty());
+        // An edge 30 % into the first interval, one exactly on the third
+        // sample (it belongs to the interval after it).
+        source.timer.edges = [1030, 1200].into();
+        let mut out = SampleBuffer::default();
+        source.poll(&mut out);
+        assert_eq!(out.samples.len(), 2);
+        assert_eq!(
+            out.samples[1][2],
+            12.0 * Range::PlusMinus10V.volts_per_code()
+        );
+        assert_eq!(out.edges.len(), 1);
+        assert_eq!(out.edges[0].index, 1);
+        assert!((out.edges[0].fraction - 0.3).abs() < 1e-6);
+        out.clear();
+        source.poll(&mut out);
+        assert_eq!(out.samples.len(), 1);
+        // The edge at the third conversion's stamp waits for the next interval.
+        assert!(out.edges.is_empty());
+        assert_eq!(source.held_edge, Some(1200));
+        assert_eq!(source.counters, AdcSourceCounters::default());
+        spi.done();
+        convst.done();
+        busy.done();
+    }
+
+    #[test]
+    fn a_late_loop_counts_missed_samples_and_marks_the_gap() {
+        let (mut spi, mut convst, mut busy) = adc_for(1);
+        let adc = Ad7606::new(
+            spi.clone(),
+            convst.clone(),
+            busy.clone(),
+            Range::PlusMinus10V,
+            10,
+        )
+        .unwrap();
+        // Start at 0; the loop comes back at 350: slots 0, 100, 200 missed,
+        // the conversion at 350 stands for slot 300; then 390 is not due.
+        let timer = ScriptedTimer {
+            counts: [0, 350, 390].into(),
+            edges: VecDeque::new(),
+        };
+        let mut source = AdcSource::new(adc, timer, 100);
+        source.start();
+        let mut out = SampleBuffer::default();
+        source.poll(&mut out);
+        assert_eq!(out.samples.len(), 1);
+        assert_eq!(out.lost_before, 3);
+        assert_eq!(source.counters.missed_samples, 3);
+        spi.done();
+        convst.done();
+        busy.done();
     }
 }
