@@ -125,13 +125,7 @@ pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
             row.push(if is_fixed(fit, p) {
                 "0 (fixed)".to_string()
             } else {
-                let se = fit.std_errs()[p as usize] / scale;
-                let se = if se.is_finite() {
-                    sig(se, 2)
-                } else {
-                    "∞".into()
-                };
-                format!("{} ± {se}", sig(fit.get(p) / scale, 6))
+                value_pm(fit.get(p) / scale, fit.std_errs()[p as usize] / scale)
             });
         }
         row.push(sig(fit.residual_rms, 3));
@@ -186,6 +180,28 @@ fn is_fixed(fit: &PedestalFit, p: Parameter) -> bool {
     fit.fixed.iter().any(|f| f == p.name())
 }
 
+/// `value ± std_err` with the value given to the decimal of the standard
+/// error's second significant digit (6 significant digits when the standard
+/// error is zero, tiny or not finite).
+fn value_pm(value: f64, std_err: f64) -> String {
+    if !std_err.is_finite() {
+        return format!("{} ± ∞", sig(value, 6));
+    }
+    let v_mag = if value != 0.0 {
+        value.abs().log10().floor() as i32
+    } else {
+        0
+    };
+    if std_err <= 0.0 || (std_err.log10().floor() as i32) < v_mag - 5 {
+        return format!("{} ± {}", sig(value, 6), sig(std_err, 2));
+    }
+    let decimals = (1 - std_err.log10().floor() as i32).max(0) as usize;
+    if (v_mag - decimals as i32).abs() > 12 || !(-4..9).contains(&v_mag) {
+        return format!("{} ± {}", sig(value, 3), sig(std_err, 2));
+    }
+    format!("{value:.decimals$} ± {}", sig(std_err, 2))
+}
+
 /// `x` with `digits` significant digits, in plain notation for moderate
 /// magnitudes.
 fn sig(x: f64, digits: usize) -> String {
@@ -205,7 +221,7 @@ fn sig(x: f64, digits: usize) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::sig;
+    use super::{sig, value_pm};
 
     #[test]
     fn significant_digit_formatting() {
@@ -214,5 +230,10 @@ mod tests {
         assert_eq!(sig(150.0, 6), "150.000");
         assert_eq!(sig(1.5e-7, 2), "1.5e-7");
         assert_eq!(sig(-2.0, 3), "-2.00");
+        assert_eq!(value_pm(105.045, 106.0), "105 ± 106");
+        assert_eq!(value_pm(9.93343, 0.057), "9.933 ± 0.057");
+        assert_eq!(value_pm(149.542, 0.19), "149.54 ± 0.19");
+        assert_eq!(value_pm(10.0, 1.6e-15), "10.0000 ± 1.6e-15");
+        assert_eq!(value_pm(10.0, f64::INFINITY), "10.0000 ± ∞");
     }
 }
