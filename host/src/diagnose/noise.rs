@@ -1,13 +1,18 @@
 //! The measurement noise the data can support: how finely the numbers were
 //! written (quantisation) and how much they scatter between neighbouring speeds.
 //!
-//! Quantisation: every number of `measurements.csv` is taken to be rounded to
-//! a unit in its last written digit (ulp). A rounding error is uniform on
-//! ±ulp/2, so its standard deviation is σ = ulp/√12, per real component, with
-//! ulp set by *that number's own magnitude*: a value written with D significant
-//! digits and decimal exponent e has ulp = 10^(e−D+1). Rounded data are not
-//! white noise (neighbouring speeds round alike), which the selection criterion
-//! allows for separately (autocorrelation-robust covariance, `criterion`).
+//! Quantisation: every number of `measurements.csv` carries an error of up to
+//! a unit in its last written digit (ulp), with ulp set by *that number's own
+//! magnitude*: a value written with D significant digits and decimal exponent
+//! e has ulp = 10^(e−D+1). A rounding error is uniform on ±ulp/2 (standard
+//! deviation ulp/√12); a truncation error (what the paper did) is uniform on
+//! [0, ulp) toward zero, a bias of ulp/2 plus the same scatter, RMS ulp/√3.
+//! The written digits cannot tell the two apart, so each number's σ is the
+//! RMS error of truncation, ulp/√3, which bounds both: on truncated data the
+//! rounding value would let the bias pass for an effect. Quantised data are
+//! not white noise either (neighbouring speeds round alike), which the
+//! selection criterion allows for separately (autocorrelation-robust
+//! covariance, `criterion`).
 //!
 //! The number of digits D of a column is detected from the values themselves:
 //! the fewest significant digits that reproduce a value exactly when printed
@@ -20,10 +25,13 @@
 //! Scatter: noise beyond rounding (a noisy instrument) shows as scatter between
 //! neighbouring speeds that a smooth response does not have. Per bearing and
 //! complex channel, the third divided difference over four neighbouring speeds
-//! annihilates any quadratic trend; normalised to unit noise gain and divided
-//! by the local magnitude it estimates the relative noise level, robustly (the
-//! median, so a few points at a sharp resonance do not count). Each number's
-//! σ is the larger of its quantisation σ and its scatter σ.
+//! annihilates any quadratic trend; normalised to unit noise gain it is a
+//! sample of the local noise. Two noise laws are considered: a constant σ per
+//! channel (an instrument's noise floor) and σ proportional to the local
+//! magnitude. Each is estimated robustly (the median, so a few points at a
+//! sharp resonance do not count) and the law under which the standardised
+//! samples are the more homogeneous (smaller variance of log|u|) is kept.
+//! Each number's σ is the larger of its quantisation σ and its scatter σ.
 
 use crate::rundir::RunDir;
 use anyhow::Result;
@@ -90,9 +98,9 @@ impl ColumnQuantisation {
 pub struct NoiseModel {
     /// Quantisation of each real column, in the order of [`CHANNELS`].
     pub columns: Vec<ColumnQuantisation>,
-    /// Relative scatter σ/|phasor| per bearing and complex channel
-    /// ([`COMPLEX_CHANNELS`] order); `None` with fewer than 4 speeds.
-    pub scatter: Vec<[Option<f64>; 4]>,
+    /// Scatter law per bearing and complex channel ([`COMPLEX_CHANNELS`]
+    /// order); `None` with fewer than 4 speeds.
+    pub scatter: Vec<[Option<Scatter>; 4]>,
 }
 
 impl NoiseModel {
@@ -135,7 +143,7 @@ impl NoiseModel {
                         (m.speed_hz, z)
                     })
                     .collect();
-                *slot = relative_scatter(&series);
+                *slot = self::scatter(&series);
             }
             scatter.push(per_channel);
         }
@@ -145,12 +153,12 @@ impl NoiseModel {
     /// Noise standard deviation [m] of real channel `c` of bearing `b` whose
     /// value is `v` [m] and whose complex phasor has magnitude `magnitude` [m].
     pub fn sigma(&self, b: usize, c: usize, v: f64, magnitude: f64) -> f64 {
-        let quantisation = self.columns[c].ulp(v) / 12f64.sqrt();
-        let scatter = self
-            .scatter
-            .get(b)
-            .and_then(|s| s[c / 2])
-            .map_or(0.0, |s| s * magnitude);
+        let quantisation = self.columns[c].ulp(v) / 3f64.sqrt();
+        let scatter = match self.scatter.get(b).and_then(|s| s[c / 2]) {
+            Some(Scatter::Absolute(sigma)) => sigma,
+            Some(Scatter::Relative(s)) => s * magnitude,
+            None => 0.0,
+        };
         quantisation.max(scatter)
     }
 
@@ -173,12 +181,43 @@ fn value(m: &crate::rundir::Measurement, c: usize) -> f64 {
     }
 }
 
-/// Robust relative noise level σ/|x| (per real component) of a complex series
-/// sampled at increasing speeds, from third divided differences over four
-/// neighbouring speeds (which cancel any quadratic trend). `None` when fewer
-/// than four usable points.
-pub fn relative_scatter(series: &[(f64, num_complex::Complex<f64>)]) -> Option<f64> {
-    let mut u = Vec::new();
+/// The noise law of one complex channel, per real component.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Scatter {
+    /// Constant σ [m] at every speed.
+    Absolute(f64),
+    /// σ = value·|phasor| (a fraction of the local magnitude) [-].
+    Relative(f64),
+}
+
+const MEDIAN_ABS_NORMAL: f64 = 0.674_489_750_196_081_7;
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn log_spread(u: &[f64]) -> f64 {
+    let logs: Vec<f64> = u.iter().filter(|x| **x > 0.0).map(|x| x.ln()).collect();
+    if logs.len() < 2 {
+        return f64::INFINITY;
+    }
+    let mean = logs.iter().sum::<f64>() / logs.len() as f64;
+    logs.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / (logs.len() - 1) as f64
+}
+
+/// Robust noise law (module docs) of a complex series sampled at increasing
+/// speeds [Hz], from third divided differences over four neighbouring speeds
+/// (which cancel any quadratic trend). `None` with fewer than four points.
+pub fn scatter(series: &[(f64, num_complex::Complex<f64>)]) -> Option<Scatter> {
+    // (|component of the unit-gain difference|, local magnitude)
+    let mut samples: Vec<(f64, f64)> = Vec::new();
     for w in series.windows(4) {
         let xs = [w[0].0, w[1].0, w[2].0, w[3].0];
         let mut weights = [0.0; 4];
@@ -200,21 +239,30 @@ pub fn relative_scatter(series: &[(f64, num_complex::Complex<f64>)]) -> Option<f
             continue;
         }
         let d: num_complex::Complex<f64> = w.iter().zip(weights).map(|((_, z), wi)| z * wi).sum();
-        let d = d / (gain * level);
-        u.push(d.re.abs());
-        u.push(d.im.abs());
+        let d = d / gain;
+        samples.push((d.re.abs(), level));
+        samples.push((d.im.abs(), level));
     }
-    if u.len() < 2 {
+    if samples.len() < 2 {
         return None;
     }
-    u.sort_by(f64::total_cmp);
-    let median = if u.len() % 2 == 1 {
-        u[u.len() / 2]
+    let mut abs: Vec<f64> = samples.iter().map(|s| s.0).collect();
+    let mut rel: Vec<f64> = samples.iter().map(|s| s.0 / s.1).collect();
+    let sigma = median(&mut abs) / MEDIAN_ABS_NORMAL;
+    let fraction = median(&mut rel) / MEDIAN_ABS_NORMAL;
+    let u_abs: Vec<f64> = samples
+        .iter()
+        .map(|s| s.0 / sigma.max(f64::MIN_POSITIVE))
+        .collect();
+    let u_rel: Vec<f64> = samples
+        .iter()
+        .map(|s| s.0 / (fraction * s.1).max(f64::MIN_POSITIVE))
+        .collect();
+    if log_spread(&u_abs) < log_spread(&u_rel) {
+        Some(Scatter::Absolute(sigma))
     } else {
-        0.5 * (u[u.len() / 2 - 1] + u[u.len() / 2])
-    };
-    // Median of |N(0, σ²)| is 0.6745·σ.
-    Some(median / 0.674_489_750_196_081_7)
+        Some(Scatter::Relative(fraction))
+    }
 }
 
 #[cfg(test)]
@@ -252,7 +300,7 @@ mod tests {
     }
 
     #[test]
-    fn scatter_of_a_smooth_series_is_small_and_of_noise_is_right() {
+    fn scatter_law_and_level_are_recognised() {
         use rand::{Rng, SeedableRng};
         let smooth: Vec<_> = (0..200)
             .map(|j| {
@@ -263,7 +311,10 @@ mod tests {
                 )
             })
             .collect();
-        let s = relative_scatter(&smooth).unwrap();
+        let s = match scatter(&smooth).unwrap() {
+            Scatter::Relative(s) => s,
+            Scatter::Absolute(a) => a / 1e-6,
+        };
         assert!(s < 1e-4, "{s}");
         let mut rng = rand::rngs::StdRng::seed_from_u64(7);
         let noisy: Vec<_> = smooth
@@ -276,7 +327,26 @@ mod tests {
                 (*f, z + n * (0.01 * z.norm()))
             })
             .collect();
-        let s = relative_scatter(&noisy).unwrap();
-        assert!((s - 0.01).abs() < 0.0015, "{s}");
+        match scatter(&noisy).unwrap() {
+            Scatter::Relative(s) => assert!((s - 0.01).abs() < 0.0015, "{s}"),
+            other => panic!("relative noise read as {other:?}"),
+        }
+        // Constant noise on a response spanning two decades: absolute law.
+        let mut rng = rand::rngs::StdRng::seed_from_u64(8);
+        let wide: Vec<_> = (0..200)
+            .map(|j| {
+                let f = 5.0 + j as f64;
+                let z = num_complex::Complex::from_polar(1e-8 * f * f / 25.0, f / 40.0);
+                let n = num_complex::Complex::new(
+                    rng.sample::<f64, _>(rand_distr::StandardNormal),
+                    rng.sample::<f64, _>(rand_distr::StandardNormal),
+                );
+                (f, z + n * 2e-8)
+            })
+            .collect();
+        match scatter(&wide).unwrap() {
+            Scatter::Absolute(a) => assert!((a / 2e-8 - 1.0).abs() < 0.15, "{a}"),
+            other => panic!("constant noise read as {other:?}"),
+        }
     }
 }

@@ -91,8 +91,8 @@ pub struct Pedestal {
 pub struct NoiseSummary {
     /// Significant digits of each `measurements.csv` column (by column name).
     pub digits: BTreeMap<String, u32>,
-    /// Relative scatter between neighbouring speeds per bearing and channel.
-    pub relative_scatter: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Scatter law between neighbouring speeds per bearing and channel.
+    pub scatter: BTreeMap<String, BTreeMap<String, super::noise::Scatter>>,
     /// Noise floor of the pedestal-level gap with the base model [-].
     pub gap_floor_before: f64,
     /// Noise floor of the pedestal-level gap with the final model [-].

@@ -411,7 +411,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     for (c, q) in prep.noise.columns.iter().enumerate() {
         digits.insert(CHANNELS[c].to_string(), q.digits);
     }
-    let mut relative_scatter = BTreeMap::new();
+    let mut scatter = BTreeMap::new();
     for (b, name) in prep.bearings.iter().enumerate() {
         let mut m = BTreeMap::new();
         for (c, s) in prep.noise.scatter[b].iter().enumerate() {
@@ -419,7 +419,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                 m.insert(COMPLEX_CHANNELS[c].to_string(), *s);
             }
         }
-        relative_scatter.insert(name.clone(), m);
+        scatter.insert(name.clone(), m);
     }
     let diagnosis = Diagnosis {
         base_model: opts.base.iter().map(|p| p.name().to_string()).collect(),
@@ -431,7 +431,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         machine_gap_after: None,
         noise: NoiseSummary {
             digits,
-            relative_scatter,
+            scatter,
             gap_floor_before: gap0.floor,
             gap_floor_after: gap1.floor,
         },
