@@ -1,6 +1,6 @@
 //! Unbalance-response sweep: 1000 speeds on the ROSS reference machine A
-//! (12 Timoshenko elements, 3 disks, 2 cross-coupled bearings on pedestals:
-//! 56 DOF). Compare with `python3 tests/reference/ross/make_reference.py --time`
+//! (15 Timoshenko elements, 3 disks, 2 cross-coupled bearings on pedestals:
+//! 68 DOF here, 100 as ROSS counts them with 6 per node). Compare with `python3 tests/reference/ross/make_reference.py --time`
 //! (or scripts/bench-sim.sh for both side by side).
 
 use criterion::{criterion_group, criterion_main, Criterion};
