@@ -187,6 +187,7 @@ pub fn stream(
             last_estimates: None,
             last_status: None,
             replay: None,
+            resent_blocks: 0,
         });
     }
     session.run()
@@ -236,6 +237,8 @@ pub fn finish(
         merged_rows: derived.merged_rows,
         dropped_rows: derived.dropped_rows.clone(),
         replay_blocks: outcome.and_then(|o| o.replay),
+        resent_blocks: outcome.map_or(0, |o| o.resent_blocks),
+        box_sessions: derived.sessions,
         pedestals,
         batch_error,
     };
@@ -262,6 +265,12 @@ pub fn summary(report: &StreamReport) -> String {
         s.push_str(&report::render_link("link (box side, last status)", l));
         s.push('\n');
     }
+    if let Some((done, total)) = report.replay_blocks {
+        s.push_str(&format!(
+            "replay: {done} of {total} sample blocks acknowledged, {} sent again\n",
+            report.resent_blocks
+        ));
+    }
     s.push_str(&format!(
         "raw log: {} bytes; {} phasor frames -> {} measurement rows ({} merged, {} dropped)\n",
         report.raw_log_bytes,
@@ -272,6 +281,12 @@ pub fn summary(report: &StreamReport) -> String {
     ));
     for d in report.dropped_rows.iter().take(5) {
         s.push_str(&format!("  dropped: {d}\n"));
+    }
+    if report.box_sessions > 1 {
+        s.push_str(&format!(
+            "note: the raw log holds {} box sessions (the host reconnected or restarted); the box's estimates cover only the last one, the batch fit all of them\n",
+            report.box_sessions
+        ));
     }
     if let Some(e) = &report.batch_error {
         s.push_str(&format!("batch fit: not possible: {e}\n"));

@@ -30,6 +30,8 @@ pub struct ProgressState {
     pub reconnects: u64,
     /// Replay sample blocks acknowledged by the box, and the total to send.
     pub replay: Option<(u64, u64)>,
+    /// Replay sample blocks sent again after a loss.
+    pub resent_blocks: u64,
 }
 
 /// Renders [`ProgressState`] at most every `interval` to a writer (stderr).
@@ -136,6 +138,9 @@ pub fn render(state: &ProgressState, elapsed: Duration) -> String {
             100.0
         };
         line.push_str(&format!("  replay {done}/{total} ({pct:.0}%)"));
+        if state.resent_blocks > 0 {
+            line.push_str(&format!(" resent {}", state.resent_blocks));
+        }
     }
     if state.reconnects > 0 {
         line.push_str(&format!("  reconnects {}", state.reconnects));
@@ -184,6 +189,7 @@ mod tests {
             bytes: 12_345,
             reconnects: 1,
             replay: Some((5, 10)),
+            resent_blocks: 2,
         };
         let line = render(&s, Duration::from_millis(1500));
         for part in [

@@ -232,6 +232,12 @@ pub struct StreamReport {
     pub dropped_rows: Vec<String>,
     /// Replay blocks acknowledged and in total.
     pub replay_blocks: Option<(usize, usize)>,
+    /// Replay blocks sent again after a loss.
+    pub resent_blocks: u64,
+    /// Box sessions in the raw log (each `Hello` restarts the box's
+    /// estimator, so its final estimates cover only the last session's data
+    /// while the batch fit covers all of them).
+    pub box_sessions: u32,
     /// Box vs batch per pedestal.
     pub pedestals: Vec<PedestalComparison>,
     /// Why the batch fit could not run, if it could not.

@@ -9,19 +9,26 @@
 //!    arrives; bytes the box sent before the port was open are lost, and so
 //!    may be the first `Hello`s (QEMU drops output to an unopened
 //!    pseudo-terminal). A `VersionMismatch` ends the session with an error.
-//! 3. Configure: `Stop`, channels, averaging, RLS settings, every bearing's
-//!    table in chunks; each command waits for its `Ack` (resent with a new
+//! 3. Configure: channels, averaging, RLS settings, every bearing's table in
+//!    chunks (a box still running refuses the first with `WrongState`: it is
+//!    sent `Stop` and the command again); each command waits for its `Ack` (resent with a new
 //!    sequence number on timeout; a table is resent from its first chunk if a
 //!    resent chunk is refused as out of order). Then `Start`.
 //! 4. Replay (with `--replay`): sample blocks go out with at most `window`
 //!    unacknowledged (go-back-N). An `Ack` of a block acknowledges every block
 //!    before it (the box processes blocks in order). A `Nack(QueueFull)`, a
-//!    `Nack(BadBlock)` (the box saw a gap: an earlier block was lost) or no
-//!    acknowledgement within `block_timeout` rewinds to the oldest
-//!    unacknowledged block; the box acknowledges a block it already has
-//!    without processing it again. Without a replay the session receives for
+//!    `Nack(BadBlock)` rewinds to the oldest unacknowledged block. When no
+//!    block was acknowledged for `block_timeout`, a `Ping` tells a slow box
+//!    from a lost frame: its `Ack` comes after the answers to every block
+//!    sent before it, so a block still unacknowledged then was lost (or its
+//!    `Ack` was), and the replay rewinds; no answer to the `Ping` either
+//!    rewinds after twice `block_timeout`. A resent block the box had
+//!    already processed is a repeat for it (the firmware treats it as a
+//!    break in the time base and re-acquires the keyphasor). Without a replay the session receives for
 //!    `duration`.
-//! 5. `Stop`, then receive for `drain` so the last frames arrive.
+//! 5. `Stop`, then receive for `drain` so the last frames (the box's final
+//!    estimates and status) arrive; the box closing the line then (the QEMU
+//!    image exits on `Stop`) just ends the drain.
 //!
 //! Every byte read goes to the raw log before it is decoded. Phasor,
 //! estimate and status frames update the progress line at any point.
@@ -129,6 +136,8 @@ pub struct SessionOutcome {
     pub last_status: Option<StatusFrame>,
     /// Replay blocks acknowledged and in total.
     pub replay: Option<(usize, usize)>,
+    /// Replay blocks sent again after a loss.
+    pub resent_blocks: u64,
 }
 
 /// The link went away (or stopped answering): reopen and resume.
@@ -322,6 +331,7 @@ impl<'a> Session<'a> {
                 .replay
                 .as_ref()
                 .map(|r| (self.acked_blocks, r.plan.len())),
+            resent_blocks: self.state.resent_blocks,
         })
     }
 
@@ -444,11 +454,11 @@ impl<'a> Session<'a> {
     }
 
     fn configure_and_start(&mut self) -> Result<()> {
-        // Stop whatever the box was doing; refused only when already stopped.
-        match self.command(&HostMessage::Stop)? {
-            Ok(()) | Err(NackReason::WrongState) => {}
-            Err(r) => bail!("the box refused Stop: {r:?}"),
-        }
+        // No `Stop` up front: a box that is not running needs none, and some
+        // images end on `Stop` (the QEMU image exits). A box still running
+        // refuses the first configuration command with `WrongState`; it is
+        // stopped then and the command sent again.
+        let mut stopped_once = false;
         let commands = self.config.device_commands(self.tables)?;
         let mut i = 0;
         let mut table_restarts = 0;
@@ -457,6 +467,13 @@ impl<'a> Session<'a> {
             let (answer, attempts) = self.command_counted(cmd)?;
             match answer {
                 Ok(()) => i += 1,
+                Err(NackReason::WrongState) if i == 0 && !stopped_once => {
+                    stopped_once = true;
+                    match self.command(&HostMessage::Stop)? {
+                        Ok(()) | Err(NackReason::WrongState) => {}
+                        Err(r) => bail!("the box refused Stop: {r:?}"),
+                    }
+                }
                 // A resent chunk the box had already taken (its Ack was lost):
                 // send this bearing's table again from its first chunk.
                 Err(NackReason::TableOutOfOrder) if attempts > 1 && table_restarts < 5 => {
@@ -505,9 +522,16 @@ impl<'a> Session<'a> {
             Err(NackReason::WrongState) if attempts > 1 => {}
             Err(r) => bail!("the box refused Stop: {r:?}"),
         }
+        // The last frames (final estimates, status) follow the Ack. A box
+        // that ends its run on Stop may close the line meanwhile: that ends
+        // the drain, it is not a lost link.
         let until = Instant::now() + self.options.drain;
         while Instant::now() < until {
-            self.pump()?;
+            match self.pump() {
+                Ok(()) => {}
+                Err(e) if e.is::<LinkLost>() => break,
+                Err(e) => return Err(e),
+            }
         }
         Ok(())
     }
@@ -522,7 +546,11 @@ impl<'a> Session<'a> {
         let window = self.options.window.max(1);
         let mut next = self.acked_blocks;
         let mut sent: HashMap<u32, usize> = HashMap::new();
-        let mut oldest_unacked_sent: Option<Instant> = None;
+        let mut last_progress = Instant::now();
+        // A Ping sent when acknowledgements are late: (its seq, when, blocks
+        // sent before it). The box answers in order, so once its Ack is in,
+        // a block sent before it and still unacknowledged was really lost.
+        let mut probe: Option<(u32, Instant, usize)> = None;
         let mut stalls = 0u32;
         self.replies.clear();
         while self.acked_blocks < total {
@@ -531,23 +559,33 @@ impl<'a> Session<'a> {
                 let block = replay.plan.block(replay.source, next, origin);
                 let seq = self.send(&HostMessage::Samples(block))?;
                 sent.insert(seq, next);
-                if next == self.acked_blocks {
-                    oldest_unacked_sent = Some(Instant::now());
-                }
                 next += 1;
             }
             self.pump()?;
             let mut rewind = false;
             while let Some((seq, reply)) = self.replies.pop_front() {
+                if let Some((probe_seq, _, sent_before)) = probe {
+                    if seq == probe_seq {
+                        probe = None;
+                        if self.acked_blocks < sent_before {
+                            rewind = true;
+                        } else {
+                            last_progress = Instant::now();
+                        }
+                        continue;
+                    }
+                }
                 let Some(&block) = sent.get(&seq) else {
                     continue;
                 };
                 match reply {
+                    // The box processes blocks in order: an Ack covers every
+                    // block before it too.
                     Ok(()) => {
                         if block >= self.acked_blocks {
                             self.acked_blocks = block + 1;
                             stalls = 0;
-                            oldest_unacked_sent = Some(Instant::now());
+                            last_progress = Instant::now();
                             next = next.max(self.acked_blocks);
                         }
                     }
@@ -567,9 +605,22 @@ impl<'a> Session<'a> {
                     }
                 }
             }
-            let timed_out =
-                oldest_unacked_sent.is_some_and(|t| t.elapsed() > self.options.block_timeout);
-            if rewind || timed_out {
+            let waiting = next > self.acked_blocks;
+            if waiting && !rewind && last_progress.elapsed() > self.options.block_timeout {
+                match probe {
+                    None => {
+                        let seq = self.send(&HostMessage::Ping)?;
+                        probe = Some((seq, Instant::now(), next));
+                    }
+                    // The Ping or its Ack was lost too: resend blindly.
+                    Some((_, t, _)) if t.elapsed() > self.options.block_timeout * 2 => {
+                        probe = None;
+                        rewind = true;
+                    }
+                    Some(_) => {}
+                }
+            }
+            if rewind {
                 stalls += 1;
                 if stalls > self.options.max_stalls {
                     return Err(lost(format!(
@@ -577,15 +628,15 @@ impl<'a> Session<'a> {
                         self.options.max_stalls
                     )));
                 }
+                self.state.resent_blocks += (next - self.acked_blocks) as u64;
                 next = self.acked_blocks;
                 sent.retain(|_, b| *b >= self.acked_blocks);
-                oldest_unacked_sent = None;
-                if rewind {
-                    // Give a full queue time to drain.
-                    let until = Instant::now() + Duration::from_millis(2);
-                    while Instant::now() < until {
-                        self.pump()?;
-                    }
+                last_progress = Instant::now();
+                probe = None;
+                // Give a full queue time to drain.
+                let until = Instant::now() + Duration::from_millis(2);
+                while Instant::now() < until {
+                    self.pump()?;
                 }
             }
             sent.retain(|_, b| *b >= self.acked_blocks.saturating_sub(window));

@@ -1,0 +1,261 @@
+//! The field box link under faults: a seeded proxy between `plinth stream`
+//! and the firmware's device (compiled for the host, behind a
+//! pseudo-terminal) flips bits, drops and duplicates bytes in both
+//! directions. No corrupted frame may ever be accepted, every lost frame
+//! must be counted, and the run must complete. Then the host is killed
+//! mid-run and restarted: the raw log keeps every byte and the final run
+//! directory contains the data received before the kill.
+
+mod stream_common;
+
+use plinth::stream::derive::derive;
+use plinth::stream::port::SerialConnector;
+use plinth::stream::progress::Progress;
+use plinth::stream::replay::ReplayJournal;
+use plinth::stream::session::SessionOptions;
+use plinth_shared::protocol::{DeviceMessage, Receiver};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command};
+use std::time::{Duration, Instant};
+use stream_common::{frames_by_session, measurements, DeviceThread, Faults, Scenario};
+
+#[test]
+fn corrupted_frames_are_never_accepted_and_every_loss_is_counted() {
+    let scenario = Scenario::paper_rundown(150.0, 110.0, 40.0);
+    let replay = scenario.replay();
+    let to_host = Faults {
+        flip: 1.0e-3,
+        drop: 3.0e-4,
+        duplicate: 3.0e-4,
+    };
+    let to_device = Faults {
+        flip: 1.0e-5,
+        drop: 5.0e-6,
+        duplicate: 5.0e-6,
+    };
+    let device = DeviceThread::start(to_host, to_device, 0x5eed);
+    let out = scenario.out_dir("faulty");
+    std::fs::create_dir_all(&out).unwrap();
+    let mut connector = SerialConnector::new(&device.port, 115_200);
+    let outcome = plinth::stream::stream(
+        &mut connector,
+        &out,
+        &scenario.config,
+        &scenario.tables,
+        Some((&scenario.signals, &replay)),
+        SessionOptions::default(),
+        Progress::hidden(),
+    )
+    .expect("streaming through the faulty proxy");
+    let sent = device.sent();
+    let (host_faults, device_faults) = device.stop();
+    println!("injected towards the host: {host_faults:?}, towards the box: {device_faults:?}");
+    assert!(outcome.completed, "{outcome:?}");
+    assert!(host_faults.total() > 20 && device_faults.total() > 5);
+    let report =
+        plinth::stream::finish(&out, &scenario.config, &scenario.tables, Some(&outcome)).unwrap();
+    println!("{}", plinth::stream::summary(&report));
+
+    // Every frame the host accepted is exactly a frame the box sent with
+    // that sequence number in that session.
+    let truth = frames_by_session(&sent);
+    let raw = std::fs::read(out.join("raw.bin")).unwrap();
+    let mut rx = Receiver::<DeviceMessage>::new();
+    let mut session = 0usize;
+    let mut first = true;
+    let mut accepted = 0u64;
+    let mut counted_losses = 0u64;
+    let mut actual_losses = 0u64;
+    let mut previous: Option<u32> = None;
+    for f in rx.feed(&raw).flatten() {
+        if f.restart || (first && f.seq == 0) {
+            if !first {
+                session += 1;
+            }
+            previous = None;
+        }
+        first = false;
+        let frames = &truth[session];
+        let original = frames.iter().find(|(s, _)| *s == f.seq).unwrap_or_else(|| {
+            panic!(
+                "accepted frame {} was never sent in session {session}",
+                f.seq
+            )
+        });
+        assert_eq!(
+            original.1, f.message,
+            "frame {} was accepted corrupted",
+            f.seq
+        );
+        accepted += 1;
+        counted_losses += f.missed as u64;
+        if let Some(p) = previous {
+            actual_losses += frames.iter().filter(|(s, _)| *s > p && *s < f.seq).count() as u64;
+        }
+        previous = Some(f.seq);
+    }
+    assert_eq!(session + 1, truth.len(), "one device session per Hello");
+    assert_eq!(counted_losses, actual_losses, "every lost frame is counted");
+    let l = &report.link_raw_log;
+    assert_eq!(accepted, l.frames_ok as u64);
+    assert_eq!(counted_losses, l.sequence_gaps as u64);
+    assert!(l.sequence_gaps > 0 && l.crc_failures + l.cobs_failures > 0 && l.resyncs > 0);
+
+    // The box saw corrupted commands too, and counted them.
+    let box_link = report.link_box.as_ref().expect("a status frame");
+    assert!(box_link.crc_failures + box_link.cobs_failures + box_link.sequence_gaps > 0);
+
+    // Every measurement row is one the box computed (from its own bytes).
+    let clean = derive(&sent, &scenario.config, &scenario.tables);
+    let rows = measurements(&out);
+    assert!(
+        rows.len() >= clean.run.measurements.len() / 2,
+        "{} rows",
+        rows.len()
+    );
+    for r in &rows {
+        assert!(
+            clean.run.measurements.contains(r),
+            "row at {} Hz, {} is not one the box sent",
+            r.speed_hz,
+            r.bearing
+        );
+    }
+    assert!(report.batch_error.is_none(), "{:?}", report.batch_error);
+}
+
+/// Environment variable carrying the child host's arguments.
+const CHILD_ARGS: &str = "PLINTH_STREAM_CHILD_ARGS";
+
+/// The host process that [`killing_the_host_mid_run_loses_nothing`] starts
+/// and kills: `plinth stream` exactly as the command line runs it.
+#[test]
+#[ignore = "run as a child process by killing_the_host_mid_run_loses_nothing"]
+fn stream_host_child() {
+    let args =
+        std::env::var(CHILD_ARGS).expect("started by killing_the_host_mid_run_loses_nothing");
+    let a: Vec<&str> = args.split('\n').collect();
+    let args = plinth::stream::Args {
+        port: Some(a[0].to_string()),
+        baud: 115_200,
+        config: PathBuf::from(a[1]),
+        out: PathBuf::from(a[2]),
+        replay: Some(PathBuf::from(a[3])),
+        window: 4,
+        duration: None,
+        reconnect_timeout: 10.0,
+        offline: false,
+        quiet: true,
+    };
+    plinth::stream::run(&args).expect("plinth stream");
+}
+
+/// Kills a child process when dropped (a failed assertion must not leave it).
+struct KillOnDrop(Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn spawn_host(port: &str, scenario: &Scenario, out: &Path) -> KillOnDrop {
+    let args = [
+        port.to_string(),
+        scenario.config_path.display().to_string(),
+        out.display().to_string(),
+        scenario.signals.display().to_string(),
+    ]
+    .join("\n");
+    let child = Command::new(std::env::current_exe().unwrap())
+        .args(["--ignored", "--exact", "stream_host_child", "--nocapture"])
+        .env(CHILD_ARGS, args)
+        .spawn()
+        .expect("starting the host process");
+    KillOnDrop(child)
+}
+
+#[test]
+fn killing_the_host_mid_run_loses_nothing() {
+    let scenario = Scenario::paper_rundown(150.0, 100.0, 20.0);
+    let device = DeviceThread::start(Faults::default(), Faults::default(), 3);
+    let out = scenario.out_dir("killed");
+    std::fs::create_dir_all(&out).unwrap();
+    let raw_path = out.join("raw.bin");
+
+    // First host: kill it once a third of the replay is acknowledged.
+    let mut host = spawn_host(&device.port, &scenario, &out);
+    let total = scenario.replay().set().len();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let done = ReplayJournal::read(&out)
+            .ok()
+            .flatten()
+            .is_some_and(|j| j.acknowledged * 3 > total);
+        if done {
+            break;
+        }
+        assert!(Instant::now() < deadline, "the first host made no progress");
+        assert!(
+            host.0.try_wait().unwrap().is_none(),
+            "the first host ended before it was killed"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    host.0.kill().unwrap();
+    host.0.wait().unwrap();
+    drop(host);
+    let before = std::fs::read(&raw_path).unwrap();
+    let rows_before = derive(&before, &scenario.config, &scenario.tables)
+        .run
+        .measurements;
+    assert!(
+        !rows_before.is_empty(),
+        "no phasor frame arrived before the kill"
+    );
+
+    // Second host: resumes and completes.
+    let mut host = spawn_host(&device.port, &scenario, &out);
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let status = loop {
+        if let Some(s) = host.0.try_wait().unwrap() {
+            break s;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the restarted host did not finish"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert!(status.success(), "the restarted host failed: {status:?}");
+    drop(device);
+
+    let after = std::fs::read(&raw_path).unwrap();
+    assert!(after.len() > before.len());
+    assert_eq!(
+        &after[..before.len()],
+        &before[..],
+        "the raw log was rewritten"
+    );
+    let journal = ReplayJournal::read(&out).unwrap().unwrap();
+    assert!(
+        journal.finished && journal.acknowledged == total,
+        "{journal:?}"
+    );
+    let rows = measurements(&out);
+    for r in &rows_before {
+        assert!(
+            rows.contains(r),
+            "row at {} Hz, {} received before the kill is missing",
+            r.speed_hz,
+            r.bearing
+        );
+    }
+    assert!(rows.len() > rows_before.len());
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("stream-report.json")).unwrap())
+            .unwrap();
+    assert_eq!(report["completed"], true);
+    assert!(report["link_raw_log"]["restarts"].as_u64().unwrap() >= 1);
+}
