@@ -203,7 +203,7 @@ impl Inference {
 
 /// Upper tail P(χ²(q) > w).
 pub fn chi2_sf(w: f64, q: usize) -> f64 {
-    if !(w > 0.0) {
+    if w.is_nan() || w <= 0.0 {
         return 1.0;
     }
     match ChiSquared::new(q.max(1) as f64) {
@@ -222,10 +222,11 @@ fn andrews_bandwidth(scores: &[DVector<f64>]) -> f64 {
     let p = scores[0].len();
     let (mut num, mut den) = (0.0, 0.0);
     for a in 0..p {
+        let series: Vec<f64> = scores.iter().map(|g| g[a]).collect();
         let (mut s01, mut s00) = (0.0, 0.0);
-        for i in 1..t {
-            s01 += scores[i][a] * scores[i - 1][a];
-            s00 += scores[i - 1][a] * scores[i - 1][a];
+        for w in series.windows(2) {
+            s01 += w[1] * w[0];
+            s00 += w[0] * w[0];
         }
         if s00 <= 0.0 {
             continue;
@@ -234,8 +235,8 @@ fn andrews_bandwidth(scores: &[DVector<f64>]) -> f64 {
         // divides by 1 − ρ); the bandwidth is capped at T − 1 anyway.
         let rho = (s01 / s00).clamp(-0.999, 0.999);
         let mut innov = 0.0;
-        for i in 1..t {
-            let e = scores[i][a] - rho * scores[i - 1][a];
+        for w in series.windows(2) {
+            let e = w[1] - rho * w[0];
             innov += e * e;
         }
         let sigma2 = innov / (t - 1) as f64;

@@ -95,6 +95,10 @@ pub struct LinearFit {
     pub condition: f64,
 }
 
+/// The whitened regression of a group: term indices (columns), design,
+/// right-hand side and the speed index of every row.
+type Design = (Vec<usize>, DMatrix<f64>, DVector<f64>, Vec<usize>);
+
 /// Builds the whitened design and right-hand side of `group`.
 fn design(
     prep: &Prepared,
@@ -102,7 +106,7 @@ fn design(
     nl: &[f64],
     weights: &Weights,
     group: &[usize],
-) -> Result<(Vec<usize>, DMatrix<f64>, DVector<f64>, Vec<usize>)> {
+) -> Result<Design> {
     let terms = model.group_terms(group);
     let speeds = Model::group_speeds(prep, group);
     let n_rows = speeds.len() * 4 * group.len();

@@ -57,13 +57,13 @@ pub fn write_pedestal_figures(outcome: &Outcome, dir: &Path) -> Result<Vec<PathB
             .enumerate()
             .map(|(b, name)| {
                 let mut series = Vec::new();
-                for d in 0..2 {
+                for (d, dir) in DIRS.iter().enumerate() {
                     series.push(PhasorSeries::markers(
-                        format!("{name} {} measured", DIRS[d]),
+                        format!("{name} {dir} measured"),
                         measured_ped(prep, b, d),
                     ));
                     series.push(PhasorSeries::line(
-                        format!("{name} {} predicted", DIRS[d]),
+                        format!("{name} {dir} predicted"),
                         predicted_ped(prep, &pred, b, d),
                     ));
                 }

@@ -61,6 +61,10 @@ pub fn base_model(base: &[Parameter], n_bearings: usize) -> Model {
     }
 }
 
+/// Inference of one group of pedestals: (bearing indices, inference, the
+/// parameter of each estimate entry).
+pub type GroupInference = (Vec<usize>, Inference, Vec<ParamRef>);
+
 /// A fitted model with the weights it was fitted with.
 #[derive(Clone, Debug)]
 pub struct State {
@@ -108,10 +112,7 @@ impl State {
 
     /// Parameter inference per group: (group, inference, parameter of each
     /// estimate entry).
-    pub fn inference(
-        &self,
-        prep: &Prepared,
-    ) -> Result<Vec<(Vec<usize>, Inference, Vec<ParamRef>)>> {
+    pub fn inference(&self, prep: &Prepared) -> Result<Vec<GroupInference>> {
         let mut out = Vec::new();
         for group in self.model.groups(prep.bearings.len()) {
             let (inf, refs) = infer_group(prep, &self.model, &self.params, &self.weights, &group)?;
