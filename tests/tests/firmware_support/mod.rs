@@ -51,6 +51,17 @@ impl Scenario {
         }
     }
 
+    /// The same machine over a shorter run-down, 45 → 28 Hz in 1.2 s
+    /// (still through both resonances; half the data, for QEMU).
+    pub fn short() -> Self {
+        Self {
+            speed_start_hz: 45.0,
+            speed_end_hz: 28.0,
+            duration_s: 1.2,
+            ..Self::standard()
+        }
+    }
+
     /// Speed at time t [Hz].
     pub fn speed_hz(&self, t: f64) -> f64 {
         self.speed_start_hz + (self.speed_end_hz - self.speed_start_hz) * t / self.duration_s
