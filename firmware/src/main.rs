@@ -26,8 +26,6 @@ mod image {
     use defmt_rtt as _;
     #[cfg(feature = "semihosting")]
     use defmt_semihosting as _;
-    #[cfg(feature = "semihosting")]
-    use panic_semihosting as _;
 
     use cortex_m_rt::entry;
     use plinth_firmware::ad7606::Range;
@@ -46,13 +44,25 @@ mod image {
     /// Watchdog timeout [ms]: far above one bounded main-loop pass.
     const WATCHDOG_MS: u32 = 500;
 
-    #[cfg(feature = "rtt")]
+    /// Logs the panic over defmt (no `core::fmt`: it would cost ~4 KiB of
+    /// flash), then exits with failure under semihosting (QEMU: the test
+    /// sees it) or stops on an undefined instruction (hardware: the watchdog
+    /// resets the box).
     #[panic_handler]
     fn panic(info: &core::panic::PanicInfo) -> ! {
-        defmt::error!("panic: {}", defmt::Display2Format(info));
-        loop {
-            cortex_m::asm::udf();
+        let message = info.message().as_str().unwrap_or("(formatted message)");
+        match info.location() {
+            Some(l) => defmt::error!(
+                "panic at {=str}:{=u32}: {=str}",
+                l.file(),
+                l.line(),
+                message
+            ),
+            None => defmt::error!("panic: {=str}", message),
         }
+        #[cfg(feature = "semihosting")]
+        cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+        cortex_m::asm::udf()
     }
 
     #[entry]
@@ -60,9 +70,7 @@ mod image {
         let Some(cp) = cortex_m::Peripherals::take() else {
             // Only reachable if something took the core peripherals before
             // main, which nothing does.
-            loop {
-                cortex_m::asm::udf();
-            }
+            cortex_m::asm::udf()
         };
         let mut link = Usart1::init(PCLK2_HZ, BAUD);
         let mut watchdog = Iwdg::start(WATCHDOG_MS);
@@ -72,9 +80,7 @@ mod image {
             cortex_m::singleton!(: Device = Device::new(Range::PlusMinus10V.volts_per_code()));
         let source = cortex_m::singleton!(: ReplaySource = ReplaySource::new(Range::PlusMinus10V.volts_per_code()));
         let (Some(device), Some(source)) = (device, source) else {
-            loop {
-                cortex_m::asm::udf();
-            }
+            cortex_m::asm::udf()
         };
         defmt::info!("plinth-firmware {=str} up", env!("CARGO_PKG_VERSION"));
         let mut stopping = false;

@@ -70,9 +70,7 @@ mod image {
     #[entry]
     fn main() -> ! {
         let Some(mut cp) = cortex_m::Peripherals::take() else {
-            loop {
-                cortex_m::asm::udf();
-            }
+            cortex_m::asm::udf()
         };
         cp.SYST.set_clock_source(SystClkSource::Core);
         cp.SYST.set_reload(0x00FF_FFFF);
@@ -86,7 +84,7 @@ mod image {
         let Ok(mut ex) = PhasorExtractor::<N>::new(ExtractorConfig::new(51_200.0, sensors)) else {
             hprintln!("BENCH error extractor config");
             debug::exit(debug::EXIT_FAILURE);
-            loop {}
+            cortex_m::asm::udf()
         };
         let mut buf = [[0.0f32; N]; PERIOD];
         for (k, v) in buf.iter_mut().enumerate() {
@@ -216,6 +214,6 @@ mod image {
             receive / (repeats * len) as f32
         );
         debug::exit(debug::EXIT_SUCCESS);
-        loop {}
+        cortex_m::asm::udf()
     }
 }
