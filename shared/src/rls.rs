@@ -229,12 +229,21 @@ impl<T: Float, const P: usize> Rls<T, P> {
     }
 }
 
-/// Square root through libm so the host computes what the MCU computes.
+/// Square root through libm, in the working precision, so the host computes
+/// bit for bit what the MCU computes (IEEE sqrt is correctly rounded in both)
+/// and the M4F never falls back to software double precision.
 #[inline]
 fn libm_sqrt<T: Float>(x: T) -> T {
-    match x.to_f64() {
-        Some(v) => T::from(libm::sqrt(v)).unwrap_or_else(T::nan),
-        None => T::nan(),
+    if core::mem::size_of::<T>() == core::mem::size_of::<f32>() {
+        match x.to_f32() {
+            Some(v) => T::from(libm::sqrtf(v)).unwrap_or_else(T::nan),
+            None => T::nan(),
+        }
+    } else {
+        match x.to_f64() {
+            Some(v) => T::from(libm::sqrt(v)).unwrap_or_else(T::nan),
+            None => T::nan(),
+        }
     }
 }
 
