@@ -1,10 +1,834 @@
-//! `plinth demo` (not yet implemented).
+//! `plinth demo`: the whole chain on the bundled paper machine, in one
+//! command, without hardware.
+//!
+//! 1. **Signals**: the damped Feng & Hahn machine (`examples/feng-hahn-1997-damped.toml`,
+//!    bundled; or `--machine FILE`) is run down at a constant rate and its
+//!    sensors sampled as the box's ADC would ([`crate::sim::signals`]):
+//!    proximity probes and pedestal accelerometers, 1 mV noise, 16-bit ADC,
+//!    a keyphasor.
+//! 2. **Box**: the signals are replayed, over the real wire protocol and the
+//!    `plinth stream` session ([`crate::stream`]), to the field box: by
+//!    default the firmware's pipeline compiled for the host and run in
+//!    process ([`inprocess`]); with `--qemu` the real firmware image under
+//!    QEMU on a pseudo-terminal ([`qemu`]). The box extracts 1X phasors,
+//!    computes bearing forces from its table and fits each pedestal
+//!    recursively (RLS).
+//! 3. **Run directory**: every byte the box sent is kept (`raw.bin`), and the
+//!    run directory (formats.md) is re-derived from it, with the simulation's
+//!    `truth.json` added.
+//! 4. **Batch fit**: [`crate::identify`] on the run directory.
+//! 5. **Table and figures**: box RLS vs batch fit vs truth with their
+//!    differences ([`table`]), and the amplitude, phase and phase-difference
+//!    figures, box-extracted phasors over the simulated truth, PNG and SVG
+//!    ([`figures`]).
+//!
+//! Files (under `--out`, default `plinth-demo/`): `box/stream.toml` and
+//! `box/bearings.csv` (the box's configuration: `plinth stream --config
+//! OUT/box/stream.toml --out OUT/run --offline` rebuilds the run directory
+//! from `raw.bin`), `run/` (the run directory, `raw.bin`,
+//! `stream-report.json`), `figures/`, `demo-report.json`, and with
+//! `--keep-signals` the signal set `signals/`.
+//!
+//! The host-only default replays a realistic run-down, 200 → 5 Hz at
+//! 10 Hz/s (19.5 s of signals, 2000 revolutions, 1 M sample vectors of 8
+//! channels at the box's 51.2 kHz; a few seconds in release), with seismic
+//! displacement sensors on the pedestals ([`DEFAULT_SEISMIC`] says why). Under QEMU the firmware runs about 100×
+//! slower than real time, so `--qemu` replays a short run-down through the
+//! pedestal resonances (62 → 48 Hz at 35 Hz/s, 0.4 s) with one revolution
+//! per phasor.
+
+pub mod figures;
+pub mod inprocess;
+pub mod qemu;
+pub mod table;
+
+use crate::identify::{identify_run, Identification, Options};
+use crate::paper::DAMPED_MACHINE;
+use crate::rundir::{BearingRow, RunDir, Truth, TRUTH_FILE};
+use crate::sim::signals::{
+    default_seismic_sensitivity, synthesise, write_truth, RunDown, SensorKind, SignalOptions,
+    SignalSet,
+};
+use crate::sim::{EffectSet, Machine};
+use crate::stream::config::{BearingTables, StreamConfig};
+use crate::stream::port::{Backoff, Connector, SerialConnector};
+use crate::stream::progress::Progress;
+use crate::stream::rawlog::RAW_LOG_FILE;
+use crate::stream::replay::{SignalSetReplay, JOURNAL_FILE};
+use crate::stream::report::StreamReport;
+use crate::stream::session::SessionOptions;
+use anyhow::{anyhow, bail, Context, Result};
+use plinth_firmware::ad7606::Range;
+use plinth_firmware::config::TABLE_ROWS;
+use plinth_firmware::device::SAMPLE_RATE_HZ;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use table::ComparisonRow;
+
+/// Run-down of the host-only demo: 200 → 5 Hz at 10 Hz/s (19.5 s, 2000
+/// revolutions).
+pub const DEFAULT_RUNDOWN: RunDown = RunDown {
+    start_hz: 200.0,
+    end_hz: 5.0,
+    rate_hz_per_s: 10.0,
+};
+
+/// Run-down of the QEMU demo: 62 → 48 Hz at 35 Hz/s (0.4 s of signals, 22
+/// revolutions, through the bundled machine's pedestal resonances at
+/// 50-58 Hz), short because QEMU runs the firmware about 100× slower than
+/// real time (about a minute).
+pub const QEMU_RUNDOWN: RunDown = RunDown {
+    start_hz: 62.0,
+    end_hz: 48.0,
+    rate_hz_per_s: 35.0,
+};
+
+/// Revolutions per phasor of the host-only demo.
+pub const DEFAULT_AVERAGING: u32 = 4;
+
+/// Revolutions per phasor under QEMU (the short run has few revolutions).
+pub const QEMU_AVERAGING: u32 = 1;
+
+/// Seismic transducers of the demo: seismic displacement sensors
+/// (7.87 V/mm). The pedestals move by fractions of a micrometre at low
+/// speed, where a velocity pick-up's signal falls as Ω and an
+/// accelerometer's as Ω²: with those, 1 mV of noise puts noise into the
+/// regressors of eq. 4 (errors in variables) and biases k low by a few
+/// percent on this machine (try `--seismic velocity` or `acceleration`).
+pub const DEFAULT_SEISMIC: SensorKind = SensorKind::Displacement;
+
+/// Name of the bundled machine in messages.
+pub const BUNDLED_MACHINE_NAME: &str = "examples/feng-hahn-1997-damped.toml";
 
 /// Command-line arguments of `plinth demo`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+#[command(
+    long_about = "The whole chain on the bundled paper machine (Feng & Hahn 1997, damped pedestals), \
+without hardware: simulated run-down signals -> field box (the firmware pipeline compiled for \
+the host, or with --qemu the real firmware image under QEMU) over the wire protocol -> run \
+directory -> batch fit -> table (box RLS vs batch fit vs truth) and figures (PNG and SVG).\n\n\
+Host-only default: 200 -> 5 Hz at 10 Hz/s, 51.2 kHz, 8 channels. With --qemu a short run-down \
+(62 -> 48 Hz at 35 Hz/s) is replayed, as QEMU runs the firmware about 100x slower than real time."
+)]
+pub struct Args {
+    /// Output directory (created): box configuration, run directory, figures, report.
+    #[arg(long, default_value = "plinth-demo")]
+    pub out: PathBuf,
+    /// Run the real firmware image under qemu-system-arm (netduinoplus2) instead
+    /// of the pipeline compiled for the host.
+    #[arg(long)]
+    pub qemu: bool,
+    /// Firmware image for --qemu (default: target/thumbv7em-none-eabihf/release/plinth-firmware;
+    /// build it with `cargo build -p plinth-firmware --target thumbv7em-none-eabihf --release`).
+    #[arg(long, requires = "qemu")]
+    pub elf: Option<PathBuf>,
+    /// Run-down START:END:RATE [Hz:Hz:Hz/s] (default 200:5:10; with --qemu 62:48:35).
+    #[arg(long)]
+    pub rundown: Option<String>,
+    /// Keyphasor revolutions averaged into one phasor (default 4; with --qemu 1).
+    #[arg(long)]
+    pub averaging: Option<u32>,
+    /// Machine file (TOML) instead of the bundled damped paper machine.
+    #[arg(long)]
+    pub machine: Option<PathBuf>,
+    /// Seed of the sensor noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Seismic transducers on the pedestals (typical field sensitivities:
+    /// 20 mV/(mm/s) velocity pick-ups, 100 mV/g accelerometers, 7.87 V/mm).
+    #[arg(long, value_enum, default_value_t = DEFAULT_SEISMIC)]
+    pub seismic: SensorKind,
+    /// Also write the simulated signals to OUT/signals (`plinth signals` format,
+    /// about 0.8 MB per second of run-down).
+    #[arg(long)]
+    pub keep_signals: bool,
+    /// No progress on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Which field box the signals are replayed to.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BoxTarget {
+    /// The firmware's device and pipeline compiled for the host, in process.
+    InProcess,
+    /// The firmware image at this path under QEMU (netduinoplus2).
+    Qemu(PathBuf),
+}
+
+impl BoxTarget {
+    /// Short description for messages and the report.
+    pub fn describe(&self) -> String {
+        match self {
+            BoxTarget::InProcess => "firmware pipeline compiled for the host (in process)".into(),
+            BoxTarget::Qemu(p) => {
+                format!("firmware image {} under QEMU netduinoplus2", p.display())
+            }
+        }
+    }
+}
+
+/// Everything a demo run needs.
+#[derive(Clone, Debug)]
+pub struct DemoOptions {
+    /// The machine (the bundled damped paper machine by default).
+    pub machine: Machine,
+    /// The speed ramp.
+    pub rundown: RunDown,
+    /// Keyphasor revolutions per phasor.
+    pub averaging: u32,
+    /// Noise seed.
+    pub seed: u64,
+    /// Seismic transducers on the pedestals (at their typical sensitivity).
+    pub seismic: SensorKind,
+    /// Output directory.
+    pub out: PathBuf,
+    /// The box.
+    pub target: BoxTarget,
+    /// Write the signal set to `out/signals`.
+    pub keep_signals: bool,
+    /// Progress on stderr.
+    pub progress: bool,
+}
+
+impl DemoOptions {
+    /// The host-only demo of the bundled machine with the default run-down,
+    /// writing into `out`.
+    pub fn bundled(out: impl Into<PathBuf>) -> Result<Self> {
+        Ok(Self {
+            machine: bundled_machine()?,
+            rundown: DEFAULT_RUNDOWN,
+            averaging: DEFAULT_AVERAGING,
+            seed: 1,
+            seismic: DEFAULT_SEISMIC,
+            out: out.into(),
+            target: BoxTarget::InProcess,
+            keep_signals: false,
+            progress: false,
+        })
+    }
+}
+
+/// The bundled damped paper machine.
+pub fn bundled_machine() -> Result<Machine> {
+    Machine::from_toml_str(DAMPED_MACHINE, BUNDLED_MACHINE_NAME)
+        .with_context(|| format!("the bundled machine {BUNDLED_MACHINE_NAME}"))
+}
+
+/// Wall-clock time of each stage [s].
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Timings {
+    /// Response and time-signal synthesis.
+    pub signals_s: f64,
+    /// Streaming to the box (replay, phasors, RLS) and re-deriving the run directory.
+    pub stream_s: f64,
+    /// Batch fit and table.
+    pub fit_s: f64,
+    /// Figures.
+    pub figures_s: f64,
+    /// Everything.
+    pub total_s: f64,
+}
+
+/// `demo-report.json`: what was run, what came out, where it was written.
+#[derive(Clone, Debug, Serialize)]
+pub struct DemoReport {
+    /// Machine name.
+    pub machine: String,
+    /// The box the signals went to.
+    pub target: String,
+    /// The speed ramp.
+    pub rundown: RunDown,
+    /// Duration of the run-down [s].
+    pub duration_s: f64,
+    /// Keyphasor revolutions in the run-down.
+    pub revolutions: u64,
+    /// Sample rate per channel [Hz].
+    pub sample_rate_hz: f64,
+    /// Sample vectors replayed.
+    pub sample_vectors: usize,
+    /// Channels per sample vector.
+    pub channels: usize,
+    /// Revolutions per phasor.
+    pub averaging: u32,
+    /// Noise seed.
+    pub seed: u64,
+    /// Rows of the box's bearing table per bearing.
+    pub bearing_table_rows: usize,
+    /// Largest relative error of the box's (linearly interpolated) bearing
+    /// table against the exact coefficients over the run.
+    pub bearing_table_max_rel_error: f64,
+    /// Phasor frames the box sent.
+    pub phasor_frames: usize,
+    /// Rows of measurements.csv.
+    pub measurement_rows: usize,
+    /// Box RLS vs batch fit vs truth, per pedestal and parameter.
+    pub table: Vec<ComparisonRow>,
+    /// Warnings of the batch fit, per pedestal.
+    pub warnings: Vec<String>,
+    /// Wall-clock times.
+    pub timings: Timings,
+    /// Every file written (besides the run directory's own).
+    pub files: Vec<PathBuf>,
+}
+
+/// What a demo run produced.
+#[derive(Clone, Debug)]
+pub struct DemoOutcome {
+    /// The run directory (`out/run`).
+    pub run_dir: PathBuf,
+    /// The figures directory (`out/figures`).
+    pub figures_dir: PathBuf,
+    /// The report (also in `out/demo-report.json`).
+    pub report: DemoReport,
+    /// The stream's own report (also in `out/run/stream-report.json`).
+    pub stream: StreamReport,
+    /// The batch fit of the run directory.
+    pub identification: Identification,
+    /// The machine's pedestals.
+    pub truth: Truth,
+}
+
+/// File name of the demo report inside the output directory.
+pub const REPORT_FILE: &str = "demo-report.json";
 
 /// Runs `plinth demo`.
-pub fn run(_args: &Args) -> anyhow::Result<()> {
-    anyhow::bail!("`plinth demo` is not available in this build yet")
+pub fn run(args: &Args) -> Result<()> {
+    let started = Instant::now();
+    let target = if args.qemu {
+        BoxTarget::Qemu(qemu::find_image(args.elf.as_deref())?)
+    } else {
+        BoxTarget::InProcess
+    };
+    let rundown = match &args.rundown {
+        Some(text) => RunDown::parse(text)?,
+        None if args.qemu => QEMU_RUNDOWN,
+        None => DEFAULT_RUNDOWN,
+    };
+    let averaging = args.averaging.unwrap_or(if args.qemu {
+        QEMU_AVERAGING
+    } else {
+        DEFAULT_AVERAGING
+    });
+    let machine = match &args.machine {
+        Some(p) => Machine::from_toml_path(p)?,
+        None => bundled_machine()?,
+    };
+    let opts = DemoOptions {
+        machine,
+        rundown,
+        averaging,
+        seed: args.seed,
+        seismic: args.seismic,
+        out: args.out.clone(),
+        target,
+        keep_signals: args.keep_signals,
+        progress: !args.quiet,
+    };
+    let outcome = demo(&opts)?;
+    print!("{}", summary(&outcome));
+    println!(
+        "elapsed {:.1} s (signals {:.1} s, box {:.1} s, fit {:.1} s, figures {:.1} s)",
+        started.elapsed().as_secs_f64(),
+        outcome.report.timings.signals_s,
+        outcome.report.timings.stream_s,
+        outcome.report.timings.fit_s,
+        outcome.report.timings.figures_s
+    );
+    Ok(())
+}
+
+/// Writes a progress note on stderr when enabled.
+fn note(on: bool, text: &str) {
+    if on {
+        eprintln!("{text}");
+    }
+}
+
+/// Runs the whole chain (see the module documentation).
+pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
+    let started = Instant::now();
+    let mut timings = Timings::default();
+    let r = opts.rundown;
+    r.validate().map_err(|m| anyhow!("run-down: {m}"))?;
+    if opts.averaging == 0 {
+        bail!("averaging must be at least 1 revolution per phasor");
+    }
+    let out = &opts.out;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("cannot create the output directory {}", out.display()))?;
+    let box_dir = out.join("box");
+    let run_dir = out.join("run");
+    let figures_dir = out.join("figures");
+    let signals_dir = out.join("signals");
+
+    // 1. Signals.
+    note(
+        opts.progress,
+        &format!(
+            "[1/5] simulating {}: run-down {} → {} Hz at {} Hz/s ({:.2} s, {} revolutions), {} Hz sampling",
+            opts.machine.name,
+            r.start_hz,
+            r.end_hz,
+            r.rate_hz_per_s,
+            r.duration_s(),
+            r.revolutions(),
+            SAMPLE_RATE_HZ
+        ),
+    );
+    let t = Instant::now();
+    let signal_opts = SignalOptions {
+        rundown: r,
+        sample_rate_hz: SAMPLE_RATE_HZ as f64,
+        seed: opts.seed,
+        seismic_kind: opts.seismic,
+        seismic_sensitivity: default_seismic_sensitivity(opts.seismic),
+        ..SignalOptions::default()
+    };
+    let (set, truth_run) = synthesise(&opts.machine, &EffectSet::none(), &signal_opts)
+        .context("synthesising the run-down signals")?;
+    let truth = truth_run
+        .truth
+        .clone()
+        .ok_or_else(|| anyhow!("the simulation produced no truth"))?;
+    if truth.pedestals.is_empty() {
+        bail!(
+            "machine {}: no bearing stands on a pedestal, so there is nothing to identify",
+            opts.machine.name
+        );
+    }
+    if opts.keep_signals {
+        set.write(&signals_dir)
+            .and_then(|()| write_truth(&signals_dir, &truth_run))
+            .with_context(|| format!("writing the signals to {}", signals_dir.display()))?;
+    }
+    timings.signals_s = t.elapsed().as_secs_f64();
+    note(
+        opts.progress,
+        &format!(
+            "      {} sample vectors × {} channels in {:.1} s",
+            set.len(),
+            set.channels(),
+            timings.signals_s
+        ),
+    );
+
+    // 2. The box's configuration: channels as synthesised, and a bearing
+    // table that fits the box.
+    let (lo, hi) = (r.start_hz.min(r.end_hz), r.start_hz.max(r.end_hz));
+    let (table_rows, table_error) = box_bearing_table(&truth_run.bearings, lo, hi, TABLE_ROWS)?;
+    let per_bearing = table_rows.len() / truth.pedestals.len().max(1);
+    let config = write_box_config(&box_dir, &set, &table_rows, opts.averaging)?;
+    let tables = config.load_bearing_tables()?;
+
+    // 3. Stream to the box.
+    prepare_run_dir(&run_dir)?;
+    let replay = SignalSetReplay::new(set, &config)?;
+    let t = Instant::now();
+    note(
+        opts.progress,
+        &format!("[2/5] streaming to the {}", opts.target.describe()),
+    );
+    let progress = if opts.progress {
+        Progress::stderr()
+    } else {
+        Progress::hidden()
+    };
+    let signals_path = if opts.keep_signals {
+        signals_dir.clone()
+    } else {
+        PathBuf::from(format!("(in memory: {})", opts.machine.name))
+    };
+    let outcome = match &opts.target {
+        BoxTarget::InProcess => {
+            let mut connector =
+                inprocess::InProcessConnector::new(Range::PlusMinus10V.volts_per_code());
+            stream_to(
+                &mut connector,
+                &run_dir,
+                &config,
+                &tables,
+                &signals_path,
+                &replay,
+                SessionOptions::default(),
+                progress,
+            )?
+        }
+        BoxTarget::Qemu(image) => {
+            let guard = qemu::Qemu::start(image)?;
+            note(
+                opts.progress,
+                &format!(
+                    "      QEMU started; the box's USART is on {} (QEMU runs the firmware ~100× slower than real time)",
+                    guard.pty
+                ),
+            );
+            let mut connector = SerialConnector::new(&guard.pty, 115_200);
+            let options = SessionOptions {
+                backoff: Backoff {
+                    give_up: Duration::from_secs(10),
+                    ..Backoff::default()
+                },
+                ..SessionOptions::default()
+            };
+            let o = stream_to(
+                &mut connector,
+                &run_dir,
+                &config,
+                &tables,
+                &signals_path,
+                &replay,
+                options,
+                progress,
+            );
+            drop(guard);
+            o?
+        }
+    };
+    let stream_report = crate::stream::finish(&run_dir, &config, &tables, Some(&outcome))?;
+    if !outcome.completed {
+        bail!(
+            "the stream to the box did not complete: {}",
+            outcome.error.as_deref().unwrap_or("no reason given")
+        );
+    }
+    timings.stream_s = t.elapsed().as_secs_f64();
+    note(
+        opts.progress,
+        &format!(
+            "      {} phasor frames → {} measurement rows in {:.1} s",
+            stream_report.phasor_frames, stream_report.measurement_rows, timings.stream_s
+        ),
+    );
+
+    // 4. The run directory with its truth, read back as `plinth identify`
+    // would, and the batch fit.
+    note(
+        opts.progress,
+        "[3/5] batch least-squares fit of the run directory",
+    );
+    let t = Instant::now();
+    let truth_path = run_dir.join(TRUTH_FILE);
+    let text = serde_json::to_string_pretty(&truth).context("encoding truth.json")?;
+    std::fs::write(&truth_path, text + "\n")
+        .with_context(|| format!("cannot write {}", truth_path.display()))?;
+    let measured = RunDir::read(&run_dir)?;
+    let identification = identify_run(&measured, &Options::default())
+        .with_context(|| format!("identifying {}", run_dir.display()))?;
+    let mut warnings = Vec::new();
+    for p in &identification.pedestals {
+        for w in &p.warnings {
+            warnings.push(format!("pedestal `{}`: {}", p.bearing, w.message));
+        }
+    }
+    let rows = table::rows(&stream_report.pedestals, &truth);
+    timings.fit_s = t.elapsed().as_secs_f64();
+
+    // 5. Figures.
+    note(
+        opts.progress,
+        &format!("[4/5] figures into {}", figures_dir.display()),
+    );
+    let t = Instant::now();
+    let truth_in_range = RunDir {
+        measurements: truth_run
+            .measurements
+            .iter()
+            .filter(|m| m.speed_hz >= lo && m.speed_hz <= hi)
+            .cloned()
+            .collect(),
+        bearings: truth_run.bearings.clone(),
+        truth: None,
+    };
+    let mut files = figures::write_figures(&measured, &truth_in_range, &figures_dir)?;
+    timings.figures_s = t.elapsed().as_secs_f64();
+
+    files.push(box_dir.join("stream.toml"));
+    files.push(box_dir.join("bearings.csv"));
+    if opts.keep_signals {
+        files.push(signals_dir.clone());
+    }
+    let report_path = out.join(REPORT_FILE);
+    files.push(report_path.clone());
+    timings.total_s = started.elapsed().as_secs_f64();
+    let report = DemoReport {
+        machine: opts.machine.name.clone(),
+        target: opts.target.describe(),
+        rundown: r,
+        duration_s: r.duration_s(),
+        revolutions: r.revolutions(),
+        sample_rate_hz: SAMPLE_RATE_HZ as f64,
+        sample_vectors: replay.set().len(),
+        channels: replay.set().channels(),
+        averaging: opts.averaging,
+        seed: opts.seed,
+        bearing_table_rows: per_bearing,
+        bearing_table_max_rel_error: table_error,
+        phasor_frames: stream_report.phasor_frames,
+        measurement_rows: stream_report.measurement_rows,
+        table: rows,
+        warnings,
+        timings,
+        files,
+    };
+    note(
+        opts.progress,
+        &format!("[5/5] report {}", report_path.display()),
+    );
+    let text = serde_json::to_string_pretty(&report).context("encoding the demo report")?;
+    std::fs::write(&report_path, text + "\n")
+        .with_context(|| format!("cannot write {}", report_path.display()))?;
+    Ok(DemoOutcome {
+        run_dir,
+        figures_dir,
+        report,
+        stream: stream_report,
+        identification,
+        truth,
+    })
+}
+
+/// Streams the replay to the box behind `connector` into `run_dir`.
+#[allow(clippy::too_many_arguments)]
+fn stream_to(
+    connector: &mut dyn Connector,
+    run_dir: &Path,
+    config: &StreamConfig,
+    tables: &BearingTables,
+    signals_path: &Path,
+    replay: &SignalSetReplay,
+    options: SessionOptions,
+    progress: Progress,
+) -> Result<crate::stream::session::SessionOutcome> {
+    crate::stream::stream(
+        connector,
+        run_dir,
+        config,
+        tables,
+        Some((signals_path, replay)),
+        options,
+        progress,
+    )
+    .with_context(|| format!("streaming to the {}", connector.describe()))
+}
+
+/// Makes `dir` ready for a fresh stream: the raw log is append-only and the
+/// replay journal resumes an earlier replay, so both are removed (a demo
+/// always starts over); everything else is rewritten.
+fn prepare_run_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create the run directory {}", dir.display()))?;
+    for name in [
+        RAW_LOG_FILE.to_string(),
+        JOURNAL_FILE.to_string(),
+        format!("{JOURNAL_FILE}.tmp"),
+        TRUTH_FILE.to_string(),
+    ] {
+        let p = dir.join(name);
+        match std::fs::remove_file(&p) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(e).with_context(|| format!("cannot remove {}", p.display())),
+        }
+    }
+    Ok(())
+}
+
+/// Writes the box's configuration into `dir` (`stream.toml` with the signal
+/// set's channels on ADC channels 0.., `bearings.csv` with `table`) and
+/// loads it back as `plinth stream` would.
+pub fn write_box_config(
+    dir: &Path,
+    set: &SignalSet,
+    table: &[BearingRow],
+    averaging: u32,
+) -> Result<StreamConfig> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    RunDir {
+        measurements: Vec::new(),
+        bearings: table.to_vec(),
+        truth: None,
+    }
+    .write(dir)
+    .with_context(|| format!("writing the box's bearing table into {}", dir.display()))?;
+    // RunDir::write also wrote an empty measurements.csv: not part of a configuration.
+    let _ = std::fs::remove_file(dir.join(crate::rundir::MEASUREMENTS_FILE));
+    let path = dir.join("stream.toml");
+    std::fs::write(&path, config_text(set, "bearings.csv", averaging))
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    StreamConfig::load(&path)
+}
+
+/// A stream configuration for a signal set's channels (ADC channel = the
+/// set's column, so the replay needs no reordering).
+pub fn config_text(set: &SignalSet, bearings_csv: &str, averaging: u32) -> String {
+    let mut s = format!(
+        "# Field box configuration written by `plinth demo` for {}.\n\
+         # Known bearing coefficients (formats.md), relative to this file.\n\
+         bearings = \"{bearings_csv}\"\n\n[averaging]\nrevolutions = {averaging}\n\n[rls]\nforgetting_factor = 1.0\n",
+        set.header.machine
+    );
+    for (adc, ch) in set.header.channels.iter().enumerate() {
+        let sensor = match ch.kind {
+            SensorKind::Displacement => "proximity",
+            SensorKind::Velocity => "velocity",
+            SensorKind::Acceleration => "acceleration",
+        };
+        s.push_str(&format!(
+            "\n[[channels]]\nadc = {adc}\nbearing = \"{}\"\nquantity = \"{}\"\nsensor = \"{sensor}\"\nsensitivity = {:e}\n",
+            ch.bearing,
+            ch.quantity.name(),
+            ch.sensitivity
+        ));
+    }
+    s
+}
+
+/// Relative difference of two bearing coefficient sets: the largest
+/// stiffness difference over the largest stiffness magnitude, or the same
+/// for damping, whichever is larger.
+fn coefficient_error(
+    a: &plinth_shared::bearing::BearingCoefficients<f64>,
+    b: &plinth_shared::bearing::BearingCoefficients<f64>,
+) -> f64 {
+    let rel = |x: &[[f64; 2]; 2], y: &[[f64; 2]; 2]| {
+        let mut d: f64 = 0.0;
+        let mut n: f64 = 0.0;
+        for i in 0..2 {
+            for j in 0..2 {
+                d = d.max((x[i][j] - y[i][j]).abs());
+                n = n.max(y[i][j].abs());
+            }
+        }
+        if n > 0.0 {
+            d / n
+        } else {
+            d
+        }
+    };
+    rel(&a.k, &b.k).max(rel(&a.c, &b.c))
+}
+
+/// The bearing table the box holds (at most `max_rows` rows per bearing,
+/// the firmware's capacity), chosen from the exact coefficients `exact` on a
+/// fine speed grid so that linear interpolation between the chosen rows is
+/// as close to them as the row budget allows over [`lo_hz`, `hi_hz`]: the
+/// rows bracketing the run first, then repeatedly the grid row where the
+/// interpolated table is worst. Returns the rows and the largest relative
+/// error left (see `coefficient_error`).
+pub fn box_bearing_table(
+    exact: &[BearingRow],
+    lo_hz: f64,
+    hi_hz: f64,
+    max_rows: usize,
+) -> Result<(Vec<BearingRow>, f64)> {
+    if max_rows < 2 {
+        bail!("a bearing table needs at least 2 rows");
+    }
+    let mut names: Vec<&str> = Vec::new();
+    for r in exact {
+        if !names.contains(&r.bearing.as_str()) {
+            names.push(&r.bearing);
+        }
+    }
+    let mut out = Vec::new();
+    let mut worst_all: f64 = 0.0;
+    for name in names {
+        let mut grid: Vec<&BearingRow> = exact.iter().filter(|r| r.bearing == name).collect();
+        grid.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
+        let first = grid.iter().rposition(|r| r.speed_hz <= lo_hz);
+        let last = grid.iter().position(|r| r.speed_hz >= hi_hz);
+        let (Some(first), Some(last)) = (first, last) else {
+            bail!("bearing {name:?}: the exact coefficients do not cover {lo_hz}-{hi_hz} Hz");
+        };
+        let span = &grid[first..=last];
+        let mut chosen: Vec<usize> = vec![0, span.len() - 1];
+        chosen.dedup();
+        let worst = loop {
+            // Interpolation error at every grid row between chosen rows.
+            let mut max = (0.0, None);
+            for w in chosen.windows(2) {
+                let (a, b) = (span[w[0]], span[w[1]]);
+                for (i, r) in span.iter().enumerate().take(w[1]).skip(w[0] + 1) {
+                    let t = (r.speed_hz - a.speed_hz) / (b.speed_hz - a.speed_hz);
+                    let interp = a.coefficients.lerp(&b.coefficients, t);
+                    let e = coefficient_error(&interp, &r.coefficients);
+                    if e > max.0 {
+                        max = (e, Some(i));
+                    }
+                }
+            }
+            match max.1 {
+                Some(i) if chosen.len() < max_rows => {
+                    let at = chosen.partition_point(|&c| c < i);
+                    chosen.insert(at, i);
+                }
+                _ => break max.0,
+            }
+        };
+        worst_all = worst_all.max(worst);
+        out.extend(chosen.iter().map(|&i| span[i].clone()));
+    }
+    Ok((out, worst_all))
+}
+
+/// The end-of-demo text: what ran, the table, the warnings, the files.
+pub fn summary(o: &DemoOutcome) -> String {
+    let r = &o.report;
+    let mut s = String::new();
+    s.push_str(&format!(
+        "\nplinth demo: {} run down {} → {} Hz at {} Hz/s ({:.2} s, {} revolutions), {} sample vectors × {} channels at {} Hz\n",
+        r.machine,
+        r.rundown.start_hz,
+        r.rundown.end_hz,
+        r.rundown.rate_hz_per_s,
+        r.duration_s,
+        r.revolutions,
+        r.sample_vectors,
+        r.channels,
+        r.sample_rate_hz
+    ));
+    s.push_str(&format!("box: {}\n", r.target));
+    s.push_str(&format!(
+        "     bearing table {} rows per bearing (linear interpolation within {:.2e} of the exact coefficients), {} revolution(s) per phasor\n",
+        r.bearing_table_rows, r.bearing_table_max_rel_error, r.averaging
+    ));
+    s.push_str(&crate::stream::report::render_link(
+        "link",
+        &o.stream.link_raw_log,
+    ));
+    s.push('\n');
+    s.push_str(&format!(
+        "{} phasor frames -> {} measurement rows ({} dropped)\n\n",
+        r.phasor_frames,
+        r.measurement_rows,
+        o.stream.dropped_rows.len()
+    ));
+    s.push_str(&table::render(&r.table, &o.identification));
+    for w in &r.warnings {
+        s.push_str(&format!("warning: {w}\n"));
+    }
+    s.push_str(&format!(
+        "\nwritten to {}:\n",
+        o.run_dir
+            .parent()
+            .map_or(o.run_dir.clone(), Path::to_path_buf)
+            .display()
+    ));
+    s.push_str(&format!(
+        "  {}  run directory (measurements.csv, bearings.csv, truth.json, raw.bin, stream-report.json): try `plinth identify {}`\n",
+        o.run_dir.display(),
+        o.run_dir.display()
+    ));
+    s.push_str(&format!(
+        "  {}  amplitudes, phases, phase_difference (.png and .svg)\n",
+        o.figures_dir.display()
+    ));
+    for f in &r.files {
+        if !f.starts_with(&o.figures_dir) {
+            s.push_str(&format!("  {}\n", f.display()));
+        }
+    }
+    s
 }
