@@ -44,12 +44,27 @@ fn read_until(
     stream: &mut UnixStream,
     client: &mut Client,
     timeout: Duration,
-    mut done: impl FnMut(&[DeviceMessage]) -> bool,
+    done: impl FnMut(&[DeviceMessage]) -> bool,
 ) {
+    assert!(
+        try_read_until(stream, client, timeout, done),
+        "timed out waiting for the box"
+    );
+}
+
+/// Reads from the box until `done` says so; false after `timeout`.
+fn try_read_until(
+    stream: &mut UnixStream,
+    client: &mut Client,
+    timeout: Duration,
+    mut done: impl FnMut(&[DeviceMessage]) -> bool,
+) -> bool {
     let deadline = Instant::now() + timeout;
     let mut buf = [0u8; 4096];
     while !done(&client.received) {
-        assert!(Instant::now() < deadline, "timed out waiting for the box");
+        if Instant::now() >= deadline {
+            return false;
+        }
         match stream.read(&mut buf) {
             Ok(0) => panic!("the box closed the link"),
             Ok(n) => {
@@ -60,6 +75,7 @@ fn read_until(
             Err(e) => panic!("link read: {e}"),
         }
     }
+    true
 }
 
 fn acked(received: &[DeviceMessage], seq: u32) -> bool {
@@ -118,12 +134,29 @@ fn image_identifies_a_replayed_run_down_under_qemu_and_exits_cleanly() {
     let mut client = Client::new();
     let t = Duration::from_secs(30);
 
-    let (_, hello) = client.hello(0x5eed);
-    stream.write_all(&hello).unwrap();
-    read_until(&mut stream, &mut client, t, |r| {
+    // The host speaks first, and keeps saying Hello until the box answers:
+    // bytes that arrive before the image has enabled USART1 are dropped.
+    let hello_acked = |r: &[DeviceMessage]| {
         r.iter()
             .any(|m| matches!(m, DeviceMessage::HelloAck(a) if a.host_nonce == 0x5eed))
-    });
+    };
+    let deadline = Instant::now() + t;
+    loop {
+        let (_, hello) = client.hello(0x5eed);
+        stream.write_all(&hello).unwrap();
+        if try_read_until(
+            &mut stream,
+            &mut client,
+            Duration::from_millis(500),
+            hello_acked,
+        ) {
+            break;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "no HelloAck from the box within {t:?}"
+        );
+    }
 
     let scenario = Scenario::short();
     let mut commands = scenario.configuration();
