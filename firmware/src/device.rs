@@ -13,7 +13,11 @@
 //!    else `Nack(WrongState)`.
 //! 4. While running, each `Samples` block → `Ack` after it was processed
 //!    (or `Nack`); the phasor/estimate frames it produced are queued before
-//!    the `Ack`. With an ADC source, frames come as revolutions complete.
+//!    the `Ack`. Blocks are taken strictly in order (go-back-N): a block
+//!    that repeats processed samples → `Ack` again, unprocessed; a block
+//!    after a missing one → `Nack(BadBlock)`, unprocessed (see
+//!    [`crate::replay`]). With an ADC source, frames come as revolutions
+//!    complete.
 //! 5. `Stop` → `Ack`, then the final `Estimates` (if any) and a `Status`.
 //! 6. A `Status` frame every [`STATUS_PERIOD_MS`] while a session is open.
 //!

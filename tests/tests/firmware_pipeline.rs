@@ -324,3 +324,94 @@ fn replayed_run_down_gives_true_phasors_and_the_batch_estimate() {
         assert!(estimate.std_err[i].is_finite() && estimate.std_err[i] > 0.0);
     }
 }
+
+/// The phasor frames among `got`.
+fn phasor_frames(got: Vec<DeviceMessage>) -> Vec<plinth_shared::protocol::PhasorFrame> {
+    got.into_iter()
+        .filter_map(|m| match m {
+            DeviceMessage::Phasors(p) => Some(p),
+            _ => None,
+        })
+        .collect()
+}
+
+/// A box configured for `scenario` and started.
+fn started(scenario: &Scenario) -> Bench {
+    let mut b = Bench::new();
+    b.open();
+    for m in scenario.configuration() {
+        b.command(&m);
+    }
+    b.command(&HostMessage::Start);
+    b
+}
+
+#[test]
+fn blocks_are_taken_in_order_repeats_acknowledged_and_gaps_refused() {
+    let scenario = Scenario::standard();
+    let blocks = scenario.blocks();
+
+    // Reference: every block once, in order.
+    let mut clean = started(&scenario);
+    let mut want = Vec::new();
+    let mut producing = Vec::new();
+    for (i, block) in blocks.iter().enumerate() {
+        let got = phasor_frames(clean.command(&HostMessage::Samples(block.clone())));
+        if !got.is_empty() {
+            producing.push(i);
+        }
+        want.extend(got);
+    }
+    // Two blocks that each complete a revolution, with blocks between them.
+    let dup = producing[3];
+    let skip_to = *producing.iter().find(|&&i| i > dup + 2).unwrap();
+
+    let mut b = started(&scenario);
+    let mut frames = Vec::new();
+    let mut i = 0;
+    let mut repeated = false;
+    let mut skipped = false;
+    while i < blocks.len() {
+        // In order: processed and acknowledged.
+        frames.extend(phasor_frames(
+            b.command(&HostMessage::Samples(blocks[i].clone())),
+        ));
+        if i == dup && !repeated {
+            // The same block again (its Ack was lost): acknowledged, and
+            // nothing else; the frames it produced are not sent twice.
+            repeated = true;
+            let (seq, got) = b.send(&HostMessage::Samples(blocks[i].clone()));
+            assert!(
+                matches!(got.as_slice(), [DeviceMessage::Ack(a)] if a.command_seq == seq),
+                "repeated block {i}: {got:?}"
+            );
+            // An older block too.
+            let (seq, got) = b.send(&HostMessage::Samples(blocks[0].clone()));
+            assert!(
+                matches!(got.as_slice(), [DeviceMessage::Ack(a)] if a.command_seq == seq),
+                "repeated block 0: {got:?}"
+            );
+        }
+        if i + 1 == skip_to && !skipped {
+            // Block i + 1 is lost on the way: the next ones are refused,
+            // and what they would have produced is not sent.
+            skipped = true;
+            for later in [skip_to + 1, skip_to + 2] {
+                let (seq, got) = b.send(&HostMessage::Samples(blocks[later].clone()));
+                assert_eq!(got.len(), 1, "block {later} after a gap: {got:?}");
+                assert_eq!(nack_reason(&got, seq), Some(NackReason::BadBlock));
+            }
+        }
+        i += 1;
+    }
+    assert!(repeated && skipped);
+    assert_eq!(b.source.counters().accepted as usize, blocks.len());
+    assert_eq!(b.source.counters().duplicates, 2);
+    assert_eq!(b.source.counters().out_of_order, 2);
+    let counters = b.device.counters();
+    assert_eq!(counters.commands_rejected, 2);
+    assert_eq!(counters.overruns, 0);
+    // The time base never broke: exactly the reference's frames.
+    assert_eq!(frames.len(), want.len());
+    assert!(frames == want, "phasor frames differ from the in-order run");
+}

@@ -2,7 +2,9 @@
 //! and the firmware's device (compiled for the host, behind a
 //! pseudo-terminal) flips bits, drops and duplicates bytes in both
 //! directions. No corrupted frame may ever be accepted, every lost frame
-//! must be counted, and the run must complete. Then the host is killed
+//! must be counted, the run must complete, and (go-back-N: a block lost on
+//! the way to the box is resent, never skipped) the box must send exactly
+//! the phasor frames of the fault-free run. Then the host is killed
 //! mid-run and restarted: the raw log keeps every byte and the final run
 //! directory contains the data received before the kill.
 
@@ -13,11 +15,62 @@ use plinth::stream::port::SerialConnector;
 use plinth::stream::progress::Progress;
 use plinth::stream::replay::ReplayJournal;
 use plinth::stream::session::SessionOptions;
+use plinth_shared::protocol::PhasorFrame;
 use plinth_shared::protocol::{DeviceMessage, Receiver};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
-use stream_common::{frames_by_session, measurements, DeviceThread, Faults, Scenario};
+use stream_common::{
+    frames_by_session, measurements, reference_bytes, DeviceThread, Faults, Scenario,
+};
+
+/// Every phasor frame in `bytes` (all device sessions), in order.
+fn phasor_frames(bytes: &[u8]) -> Vec<PhasorFrame> {
+    frames_by_session(bytes)
+        .into_iter()
+        .flatten()
+        .filter_map(|(_, m)| match m {
+            DeviceMessage::Phasors(p) => Some(p),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Asserts that `got` is `want` up to f32 rounding: same revolutions and
+/// speeds, phasors within 1e-5 of the frame's largest magnitude.
+fn assert_same_phasors(got: &PhasorFrame, want: &PhasorFrame) {
+    let at = want.revolution;
+    assert_eq!(
+        (got.revolution, got.revolutions),
+        (want.revolution, want.revolutions),
+        "revolution {at}"
+    );
+    assert!(
+        (got.speed_hz - want.speed_hz).abs() <= 1e-6 * want.speed_hz.abs(),
+        "revolution {at}: speed {} Hz vs {} Hz",
+        got.speed_hz,
+        want.speed_hz
+    );
+    assert_eq!(got.bearings.len(), want.bearings.len(), "revolution {at}");
+    for (g, w) in got.bearings.iter().zip(&want.bearings) {
+        assert_eq!(g.bearing, w.bearing, "revolution {at}");
+        let pairs = g.rel.iter().chain(&g.ped).zip(w.rel.iter().chain(&w.ped));
+        let scale = w
+            .rel
+            .iter()
+            .chain(&w.ped)
+            .map(|p| p.re.hypot(p.im))
+            .fold(0.0f32, f32::max);
+        for (a, b) in pairs {
+            let d = (a.re - b.re).hypot(a.im - b.im);
+            assert!(
+                d <= 1e-5 * scale,
+                "revolution {at}, bearing {}: phasor {a:?} vs {b:?}",
+                w.bearing
+            );
+        }
+    }
+}
 
 #[test]
 fn corrupted_frames_are_never_accepted_and_every_loss_is_counted() {
@@ -122,6 +175,53 @@ fn corrupted_frames_are_never_accepted_and_every_loss_is_counted() {
         );
     }
     assert!(report.batch_error.is_none(), "{:?}", report.batch_error);
+
+    // Go-back-N: every block reached the box's pipeline once and in order
+    // (lost ones resent, repeats acknowledged without processing), so the
+    // box sent exactly the fault-free run's phasor frames. (Frames lost on
+    // the way to the host are not resent: those are the counted losses.)
+    assert_eq!(
+        outcome.reconnects, 0,
+        "the replay restarted the box's pipeline: {outcome:?}"
+    );
+    let want = phasor_frames(&reference_bytes(&scenario));
+    let got = phasor_frames(&sent);
+    assert!(
+        want.len() > 20,
+        "{} phasor frames without faults",
+        want.len()
+    );
+    assert_eq!(
+        got.len(),
+        want.len(),
+        "phasor frames the box sent under faults vs without (resent blocks: {})",
+        outcome.resent_blocks
+    );
+    for (g, w) in got.iter().zip(&want) {
+        assert_same_phasors(g, w);
+    }
+    // And every phasor frame the host accepted is one of them.
+    let mut received = 0;
+    for (_, m) in frames_by_session(&raw).into_iter().flatten() {
+        if let DeviceMessage::Phasors(p) = m {
+            let w = want
+                .iter()
+                .find(|w| w.revolution == p.revolution)
+                .unwrap_or_else(|| {
+                    panic!("revolution {} is not in the fault-free run", p.revolution)
+                });
+            assert_same_phasors(&p, w);
+            received += 1;
+        }
+    }
+    assert!(received > 0 && received <= want.len());
+    println!(
+        "phasor frames: {} sent by the box, {} without faults, {} received; {} blocks resent",
+        got.len(),
+        want.len(),
+        received,
+        outcome.resent_blocks
+    );
 }
 
 /// Environment variable carrying the child host's arguments.

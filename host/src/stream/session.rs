@@ -16,15 +16,17 @@
 //!    resent chunk is refused as out of order). Then `Start`.
 //! 4. Replay (with `--replay`): sample blocks go out with at most `window`
 //!    unacknowledged (go-back-N). An `Ack` of a block acknowledges every block
-//!    before it (the box processes blocks in order). A `Nack(QueueFull)`, a
-//!    `Nack(BadBlock)` rewinds to the oldest unacknowledged block. When no
+//!    before it (the box takes blocks strictly in order: it refuses a block
+//!    after a missing one with `Nack(BadBlock)`, and acknowledges a block it
+//!    already processed again without processing it). A `Nack(QueueFull)`
+//!    or `Nack(BadBlock)` rewinds to the oldest unacknowledged block, once:
+//!    the refusals of the other blocks sent before that rewind are expected
+//!    and ignored. When no
 //!    block was acknowledged for `block_timeout`, a `Ping` tells a slow box
 //!    from a lost frame: its `Ack` comes after the answers to every block
 //!    sent before it, so a block still unacknowledged then was lost (or its
 //!    `Ack` was), and the replay rewinds; no answer to the `Ping` either
-//!    rewinds after twice `block_timeout`. A resent block the box had
-//!    already processed is a repeat for it (the firmware treats it as a
-//!    break in the time base and re-acquires the keyphasor). Without a replay the session receives for
+//!    rewinds after twice `block_timeout`. Without a replay the session receives for
 //!    `duration`.
 //! 5. `Stop`, then receive for `drain` so the last frames (the box's final
 //!    estimates and status) arrive; the box closing the line then (the QEMU
@@ -545,7 +547,9 @@ impl<'a> Session<'a> {
         let origin = self.journal.as_ref().map_or(0, |j| j.box_origin);
         let window = self.options.window.max(1);
         let mut next = self.acked_blocks;
-        let mut sent: HashMap<u32, usize> = HashMap::new();
+        // Block sends by sequence number: (block, rewind round it was sent in).
+        let mut sent: HashMap<u32, (usize, u32)> = HashMap::new();
+        let mut round = 0u32;
         let mut last_progress = Instant::now();
         // A Ping sent when acknowledgements are late: (its seq, when, blocks
         // sent before it). The box answers in order, so once its Ack is in,
@@ -558,7 +562,7 @@ impl<'a> Session<'a> {
                 let replay = self.replay.as_ref().ok_or_else(|| anyhow!("no replay"))?;
                 let block = replay.plan.block(replay.source, next, origin);
                 let seq = self.send(&HostMessage::Samples(block))?;
-                sent.insert(seq, next);
+                sent.insert(seq, (next, round));
                 next += 1;
             }
             self.pump()?;
@@ -575,7 +579,7 @@ impl<'a> Session<'a> {
                         continue;
                     }
                 }
-                let Some(&block) = sent.get(&seq) else {
+                let Some(&(block, sent_in)) = sent.get(&seq) else {
                     continue;
                 };
                 match reply {
@@ -590,8 +594,13 @@ impl<'a> Session<'a> {
                         }
                     }
                     Err(NackReason::WrongState) => return Err(anyhow::Error::new(NotRunning)),
+                    // Go-back-N: the box refused this block (a block before
+                    // it went missing, or its queue was full), so it refuses
+                    // every later one too; one rewind resends them all.
+                    // Refusals of sends from before the last rewind are of
+                    // blocks already sent again.
                     Err(NackReason::QueueFull) | Err(NackReason::BadBlock) => {
-                        if block >= self.acked_blocks {
+                        if block >= self.acked_blocks && sent_in == round {
                             rewind = true;
                         }
                     }
@@ -630,7 +639,8 @@ impl<'a> Session<'a> {
                 }
                 self.state.resent_blocks += (next - self.acked_blocks) as u64;
                 next = self.acked_blocks;
-                sent.retain(|_, b| *b >= self.acked_blocks);
+                round = round.wrapping_add(1);
+                sent.retain(|_, (b, _)| *b >= self.acked_blocks);
                 last_progress = Instant::now();
                 probe = None;
                 // Give a full queue time to drain.
@@ -639,7 +649,7 @@ impl<'a> Session<'a> {
                     self.pump()?;
                 }
             }
-            sent.retain(|_, b| *b >= self.acked_blocks.saturating_sub(window));
+            sent.retain(|_, (b, _)| *b >= self.acked_blocks.saturating_sub(window));
             self.state.replay = Some((self.acked_blocks as u64, total as u64));
             if let Some(j) = self.journal.as_mut() {
                 let replay = self.replay.as_ref().map(|r| &r.plan);
