@@ -49,7 +49,7 @@ pub struct ReplayCounters {
 
 /// Where a block's `first_sample` lies relative to the next expected sample.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Order {
+enum Position {
     /// Exactly the next block.
     Next,
     /// Wholly before it: already processed.
@@ -61,15 +61,15 @@ enum Order {
 /// Classifies a block of `k` sample vectors starting at `first` when `next`
 /// is the next expected sample index (indices wrap at 2^32: a block is
 /// "before" when it starts less than 2^31 samples back).
-fn order(first: u32, k: usize, next: u32) -> Order {
+fn position(first: u32, k: usize, next: u32) -> Position {
     if first == next {
-        return Order::Next;
+        return Position::Next;
     }
     let behind = next.wrapping_sub(first);
     if behind < 1 << 31 && u64::from(behind) >= k as u64 {
-        Order::Duplicate
+        Position::Duplicate
     } else {
-        Order::OutOfOrder
+        Position::OutOfOrder
     }
 }
 
@@ -125,13 +125,13 @@ impl SampleSource for ReplaySource {
         if n != layout.adc_channel.len() || k > self.pending.samples.capacity() {
             return Err(NackReason::BadBlock);
         }
-        match order(block.first_sample, k, self.next_sample) {
-            Order::Next => {}
-            Order::Duplicate => {
+        match position(block.first_sample, k, self.next_sample) {
+            Position::Next => {}
+            Position::Duplicate => {
                 self.counters.duplicates = self.counters.duplicates.saturating_add(1);
                 return Ok(());
             }
-            Order::OutOfOrder => {
+            Position::OutOfOrder => {
                 self.counters.out_of_order = self.counters.out_of_order.saturating_add(1);
                 return Err(NackReason::BadBlock);
             }
@@ -316,13 +316,16 @@ mod tests {
 
     #[test]
     fn sample_indices_wrap_at_two_to_the_32() {
-        assert_eq!(order(u32::MAX - 4, 10, u32::MAX - 4), Order::Next);
+        assert_eq!(position(u32::MAX - 4, 10, u32::MAX - 4), Position::Next);
         // 10 samples before 5 (across the wrap) is a duplicate.
-        assert_eq!(order(u32::MAX - 4, 10, 5), Order::Duplicate);
-        assert_eq!(order(u32::MAX - 3, 10, 5), Order::OutOfOrder);
-        assert_eq!(order(15, 10, 5), Order::OutOfOrder);
+        assert_eq!(position(u32::MAX - 4, 10, 5), Position::Duplicate);
+        assert_eq!(position(u32::MAX - 3, 10, 5), Position::OutOfOrder);
+        assert_eq!(position(15, 10, 5), Position::OutOfOrder);
         // Half the index range ahead is ahead, not behind.
-        assert_eq!(order(5u32.wrapping_add(1 << 31), 10, 5), Order::OutOfOrder);
+        assert_eq!(
+            position(5u32.wrapping_add(1 << 31), 10, 5),
+            Position::OutOfOrder
+        );
     }
 
     #[test]
