@@ -164,10 +164,8 @@ fn bad_configuration_values_are_refused_with_their_reason() {
     let HostMessage::ConfigureChannels(good) = scenario.configuration().remove(0) else {
         unreachable!()
     };
-    let cases: Vec<(
-        Box<dyn Fn(&mut plinth_shared::protocol::ChannelSet)>,
-        NackReason,
-    )> = vec![
+    type Mutation = Box<dyn Fn(&mut plinth_shared::protocol::ChannelSet)>;
+    let cases: Vec<(Mutation, NackReason)> = vec![
         (
             Box::new(|s| s.channels[1].channel = 8),
             NackReason::BadChannel,
@@ -296,14 +294,9 @@ fn replayed_run_down_gives_true_phasors_and_the_batch_estimate() {
     // same phasors (f32 on the box vs f64 SVD on the host).
     let batch = fit_pedestal("0", &points, &Options::default()).expect("batch fit");
     let batch = batch.params();
-    for i in 0..5 {
-        let rel = (f64::from(estimate.theta[i]) - batch[i]).abs() / batch[i].abs();
-        assert!(
-            rel < 2e-3,
-            "parameter {i}: box {} vs batch {}",
-            estimate.theta[i],
-            batch[i]
-        );
+    for (i, (&got, &want)) in estimate.theta.iter().zip(batch.iter()).enumerate() {
+        let rel = (f64::from(got) - want).abs() / want.abs();
+        assert!(rel < 2e-3, "parameter {i}: box {got} vs batch {want}");
     }
     eprintln!("box estimate {:?} ± {:?}", estimate.theta, estimate.std_err);
     eprintln!("batch        {batch:?}");
