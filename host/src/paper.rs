@@ -906,8 +906,15 @@ fn gap_caption(paper: &Paper) -> String {
     let bands = &paper.reprediction_gap.bands;
     if !bands.is_empty() {
         let share: f64 = bands.iter().map(|b| b.share).sum();
-        let at: Vec<String> = bands.iter().map(|b| format!("{}", b.speed_hz)).collect();
-        s += &format!(" ({:.0} % of it at {} Hz)", share * 100.0, at.join(", "));
+        let mut at: Vec<f64> = bands.iter().map(|b| b.speed_hz).collect();
+        at.sort_by(f64::total_cmp);
+        let at: Vec<String> = at.iter().map(|f| f.to_string()).collect();
+        // Floor: never print 100 % for 99.9 %.
+        s += &format!(
+            ", {:.0} % of it within {GAP_HALF_WIDTH_HZ} Hz of {} Hz",
+            (share * 100.0).floor(),
+            at.join(", ")
+        );
     }
     s
 }
