@@ -98,8 +98,20 @@ fn panel(title: &str, measured: &RunDir, truth: &RunDir, ped: bool) -> PhasorPan
     }
 }
 
+/// A phase lag [deg] moved into [−90, 270), the range where the 0° → 180°
+/// step of a pedestal resonance is continuous (a lag just over 180° would
+/// otherwise wrap to −180°).
+pub fn lag_for_plot(deg: f64) -> f64 {
+    if deg < -90.0 {
+        deg + 360.0
+    } else {
+        deg
+    }
+}
+
 /// Phase lag of each pedestal's response behind the force transmitted to it
-/// [deg] per (bearing, direction), forces from the run's bearing table.
+/// [deg] in [−90, 270) per (bearing, direction), forces from the run's
+/// bearing table.
 pub fn phase_differences(run: &RunDir) -> Result<Vec<(ChannelKey, SpeedDegrees)>> {
     let schedules = run.bearing_schedules();
     let mut by: BTreeMap<ChannelKey, SpeedDegrees> = BTreeMap::new();
@@ -114,7 +126,7 @@ pub fn phase_differences(run: &RunDir) -> Result<Vec<(ChannelKey, SpeedDegrees)>
         for (d, (x, fd)) in m.ped.iter().zip(f).enumerate() {
             by.entry((m.bearing.clone(), d))
                 .or_default()
-                .push((m.speed_hz, phase_lag_deg(*x, fd)));
+                .push((m.speed_hz, lag_for_plot(phase_lag_deg(*x, fd))));
         }
     }
     Ok(by
