@@ -1,0 +1,99 @@
+//! `plinth demo --qemu`: the same chain with the real firmware image under
+//! QEMU (netduinoplus2) on a pseudo-terminal, on a very short run-down
+//! (62 → 56 Hz at 35 Hz/s: 0.17 s of signals, 10 revolutions, one phasor
+//! each; QEMU runs the firmware ~100× slower than real time, so this takes
+//! about 20-30 s). It checks the demo's QEMU plumbing (image, QEMU start,
+//! pty, stream, run directory, fit, figures) and that the MCU's recursive
+//! estimates equal the batch fit; the bit-level comparison with the host-only
+//! pipeline is tests/tests/qemu_stream.rs.
+//!
+//! Needs `qemu-system-arm` and the image, as qemu_stream.rs (scripts/test.sh
+//! provides both; the image is built here when missing).
+
+use plinth::demo::{demo, BoxTarget, DemoOptions};
+use plinth::sim::signals::RunDown;
+use std::path::PathBuf;
+use std::process::Command;
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+
+/// The workspace's target directory (this test runs from target/<profile>/deps).
+fn target_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    exe.ancestors()
+        .nth(3)
+        .expect("target directory above target/<profile>/deps")
+        .to_path_buf()
+}
+
+/// The image scripts/test.sh built, or one built now in the directory
+/// qemu_stream.rs uses.
+fn firmware_image() -> PathBuf {
+    let standard = target_dir().join(TARGET).join("release/plinth-firmware");
+    if standard.is_file() {
+        return standard;
+    }
+    let own = target_dir().join("qemu-image");
+    let image = own.join(TARGET).join("release/plinth-firmware");
+    let status = Command::new(env!("CARGO"))
+        .args([
+            "build",
+            "-p",
+            "plinth-firmware",
+            "--target",
+            TARGET,
+            "--release",
+        ])
+        .arg("--target-dir")
+        .arg(&own)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .status()
+        .expect("running cargo to build the firmware image");
+    assert!(status.success(), "building the firmware image failed");
+    image
+}
+
+#[test]
+fn qemu_demo_runs_the_real_image() {
+    let image = firmware_image();
+    let dir = tempfile::tempdir().unwrap();
+    let mut opts = DemoOptions::bundled(dir.path().join("demo")).unwrap();
+    opts.target = BoxTarget::Qemu(image);
+    opts.rundown = RunDown {
+        start_hz: 62.0,
+        end_hz: 56.0,
+        rate_hz_per_s: 35.0,
+    };
+    opts.averaging = 1;
+    let o = demo(&opts).expect("the QEMU demo runs");
+    print!("{}", plinth::demo::summary(&o));
+    let l = &o.stream.link_raw_log;
+    assert_eq!(
+        (l.sequence_gaps, l.crc_failures, l.cobs_failures),
+        (0, 0, 0)
+    );
+    let (done, total) = o.stream.replay_blocks.expect("replay counters");
+    assert_eq!(done, total);
+    assert!(
+        o.report.phasor_frames >= 6,
+        "{} phasors",
+        o.report.phasor_frames
+    );
+    // The MCU's f32 RLS and the host's f64 batch fit of the same rows.
+    for row in &o.report.table {
+        if matches!(row.parameter.as_str(), "k_y" | "k_z" | "m") {
+            let d = row.box_minus_batch_pct.expect("box and batch values");
+            assert!(
+                d.abs() < 0.1,
+                "{} {}: box − batch {d} %",
+                row.bearing,
+                row.parameter
+            );
+        }
+    }
+    for stem in ["amplitudes", "phases", "phase_difference"] {
+        assert!(o.figures_dir.join(format!("{stem}.png")).is_file());
+        assert!(o.figures_dir.join(format!("{stem}.svg")).is_file());
+    }
+    assert!(o.run_dir.join("measurements.csv").is_file());
+}
