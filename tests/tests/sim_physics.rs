@@ -281,9 +281,9 @@ fn foundation_coupling_solution_satisfies_the_full_system() {
     let mut band = asm.new_matrix();
     asm.fill(&mut band, 2.0 * PI * hz, &coefs);
     let mut ax = vec![C::new(0.0, 0.0); n];
-    for r in 0..n {
-        for c in 0..n {
-            ax[r] += band.get(r, c) * x[c];
+    for (r, axr) in ax.iter_mut().enumerate() {
+        for (c, xc) in x.iter().enumerate() {
+            *axr += band.get(r, c) * *xc;
         }
     }
     for s in &asm.couplings {
