@@ -36,3 +36,44 @@ pub fn paper_like_run(speeds: usize, damping_factor: f64, digits: Option<u32>) -
 pub fn rel_err(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
+
+/// The MCU target the firmware image is built for.
+pub const FIRMWARE_TARGET: &str = "thumbv7em-none-eabihf";
+
+/// The workspace's target directory (integration tests run from
+/// `target/<profile>/deps`).
+pub fn target_dir() -> std::path::PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    exe.ancestors()
+        .nth(3)
+        .expect("target directory above target/<profile>/deps")
+        .to_path_buf()
+}
+
+/// The firmware image for the QEMU tests: the one scripts/test.sh built, or
+/// one built now in a separate target directory (so as not to wait on this
+/// build's lock).
+pub fn firmware_image() -> std::path::PathBuf {
+    let release = format!("{FIRMWARE_TARGET}/release/plinth-firmware");
+    let standard = target_dir().join(&release);
+    if standard.is_file() {
+        return standard;
+    }
+    let own = target_dir().join("qemu-image");
+    let status = std::process::Command::new(env!("CARGO"))
+        .args([
+            "build",
+            "-p",
+            "plinth-firmware",
+            "--target",
+            FIRMWARE_TARGET,
+            "--release",
+        ])
+        .arg("--target-dir")
+        .arg(&own)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .status()
+        .expect("running cargo to build the firmware image");
+    assert!(status.success(), "building the firmware image failed");
+    own.join(release)
+}

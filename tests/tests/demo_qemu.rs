@@ -12,46 +12,7 @@
 
 use plinth::demo::{demo, BoxTarget, DemoOptions};
 use plinth::sim::signals::RunDown;
-use std::path::PathBuf;
-use std::process::Command;
-
-const TARGET: &str = "thumbv7em-none-eabihf";
-
-/// The workspace's target directory (this test runs from target/<profile>/deps).
-fn target_dir() -> PathBuf {
-    let exe = std::env::current_exe().expect("test executable path");
-    exe.ancestors()
-        .nth(3)
-        .expect("target directory above target/<profile>/deps")
-        .to_path_buf()
-}
-
-/// The image scripts/test.sh built, or one built now in the directory
-/// qemu_stream.rs uses.
-fn firmware_image() -> PathBuf {
-    let standard = target_dir().join(TARGET).join("release/plinth-firmware");
-    if standard.is_file() {
-        return standard;
-    }
-    let own = target_dir().join("qemu-image");
-    let image = own.join(TARGET).join("release/plinth-firmware");
-    let status = Command::new(env!("CARGO"))
-        .args([
-            "build",
-            "-p",
-            "plinth-firmware",
-            "--target",
-            TARGET,
-            "--release",
-        ])
-        .arg("--target-dir")
-        .arg(&own)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .status()
-        .expect("running cargo to build the firmware image");
-    assert!(status.success(), "building the firmware image failed");
-    image
-}
+use plinth_tests::firmware_image;
 
 #[test]
 fn qemu_demo_runs_the_real_image() {

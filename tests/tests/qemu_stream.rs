@@ -11,129 +11,15 @@
 
 mod stream_common;
 
+use plinth::demo::qemu::Qemu;
 use plinth::stream::derive::derive;
 use plinth::stream::port::SerialConnector;
 use plinth::stream::progress::Progress;
 use plinth::stream::session::SessionOptions;
-use std::io::{BufRead, BufReader};
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use plinth_tests::firmware_image;
 use std::sync::mpsc;
 use std::time::Duration;
 use stream_common::{measurements, reference_bytes, Scenario};
-
-const TARGET: &str = "thumbv7em-none-eabihf";
-
-/// QEMU, killed when dropped.
-struct Qemu {
-    child: Child,
-    /// The pseudo-terminal QEMU connected the box's USART to.
-    pty: String,
-}
-
-impl Drop for Qemu {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// The workspace's target directory (this test runs from target/<profile>/deps).
-fn target_dir() -> PathBuf {
-    let exe = std::env::current_exe().expect("test executable path");
-    exe.ancestors()
-        .nth(3)
-        .expect("target directory above target/<profile>/deps")
-        .to_path_buf()
-}
-
-/// The firmware image: the one scripts/test.sh built, or one built now in a
-/// separate target directory (so as not to wait on this build's lock).
-fn firmware_image() -> PathBuf {
-    let standard = target_dir().join(TARGET).join("release/plinth-firmware");
-    if standard.is_file() {
-        return standard;
-    }
-    let own = target_dir().join("qemu-image");
-    let status = Command::new(env!("CARGO"))
-        .args([
-            "build",
-            "-p",
-            "plinth-firmware",
-            "--target",
-            TARGET,
-            "--release",
-        ])
-        .arg("--target-dir")
-        .arg(&own)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .status()
-        .expect("running cargo to build the firmware image");
-    assert!(status.success(), "building the firmware image failed");
-    own.join(TARGET).join("release/plinth-firmware")
-}
-
-fn start_qemu(image: &PathBuf) -> Qemu {
-    let mut child = Command::new("qemu-system-arm")
-        .args([
-            "-M",
-            "netduinoplus2",
-            "-display",
-            "none",
-            "-monitor",
-            "none",
-            "-serial",
-            "pty",
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-kernel",
-        ])
-        .arg(image)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("starting qemu-system-arm (scripts/test.sh installs it)");
-    let (tx, rx) = mpsc::channel::<String>();
-    for pipe in [
-        child
-            .stdout
-            .take()
-            .map(|p| Box::new(p) as Box<dyn std::io::Read + Send>),
-        child
-            .stderr
-            .take()
-            .map(|p| Box::new(p) as Box<dyn std::io::Read + Send>),
-    ]
-    .into_iter()
-    .flatten()
-    {
-        let tx = tx.clone();
-        std::thread::spawn(move || {
-            for line in BufReader::new(pipe).lines().map_while(Result::ok) {
-                let _ = tx.send(line);
-            }
-        });
-    }
-    let mut qemu = Qemu {
-        child,
-        pty: String::new(),
-    };
-    loop {
-        match rx.recv_timeout(Duration::from_secs(20)) {
-            Ok(line) => {
-                if let Some(rest) = line.split("char device redirected to ").nth(1) {
-                    qemu.pty = rest.split_whitespace().next().unwrap_or("").to_string();
-                    break;
-                }
-            }
-            Err(e) => panic!("QEMU did not print its pseudo-terminal: {e}"),
-        }
-    }
-    // Keep draining QEMU's output (semihosting log) so it never blocks.
-    std::thread::spawn(move || for _ in rx {});
-    qemu
-}
 
 #[test]
 fn qemu_firmware_matches_the_host_only_pipeline() {
@@ -146,7 +32,7 @@ fn qemu_firmware_matches_the_host_only_pipeline() {
         &scenario.config,
         &scenario.tables,
     );
-    let qemu = start_qemu(&image);
+    let qemu = Qemu::start(&image).expect("starting qemu-system-arm (scripts/test.sh installs it)");
     let out = scenario.out_dir("qemu");
     std::fs::create_dir_all(&out).unwrap();
 
