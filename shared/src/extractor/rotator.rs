@@ -27,15 +27,42 @@ pub fn expi_neg_small(x: f32) -> Complex<f32> {
     Complex::new(cos, -sin)
 }
 
-/// e^{−ix} for any finite x [rad]: the Taylor series when |x| ≤ 0.2,
-/// `libm::sincosf` otherwise (once-per-revolution use only).
+/// e^{−ix} for finite x [rad] with |x| ≤ 1e4 (once-per-revolution use
+/// only): the Taylor series when |x| ≤ 0.2, otherwise reduced to the nearest
+/// quadrant, x = k·π/2 + r with |r| ≤ π/4 (Cody–Waite: π/2 in three parts,
+/// k·C₁ exact), and the series to r¹³ rotated by (−i)ᵏ; error ≲ 2e-7.
+/// libm's `sincosf` would do as well but links its f64 reduction for
+/// arguments up to 1e38 (3.4 KiB of flash with the soft-float it needs),
+/// which angles bounded by a revolution never use.
 #[inline]
 pub fn expi_neg(x: f32) -> Complex<f32> {
     if libm::fabsf(x) <= 0.2 {
-        expi_neg_small(x)
-    } else {
-        let (sin, cos) = libm::sincosf(x);
-        Complex::new(cos, -sin)
+        return expi_neg_small(x);
+    }
+    const C1: f32 = 1.570_312_5;
+    const C2: f32 = 4.837_513e-4;
+    const C3: f32 = 7.549_79e-8;
+    let k = libm::roundf(x * core::f32::consts::FRAC_2_PI);
+    let r = ((x - k * C1) - k * C2) - k * C3;
+    let r2 = r * r;
+    let cos = 1.0
+        - r2 * (0.5
+            - r2 * (1.0 / 24.0
+                - r2 * (1.0 / 720.0
+                    - r2 * (1.0 / 40_320.0 - r2 * (1.0 / 3_628_800.0 - r2 / 479_001_600.0)))));
+    let sin = r
+        * (1.0
+            - r2 * (1.0 / 6.0
+                - r2 * (1.0 / 120.0
+                    - r2 * (1.0 / 5_040.0
+                        - r2 * (1.0 / 362_880.0
+                            - r2 * (1.0 / 39_916_800.0 - r2 / 6_227_020_800.0))))));
+    // e^{−ir}·(−i)ᵏ; NaN or infinite x gives a NaN k and phasor.
+    match (k as i32) & 3 {
+        0 => Complex::new(cos, -sin),
+        1 => Complex::new(-sin, -cos),
+        2 => Complex::new(-cos, sin),
+        _ => Complex::new(sin, cos),
     }
 }
 
@@ -108,6 +135,23 @@ impl Rotator {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn reduced_series_matches_sincos_over_many_turns() {
+        let mut worst = 0.0f64;
+        for k in -2_000_000..=2_000_000 {
+            let x = k as f32 * 5e-3; // ±10⁴ rad, every quadrant
+            let e = expi_neg(x);
+            let want = (x as f64).cos();
+            let err = (e.re as f64 - want)
+                .abs()
+                .max((e.im as f64 + (x as f64).sin()).abs());
+            worst = worst.max(err / (1.0 + (x as f64).abs() * 1e-4));
+        }
+        assert!(worst < 3e-7, "worst {worst:e}");
+        assert!(expi_neg(f32::NAN).re.is_nan());
+        assert!(expi_neg(f32::INFINITY).im.is_nan());
+    }
 
     #[test]
     fn taylor_matches_sincos() {
