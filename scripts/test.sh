@@ -29,7 +29,9 @@ cargo clippy -p plinth-shared -p plinth-firmware --target thumbv7em-none-eabihf 
 
 step "cross-build: plinth-shared and the firmware image for thumbv7em-none-eabihf"
 cargo build -p plinth-shared --target thumbv7em-none-eabihf --release
-cargo build -p plinth-firmware --target thumbv7em-none-eabihf --release
+# (into the directory the QEMU tests build their image in, so theirs is a no-op)
+cargo build -p plinth-firmware --target thumbv7em-none-eabihf --release \
+  --target-dir "${CARGO_TARGET_DIR:-target}/qemu-image"
 
 step "tests (host, simulated hardware, QEMU end to end)"
 cargo test --workspace --release

@@ -50,30 +50,39 @@ pub fn target_dir() -> std::path::PathBuf {
         .to_path_buf()
 }
 
-/// The firmware image for the QEMU tests: the one scripts/test.sh built, or
-/// one built now in a separate target directory (so as not to wait on this
-/// build's lock).
+/// The firmware image for the QEMU tests: `PLINTH_FIRMWARE_ELF` if set,
+/// otherwise the current sources built now (incrementally: a no-op when
+/// scripts/test.sh already built them) in `<target>/qemu-image`, a
+/// directory of its own so as not to wait on the lock of the build running
+/// the tests. Never an image left over from older sources.
 pub fn firmware_image() -> std::path::PathBuf {
-    let release = format!("{FIRMWARE_TARGET}/release/plinth-firmware");
-    let standard = target_dir().join(&release);
-    if standard.is_file() {
-        return standard;
+    if let Some(p) = std::env::var_os("PLINTH_FIRMWARE_ELF") {
+        return p.into();
     }
-    let own = target_dir().join("qemu-image");
-    let status = std::process::Command::new(env!("CARGO"))
-        .args([
-            "build",
-            "-p",
-            "plinth-firmware",
-            "--target",
-            FIRMWARE_TARGET,
-            "--release",
-        ])
-        .arg("--target-dir")
-        .arg(&own)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .status()
-        .expect("running cargo to build the firmware image");
-    assert!(status.success(), "building the firmware image failed");
-    own.join(release)
+    static BUILT: std::sync::OnceLock<std::path::PathBuf> = std::sync::OnceLock::new();
+    BUILT
+        .get_or_init(|| {
+            let own = target_dir().join("qemu-image");
+            let status = std::process::Command::new(env!("CARGO"))
+                .args([
+                    "build",
+                    "-p",
+                    "plinth-firmware",
+                    "--bin",
+                    "plinth-firmware",
+                    "--target",
+                    FIRMWARE_TARGET,
+                    "--release",
+                ])
+                .arg("--target-dir")
+                .arg(&own)
+                .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+                .status()
+                .expect("running cargo to build the firmware image");
+            assert!(status.success(), "building the firmware image failed");
+            own.join(FIRMWARE_TARGET)
+                .join("release")
+                .join("plinth-firmware")
+        })
+        .clone()
 }

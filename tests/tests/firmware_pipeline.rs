@@ -249,16 +249,17 @@ fn replayed_run_down_gives_true_phasors_and_the_batch_estimate() {
         .expect("a status frame after Stop");
 
     // 60 → 25 Hz over 2.5 s is ≈ 106 revolutions; the extractor needs
-    // three edges to lock and holds one back.
+    // three edges to lock and holds two back.
     assert!(frames.len() >= 95, "{} phasor frames", frames.len());
     assert_eq!(status.counters.keyphasor_missing, 0);
     assert_eq!(status.counters.keyphasor_extra, 0);
     assert_eq!(status.counters.queue_full_drops, 0);
     assert_eq!(status.counters.overruns, 0);
 
-    // Phasors against the exact angle-domain Fourier coefficients of each
-    // revolution (f64 quadrature of the noiseless signal): what is left is
-    // ADC quantization and f32 rounding.
+    // Phasors against the response at each revolution's speed (the run-down
+    // crosses the pedestal resonances at 14 Hz/s, 0.3 Hz per revolution):
+    // what is left is ADC quantisation (~1e-3 of the smallest phasors) and
+    // the run-down correction's remainder.
     let mut worst = 0.0f64;
     let mut points = Vec::new();
     for f in &frames {

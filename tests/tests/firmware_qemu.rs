@@ -18,15 +18,9 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The firmware image built by `cargo build --release` for the MCU.
+/// The firmware image of the current sources.
 fn image() -> PathBuf {
-    if let Some(p) = std::env::var_os("PLINTH_FIRMWARE_ELF") {
-        return PathBuf::from(p);
-    }
-    let target = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target"));
-    target.join("thumbv7em-none-eabihf/release/plinth-firmware")
+    plinth_tests::firmware_image()
 }
 
 /// QEMU, killed if the test ends early.

@@ -37,13 +37,15 @@ pub struct Scenario {
 
 impl Scenario {
     /// Two pedestal resonances (≈ 36.8 and 31.8 Hz) inside a 60 → 25 Hz
-    /// run-down at −14 Hz/s, damping ratio ≈ 2-3 %.
+    /// run-down at −14 Hz/s, damping ratio ≈ 8 % (so that a run-down this
+    /// fast, 0.4 Hz per revolution, still sees the steady-state response:
+    /// at ζ = 2 % the phasor would change by half within a revolution).
     pub fn standard() -> Self {
         let mut bearing = BearingCoefficients::isotropic(1.0e7, 2.0e3);
         bearing.k[0][1] = 1.5e6;
         bearing.k[1][0] = -1.5e6;
         Self {
-            pedestal: [8.0e6, 6.0e6, 150.0, 2000.0, 1500.0],
+            pedestal: [8.0e6, 6.0e6, 150.0, 5500.0, 4800.0],
             bearing,
             speed_start_hz: 60.0,
             speed_end_hz: 25.0,
@@ -142,35 +144,16 @@ impl Scenario {
         ]
     }
 
-    /// The angle-domain 1X phasors (rel y, rel z, ped y, ped z) [m] of
-    /// revolution `r` (between keyphasor edges r and r + 1 of
-    /// [`Scenario::keyphasor_times`], 0-based), computed the way the
-    /// extractor defines them, Q = (1/π)∫₀^{2π} x(θ)·e^{−iθ} dθ, by Simpson's
-    /// rule in f64 on the noiseless signal; and the revolution's mean speed
-    /// [Hz].
+    /// The true 1X phasors (rel y, rel z, ped y, ped z) [m] of revolution
+    /// `r` (between keyphasor edges r and r + 1 of
+    /// [`Scenario::keyphasor_times`], 0-based): the steady-state response at
+    /// the revolution's mean speed [Hz], which is returned with them.
     pub fn revolution_phasors(&self, r: usize) -> Option<([Complex<f64>; 4], f64)> {
         let kt = self.keyphasor_times();
         let (t0, t1) = (*kt.get(r)?, *kt.get(r + 1)?);
-        let n = 4000;
-        let h = (t1 - t0) / n as f64;
-        let mut q = [Complex::new(0.0, 0.0); 4];
-        for j in 0..=n {
-            let t = t0 + j as f64 * h;
-            let w = if j == 0 || j == n {
-                1.0
-            } else if j % 2 == 1 {
-                4.0
-            } else {
-                2.0
-            };
-            let rate = TAU * self.speed_hz(t); // dθ/dt
-            let e = Complex::from_polar(1.0, -self.angle(t));
-            for (qc, v) in q.iter_mut().zip(self.volts(t)) {
-                *qc += e * (w * v / PROBE_V_PER_M * rate);
-            }
-        }
-        let scale = h / 3.0 / std::f64::consts::PI;
-        Some((q.map(|c| c * scale), 1.0 / (t1 - t0)))
+        let speed = 1.0 / (t1 - t0);
+        let (rel, ped) = (self.rel(speed), self.ped(speed));
+        Some(([rel[0], rel[1], ped[0], ped[1]], speed))
     }
 
     /// The whole run as replay blocks of raw ADC codes (4 channels, 24
