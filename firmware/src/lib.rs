@@ -7,7 +7,8 @@
 //! - [`source`]: the [`source::SampleSource`] trait; [`replay`] (host-fed
 //!   blocks, used under QEMU) and [`adc_source`] (the [`ad7606`] ADC with
 //!   keyphasor capture) implement it.
-//! - [`link`], [`watchdog`], [`uptime`]: the loop's I/O, feed hook and clock.
+//! - [`link`], [`watchdog`], [`uptime`]: the loop's I/O, feed hook and time.
+//! - [`clock`]: the STM32F4 clock tree the box programs (PLL to 168 MHz).
 //! - `stm32` (MCU only): the one module with register access.
 #![no_std]
 #![deny(unsafe_code)]
@@ -15,6 +16,7 @@
 
 pub mod ad7606;
 pub mod adc_source;
+pub mod clock;
 pub mod config;
 pub mod device;
 pub mod link;

@@ -31,14 +31,13 @@ mod image {
     use plinth_firmware::ad7606::Range;
     use plinth_firmware::device::Device;
     use plinth_firmware::replay::ReplaySource;
-    use plinth_firmware::stm32::{Iwdg, Usart1};
+    use plinth_firmware::stm32::{configure_clocks, Iwdg, Usart1};
     use plinth_firmware::uptime::Uptime;
     use plinth_firmware::watchdog::Watchdog;
 
-    /// APB2 clock after reset (HSI) [Hz]: the USART1 baud rate base.
-    const PCLK2_HZ: u32 = 16_000_000;
-    /// Core clock that SysTick counts [Hz] (QEMU's netduinoplus2 model).
-    const CORE_HZ: u32 = 168_000_000;
+    /// The board's crystal [Hz] (8 MHz, as on most STM32F4 boards; `None`
+    /// for a board without one: the PLL then runs from the HSI).
+    const HSE_HZ: Option<u32> = Some(8_000_000);
     /// Host link speed [bit/s].
     const BAUD: u32 = 115_200;
     /// Watchdog timeout [ms]: far above one bounded main-loop pass.
@@ -72,9 +71,10 @@ mod image {
             // main, which nothing does.
             cortex_m::asm::udf()
         };
-        let mut link = Usart1::init(PCLK2_HZ, BAUD);
+        let clocks = configure_clocks(HSE_HZ);
+        let mut link = Usart1::init(clocks.pclk2_hz, BAUD);
         let mut watchdog = Iwdg::start(WATCHDOG_MS);
-        let mut uptime = Uptime::new(cp.SYST, CORE_HZ);
+        let mut uptime = Uptime::new(cp.SYST, clocks.sysclk_hz);
         // Statics (counted by `size`), not stack: the device is ~20 KiB.
         let device =
             cortex_m::singleton!(: Device = Device::new(Range::PlusMinus10V.volts_per_code()));
@@ -82,7 +82,11 @@ mod image {
         let (Some(device), Some(source)) = (device, source) else {
             cortex_m::asm::udf()
         };
-        defmt::info!("plinth-firmware {=str} up", env!("CARGO_PKG_VERSION"));
+        defmt::info!(
+            "plinth-firmware {=str} up, clocks {}",
+            env!("CARGO_PKG_VERSION"),
+            clocks
+        );
         let mut stopping = false;
         loop {
             watchdog.feed();

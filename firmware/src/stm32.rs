@@ -1,13 +1,17 @@
-//! STM32F4 registers the image touches: the USART1 host link with the
-//! clocks and pins it needs, and the independent watchdog. This is the one module with `unsafe`: every
-//! access is a volatile read or write of a documented memory-mapped register.
+//! STM32F4 registers the image touches: the clock tree (PLL to 168 MHz),
+//! the USART1 host link with the clocks and pins it needs, and the
+//! independent watchdog. This is the one module with `unsafe`: every access
+//! is a volatile read or write of a documented memory-mapped register.
 //!
 //! The same code runs on an STM32F405/407 board and under
 //! `qemu-system-arm -M netduinoplus2`, whose first serial port is USART1 at
-//! 0x4001_1000. QEMU does not model RCC or GPIO (writes are ignored), so the
-//! driver never waits on a clock or pin status bit.
+//! 0x4001_1000. QEMU does not model RCC or GPIO (reads give 0, writes are
+//! ignored): the clock set-up recognises that (RCC_CR reads 0, which real
+//! silicon never does: HSI on and ready after reset) and every wait on a
+//! status bit is bounded.
 #![allow(unsafe_code)]
 
+use crate::clock::{self, Clocks};
 use crate::link::ByteLink;
 use crate::watchdog::Watchdog;
 
@@ -66,6 +70,25 @@ fn set_bits(addr: usize, mask: u32, value: u32) {
     write(addr, (read(addr) & !mask) | value);
 }
 
+/// The memory-mapped registers themselves, for [`clock::configure`].
+#[derive(Debug)]
+pub struct Mmio;
+
+impl clock::Registers for Mmio {
+    fn read(&mut self, addr: usize) -> u32 {
+        read(addr)
+    }
+    fn write(&mut self, addr: usize, value: u32) {
+        write(addr, value)
+    }
+}
+
+/// [`clock::configure`] on the real registers: call once, first thing in
+/// `main`.
+pub fn configure_clocks(hse_hz: Option<u32>) -> Clocks {
+    clock::configure(&mut Mmio, hse_hz)
+}
+
 /// USART1 on PA9 (TX) / PA10 (RX), 8N1, polled.
 #[derive(Debug)]
 pub struct Usart1 {
@@ -74,7 +97,7 @@ pub struct Usart1 {
 
 impl Usart1 {
     /// Enables the clocks and pins and starts USART1 at `baud` [bit/s] from
-    /// the APB2 clock `pclk2_hz` [Hz] (16 MHz HSI after reset).
+    /// the APB2 clock `pclk2_hz` [Hz] ([`Clocks::pclk2_hz`]).
     ///
     /// Only call this once: the returned value owns the peripheral.
     pub fn init(pclk2_hz: u32, baud: u32) -> Self {
@@ -83,9 +106,7 @@ impl Usart1 {
         // PA9, PA10: alternate function 7 (USART1).
         set_bits(GPIOA_MODER, 0b1111 << 18, 0b1010 << 18);
         set_bits(GPIOA_AFRH, 0xFF << 4, 0x77 << 4);
-        // Oversampling by 16: BRR = fCK / baud, rounded (mantissa.fraction).
-        let brr = (pclk2_hz + baud / 2) / baud.max(1);
-        write(USART1 + BRR, brr & 0xFFFF);
+        write(USART1 + BRR, clock::usart_brr(pclk2_hz, baud));
         write(USART1 + CR1, CR1_UE | CR1_TE | CR1_RE);
         Self { receive_errors: 0 }
     }
