@@ -31,7 +31,7 @@ use crate::pipeline::Pipeline;
 use crate::source::{SampleBuffer, SampleSource, CHANNELS};
 use plinth_shared::protocol::{
     Ack, Capabilities, DeviceCounters, DeviceMessage, DeviceState, FirmwareVersion, HelloAck,
-    HostMessage, Nack, NackReason, Receiver, StatusFrame, Transmitter, VersionMismatch,
+    HostMessage, LinkStats, Nack, NackReason, Receiver, StatusFrame, Transmitter, VersionMismatch,
     MAX_BEARINGS, MAX_FRAME_SIZE, PROTOCOL_VERSION,
 };
 
@@ -130,6 +130,11 @@ impl Device {
             p.counters.fold_into(&mut c);
         }
         c
+    }
+
+    /// What the box's receiver counted on the host link this session.
+    pub fn link_stats(&self) -> LinkStats {
+        *self.rx.stats()
     }
 
     /// The session's configuration.

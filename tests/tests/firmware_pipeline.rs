@@ -113,6 +113,42 @@ fn nack_reason(got: &[DeviceMessage], seq: u32) -> Option<NackReason> {
 }
 
 #[test]
+fn a_hello_sent_again_after_its_answer_was_lost_opens_the_session() {
+    let mut b = Bench::new();
+    // Hello 1 reaches the box; its HelloAck is lost on the way back.
+    let (_, hello1) = b
+        .client
+        .encode(&HostMessage::Hello(plinth_shared::protocol::Hello {
+            protocol_version: plinth_shared::protocol::PROTOCOL_VERSION,
+            host_nonce: 1,
+        }));
+    b.link.rx.extend(&hello1);
+    b.device.poll(&mut b.link, &mut b.source, 0);
+    b.device.poll(&mut b.link, &mut b.source, 0);
+    assert!(!b.link.tx.is_empty(), "the box answered");
+    b.link.tx.clear();
+    assert_eq!(b.device.state(), DeviceState::Idle);
+    // The host sends Hello again, frame 0 again, with a fresh nonce: the box
+    // must take it as a new session, not as a repeated frame 0.
+    let (seq, hello2) = b.client.hello(2);
+    assert_eq!(seq, 0);
+    let got = b.send_bytes(&hello2);
+    assert!(
+        matches!(got.as_slice(), [DeviceMessage::HelloAck(a)] if a.host_nonce == 2),
+        "{got:?}"
+    );
+    // The same frame repeated by the line is dropped (and counted).
+    let got = b.send_bytes(&hello2);
+    assert!(got.is_empty(), "{got:?}");
+    assert_eq!(b.device.link_stats().duplicates, 1);
+    // The session works.
+    let scenario = Scenario::standard();
+    for m in scenario.configuration() {
+        b.command(&m);
+    }
+}
+
+#[test]
 fn commands_before_hello_and_in_the_wrong_state_are_refused() {
     let mut b = Bench::new();
     let (seq, got) = b.send(&HostMessage::Start);

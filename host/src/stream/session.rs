@@ -395,11 +395,16 @@ impl<'a> Session<'a> {
     }
 
     fn handshake(&mut self) -> Result<HelloAck> {
-        let nonce: u32 = rand::random();
         let deadline = Instant::now() + self.options.handshake_timeout;
         self.hellos.clear();
+        // Nonces of this handshake's Hellos: any of them may be answered.
+        let mut nonces: Vec<u32> = Vec::new();
         loop {
-            // Every Hello opens a new session: it is sequence number 0.
+            // Every Hello opens a new session: it is sequence number 0, with
+            // a fresh nonce so that the box does not take a repeat for a
+            // duplicated frame.
+            let nonce: u32 = rand::random();
+            nonces.push(nonce);
             self.tx.restart();
             self.send(&HostMessage::Hello(Hello {
                 protocol_version: PROTOCOL_VERSION,
@@ -410,7 +415,7 @@ impl<'a> Session<'a> {
                 self.pump()?;
                 while let Some(m) = self.hellos.pop_front() {
                     match m {
-                        DeviceMessage::HelloAck(ack) if ack.host_nonce == nonce => {
+                        DeviceMessage::HelloAck(ack) if nonces.contains(&ack.host_nonce) => {
                             if ack.protocol_version != PROTOCOL_VERSION {
                                 bail!(
                                     "the box acknowledged Hello with protocol version {} but this host speaks {}",
@@ -435,7 +440,7 @@ impl<'a> Session<'a> {
                             self.replies.clear();
                             return Ok(ack);
                         }
-                        DeviceMessage::VersionMismatch(m) if m.host_nonce == nonce => {
+                        DeviceMessage::VersionMismatch(m) if nonces.contains(&m.host_nonce) => {
                             bail!(
                                 "the box speaks protocol version {} and this host {}: update one of them",
                                 m.device_protocol_version,

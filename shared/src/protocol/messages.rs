@@ -25,7 +25,10 @@
 //! Sequence numbers restart with the session: the host restarts its
 //! [`Transmitter`](super::Transmitter) before each `Hello` (so `Hello` is frame
 //! 0) and the box restarts its own on accepting a `Hello` (so `HelloAck` is
-//! frame 0). A receiver takes frame 0 as a restart, not as a loss.
+//! frame 0). A receiver takes frame 0 as a restart, not as a loss. A
+//! `Hello` sent again because no answer came carries a fresh nonce, so the
+//! box takes it (and its answer the host) as a new session rather than as a
+//! repeated frame 0 (see [`sequence`](super::sequence), rule 2).
 
 use crate::bearing::BearingCoefficients;
 use crate::phasor::Complex;
@@ -121,6 +124,25 @@ pub enum DeviceMessage {
     Estimates(EstimateFrame),
     /// Health counters and state.
     Status(StatusFrame),
+}
+
+impl super::SessionOpener for HostMessage {
+    fn session_nonce(&self) -> Option<u32> {
+        match self {
+            HostMessage::Hello(h) => Some(h.host_nonce),
+            _ => None,
+        }
+    }
+}
+
+impl super::SessionOpener for DeviceMessage {
+    fn session_nonce(&self) -> Option<u32> {
+        match self {
+            DeviceMessage::HelloAck(a) => Some(a.host_nonce),
+            DeviceMessage::VersionMismatch(m) => Some(m.host_nonce),
+            _ => None,
+        }
+    }
 }
 
 /// Host → box: opens a session.

@@ -67,4 +67,6 @@ pub use framing::{
 };
 pub use messages::*;
 pub use receiver::{Event, Events, LinkStats, Received, Receiver};
-pub use sequence::{SequenceCounter, SequenceTracker, SequenceVerdict, DUPLICATE_WINDOW};
+pub use sequence::{
+    SequenceCounter, SequenceTracker, SequenceVerdict, SessionOpener, DUPLICATE_WINDOW,
+};

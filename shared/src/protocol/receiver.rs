@@ -15,7 +15,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use super::framing::{decode_frame, LinkError, DELIMITER, MAX_BODY_SIZE};
-use super::sequence::{SequenceTracker, SequenceVerdict};
+use super::sequence::{SequenceTracker, SequenceVerdict, SessionOpener};
 
 /// Counters of one receiving link, all saturating at `u32::MAX`.
 ///
@@ -185,7 +185,7 @@ impl<M> Receiver<M> {
     }
 }
 
-impl<M: DeserializeOwned> Receiver<M> {
+impl<M: DeserializeOwned + SessionOpener> Receiver<M> {
     /// Consumes `input` up to and including the first delimiter and returns
     /// what that completed (if anything) and the unconsumed rest. Without a
     /// delimiter everything is buffered and `(None, &[])` returned.
@@ -235,7 +235,10 @@ impl<M: DeserializeOwned> Receiver<M> {
             Ok(f) => f,
             Err(e) => return self.fail(e),
         };
-        match self.sequence.observe(frame.seq) {
+        match self
+            .sequence
+            .observe_opener(frame.seq, frame.message.session_nonce())
+        {
             SequenceVerdict::Duplicate => self.fail(LinkError::Duplicate { seq: frame.seq }),
             SequenceVerdict::Accept { missed, restart } => {
                 bump(&mut self.stats.frames_ok);
@@ -263,7 +266,7 @@ pub struct Events<'r, 'a, M> {
     input: &'a [u8],
 }
 
-impl<M: DeserializeOwned> Iterator for Events<'_, '_, M> {
+impl<M: DeserializeOwned + SessionOpener> Iterator for Events<'_, '_, M> {
     type Item = Event<M>;
 
     fn next(&mut self) -> Option<Self::Item> {

@@ -10,7 +10,11 @@
 //! # Receiver rules (checked in this order against the last accepted number)
 //!
 //! 1. Nothing accepted yet: accept, no loss counted (the receiver joined late).
-//! 2. The same number again: a **duplicate**, counted and **not delivered**.
+//! 2. The same number again: a **duplicate**, counted and **not delivered**;
+//!    except number 0 opening a session with another nonce than the session
+//!    accepted last (a `Hello` sent again because its answer was lost, which
+//!    the host numbers 0 again with a fresh nonce; the box's answer likewise):
+//!    a restart, accepted.
 //! 3. Number 0: the sender restarted its session (rebooted, or the host sent a
 //!    new `Hello`): accept, count a restart, no loss counted.
 //! 4. Ahead by d (1 ≤ d < 2³¹ steps along the ring): accept; d − 1 frames were
@@ -96,18 +100,31 @@ pub enum SequenceVerdict {
     Duplicate,
 }
 
+/// A message that may open a session: `Hello` and the box's answers to it,
+/// which carry the session's nonce.
+pub trait SessionOpener {
+    /// The session's nonce if this message opens (or answers the opening
+    /// of) a session.
+    fn session_nonce(&self) -> Option<u32>;
+}
+
 /// The receiver's view of one direction's sequence numbers (rules in the
 /// module docs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SequenceTracker {
     last: Option<u32>,
+    /// Nonce of the last accepted session opener.
+    session: Option<u32>,
 }
 
 impl SequenceTracker {
     /// A tracker that has accepted nothing.
     pub const fn new() -> Self {
-        Self { last: None }
+        Self {
+            last: None,
+            session: None,
+        }
     }
 
     /// The last accepted sequence number.
@@ -115,17 +132,31 @@ impl SequenceTracker {
         self.last
     }
 
-    /// Forgets the last accepted number (the next frame is accepted as is).
+    /// Forgets the last accepted number and session (the next frame is
+    /// accepted as is).
     pub fn reset(&mut self) {
         self.last = None;
+        self.session = None;
     }
 
     /// Classifies `seq` and, if accepted, makes it the last accepted number.
     pub fn observe(&mut self, seq: u32) -> SequenceVerdict {
+        self.observe_opener(seq, None)
+    }
+
+    /// Classifies frame `seq` whose message opens the session `nonce` (if
+    /// any; see [`SessionOpener`]) and, if accepted, makes it the last
+    /// accepted number and session.
+    pub fn observe_opener(&mut self, seq: u32, nonce: Option<u32>) -> SequenceVerdict {
+        let new_session = seq == 0 && nonce.is_some() && nonce != self.session;
         let verdict = match self.last {
             None => SequenceVerdict::Accept {
                 missed: 0,
                 restart: false,
+            },
+            Some(0) if new_session => SequenceVerdict::Accept {
+                missed: 0,
+                restart: true,
             },
             Some(last) if seq == last => SequenceVerdict::Duplicate,
             Some(_) if seq == 0 => SequenceVerdict::Accept {
@@ -151,6 +182,9 @@ impl SequenceTracker {
         };
         if let SequenceVerdict::Accept { .. } = verdict {
             self.last = Some(seq);
+            if seq == 0 {
+                self.session = nonce;
+            }
         }
         verdict
     }
@@ -191,6 +225,24 @@ mod tests {
         assert_eq!(t.observe(1), accept(0, false));
         t.last = Some(0);
         assert_eq!(t.observe(5), accept(4, false));
+    }
+
+    #[test]
+    fn a_session_opener_sent_again_with_a_fresh_nonce_is_a_restart() {
+        let mut t = SequenceTracker::new();
+        assert_eq!(t.observe_opener(0, Some(7)), accept(0, false));
+        // The same frame repeated by the line: dropped.
+        assert_eq!(t.observe_opener(0, Some(7)), SequenceVerdict::Duplicate);
+        // Sent again (its answer was lost) with a fresh nonce: delivered.
+        assert_eq!(t.observe_opener(0, Some(8)), accept(0, true));
+        assert_eq!(t.observe_opener(0, Some(8)), SequenceVerdict::Duplicate);
+        // A frame 0 that opens nothing is a plain duplicate.
+        assert_eq!(t.observe(0), SequenceVerdict::Duplicate);
+        assert_eq!(t.observe(1), accept(0, false));
+        // Later in the session a new opener restarts as before.
+        assert_eq!(t.observe_opener(0, Some(8)), accept(0, true));
+        t.reset();
+        assert_eq!(t.observe_opener(0, Some(8)), accept(0, false));
     }
 
     #[test]

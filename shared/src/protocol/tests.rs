@@ -242,7 +242,7 @@ fn wire<M: serde::Serialize>(seq: u32, message: &M) -> Vec<u8> {
 }
 
 /// Feeds `bytes` to `rx` in pieces of pseudo-random length and collects all events.
-fn feed_chunked<M: serde::de::DeserializeOwned>(
+fn feed_chunked<M: serde::de::DeserializeOwned + SessionOpener>(
     rx: &mut Receiver<M>,
     bytes: &[u8],
     rng: &mut XorShift,
@@ -500,7 +500,7 @@ fn probe_frames() -> Vec<(u32, DeviceMessage)> {
 /// Feeds A, corrupted B, C and checks that exactly A and C come out, intact.
 fn check_corruption<M>(a: &[u8], b_corrupt: &[u8], c: &[u8], want: [&(u32, M); 2], what: &str)
 where
-    M: serde::Serialize + serde::de::DeserializeOwned + core::fmt::Debug,
+    M: serde::Serialize + serde::de::DeserializeOwned + core::fmt::Debug + SessionOpener,
 {
     let mut stream = Vec::new();
     stream.extend_from_slice(a);
@@ -523,7 +523,7 @@ where
 /// number of flips tried.
 fn flip_every_bit<M>(frames: &[M]) -> usize
 where
-    M: serde::Serialize + serde::de::DeserializeOwned + core::fmt::Debug + Clone,
+    M: serde::Serialize + serde::de::DeserializeOwned + core::fmt::Debug + Clone + SessionOpener,
 {
     let mut flips = 0;
     for (i, b) in frames.iter().enumerate() {
