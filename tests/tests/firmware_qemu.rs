@@ -15,7 +15,7 @@ use plinth_shared::protocol::{DeviceMessage, HostMessage};
 use std::io::{Read, Write};
 use std::os::unix::net::UnixStream;
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
 
 /// The firmware image of the current sources.
@@ -89,23 +89,8 @@ fn image_identifies_a_replayed_run_down_under_qemu_and_exits_cleanly() {
     let dir = tempfile::tempdir().unwrap();
     let sock = dir.path().join("usart1.sock");
     let log = std::fs::File::create(dir.path().join("semihosting.bin")).unwrap();
-    let child = Command::new("qemu-system-arm")
-        .args([
-            "-M",
-            "netduinoplus2",
-            "-display",
-            "none",
-            "-monitor",
-            "none",
-        ])
-        .args(["-semihosting-config", "enable=on,target=native"])
-        .arg("-chardev")
-        .arg(format!(
-            "socket,id=link,path={},server=on,wait=on",
-            sock.display()
-        ))
-        .args(["-serial", "chardev:link", "-kernel"])
-        .arg(&elf)
+    let link = format!("socket,id=link,path={},server=on,wait=on", sock.display());
+    let child = plinth::demo::qemu::command(&elf, &["-chardev", &link, "-serial", "chardev:link"])
         .stdin(Stdio::null())
         .stdout(Stdio::from(log))
         .stderr(Stdio::piped())

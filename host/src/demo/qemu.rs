@@ -83,6 +83,28 @@ pub struct Qemu {
     pub pty: String,
 }
 
+/// `qemu-system-arm` running `image` on the netduinoplus2 model (STM32F405)
+/// with no display or monitor (not `-nographic`: its multiplexer swallows
+/// 0x01 bytes), semihosting on (defmt log on stdout, exit code), and the
+/// box's USART1 as `serial` says (QEMU's `-serial` and any `-chardev` it
+/// names).
+pub fn command<S: AsRef<std::ffi::OsStr>>(image: &Path, serial: &[S]) -> Command {
+    let mut c = Command::new(QEMU);
+    c.args([
+        "-M",
+        "netduinoplus2",
+        "-display",
+        "none",
+        "-monitor",
+        "none",
+    ])
+    .args(["-semihosting-config", "enable=on,target=native"])
+    .args(serial)
+    .arg("-kernel")
+    .arg(image);
+    c
+}
+
 impl Drop for Qemu {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -95,21 +117,7 @@ impl Qemu {
     /// pseudo-terminal and semihosting on (logs, exit code), and waits for
     /// QEMU to print `char device redirected to /dev/pts/N`.
     pub fn start(image: &Path) -> Result<Qemu> {
-        let mut child = Command::new(QEMU)
-            .args([
-                "-M",
-                "netduinoplus2",
-                "-display",
-                "none",
-                "-monitor",
-                "none",
-                "-serial",
-                "pty",
-                "-semihosting-config",
-                "enable=on,target=native",
-                "-kernel",
-            ])
-            .arg(image)
+        let mut child = command(image, &["-serial", "pty"])
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
