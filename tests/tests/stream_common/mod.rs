@@ -7,7 +7,7 @@
 
 use plinth::sim::inject::EffectSet;
 use plinth::sim::machine::Machine;
-use plinth::sim::signals::{synthesise_to, RunDown, SensorKind, SignalOptions, SignalSet};
+use plinth::sim::signals::{synthesise_to, RunDown, SignalOptions};
 use plinth::stream::config::{BearingTables, StreamConfig};
 use plinth::stream::port::{pseudo_terminal, TTYPort};
 use plinth::stream::replay::{ReplayPlan, SignalSetReplay};
@@ -103,8 +103,11 @@ impl Scenario {
         .write(&tables_dir)
         .expect("writing bearings.csv");
         let config_path = dir.path().join("stream.toml");
-        std::fs::write(&config_path, config_text(&set, "tables/bearings.csv"))
-            .expect("writing the stream configuration");
+        std::fs::write(
+            &config_path,
+            plinth::demo::config_text(&set, "tables/bearings.csv", 4),
+        )
+        .expect("writing the stream configuration");
         let config = StreamConfig::load(&config_path).expect("stream configuration");
         let tables = config.load_bearing_tables().expect("bearing tables");
         Scenario {
@@ -125,28 +128,6 @@ impl Scenario {
     pub fn out_dir(&self, name: &str) -> PathBuf {
         self.dir.path().join(name)
     }
-}
-
-/// A stream configuration matching a signal set's channels (ADC channel =
-/// the set's column, so the replay needs no reordering).
-pub fn config_text(set: &SignalSet, bearings_csv: &str) -> String {
-    let mut s = format!(
-        "# Stream configuration for the simulated paper machine.\nbearings = \"{bearings_csv}\"\n\n[averaging]\nrevolutions = 4\n\n[rls]\nforgetting_factor = 1.0\n"
-    );
-    for (adc, ch) in set.header.channels.iter().enumerate() {
-        let sensor = match ch.kind {
-            SensorKind::Displacement => "proximity",
-            SensorKind::Velocity => "velocity",
-            SensorKind::Acceleration => "acceleration",
-        };
-        s.push_str(&format!(
-            "\n[[channels]]\nadc = {adc}\nbearing = \"{}\"\nquantity = \"{}\"\nsensor = \"{sensor}\"\nsensitivity = {:e}\n",
-            ch.bearing,
-            ch.quantity.name(),
-            ch.sensitivity
-        ));
-    }
-    s
 }
 
 /// Faults a proxy injects into one direction of the byte stream, each with
