@@ -21,7 +21,15 @@ pub struct Measurement {
     pub rel: Phasor2<f64>,
     /// Absolute pedestal displacement, (y, z) [m].
     pub ped: Phasor2<f64>,
+    /// Noise of each phasor when the file carries formats.md's noise columns
+    /// (`rel_y_sd, rel_z_sd, ped_y_sd, ped_z_sd`), else `None`.
+    pub noise_sd: Option<NoiseSd>,
 }
+
+/// Standard deviations of the complex noise of one row's four phasors [m]:
+/// sqrt(E|n|²), split equally between real and imaginary parts (formats.md,
+/// "Noise columns"). Order: rel y, rel z, ped y, ped z.
+pub type NoiseSd = [f64; 4];
 
 /// One row of `bearings.csv`: the known bearing coefficients at one speed.
 #[derive(Clone, Debug, PartialEq)]
@@ -103,6 +111,9 @@ pub const MEASUREMENT_COLUMNS: [&str; 10] = [
     "speed_hz", "bearing", "rel_y_re", "rel_y_im", "rel_z_re", "rel_z_im", "ped_y_re", "ped_y_im",
     "ped_z_re", "ped_z_im",
 ];
+/// formats.md's optional noise columns of `measurements.csv` (all four or
+/// none), in the order of [`NoiseSd`].
+pub const NOISE_COLUMNS: [&str; 4] = ["rel_y_sd", "rel_z_sd", "ped_y_sd", "ped_z_sd"];
 /// Columns of `bearings.csv`, in the order Plinth writes them.
 pub const BEARING_COLUMNS: [&str; 10] = [
     "speed_hz", "bearing", "kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz",
@@ -319,6 +330,32 @@ pub enum RunDirError {
         /// What serde_json said.
         message: String,
     },
+    /// Some but not all of the optional noise columns are in the header.
+    #[error("{}:{line}: the noise columns come all four or none: header has `{present}` but not `{missing}`", file.display())]
+    PartialNoiseColumns {
+        /// The file.
+        file: PathBuf,
+        /// Line of the header.
+        line: u64,
+        /// The noise columns found.
+        present: String,
+        /// The noise columns missing.
+        missing: String,
+    },
+    /// A noise standard deviation is negative.
+    #[error("{}:{line}:{column}: column `{name}`: {value} m is negative (a standard deviation is zero or positive)", file.display())]
+    NegativeNoise {
+        /// The file.
+        file: PathBuf,
+        /// Line of the row.
+        line: u64,
+        /// 1-based column.
+        column: usize,
+        /// Header name of the column.
+        name: &'static str,
+        /// The value [m].
+        value: f64,
+    },
     /// A value in memory cannot be written (non-finite number).
     #[error("{}: cannot write {what}: {value} is not finite", file.display())]
     NotWritable {
@@ -514,8 +551,8 @@ impl RunDir {
         let b_path = dir.join(BEARINGS_FILE);
         let t_path = dir.join(TRUTH_FILE);
 
-        let m_rows = read_table(&m_path, &MEASUREMENT_COLUMNS, true)?;
-        let b_rows = read_table(&b_path, &BEARING_COLUMNS, false)?;
+        let m_rows = read_table(&m_path, &MEASUREMENT_COLUMNS, Some(&NOISE_COLUMNS), true)?;
+        let b_rows = read_table(&b_path, &BEARING_COLUMNS, None, false)?;
 
         let bearings: Vec<BearingRow> = b_rows
             .iter()
@@ -538,6 +575,7 @@ impl RunDir {
                         bearing: r.bearing.clone(),
                         rel: [Complex::new(v[0], v[1]), Complex::new(v[2], v[3])],
                         ped: [Complex::new(v[4], v[5]), Complex::new(v[6], v[7])],
+                        noise_sd: r.noise_sd,
                     }
                 })
                 .collect(),
@@ -621,13 +659,18 @@ impl RunDir {
         };
 
         let m_path = dir.join(MEASUREMENTS_FILE);
+        // The noise columns are written when every row has them.
+        let with_noise =
+            !self.measurements.is_empty() && self.measurements.iter().all(|m| m.noise_sd.is_some());
         let rows = self.measurements.iter().map(|m| {
             let [ry, rz] = m.rel;
             let [py, pz] = m.ped;
             let values = [ry.re, ry.im, rz.re, rz.im, py.re, py.im, pz.re, pz.im].map(reduce);
-            (m.speed_hz, m.bearing.as_str(), values)
+            let noise = if with_noise { m.noise_sd } else { None };
+            (m.speed_hz, m.bearing.as_str(), values, noise)
         });
-        write_table(&m_path, &MEASUREMENT_COLUMNS, rows)?;
+        let extra: &[&'static str] = if with_noise { &NOISE_COLUMNS } else { &[] };
+        write_table(&m_path, &MEASUREMENT_COLUMNS, extra, rows)?;
 
         let b_path = dir.join(BEARINGS_FILE);
         let rows = self.bearings.iter().map(|b| {
@@ -635,9 +678,9 @@ impl RunDir {
             let values = [
                 k[0][0], k[0][1], k[1][0], k[1][1], c[0][0], c[0][1], c[1][0], c[1][1],
             ];
-            (b.speed_hz, b.bearing.as_str(), values)
+            (b.speed_hz, b.bearing.as_str(), values, None)
         });
-        write_table(&b_path, &BEARING_COLUMNS, rows)?;
+        write_table(&b_path, &BEARING_COLUMNS, &[], rows)?;
 
         let t_path = dir.join(TRUTH_FILE);
         if let Some(truth) = &self.truth {
@@ -687,12 +730,17 @@ struct TableRow {
     bearing: String,
     bearing_column: usize,
     values: [f64; 8],
+    /// The optional noise columns, when the header has them.
+    noise_sd: Option<NoiseSd>,
 }
 
-/// Reads a CSV table whose columns are `speed_hz`, `bearing` and eight numbers.
+/// Reads a CSV table whose columns are `speed_hz`, `bearing` and eight numbers,
+/// plus, when `optional` is given and the header names them, four
+/// non-negative numbers (all four or none).
 fn read_table(
     path: &Path,
     columns: &[&'static str; 10],
+    optional: Option<&[&'static str; 4]>,
     positive_speed: bool,
 ) -> Result<Vec<TableRow>, RunDirError> {
     let file = || path.to_path_buf();
@@ -773,6 +821,30 @@ fn read_table(
             }
         })?;
     }
+    let mut noise_index: Option<[usize; 4]> = None;
+    if let Some(names) = optional {
+        let found = names.map(|n| header.iter().position(|h| h == n));
+        let present: Vec<&str> = names
+            .iter()
+            .zip(&found)
+            .filter_map(|(n, f)| f.map(|_| *n))
+            .collect();
+        if present.len() == 4 {
+            noise_index = Some(found.map(|f| f.unwrap_or_default()));
+        } else if !present.is_empty() {
+            let missing: Vec<&str> = names
+                .iter()
+                .zip(&found)
+                .filter_map(|(n, f)| f.is_none().then_some(*n))
+                .collect();
+            return Err(RunDirError::PartialNoiseColumns {
+                file: file(),
+                line: header_line,
+                present: present.join(","),
+                missing: missing.join(","),
+            });
+        }
+    }
     let width = header.len();
 
     let mut rows = Vec::new();
@@ -800,14 +872,13 @@ fn read_table(
                 expected: width,
             });
         }
-        let number = |k: usize| -> Result<f64, RunDirError> {
-            let col = index[k];
+        let number_at = |col: usize, name: &'static str| -> Result<f64, RunDirError> {
             let text = record.get(col).unwrap_or_default();
             let value: f64 = text.parse().map_err(|_| RunDirError::BadNumber {
                 file: file(),
                 line,
                 column: col + 1,
-                name: columns[k],
+                name,
                 text: text.to_string(),
             })?;
             if !value.is_finite() {
@@ -815,12 +886,13 @@ fn read_table(
                     file: file(),
                     line,
                     column: col + 1,
-                    name: columns[k],
+                    name,
                     text: text.to_string(),
                 });
             }
             Ok(value)
         };
+        let number = |k: usize| number_at(index[k], columns[k]);
         let speed_hz = number(0)?;
         let speed_ok = if positive_speed {
             speed_hz > 0.0
@@ -860,6 +932,25 @@ fn read_table(
         for (k, v) in values.iter_mut().enumerate() {
             *v = number(k + 2)?;
         }
+        let noise_sd = match (noise_index, optional) {
+            (Some(cols), Some(names)) => {
+                let mut sd = [0.0; 4];
+                for ((v, &col), &name) in sd.iter_mut().zip(&cols).zip(names) {
+                    *v = number_at(col, name)?;
+                    if *v < 0.0 {
+                        return Err(RunDirError::NegativeNoise {
+                            file: file(),
+                            line,
+                            column: col + 1,
+                            name,
+                            value: *v,
+                        });
+                    }
+                }
+                Some(sd)
+            }
+            _ => None,
+        };
         // -0.0 and 0.0 are the same speed.
         let key = ((speed_hz + 0.0).to_bits(), bearing.to_string());
         if let Some(&first_line) = seen.get(&key) {
@@ -879,6 +970,7 @@ fn read_table(
             bearing: bearing.to_string(),
             bearing_column: index[1] + 1,
             values,
+            noise_sd,
         });
     }
     Ok(rows)
@@ -899,11 +991,17 @@ fn bearing_name_ok(name: &str) -> bool {
     !name.is_empty() && !name.contains(['"', '\'', ',', '\n', '\r']) && name.trim() == name
 }
 
-/// Writes a CSV table of `speed_hz`, `bearing` and eight numbers.
+/// One row to write: speed [Hz], bearing, the eight numbers and, when the table
+/// has the `extra` columns, their four values.
+type WriteRow<'a> = (f64, &'a str, [f64; 8], Option<[f64; 4]>);
+
+/// Writes a CSV table of `speed_hz`, `bearing`, eight numbers and the `extra`
+/// columns (empty, or four filled from every row's fourth element).
 fn write_table<'a>(
     path: &Path,
     columns: &[&'static str; 10],
-    rows: impl Iterator<Item = (f64, &'a str, [f64; 8])>,
+    extra: &[&'static str],
+    rows: impl Iterator<Item = WriteRow<'a>>,
 ) -> Result<(), RunDirError> {
     let io = |source: std::io::Error| RunDirError::Io {
         file: path.to_path_buf(),
@@ -917,8 +1015,10 @@ fn write_table<'a>(
         .quote_style(csv::QuoteStyle::Never)
         .from_path(path)
         .map_err(csv_err)?;
-    writer.write_record(columns).map_err(csv_err)?;
-    for (i, (speed_hz, bearing, values)) in rows.enumerate() {
+    writer
+        .write_record(columns.iter().chain(extra))
+        .map_err(csv_err)?;
+    for (i, (speed_hz, bearing, values, noise)) in rows.enumerate() {
         if !bearing_name_ok(bearing) {
             return Err(RunDirError::BadBearingName {
                 file: path.to_path_buf(),
@@ -927,10 +1027,19 @@ fn write_table<'a>(
                 name: bearing.to_string(),
             });
         }
-        let mut record: Vec<String> = Vec::with_capacity(10);
-        for (k, v) in std::iter::once(speed_hz).chain(values).enumerate() {
+        let mut record: Vec<String> = Vec::with_capacity(10 + extra.len());
+        let noise = if extra.is_empty() { None } else { noise };
+        for (k, v) in std::iter::once(speed_hz)
+            .chain(values)
+            .chain(noise.into_iter().flatten())
+            .enumerate()
+        {
             if !v.is_finite() {
-                let name = columns[if k == 0 { 0 } else { k + 1 }];
+                let name = match k {
+                    0 => columns[0],
+                    1..=8 => columns[k + 1],
+                    _ => extra[k - 9],
+                };
                 return Err(RunDirError::NotWritable {
                     file: path.to_path_buf(),
                     what: format!("row {} (bearing `{bearing}`), column `{name}`", i + 1),

@@ -213,6 +213,7 @@ impl SyntheticRun {
             bearing: p.bearing.clone(),
             rel,
             ped,
+            noise_sd: None,
         })
     }
 }

@@ -323,6 +323,7 @@ mod tests {
             bearing: "left".into(),
             rel: [c, c],
             ped: [c, c],
+            noise_sd: None,
         }
     }
 

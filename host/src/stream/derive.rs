@@ -124,6 +124,7 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
             bearing: name.clone(),
             rel: [rel[0] / *w, rel[1] / *w],
             ped: [ped[0] / *w, ped[1] / *w],
+            noise_sd: None,
         })
         .collect();
     let bearings: Vec<BearingRow> = tables.rows.clone();
