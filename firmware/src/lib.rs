@@ -8,12 +8,15 @@
 //!   blocks, used under QEMU) and [`adc_source`] (the [`ad7606`] ADC with
 //!   keyphasor capture) implement it.
 //! - [`link`], [`watchdog`], [`uptime`]: the loop's I/O, feed hook and time.
+//! - [`acquisition`]: the board's DMA-paced ADC and keyphasor capture
+//!   (`plinth-box`), target independent.
 //! - [`clock`]: the STM32F4 clock tree the box programs (PLL to 168 MHz).
 //! - `stm32` (MCU only): the one module with register access.
 #![no_std]
 #![deny(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod acquisition;
 pub mod ad7606;
 pub mod adc_source;
 pub mod clock;

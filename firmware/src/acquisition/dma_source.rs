@@ -1,0 +1,172 @@
+//! The box's sample source on the board: DMA halves of AD7606 conversions
+//! and keyphasor captures, turned into the [`SampleBuffer`]s the pipeline
+//! takes (volts, sample-fractional edges, losses marked).
+
+use super::handover::{DoubleBuffer, HandOver, Taken};
+use super::scaling;
+use super::timebase::CaptureTimebase;
+use crate::ad7606::Range;
+use crate::source::{SampleBuffer, SampleSource, BUFFER_VECTORS};
+use plinth_shared::extractor::KeyphasorEdge;
+
+/// The acquisition hardware: CONVST timer, capture timer, SPI DMA.
+pub trait AcquisitionHardware: DoubleBuffer {
+    /// Starts conversions from a clean state (half 0, completion count 0)
+    /// and returns the capture timer's count at sample 0 [ticks].
+    fn start(&mut self) -> u32;
+    /// Stops conversions and the DMA.
+    fn stop(&mut self);
+    /// The oldest keyphasor capture not yet taken [capture ticks].
+    fn take_capture(&mut self) -> Option<u32>;
+}
+
+/// What the source lost or dropped since start.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(target_os = "none", derive(defmt::Format))]
+pub struct DmaSourceCounters {
+    /// Halves not delivered because the consumer came too late (overruns).
+    pub overrun_halves: u32,
+    /// Of those, halves overrun while being copied (copy discarded).
+    pub torn_halves: u32,
+    /// Keyphasor edges dropped: before the start, in lost samples, or more
+    /// than a buffer holds.
+    pub dropped_edges: u32,
+}
+
+/// DMA-fed AD7606 samples with keyphasor captures.
+#[derive(Debug)]
+pub struct DmaSource<H> {
+    hardware: H,
+    handover: HandOver,
+    timebase: CaptureTimebase,
+    range: Range,
+    /// A capture belonging to a later half.
+    held: Option<u32>,
+    /// Vectors lost since the last delivered half.
+    lost: u64,
+    running: bool,
+    counters: DmaSourceCounters,
+}
+
+impl<H: AcquisitionHardware> DmaSource<H> {
+    /// A source over `hardware` whose halves hold `vectors_per_half` sample
+    /// vectors (at most [`BUFFER_VECTORS`]), converted `ticks_per_sample`
+    /// capture ticks apart, on the ADC input `range`.
+    pub fn new(hardware: H, vectors_per_half: usize, ticks_per_sample: u32, range: Range) -> Self {
+        Self {
+            hardware,
+            handover: HandOver::new(vectors_per_half.clamp(1, BUFFER_VECTORS)),
+            timebase: CaptureTimebase::new(ticks_per_sample, 0),
+            range,
+            held: None,
+            lost: 0,
+            running: false,
+            counters: DmaSourceCounters::default(),
+        }
+    }
+
+    /// What was lost since start.
+    pub fn counters(&self) -> DmaSourceCounters {
+        self.counters
+    }
+
+    /// The hardware (for its own counters).
+    pub fn hardware(&self) -> &H {
+        &self.hardware
+    }
+
+    /// Whether acquisition runs.
+    pub fn running(&self) -> bool {
+        self.running
+    }
+
+    /// Attaches the captures up to the end of the half `[first, end)`.
+    fn attach_edges(&mut self, out: &mut SampleBuffer, first: u64, end: u64) {
+        let now = self.handover.now_bound(&self.hardware);
+        loop {
+            let Some(capture) = self.held.take().or_else(|| self.hardware.take_capture()) else {
+                return;
+            };
+            let Some(edge) = self.timebase.locate(capture, now) else {
+                self.counters.dropped_edges = self.counters.dropped_edges.saturating_add(1);
+                continue;
+            };
+            if edge.next_sample >= end {
+                self.held = Some(capture); // for a later half
+                return;
+            }
+            if edge.next_sample < first {
+                // In samples that were lost.
+                self.counters.dropped_edges = self.counters.dropped_edges.saturating_add(1);
+                continue;
+            }
+            let index = (edge.next_sample - first) as usize;
+            if out
+                .edges
+                .push(KeyphasorEdge {
+                    index,
+                    fraction: edge.fraction,
+                })
+                .is_err()
+            {
+                self.counters.dropped_edges = self.counters.dropped_edges.saturating_add(1);
+            }
+        }
+    }
+}
+
+impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
+    fn start(&mut self) {
+        self.hardware.stop();
+        while self.hardware.take_capture().is_some() {}
+        self.handover.reset();
+        self.held = None;
+        self.lost = 0;
+        self.counters = DmaSourceCounters::default();
+        let origin = self.hardware.start();
+        self.timebase = CaptureTimebase::new(self.timebase.ticks_per_sample(), origin);
+        self.running = true;
+    }
+
+    fn stop(&mut self) {
+        self.hardware.stop();
+        self.running = false;
+    }
+
+    /// Delivers at most one half: the newest complete one.
+    fn poll(&mut self, out: &mut SampleBuffer) {
+        if !self.running {
+            return;
+        }
+        let range = self.range;
+        let mut saturated = [0u32; crate::source::CHANNELS];
+        out.clear();
+        let taken = self.handover.take(&self.hardware, |_, codes| {
+            // Cannot fail: a half holds at most BUFFER_VECTORS vectors.
+            let _ = out
+                .samples
+                .push(scaling::to_volts(range, &codes, &mut saturated));
+        });
+        match taken {
+            Taken::Nothing => {}
+            Taken::Torn { lost } => {
+                out.clear();
+                self.lost = self.lost.saturating_add(lost);
+                self.counters.overrun_halves = self.handover.lost_halves() as u32;
+                self.counters.torn_halves = self.counters.torn_halves.saturating_add(1);
+            }
+            Taken::Half {
+                first_sample,
+                lost_before,
+            } => {
+                out.saturated = saturated;
+                let lost = self.lost.saturating_add(lost_before);
+                self.lost = 0;
+                out.lost_before = u32::try_from(lost).unwrap_or(u32::MAX);
+                self.counters.overrun_halves = self.handover.lost_halves() as u32;
+                let end = first_sample + out.samples.len() as u64;
+                self.attach_edges(out, first_sample, end);
+            }
+        }
+    }
+}
