@@ -65,11 +65,17 @@ pub fn firmware_version() -> FirmwareVersion {
 
 /// What the box can do, for `HelloAck`: `volts_per_code` is the ADC step [V].
 pub fn capabilities(volts_per_code: f32) -> Capabilities {
+    capabilities_at(volts_per_code, SAMPLE_RATE_HZ)
+}
+
+/// [`capabilities`] of a box sampling at `sample_rate_hz` [Hz] (a board's
+/// timer gives the nominal rate rounded to whole timer ticks).
+pub fn capabilities_at(volts_per_code: f32, sample_rate_hz: f32) -> Capabilities {
     Capabilities {
         max_channels: CHANNELS as u8,
         max_bearings: MAX_BEARINGS as u8,
         bearing_table_capacity: crate::config::TABLE_ROWS as u16,
-        sample_rate_hz: SAMPLE_RATE_HZ,
+        sample_rate_hz,
         adc_volts_per_code: volts_per_code,
     }
 }
@@ -100,8 +106,16 @@ pub struct Device {
 }
 
 impl Device {
-    /// A box waiting for `Hello`, whose ADC step is `volts_per_code` [V].
+    /// A box waiting for `Hello`, whose ADC step is `volts_per_code` [V],
+    /// sampling at [`SAMPLE_RATE_HZ`].
     pub fn new(volts_per_code: f32) -> Self {
+        Self::with_sample_rate(volts_per_code, SAMPLE_RATE_HZ)
+    }
+
+    /// A box waiting for `Hello` that samples at `sample_rate_hz` [Hz] (the
+    /// rate its timer really gives: announced in `HelloAck`, used by the
+    /// pipeline for the rotor speed).
+    pub fn with_sample_rate(volts_per_code: f32, sample_rate_hz: f32) -> Self {
         Self {
             state: DeviceState::AwaitingHello,
             rx: Receiver::new(),
@@ -110,7 +124,7 @@ impl Device {
             pipeline: None,
             buffer: SampleBuffer::default(),
             counters: DeviceCounters::default(),
-            capabilities: capabilities(volts_per_code),
+            capabilities: capabilities_at(volts_per_code, sample_rate_hz),
             last_status_ms: 0,
             stopped: false,
         }

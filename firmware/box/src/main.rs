@@ -2,6 +2,10 @@
 #![no_main]
 use defmt_rtt as _;
 #[panic_handler]
-fn panic(_: &core::panic::PanicInfo) -> ! { loop {} }
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    loop {}
+}
 #[cortex_m_rt::entry]
-fn main() -> ! { loop {} }
+fn main() -> ! {
+    loop {}
+}

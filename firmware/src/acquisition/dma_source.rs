@@ -95,8 +95,9 @@ impl<H: AcquisitionHardware> DmaSource<H> {
                 self.held = Some(capture); // for a later half
                 return;
             }
-            if edge.next_sample < first {
-                // In samples that were lost.
+            if edge.next_sample < first || (edge.next_sample == first && out.lost_before > 0) {
+                // In samples that were lost (the interval before a half
+                // that follows a gap is not one sample period of data).
                 self.counters.dropped_edges = self.counters.dropped_edges.saturating_add(1);
                 continue;
             }

@@ -201,12 +201,18 @@ mod tests {
             complete_after_reads: None,
         };
         let mut h = HandOver::new(2);
-        assert_eq!(h.take(&dma, |_, _| panic!("nothing to copy")), Taken::Nothing);
+        assert_eq!(
+            h.take(&dma, |_, _| panic!("nothing to copy")),
+            Taken::Nothing
+        );
         dma.done.complete();
         let mut got = [0i16; 2];
         assert_eq!(
             h.take(&dma, |i, c| got[i] = c[0]),
-            Taken::Half { first_sample: 0, lost_before: 0 }
+            Taken::Half {
+                first_sample: 0,
+                lost_before: 0
+            }
         );
         assert_eq!(got, [0, 1]);
         // Three more complete (halves 1, 2, 3): 1 and 2 are lost, 3 (in
@@ -216,7 +222,10 @@ mod tests {
         }
         assert_eq!(
             h.take(&dma, |i, c| got[i] = c[0]),
-            Taken::Half { first_sample: 6, lost_before: 4 }
+            Taken::Half {
+                first_sample: 6,
+                lost_before: 4
+            }
         );
         assert_eq!(got, [10, 11]);
         assert_eq!(h.lost_halves(), 2);
@@ -237,7 +246,10 @@ mod tests {
         // The half completed during the copy is intact and comes next.
         assert_eq!(
             h.take(&dma, |_, _| {}),
-            Taken::Half { first_sample: 2, lost_before: 0 }
+            Taken::Half {
+                first_sample: 2,
+                lost_before: 0
+            }
         );
     }
 }

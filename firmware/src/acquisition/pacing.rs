@@ -140,11 +140,26 @@ mod tests {
     #[test]
     fn impossible_rates_are_refused() {
         use PacingError::*;
-        assert_eq!(ConvstTiming::for_rate(84_000_000, 0.0, 16), Err(NotPositive));
-        assert_eq!(ConvstTiming::for_rate(84_000_000, f64::NAN, 16), Err(NotPositive));
+        assert_eq!(
+            ConvstTiming::for_rate(84_000_000, 0.0, 16),
+            Err(NotPositive)
+        );
+        assert_eq!(
+            ConvstTiming::for_rate(84_000_000, f64::NAN, 16),
+            Err(NotPositive)
+        );
         assert_eq!(ConvstTiming::for_rate(0, 1e3, 16), Err(NotPositive));
-        assert_eq!(ConvstTiming::for_rate(84_000_000, 250e3, 16), Err(AboveAdcThroughput));
-        assert_eq!(ConvstTiming::for_rate(200_000, 150e3, 16), Err(PeriodTooShort));
-        assert_eq!(ConvstTiming::for_rate(84_000_000, 0.001, 16), Err(PeriodTooLong));
+        assert_eq!(
+            ConvstTiming::for_rate(84_000_000, 250e3, 16),
+            Err(AboveAdcThroughput)
+        );
+        assert_eq!(
+            ConvstTiming::for_rate(200_000, 150e3, 16),
+            Err(PeriodTooShort)
+        );
+        assert_eq!(
+            ConvstTiming::for_rate(84_000_000, 0.001, 16),
+            Err(PeriodTooLong)
+        );
     }
 }
