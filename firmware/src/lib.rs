@@ -10,6 +10,7 @@
 //! - [`link`], [`watchdog`], [`uptime`]: the loop's I/O, feed hook and time.
 //! - [`acquisition`]: the board's DMA-paced ADC and keyphasor capture
 //!   (`plinth-box`), target independent.
+//! - [`uart_dma`]: the board's DMA-fed UART receive ring (`plinth-box`).
 //! - [`clock`]: the STM32F4 clock tree the box programs (PLL to 168 MHz).
 //! - `stm32` (MCU only): the one module with register access.
 #![no_std]
@@ -28,5 +29,6 @@ pub mod replay;
 pub mod source;
 #[cfg(target_os = "none")]
 pub mod stm32;
+pub mod uart_dma;
 pub mod uptime;
 pub mod watchdog;

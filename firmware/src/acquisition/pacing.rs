@@ -1,11 +1,13 @@
 //! CONVST pacing: the prescaler, period and compare value that make a timer's
 //! PWM output start one AD7606 conversion per sample period.
 //!
-//! PWM mode 1 drives the output high while the counter is below the compare
-//! value, so CONVST rises at every update event (counter back to 0): that
-//! rising edge is the sampling instant of all eight channels. The counter
-//! clock is the timer clock divided by `prescaler + 1`; the period is
-//! `auto_reload + 1` counter ticks.
+//! PWM mode 2 holds the output low while the counter is below the compare
+//! value and high from it to the end of the period, so CONVST rises at
+//! count `compare` of every period (the sampling instant of all eight
+//! channels) and falls at the update event. Mode 2 rather than mode 1: the
+//! output stays low until the counter runs, so the first rising edge is
+//! the first sample. The counter clock is the timer clock divided by
+//! `prescaler + 1`; the period is `auto_reload + 1` counter ticks.
 
 /// The AD7606's fastest throughput [samples/s per channel] (200 kSPS).
 pub const AD7606_MAX_RATE_HZ: f64 = 200_000.0;
@@ -36,9 +38,12 @@ pub struct ConvstTiming {
     pub prescaler: u16,
     /// ARR: period = auto_reload + 1 counter ticks.
     pub auto_reload: u32,
-    /// CCR of the CONVST channel: CONVST high for this many counter ticks
-    /// after each update event.
+    /// CCR of the CONVST channel (PWM mode 2): CONVST rises at this count
+    /// and stays high to the end of the period (≥ [`CONVST_HIGH_NS`]).
     pub compare: u32,
+    /// Timer-clock ticks from the counter's start to the first CONVST
+    /// rising edge (sample 0): compare · (prescaler + 1).
+    pub first_rise_ticks: u32,
     /// Timer-clock ticks per sample period: (prescaler + 1) · (auto_reload + 1).
     /// An unprescaled capture timer on the same clock counts this many ticks
     /// between samples.
@@ -91,10 +96,12 @@ impl ConvstTiming {
         let Ok(timer_ticks_per_sample) = u32::try_from(timer_ticks) else {
             return Err(PacingError::PeriodTooLong);
         };
+        let compare = (period - high as u64) as u32;
         Ok(Self {
             prescaler: prescaler as u16,
             auto_reload: (period - 1) as u32,
-            compare: high as u32,
+            compare,
+            first_rise_ticks: compare * (prescaler + 1),
             timer_ticks_per_sample,
             achieved_rate_hz: clock / timer_ticks as f64,
         })
@@ -103,6 +110,16 @@ impl ConvstTiming {
     /// (achieved − requested) / requested for the request `rate_hz` [Hz].
     pub fn relative_error(&self, rate_hz: f64) -> f64 {
         (self.achieved_rate_hz - rate_hz) / rate_hz
+    }
+}
+
+/// The clock of a timer on an APB bus [Hz]: the bus clock, doubled when the
+/// bus runs divided from HCLK (RM0090 §6.2).
+pub fn apb_timer_clock_hz(hclk_hz: u32, pclk_hz: u32) -> u32 {
+    if pclk_hz < hclk_hz {
+        pclk_hz.saturating_mul(2)
+    } else {
+        pclk_hz
     }
 }
 
@@ -118,8 +135,9 @@ mod tests {
         assert_eq!(t.prescaler, 0);
         assert_eq!(t.auto_reload, 1640);
         assert_eq!(t.timer_ticks_per_sample, 1641);
-        // 100 ns at 84 MHz = 8.4 → 9 ticks.
-        assert_eq!(t.compare, 9);
+        // 100 ns at 84 MHz = 8.4 → 9 ticks high at the end of the period.
+        assert_eq!(t.compare, 1632);
+        assert_eq!(t.first_rise_ticks, 1632);
         assert!((t.achieved_rate_hz - 84e6 / 1641.0).abs() < 1e-9);
         assert!(t.relative_error(51_200.0).abs() < 2.3e-4);
     }
@@ -132,9 +150,17 @@ mod tests {
         assert_eq!(t.auto_reload, 41_999);
         assert_eq!(t.timer_ticks_per_sample, 84_000);
         assert_eq!(t.achieved_rate_hz, 1_000.0);
+        // 100 ns at 42 MHz: 4.2 → 5 counter ticks high, rising at 41 995.
+        assert_eq!((t.compare, t.first_rise_ticks), (41_995, 83_990));
         // A 32-bit counter needs none.
         let t = ConvstTiming::for_rate(84_000_000, 1_000.0, 32).unwrap();
         assert_eq!((t.prescaler, t.auto_reload), (0, 83_999));
+    }
+
+    #[test]
+    fn apb_timers_run_at_twice_a_divided_bus() {
+        assert_eq!(apb_timer_clock_hz(168_000_000, 42_000_000), 84_000_000);
+        assert_eq!(apb_timer_clock_hz(16_000_000, 16_000_000), 16_000_000);
     }
 
     #[test]
@@ -163,3 +189,4 @@ mod tests {
         );
     }
 }
+
