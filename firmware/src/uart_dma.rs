@@ -67,7 +67,10 @@ impl RxRing {
             self.lost += written - self.read;
             self.read = written;
         }
-        ((self.read % self.size) as usize, (written - self.read) as usize)
+        (
+            (self.read % self.size) as usize,
+            (written - self.read) as usize,
+        )
     }
 
     /// Marks `n` bytes as read.
