@@ -24,14 +24,18 @@ cargo fmt --all -- --check
 step "clippy (host crates)"
 cargo clippy --workspace --all-targets -- -D warnings
 
-step "clippy (firmware and shared for thumbv7em-none-eabihf)"
-cargo clippy -p plinth-shared -p plinth-firmware --target thumbv7em-none-eabihf -- -D warnings
+step "clippy (firmware, the board image and shared for thumbv7em-none-eabihf)"
+cargo clippy -p plinth-shared -p plinth-firmware -p plinth-box --target thumbv7em-none-eabihf -- -D warnings
+cargo clippy -p plinth-box --target thumbv7em-none-eabihf --features bench -- -D warnings
 
 step "cross-build: plinth-shared and the firmware image for thumbv7em-none-eabihf"
 cargo build -p plinth-shared --target thumbv7em-none-eabihf --release
 # (into the directory the QEMU tests build their image in, so theirs is a no-op)
 cargo build -p plinth-firmware --target thumbv7em-none-eabihf --release \
   --target-dir "${CARGO_TARGET_DIR:-target}/qemu-image"
+
+step "cross-build: plinth-box, the board image (STM32F407G-DISC1 + AD7606)"
+bash scripts/build-box.sh
 
 step "tests (host, simulated hardware, QEMU end to end)"
 cargo test --workspace --release

@@ -24,17 +24,29 @@
 //! keyphasor capture 3; host-link receive DMA and the millisecond tick 2;
 //! the idle loop runs the protocol, the extractor and the pipeline on each
 //! full half ([`plinth_firmware::acquisition`]) and feeds the watchdog.
-#![no_std]
-#![no_main]
+#![cfg_attr(target_os = "none", no_std)]
+#![cfg_attr(target_os = "none", no_main)]
 
+#[cfg(not(target_os = "none"))]
+fn main() {
+    eprintln!("plinth-box is an MCU image: build it with `bash scripts/build-box.sh`");
+    std::process::exit(2);
+}
+
+#[cfg(target_os = "none")]
 mod adc_dma;
+#[cfg(target_os = "none")]
 mod cycles;
+#[cfg(target_os = "none")]
 mod panic_record;
+#[cfg(target_os = "none")]
 mod serial;
 
+#[cfg(target_os = "none")]
 use defmt_rtt as _;
 
 /// Logs, records and resets: the next boot reports the record.
+#[cfg(target_os = "none")]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
     cortex_m::interrupt::disable();
@@ -46,6 +58,7 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     cortex_m::peripheral::SCB::sys_reset()
 }
 
+#[cfg(target_os = "none")]
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
     use crate::adc_dma::{self, AdcDma, CAPTURE_SLOTS, HALF_VECTORS};
@@ -168,7 +181,7 @@ mod app {
         let (producer, consumer) = cx.local.queue.split();
         // SAFETY: TIM5's capture registers belong to the keyphasor task from
         // here on; `AdcDma` only starts and stops its counter.
-        let tim5_capture = unsafe { pac::Peripherals::steal().TIM5 };
+        let tim5_capture = unsafe { pac::TIM5::steal() };
         let hardware = AdcDma::new(dp.TIM3, dp.TIM5, dp.SPI2, timing, consumer);
         let source = DmaSource::new(hardware, HALF_VECTORS, timing.timer_ticks_per_sample, RANGE);
         let link = DmaSerial::new(dp.USART2, clocks.pclk1_hz, BAUD);
@@ -186,6 +199,8 @@ mod app {
         cp.SYST.enable_interrupt();
         cp.SYST.enable_counter();
 
+        // Keep the debug port (RTT, probe-rs) alive while idle sleeps in WFI.
+        dp.DBGMCU.cr().modify(|_, w| w.dbg_sleep().set_bit());
         let mut watchdog = IndependentWatchdog::new(dp.IWDG);
         watchdog.stop_on_debug(&dp.DBGMCU, true);
         watchdog.start(WATCHDOG_MS.millis());

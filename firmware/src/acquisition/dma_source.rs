@@ -75,6 +75,11 @@ impl<H: AcquisitionHardware> DmaSource<H> {
         &self.hardware
     }
 
+    /// The hardware, mutably (benches and simulations drive it).
+    pub fn hardware_mut(&mut self) -> &mut H {
+        &mut self.hardware
+    }
+
     /// Whether acquisition runs.
     pub fn running(&self) -> bool {
         self.running

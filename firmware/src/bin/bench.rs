@@ -28,6 +28,10 @@ mod image {
     use cortex_m::peripheral::{syst::SystClkSource, SYST};
     use cortex_m_rt::entry;
     use cortex_m_semihosting::{debug, hprintln};
+    use plinth_firmware::acquisition::dma_source::{AcquisitionHardware, DmaSource};
+    use plinth_firmware::acquisition::handover::{DoubleBuffer, HalfCompletions};
+    use plinth_firmware::ad7606::Range;
+    use plinth_firmware::source::{SampleBuffer, SampleSource};
     use plinth_shared::extractor::{
         Event, ExtractorConfig, KeyphasorEdge, PhasorExtractor, Sensor,
     };
@@ -46,6 +50,61 @@ mod image {
     const PERIOD: usize = 1024;
     /// Sample vectors per measured extractor block.
     const BLOCK: usize = 64;
+
+    /// Sample vectors per DMA half (as in plinth-box).
+    const HALF: usize = plinth_firmware::source::BUFFER_VECTORS;
+
+    /// The DMA double buffer in RAM, filled by the CPU, with one keyphasor
+    /// capture per half.
+    struct RamHalves {
+        memory: [[[i16; N]; HALF]; 2],
+        done: HalfCompletions,
+        capture: Option<u32>,
+    }
+
+    impl RamHalves {
+        fn new() -> Self {
+            Self {
+                memory: [[[0; N]; HALF]; 2],
+                done: HalfCompletions::new(),
+                capture: None,
+            }
+        }
+
+        /// Writes half `h` as the DMA would and counts it complete.
+        fn fill_and_complete(&mut self, h: usize) {
+            for (v, vector) in self.memory[h % 2].iter_mut().enumerate() {
+                for (c, code) in vector.iter_mut().enumerate() {
+                    *code = (libm::sinf((h * HALF + v) as f32 * 0.05 + c as f32) * 3000.0) as i16;
+                }
+            }
+            self.capture = Some(((h * HALF + 40) * 1641 + 800) as u32);
+            self.done.complete();
+        }
+    }
+
+    impl DoubleBuffer for RamHalves {
+        fn completed(&self) -> u32 {
+            self.done.count()
+        }
+        fn read(&self, half: usize, vector: usize) -> [i16; N] {
+            // Volatile and clamped, as plinth-box reads its DMA memory.
+            let p: *const [i16; N] = &self.memory[half.min(1)][vector.min(HALF - 1)];
+            // SAFETY: a reference to an element of the array just above.
+            unsafe { p.read_volatile() }
+        }
+    }
+
+    impl AcquisitionHardware for RamHalves {
+        fn start(&mut self) -> u32 {
+            self.done.reset();
+            0
+        }
+        fn stop(&mut self) {}
+        fn take_capture(&mut self) -> Option<u32> {
+            self.capture.take()
+        }
+    }
 
     /// Runs `f` and returns the SysTick ticks it took.
     #[inline(never)]
@@ -212,6 +271,28 @@ mod image {
         hprintln!(
             "BENCH receive_instr_per_byte {}",
             receive / (repeats * len) as f32
+        );
+
+        // ---- the board's acquisition consumer: one DMA half taken ----
+        let mut source = DmaSource::new(RamHalves::new(), HALF, 1641, Range::PlusMinus10V);
+        source.start();
+        let mut out = SampleBuffer::default();
+        let mut taken = 0.0f32;
+        let halves = 20;
+        for h in 0..halves {
+            source.hardware_mut().fill_and_complete(h);
+            taken += instructions(overhead, || {
+                out.clear();
+                source.poll(&mut out);
+            });
+        }
+        if out.samples.len() != HALF || out.edges.len() != 1 {
+            hprintln!("BENCH error acquisition took {} vectors", out.samples.len());
+        }
+        hprintln!("BENCH acquisition_instr_per_half {}", taken / halves as f32);
+        hprintln!(
+            "BENCH acquisition_instr_per_vector {}",
+            taken / (halves * HALF) as f32
         );
         debug::exit(debug::EXIT_SUCCESS);
         cortex_m::asm::udf()

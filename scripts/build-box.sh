@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Builds plinth-box, the field box image for the reference board
+# (STM32F407G-DISC1 + AD7606 module; firmware/README.md), release, for
+# thumbv7em-none-eabihf, and prints the ELF's path on its last line.
+# Extra arguments go to cargo (e.g. `--features bench`).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+rustup target list --installed | grep -qx thumbv7em-none-eabihf || rustup target add thumbv7em-none-eabihf
+cargo build -p plinth-box --target thumbv7em-none-eabihf --release "$@" >&2
+echo "$(cd "${CARGO_TARGET_DIR:-target}" && pwd)/thumbv7em-none-eabihf/release/plinth-box"
