@@ -9,6 +9,10 @@
 //!   not delivered, and no delivered buffer holds a sample from the wrong
 //!   conversion (each sample vector is checked against the one converted at
 //!   its time).
+//! - A conversion the BUSY interrupt misses (a sequence fault) restarts
+//!   acquisition: one counted gap, never samples one conversion out of
+//!   place (each vector carries its conversion's number, each edge is
+//!   checked against the conversions' own times).
 //! - Keyphasor at a changing speed (60 → 25 Hz in 2.5 s), captures at
 //!   84 MHz across the 32-bit wrap: every edge delivered once, within
 //!   1e-3 sample of the true time (measured ≤ 3.0e-4, half a tick).
@@ -47,12 +51,25 @@ struct State {
     p: u64,
     /// Capture count at sample 0 (the 32-bit count wraps during the run).
     origin: u32,
-    /// Ticks since sample 0.
+    /// Ticks since power-up (the first start is at tick 0).
     now: u64,
-    /// Conversions transferred by the DMA.
+    /// Tick of the current acquisition's sample 0.
+    run_start: u64,
+    /// Conversions of the current acquisition.
+    run_converted: u64,
+    /// Conversions since power-up (each one's number is in its codes).
     converted: u64,
-    /// Conversions in the run.
+    /// Tick of each conversion since power-up.
+    ticks: Vec<u64>,
+    /// Ticks of the scenario's run: conversions stop after it.
+    end_tick: u64,
+    /// Conversions in the run, if nothing restarts it.
     total: u64,
+    /// A conversion that BUSY's interrupt misses (its words are never
+    /// read: the later ones land one slot early), by number since power-up.
+    skip: Option<u64>,
+    /// Sequence faults so far.
+    faults: u32,
     /// The DMA's two halves.
     memory: [[[i16; CHANNELS]; HALF]; 2],
     /// Half and vector the DMA writes next.
@@ -81,16 +98,26 @@ impl State {
         if !self.running {
             return;
         }
-        while self.converted < self.total && self.converted * self.p <= self.now {
-            let codes = codes(&self.scenario, self.converted, self.rate());
-            self.memory[self.half][self.index] = codes;
+        loop {
+            let tick = self.run_start + self.run_converted * self.p;
+            if tick > self.now || tick > self.end_tick {
+                break;
+            }
+            let k = self.converted;
+            self.ticks.push(tick);
+            self.converted += 1;
+            self.run_converted += 1;
+            if self.skip == Some(k) {
+                self.faults += 1;
+                continue;
+            }
+            self.memory[self.half][self.index] = codes(&self.scenario, k, tick);
             self.index += 1;
             if self.index == HALF {
                 self.index = 0;
                 self.half ^= 1;
                 self.completions.complete();
             }
-            self.converted += 1;
         }
         let tick_s = 1.0 / f64::from(TIMER_HZ);
         while let Some(&t) = self.pulses.get(self.next_pulse) {
@@ -105,10 +132,11 @@ impl State {
     }
 }
 
-/// The ADC codes of conversion k: the scenario's four probes quantised,
-/// then channels that make every vector unique (k itself, split in two).
-fn codes(scenario: &Scenario, k: u64, rate: f64) -> [i16; CHANNELS] {
-    let v = scenario.volts(k as f64 / rate);
+/// The ADC codes of conversion k (since power-up) taken at `tick`: the
+/// scenario's four probes quantised, then channels that make every vector
+/// unique (k itself, split in two).
+fn codes(scenario: &Scenario, k: u64, tick: u64) -> [i16; CHANNELS] {
+    let v = scenario.volts(tick as f64 / f64::from(TIMER_HZ));
     let q = |x: f64| (x / VOLTS_PER_CODE).round().clamp(-32768.0, 32767.0) as i16;
     [
         q(v[0]),
@@ -136,8 +164,14 @@ impl Board {
             p,
             origin,
             now: 0,
+            run_start: 0,
+            run_converted: 0,
             converted: 0,
-            total: (scenario.duration_s * rate) as u64,
+            ticks: Vec::new(),
+            end_tick: (scenario.duration_s * f64::from(TIMER_HZ)) as u64,
+            total: (scenario.duration_s * rate) as u64 + 1,
+            skip: None,
+            faults: 0,
             memory: [[[0; CHANNELS]; HALF]; 2],
             half: 0,
             index: 0,
@@ -172,13 +206,21 @@ impl AcquisitionHardware for Board {
         let mut s = self.0.borrow_mut();
         s.running = true;
         s.completions.reset();
-        s.origin
+        // The DMA restarts at half 0.
+        s.half = 0;
+        s.index = 0;
+        s.run_start = s.now;
+        s.run_converted = 0;
+        s.origin.wrapping_add(s.run_start as u32)
     }
     fn stop(&mut self) {
         self.0.borrow_mut().running = false;
     }
     fn take_capture(&mut self) -> Option<u32> {
         self.0.borrow_mut().captures.pop_front()
+    }
+    fn sequence_faults(&self) -> u32 {
+        self.0.borrow().faults
     }
 }
 
@@ -193,7 +235,8 @@ fn check_buffer(board: &Board, buf: &SampleBuffer, first: u64) -> Vec<f64> {
     let s = board.0.borrow();
     let step = Range::PlusMinus10V.volts_per_code();
     for (i, v) in buf.samples.iter().enumerate() {
-        let want = codes(&s.scenario, first + i as u64, s.rate()).map(|c| f32::from(c) * step);
+        let k = first + i as u64;
+        let want = codes(&s.scenario, k, s.ticks[k as usize]).map(|c| f32::from(c) * step);
         assert_eq!(
             *v,
             want,
@@ -327,6 +370,78 @@ fn keyphasor_edges_at_a_changing_speed_within_a_thousandth_of_a_sample() {
     assert!(worst < 1e-3, "worst edge error {worst:e} sample");
     assert_eq!(source.counters().dropped_edges, 0);
     assert!(want.len() > 100);
+}
+
+#[test]
+fn a_missed_conversion_restarts_acquisition_instead_of_shifting_the_samples() {
+    // BUSY's interrupt misses conversion 50 000 (≈ 1 s in): without a
+    // restart every later sample would sit one conversion early and every
+    // keyphasor edge one sample late.
+    let scenario = Scenario::standard();
+    let board = Board::new(scenario, 0xFFFF_0000);
+    board.0.borrow_mut().skip = Some(50_000);
+    let mut source = source(&board);
+    source.start();
+    let p = board.0.borrow().p;
+    let mut rng = StdRng::seed_from_u64(5);
+    let mut buf = SampleBuffer::default();
+    let (mut edges, mut gaps) = (0usize, 0usize);
+    let mut previous_last: Option<u64> = None;
+    while board.0.borrow().converted < board.0.borrow().total {
+        board.advance(rng.random_range(p * 10..p * HALF as u64));
+        source.poll(&mut buf);
+        if buf.is_empty() {
+            continue;
+        }
+        let s = board.0.borrow();
+        let step = Range::PlusMinus10V.volts_per_code();
+        // Which conversion each vector holds (its channels 4 and 5), and
+        // that it is that conversion, whole.
+        let k_of = |v: &[f32; CHANNELS]| {
+            let lo = (v[4] / step).round() as u64;
+            let hi = (v[5] / step).round() as u64;
+            hi * 30_000 + lo
+        };
+        let k_first = k_of(&buf.samples[0]);
+        for (i, v) in buf.samples.iter().enumerate() {
+            let k = k_first + i as u64;
+            assert_eq!(
+                k_of(v),
+                k,
+                "vectors of one buffer are consecutive conversions"
+            );
+            let want = codes(&s.scenario, k, s.ticks[k as usize]).map(|c| f32::from(c) * step);
+            assert_eq!(*v, want);
+        }
+        if buf.lost_before > 0 {
+            gaps += 1;
+        } else if let Some(last) = previous_last {
+            assert_eq!(k_first, last + 1, "no gap without lost_before");
+        }
+        previous_last = Some(k_first + buf.samples.len() as u64 - 1);
+        // Each edge where the pulse really was, by the conversions' own
+        // times.
+        for e in &buf.edges {
+            let before = s.ticks[(k_first + e.index as u64 - 1) as usize];
+            let tick = before as f64 + f64::from(e.fraction) * p as f64;
+            let nearest = s
+                .pulses
+                .iter()
+                .map(|t| (t * f64::from(TIMER_HZ) - tick).abs())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                nearest < 1e-3 * p as f64,
+                "edge {e:?} of the buffer from conversion {k_first} is {:.3} samples off",
+                nearest / p as f64
+            );
+            edges += 1;
+        }
+    }
+    let c = source.counters();
+    eprintln!("{edges} edges, {} resync, {gaps} gaps", c.resyncs);
+    assert_eq!(c.resyncs, 1);
+    assert_eq!(gaps, 1);
+    assert!(edges > 90, "{edges} edges");
 }
 
 /// An unbounded in-memory link.

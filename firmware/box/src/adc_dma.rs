@@ -55,8 +55,8 @@ pub static TX_DUMMY: u16 = 0;
 pub static COMPLETIONS: HalfCompletions = HalfCompletions::new();
 
 /// BUSY fell while the previous 8-word read was still running: that
-/// conversion was not read and every later sample is one conversion early
-/// in the buffer (reported by defmt; stop and start to resynchronise).
+/// conversion was not read, so the source restarts acquisition (counted in
+/// its `resyncs`, the samples since its last half as overruns).
 pub static LATE_READS: AtomicU32 = AtomicU32::new(0);
 /// DMA transfer errors on the ADC streams.
 pub static DMA_ERRORS: AtomicU32 = AtomicU32::new(0);
@@ -294,5 +294,11 @@ impl AcquisitionHardware for AdcDma {
 
     fn take_capture(&mut self) -> Option<u32> {
         self.captures.dequeue()
+    }
+
+    fn sequence_faults(&self) -> u32 {
+        LATE_READS
+            .load(Ordering::Relaxed)
+            .wrapping_add(DMA_ERRORS.load(Ordering::Relaxed))
     }
 }

@@ -18,19 +18,29 @@ pub trait AcquisitionHardware: DoubleBuffer {
     fn stop(&mut self);
     /// The oldest keyphasor capture not yet taken [capture ticks].
     fn take_capture(&mut self) -> Option<u32>;
+    /// Faults since power-up that broke the sample sequence: conversions
+    /// not read (BUSY came while the previous read still ran) and DMA
+    /// transfer errors (wrapping). When it changes the source restarts the
+    /// hardware rather than deliver samples one conversion out of place.
+    fn sequence_faults(&self) -> u32 {
+        0
+    }
 }
 
 /// What the source lost or dropped since start.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]
 pub struct DmaSourceCounters {
-    /// Halves not delivered because the consumer came too late (overruns).
+    /// Halves not delivered because the consumer came too late (overruns;
+    /// samples lost to a restart after a sequence fault are not in here).
     pub overrun_halves: u32,
     /// Of those, halves overrun while being copied (copy discarded).
     pub torn_halves: u32,
     /// Keyphasor edges dropped: before the start, in lost samples, or more
     /// than a buffer holds.
     pub dropped_edges: u32,
+    /// Restarts after a sequence fault ([`AcquisitionHardware::sequence_faults`]).
+    pub resyncs: u32,
 }
 
 /// DMA-fed AD7606 samples with keyphasor captures.
@@ -44,6 +54,12 @@ pub struct DmaSource<H> {
     held: Option<u32>,
     /// Vectors lost since the last delivered half.
     lost: u64,
+    /// Sample count since the (re)start that the next half should begin at.
+    expected: u64,
+    /// The hardware's fault count when last looked at.
+    faults_seen: u32,
+    /// Halves lost before the last restart.
+    lost_halves_before: u64,
     running: bool,
     counters: DmaSourceCounters,
 }
@@ -60,9 +76,26 @@ impl<H: AcquisitionHardware> DmaSource<H> {
             range,
             held: None,
             lost: 0,
+            expected: 0,
+            faults_seen: 0,
+            lost_halves_before: 0,
             running: false,
             counters: DmaSourceCounters::default(),
         }
+    }
+
+    /// Starts the hardware from a clean state: sample count 0, no stale
+    /// captures.
+    fn restart(&mut self) {
+        self.hardware.stop();
+        while self.hardware.take_capture().is_some() {}
+        self.lost_halves_before += self.handover.lost_halves();
+        self.handover.reset();
+        self.held = None;
+        self.expected = 0;
+        self.faults_seen = self.hardware.sequence_faults();
+        let origin = self.hardware.start();
+        self.timebase = CaptureTimebase::new(self.timebase.ticks_per_sample(), origin);
     }
 
     /// What was lost since start.
@@ -123,14 +156,10 @@ impl<H: AcquisitionHardware> DmaSource<H> {
 
 impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
     fn start(&mut self) {
-        self.hardware.stop();
-        while self.hardware.take_capture().is_some() {}
-        self.handover.reset();
-        self.held = None;
         self.lost = 0;
         self.counters = DmaSourceCounters::default();
-        let origin = self.hardware.start();
-        self.timebase = CaptureTimebase::new(self.timebase.ticks_per_sample(), origin);
+        self.restart();
+        self.lost_halves_before = 0;
         self.running = true;
     }
 
@@ -144,9 +173,23 @@ impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
         if !self.running {
             return;
         }
+        out.clear();
+        if self.hardware.sequence_faults() != self.faults_seen {
+            // A conversion went unread or the DMA failed: what follows in
+            // the buffer is out of place. Everything since the last
+            // delivered half is lost; start again from a clean state.
+            let converted = self.handover.now_bound(&self.hardware);
+            // (Halves already counted lost all lie after `expected`.)
+            self.lost = self
+                .lost
+                .max(converted.saturating_sub(self.expected))
+                .max(1);
+            self.counters.resyncs = self.counters.resyncs.saturating_add(1);
+            self.restart();
+            return;
+        }
         let range = self.range;
         let mut saturated = [0u32; crate::source::CHANNELS];
-        out.clear();
         let taken = self.handover.take(&self.hardware, |_, codes| {
             // Cannot fail: a half holds at most BUFFER_VECTORS vectors.
             let _ = out
@@ -158,7 +201,8 @@ impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
             Taken::Torn { lost } => {
                 out.clear();
                 self.lost = self.lost.saturating_add(lost);
-                self.counters.overrun_halves = self.handover.lost_halves() as u32;
+                self.counters.overrun_halves =
+                    (self.lost_halves_before + self.handover.lost_halves()) as u32;
                 self.counters.torn_halves = self.counters.torn_halves.saturating_add(1);
             }
             Taken::Half {
@@ -169,8 +213,10 @@ impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
                 let lost = self.lost.saturating_add(lost_before);
                 self.lost = 0;
                 out.lost_before = u32::try_from(lost).unwrap_or(u32::MAX);
-                self.counters.overrun_halves = self.handover.lost_halves() as u32;
+                self.counters.overrun_halves =
+                    (self.lost_halves_before + self.handover.lost_halves()) as u32;
                 let end = first_sample + out.samples.len() as u64;
+                self.expected = end;
                 self.attach_edges(out, first_sample, end);
             }
         }
