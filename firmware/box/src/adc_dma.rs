@@ -267,8 +267,6 @@ impl AcquisitionHardware for AdcDma {
                 .fixed()
                 .dir()
                 .memory_to_peripheral()
-                .teie()
-                .enabled()
         });
         // Stale received words out of the SPI.
         let _ = self.spi.dr().read();
