@@ -7,5 +7,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 rustup target list --installed | grep -qx thumbv7em-none-eabihf || rustup target add thumbv7em-none-eabihf
+# defmt keeps only errors unless told otherwise: the box's start-up and
+# fault lines are info and warn.
+export DEFMT_LOG="${DEFMT_LOG:-info}"
 cargo build -p plinth-box --target thumbv7em-none-eabihf --release "$@" >&2
 echo "$(cd "${CARGO_TARGET_DIR:-target}" && pwd)/thumbv7em-none-eabihf/release/plinth-box"
