@@ -92,18 +92,22 @@ print(f"plinth-box image: flash {box_flash} B = {box_flash/1024:.1f} KiB (STM32F
 #    stall the CPU for 2 cycles at the bus matrix (upper bound);
 #  - the half-complete ISR: 10 instructions, 4 register accesses, per 96
 #    conversions; keyphasor ISR (~60 cycles at <= 200 Hz) negligible;
+#  - every BUSY interrupt wakes the idle loop from WFI; it looks at the
+#    completion count, the receive DMA and the clock (4 loads, one of a DMA
+#    register) and sleeps again: 25 cycles;
 #  - the consumer's copy, scaling and edge placement: measured under QEMU
 #    (acquisition_instr_per_half, 96 conversions, one keyphasor edge).
 entry_exit, access = 24, 4
 busy_isr = entry_exit + 12 + 8 * access + 10
 dma_stall = 16 * 2
 half_isr = (entry_exit + 10 + 4 * access) / 96
+idle_wake = 25
 consumer = acq_half / 96
 extractor = ex_all * ch
-per_conv = busy_isr + dma_stall + half_isr + consumer + extractor
+per_conv = busy_isr + dma_stall + idle_wake + half_isr + consumer + extractor
 print(f"per conversion (8 channels) [cycles, estimate]: BUSY ISR {busy_isr} + SPI DMA bus stalls <= {dma_stall} "
-      f"+ half ISR {half_isr:.2f} + consumer copy/scale {consumer:.1f} (QEMU) + extractor {extractor:.1f} (QEMU) "
-      f"= {per_conv:.0f}")
+      f"+ idle wake-up {idle_wake} + half ISR {half_isr:.2f} + consumer copy/scale {consumer:.1f} (QEMU) "
+      f"+ extractor {extractor:.1f} (QEMU) = {per_conv:.0f}")
 acq_load = fs * per_conv
 print(f"box load at 51.2 kHz: {fs:.0f} x {per_conv:.0f} = {acq_load/1e6:.2f} M cycles/s = {100*acq_load/mips:.1f} % "
       f"of 168 MHz, + RLS {100*800*(rls+est)/mips:.1f} % (ESTIMATE, assumptions in scripts/bench-firmware.sh)")

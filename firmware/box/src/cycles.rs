@@ -85,8 +85,8 @@ pub static BUSY: Meter = Meter::new("busy_exti");
 pub static HALF: Meter = Meter::new("adc_half_dma");
 /// The keyphasor capture interrupt.
 pub static KEYPHASOR: Meter = Meter::new("keyphasor_capture");
-/// One pass of the idle loop's `Device::poll` that did some work
-/// (extractor, pipeline, protocol).
+/// One `Device::poll` of the idle loop (extractor, pipeline, protocol);
+/// the loop skips it when nothing can have changed (see `idle`).
 pub static POLL: Meter = Meter::new("device_poll");
 /// The millisecond tick.
 pub static TICK: Meter = Meter::new("systick");

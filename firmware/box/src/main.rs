@@ -245,9 +245,20 @@ mod app {
         } = cx.local;
         let mut last_report_ms = 0u32;
         let mut reported = (0u32, 0u32, 0u32, 0u32);
+        let mut last_look = serial::Look::default();
+        let mut busy = true;
         loop {
             watchdog.feed();
             let now = UPTIME_MS.load(Ordering::Relaxed);
+            // Every BUSY interrupt (51.2 kHz) wakes the core from WFI: when
+            // no half completed, no byte came in and no millisecond passed
+            // since an idle pass, go straight back to sleep.
+            let look = serial::Look::now(now);
+            if !busy && look == last_look {
+                cortex_m::asm::wfi();
+                continue;
+            }
+            last_look = look;
             let activity = cycles::POLL.measure(|| device.poll(link, source, now));
             link.kick();
             if now.wrapping_sub(last_report_ms) >= 1000 {
@@ -277,7 +288,8 @@ mod app {
                 #[cfg(feature = "bench")]
                 report_cycles(now);
             }
-            if activity.received == 0 && activity.sent == 0 && activity.samples == 0 {
+            busy = activity.received != 0 || activity.sent != 0 || activity.samples != 0;
+            if !busy {
                 cortex_m::asm::wfi();
             }
         }

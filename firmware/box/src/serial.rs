@@ -186,3 +186,25 @@ impl ByteLink for DmaSerial {
         self.line_errors.wrapping_add(self.ring.overruns())
     }
 }
+
+/// What can give the idle loop work: a completed ADC half, received bytes,
+/// the passing of a millisecond (status frames, transmit retries).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Look {
+    halves: u32,
+    rx_remaining: u16,
+    rx_halves: u32,
+    now_ms: u32,
+}
+
+impl Look {
+    /// The state now, at `now_ms` [ms] since boot.
+    pub fn now(now_ms: u32) -> Self {
+        Self {
+            halves: crate::adc_dma::COMPLETIONS.count(),
+            rx_remaining: dma1().st(RX_STREAM).ndtr().read().ndt().bits(),
+            rx_halves: RX_HALVES.load(Ordering::Relaxed),
+            now_ms,
+        }
+    }
+}
