@@ -222,3 +222,125 @@ impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::acquisition::handover::HalfCompletions;
+    use crate::source::CHANNELS;
+    use std::collections::VecDeque;
+
+    /// Halves of 4 vectors whose codes are their sample number, captures
+    /// queued by hand, 100 capture ticks per sample from origin 1000.
+    struct Fake {
+        done: HalfCompletions,
+        captures: VecDeque<u32>,
+        faults: u32,
+    }
+
+    impl DoubleBuffer for Fake {
+        fn completed(&self) -> u32 {
+            self.done.count()
+        }
+        fn read(&self, half: usize, vector: usize) -> [i16; CHANNELS] {
+            // The newest half of a count n is n − 1; this fake is only read
+            // for that one.
+            let seq = self.done.count() as usize - 1;
+            assert_eq!(seq % 2, half);
+            [(seq * 4 + vector) as i16; CHANNELS]
+        }
+    }
+
+    impl AcquisitionHardware for Fake {
+        fn start(&mut self) -> u32 {
+            self.done.reset();
+            1000
+        }
+        fn stop(&mut self) {}
+        fn take_capture(&mut self) -> Option<u32> {
+            self.captures.pop_front()
+        }
+        fn sequence_faults(&self) -> u32 {
+            self.faults
+        }
+    }
+
+    fn source() -> DmaSource<Fake> {
+        let fake = Fake {
+            done: HalfCompletions::new(),
+            captures: VecDeque::new(),
+            faults: 0,
+        };
+        let mut s = DmaSource::new(fake, 4, 100, Range::PlusMinus10V);
+        s.start();
+        s
+    }
+
+    #[test]
+    fn edges_go_to_the_half_that_holds_the_sample_after_them() {
+        let mut s = source();
+        // 2.5 samples in (half 0), and 3.5 (after its last sample: half 1's
+        // index 0).
+        s.hardware.captures.extend([1250, 1350]);
+        s.hardware.done.complete();
+        let mut out = SampleBuffer::default();
+        s.poll(&mut out);
+        assert_eq!(out.samples.len(), 4);
+        assert_eq!(out.edges.len(), 1);
+        assert_eq!(out.edges[0].index, 3);
+        assert!((out.edges[0].fraction - 0.505).abs() < 1e-6);
+        s.hardware.done.complete();
+        s.poll(&mut out);
+        assert_eq!(
+            out.samples[0][0],
+            4.0 * Range::PlusMinus10V.volts_per_code()
+        );
+        assert_eq!(out.edges.len(), 1);
+        assert_eq!(out.edges[0].index, 0);
+        assert_eq!(s.counters(), DmaSourceCounters::default());
+    }
+
+    #[test]
+    fn after_a_gap_the_interval_before_the_first_sample_is_not_data() {
+        let mut s = source();
+        s.hardware.done.complete();
+        let mut out = SampleBuffer::default();
+        s.poll(&mut out);
+        // Halves 1 and 2 complete; 1 is lost. An edge in half 1, one in the
+        // interval before half 2's first sample (8), one inside half 2.
+        s.hardware
+            .captures
+            .extend([1000 + 550, 1000 + 750, 1000 + 920]);
+        s.hardware.done.complete();
+        s.hardware.done.complete();
+        s.poll(&mut out);
+        assert_eq!(out.lost_before, 4);
+        assert_eq!(
+            out.samples[0][0],
+            8.0 * Range::PlusMinus10V.volts_per_code()
+        );
+        assert_eq!(out.edges.len(), 1);
+        assert_eq!(out.edges[0].index, 2);
+        assert_eq!(s.counters().dropped_edges, 2);
+        assert_eq!(s.counters().overrun_halves, 1);
+    }
+
+    #[test]
+    fn a_sequence_fault_restarts_and_reports_a_gap() {
+        let mut s = source();
+        s.hardware.done.complete();
+        let mut out = SampleBuffer::default();
+        s.poll(&mut out);
+        s.hardware.faults = 1;
+        s.poll(&mut out);
+        assert!(out.is_empty());
+        assert_eq!(s.counters().resyncs, 1);
+        // Sample numbering starts again after the restart.
+        s.hardware.done.complete();
+        s.poll(&mut out);
+        assert_eq!(out.samples.len(), 4);
+        assert_eq!(out.samples[0][0], 0.0);
+        assert!(out.lost_before >= 1);
+    }
+}
