@@ -86,6 +86,9 @@ mod app {
     /// The AD7606 module's RANGE jumper (±10 V).
     const RANGE: Range = Range::PlusMinus10V;
 
+    /// TIMx_SR: channel 2 overcapture (RM0090 18.4.5).
+    const TIM_SR_CC2OF: u32 = 1 << 10;
+
     /// Milliseconds since boot (the SysTick task).
     static UPTIME_MS: AtomicU32 = AtomicU32::new(0);
 
@@ -359,7 +362,14 @@ mod app {
             if sr.cc2of().bit_is_set() {
                 // A second edge came before the first was read.
                 adc_dma::bump(&adc_dma::LOST_CAPTURES);
-                cx.local.tim5.sr().modify(|_, w| w.cc2of().clear());
+                // SR's flags clear by writing 0 and ignore a 1: clear CC2OF
+                // alone (a read-modify-write could clear a capture flag
+                // raised meanwhile).
+                // SAFETY: writes 1 to every other flag, which changes nothing.
+                cx.local
+                    .tim5
+                    .sr()
+                    .write(|w| unsafe { w.bits(!TIM_SR_CC2OF) });
             }
             if sr.cc2if().bit_is_set() {
                 // Reading CCR2 clears CC2IF.
