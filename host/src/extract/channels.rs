@@ -5,8 +5,8 @@
 //! ```toml
 //! full_scale_v = 10.0      # integer PCM: volts at full scale (float WAV, CSV: samples are volts)
 //! revolutions = 4          # revolutions per phasor
-//! # optional: speed_resolution_hz = 0.01 (written speeds are rounded to it;
-//! #   phasors whose written speeds coincide, a dwell, are averaged),
+//! # optional: speed_resolution_hz = 0.001 (consecutive phasors whose speeds
+//! #   agree within it, a dwell, are averaged into one row at their mean speed),
 //! # min_speed_hz = 1.0, max_acceleration_hz_per_s = 50.0, period_tolerance = 0.05,
 //! # view = "driver", rotation = "ccw" (for `angle = "45L"`)
 //!
@@ -37,7 +37,7 @@ use std::path::Path;
 /// Default hysteresis of the keyphasor detector [V].
 pub const DEFAULT_HYSTERESIS_V: f64 = 0.5;
 /// Default rounding of written speeds [Hz].
-pub const DEFAULT_SPEED_RESOLUTION_HZ: f64 = 0.01;
+pub const DEFAULT_SPEED_RESOLUTION_HZ: f64 = 0.001;
 
 /// Keyphasor edge direction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -82,7 +82,7 @@ pub struct Channels {
     pub full_scale_v: Option<f64>,
     /// Revolutions per phasor, ≥ 1.
     pub revolutions: u16,
-    /// Written speeds are rounded to this [Hz]; equal ones are averaged.
+    /// Consecutive phasors within this of the first [Hz] are one dwell, averaged.
     pub speed_resolution_hz: f64,
     /// Lowest speed tracked [Hz].
     pub min_speed_hz: f64,

@@ -8,8 +8,8 @@
 //! channels converted with the revolution's kinematics, the run-down
 //! correction applied), R of which are averaged into one phasor with its
 //! noise ([`phasors`]); each bearing's channels are resolved into y and z;
-//! the written speed is rounded to `speed_resolution_hz`, and phasors whose
-//! written speeds coincide (a dwell) are averaged into one row. The run
+//! consecutive phasors whose speeds agree within `speed_resolution_hz`
+//! (default 0.001 Hz: a dwell) are averaged into one row at their mean speed. The run
 //! directory has the noise columns (`rel_y_sd`, ...: sqrt(E|n|²) of the
 //! written phasor). Phasors outside the speeds the bearing table covers are
 //! left out (with a warning); keyphasor faults are reported as the box
@@ -30,7 +30,6 @@ use num_complex::Complex;
 use phasors::{extract, Extraction};
 use plinth_shared::extractor::FaultKind;
 use recording::Recording;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -62,72 +61,108 @@ pub struct Args {
     pub force: bool,
 }
 
-/// Turns an extraction into run-directory rows: y/z resolved per bearing,
-/// speeds rounded to `config.speed_resolution_hz`, dwells averaged. Rows
-/// without a noise estimate take the median of the others.
-pub fn measurements(extraction: &Extraction, config: &Channels) -> Vec<Measurement> {
-    let res = config.speed_resolution_hz;
-    // (rounded speed index, bearing) → sums.
-    type Acc = (usize, [Complex<f64>; 4], [f64; 4], usize);
-    let mut acc: BTreeMap<(i64, usize), Acc> = BTreeMap::new();
-    for o in &extraction.outputs {
-        let key_speed = (o.speed_hz / res).round() as i64;
-        for (bi, (_, sets)) in config.bearings.iter().enumerate() {
-            let mut values = [Complex::new(0.0, 0.0); 4];
-            let mut sds = [f64::NAN; 4];
-            for (qi, set) in sets.iter().enumerate() {
-                let angles: Vec<f64> = set
-                    .iter()
-                    .map(|&i| config.channels[i].placement.angle_deg)
-                    .collect();
-                let q: Vec<Complex<f64>> = set
-                    .iter()
-                    .map(|&i| {
-                        Complex::new(
-                            f64::from(o.displacement[i].re),
-                            f64::from(o.displacement[i].im),
-                        )
-                    })
-                    .collect();
-                let sd: Option<Vec<f64>> = set.iter().map(|&i| o.noise_sd[i]).collect();
-                let (yz, noise) = resolve(&angles, &q, sd.as_deref());
-                values[2 * qi] = yz[0];
-                values[2 * qi + 1] = yz[1];
-                if let Some(n) = noise {
-                    sds[2 * qi] = n[0];
-                    sds[2 * qi + 1] = n[1];
-                }
-            }
-            let e =
-                acc.entry((key_speed, bi))
-                    .or_insert((0, [Complex::new(0.0, 0.0); 4], [0.0; 4], 0));
-            e.0 += 1;
-            for k in 0..4 {
-                e.1[k] += values[k];
-                e.2[k] += sds[k] * sds[k];
-            }
-            e.3 = bi;
+/// One bearing's y/z phasors [m] (rel y, rel z, ped y, ped z) and their
+/// noise sd [m] (NaN when unknown) from one output.
+fn bearing_phasors(
+    o: &phasors::Output,
+    config: &Channels,
+    sets: &[Vec<usize>; 2],
+) -> ([Complex<f64>; 4], [f64; 4]) {
+    let mut values = [Complex::new(0.0, 0.0); 4];
+    let mut sds = [f64::NAN; 4];
+    for (qi, set) in sets.iter().enumerate() {
+        let angles: Vec<f64> = set
+            .iter()
+            .map(|&i| config.channels[i].placement.angle_deg)
+            .collect();
+        let q: Vec<Complex<f64>> = set
+            .iter()
+            .map(|&i| {
+                Complex::new(
+                    f64::from(o.displacement[i].re),
+                    f64::from(o.displacement[i].im),
+                )
+            })
+            .collect();
+        let sd: Option<Vec<f64>> = set.iter().map(|&i| o.noise_sd[i]).collect();
+        let (yz, noise) = resolve(&angles, &q, sd.as_deref());
+        values[2 * qi] = yz[0];
+        values[2 * qi + 1] = yz[1];
+        if let Some(n) = noise {
+            sds[2 * qi] = n[0];
+            sds[2 * qi + 1] = n[1];
         }
     }
-    let mut rows: Vec<Measurement> = acc
-        .iter()
-        .map(|(&(speed, bi), (n, sum, var, _))| {
-            let n = *n as f64;
+    (values, sds)
+}
+
+/// Turns an extraction into run-directory rows: y/z resolved per bearing;
+/// a dwell (consecutive phasors within `config.speed_resolution_hz` of the
+/// first of them) averaged into one row at their mean speed, its noise sd
+/// the sd of that mean. Rows without a noise estimate take the median of
+/// the others of their bearing and column.
+pub fn measurements(extraction: &Extraction, config: &Channels) -> Vec<Measurement> {
+    let res = config.speed_resolution_hz;
+    // Consecutive outputs within `res` of the group's first speed.
+    let mut groups: Vec<Vec<&phasors::Output>> = Vec::new();
+    for o in &extraction.outputs {
+        match groups.last_mut() {
+            Some(g) if (o.speed_hz - g[0].speed_hz).abs() <= res => g.push(o),
+            _ => groups.push(vec![o]),
+        }
+    }
+    let mut rows: Vec<Measurement> = Vec::new();
+    for g in &groups {
+        let n = g.len() as f64;
+        let speed_hz = g.iter().map(|o| o.speed_hz).sum::<f64>() / n;
+        for (name, sets) in &config.bearings {
+            let mut sum = [Complex::new(0.0, 0.0); 4];
+            let mut var = [0.0f64; 4];
+            for o in g {
+                let (v, sd) = bearing_phasors(o, config, sets);
+                for k in 0..4 {
+                    sum[k] += v[k];
+                    var[k] += sd[k] * sd[k];
+                }
+            }
             let v = sum.map(|s| s / n);
-            let sd = var.map(|s| s.sqrt() / n);
-            Measurement {
-                speed_hz: speed as f64 * res,
-                bearing: config.bearings[bi].0.clone(),
+            rows.push(Measurement {
+                speed_hz,
+                bearing: name.clone(),
                 rel: [v[0], v[1]],
                 ped: [v[2], v[3]],
-                noise_sd: Some(sd),
+                noise_sd: Some(var.map(|s| s.sqrt() / n)),
+            });
+        }
+    }
+    // Two groups at exactly the same speed (a run-up and a run-down meeting
+    // there) would be the same (speed, bearing) twice: merge them.
+    rows.sort_by(|a, b| {
+        a.speed_hz
+            .total_cmp(&b.speed_hz)
+            .then(a.bearing.cmp(&b.bearing))
+    });
+    let mut merged: Vec<(Measurement, f64)> = Vec::new();
+    for m in rows {
+        match merged.last_mut() {
+            Some((last, count)) if last.speed_hz == m.speed_hz && last.bearing == m.bearing => {
+                let c = *count;
+                for k in 0..2 {
+                    last.rel[k] = (last.rel[k] * c + m.rel[k]) / (c + 1.0);
+                    last.ped[k] = (last.ped[k] * c + m.ped[k]) / (c + 1.0);
+                }
+                if let (Some(a), Some(b)) = (&mut last.noise_sd, m.noise_sd) {
+                    for k in 0..4 {
+                        a[k] = ((a[k] * c).powi(2) + b[k] * b[k]).sqrt() / (c + 1.0);
+                    }
+                }
+                *count += 1.0;
             }
-        })
-        .collect();
-    // Fill missing estimates (too few contiguous revolutions) with the
-    // median of the same bearing and column.
-    for (bi, (name, _)) in config.bearings.iter().enumerate() {
-        let _ = bi;
+            _ => merged.push((m, 1.0)),
+        }
+    }
+    let mut rows: Vec<Measurement> = merged.into_iter().map(|(m, _)| m).collect();
+    for (name, _) in &config.bearings {
         for k in 0..4 {
             let mut known: Vec<f64> = rows
                 .iter()
@@ -146,11 +181,6 @@ pub fn measurements(extraction: &Extraction, config: &Channels) -> Vec<Measureme
             }
         }
     }
-    rows.sort_by(|a, b| {
-        a.speed_hz
-            .total_cmp(&b.speed_hz)
-            .then(a.bearing.cmp(&b.bearing))
-    });
     rows
 }
 
