@@ -280,6 +280,31 @@ fn simulated_rundown_phasors_within_1e_3_and_identification_within_quarter_perce
         worst < 1e-3,
         "worst phasor error {worst:e} of the channel's peak"
     );
+    // The noise columns against the actual errors: sqrt(E|n|²) per phasor,
+    // so mean(|error|²/sd²) ≈ 1 where the error is noise (away from the
+    // resonances, where the run-down itself adds a systematic part).
+    let mut ratios = Vec::new();
+    for q in ChannelQuantity::ALL {
+        let k = ChannelQuantity::ALL.iter().position(|x| *x == q).unwrap();
+        for m in got
+            .measurements
+            .iter()
+            .filter(|m| m.speed_hz > 32.0 && m.speed_hz < 40.0)
+        {
+            let truth = spline.at(&m.bearing, q, m.speed_hz).unwrap();
+            let sd = m.noise_sd.unwrap()[k];
+            ratios.push((q.of(m) - truth).norm_sqr() / (sd * sd));
+        }
+    }
+    let mean_ratio = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    eprintln!(
+        "mean |error|²/sd² = {mean_ratio:.3} over {} phasors (32-40 Hz)",
+        ratios.len()
+    );
+    assert!(
+        mean_ratio > 0.5 && mean_ratio < 2.0,
+        "noise columns off: mean |error|²/sd² = {mean_ratio}"
+    );
     let id = identify_run(&got, &Options::default()).unwrap();
     for p in &sim.truth.truth.as_ref().unwrap().pedestals {
         let f = id.pedestal(&p.bearing).unwrap();

@@ -63,29 +63,39 @@ struct Single {
     displacement: Vec<Phasor>,
 }
 
+/// Revolutions the box's run-down correction ties together: the phasor of
+/// revolution j is made from revolutions j−2 … j+1, so phasors 4 or more
+/// revolutions apart have independent noise.
+pub const CORRELATED_REVOLUTIONS: usize = 4;
+
 /// HOST-SIDE NOISE ESTIMATE, to be replaced by the shared extractor's own
 /// per-phasor noise estimate (issue 9, branch issue9-box) when it lands.
 ///
-/// `window`: consecutive single-revolution phasors of one channel [m], the
-/// last `revolutions` of which make the output. The scatter between
-/// revolutions is measured by second differences q_{k−1} − 2q_k + q_{k+1}
-/// (blind to a response changing linearly over the window, as in a
-/// run-down): for independent noise of variance σ² per revolution,
-/// E|d|² = 6σ². The average of R revolutions has sd σ/√R = sqrt(E|n|²)
-/// (formats.md). `None` with fewer than 3 revolutions.
-pub fn revolution_scatter_sd(window: &[Phasor], revolutions: usize) -> Option<f64> {
-    if window.len() < 3 {
+/// `history`: one channel's consecutive output phasors [m] (each the average
+/// of `revolutions` revolutions), the newest last. Their scatter is measured
+/// by second differences at a lag L of outputs spanning at least
+/// [`CORRELATED_REVOLUTIONS`] revolutions, a_{k} − 2a_{k+L} + a_{k+2L}:
+/// blind to a response changing linearly (a run-down), and over phasors
+/// whose noise is independent, so that E|d|² = 6·E|n|² (formats.md's
+/// sqrt(E|n|²)). The last three such differences are averaged; `None` until
+/// 2L + 1 outputs are there. (Adjacent phasors are not independent: their
+/// second differences underestimate the noise by about √3.)
+pub fn revolution_scatter_sd(history: &[Phasor], revolutions: usize) -> Option<f64> {
+    let lag = CORRELATED_REVOLUTIONS.div_ceil(revolutions.max(1));
+    if history.len() < 2 * lag + 1 {
         return None;
     }
-    let d: Vec<f64> = window
-        .windows(3)
-        .map(|w| {
-            let d = w[0] - w[1] * 2.0 + w[2];
-            f64::from(d.norm_sqr())
-        })
+    let d: Vec<f64> = (0..history.len() - 2 * lag)
+        .rev()
+        .take(3)
+        .map(|k| f64::from((history[k] - history[k + lag] * 2.0 + history[k + 2 * lag]).norm_sqr()))
         .collect();
-    let var = d.iter().sum::<f64>() / (6.0 * d.len() as f64);
-    Some((var / revolutions.max(1) as f64).sqrt())
+    Some((d.iter().sum::<f64>() / (6.0 * d.len() as f64)).sqrt())
+}
+
+/// Outputs kept per channel for [`revolution_scatter_sd`].
+fn history_len(revolutions: usize) -> usize {
+    2 * CORRELATED_REVOLUTIONS.div_ceil(revolutions.max(1)) + 3
 }
 
 /// Host-side state of R-revolution averaging.
@@ -95,6 +105,9 @@ struct Averager {
     run: Vec<Single>,
     /// Singles in the run since the last output.
     count: usize,
+    /// The outputs of the current contiguous run (the last few), for the
+    /// noise estimate.
+    history: Vec<Vec<Phasor>>,
     fs: f64,
 }
 
@@ -102,6 +115,7 @@ impl Averager {
     fn brk(&mut self) {
         self.run.clear();
         self.count = 0;
+        self.history.clear();
     }
 
     fn push(&mut self, s: Single, out: &mut Vec<Output>) {
@@ -134,14 +148,15 @@ impl Averager {
         for d in &mut displacement {
             *d *= scale;
         }
-        let window_start = self.run.len().saturating_sub(r + 2);
+        self.history.push(displacement.clone());
+        let keep = history_len(r);
+        if self.history.len() > keep {
+            self.history.drain(..self.history.len() - keep);
+        }
         let noise_sd = (0..channels)
             .map(|c| {
-                let w: Vec<Phasor> = self.run[window_start..]
-                    .iter()
-                    .map(|s| s.displacement[c])
-                    .collect();
-                revolution_scatter_sd(&w, r)
+                let h: Vec<Phasor> = self.history.iter().map(|o| o[c]).collect();
+                revolution_scatter_sd(&h, r)
             })
             .collect();
         let last = &group[r - 1];
@@ -151,11 +166,9 @@ impl Averager {
             displacement,
             noise_sd,
         });
-        // Keep what the next window needs.
-        let keep = r + 2;
-        if self.run.len() > keep {
-            self.run.drain(..self.run.len() - keep);
-        }
+        // Only contiguity matters from here on.
+        let n = self.run.len();
+        self.run.drain(..n - 1);
     }
 }
 
@@ -224,6 +237,7 @@ pub fn extract(
         revolutions: usize::from(config.revolutions),
         run: Vec::new(),
         count: 0,
+        history: Vec::new(),
         fs,
     };
     let mut result = Extraction {
