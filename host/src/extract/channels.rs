@@ -137,17 +137,6 @@ struct RawChannel {
     sensitivity_unit: String,
 }
 
-/// Parses a sensor name: `proximity` (also `displacement`), `velocity`,
-/// `acceleration` (also `accelerometer`).
-pub fn parse_sensor(name: &str) -> Option<SensorKind> {
-    match name.trim().to_ascii_lowercase().as_str() {
-        "proximity" | "displacement" => Some(SensorKind::Displacement),
-        "velocity" => Some(SensorKind::Velocity),
-        "acceleration" | "accelerometer" => Some(SensorKind::Acceleration),
-        _ => None,
-    }
-}
-
 /// A sensitivity unit: the sensor kind it belongs to and the factor to SI
 /// (V/m, V/(m/s), V/(m/s²)).
 pub fn sensitivity_unit(unit: &str) -> Option<(SensorKind, f64)> {
@@ -249,7 +238,7 @@ impl Channels {
             if let Some(j) = channels.iter().position(|o| o.index == index) {
                 bail!("{file}: {key}.index: channel {index} is already channel[{j}]");
             }
-            let kind = parse_sensor(&c.sensor).ok_or_else(|| {
+            let kind = SensorKind::parse(&c.sensor).ok_or_else(|| {
                 anyhow::anyhow!(
                     "{file}: {key}.sensor: unknown sensor `{}` (expected \"proximity\", \"velocity\" or \"acceleration\")",
                     c.sensor

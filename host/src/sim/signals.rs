@@ -311,38 +311,16 @@ impl ChannelQuantity {
     }
 }
 
-/// What a channel's transducer measures.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "snake_case")]
-pub enum SensorKind {
-    /// Displacement [m] (proximity probe); sensitivity in V/m.
-    Displacement,
-    /// Velocity [m/s] (velocity pick-up); sensitivity in V/(m/s).
-    Velocity,
-    /// Acceleration [m/s²] (accelerometer); sensitivity in V/(m/s²).
-    Acceleration,
-}
+/// What a channel's transducer measures (the one definition, shared with
+/// the extractor and the wire protocol).
+pub use plinth_shared::extractor::SensorKind;
 
-impl SensorKind {
-    /// The wire protocol's name for it.
-    pub fn to_protocol(self) -> plinth_shared::protocol::messages::SensorKind {
-        use plinth_shared::protocol::messages::SensorKind as K;
-        match self {
-            Self::Displacement => K::Displacement,
-            Self::Velocity => K::Velocity,
-            Self::Acceleration => K::Acceleration,
-        }
-    }
-
-    /// The extractor's transducer description with `sensitivity` [V/unit].
-    pub fn to_extractor(self, sensitivity: f32) -> plinth_shared::extractor::Sensor {
-        use plinth_shared::extractor::Sensor;
-        match self {
-            Self::Displacement => Sensor::displacement(sensitivity),
-            Self::Velocity => Sensor::velocity(sensitivity),
-            Self::Acceleration => Sensor::acceleration(sensitivity),
-        }
-    }
+/// Parses a sensor kind on the command line (`displacement`/`proximity`,
+/// `velocity`, `acceleration`).
+pub fn parse_sensor_kind(text: &str) -> Result<SensorKind, String> {
+    SensorKind::parse(text).ok_or_else(|| {
+        format!("`{text}` is not a sensor kind (expected displacement, velocity or acceleration)")
+    })
 }
 
 /// One channel of a signal set.
@@ -1227,7 +1205,7 @@ pub struct SignalsArgs {
     #[arg(long, default_value_t = 1.0)]
     pub probe_noise_mv: f64,
     /// Transducer on the pedestals.
-    #[arg(long, value_enum, default_value = "acceleration")]
+    #[arg(long, value_parser = parse_sensor_kind, default_value = "acceleration")]
     pub seismic: SensorKind,
     /// Seismic sensitivity [V/(m/s²), V/(m/s) or V/m]; default by kind:
     /// 100 mV/g, 20 mV/(mm/s), 7.87 V/mm.
