@@ -33,7 +33,8 @@
 //! each end of the run) and each channel's complex phasor is interpolated
 //! with a natural cubic spline in speed (derivatives from the same spline).
 //! The interpolation error is *measured*, not assumed: the machine is also
-//! solved at every grid midpoint inside the run's speed range and the largest
+//! solved at the midpoint of every grid interval the run overlaps and at 17
+//! speeds spread over the run, and the largest
 //! |X_spline − X_solved| is recorded in the header, absolute [m] and relative
 //! to that channel's largest |X| over the run. It falls as h⁴ and is set by
 //! the sharpest resonance: on the undamped paper machine (rotor-on-pedestal
@@ -91,6 +92,15 @@ pub const SAMPLES_FILE: &str = "samples.i16";
 pub const KEYPHASOR_FILE: &str = "keyphasor.csv";
 /// Truth run directory inside a signal set.
 pub const TRUTH_DIR: &str = "truth";
+/// Most response solves of the speed grid (a grid step too small for the
+/// run is refused, not allocated).
+pub const MAX_GRID_POINTS: usize = 200_000;
+/// Largest interpolation error accepted, relative to each channel's peak
+/// over the run: a grid step that cannot represent the response is refused.
+pub const MAX_INTERPOLATION_ERROR: f64 = 0.1;
+/// Speeds spread over the run (besides the grid midpoints) at which the
+/// interpolation error is measured.
+pub const CHECK_SPEEDS: usize = 16;
 
 /// A problem reading, writing or making a signal set, naming the file and
 /// where in it.
@@ -1010,24 +1020,32 @@ pub fn synthesise(
     let hi = max_speed;
     let g0 = ((lo / step).floor() - 4.0).max(0.0) * step;
     let g0 = if g0 <= 0.0 { step.min(lo / 2.0) } else { g0 };
-    let n_grid = ((hi - g0) / step).ceil() as usize + 5;
+    let points = ((hi - g0) / step).ceil() + 5.0;
+    if points > MAX_GRID_POINTS as f64 {
+        return Err(SignalsError::Request(format!(
+            "grid step {step} Hz needs {points:.3e} response solves over {g0}..{hi} Hz; at most {MAX_GRID_POINTS} are made: use a step of at least {:.3e} Hz",
+            (hi - g0) / (MAX_GRID_POINTS as f64 - 5.0)
+        )));
+    }
+    let n_grid = points as usize;
     let grid: Vec<f64> = (0..n_grid).map(|i| g0 + i as f64 * step).collect();
     let response = unbalance_response(machine, &grid, effects)?;
     let truth = response.to_run_dir(None)?;
     let spline =
         PhasorSpline::from_measurements(&truth.measurements).map_err(SignalsError::Request)?;
 
-    // Measure the interpolation error at grid midpoints inside the run.
-    let mids: Vec<f64> = grid
+    // Measure the interpolation error where the run is: at the midpoint of
+    // every grid interval the run overlaps and at CHECK_SPEEDS speeds spread
+    // over the run (a grid coarser than the run has no midpoint inside it).
+    let mut checks: Vec<f64> = grid
         .windows(2)
+        .filter(|w| w[1] >= lo && w[0] <= hi)
         .map(|w| 0.5 * (w[0] + w[1]))
-        .filter(|&m| m >= lo && m <= hi)
         .collect();
-    let mid_rows = if mids.is_empty() {
-        Vec::new()
-    } else {
-        unbalance_response(machine, &mids, effects)?.measurements()
-    };
+    checks.extend((0..=CHECK_SPEEDS).map(|i| lo + (hi - lo) * i as f64 / CHECK_SPEEDS as f64));
+    checks.sort_by(f64::total_cmp);
+    checks.dedup();
+    let check_rows = unbalance_response(machine, &checks, effects)?.measurements();
 
     // Channels: per bearing rel_y, rel_z (probes), ped_y, ped_z (seismic).
     let mut channels = Vec::new();
@@ -1035,13 +1053,18 @@ pub fn synthesise(
         for q in ChannelQuantity::ALL {
             let probe = matches!(q, ChannelQuantity::RelY | ChannelQuantity::RelZ);
             let mut max_x: f64 = 0.0;
-            for m in truth.measurements.iter().filter(|m| m.bearing == b.name) {
+            for m in truth
+                .measurements
+                .iter()
+                .chain(&check_rows)
+                .filter(|m| m.bearing == b.name)
+            {
                 if m.speed_hz >= lo && m.speed_hz <= hi {
                     max_x = max_x.max(q.of(m).norm());
                 }
             }
             let mut err: f64 = 0.0;
-            for m in mid_rows.iter().filter(|m| m.bearing == b.name) {
+            for m in check_rows.iter().filter(|m| m.bearing == b.name) {
                 if let Some(v) = spline.at(&b.name, q, m.speed_hz) {
                     err = err.max((v - q.of(m)).norm());
                 }
@@ -1072,6 +1095,17 @@ pub fn synthesise(
                 interpolation_error_rel: if max_x > 0.0 { err / max_x } else { 0.0 },
             });
         }
+    }
+    if let Some(c) = channels
+        .iter()
+        .find(|c| !(c.interpolation_error_rel <= MAX_INTERPOLATION_ERROR))
+    {
+        return Err(SignalsError::Request(format!(
+            "grid step {step} Hz cannot represent the response: channel {} is interpolated with an error of {:.2e} of its peak (measured at {} speeds over the run; at most {MAX_INTERPOLATION_ERROR} accepted): use a smaller --grid-step (the error falls as step⁴)",
+            c.name,
+            c.interpolation_error_rel,
+            checks.len()
+        )));
     }
     let n = channels.len();
     let chan_splines: Vec<&ComplexSpline> = channels
