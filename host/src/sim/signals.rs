@@ -1096,10 +1096,9 @@ pub fn synthesise(
             });
         }
     }
-    if let Some(c) = channels
-        .iter()
-        .find(|c| !(c.interpolation_error_rel <= MAX_INTERPOLATION_ERROR))
-    {
+    if let Some(c) = channels.iter().find(|c| {
+        c.interpolation_error_rel.is_nan() || c.interpolation_error_rel > MAX_INTERPOLATION_ERROR
+    }) {
         return Err(SignalsError::Request(format!(
             "grid step {step} Hz cannot represent the response: channel {} is interpolated with an error of {:.2e} of its peak (measured at {} speeds over the run; at most {MAX_INTERPOLATION_ERROR} accepted): use a smaller --grid-step (the error falls as step⁴)",
             c.name,
