@@ -345,3 +345,33 @@ fn slow_roll_removes_probe_runout() {
     let s = subtract_slow_roll(&mut run2.measurements, "40:60".parse().unwrap()).unwrap();
     assert!(!s.warnings.is_empty());
 }
+
+/// `--plots`: Bode per bearing and quantity, a polar plot per resolved
+/// direction and per transducer, PNG and SVG.
+#[test]
+fn plots_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let t = fixtures().join("tables");
+    let mut a = args(
+        &t.join("bently_um_pp_lag.csv"),
+        &t.join("bently_um_pp_lag.toml"),
+        &out,
+    );
+    a.plots = true;
+    run(&a).unwrap();
+    let figures = out.join("figures");
+    for name in [
+        "bode_left_rel.png",
+        "bode_right_ped.svg",
+        "polar_left_rel_y.png",
+        "polar_right_ped_z.svg",
+        "polar_left_rel_45deg.png",
+        "polar_left_rel_-45deg.svg",
+    ] {
+        let len = std::fs::metadata(figures.join(name))
+            .map(|m| m.len())
+            .unwrap_or(0);
+        assert!(len > 1000, "{name}: {len} bytes");
+    }
+}

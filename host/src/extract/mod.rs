@@ -285,7 +285,19 @@ pub fn run(args: &Args) -> Result<()> {
         bearings,
         truth: None,
     };
-    write_run(&args.out, args.force, &run, slow_roll.as_ref(), args.plots)?;
+    let placements: Vec<_> = config
+        .channels
+        .iter()
+        .map(|c| c.placement.clone())
+        .collect();
+    write_run(
+        &args.out,
+        args.force,
+        &run,
+        slow_roll.as_ref(),
+        args.plots,
+        &placements,
+    )?;
     let per_channel = extraction.frames as f64 / elapsed.max(1e-9);
     println!(
         "{} ({}, {} channels at {} Hz, {:.1} s): {} keyphasor edges, {} phasors, {} rows -> {}",

@@ -369,13 +369,16 @@ pub fn check_against_bearings(
 }
 
 /// Writes the run directory: measurements, bearings, and `slow_roll.csv`
-/// when slow roll was subtracted; figures on request.
+/// when slow roll was subtracted; with `plots`, Bode and polar figures in
+/// `figures/` for the resolved y/z phasors and every transducer in
+/// `transducers` (bearing, quantity, angle [deg]).
 pub fn write_run(
     out: &Path,
     force: bool,
     run: &RunDir,
     slow_roll: Option<&SlowRoll>,
     plots: bool,
+    transducers: &[Placement],
 ) -> Result<()> {
     write_dir_atomically(out, force, |dir| {
         run.write(dir)?;
@@ -383,7 +386,11 @@ pub fn write_run(
             s.write(dir)?;
         }
         if plots {
-            super::plot::plot_run(run, &dir.join("figures"))?;
+            let t: Vec<(String, Quantity, f64)> = transducers
+                .iter()
+                .map(|p| (p.bearing.clone(), p.quantity, p.angle_deg))
+                .collect();
+            super::plot::plot_run_with(run, &dir.join("figures"), &t, super::angle::Rotation::Ccw)?;
         }
         Ok(())
     })
@@ -418,7 +425,19 @@ pub fn run(args: &Args) -> Result<()> {
         bearings,
         truth: None,
     };
-    write_run(&args.out, args.force, &run, slow_roll.as_ref(), args.plots)?;
+    let placements: Vec<Placement> = layout
+        .transducers
+        .iter()
+        .map(|t| t.placement.clone())
+        .collect();
+    write_run(
+        &args.out,
+        args.force,
+        &run,
+        slow_roll.as_ref(),
+        args.plots,
+        &placements,
+    )?;
     println!(
         "{}: {} rows ({} bearings) -> {}",
         args.table.display(),
