@@ -136,7 +136,8 @@ pub struct Args {
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Seismic transducers on the pedestals (typical field sensitivities:
+    /// Seismic transducers on the pedestals: displacement, velocity or
+    /// acceleration (typical field sensitivities:
     /// 20 mV/(mm/s) velocity pick-ups, 100 mV/g accelerometers, 7.87 V/mm).
     #[arg(long, value_parser = crate::sim::signals::parse_sensor_kind, default_value = "displacement")]
     pub seismic: SensorKind,

@@ -25,7 +25,7 @@ pub struct SignalsArgs {
     /// Probe channel noise [mV RMS].
     #[arg(long, default_value_t = 1.0)]
     pub probe_noise_mv: f64,
-    /// Transducer on the pedestals.
+    /// Transducer on the pedestals: displacement, velocity or acceleration.
     #[arg(long, value_parser = parse_sensor_kind, default_value = "acceleration")]
     pub seismic: SensorKind,
     /// Seismic sensitivity [V/(m/s²), V/(m/s) or V/m]; default by kind:
