@@ -4,10 +4,10 @@
 
 use crate::source::{ChannelLayout, CHANNELS};
 use plinth_shared::bearing::{BearingTable, BearingTableError};
-use plinth_shared::extractor::{Sensor, SensorKind as ExtractorSensorKind};
+use plinth_shared::extractor::Sensor;
 use plinth_shared::protocol::{
     Averaging, BearingTableChunk, ChannelConfig, ChannelSet, NackReason, Quantity, RlsSettings,
-    SensorKind, MAX_BEARINGS,
+    MAX_BEARINGS,
 };
 use plinth_shared::regression::ParameterScale;
 
@@ -202,13 +202,8 @@ impl Configuration {
     pub fn sensors(&self) -> [Sensor; CHANNELS] {
         let mut sensors = [Sensor::displacement(1.0); CHANNELS];
         for c in &self.channels {
-            let kind = match c.kind {
-                SensorKind::Displacement => ExtractorSensorKind::Displacement,
-                SensorKind::Velocity => ExtractorSensorKind::Velocity,
-                SensorKind::Acceleration => ExtractorSensorKind::Acceleration,
-            };
             sensors[c.channel as usize % CHANNELS] = Sensor {
-                kind,
+                kind: c.kind,
                 sensitivity: c.sensitivity,
             };
         }

@@ -6,6 +6,8 @@
 pub mod demo;
 pub mod diagnose;
 pub mod effects;
+pub mod extract;
+pub mod field;
 pub mod identify;
 pub mod paper;
 pub mod plots;

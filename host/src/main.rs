@@ -31,6 +31,12 @@ enum Command {
     Demo(plinth::demo::Args),
     /// Find, name and fix what the pedestal model is missing.
     Diagnose(plinth::diagnose::Args),
+    /// Import a 1X vector table (amplitude and phase per transducer) as a run directory.
+    Import(plinth::field::import::Args),
+    /// Extract 1X phasors from a recorded run-down (WAV or CSV) into a run directory.
+    Extract(plinth::extract::Args),
+    /// Bode and polar plots of a run directory.
+    Plot(plinth::field::plot::Args),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +50,9 @@ fn main() -> ExitCode {
         Command::Stream(a) => plinth::stream::run(&a),
         Command::Demo(a) => plinth::demo::run(&a),
         Command::Diagnose(a) => plinth::diagnose::run(&a),
+        Command::Import(a) => plinth::field::import::run(&a),
+        Command::Extract(a) => plinth::extract::run(&a),
+        Command::Plot(a) => plinth::field::plot::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -337,7 +337,7 @@ fn row_from_zero(view: PhasorView, row: usize) -> bool {
 }
 
 /// Colour of the i-th series (a colour-blind-safe qualitative palette).
-fn colour(i: usize) -> RGBColor {
+pub fn colour(i: usize) -> RGBColor {
     const PALETTE: [RGBColor; 8] = [
         RGBColor(0, 114, 178),   // blue
         RGBColor(213, 94, 0),    // vermillion
@@ -802,7 +802,7 @@ impl ScalarFigure {
 }
 
 /// Renders a figure once to PNG and once to SVG beside each other.
-fn write_both(
+pub fn write_both(
     stem: &Path,
     size: (u32, u32),
     png: impl FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> Result<()>,

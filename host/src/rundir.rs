@@ -539,6 +539,23 @@ impl BearingSchedule {
     }
 }
 
+/// Reads and checks a `bearings.csv` on its own (formats.md layout), e.g. the
+/// bearing table given to `plinth import` or `plinth extract`.
+pub fn read_bearings(path: impl AsRef<Path>) -> Result<Vec<BearingRow>, RunDirError> {
+    let rows = read_table(path.as_ref(), &BEARING_COLUMNS, None, false)?;
+    Ok(rows
+        .iter()
+        .map(|r| BearingRow {
+            speed_hz: r.speed_hz,
+            bearing: r.bearing.clone(),
+            coefficients: BearingCoefficients {
+                k: [[r.values[0], r.values[1]], [r.values[2], r.values[3]]],
+                c: [[r.values[4], r.values[5]], [r.values[6], r.values[7]]],
+            },
+        })
+        .collect())
+}
+
 impl RunDir {
     /// Reads and checks a run directory: `measurements.csv` and
     /// `bearings.csv` are required, `truth.json` is optional. Every

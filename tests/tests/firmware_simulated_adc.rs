@@ -343,7 +343,7 @@ fn run(machine: &Machine, rundown: (f64, f64, f64), front: FrontEnd) -> Outcome 
             .channels
             .push(ChannelConfig {
                 channel: n as u8,
-                kind: ch.kind.to_protocol(),
+                kind: ch.kind,
                 sensitivity: ch.sensitivity as f32,
                 bearing: ch.bearing_index as u8,
                 quantity: ch.quantity.to_protocol(),

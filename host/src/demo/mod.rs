@@ -136,9 +136,10 @@ pub struct Args {
     /// Seed of the sensor noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Seismic transducers on the pedestals (typical field sensitivities:
+    /// Seismic transducers on the pedestals: displacement, velocity or
+    /// acceleration (typical field sensitivities:
     /// 20 mV/(mm/s) velocity pick-ups, 100 mV/g accelerometers, 7.87 V/mm).
-    #[arg(long, value_enum, default_value_t = DEFAULT_SEISMIC)]
+    #[arg(long, value_parser = crate::sim::signals::parse_sensor_kind, default_value = "displacement")]
     pub seismic: SensorKind,
     /// Also write the simulated signals to OUT/signals (`plinth signals` format,
     /// about 0.8 MB per second of run-down).

@@ -89,28 +89,10 @@ impl fmt::Display for Quantity {
     }
 }
 
-/// The kind of transducer on a channel, which fixes its sensitivity's unit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SensorKind {
-    /// Eddy-current proximity probe: displacement, sensitivity in V/m.
-    Proximity,
-    /// Velocity pickup (seismic): sensitivity in V/(m/s).
-    Velocity,
-    /// Accelerometer: sensitivity in V/(m/s²).
-    Acceleration,
-}
-
-impl SensorKind {
-    /// The unit of this kind's sensitivity.
-    pub fn sensitivity_unit(self) -> &'static str {
-        match self {
-            SensorKind::Proximity => "V/m",
-            SensorKind::Velocity => "V/(m/s)",
-            SensorKind::Acceleration => "V/(m/s²)",
-        }
-    }
-}
+/// The kind of transducer on a channel, which fixes its sensitivity's unit
+/// (`proximity` or `displacement`, `velocity`, `acceleration`): the one
+/// definition shared with the extractor and the wire protocol.
+pub use plinth_shared::extractor::SensorKind;
 
 /// One ADC channel's assignment.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -289,7 +271,7 @@ impl StreamConfig {
                 );
             }
             if matches!(ch.quantity, Quantity::RelY | Quantity::RelZ)
-                && ch.sensor != SensorKind::Proximity
+                && ch.sensor != SensorKind::Displacement
             {
                 bail!(
                     "{here}: {} is rotor motion relative to the pedestal and needs a proximity probe, not a {:?} sensor",
@@ -425,11 +407,7 @@ impl StreamConfig {
             let bearing = self.bearing_index(&ch.bearing).unwrap_or(0);
             let entry = ChannelConfig {
                 channel: ch.adc,
-                kind: match ch.sensor {
-                    SensorKind::Proximity => protocol::SensorKind::Displacement,
-                    SensorKind::Velocity => protocol::SensorKind::Velocity,
-                    SensorKind::Acceleration => protocol::SensorKind::Acceleration,
-                },
+                kind: ch.sensor,
                 sensitivity: ch.sensitivity as f32,
                 bearing: bearing as u8,
                 quantity: match ch.quantity {

@@ -3,8 +3,8 @@
 //! how far the box has acknowledged them so that a restarted host resumes
 //! where the last one stopped.
 
-use super::config::{SensorKind, StreamConfig};
-use crate::sim::signals::{SensorKind as SetKind, SignalSet};
+use super::config::StreamConfig;
+use crate::sim::signals::SignalSet;
 use anyhow::{bail, Context, Result};
 use plinth_shared::protocol::{
     KeyphasorEdge, SampleBlock, Samples, MAX_BLOCK_VALUES, MAX_KEYPHASOR_EDGES,
@@ -153,12 +153,7 @@ impl SignalSetReplay {
                 );
             };
             let s = &set.header.channels[col];
-            let kind_matches = matches!(
-                (s.kind, ch.sensor),
-                (SetKind::Displacement, SensorKind::Proximity)
-                    | (SetKind::Velocity, SensorKind::Velocity)
-                    | (SetKind::Acceleration, SensorKind::Acceleration)
-            );
+            let kind_matches = s.kind == ch.sensor;
             if !kind_matches {
                 bail!(
                     "configured ADC channel {} ({} {}) is a {:?} sensor but the signal set's {} is {:?}",

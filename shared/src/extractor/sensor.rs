@@ -19,16 +19,65 @@
 use core::f32::consts::FRAC_1_PI;
 use num_complex::Complex;
 
-/// What a channel's transducer measures.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What a channel's transducer measures: THE sensor kind of Plinth, used by
+/// the extractor, the wire protocol (postcard encodes the variant index, in
+/// this order), the signal-set header (`displacement`, `velocity`,
+/// `acceleration`), the stream configuration and the field-data readers
+/// (which also accept `proximity` for a displacement probe).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SensorKind {
     /// Displacement, e.g. a proximity probe (`rel`) [m].
+    #[serde(alias = "proximity")]
     Displacement,
     /// Velocity, a seismic velocity pick-up on a pedestal [m/s].
     Velocity,
     /// Acceleration, an accelerometer on a pedestal [m/s²].
     Acceleration,
+}
+
+impl SensorKind {
+    /// All kinds, in wire order.
+    pub const ALL: [SensorKind; 3] = [
+        SensorKind::Displacement,
+        SensorKind::Velocity,
+        SensorKind::Acceleration,
+    ];
+
+    /// The name in files: `displacement`, `velocity`, `acceleration`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            SensorKind::Displacement => "displacement",
+            SensorKind::Velocity => "velocity",
+            SensorKind::Acceleration => "acceleration",
+        }
+    }
+
+    /// The unit of a sensitivity for this kind: V/m, V/(m/s) or V/(m/s²).
+    pub const fn sensitivity_unit(self) -> &'static str {
+        match self {
+            SensorKind::Displacement => "V/m",
+            SensorKind::Velocity => "V/(m/s)",
+            SensorKind::Acceleration => "V/(m/s²)",
+        }
+    }
+
+    /// Parses a name: `displacement` (or `proximity`), `velocity`,
+    /// `acceleration` (or `accelerometer`), any case.
+    pub fn parse(name: &str) -> Option<SensorKind> {
+        let n = name.trim();
+        let is = |s: &str| n.eq_ignore_ascii_case(s);
+        if is("displacement") || is("proximity") {
+            Some(SensorKind::Displacement)
+        } else if is("velocity") {
+            Some(SensorKind::Velocity)
+        } else if is("acceleration") || is("accelerometer") {
+            Some(SensorKind::Acceleration)
+        } else {
+            None
+        }
+    }
 }
 
 /// One channel's transducer: what it measures and how many volts it gives per

@@ -211,17 +211,10 @@ pub struct Capabilities {
     pub adc_volts_per_code: f32,
 }
 
-/// How a channel's transducer measures vibration.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum SensorKind {
-    /// Displacement (proximity probe); sensitivity in V/m.
-    Displacement,
-    /// Velocity (velocity pickup); sensitivity in V/(m/s).
-    Velocity,
-    /// Acceleration (accelerometer); sensitivity in V/(m/s²).
-    Acceleration,
-}
+/// How a channel's transducer measures vibration: the extractor's kind
+/// (one definition; encoded as its variant index, Displacement = 0,
+/// Velocity = 1, Acceleration = 2).
+pub use crate::extractor::SensorKind;
 
 /// Which displacement a channel measures at its bearing (formats.md: `rel` is
 /// rotor minus pedestal, `ped` is absolute pedestal; y vertical, z horizontal).

@@ -1,0 +1,404 @@
+//! The extraction loop: recording blocks → keyphasor edges → the box's own
+//! phasor extractor (`plinth_shared::extractor::PhasorExtractor`, one per
+//! group of the box's [`GROUP`] channels, all fed the same edges) → R-revolution
+//! averages with their noise.
+//!
+//! The extractor runs with one revolution per output, exactly as on the box
+//! (its run-down correction and seismic conversion included); the R
+//! revolutions of a phasor are then averaged here the way the box's
+//! extractor averages them (a sum of R contiguous revolutions in f32, times
+//! 1/R), so that their scatter is available for the noise columns. A fault
+//! (missing or extra pulse) drops a partial average, as on the box.
+
+use super::channels::Channels;
+use super::keyphasor::{EdgeDetector, MIN_SAMPLES_PER_REVOLUTION};
+use super::recording::Recording;
+use anyhow::{bail, Result};
+use plinth_shared::extractor::{
+    Event, ExtractorConfig, Fault, FaultKind, KeyphasorEdge, PhasorExtractor, Sensor,
+};
+use plinth_shared::phasor::Phasor;
+
+/// Channels per extractor: the box's channel count.
+pub const GROUP: usize = plinth_firmware::source::CHANNELS;
+
+/// Frames per block read from the recording.
+pub const BLOCK_FRAMES: usize = 4096;
+
+/// One output phasor set: every configured channel's displacement phasor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Output {
+    /// Mean speed over its revolutions [Hz].
+    pub speed_hz: f64,
+    /// Time of its last closing edge [s from the recording's first sample].
+    pub time_s: f64,
+    /// Displacement phasor of each configured channel [m], in `Channels::channels` order.
+    pub displacement: Vec<Phasor>,
+    /// Noise standard deviation of each [m] (scatter between revolutions),
+    /// when enough contiguous revolutions were there to tell.
+    pub noise_sd: Vec<Option<f64>>,
+}
+
+/// Everything an extraction found.
+#[derive(Clone, Debug, Default)]
+pub struct Extraction {
+    /// The phasors, in time order.
+    pub outputs: Vec<Output>,
+    /// Keyphasor faults as the box reports them.
+    pub faults: Vec<Fault>,
+    /// Keyphasor edges detected.
+    pub edges: u64,
+    /// Frames read.
+    pub frames: u64,
+    /// Sample rate [Hz].
+    pub sample_rate_hz: f64,
+}
+
+/// A single revolution of every channel.
+#[derive(Clone, Debug)]
+struct Single {
+    revolution: u32,
+    speed_hz: f32,
+    end_sample: u64,
+    displacement: Vec<Phasor>,
+}
+
+/// Revolutions the box's run-down correction ties together: the phasor of
+/// revolution j is made from revolutions j−2 … j+1, so phasors 4 or more
+/// revolutions apart have independent noise.
+pub const CORRELATED_REVOLUTIONS: usize = 4;
+
+/// HOST-SIDE NOISE ESTIMATE, to be replaced by the shared extractor's own
+/// per-phasor noise estimate (issue 9, branch issue9-box) when it lands.
+///
+/// `history`: one channel's consecutive output phasors [m] (each the average
+/// of `revolutions` revolutions), the newest last. Their scatter is measured
+/// by second differences at a lag L of outputs spanning at least
+/// [`CORRELATED_REVOLUTIONS`] revolutions, a_{k} − 2a_{k+L} + a_{k+2L}:
+/// blind to a response changing linearly (a run-down), and over phasors
+/// whose noise is independent, so that E|d|² = 6·E|n|² (formats.md's
+/// sqrt(E|n|²)). The last three such differences are averaged; `None` until
+/// 2L + 1 outputs are there. (Adjacent phasors are not independent: their
+/// second differences underestimate the noise by about √3.)
+pub fn revolution_scatter_sd(history: &[Phasor], revolutions: usize) -> Option<f64> {
+    let lag = CORRELATED_REVOLUTIONS.div_ceil(revolutions.max(1));
+    if history.len() < 2 * lag + 1 {
+        return None;
+    }
+    let d: Vec<f64> = (0..history.len() - 2 * lag)
+        .rev()
+        .take(3)
+        .map(|k| f64::from((history[k] - history[k + lag] * 2.0 + history[k + 2 * lag]).norm_sqr()))
+        .collect();
+    Some((d.iter().sum::<f64>() / (6.0 * d.len() as f64)).sqrt())
+}
+
+/// Outputs kept per channel for [`revolution_scatter_sd`].
+fn history_len(revolutions: usize) -> usize {
+    2 * CORRELATED_REVOLUTIONS.div_ceil(revolutions.max(1)) + 3
+}
+
+/// Host-side state of R-revolution averaging.
+struct Averager {
+    revolutions: usize,
+    /// Contiguous singles since the last break (the last R + 2 kept).
+    run: Vec<Single>,
+    /// Singles in the run since the last output.
+    count: usize,
+    /// The outputs of the current contiguous run (the last few), for the
+    /// noise estimate.
+    history: Vec<Vec<Phasor>>,
+    fs: f64,
+}
+
+impl Averager {
+    fn brk(&mut self) {
+        self.run.clear();
+        self.count = 0;
+        self.history.clear();
+    }
+
+    fn push(&mut self, s: Single, out: &mut Vec<Output>) {
+        if self
+            .run
+            .last()
+            .is_some_and(|l| l.revolution.wrapping_add(1) != s.revolution)
+        {
+            self.brk();
+        }
+        self.run.push(s);
+        self.count += 1;
+        let r = self.revolutions;
+        if self.count < r {
+            return;
+        }
+        self.count = 0;
+        let group = &self.run[self.run.len() - r..];
+        let channels = group[0].displacement.len();
+        let scale = 1.0 / r as f32;
+        let mut displacement = vec![Phasor::new(0.0, 0.0); channels];
+        let mut sum_period = 0.0f32;
+        let fs = self.fs as f32;
+        for s in group {
+            for (d, q) in displacement.iter_mut().zip(&s.displacement) {
+                *d += *q;
+            }
+            sum_period += fs / s.speed_hz;
+        }
+        for d in &mut displacement {
+            *d *= scale;
+        }
+        self.history.push(displacement.clone());
+        let keep = history_len(r);
+        if self.history.len() > keep {
+            self.history.drain(..self.history.len() - keep);
+        }
+        let noise_sd = (0..channels)
+            .map(|c| {
+                let h: Vec<Phasor> = self.history.iter().map(|o| o[c]).collect();
+                revolution_scatter_sd(&h, r)
+            })
+            .collect();
+        let last = &group[r - 1];
+        out.push(Output {
+            speed_hz: f64::from(fs * r as f32 / sum_period),
+            time_s: last.end_sample as f64 / self.fs,
+            displacement,
+            noise_sd,
+        });
+        // Only contiguity matters from here on.
+        let n = self.run.len();
+        self.run.drain(..n - 1);
+    }
+}
+
+/// Runs the extraction over the whole recording; `progress` is told the
+/// frames read after each block.
+pub fn extract(
+    recording: &mut Recording,
+    config: &Channels,
+    mut progress: impl FnMut(u64),
+) -> Result<Extraction> {
+    let file = recording.file.clone();
+    let fs = recording.sample_rate_hz;
+    let n = recording.channels;
+    let kp = config.keyphasor.channel;
+    for (i, c) in
+        std::iter::once((usize::MAX, kp)).chain(config.channels.iter().map(|c| c.index).enumerate())
+    {
+        if c >= n {
+            let what = if i == usize::MAX {
+                "keyphasor.channel".to_string()
+            } else {
+                format!("channel[{i}].index")
+            };
+            bail!(
+                "{what}: channel {c} is beyond the recording: {file} has {n} channels (0..={})",
+                n - 1
+            );
+        }
+    }
+    let max_speed = fs / MIN_SAMPLES_PER_REVOLUTION;
+    let min_speed = config.min_speed_hz.max(fs / 4_000_000.0);
+    if min_speed >= max_speed {
+        bail!(
+            "{file}: sample rate {fs} Hz is too low: the extractor needs {MIN_SAMPLES_PER_REVOLUTION} samples per revolution, so at most {max_speed:.3} Hz, below min_speed_hz {min_speed}"
+        );
+    }
+    let groups = config.channels.len().div_ceil(GROUP);
+    let mut extractors = Vec::with_capacity(groups);
+    for g in 0..groups {
+        let mut sensors = [Sensor::displacement(1.0); GROUP];
+        for (j, c) in config
+            .channels
+            .iter()
+            .skip(g * GROUP)
+            .take(GROUP)
+            .enumerate()
+        {
+            sensors[j] = Sensor {
+                kind: c.kind,
+                sensitivity: c.sensitivity_si as f32,
+            };
+        }
+        let mut ec = ExtractorConfig::new(fs as f32, sensors);
+        ec.revolutions_per_output = 1;
+        ec.min_speed_hz = min_speed as f32;
+        ec.max_speed_hz = max_speed as f32;
+        ec.period_tolerance = config.period_tolerance as f32;
+        ec.max_acceleration_hz_per_s = config.max_acceleration_hz_per_s as f32;
+        extractors.push(
+            PhasorExtractor::new(ec)
+                .map_err(|e| anyhow::anyhow!("{file}: extractor settings refused: {e:?}"))?,
+        );
+    }
+    let mut detector = EdgeDetector::new(&config.keyphasor);
+    let mut averager = Averager {
+        revolutions: usize::from(config.revolutions),
+        run: Vec::new(),
+        count: 0,
+        history: Vec::new(),
+        fs,
+    };
+    let mut result = Extraction {
+        sample_rate_hz: fs,
+        ..Extraction::default()
+    };
+    let mut buf = Vec::with_capacity(BLOCK_FRAMES * n);
+    let mut blocks: Vec<Vec<[f32; GROUP]>> = vec![Vec::with_capacity(BLOCK_FRAMES); groups];
+    let mut edges: Vec<KeyphasorEdge> = Vec::new();
+    let mut events: Vec<Vec<Event<GROUP>>> = vec![Vec::new(); groups];
+    let mut last_edge: Option<f64> = None;
+    let mut short_periods = 0u32;
+    loop {
+        let frames = recording.read(&mut buf, BLOCK_FRAMES)?;
+        if frames == 0 {
+            break;
+        }
+        let first_frame = result.frames;
+        // Clipping on a measuring channel ends the extraction.
+        for (i, c) in config.channels.iter().enumerate() {
+            let clip = recording.clipping[c.index];
+            if let Some(at) = clip.first_frame {
+                bail!(
+                    "{file}: channel {} (channel[{i}]: bearing `{}`, {} at {}°) is clipped from {:.6} s (frame {at}) on: its samples reach the converter's full scale, so its 1X phasors would be wrong; lower the gain or leave the channel out",
+                    c.index,
+                    c.placement.bearing,
+                    c.placement.quantity.name(),
+                    c.placement.angle_deg,
+                    at as f64 / fs
+                );
+            }
+        }
+        edges.clear();
+        for k in 0..frames {
+            if let Some(fraction) = detector.push(f64::from(buf[k * n + kp])) {
+                edges.push(KeyphasorEdge { index: k, fraction });
+                let at = (first_frame + k as u64) as f64 - 1.0 + f64::from(fraction);
+                if let Some(prev) = last_edge.replace(at) {
+                    if at - prev < MIN_SAMPLES_PER_REVOLUTION {
+                        short_periods += 1;
+                        if short_periods >= 3 {
+                            bail!(
+                                "{file}: the sample rate {fs} Hz is too low for the speed at {:.3} s: keyphasor pulses {:.1} samples apart ({:.1} Hz), but the extractor needs at least {MIN_SAMPLES_PER_REVOLUTION} samples per revolution (a sample rate of at least {:.0} Hz)",
+                                at / fs,
+                                at - prev,
+                                fs / (at - prev),
+                                MIN_SAMPLES_PER_REVOLUTION * fs / (at - prev)
+                            );
+                        }
+                    } else {
+                        short_periods = 0;
+                    }
+                }
+            }
+        }
+        for (g, block) in blocks.iter_mut().enumerate() {
+            block.clear();
+            let idx: Vec<usize> = config
+                .channels
+                .iter()
+                .skip(g * GROUP)
+                .take(GROUP)
+                .map(|c| c.index)
+                .collect();
+            for k in 0..frames {
+                let row = &buf[k * n..(k + 1) * n];
+                let mut v = [0.0f32; GROUP];
+                for (j, &c) in idx.iter().enumerate() {
+                    v[j] = row[c];
+                }
+                block.push(v);
+            }
+            events[g].clear();
+            let sink = &mut events[g];
+            extractors[g]
+                .update_block(block, &edges, &mut |e| sink.push(e))
+                .map_err(|e| {
+                    anyhow::anyhow!("{file}: keyphasor edges refused at frame {first_frame}: {e:?}")
+                })?;
+        }
+        collect(&events, &mut averager, &mut result, config.channels.len());
+        result.frames += frames as u64;
+        progress(result.frames);
+    }
+    result.edges = detector.edges;
+    if detector.edges == 0 {
+        let k = &config.keyphasor;
+        bail!(
+            "{file}: no keyphasor edges on channel {} ({:?} through {} V with {} V hysteresis): the channel spans {:.4} .. {:.4} V{}",
+            k.channel,
+            k.edge,
+            k.threshold_v,
+            k.hysteresis_v,
+            detector.range.0,
+            detector.range.1,
+            if detector.range.0 > k.threshold_v || detector.range.1 < k.threshold_v {
+                ", which does not reach the threshold"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(result)
+}
+
+/// Matches the groups' events by revolution and feeds the averager.
+fn collect(
+    events: &[Vec<Event<GROUP>>],
+    averager: &mut Averager,
+    result: &mut Extraction,
+    channels: usize,
+) {
+    let mut others: Vec<std::collections::VecDeque<&Event<GROUP>>> =
+        events.iter().skip(1).map(|e| e.iter().collect()).collect();
+    for e in &events[0] {
+        match e {
+            Event::Fault(f) => {
+                result.faults.push(*f);
+                averager.brk();
+            }
+            Event::Phasors(p) => {
+                let mut displacement: Vec<Phasor> = p.displacement.to_vec();
+                let mut complete = true;
+                for q in others.iter_mut() {
+                    let mut found = None;
+                    while let Some(o) = q.pop_front() {
+                        match o {
+                            Event::Phasors(op) if op.revolution == p.revolution => {
+                                found = Some(op);
+                                break;
+                            }
+                            Event::Phasors(op) if op.revolution > p.revolution => {
+                                q.push_front(o);
+                                break;
+                            }
+                            Event::Fault(f) if f.kind == FaultKind::NonFinite => {
+                                result.faults.push(*f)
+                            }
+                            _ => {}
+                        }
+                    }
+                    match found {
+                        Some(op) => displacement.extend_from_slice(&op.displacement),
+                        None => complete = false,
+                    }
+                }
+                if !complete {
+                    averager.brk();
+                    continue;
+                }
+                displacement.truncate(channels);
+                averager.push(
+                    Single {
+                        revolution: p.revolution,
+                        speed_hz: p.speed_hz,
+                        end_sample: p.end.sample,
+                        displacement,
+                    },
+                    &mut result.outputs,
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,449 @@
+//! `plinth import TABLE.csv --layout LAYOUT.toml --bearings BEARINGS.csv
+//! --out DIR`: a 1X vector table (one row per speed, as field instruments
+//! export it) to a run directory (formats.md "A 1X vector table").
+//!
+//! Each transducer's amplitude (its unit: pp/0-pk/rms, displacement,
+//! velocity or acceleration, [`super::units`]) and phase (lag or lead) become
+//! a 1X phasor of what it measures, then a displacement phasor at the row's
+//! speed (D = V/(iΩ), D = −A/Ω²); each bearing's `rel` and `ped`
+//! transducers, at any distinct angles, are resolved into y and z
+//! ([`super::angle::resolve`]). Errors name TABLE.csv's line and column, or
+//! LAYOUT.toml's key.
+
+use super::angle::{resolve, Rotation, View};
+use super::output::write_dir_atomically;
+use super::slow_roll::{subtract_slow_roll, SlowRoll, SlowRollBand};
+use super::transducer::{angle_of, group_by_bearing, Placement, Quantity};
+use super::units::{reading_phasor, to_displacement, AmplitudeUnit, PhaseConvention, UNIT_HELP};
+use crate::rundir::{read_bearings, BearingRow, Measurement, RunDir};
+use anyhow::{bail, Context, Result};
+use num_complex::Complex;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Command-line arguments of `plinth import`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The 1X vector table (CSV: a header row, one row per speed).
+    pub table: PathBuf,
+    /// Which columns are which transducer, units and phase convention (TOML,
+    /// formats.md "A 1X vector table").
+    #[arg(long)]
+    pub layout: PathBuf,
+    /// Bearing coefficients (`bearings.csv` layout).
+    #[arg(long)]
+    pub bearings: PathBuf,
+    /// Run directory to write (refused if it exists and is not empty, unless --force).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Subtract each bearing's mean `rel` vector between LO and HI Hz (slow roll).
+    #[arg(long, value_name = "LO:HI")]
+    pub slow_roll: Option<SlowRollBand>,
+    /// Also draw Bode and polar plots into DIR/figures.
+    #[arg(long)]
+    pub plots: bool,
+    /// Replace the files this command writes in an existing --out.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLayout {
+    phase: PhaseConvention,
+    speed: RawSpeed,
+    view: Option<View>,
+    rotation: Option<Rotation>,
+    #[serde(rename = "transducer", default)]
+    transducers: Vec<RawTransducer>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSpeed {
+    column: String,
+    unit: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTransducer {
+    bearing: String,
+    quantity: Quantity,
+    angle_deg: Option<f64>,
+    angle: Option<String>,
+    amplitude: RawAmplitude,
+    phase: RawColumn,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAmplitude {
+    column: String,
+    unit: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawColumn {
+    column: String,
+}
+
+/// A checked layout.
+#[derive(Clone, Debug)]
+pub struct Layout {
+    /// Lag or lead.
+    pub phase: PhaseConvention,
+    /// Speed column name.
+    pub speed_column: String,
+    /// Factor from the speed column to Hz (1 for Hz, 1/60 for rpm).
+    pub speed_to_hz: f64,
+    /// Transducers in layout order.
+    pub transducers: Vec<Transducer>,
+}
+
+/// One transducer's columns and placement.
+#[derive(Clone, Debug)]
+pub struct Transducer {
+    /// Bearing, quantity, angle.
+    pub placement: Placement,
+    /// Amplitude column name.
+    pub amplitude_column: String,
+    /// Its unit.
+    pub unit: AmplitudeUnit,
+    /// Phase column name.
+    pub phase_column: String,
+}
+
+impl Layout {
+    /// Reads and checks LAYOUT.toml.
+    pub fn read(path: &Path) -> Result<Layout> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses layout text; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<Layout> {
+        let raw: RawLayout = toml::from_str(text).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        let speed_to_hz = match raw.speed.unit.trim().to_ascii_lowercase().as_str() {
+            "rpm" => 1.0 / 60.0,
+            "hz" => 1.0,
+            u => bail!("{file}: speed.unit: unknown unit `{u}` (expected \"rpm\" or \"Hz\")"),
+        };
+        if raw.transducers.is_empty() {
+            bail!("{file}: no [[transducer]] tables: each bearing needs two `rel` and two `ped` transducers");
+        }
+        let rotation = raw.rotation;
+        if raw.view.is_some() != raw.rotation.is_some() {
+            bail!("{file}: `view` and `rotation` come together (the rotation is as seen from the view), e.g. view = \"driver\", rotation = \"ccw\"");
+        }
+        let mut transducers = Vec::new();
+        for (i, t) in raw.transducers.iter().enumerate() {
+            let key = format!("transducer[{i}]");
+            let unit = AmplitudeUnit::parse(&t.amplitude.unit).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{file}: {key}.amplitude.unit: unknown unit `{}`; expected {UNIT_HELP}",
+                    t.amplitude.unit
+                )
+            })?;
+            if t.quantity == Quantity::Rel
+                && unit.kind != plinth_shared::extractor::SensorKind::Displacement
+            {
+                bail!(
+                    "{file}: {key}.amplitude.unit: `{}` is not a displacement, but a `rel` transducer is a proximity probe",
+                    t.amplitude.unit
+                );
+            }
+            let angle_deg = angle_of(file, &key, t.angle_deg, t.angle.as_deref(), rotation)?;
+            transducers.push(Transducer {
+                placement: Placement {
+                    bearing: t.bearing.clone(),
+                    quantity: t.quantity,
+                    angle_deg,
+                    key,
+                },
+                amplitude_column: t.amplitude.column.clone(),
+                unit,
+                phase_column: t.phase.column.clone(),
+            });
+        }
+        let placements: Vec<Placement> = transducers.iter().map(|t| t.placement.clone()).collect();
+        group_by_bearing(file, &placements)?;
+        Ok(Layout {
+            phase: raw.phase,
+            speed_column: raw.speed.column,
+            speed_to_hz,
+            transducers,
+        })
+    }
+}
+
+/// One bearing's measurement from a table row, with where the row is.
+#[derive(Clone, Debug)]
+pub struct ImportedRow {
+    /// Line in TABLE.csv [1-based].
+    pub line: u64,
+    /// Column of the speed [1-based].
+    pub speed_column: usize,
+    /// The phasors [m] at the row's speed [Hz].
+    pub measurement: Measurement,
+}
+
+/// Reads TABLE.csv through `layout`: one row per table row and bearing,
+/// displacement phasors [m], y and z resolved.
+pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec<ImportedRow>> {
+    let file = path.display().to_string();
+    let handle = std::fs::File::open(path).with_context(|| file.clone())?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(std::io::BufReader::new(handle));
+    let mut records = reader.records();
+    let header = match records.next() {
+        Some(r) => r.with_context(|| format!("{file}:1"))?,
+        None => bail!("{file}:1: empty file: expected a header row naming the columns"),
+    };
+    let names: Vec<String> = header
+        .iter()
+        .map(|s| s.trim_start_matches('\u{feff}').to_string())
+        .collect();
+    let find =
+        |key: &str, name: &str| -> Result<usize> {
+            names.iter().position(|n| n == name).ok_or_else(|| {
+                anyhow::anyhow!(
+                "{layout_file}: {key}: {file}:1: the header has no column `{name}` (it has: {})",
+                names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+            )
+            })
+        };
+    let speed_col = find("speed.column", &layout.speed_column)?;
+    let cols: Vec<(usize, usize)> = layout
+        .transducers
+        .iter()
+        .map(|t| {
+            Ok((
+                find(
+                    &format!("{}.amplitude.column", t.placement.key),
+                    &t.amplitude_column,
+                )?,
+                find(
+                    &format!("{}.phase.column", t.placement.key),
+                    &t.phase_column,
+                )?,
+            ))
+        })
+        .collect::<Result<_>>()?;
+    let placements: Vec<Placement> = layout
+        .transducers
+        .iter()
+        .map(|t| t.placement.clone())
+        .collect();
+    let groups = group_by_bearing(layout_file, &placements)?;
+
+    let mut rows = Vec::new();
+    let mut seen: BTreeMap<u64, u64> = BTreeMap::new();
+    for record in records {
+        let record = record.with_context(|| file.to_string())?;
+        let line = record.position().map_or(0, |p| p.line());
+        if record.iter().all(|f| f.is_empty()) {
+            continue;
+        }
+        let cell = |col: usize, what: &str| -> Result<f64> {
+            let text = record.get(col).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{file}:{line}:{}: missing column `{}` (the row has {} fields)",
+                    col + 1,
+                    names[col],
+                    record.len()
+                )
+            })?;
+            let v: f64 = text.parse().map_err(|_| {
+                anyhow::anyhow!(
+                    "{file}:{line}:{}: column `{}` ({what}): `{text}` is not a number",
+                    col + 1,
+                    names[col]
+                )
+            })?;
+            if !v.is_finite() {
+                bail!(
+                    "{file}:{line}:{}: column `{}`: `{text}` is not finite",
+                    col + 1,
+                    names[col]
+                );
+            }
+            Ok(v)
+        };
+        let speed_hz = cell(speed_col, "speed")? * layout.speed_to_hz;
+        if speed_hz <= 0.0 {
+            bail!(
+                "{file}:{line}:{}: column `{}`: the speed must be > 0 (a 1X phasor needs rotation)",
+                speed_col + 1,
+                names[speed_col]
+            );
+        }
+        if let Some(first) = seen.insert(speed_hz.to_bits(), line) {
+            bail!(
+                "{file}:{line}:{}: speed {speed_hz} Hz twice (first at line {first})",
+                speed_col + 1
+            );
+        }
+        let omega = std::f64::consts::TAU * speed_hz;
+        let mut disp = Vec::with_capacity(cols.len());
+        for (t, &(ac, pc)) in layout.transducers.iter().zip(&cols) {
+            let amplitude = cell(ac, "amplitude")?;
+            if amplitude < 0.0 {
+                bail!(
+                    "{file}:{line}:{}: column `{}`: amplitude {amplitude} is negative",
+                    ac + 1,
+                    names[ac]
+                );
+            }
+            let phase = cell(pc, "phase [deg]")?;
+            let q = reading_phasor(amplitude * t.unit.to_si_zero_peak, phase, layout.phase);
+            disp.push(to_displacement(t.unit.kind, q, omega));
+        }
+        for (bearing, [rel, ped]) in &groups {
+            let pick = |set: &[usize]| -> [Complex<f64>; 2] {
+                let angles: Vec<f64> = set.iter().map(|&i| placements[i].angle_deg).collect();
+                let q: Vec<Complex<f64>> = set.iter().map(|&i| disp[i]).collect();
+                resolve(&angles, &q, None).0
+            };
+            rows.push(ImportedRow {
+                line,
+                speed_column: speed_col + 1,
+                measurement: Measurement {
+                    speed_hz,
+                    bearing: bearing.clone(),
+                    rel: pick(rel),
+                    ped: pick(ped),
+                    noise_sd: None,
+                },
+            });
+        }
+    }
+    if rows.is_empty() {
+        bail!("{file}: no data rows after the header");
+    }
+    Ok(rows)
+}
+
+/// Checks that every measurement's bearing is in `bearings` and its speed in
+/// the listed range (no extrapolation).
+pub fn check_against_bearings(
+    rows: &[ImportedRow],
+    bearings: &[BearingRow],
+    table: &str,
+    bearings_file: &str,
+) -> Result<()> {
+    let run = RunDir {
+        measurements: Vec::new(),
+        bearings: bearings.to_vec(),
+        truth: None,
+    };
+    let schedules = run.bearing_schedules();
+    for r in rows {
+        let m = &r.measurement;
+        let Some(s) = schedules.get(&m.bearing) else {
+            bail!(
+                "{table}:{}: bearing `{}` has no rows in {bearings_file} (it lists: {})",
+                r.line,
+                m.bearing,
+                schedules.keys().cloned().collect::<Vec<_>>().join(", ")
+            );
+        };
+        if let Err(e) = s.at(m.speed_hz) {
+            bail!(
+                "{table}:{}:{}: speed {} Hz is outside the range {}..={} Hz that {bearings_file} lists for bearing `{}` (coefficients are not extrapolated)",
+                r.line,
+                r.speed_column,
+                m.speed_hz,
+                e.min_hz,
+                e.max_hz,
+                m.bearing
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Writes the run directory: measurements, bearings, and `slow_roll.csv`
+/// when slow roll was subtracted; with `plots`, Bode and polar figures in
+/// `figures/` for the resolved y/z phasors and every transducer in
+/// `transducers` (bearing, quantity, angle [deg]).
+pub fn write_run(
+    out: &Path,
+    force: bool,
+    run: &RunDir,
+    slow_roll: Option<&SlowRoll>,
+    plots: bool,
+    transducers: &[Placement],
+) -> Result<()> {
+    write_dir_atomically(out, force, |dir| {
+        run.write(dir)?;
+        if let Some(s) = slow_roll {
+            s.write(dir)?;
+        }
+        if plots {
+            let t: Vec<(String, Quantity, f64)> = transducers
+                .iter()
+                .map(|p| (p.bearing.clone(), p.quantity, p.angle_deg))
+                .collect();
+            super::plot::plot_run_with(run, &dir.join("figures"), &t, super::angle::Rotation::Ccw)?;
+        }
+        Ok(())
+    })
+}
+
+/// Runs `plinth import`.
+pub fn run(args: &Args) -> Result<()> {
+    let layout_file = args.layout.display().to_string();
+    let layout = Layout::read(&args.layout)?;
+    let imported = read_table(&args.table, &layout, &layout_file)?;
+    let bearings = read_bearings(&args.bearings)?;
+    check_against_bearings(
+        &imported,
+        &bearings,
+        &args.table.display().to_string(),
+        &args.bearings.display().to_string(),
+    )?;
+    let mut rows: Vec<Measurement> = imported.into_iter().map(|r| r.measurement).collect();
+    let slow_roll = match args.slow_roll {
+        Some(band) => {
+            let s = subtract_slow_roll(&mut rows, band)?;
+            for w in &s.warnings {
+                eprintln!("warning: {w}");
+            }
+            Some(s)
+        }
+        None => None,
+    };
+    let n = rows.len();
+    let run = RunDir {
+        measurements: rows,
+        bearings,
+        truth: None,
+    };
+    let placements: Vec<Placement> = layout
+        .transducers
+        .iter()
+        .map(|t| t.placement.clone())
+        .collect();
+    write_run(
+        &args.out,
+        args.force,
+        &run,
+        slow_roll.as_ref(),
+        args.plots,
+        &placements,
+    )?;
+    println!(
+        "{}: {} rows ({} bearings) -> {}",
+        args.table.display(),
+        n,
+        run.measured_bearings().len(),
+        args.out.display()
+    );
+    Ok(())
+}

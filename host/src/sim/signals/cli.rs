@@ -1,0 +1,103 @@
+//! `plinth signals`: the command line over [`super::synthesise_to`].
+
+use super::*;
+
+/// Command-line arguments of `plinth signals`.
+#[derive(clap::Args, Debug)]
+pub struct SignalsArgs {
+    /// Machine file (TOML, SI units; see the `plinth::sim::machine` docs).
+    pub machine: PathBuf,
+    /// Signal-set directory to write (created if needed).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Speed ramp START:END:RATE [Hz:Hz:Hz/s] (linear; END < START is a run-down).
+    #[arg(long, default_value = "200:5:5")]
+    pub rundown: String,
+    /// Sample rate per channel [Hz].
+    #[arg(long, default_value_t = 51_200.0)]
+    pub rate: f64,
+    /// Proximity probe sensitivity [V/mm].
+    #[arg(long, default_value_t = 7.87)]
+    pub probe_v_per_mm: f64,
+    /// Proximity probe gap voltage [V].
+    #[arg(long, default_value_t = -9.0, allow_hyphen_values = true)]
+    pub probe_gap: f64,
+    /// Probe channel noise [mV RMS].
+    #[arg(long, default_value_t = 1.0)]
+    pub probe_noise_mv: f64,
+    /// Transducer on the pedestals: displacement, velocity or acceleration.
+    #[arg(long, value_parser = parse_sensor_kind, default_value = "acceleration")]
+    pub seismic: SensorKind,
+    /// Seismic sensitivity [V/(m/s²), V/(m/s) or V/m]; default by kind:
+    /// 100 mV/g, 20 mV/(mm/s), 7.87 V/mm.
+    #[arg(long)]
+    pub seismic_sensitivity: Option<f64>,
+    /// Seismic channel noise [mV RMS].
+    #[arg(long, default_value_t = 1.0)]
+    pub seismic_noise_mv: f64,
+    /// ADC resolution [bits].
+    #[arg(long, default_value_t = 16)]
+    pub adc_bits: u32,
+    /// ADC full scale [±V].
+    #[arg(long, default_value_t = 10.0)]
+    pub adc_range: f64,
+    /// Speed step of the precomputed response [Hz].
+    #[arg(long, default_value_t = 0.01)]
+    pub grid_step: f64,
+    /// Noise seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Effect to inject: NAME[:BEARING][=SIZE] (repeatable).
+    #[arg(long = "effect")]
+    pub effects: Vec<String>,
+}
+
+/// Runs `plinth signals`.
+pub fn signals(args: &SignalsArgs) -> anyhow::Result<()> {
+    let machine = Machine::from_toml_path(&args.machine)?;
+    let mut effects = EffectSet::none();
+    for e in &args.effects {
+        let req: EffectRequest = e.parse().map_err(anyhow::Error::msg)?;
+        effects.requests.push(req);
+    }
+    let opts = SignalOptions {
+        rundown: RunDown::parse(&args.rundown)?,
+        sample_rate_hz: args.rate,
+        adc: Adc::new(args.adc_bits, args.adc_range)?,
+        probe_sensitivity: args.probe_v_per_mm * 1e3,
+        probe_gap_v: args.probe_gap,
+        probe_noise_v: args.probe_noise_mv * 1e-3,
+        seismic_kind: args.seismic,
+        seismic_sensitivity: args
+            .seismic_sensitivity
+            .unwrap_or_else(|| default_seismic_sensitivity(args.seismic)),
+        seismic_noise_v: args.seismic_noise_mv * 1e-3,
+        grid_step_hz: args.grid_step,
+        t0_sample_position: 0.5,
+        seed: args.seed,
+    };
+    let set = synthesise_to(&machine, &effects, &opts, &args.out)
+        .with_context(|| format!("making signals of {}", args.machine.display()))?;
+    let h = &set.header;
+    println!(
+        "{}: {} samples x {} channels at {} Hz ({:.1} s), {} keyphasor pulses -> {}",
+        h.machine,
+        h.samples,
+        h.channels.len(),
+        h.sample_rate_hz,
+        h.samples as f64 / h.sample_rate_hz,
+        h.keyphasor_pulses,
+        args.out.display()
+    );
+    println!(
+        "response interpolation: {} Hz grid, largest error {:.2e} of channel peak",
+        h.interpolation.grid_step_hz, h.interpolation.max_rel_error
+    );
+    for c in h.channels.iter().filter(|c| c.clipped_samples > 0) {
+        eprintln!(
+            "warning: {}: {} samples clipped at ±{} V",
+            c.name, c.clipped_samples, h.adc.full_scale_v
+        );
+    }
+    Ok(())
+}
