@@ -3,10 +3,12 @@
 //! the model-discrepancy workflow. The `plinth` binary is a thin CLI over it.
 #![warn(missing_docs)]
 
+pub mod args;
 pub mod demo;
 pub mod diagnose;
 pub mod effects;
 pub mod identify;
+pub mod output;
 pub mod paper;
 pub mod plots;
 pub mod rundir;

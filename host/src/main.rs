@@ -20,7 +20,7 @@ enum Command {
     /// Unbalance response of a machine file, written as a run directory.
     Simulate(plinth::sim::cli::SimulateArgs),
     /// Sampled sensor signals of a run-down, for the field box.
-    Signals(plinth::sim::cli::SignalsArgs),
+    Signals(plinth::sim::cli::SignalsCommand),
     /// Re-predict a machine with identified pedestals and compare with a run.
     Predict(plinth::sim::cli::PredictArgs),
     /// Reproduce Feng & Hahn (1997): Tables 1 and 2 and the figures.
@@ -38,7 +38,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Identify(a) => plinth::identify::cli::run(&a),
         Command::Simulate(a) => plinth::sim::cli::simulate(&a),
-        Command::Signals(a) => plinth::sim::cli::signals(&a),
+        Command::Signals(a) => plinth::sim::cli::signals(a),
         Command::Predict(a) => plinth::sim::cli::predict(&a),
         Command::Paper(a) => plinth::paper::run(&a),
         Command::Stream(a) => plinth::stream::run(&a),
@@ -48,8 +48,25 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", render(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes, each cause once: a cause whose text the message
+/// already holds (an OS error a message quotes) is not repeated.
+fn render(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if text.contains(&c) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&c);
+    }
+    text
 }

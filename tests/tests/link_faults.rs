@@ -240,10 +240,12 @@ fn stream_host_child() {
         baud: 115_200,
         config: PathBuf::from(a[1]),
         out: PathBuf::from(a[2]),
+        force: false,
         replay: Some(PathBuf::from(a[3])),
         window: 4,
         duration: None,
-        reconnect_timeout: 10.0,
+        reconnect_timeout: Duration::from_secs(10),
+        handshake_timeout: Duration::from_secs(15),
         offline: false,
         quiet: true,
     };
@@ -281,15 +283,16 @@ fn killing_the_host_mid_run_loses_nothing() {
     let scenario = Scenario::paper_rundown(150.0, 100.0, 20.0);
     let device = DeviceThread::start(Faults::default(), Faults::default(), 3);
     let out = scenario.out_dir("killed");
-    std::fs::create_dir_all(&out).unwrap();
-    let raw_path = out.join("raw.bin");
+    // The host works in OUT.incomplete until the stream completes.
+    let staging = plinth::stream::staging_dir(&out);
+    let raw_path = staging.join("raw.bin");
 
     // First host: kill it once a third of the replay is acknowledged.
     let mut host = spawn_host(&device.port, &scenario, &out);
     let total = scenario.replay().set().len();
     let deadline = Instant::now() + Duration::from_secs(120);
     loop {
-        let done = ReplayJournal::read(&out)
+        let done = ReplayJournal::read(&staging)
             .ok()
             .flatten()
             .is_some_and(|j| j.acknowledged * 3 > total);
@@ -331,7 +334,8 @@ fn killing_the_host_mid_run_loses_nothing() {
     assert!(status.success(), "the restarted host failed: {status:?}");
     drop(device);
 
-    let after = std::fs::read(&raw_path).unwrap();
+    assert!(!staging.exists(), "the completed stream left {staging:?}");
+    let after = std::fs::read(out.join("raw.bin")).unwrap();
     assert!(after.len() > before.len());
     assert_eq!(
         &after[..before.len()],
