@@ -4,6 +4,7 @@
 #![warn(missing_docs)]
 
 pub mod args;
+pub mod csv_layout;
 pub mod demo;
 pub mod diagnose;
 pub mod effects;
@@ -11,6 +12,7 @@ pub mod identify;
 pub mod output;
 pub mod paper;
 pub mod plots;
+pub mod progress;
 pub mod rundir;
 pub mod sim;
 pub mod stream;

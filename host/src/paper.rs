@@ -656,6 +656,7 @@ pub fn reproduce_with(
             m: Some(fit.m),
             c_y: Some(fit.c_y),
             c_z: Some(fit.c_z),
+            std_err: Default::default(),
         };
         machine
             .set_pedestal(&p.bearing, Some(p.params()?))

@@ -396,8 +396,16 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             )
         }
     } else {
+        // The wording follows the numbers: a gap that grew is not said to fall.
+        let moved = if gap1.gap < gap0.gap {
+            "fell"
+        } else if gap1.gap > gap0.gap {
+            "ROSE (the added effect does not explain the data: check the data's conventions and units)"
+        } else {
+            "stayed"
+        };
         format!(
-            "Added {}: the pedestal-level gap fell from {:.4} to {:.4} (noise floor {:.4}).",
+            "Added {}: the pedestal-level gap {moved} from {:.4} to {:.4} (noise floor {:.4}).",
             steps
                 .iter()
                 .map(|s| format!("{} at {}", s.effect, s.bearing))

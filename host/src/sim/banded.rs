@@ -29,6 +29,45 @@ pub enum BandError {
     },
 }
 
+/// The storage layout of an n×n band matrix with `kl` sub- and `ku`
+/// super-diagonals (LAPACK band storage with `kl` fill-in rows), without the
+/// data: for arrays that share a [`BandMatrix`]'s layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BandShape {
+    /// Order.
+    pub n: usize,
+    /// Sub-diagonals.
+    pub kl: usize,
+    /// Super-diagonals.
+    pub ku: usize,
+}
+
+impl BandShape {
+    /// Leading dimension of the storage (rows per column).
+    pub fn ldab(&self) -> usize {
+        2 * self.kl + self.ku + 1
+    }
+
+    /// Number of stored elements.
+    pub fn len(&self) -> usize {
+        self.ldab() * self.n
+    }
+
+    /// Whether the matrix is 0×0.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Storage index of element (r, c), or `None` outside the band.
+    #[inline]
+    pub fn index(&self, r: usize, c: usize) -> Option<usize> {
+        if r >= self.n || c >= self.n || r > c + self.kl || c > r + self.ku {
+            return None;
+        }
+        Some(c * self.ldab() + self.kl + self.ku + r - c)
+    }
+}
+
 /// A square complex band matrix with `kl` sub- and `ku` super-diagonals, in
 /// LAPACK band storage with `kl` extra rows for the fill-in of pivoting.
 ///

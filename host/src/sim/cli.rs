@@ -1,9 +1,11 @@
 //! `plinth simulate`, `plinth signals`, `plinth predict`.
 
+use super::budget;
 use super::inject::{EffectRequest, EffectSet};
 use super::machine::Machine;
-use super::response::{unbalance_response, Noise};
+use super::response::{Noise, UnbalanceSolver};
 use crate::output::OutputDir;
+use crate::progress::Ticker;
 use crate::rundir::{DigitsMode, WriteOptions};
 use anyhow::{bail, Context};
 use std::path::PathBuf;
@@ -28,10 +30,10 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub digits: Option<u32>,
     /// Truncate to --digits instead of rounding (as the paper did).
-    #[arg(long)]
+    #[arg(long, requires = "digits")]
     pub truncate: bool,
     /// Complex Gaussian noise, RMS relative to each channel's RMS over speed.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::non_negative)]
     pub noise: Option<f64>,
     /// Seed of the noise.
     #[arg(long, default_value_t = 1)]
@@ -121,8 +123,22 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
             bail!("--digits must be at least 1");
         }
     }
-    let response = unbalance_response(&machine, &speeds, &effects)
+    let needed = budget::simulate_bytes(&machine, speeds.len());
+    budget::check(
+        &format!(
+            "simulating {} shaft elements at {} speeds",
+            machine.elements.len(),
+            speeds.len()
+        ),
+        needed,
+        budget::available_bytes(),
+    )
+    .map_err(anyhow::Error::msg)?;
+    let mut ticker = Ticker::new("simulate: speeds", speeds.len(), true);
+    let response = UnbalanceSolver::new(&machine, &effects)
+        .and_then(|s| s.run_with(&speeds, false, &mut |done| ticker.tick(done)))
         .with_context(|| format!("simulating {}", args.machine.display()))?;
+    ticker.finish();
     let noise = args.noise.map(|fraction| Noise {
         fraction,
         seed: args.seed,

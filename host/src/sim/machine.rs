@@ -60,7 +60,6 @@ use super::disk::{inertia_from_geometry, Disk};
 use super::oil_film::OilFilmBearing;
 use super::pedestal::PedestalParams;
 use super::timoshenko::ShaftElement;
-use nalgebra::{DMatrix, DVector};
 use plinth_shared::bearing::BearingCoefficients;
 use serde::Deserialize;
 use std::path::Path;
@@ -829,57 +828,6 @@ impl Machine {
     pub fn rotor_mass(&self) -> f64 {
         self.elements.iter().map(ShaftElement::mass).sum::<f64>()
             + self.disks.iter().map(|d| d.mass).sum::<f64>()
-    }
-
-    /// Vertical bearing reactions [N] (upwards on the rotor, per bearing) that
-    /// carry the rotor's weight, from the static shaft on rigid supports at
-    /// the bearing nodes (vertical plane, Timoshenko stiffness; statically
-    /// determinate cases reduce to the lever rule).
-    pub fn static_bearing_loads(&self) -> Result<Vec<f64>, String> {
-        let nn = self.node_positions.len();
-        let n = 2 * nn; // (y, θ_z) per node
-        let mut k = DMatrix::<f64>::zeros(n, n);
-        let mut f = DVector::<f64>::zeros(n);
-        for (e, el) in self.elements.iter().enumerate() {
-            let ke = el.stiffness_matrix();
-            let map = [2 * e, 2 * e + 1, 2 * e + 2, 2 * e + 3];
-            let local = [0usize, 3, 4, 7];
-            for i in 0..4 {
-                for j in 0..4 {
-                    k[(map[i], map[j])] += ke[local[i]][local[j]];
-                }
-            }
-            // Element weight, lumped half to each end (exact resultant and moment).
-            let w = el.mass() * self.gravity;
-            f[2 * e] -= 0.5 * w;
-            f[2 * e + 2] -= 0.5 * w;
-        }
-        for d in &self.disks {
-            f[2 * d.node] -= d.mass * self.gravity;
-        }
-        if self.bearings.len() < 2 {
-            return Err("needs at least two bearings to carry the rotor's weight".into());
-        }
-        let fixed: Vec<usize> = self.bearings.iter().map(|b| 2 * b.node).collect();
-        let free: Vec<usize> = (0..n).filter(|i| !fixed.contains(i)).collect();
-        let kff = DMatrix::from_fn(free.len(), free.len(), |i, j| k[(free[i], free[j])]);
-        let ff = DVector::from_fn(free.len(), |i, _| f[free[i]]);
-        let u = kff
-            .lu()
-            .solve(&ff)
-            .ok_or("the shaft on rigid supports at the bearings is singular")?;
-        Ok(fixed
-            .iter()
-            .map(|&r| {
-                // Reaction = K_rf·u_f − f_r (force the support exerts on the shaft).
-                let ku: f64 = free
-                    .iter()
-                    .enumerate()
-                    .map(|(j, &c)| k[(r, c)] * u[j])
-                    .sum();
-                ku - f[r]
-            })
-            .collect())
     }
 
     /// Checks a machine built in code (files are checked when read).

@@ -21,6 +21,7 @@
 //! ```
 pub mod assembly;
 pub mod banded;
+pub mod budget;
 pub mod cli;
 pub mod disk;
 pub mod inject;
@@ -31,6 +32,7 @@ pub mod pedestal;
 pub mod predict;
 pub mod response;
 pub mod signals;
+pub mod static_load;
 pub mod timoshenko;
 
 pub use inject::{default_size, EffectRequest, EffectSet};
