@@ -226,6 +226,7 @@ impl OutputDir {
         let old = &self.target;
         let manifest = read_manifest(old);
         let old_entries = list_entries(old)?;
+        let mut refused: Vec<(String, String)> = Vec::new();
         for (rel, kind) in &old_entries {
             if rel == MANIFEST_FILE {
                 continue;
@@ -264,11 +265,11 @@ impl OutputDir {
                         }
                     }
                 };
-                return Err(OutputError::WouldReplace {
-                    dir: old.clone(),
-                    file: rel.clone(),
-                    why,
-                });
+                refused.push((rel.clone(), why));
+                continue;
+            }
+            if !refused.is_empty() {
+                continue; // only collecting the refusals now
             }
             if ours {
                 continue; // a stale file of an earlier Plinth run
@@ -289,6 +290,19 @@ impl OutputDir {
                     }
                 }
             }
+        }
+        if let Some((file, why)) = refused.first() {
+            let others: Vec<&str> = refused[1..].iter().map(|(f, _)| f.as_str()).collect();
+            let file = if others.is_empty() {
+                file.clone()
+            } else {
+                format!("{file} (and {})", others.join(", "))
+            };
+            return Err(OutputError::WouldReplace {
+                dir: old.clone(),
+                file,
+                why: why.clone(),
+            });
         }
         Ok(())
     }

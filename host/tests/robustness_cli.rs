@@ -116,7 +116,7 @@ fn simulate_never_replaces_a_measured_run() {
     assert!(!o.status.success());
     let msg = text(&o);
     assert!(
-        msg.contains("measurements.csv would be replaced, but Plinth did not write it"),
+        msg.contains("bearings.csv (and measurements.csv) would be replaced, but Plinth did not write it"),
         "{msg}"
     );
     assert_eq!(snapshot(&run), before);
@@ -270,7 +270,8 @@ fn numeric_options_are_validated_before_use() {
         let o = plinth()
             .arg("simulate")
             .arg(example())
-            .args(["--noise", value, "--out"])
+            .arg(format!("--noise={value}"))
+            .arg("--out")
             .arg(t.path().join("n"))
             .output()
             .unwrap();
