@@ -195,15 +195,19 @@ impl BandMatrix {
                 for i in 1..=km {
                     a[col + kv + i] *= inv;
                 }
+                // Column j's multipliers and each later column as slices
+                // (no index checks in the inner loop).
+                let (left, right) = a.split_at_mut((j + 1) * ldab);
+                let l = &left[col + kv + 1..=col + kv + km];
                 for c in j + 1..=ju {
-                    let base = c * ldab + kv;
-                    let t = a[base + j - c];
+                    let base = (c - j - 1) * ldab + kv + j - c;
+                    let t = right[base];
                     if t.re == 0.0 && t.im == 0.0 {
                         continue;
                     }
-                    for i in 1..=km {
-                        let l = a[col + kv + i];
-                        a[base + j + i - c] -= l * t;
+                    let target = &mut right[base + 1..=base + km];
+                    for (x, &li) in target.iter_mut().zip(l) {
+                        *x -= li * t;
                     }
                 }
             }
