@@ -13,7 +13,8 @@ cargo build --release -q -p plinth
 bin=${CARGO_TARGET_DIR:-target}/release/plinth
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-printf "%10s %10s %12s %14s\n" elements dofs "time [s]" "peak RSS [MB]"
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores (wall time grows with the load; CPU time does not)"
+printf "%10s %10s %10s %10s %14s\n" elements dofs "wall [s]" "cpu [s]" "peak RSS [MB]"
 for n in "${sizes[@]}"; do
   # a overhang elements each side, the 1 m between the bearings in ten
   # 0.1 m sections of b/10 elements (nodes at the disks and bearings).
@@ -43,5 +44,6 @@ for n in "${sizes[@]}"; do
     cat "$work/time$n"; exit 1; }
   secs=$(grep "Elapsed (wall clock)" "$work/time$n" | awk '{print $NF}' | awk -F: '{ if (NF==3) print $1*3600+$2*60+$3; else print $1*60+$2 }')
   kb=$(grep "Maximum resident set size" "$work/time$n" | awk '{print $NF}')
-  printf "%10d %10d %12.2f %14.1f\n" "$n" $((4 * (n + 1) + 4)) "$secs" "$(echo "$kb / 1024" | bc -l)"
+  cpu=$(awk '/User time|System time/ {s += $NF} END {print s}' "$work/time$n")
+  printf "%10d %10d %10.2f %10.2f %14.1f\n" "$n" $((4 * (n + 1) + 4)) "$secs" "$cpu" "$(echo "$kb / 1024" | bc -l)"
 done
