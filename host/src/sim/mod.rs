@@ -26,6 +26,7 @@ pub mod cli;
 pub mod disk;
 pub mod inject;
 pub mod machine;
+pub mod machine_file;
 pub mod modal;
 pub mod oil_film;
 pub mod pedestal;
