@@ -32,7 +32,7 @@ pub struct Args {
     #[arg(long)]
     pub force: bool,
     /// Family-wise significance level of each step (Bonferroni over candidates).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, value_parser = crate::args::probability)]
     pub alpha: f64,
 }
 
@@ -66,6 +66,7 @@ pub fn run(args: &Args) -> Result<()> {
     let options = Options {
         base: parse_base(&args.base)?,
         alpha: args.alpha,
+        progress: true,
         ..Options::default()
     };
     let plots = (args.plots.as_deref())

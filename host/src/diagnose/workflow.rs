@@ -26,6 +26,8 @@ pub struct Options {
     pub alpha: f64,
     /// Most effects to add.
     pub max_steps: usize,
+    /// A progress line on stderr (only on a terminal, after a second).
+    pub progress: bool,
 }
 
 impl Default for Options {
@@ -34,6 +36,7 @@ impl Default for Options {
             base: Parameter::ALL.to_vec(),
             alpha: 1e-3,
             max_steps: 8,
+            progress: false,
         }
     }
 }
@@ -349,7 +352,13 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let mut states = vec![state.clone()];
     let mut steps = Vec::new();
     let mut best_rejected = None;
-    for _ in 0..opts.max_steps {
+    let mut ticker = crate::progress::Ticker::new(
+        "diagnose: candidate-effect rounds",
+        opts.max_steps,
+        opts.progress,
+    );
+    for round in 0..opts.max_steps {
+        ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
         if !outcome.accepted {
             best_rejected = outcome.ranked.first().map(|e| summary(&prep, e));
