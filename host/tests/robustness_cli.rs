@@ -444,3 +444,43 @@ fn operating_system_errors_are_printed_once() {
     assert!(!o.status.success());
     assert_eq!(msg.matches("No such file or directory").count(), 1, "{msg}");
 }
+
+#[test]
+fn predict_takes_damping_consistent_with_zero_as_zero() {
+    let t = tempfile::tempdir().unwrap();
+    let run = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/run-paper-2digits");
+    let o = plinth()
+        .arg("identify")
+        .arg(&run)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    let id = t.path().join("id.json");
+    std::fs::write(&id, &o.stdout).unwrap();
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let negative = json["pedestals"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|p| p["c_y"].as_f64() < Some(0.0) || p["c_z"].as_f64() < Some(0.0));
+    assert!(
+        negative,
+        "the bundled example has a negative damping within its error"
+    );
+    let o = plinth()
+        .arg("predict")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/feng-hahn-1997-damped.toml"))
+        .arg("--pedestals")
+        .arg(&id)
+        .arg("--against")
+        .arg(&run)
+        .output()
+        .unwrap();
+    let msg = text(&o);
+    assert!(o.status.success(), "{msg}");
+    assert!(
+        msg.contains("is consistent with zero: re-predicted with c_"),
+        "{msg}"
+    );
+}
