@@ -12,7 +12,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 fn corpus(name: &str) -> Vec<Vec<u8>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("corpus").join(name);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("corpus")
+        .join(name);
     let mut out: Vec<Vec<u8>> = std::fs::read_dir(&dir)
         .map(|it| {
             it.filter_map(|e| e.ok())
@@ -29,10 +31,7 @@ fn corpus(name: &str) -> Vec<Vec<u8>> {
 fn mutate(input: &mut Vec<u8>, rng: &mut StdRng) {
     for _ in 0..rng.random_range(1..8) {
         if input.is_empty() || rng.random_range(0..8) == 0 {
-            input.insert(
-                rng.random_range(0..=input.len()),
-                rng.random::<u8>(),
-            );
+            input.insert(rng.random_range(0..=input.len()), rng.random::<u8>());
             continue;
         }
         let at = rng.random_range(0..input.len());
@@ -48,7 +47,11 @@ fn mutate(input: &mut Vec<u8>, rng: &mut StdRng) {
                 let piece = input[at..end].to_vec();
                 input.splice(at..at, piece);
             }
-            _ => input[at] = *[0u8, 0xFF, b',', b'\n', b';'].get(rng.random_range(0..5)).unwrap_or(&0),
+            _ => {
+                input[at] = *[0u8, 0xFF, b',', b'\n', b';']
+                    .get(rng.random_range(0..5))
+                    .unwrap_or(&0)
+            }
         }
     }
 }
@@ -107,7 +110,9 @@ fn main() {
         }
         while Instant::now() < until {
             let mut input = if rng.random_range(0..4) == 0 {
-                (0..rng.random_range(0..512)).map(|_| rng.random()).collect()
+                (0..rng.random_range(0..512))
+                    .map(|_| rng.random())
+                    .collect()
             } else {
                 seeds[rng.random_range(0..seeds.len())].clone()
             };
@@ -121,6 +126,9 @@ fn main() {
             }
             runs += 1;
         }
-        println!("{name}: {runs} inputs in {seconds} s, no panic (seed {seed}, {} corpus files)", seeds.len());
+        println!(
+            "{name}: {runs} inputs in {seconds} s, no panic (seed {seed}, {} corpus files)",
+            seeds.len()
+        );
     }
 }
