@@ -16,3 +16,21 @@ pub mod progress;
 pub mod rundir;
 pub mod sim;
 pub mod stream;
+
+/// An error and its causes as one line, each cause once: a cause whose text
+/// the message already quotes (an operating-system error a message names)
+/// is not repeated, as `{:#}` would.
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if text.contains(&c) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&c);
+    }
+    text
+}

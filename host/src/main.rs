@@ -48,25 +48,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", render(&e));
+            eprintln!("error: {}", plinth::error_text(&e));
             ExitCode::FAILURE
         }
     }
-}
-
-/// The error and its causes, each cause once: a cause whose text the message
-/// already holds (an OS error a message quotes) is not repeated.
-fn render(e: &anyhow::Error) -> String {
-    let mut text = String::new();
-    for cause in e.chain() {
-        let c = cause.to_string();
-        if text.contains(&c) {
-            continue;
-        }
-        if !text.is_empty() {
-            text.push_str(": ");
-        }
-        text.push_str(&c);
-    }
-    text
 }

@@ -175,7 +175,7 @@ pub fn run(args: &Args) -> Result<()> {
     let raw_after = std::fs::metadata(staging.join(RAW_LOG_FILE)).map_or(0, |m| m.len());
     let failed = match &result {
         Ok(report) => report.error.clone(),
-        Err(e) => Some(format!("{e:#}")),
+        Err(e) => Some(crate::error_text(e)),
     };
     match failed {
         None => {
