@@ -3,14 +3,36 @@
 //! the model-discrepancy workflow. The `plinth` binary is a thin CLI over it.
 #![warn(missing_docs)]
 
+pub mod args;
+pub mod csv_layout;
 pub mod demo;
 pub mod diagnose;
 pub mod effects;
 pub mod extract;
 pub mod field;
 pub mod identify;
+pub mod output;
 pub mod paper;
 pub mod plots;
+pub mod progress;
 pub mod rundir;
 pub mod sim;
 pub mod stream;
+
+/// An error and its causes as one line, each cause once: a cause whose text
+/// the message already quotes (an operating-system error a message names)
+/// is not repeated, as `{:#}` would.
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if text.contains(&c) {
+            continue;
+        }
+        if !text.is_empty() {
+            text.push_str(": ");
+        }
+        text.push_str(&c);
+    }
+    text
+}

@@ -20,7 +20,7 @@ enum Command {
     /// Unbalance response of a machine file, written as a run directory.
     Simulate(plinth::sim::cli::SimulateArgs),
     /// Sampled sensor signals of a run-down, for the field box.
-    Signals(plinth::sim::cli::SignalsArgs),
+    Signals(plinth::sim::cli::SignalsCommand),
     /// Re-predict a machine with identified pedestals and compare with a run.
     Predict(plinth::sim::cli::PredictArgs),
     /// Reproduce Feng & Hahn (1997): Tables 1 and 2 and the figures.
@@ -44,7 +44,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Identify(a) => plinth::identify::cli::run(&a),
         Command::Simulate(a) => plinth::sim::cli::simulate(&a),
-        Command::Signals(a) => plinth::sim::cli::signals(&a),
+        Command::Signals(a) => plinth::sim::cli::signals(a),
         Command::Predict(a) => plinth::sim::cli::predict(&a),
         Command::Paper(a) => plinth::paper::run(&a),
         Command::Stream(a) => plinth::stream::run(&a),
@@ -57,7 +57,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", plinth::error_text(&e));
             ExitCode::FAILURE
         }
     }

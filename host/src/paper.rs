@@ -74,6 +74,10 @@ pub struct Args {
     /// Write the figures (PNG and SVG) into this directory.
     #[arg(long)]
     pub plots: Option<PathBuf>,
+    /// Write into an existing --plots/--out directory that already holds
+    /// files (files Plinth did not write there are kept, never replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Measurement speeds [Hz]: START:STOP:STEP (inclusive) or a list.
     #[arg(long, default_value = "5:200:1")]
     pub speeds: String,
@@ -652,6 +656,7 @@ pub fn reproduce_with(
             m: Some(fit.m),
             c_y: Some(fit.c_y),
             c_z: Some(fit.c_z),
+            std_err: Default::default(),
         };
         machine
             .set_pedestal(&p.bearing, Some(p.params()?))
@@ -1142,7 +1147,9 @@ pub fn run(args: &Args) -> Result<()> {
         )
     };
     if let Some(dir) = &args.plots {
-        let files = write_figures(&paper, dir)?;
+        let staged = crate::output::OutputDir::create(dir, args.force)?;
+        let files = write_figures(&paper, staged.path())?;
+        staged.commit()?;
         if !args.json {
             text += &format!(
                 "{} figure files written to {}\n",

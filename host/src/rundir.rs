@@ -762,9 +762,27 @@ fn read_table(
 ) -> Result<Vec<TableRow>, RunDirError> {
     let file = || path.to_path_buf();
     let expected = columns.join(",");
-    let handle = std::fs::File::open(path).map_err(|source| RunDirError::Io {
+    // Spreadsheet exports and non-files are named before the CSV reader runs.
+    let layout = crate::csv_layout::check(path, &expected).map_err(|e| match e {
+        crate::csv_layout::LayoutError::NotAFile(m) => RunDirError::Io {
+            file: file(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, m),
+        },
+        crate::csv_layout::LayoutError::At(line, message) => RunDirError::Csv {
+            file: file(),
+            line,
+            message,
+        },
+    })?;
+    let mut handle = std::fs::File::open(path).map_err(|source| RunDirError::Io {
         file: file(),
         source,
+    })?;
+    std::io::Seek::seek(&mut handle, std::io::SeekFrom::Start(layout.skip)).map_err(|source| {
+        RunDirError::Io {
+            file: file(),
+            source,
+        }
     })?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)

@@ -185,6 +185,7 @@ fn bad_requests_are_errors_not_panics() {
     // The command line: a malformed run-down and a missing image.
     let args = |rundown: Option<&str>, qemu: bool, elf: Option<&str>| plinth::demo::Args {
         out: dir.path().join("cli"),
+        force: false,
         qemu,
         elf: elf.map(Into::into),
         rundown: rundown.map(Into::into),

@@ -240,10 +240,12 @@ fn stream_host_child() {
         baud: 115_200,
         config: PathBuf::from(a[1]),
         out: PathBuf::from(a[2]),
+        force: false,
         replay: Some(PathBuf::from(a[3])),
         window: 4,
         duration: None,
-        reconnect_timeout: 10.0,
+        reconnect_timeout: Duration::from_secs(10),
+        handshake_timeout: Duration::from_secs(15),
         offline: false,
         quiet: true,
     };
@@ -281,15 +283,37 @@ fn killing_the_host_mid_run_loses_nothing() {
     let scenario = Scenario::paper_rundown(150.0, 100.0, 20.0);
     let device = DeviceThread::start(Faults::default(), Faults::default(), 3);
     let out = scenario.out_dir("killed");
+    // A previous run in OUT (an empty raw log rebuilt offline): the killed
+    // host must leave it byte-identical.
     std::fs::create_dir_all(&out).unwrap();
-    let raw_path = out.join("raw.bin");
+    std::fs::write(out.join("raw.bin"), b"").unwrap();
+    plinth::stream::run(&plinth::stream::Args {
+        port: None,
+        baud: 115_200,
+        config: scenario.config_path.clone(),
+        out: out.clone(),
+        force: false,
+        replay: None,
+        window: 4,
+        duration: None,
+        reconnect_timeout: Duration::from_secs(1),
+        handshake_timeout: Duration::from_secs(1),
+        offline: true,
+        quiet: true,
+    })
+    .unwrap();
+    let previous = snapshot(&out);
+    assert!(previous.contains_key("measurements.csv"));
+    // The host works in OUT.incomplete until the stream completes.
+    let staging = plinth::stream::staging_dir(&out);
+    let raw_path = staging.join("raw.bin");
 
     // First host: kill it once a third of the replay is acknowledged.
     let mut host = spawn_host(&device.port, &scenario, &out);
     let total = scenario.replay().set().len();
     let deadline = Instant::now() + Duration::from_secs(120);
     loop {
-        let done = ReplayJournal::read(&out)
+        let done = ReplayJournal::read(&staging)
             .ok()
             .flatten()
             .is_some_and(|j| j.acknowledged * 3 > total);
@@ -306,6 +330,11 @@ fn killing_the_host_mid_run_loses_nothing() {
     host.0.kill().unwrap();
     host.0.wait().unwrap();
     drop(host);
+    assert_eq!(
+        snapshot(&out),
+        previous,
+        "the killed host changed the previous run"
+    );
     let before = std::fs::read(&raw_path).unwrap();
     let rows_before = derive(&before, &scenario.config, &scenario.tables)
         .run
@@ -331,7 +360,8 @@ fn killing_the_host_mid_run_loses_nothing() {
     assert!(status.success(), "the restarted host failed: {status:?}");
     drop(device);
 
-    let after = std::fs::read(&raw_path).unwrap();
+    assert!(!staging.exists(), "the completed stream left {staging:?}");
+    let after = std::fs::read(out.join("raw.bin")).unwrap();
     assert!(after.len() > before.len());
     assert_eq!(
         &after[..before.len()],
@@ -358,4 +388,21 @@ fn killing_the_host_mid_run_loses_nothing() {
             .unwrap();
     assert_eq!(report["completed"], true);
     assert!(report["link_raw_log"]["restarts"].as_u64().unwrap() >= 1);
+}
+
+/// Every file under `dir` (relative path -> bytes).
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut out = std::collections::BTreeMap::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().into_owned();
+        if p.is_dir() {
+            for (k, v) in snapshot(&p) {
+                out.insert(format!("{name}/{k}"), v);
+            }
+        } else {
+            out.insert(name, std::fs::read(&p).unwrap());
+        }
+    }
+    out
 }

@@ -116,6 +116,10 @@ pub struct Args {
     /// Output directory (created): box configuration, run directory, figures, report.
     #[arg(long, default_value = "plinth-demo")]
     pub out: PathBuf,
+    /// Write into an existing --plots/--out directory that already holds
+    /// files (files Plinth did not write there are kept, never replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Run the real firmware image under qemu-system-arm (netduinoplus2) instead
     /// of the pipeline compiled for the host.
     #[arg(long)]
@@ -317,19 +321,27 @@ pub fn run(args: &Args) -> Result<()> {
         Some(p) => Machine::from_toml_path(p)?,
         None => bundled_machine()?,
     };
+    let staged = crate::output::OutputDir::create(&args.out, args.force)?;
     let opts = DemoOptions {
         machine,
         rundown,
         averaging,
         seed: args.seed,
         seismic: args.seismic,
-        out: args.out.clone(),
+        out: staged.path().to_path_buf(),
         target,
         keep_signals: args.keep_signals,
         progress: !args.quiet,
     };
     let outcome = demo(&opts)?;
-    print!("{}", summary(&outcome));
+    staged.commit()?;
+    print!(
+        "{}",
+        summary(&outcome).replace(
+            &opts.out.display().to_string(),
+            &args.out.display().to_string()
+        )
+    );
     println!(
         "elapsed {:.1} s (signals {:.1} s, box {:.1} s, fit {:.1} s, figures {:.1} s)",
         started.elapsed().as_secs_f64(),

@@ -27,8 +27,12 @@ pub struct Args {
     /// Write measured-vs-predicted figures (PNG and SVG) into this directory.
     #[arg(long)]
     pub plots: Option<PathBuf>,
+    /// Write into an existing --plots/--out directory that already holds
+    /// files (files Plinth did not write there are kept, never replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Family-wise significance level of each step (Bonferroni over candidates).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, value_parser = crate::args::probability)]
     pub alpha: f64,
 }
 
@@ -62,8 +66,12 @@ pub fn run(args: &Args) -> Result<()> {
     let options = Options {
         base: parse_base(&args.base)?,
         alpha: args.alpha,
+        progress: true,
         ..Options::default()
     };
+    let plots = (args.plots.as_deref())
+        .map(|d| crate::output::OutputDir::create(d, args.force))
+        .transpose()?;
     let run = RunDir::read(&args.dir).with_context(|| format!("reading {}", args.dir.display()))?;
     let mut outcome = diagnose(&run, &options)?;
     if let Some(path) = &args.machine {
@@ -73,7 +81,7 @@ pub fn run(args: &Args) -> Result<()> {
         for (i, state) in outcome.states.iter().enumerate() {
             let readings = resimulate(&machine, &outcome.prep, state)?;
             gaps.push(machine_gap(&outcome.prep, &readings));
-            if let Some(dir) = &args.plots {
+            if let Some(dir) = plots.as_ref().map(|o| o.path()) {
                 if i == 0 || i + 1 == outcome.states.len() {
                     let (stem, label) = if i == 0 {
                         ("machine_before", "base model")
@@ -92,8 +100,9 @@ pub fn run(args: &Args) -> Result<()> {
             s.machine_gap_after = gaps.get(i + 1).copied();
         }
     }
-    if let Some(dir) = &args.plots {
-        write_pedestal_figures(&outcome, dir)?;
+    if let Some(plots) = plots {
+        write_pedestal_figures(&outcome, plots.path())?;
+        plots.commit()?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&outcome.diagnosis)?);

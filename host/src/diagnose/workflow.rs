@@ -26,6 +26,8 @@ pub struct Options {
     pub alpha: f64,
     /// Most effects to add.
     pub max_steps: usize,
+    /// A progress line on stderr (only on a terminal, after a second).
+    pub progress: bool,
 }
 
 impl Default for Options {
@@ -34,6 +36,7 @@ impl Default for Options {
             base: Parameter::ALL.to_vec(),
             alpha: 1e-3,
             max_steps: 8,
+            progress: false,
         }
     }
 }
@@ -349,7 +352,13 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let mut states = vec![state.clone()];
     let mut steps = Vec::new();
     let mut best_rejected = None;
-    for _ in 0..opts.max_steps {
+    let mut ticker = crate::progress::Ticker::new(
+        "diagnose: candidate-effect rounds",
+        opts.max_steps,
+        opts.progress,
+    );
+    for round in 0..opts.max_steps {
+        ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
         if !outcome.accepted {
             best_rejected = outcome.ranked.first().map(|e| summary(&prep, e));
@@ -396,8 +405,16 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             )
         }
     } else {
+        // The wording follows the numbers: a gap that grew is not said to fall.
+        let moved = if gap1.gap < gap0.gap {
+            "fell"
+        } else if gap1.gap > gap0.gap {
+            "ROSE (the added effect does not explain the data: check the data's conventions and units)"
+        } else {
+            "stayed"
+        };
         format!(
-            "Added {}: the pedestal-level gap fell from {:.4} to {:.4} (noise floor {:.4}).",
+            "Added {}: the pedestal-level gap {moved} from {:.4} to {:.4} (noise floor {:.4}).",
             steps
                 .iter()
                 .map(|s| format!("{} at {}", s.effect, s.bearing))

@@ -14,7 +14,7 @@
 //! A(Ω) = K + iΩ(C + Ω·G) − Ω²M + bearings(Ω), with A·X = F and
 //! q(t) = Re{X e^{iΩt}}.
 
-use super::banded::{BandError, BandMatrix, C64};
+use super::banded::{BandError, BandMatrix, BandShape, C64};
 use super::machine::Machine;
 use super::pedestal::PedestalDynamics;
 use plinth_shared::bearing::BearingCoefficients;
@@ -41,9 +41,7 @@ pub struct Assembly {
     pub pedestal_dof: Vec<Option<usize>>,
     /// Shaft node of each bearing.
     pub bearing_node: Vec<usize>,
-    kl: usize,
-    ku: usize,
-    template: BandMatrix,
+    shape: BandShape,
     /// Band-storage arrays, same layout as `template`: K real and imaginary
     /// parts, M, C, G.
     k_re: Vec<f64>,
@@ -96,73 +94,73 @@ impl Assembly {
             }
         }
         let n_dof = next;
-        // Triplets (row, col, kind, value).
-        let mut trip: Vec<(usize, usize, Kind, f64)> = Vec::new();
-        for (e, el) in machine.elements.iter().enumerate() {
-            let dofs: Vec<usize> = (0..4)
-                .map(|i| node_dof[e] + i)
-                .chain((0..4).map(|i| node_dof[e + 1] + i))
-                .collect();
-            let (me, ke, ge) = (
-                el.mass_matrix(),
-                el.stiffness_matrix(),
-                el.gyroscopic_matrix(),
-            );
-            for i in 0..8 {
-                for j in 0..8 {
-                    trip.push((dofs[i], dofs[j], Kind::M, me[i][j]));
-                    trip.push((dofs[i], dofs[j], Kind::KRe, ke[i][j]));
-                    trip.push((dofs[i], dofs[j], Kind::G, ge[i][j]));
-                }
-            }
-        }
-        for d in &machine.disks {
-            let (md, gd) = (d.mass_matrix(), d.gyroscopic_matrix());
-            let base = node_dof[d.node];
-            for i in 0..4 {
-                for j in 0..4 {
-                    trip.push((base + i, base + j, Kind::M, md[i][j]));
-                    trip.push((base + i, base + j, Kind::G, gd[i][j]));
-                }
-            }
-        }
-        for (b, p) in pedestals.iter().enumerate() {
-            if let (Some(p), Some(pd)) = (p, pedestal_dof[b]) {
-                for i in 0..2 {
-                    trip.push((pd + i, pd + i, Kind::M, p.m[i]));
-                    for j in 0..2 {
-                        trip.push((pd + i, pd + j, Kind::KRe, p.k[i][j]));
-                        trip.push((pd + i, pd + j, Kind::KIm, p.eta * p.k[i][j]));
-                        trip.push((pd + i, pd + j, Kind::C, p.c[i][j]));
+        // Every structural entry, visited twice (band pattern, then values):
+        // nothing per element is stored, so memory stays linear and small.
+        let visit = |add: &mut dyn FnMut(usize, usize, Kind, f64)| {
+            for (e, el) in machine.elements.iter().enumerate() {
+                let dof = |i: usize| {
+                    if i < 4 {
+                        node_dof[e] + i
+                    } else {
+                        node_dof[e + 1] + i - 4
+                    }
+                };
+                let (me, ke, ge) = (
+                    el.mass_matrix(),
+                    el.stiffness_matrix(),
+                    el.gyroscopic_matrix(),
+                );
+                for i in 0..8 {
+                    for j in 0..8 {
+                        add(dof(i), dof(j), Kind::M, me[i][j]);
+                        add(dof(i), dof(j), Kind::KRe, ke[i][j]);
+                        add(dof(i), dof(j), Kind::G, ge[i][j]);
                     }
                 }
             }
-        }
-        // Bearing blocks take part in the band pattern.
-        let mut pattern: Vec<(usize, usize)> = trip.iter().map(|t| (t.0, t.1)).collect();
-        for (b, brg) in machine.bearings.iter().enumerate() {
-            let s = node_dof[brg.node];
-            pattern.push((s, s + 1));
-            pattern.push((s + 1, s));
-            if let Some(p) = pedestal_dof[b] {
-                pattern.push((s, p + 1));
-                pattern.push((p + 1, s));
-                pattern.push((s + 1, p + 1));
-                pattern.push((p + 1, s + 1));
+            for d in &machine.disks {
+                let (md, gd) = (d.mass_matrix(), d.gyroscopic_matrix());
+                let base = node_dof[d.node];
+                for i in 0..4 {
+                    for j in 0..4 {
+                        add(base + i, base + j, Kind::M, md[i][j]);
+                        add(base + i, base + j, Kind::G, gd[i][j]);
+                    }
+                }
             }
-        }
-        let kl = pattern
-            .iter()
-            .map(|&(r, c)| r.saturating_sub(c))
-            .max()
-            .unwrap_or(0);
-        let ku = pattern
-            .iter()
-            .map(|&(r, c)| c.saturating_sub(r))
-            .max()
-            .unwrap_or(0);
-        let template = BandMatrix::zeros(n_dof, kl, ku);
-        let len = template.clone().data_mut().len();
+            for (b, p) in pedestals.iter().enumerate() {
+                if let (Some(p), Some(pd)) = (p, pedestal_dof[b]) {
+                    for i in 0..2 {
+                        add(pd + i, pd + i, Kind::M, p.m[i]);
+                        for j in 0..2 {
+                            add(pd + i, pd + j, Kind::KRe, p.k[i][j]);
+                            add(pd + i, pd + j, Kind::KIm, p.eta * p.k[i][j]);
+                            add(pd + i, pd + j, Kind::C, p.c[i][j]);
+                        }
+                    }
+                }
+            }
+            // Bearing blocks take part in the band pattern.
+            for (b, brg) in machine.bearings.iter().enumerate() {
+                let s = node_dof[brg.node];
+                let mut pair = |r: usize, c: usize| add(r, c, Kind::KRe, 0.0);
+                pair(s, s + 1);
+                pair(s + 1, s);
+                if let Some(p) = pedestal_dof[b] {
+                    pair(s, p + 1);
+                    pair(p + 1, s);
+                    pair(s + 1, p + 1);
+                    pair(p + 1, s + 1);
+                }
+            }
+        };
+        let (mut kl, mut ku) = (0usize, 0usize);
+        visit(&mut |r, c, _, _| {
+            kl = kl.max(r.saturating_sub(c));
+            ku = ku.max(c.saturating_sub(r));
+        });
+        let shape = BandShape { n: n_dof, kl, ku };
+        let len = shape.len();
         let mut arrays = [
             vec![0.0; len],
             vec![0.0; len],
@@ -170,16 +168,14 @@ impl Assembly {
             vec![0.0; len],
             vec![0.0; len],
         ];
-        for (r, c, kind, v) in trip {
-            if v == 0.0 {
-                continue;
+        visit(&mut |r, c, kind, v| {
+            if v != 0.0 {
+                if let Some(idx) = shape.index(r, c) {
+                    arrays[kind as usize][idx] += v;
+                }
             }
-            let idx = template
-                .index(r, c)
-                .ok_or_else(|| format!("internal: ({r}, {c}) outside the band"))?;
-            arrays[kind as usize][idx] += v;
-        }
-        let idx = |r: usize, c: usize| template.index(r, c).unwrap_or(usize::MAX);
+        });
+        let idx = |r: usize, c: usize| shape.index(r, c).unwrap_or(usize::MAX);
         let mut bearing_idx = Vec::new();
         for (b, brg) in machine.bearings.iter().enumerate() {
             let s = node_dof[brg.node];
@@ -223,9 +219,7 @@ impl Assembly {
             node_dof,
             pedestal_dof,
             bearing_node: machine.bearings.iter().map(|b| b.node).collect(),
-            kl,
-            ku,
-            template,
+            shape,
             k_re,
             k_im,
             m,
@@ -238,12 +232,12 @@ impl Assembly {
 
     /// (sub, super) half-bandwidths of the banded part.
     pub fn bandwidths(&self) -> (usize, usize) {
-        (self.kl, self.ku)
+        (self.shape.kl, self.shape.ku)
     }
 
     /// A zero band matrix with this model's pattern (reuse it across speeds).
     pub fn new_matrix(&self) -> BandMatrix {
-        self.template.clone()
+        BandMatrix::zeros(self.shape.n, self.shape.kl, self.shape.ku)
     }
 
     /// Fills `a` with the banded part of A(Ω) for spin Ω [rad/s] and bearing
@@ -284,7 +278,7 @@ impl Assembly {
         let mut m = nalgebra::DMatrix::<f64>::zeros(n, n);
         for r in 0..n {
             for c in 0..n {
-                if let Some(i) = self.template.index(r, c) {
+                if let Some(i) = self.shape.index(r, c) {
                     k[(r, c)] = self.k_re[i];
                     m[(r, c)] = self.m[i];
                 }

@@ -29,6 +29,45 @@ pub enum BandError {
     },
 }
 
+/// The storage layout of an n×n band matrix with `kl` sub- and `ku`
+/// super-diagonals (LAPACK band storage with `kl` fill-in rows), without the
+/// data: for arrays that share a [`BandMatrix`]'s layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BandShape {
+    /// Order.
+    pub n: usize,
+    /// Sub-diagonals.
+    pub kl: usize,
+    /// Super-diagonals.
+    pub ku: usize,
+}
+
+impl BandShape {
+    /// Leading dimension of the storage (rows per column).
+    pub fn ldab(&self) -> usize {
+        2 * self.kl + self.ku + 1
+    }
+
+    /// Number of stored elements.
+    pub fn len(&self) -> usize {
+        self.ldab() * self.n
+    }
+
+    /// Whether the matrix is 0×0.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// Storage index of element (r, c), or `None` outside the band.
+    #[inline]
+    pub fn index(&self, r: usize, c: usize) -> Option<usize> {
+        if r >= self.n || c >= self.n || r > c + self.kl || c > r + self.ku {
+            return None;
+        }
+        Some(c * self.ldab() + self.kl + self.ku + r - c)
+    }
+}
+
 /// A square complex band matrix with `kl` sub- and `ku` super-diagonals, in
 /// LAPACK band storage with `kl` extra rows for the fill-in of pivoting.
 ///
@@ -156,15 +195,19 @@ impl BandMatrix {
                 for i in 1..=km {
                     a[col + kv + i] *= inv;
                 }
+                // Column j's multipliers and each later column as slices
+                // (no index checks in the inner loop).
+                let (left, right) = a.split_at_mut((j + 1) * ldab);
+                let l = &left[col + kv + 1..=col + kv + km];
                 for c in j + 1..=ju {
-                    let base = c * ldab + kv;
-                    let t = a[base + j - c];
+                    let base = (c - j - 1) * ldab + kv + j - c;
+                    let t = right[base];
                     if t.re == 0.0 && t.im == 0.0 {
                         continue;
                     }
-                    for i in 1..=km {
-                        let l = a[col + kv + i];
-                        a[base + j + i - c] -= l * t;
+                    let target = &mut right[base + 1..=base + km];
+                    for (x, &li) in target.iter_mut().zip(l) {
+                        *x -= li * t;
                     }
                 }
             }

@@ -1,8 +1,11 @@
 //! `plinth simulate`, `plinth signals`, `plinth predict`.
 
+use super::budget;
 use super::inject::{EffectRequest, EffectSet};
 use super::machine::Machine;
-use super::response::{unbalance_response, Noise};
+use super::response::{Noise, UnbalanceSolver};
+use crate::output::OutputDir;
+use crate::progress::Ticker;
 use crate::rundir::{DigitsMode, WriteOptions};
 use anyhow::{bail, Context};
 use std::path::PathBuf;
@@ -12,9 +15,14 @@ use std::path::PathBuf;
 pub struct SimulateArgs {
     /// Machine file (TOML, SI units; see the `plinth::sim::machine` docs).
     pub machine: PathBuf,
-    /// Run directory to write (created if needed).
+    /// Run directory to write: a new or empty directory; written in a hidden
+    /// sibling and moved into place only when complete.
     #[arg(long)]
     pub out: PathBuf,
+    /// Write into an --out that already holds files (files Plinth did not
+    /// write there are kept, never replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Speeds [Hz] as START:STOP:STEP (inclusive), or a comma-separated list.
     #[arg(long, default_value = "5:200:1")]
     pub speeds: String,
@@ -22,10 +30,10 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub digits: Option<u32>,
     /// Truncate to --digits instead of rounding (as the paper did).
-    #[arg(long)]
+    #[arg(long, requires = "digits")]
     pub truncate: bool,
     /// Complex Gaussian noise, RMS relative to each channel's RMS over speed.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::non_negative)]
     pub noise: Option<f64>,
     /// Seed of the noise.
     #[arg(long, default_value_t = 1)]
@@ -36,7 +44,31 @@ pub struct SimulateArgs {
 }
 
 pub use super::predict::{predict, PredictArgs};
-pub use super::signals::{signals, SignalsArgs};
+pub use super::signals::SignalsArgs;
+
+/// `plinth signals` as the command line runs it: [`SignalsArgs`] plus the
+/// output policy (the signal set is written through [`OutputDir`]).
+#[derive(clap::Args, Debug)]
+pub struct SignalsCommand {
+    /// The signal options.
+    #[command(flatten)]
+    pub args: SignalsArgs,
+    /// Write into an --out that already holds files (files Plinth did not
+    /// write there are kept, never replaced).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Runs `plinth signals`: the signal set is staged beside `--out` and moved
+/// into place only when complete.
+pub fn signals(command: SignalsCommand) -> anyhow::Result<()> {
+    let SignalsCommand { mut args, force } = command;
+    let out = OutputDir::create(&args.out, force)?;
+    args.out = out.path().to_path_buf();
+    super::signals::signals(&args)?;
+    out.commit()?;
+    Ok(())
+}
 
 /// Parses a speed list: `START:STOP:STEP` (inclusive, to within STEP/1e6) or
 /// `a,b,c` [Hz].
@@ -80,6 +112,7 @@ pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
 pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
     let speeds = parse_speeds(&args.speeds)?;
+    let out = OutputDir::create(&args.out, args.force)?;
     let mut effects = EffectSet::none();
     for e in &args.effects {
         let req: EffectRequest = e.parse().map_err(anyhow::Error::msg)?;
@@ -90,8 +123,22 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
             bail!("--digits must be at least 1");
         }
     }
-    let response = unbalance_response(&machine, &speeds, &effects)
+    let needed = budget::simulate_bytes(&machine, speeds.len());
+    budget::check(
+        &format!(
+            "simulating {} shaft elements at {} speeds",
+            machine.elements.len(),
+            speeds.len()
+        ),
+        needed,
+        budget::available_bytes(),
+    )
+    .map_err(anyhow::Error::msg)?;
+    let mut ticker = Ticker::new("simulate: speeds", speeds.len(), true);
+    let response = UnbalanceSolver::new(&machine, &effects)
+        .and_then(|s| s.run_with(&speeds, false, &mut |done| ticker.tick(done)))
         .with_context(|| format!("simulating {}", args.machine.display()))?;
+    ticker.finish();
     let noise = args.noise.map(|fraction| Noise {
         fraction,
         seed: args.seed,
@@ -105,8 +152,9 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
             DigitsMode::Round
         },
     };
-    run.write_with(&args.out, &options)
+    run.write_with(out.path(), &options)
         .with_context(|| format!("writing {}", args.out.display()))?;
+    out.commit()?;
     println!(
         "{}: {} speeds x {} bearings -> {}",
         machine.name,

@@ -21,16 +21,19 @@
 //! ```
 pub mod assembly;
 pub mod banded;
+pub mod budget;
 pub mod cli;
 pub mod disk;
 pub mod inject;
 pub mod machine;
+pub mod machine_file;
 pub mod modal;
 pub mod oil_film;
 pub mod pedestal;
 pub mod predict;
 pub mod response;
 pub mod signals;
+pub mod static_load;
 pub mod timoshenko;
 
 pub use inject::{default_size, EffectRequest, EffectSet};

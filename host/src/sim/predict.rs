@@ -40,6 +40,9 @@ pub struct IdentifiedPedestal {
     pub c_y: Option<f64>,
     /// Horizontal damping [N·s/m].
     pub c_z: Option<f64>,
+    /// Standard errors of the parameters, by name (same units).
+    #[serde(default)]
+    pub std_err: BTreeMap<String, Option<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -52,6 +55,42 @@ impl IdentifiedPedestal {
     /// values (a negative identified mass, stiffness or damping is not a
     /// pedestal the simulator can be given).
     pub fn params(&self) -> anyhow::Result<PedestalParams> {
+        self.params_with_notes().map(|(p, _)| p)
+    }
+
+    /// [`IdentifiedPedestal::params`], and a note for every damping that
+    /// was negative but consistent with zero and is taken as zero: within
+    /// two standard errors of zero, or (without a standard error) smaller
+    /// than 1e-6 of the critical damping 2·sqrt(k·m) [N·s/m].
+    pub fn params_with_notes(&self) -> anyhow::Result<(PedestalParams, Vec<String>)> {
+        let mut notes = Vec::new();
+        let (k_y, k_z, m) = (self.k_y, self.k_z, self.m);
+        let mut damping = |name: &str, v: Option<f64>, k: Option<f64>| -> Option<f64> {
+            let x = v?;
+            if !(x.is_finite() && x < 0.0) {
+                return Some(x);
+            }
+            let se = self.std_err.get(name).copied().flatten();
+            let critical = 2.0 * (k.unwrap_or(0.0).abs() * m.unwrap_or(0.0).abs()).sqrt();
+            let zero = match se {
+                Some(se) if se.is_finite() && se > 0.0 => x >= -2.0 * se,
+                _ => -x <= 1e-6 * critical,
+            };
+            if !zero {
+                return Some(x);
+            }
+            let within = match se {
+                Some(se) => format!("± {se:.3e}, within two standard errors of zero"),
+                None => format!("below 1e-6 of the critical damping {critical:.3e} N·s/m"),
+            };
+            notes.push(format!(
+                "pedestal {:?}: identified {name} = {x:.3e} N·s/m ({within}) is consistent with zero: re-predicted with {name} = 0",
+                self.bearing
+            ));
+            Some(0.0)
+        };
+        let c_y = damping("c_y", self.c_y, k_y);
+        let c_z = damping("c_z", self.c_z, k_z);
         let get = |name: &str, v: Option<f64>| -> anyhow::Result<f64> {
             match v {
                 Some(x) if x.is_finite() && x >= 0.0 => Ok(x),
@@ -69,8 +108,8 @@ impl IdentifiedPedestal {
             k_y: get("k_y", self.k_y)?,
             k_z: get("k_z", self.k_z)?,
             m: get("m", self.m)?,
-            c_y: get("c_y", self.c_y)?,
-            c_z: get("c_z", self.c_z)?,
+            c_y: get("c_y", c_y)?,
+            c_z: get("c_z", c_z)?,
         };
         if p.m <= 0.0 {
             bail!(
@@ -79,7 +118,7 @@ impl IdentifiedPedestal {
                 p.m
             );
         }
-        Ok(p)
+        Ok((p, notes))
     }
 }
 
@@ -107,7 +146,10 @@ pub fn apply_identified(
     pedestals: &[IdentifiedPedestal],
 ) -> anyhow::Result<()> {
     for p in pedestals {
-        let params = p.params()?;
+        let (params, notes) = p.params_with_notes()?;
+        for n in notes {
+            eprintln!("note: {n}");
+        }
         machine
             .set_pedestal(&p.bearing, Some(params))
             .with_context(|| format!("applying the identified pedestal {:?}", p.bearing))?;
@@ -351,7 +393,23 @@ mod tests {
             m: Some(100.0),
             c_y: Some(-1.0),
             c_z: Some(0.0),
+            std_err: BTreeMap::new(),
         };
         assert!(p.params().unwrap_err().to_string().contains("c_y"));
+        // Within two standard errors of zero: zero, and said so.
+        let mut p = p;
+        p.std_err.insert("c_y".into(), Some(0.6));
+        let (params, notes) = p.params_with_notes().unwrap();
+        assert_eq!(params.c_y, 0.0);
+        assert!(notes[0].contains("consistent with zero"), "{notes:?}");
+        p.std_err.insert("c_y".into(), Some(0.4));
+        assert!(p.params().is_err());
+        // Round-off on noise-free data, without a standard error.
+        p.std_err.clear();
+        p.c_y = Some(-2.6e-13);
+        assert_eq!(p.params().unwrap().c_y, 0.0);
+        // Negative stiffness is never zeroed.
+        p.k_y = Some(-1.0);
+        assert!(p.params().is_err());
     }
 }

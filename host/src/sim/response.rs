@@ -45,6 +45,9 @@ pub enum SimError {
         /// Solver detail.
         detail: String,
     },
+    /// A bad noise request.
+    #[error("{0}")]
+    Noise(String),
     /// Model assembly failed.
     #[error("model: {0}")]
     Model(String),
@@ -97,7 +100,8 @@ pub struct Response {
     pub bearings: Vec<Vec<BearingResponse>>,
     /// Axial node positions [m].
     pub node_positions: Vec<f64>,
-    /// `shaft[s][node]`: shaft displacement phasors (y, z) [m] at every node.
+    /// `shaft[s][node]`: shaft displacement phasors (y, z) [m] at every node
+    /// (empty when solved without keeping them, [`UnbalanceSolver::run_with`]).
     pub shaft: Vec<Vec<Phasor2<f64>>>,
     /// Sensor effects per bearing (applied by [`Response::measurements`]).
     pub sensors: Vec<SensorEffects>,
@@ -274,7 +278,7 @@ impl UnbalanceSolver {
         self.assembly.fill(work, omega, &coefs);
         let singular = |e: super::banded::BandError| SimError::Singular {
             speed_hz,
-            detail: e.to_string(),
+            detail: self.where_singular(&e, speed_hz),
         };
         work.factor().map_err(singular)?;
         x.fill(C64::new(0.0, 0.0));
@@ -288,8 +292,63 @@ impl UnbalanceSolver {
         Ok(coefs)
     }
 
+    /// Names the machine-file keys behind a zero pivot at `speed_hz` [Hz].
+    fn where_singular(&self, e: &super::banded::BandError, speed_hz: f64) -> String {
+        let super::banded::BandError::Singular { column } = *e else {
+            return e.to_string();
+        };
+        const DIRS: [&str; 4] = ["y", "z", "θ_y", "θ_z"];
+        for (b, p) in self.assembly.pedestal_dof.iter().enumerate() {
+            if let Some(p) = *p {
+                if (p..p + 2).contains(&column) {
+                    let name = &self.machine.bearings[b].name;
+                    let d = DIRS[column - p];
+                    return format!(
+                        "the pedestal of bearings[{b}] (name = {name:?}) has no stiffness against {d} motion at this speed: check its `pedestal = {{ m, k_{d}, c_{d} }}`"
+                    );
+                }
+            }
+        }
+        let node = self
+            .assembly
+            .node_dof
+            .iter()
+            .rposition(|&d| d <= column)
+            .unwrap_or(0);
+        let d = DIRS[(column - self.assembly.node_dof[node]).min(3)];
+        let x = self
+            .machine
+            .node_positions
+            .get(node)
+            .copied()
+            .unwrap_or(0.0);
+        let near = self
+            .machine
+            .bearings
+            .iter()
+            .enumerate()
+            .map(|(i, b)| format!("bearings[{i}] (name = {:?}, node {})", b.name, b.node))
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!(
+            "nothing holds shaft node {node} (x = {x} m) in {d} at {speed_hz} Hz: check the `coefficients` (kyy, kzz) or `oil_film` of the bearings at this speed: {near}"
+        )
+    }
+
     /// Unbalance response at every speed in `speeds_hz` [Hz].
     pub fn run(&self, speeds_hz: &[f64]) -> Result<Response, SimError> {
+        self.run_with(speeds_hz, true, &mut |_| {})
+    }
+
+    /// [`UnbalanceSolver::run`] with `keep_shaft` (false: [`Response::shaft`]
+    /// stays empty, saving 32 bytes per node and speed on long shafts) and
+    /// `done(speeds solved so far)` called after every speed (progress).
+    pub fn run_with(
+        &self,
+        speeds_hz: &[f64],
+        keep_shaft: bool,
+        done: &mut dyn FnMut(usize),
+    ) -> Result<Response, SimError> {
         for (i, &s) in speeds_hz.iter().enumerate() {
             if !(s.is_finite() && s >= 0.0) {
                 return Err(SimError::Speeds(format!(
@@ -319,6 +378,10 @@ impl UnbalanceSolver {
                 });
             }
             bearings.push(row);
+            done(bearings.len());
+            if !keep_shaft {
+                continue;
+            }
             shaft.push(
                 (0..nn)
                     .map(|n| {
@@ -461,7 +524,7 @@ impl Response {
 
     /// Shaft displacement phasors (y, z) [m] at `node` for every speed.
     pub fn node_response(&self, node: usize) -> Option<Vec<Phasor2<f64>>> {
-        if node >= self.node_positions.len() {
+        if node >= self.node_positions.len() || self.shaft.is_empty() {
             return None;
         }
         Some(self.shaft.iter().map(|row| row[node]).collect())
@@ -474,8 +537,8 @@ impl Response {
         let mut measurements = self.measurements();
         if let Some(n) = noise {
             if !(n.fraction.is_finite() && n.fraction >= 0.0) {
-                return Err(SimError::Speeds(format!(
-                    "noise fraction must be finite and >= 0 (got {})",
+                return Err(SimError::Noise(format!(
+                    "--noise must be a finite fraction >= 0 (got {})",
                     n.fraction
                 )));
             }

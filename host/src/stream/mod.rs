@@ -19,6 +19,32 @@
 //! across runs), `replay-journal.json` (replay position), `stream.toml` (a
 //! copy of the configuration), `measurements.csv` and `bearings.csv`
 //! (formats.md), `stream-report.json` (link counters, box vs batch).
+//!
+//! # The raw log and the previous run directory
+//!
+//! `plinth stream --out OUT` never writes into `OUT` while it runs. It works
+//! in the sibling directory `OUT.incomplete` ([`staging_dir`]): the raw log
+//! there starts as a copy of `OUT/raw.bin` (when `OUT` is an earlier stream
+//! run) and every received byte is appended to it as it arrives. Only when
+//! the session completed is `OUT.incomplete` moved into place as `OUT`
+//! (through [`crate::output::OutputDir`]: `OUT/raw.bin` is replaced only by a
+//! log that starts with all of its bytes, files Plinth did not write are
+//! kept). So:
+//!
+//! - a stream that fails or is killed leaves `OUT` exactly as it was, and
+//!   everything received in `OUT.incomplete/raw.bin` (with the run directory
+//!   derived from it when the process could still write it);
+//! - running the same command again resumes from `OUT.incomplete` (the raw
+//!   log is appended to, the replay continues from its journal);
+//! - a stream that received nothing (the box never answered) removes the
+//!   `OUT.incomplete` it created and changes nothing;
+//! - `--offline` rebuilds the run directory from `OUT.incomplete/raw.bin`
+//!   when there is one, else from `OUT/raw.bin`, and moves it into place the
+//!   same way (a `--config OUT/stream.toml` is read before anything is
+//!   written, and is never truncated).
+//!
+//! An `OUT` that holds anything but an earlier stream run (a `raw.bin`) is
+//! refused unless `--force`.
 
 pub mod config;
 pub mod derive;
@@ -29,6 +55,7 @@ pub mod replay;
 pub mod report;
 pub mod session;
 
+use crate::output::OutputDir;
 use anyhow::{bail, Context, Result};
 use config::{BearingTables, StreamConfig};
 use port::{Connector, SerialConnector};
@@ -53,42 +80,138 @@ pub struct Args {
     /// documented in `plinth::stream::config`).
     #[arg(long)]
     pub config: PathBuf,
-    /// Run directory to write (created; raw.bin in it is appended to, never truncated).
+    /// Run directory to write: new, empty, or an earlier stream run (its
+    /// raw.bin is extended, never truncated); staged in OUT.incomplete and
+    /// moved into place only when the stream completes.
     #[arg(long)]
     pub out: PathBuf,
+    /// Write into an --out that holds files other than an earlier stream run
+    /// (files Plinth did not write there are kept, never replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Replay these simulated time signals (`plinth signals` output) to the box.
     #[arg(long)]
     pub replay: Option<PathBuf>,
     /// Sample blocks in flight without an acknowledgement.
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = 4, value_parser = crate::args::count)]
     pub window: usize,
-    /// Without --replay: how long to stream [s] (default: until the port is gone for good).
-    #[arg(long)]
-    pub duration: Option<f64>,
-    /// Give up reopening a lost port after this long [s].
-    #[arg(long, default_value_t = 60.0)]
-    pub reconnect_timeout: f64,
-    /// Do not open the port: rebuild the run directory from OUT/raw.bin.
-    #[arg(long)]
+    /// Without --replay: how long to stream [s] (default: until the port is
+    /// gone for good); also bounds every wait for a lost link.
+    #[arg(long, value_parser = crate::args::seconds, conflicts_with = "replay")]
+    pub duration: Option<Duration>,
+    /// Give up reopening a lost port, or waiting for a box that stopped
+    /// answering, after this long [s].
+    #[arg(long, default_value = "60", value_parser = crate::args::seconds)]
+    pub reconnect_timeout: Duration,
+    /// How long the box may take to answer the handshake [s]; a port where
+    /// nothing ever answers is given up after this long.
+    #[arg(long, default_value = "15", value_parser = crate::args::seconds)]
+    pub handshake_timeout: Duration,
+    /// Do not open the port: rebuild the run directory from the raw log.
+    #[arg(long, conflicts_with_all = ["port", "replay", "duration"])]
     pub offline: bool,
     /// No progress line.
     #[arg(long)]
     pub quiet: bool,
 }
 
+/// The directory a stream into `out` works in until it completes:
+/// `OUT.incomplete`, beside `out` (see the module docs).
+pub fn staging_dir(out: &Path) -> PathBuf {
+    let mut name = out
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_else(|| "stream".into());
+    name.push(".incomplete");
+    out.with_file_name(name)
+}
+
+/// File name of the copy of the configuration in the run directory.
+pub const CONFIG_COPY_FILE: &str = "stream.toml";
+
 /// Runs `plinth stream`.
 pub fn run(args: &Args) -> Result<()> {
-    let config = StreamConfig::load(&args.config)?;
-    let tables = config.load_bearing_tables()?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create the output directory {}", args.out.display()))?;
-    std::fs::copy(&args.config, args.out.join("stream.toml")).with_context(|| {
+    // Everything that is read is read before anything is written.
+    let config_text = std::fs::read(&args.config).with_context(|| {
         format!(
-            "cannot copy {} into {}",
-            args.config.display(),
-            args.out.display()
+            "cannot read the stream configuration {}",
+            args.config.display()
         )
     })?;
+    let config = StreamConfig::load(&args.config)?;
+    let tables = config.load_bearing_tables()?;
+    let staging = staging_dir(&args.out);
+    let resuming = staging.is_dir();
+    let earlier_run = args.out.join(RAW_LOG_FILE).is_file();
+    if args.offline && !resuming && !earlier_run {
+        bail!(
+            "--offline: neither {} nor {} holds a raw log ({RAW_LOG_FILE}) to rebuild the run from",
+            args.out.display(),
+            staging.display()
+        );
+    }
+    let mut out = OutputDir::resume(&args.out, &staging, args.force || earlier_run)?;
+    out.appends(RAW_LOG_FILE);
+    if !resuming && earlier_run {
+        for name in [RAW_LOG_FILE, replay::JOURNAL_FILE] {
+            let from = args.out.join(name);
+            if from.is_file() {
+                std::fs::copy(&from, staging.join(name)).with_context(|| {
+                    format!("cannot copy {} into {}", from.display(), staging.display())
+                })?;
+            }
+        }
+    }
+    if resuming {
+        eprintln!(
+            "continuing the unfinished stream in {} ({} is unchanged until it completes)",
+            staging.display(),
+            args.out.display()
+        );
+    }
+    crate::output::write_atomically(&staging.join(CONFIG_COPY_FILE), &config_text)?;
+    let raw_before = std::fs::metadata(staging.join(RAW_LOG_FILE)).map_or(0, |m| m.len());
+    let result = stream_into(args, &staging, &config, &tables);
+    let raw_after = std::fs::metadata(staging.join(RAW_LOG_FILE)).map_or(0, |m| m.len());
+    let failed = match &result {
+        Ok(report) => report.error.clone(),
+        Err(e) => Some(crate::error_text(e)),
+    };
+    match failed {
+        None => {
+            out.commit()?;
+            if let Ok(report) = &result {
+                print!("{}", summary(report));
+            }
+            Ok(())
+        }
+        Some(e) => {
+            if let Ok(report) = &result {
+                print!("{}", summary(report));
+            }
+            if !resuming && raw_after == raw_before {
+                out.discard(); // nothing arrived: the staging directory goes
+                bail!(
+                    "the stream did not complete: {e}; nothing was received, {} is unchanged",
+                    args.out.display()
+                );
+            }
+            bail!(
+                "the stream did not complete: {e}; {} is unchanged; everything received ({raw_after} bytes) is in {}: run the same command again to continue it, or --offline to rebuild the run from it",
+                args.out.display(),
+                staging.join(RAW_LOG_FILE).display()
+            )
+        }
+    }
+}
+
+/// The session (unless `--offline`) and the run directory, in `dir`.
+fn stream_into(
+    args: &Args,
+    dir: &Path,
+    config: &StreamConfig,
+    tables: &BearingTables,
+) -> Result<StreamReport> {
     let outcome = if args.offline {
         None
     } else {
@@ -96,20 +219,13 @@ pub fn run(args: &Args) -> Result<()> {
         let mut connector = SerialConnector::new(port, args.baud);
         let mut options = SessionOptions {
             window: args.window,
-            duration: args.duration.map(Duration::from_secs_f64),
+            duration: args.duration,
+            handshake_timeout: args.handshake_timeout,
             ..SessionOptions::default()
         };
-        if !(args.reconnect_timeout.is_finite() && args.reconnect_timeout >= 0.0) {
-            bail!("--reconnect-timeout must be a non-negative number of seconds");
-        }
-        options.backoff.give_up = Duration::from_secs_f64(args.reconnect_timeout);
-        if let Some(d) = args.duration {
-            if !(d.is_finite() && d >= 0.0) {
-                bail!("--duration must be a non-negative number of seconds");
-            }
-        }
+        options.backoff.give_up = args.reconnect_timeout;
         let signals = match &args.replay {
-            Some(path) => Some((path.clone(), replay::SignalSetReplay::load(path, &config)?)),
+            Some(path) => Some((path.clone(), replay::SignalSetReplay::load(path, config)?)),
             None => None,
         };
         let replay = signals
@@ -122,20 +238,15 @@ pub fn run(args: &Args) -> Result<()> {
         };
         Some(stream(
             &mut connector,
-            &args.out,
-            &config,
-            &tables,
+            dir,
+            config,
+            tables,
             replay,
             options,
             progress,
         )?)
     };
-    let report = finish(&args.out, &config, &tables, outcome.as_ref())?;
-    print!("{}", summary(&report));
-    if let Some(e) = &report.error {
-        bail!("the stream did not complete: {e}");
-    }
-    Ok(())
+    finish(dir, config, tables, outcome.as_ref())
 }
 
 /// Streams over links from `connector` into `out` (raw log and journal);

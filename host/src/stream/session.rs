@@ -67,7 +67,9 @@ pub struct SessionOptions {
     pub window: usize,
     /// Time between repeated `Hello`s.
     pub hello_interval: Duration,
-    /// Time without a `HelloAck` after which the link is declared lost.
+    /// Time without a `HelloAck` after which the link is declared lost; when
+    /// the box never answered in this process, the session ends with
+    /// [`NoAnswer`] instead (a wrong port, or no firmware running).
     pub handshake_timeout: Duration,
     /// Time to wait for a command's `Ack` before sending it again.
     pub command_timeout: Duration,
@@ -149,6 +151,16 @@ struct LinkLost(String);
 
 fn lost(msg: impl Into<String>) -> anyhow::Error {
     anyhow::Error::new(LinkLost(msg.into()))
+}
+
+/// The port opened but nothing on it ever answered the handshake.
+#[derive(Debug, thiserror::Error)]
+#[error("no answer from the box on {port} after {seconds:.1} s: is it the box's port, is the firmware running?")]
+pub struct NoAnswer {
+    /// The port, as the connector describes it.
+    pub port: String,
+    /// How long the handshake waited [s].
+    pub seconds: f64,
 }
 
 /// The box is not running the session any more (it answered
@@ -277,16 +289,42 @@ impl<'a> Session<'a> {
         let started = Instant::now();
         let mut error = None;
         let mut completed = false;
+        // Since when the link has been down (None: up, or never lost).
+        let mut lost_since: Option<Instant> = None;
         loop {
+            if let Some(d) = self.options.duration {
+                if started.elapsed() >= d && self.link.is_none() {
+                    error = Some(format!(
+                        "the link was lost and --duration ({:.1} s) ran out before it came back",
+                        d.as_secs_f64()
+                    ));
+                    break;
+                }
+            }
+            let give_up = self.options.backoff.give_up;
+            if let Some(t) = lost_since {
+                if t.elapsed() >= give_up {
+                    error = Some(format!(
+                        "the link stayed lost (no answer from the box) for {:.1} s, the --reconnect-timeout",
+                        t.elapsed().as_secs_f64()
+                    ));
+                    break;
+                }
+            }
             if self.link.is_none() {
                 let mut notes = Vec::new();
-                let connected =
-                    connect_with_backoff(self.connector, self.options.backoff, |n, e, w| {
-                        notes.push(format!(
-                            "cannot open the link (attempt {n}: {e}); retrying in {:.2} s",
-                            w.as_secs_f64()
-                        ))
-                    });
+                let mut backoff = self.options.backoff;
+                let mut left = lost_since.map_or(give_up, |t| give_up.saturating_sub(t.elapsed()));
+                if let Some(d) = self.options.duration {
+                    left = left.min(d.saturating_sub(started.elapsed()));
+                }
+                backoff.give_up = left;
+                let connected = connect_with_backoff(self.connector, backoff, |n, e, w| {
+                    notes.push(format!(
+                        "cannot open the link (attempt {n}: {e}); retrying in {:.2} s",
+                        w.as_secs_f64()
+                    ))
+                });
                 for n in notes {
                     self.progress.note(&n);
                 }
@@ -298,12 +336,13 @@ impl<'a> Session<'a> {
                     }
                 }
             }
-            match self.attempt(started) {
+            match self.attempt(started, &mut lost_since) {
                 Ok(()) => {
                     completed = true;
                     break;
                 }
                 Err(e) if e.is::<LinkLost>() => {
+                    lost_since.get_or_insert_with(Instant::now);
                     self.progress
                         .note(&format!("{e}; reopening {}", self.connector.describe()));
                     self.link = None;
@@ -338,8 +377,9 @@ impl<'a> Session<'a> {
     }
 
     /// One pass over a live link: handshake, (re)configure, stream.
-    fn attempt(&mut self, started: Instant) -> Result<()> {
-        let hello = self.handshake()?;
+    fn attempt(&mut self, started: Instant, lost_since: &mut Option<Instant>) -> Result<()> {
+        let hello = self.handshake(started)?;
+        *lost_since = None;
         self.config
             .check_capabilities(&hello.capabilities, self.tables)?;
         if self.replay.is_some() {
@@ -394,8 +434,12 @@ impl<'a> Session<'a> {
         Ok(())
     }
 
-    fn handshake(&mut self) -> Result<HelloAck> {
-        let deadline = Instant::now() + self.options.handshake_timeout;
+    fn handshake(&mut self, started: Instant) -> Result<HelloAck> {
+        let began = Instant::now();
+        let mut deadline = began + self.options.handshake_timeout;
+        if let Some(d) = self.options.duration {
+            deadline = deadline.min(started + d);
+        }
         self.hellos.clear();
         // Nonces of this handshake's Hellos: any of them may be answered.
         let mut nonces: Vec<u32> = Vec::new();
@@ -452,6 +496,12 @@ impl<'a> Session<'a> {
                 }
             }
             if Instant::now() >= deadline {
+                if self.device.is_none() {
+                    return Err(anyhow::Error::new(NoAnswer {
+                        port: self.connector.describe(),
+                        seconds: began.elapsed().as_secs_f64(),
+                    }));
+                }
                 return Err(lost(format!(
                     "no answer to Hello within {:.1} s",
                     self.options.handshake_timeout.as_secs_f64()

@@ -1,0 +1,660 @@
+//! Output directories that never destroy input.
+//!
+//! Every command that writes a directory (`simulate`, `signals`, `stream`,
+//! `demo`, `diagnose --plots`, `paper --plots`, ...) writes through an
+//! [`OutputDir`]:
+//!
+//! 1. [`OutputDir::create`] checks `--out` before anything is computed: a path
+//!    that does not exist or an empty directory is fine; a file, a symbolic
+//!    link, or a directory that already holds something is refused unless
+//!    `--force` is given. It then creates a staging directory, a hidden
+//!    sibling `.NAME.plinth-partial-PID`, and the command writes into
+//!    [`OutputDir::path`] only.
+//! 2. [`OutputDir::commit`] moves the finished staging directory into place.
+//!    Over an existing directory (only with `--force`) the files the previous
+//!    contents had are merged in: a file of the old directory that the new
+//!    output also writes is replaced only if Plinth wrote it (it is listed,
+//!    unchanged, in the old directory's manifest [`MANIFEST_FILE`]), if its
+//!    content is identical, or if the command declared the file an
+//!    append-only log ([`OutputDir::appends`]) and the new file starts with
+//!    every byte of the old one. Anything else (a measured run's
+//!    `measurements.csv`, a configuration the user wrote) makes the commit
+//!    fail with the previous directory untouched. Files of the old directory
+//!    that the new output does not write are kept (hard-linked, or copied
+//!    across file systems), except files Plinth itself wrote earlier and
+//!    that are unchanged (stale derived files such as an old `truth.json`).
+//!    Symbolic links are moved as links, never followed.
+//! 3. The swap is two renames: the old directory to a hidden backup sibling,
+//!    the staging directory to `--out`; then the backup is removed. The old
+//!    directory is never modified before the new one is complete, so a
+//!    command that fails or is killed leaves the previous state as it was
+//!    (at worst a leftover `.NAME.plinth-partial-PID` staging directory,
+//!    which holds nothing of the old run and may be deleted).
+//!
+//! Dropping an [`OutputDir`] without committing removes the staging
+//! directory, unless [`OutputDir::keep_on_failure`] gave it a name to keep it
+//! under (`stream` keeps the raw log of a failed run that way).
+//!
+//! ```no_run
+//! # fn main() -> anyhow::Result<()> {
+//! use plinth::output::OutputDir;
+//! let out = OutputDir::create(std::path::Path::new("run"), false)?;
+//! std::fs::write(out.path().join("measurements.csv"), "speed_hz,...\n")?;
+//! let final_dir = out.commit()?; // "run", complete, or the error and "run" as it was
+//! # let _ = final_dir; Ok(()) }
+//! ```
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// The manifest of the files Plinth wrote into an output directory: one line
+/// per file, `HASH SIZE RELATIVE/PATH` (FNV-1a 64-bit in hex, bytes).
+pub const MANIFEST_FILE: &str = ".plinth-written";
+
+/// Errors of an output directory; each names the path and what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// `--out` is an existing file, not a directory.
+    #[error("--out {}: is a file, not a directory: give a directory name (a new one, or an existing run directory with --force)", .0.display())]
+    IsFile(PathBuf),
+    /// `--out` is a symbolic link.
+    #[error("--out {}: is a symbolic link: give the directory it points to ({}) or a new directory, links are not followed", .0.display(), .1.display())]
+    IsSymlink(PathBuf, PathBuf),
+    /// `--out` is neither a file nor a directory (a FIFO, a device...).
+    #[error("--out {}: is not a directory (a FIFO, socket or device): give a directory name", .0.display())]
+    NotADirectory(PathBuf),
+    /// `--out` already holds something and `--force` was not given.
+    #[error("--out {}: already holds {what}: pass --force to write into it (files Plinth did not write are kept), or choose another directory", .path.display())]
+    NotEmpty {
+        /// The directory.
+        path: PathBuf,
+        /// What it holds, e.g. "a run directory (measurements.csv, raw.bin)".
+        what: String,
+    },
+    /// `--force` would have replaced a file Plinth did not write.
+    #[error("--out {}: {file} would be replaced, but Plinth did not write it ({why}): move it away or choose another directory; nothing was changed", .dir.display())]
+    WouldReplace {
+        /// The directory.
+        dir: PathBuf,
+        /// The file, relative to the directory.
+        file: String,
+        /// Why it is protected.
+        why: String,
+    },
+    /// An operating-system error on a path.
+    #[error("{what} {}: {source}", .path.display())]
+    Io {
+        /// What was being done, e.g. "cannot create".
+        what: &'static str,
+        /// The path.
+        path: PathBuf,
+        /// The operating-system error.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+fn io<'a>(what: &'static str, path: &'a Path) -> impl FnOnce(std::io::Error) -> OutputError + 'a {
+    move |source| OutputError::Io {
+        what,
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// A directory being written: staged in a hidden sibling of `--out`, moved
+/// into place by [`OutputDir::commit`].
+#[derive(Debug)]
+pub struct OutputDir {
+    target: PathBuf,
+    staging: PathBuf,
+    existing: bool,
+    appends: BTreeSet<String>,
+    keep_as: Option<PathBuf>,
+    done: bool,
+}
+
+impl OutputDir {
+    /// Checks `out` and creates the staging directory. `force`: write into an
+    /// `out` that already holds something (files Plinth did not write are
+    /// still never deleted or replaced).
+    pub fn create(out: &Path, force: bool) -> Result<OutputDir, OutputError> {
+        let existing = check_target(out, force)?;
+        let staging = sibling(out, "plinth-partial", std::process::id());
+        if staging.symlink_metadata().is_ok() {
+            std::fs::remove_dir_all(&staging).map_err(io("cannot clear", &staging))?;
+        }
+        std::fs::create_dir(&staging).map_err(io("cannot create", &staging))?;
+        Ok(OutputDir {
+            target: out.to_path_buf(),
+            staging,
+            existing,
+            appends: BTreeSet::new(),
+            keep_as: None,
+            done: false,
+        })
+    }
+
+    /// Uses `staging` (created if needed; e.g. the one a killed `stream`
+    /// left) instead of a new hidden one; `out` is checked as in
+    /// [`OutputDir::create`]. Such a staging directory is kept when the
+    /// output is dropped uncommitted (it may hold a raw log): remove it
+    /// with [`OutputDir::discard`].
+    pub fn resume(out: &Path, staging: &Path, force: bool) -> Result<OutputDir, OutputError> {
+        let existing = check_target(out, force)?;
+        if !staging.is_dir() {
+            std::fs::create_dir(staging).map_err(io("cannot create", staging))?;
+        }
+        Ok(OutputDir {
+            target: out.to_path_buf(),
+            staging: staging.to_path_buf(),
+            existing,
+            appends: BTreeSet::new(),
+            keep_as: Some(staging.to_path_buf()),
+            done: false,
+        })
+    }
+
+    /// The directory to write into (the staging directory).
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// The final directory (`--out`).
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Declares `file` (relative) an append-only log: it may replace the old
+    /// directory's file of that name when it starts with all of its bytes,
+    /// and it is not listed in the manifest (a later command that does not
+    /// write it keeps it).
+    pub fn appends(&mut self, file: &str) {
+        self.appends.insert(file.to_string());
+    }
+
+    /// On failure (drop without commit), keep the staging directory renamed
+    /// to `name` (a sibling of `--out`) instead of removing it.
+    pub fn keep_on_failure(&mut self, name: PathBuf) {
+        self.keep_as = Some(name);
+    }
+
+    /// Removes the staging directory and everything in it; `--out` is as
+    /// it was.
+    pub fn discard(mut self) {
+        self.keep_as = None;
+    }
+
+    /// Moves the staged output into place (see the module docs); returns the
+    /// final directory. On error the previous `--out` is as it was.
+    pub fn commit(mut self) -> Result<PathBuf, OutputError> {
+        let result = self.commit_inner();
+        if result.is_ok() {
+            self.done = true;
+        }
+        result.map(|()| self.target.clone())
+    }
+
+    fn commit_inner(&mut self) -> Result<(), OutputError> {
+        let new_files = list_files(&self.staging)?;
+        let exists = self.target.symlink_metadata().is_ok();
+        if exists && self.existing {
+            self.merge_old()?;
+        }
+        // Append-only logs are records, not derived files: never listed.
+        let derived: BTreeSet<String> = new_files.difference(&self.appends).cloned().collect();
+        write_manifest(&self.staging, &derived)?;
+        if !exists {
+            return std::fs::rename(&self.staging, &self.target)
+                .map_err(io("cannot move the output into", &self.target));
+        }
+        // Swap: old -> backup, staging -> target, remove backup.
+        let backup = sibling(&self.target, "plinth-old", std::process::id());
+        std::fs::rename(&self.target, &backup)
+            .map_err(io("cannot move the previous directory aside", &self.target))?;
+        if let Err(e) = std::fs::rename(&self.staging, &self.target) {
+            let _ = std::fs::rename(&backup, &self.target);
+            return Err(io("cannot move the output into", &self.target)(e));
+        }
+        std::fs::remove_dir_all(&backup).map_err(io("cannot remove", &backup))
+    }
+
+    /// Checks every collision and links the old files that are kept into the
+    /// staging directory; the old directory is only read.
+    fn merge_old(&self) -> Result<(), OutputError> {
+        let old = &self.target;
+        let manifest = read_manifest(old);
+        let old_entries = list_entries(old)?;
+        let mut refused: Vec<(String, String)> = Vec::new();
+        for (rel, kind) in &old_entries {
+            if rel == MANIFEST_FILE {
+                continue;
+            }
+            let old_path = old.join(rel);
+            let ours = matches!(kind, Entry::File)
+                && manifest
+                    .get(rel.as_str())
+                    .is_some_and(|&(h, n)| file_hash(&old_path).ok() == Some((h, n)));
+            let new_path = self.staging.join(rel);
+            if new_path.symlink_metadata().is_ok() {
+                if matches!(kind, Entry::Dir) && new_path.is_dir() {
+                    continue;
+                }
+                if ours && !self.appends.contains(rel) {
+                    continue;
+                }
+                let why = match kind {
+                    Entry::Dir => "it is a directory".to_string(),
+                    Entry::Symlink => "it is a symbolic link".to_string(),
+                    Entry::Other => "it is not a regular file".to_string(),
+                    Entry::File => {
+                        if same_content(&old_path, &new_path)? {
+                            continue;
+                        }
+                        if self.appends.contains(rel) && is_prefix(&old_path, &new_path)? {
+                            continue;
+                        }
+                        if self.appends.contains(rel) {
+                            "it is an append-only log and the new one does not extend it"
+                                .to_string()
+                        } else if manifest.contains_key(rel.as_str()) {
+                            "it was changed since Plinth wrote it".to_string()
+                        } else {
+                            "it is not in the directory's list of files Plinth wrote".to_string()
+                        }
+                    }
+                };
+                refused.push((rel.clone(), why));
+                continue;
+            }
+            if !refused.is_empty() {
+                continue; // only collecting the refusals now
+            }
+            if ours {
+                continue; // a stale file of an earlier Plinth run
+            }
+            match kind {
+                Entry::Dir => {
+                    std::fs::create_dir_all(&new_path).map_err(io("cannot create", &new_path))?
+                }
+                Entry::Symlink => {
+                    let to = std::fs::read_link(&old_path).map_err(io("cannot read", &old_path))?;
+                    std::os::unix::fs::symlink(&to, &new_path)
+                        .map_err(io("cannot create", &new_path))?;
+                }
+                Entry::File | Entry::Other => {
+                    if std::fs::hard_link(&old_path, &new_path).is_err() {
+                        std::fs::copy(&old_path, &new_path)
+                            .map_err(io("cannot copy", &old_path))?;
+                    }
+                }
+            }
+        }
+        if let Some((file, why)) = refused.first() {
+            let others: Vec<&str> = refused[1..].iter().map(|(f, _)| f.as_str()).collect();
+            let file = if others.is_empty() {
+                file.clone()
+            } else {
+                format!("{file} (and {})", others.join(", "))
+            };
+            return Err(OutputError::WouldReplace {
+                dir: old.clone(),
+                file,
+                why: why.clone(),
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if self.done {
+            return;
+        }
+        match &self.keep_as {
+            Some(name) => {
+                let _ = std::fs::rename(&self.staging, name);
+            }
+            None => {
+                let _ = std::fs::remove_dir_all(&self.staging);
+            }
+        }
+    }
+}
+
+/// `.NAME.TAG-N` beside `path`.
+fn sibling(path: &Path, tag: &str, n: u32) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    parent.join(format!(".{name}.{tag}-{n}"))
+}
+
+/// Checks `out`: returns whether it exists (as a directory that may be
+/// written into).
+fn check_target(out: &Path, force: bool) -> Result<bool, OutputError> {
+    let meta = match out.symlink_metadata() {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+                std::fs::create_dir_all(parent).map_err(io("cannot create", parent))?;
+            }
+            return Ok(false);
+        }
+        Err(e) => return Err(io("cannot inspect", out)(e)),
+    };
+    let ft = meta.file_type();
+    if ft.is_symlink() {
+        let to = std::fs::read_link(out).unwrap_or_default();
+        return Err(OutputError::IsSymlink(out.to_path_buf(), to));
+    }
+    if ft.is_file() {
+        return Err(OutputError::IsFile(out.to_path_buf()));
+    }
+    if !ft.is_dir() {
+        return Err(OutputError::NotADirectory(out.to_path_buf()));
+    }
+    let mut names: Vec<String> = std::fs::read_dir(out)
+        .map_err(io("cannot read", out))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    if names.is_empty() {
+        return Ok(false);
+    }
+    if !force {
+        names.sort();
+        return Err(OutputError::NotEmpty {
+            path: out.to_path_buf(),
+            what: describe(&names),
+        });
+    }
+    Ok(true)
+}
+
+/// "a run directory (measurements.csv, raw.bin)" or "3 files (a, b, c)".
+pub fn describe(names: &[String]) -> String {
+    const RUN: [&str; 4] = ["measurements.csv", "bearings.csv", "raw.bin", "signals.csv"];
+    let shown: Vec<&str> = names.iter().take(4).map(String::as_str).collect();
+    let more = if names.len() > 4 { ", ..." } else { "" };
+    let kind = if names.iter().any(|n| RUN.contains(&n.as_str())) {
+        "a run directory".to_string()
+    } else {
+        format!(
+            "{} entr{}",
+            names.len(),
+            if names.len() == 1 { "y" } else { "ies" }
+        )
+    };
+    format!("{kind} ({}{more})", shown.join(", "))
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Entry {
+    File,
+    Dir,
+    Symlink,
+    Other,
+}
+
+/// Every entry under `dir` (relative paths, '/'-separated, parents first),
+/// without following symbolic links.
+fn list_entries(dir: &Path) -> Result<Vec<(String, Entry)>, OutputError> {
+    let mut out = Vec::new();
+    let mut stack = vec![(dir.to_path_buf(), String::new())];
+    while let Some((path, rel)) = stack.pop() {
+        let mut children: Vec<_> = std::fs::read_dir(&path)
+            .map_err(io("cannot read", &path))?
+            .filter_map(|e| e.ok())
+            .collect();
+        children.sort_by_key(|e| e.file_name());
+        for e in children {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let r = if rel.is_empty() {
+                name
+            } else {
+                format!("{rel}/{name}")
+            };
+            let ft = e.file_type().map_err(io("cannot inspect", &e.path()))?;
+            let kind = if ft.is_symlink() {
+                Entry::Symlink
+            } else if ft.is_dir() {
+                Entry::Dir
+            } else if ft.is_file() {
+                Entry::File
+            } else {
+                Entry::Other
+            };
+            out.push((r.clone(), kind));
+            if ft.is_dir() {
+                stack.push((e.path(), r));
+            }
+        }
+    }
+    out.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok(out)
+}
+
+/// The regular files under `dir` (relative paths), without the manifest.
+fn list_files(dir: &Path) -> Result<BTreeSet<String>, OutputError> {
+    Ok(list_entries(dir)?
+        .into_iter()
+        .filter(|(r, k)| matches!(k, Entry::File) && r != MANIFEST_FILE)
+        .map(|(r, _)| r)
+        .collect())
+}
+
+/// FNV-1a 64-bit hash and size of a file's bytes.
+fn file_hash(path: &Path) -> std::io::Result<(u64, u64)> {
+    let mut f = std::fs::File::open(path)?;
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut n = 0u64;
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let k = f.read(&mut buf)?;
+        if k == 0 {
+            break;
+        }
+        for &b in &buf[..k] {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        n += k as u64;
+    }
+    Ok((h, n))
+}
+
+fn write_manifest(dir: &Path, files: &BTreeSet<String>) -> Result<(), OutputError> {
+    let mut text = String::from("# files plinth wrote here: FNV-1a-64 size path\n");
+    for rel in files {
+        let p = dir.join(rel);
+        let (h, n) = file_hash(&p).map_err(io("cannot read", &p))?;
+        text.push_str(&format!("{h:016x} {n} {rel}\n"));
+    }
+    let path = dir.join(MANIFEST_FILE);
+    std::fs::write(&path, text).map_err(io("cannot write", &path))
+}
+
+/// The manifest of `dir` (empty when absent or unreadable).
+fn read_manifest(dir: &Path) -> BTreeMap<String, (u64, u64)> {
+    let Ok(text) = std::fs::read_to_string(dir.join(MANIFEST_FILE)) else {
+        return BTreeMap::new();
+    };
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .filter_map(|l| {
+            let mut it = l.splitn(3, ' ');
+            let h = u64::from_str_radix(it.next()?, 16).ok()?;
+            let n = it.next()?.parse().ok()?;
+            Some((it.next()?.to_string(), (h, n)))
+        })
+        .collect()
+}
+
+fn same_content(a: &Path, b: &Path) -> Result<bool, OutputError> {
+    let ha = file_hash(a).map_err(io("cannot read", a))?;
+    let hb = file_hash(b).map_err(io("cannot read", b))?;
+    Ok(ha == hb)
+}
+
+/// Whether `new` starts with every byte of `old`.
+fn is_prefix(old: &Path, new: &Path) -> Result<bool, OutputError> {
+    let a = std::fs::read(old).map_err(io("cannot read", old))?;
+    let mut f = std::fs::File::open(new).map_err(io("cannot read", new))?;
+    let mut b = vec![0u8; a.len()];
+    match f.read_exact(&mut b) {
+        Ok(()) => Ok(a == b),
+        Err(_) => Ok(false),
+    }
+}
+
+/// Writes `bytes` to `path` through a temporary sibling and a rename, so that
+/// `path` is either its old content or the whole new one.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.plinth-partial-{}", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(io("cannot write", &tmp))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io("cannot write", path)(e)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+        list_entries(dir)
+            .unwrap()
+            .into_iter()
+            .filter(|(_, k)| matches!(k, Entry::File))
+            .map(|(r, _)| (r.clone(), std::fs::read(dir.join(&r)).unwrap()))
+            .collect()
+    }
+
+    #[test]
+    fn new_directory_appears_only_on_commit() {
+        let t = tempfile::tempdir().unwrap();
+        let out = t.path().join("run");
+        let o = OutputDir::create(&out, false).unwrap();
+        std::fs::write(o.path().join("a.csv"), "1").unwrap();
+        assert!(!out.exists());
+        o.commit().unwrap();
+        assert_eq!(std::fs::read(out.join("a.csv")).unwrap(), b"1");
+        assert!(out.join(MANIFEST_FILE).exists());
+        // Dropped without commit: nothing changes, no staging left.
+        let o = OutputDir::create(&out, true).unwrap();
+        std::fs::write(o.path().join("a.csv"), "2").unwrap();
+        drop(o);
+        assert_eq!(std::fs::read(out.join("a.csv")).unwrap(), b"1");
+        assert_eq!(std::fs::read_dir(t.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn refuses_files_links_and_full_directories() {
+        let t = tempfile::tempdir().unwrap();
+        let f = t.path().join("file");
+        std::fs::write(&f, "x").unwrap();
+        let e = OutputDir::create(&f, true).unwrap_err().to_string();
+        assert!(e.contains("is a file"), "{e}");
+        let l = t.path().join("link");
+        std::os::unix::fs::symlink(t.path(), &l).unwrap();
+        let e = OutputDir::create(&l, true).unwrap_err().to_string();
+        assert!(e.contains("symbolic link"), "{e}");
+        let d = t.path().join("d");
+        std::fs::create_dir(&d).unwrap();
+        std::fs::write(d.join("measurements.csv"), "m").unwrap();
+        let e = OutputDir::create(&d, false).unwrap_err().to_string();
+        assert!(e.contains("a run directory (measurements.csv)"), "{e}");
+        assert!(e.contains("--force"), "{e}");
+    }
+
+    #[test]
+    fn force_keeps_foreign_files_and_refuses_to_replace_them() {
+        let t = tempfile::tempdir().unwrap();
+        let d = t.path().join("d");
+        std::fs::create_dir(&d).unwrap();
+        std::fs::write(d.join("measurements.csv"), "measured").unwrap();
+        std::fs::write(d.join("notes.txt"), "mine").unwrap();
+        let before = tree(&d);
+        let o = OutputDir::create(&d, true).unwrap();
+        std::fs::write(o.path().join("measurements.csv"), "simulated").unwrap();
+        let e = o.commit().unwrap_err().to_string();
+        assert!(e.contains("measurements.csv would be replaced"), "{e}");
+        assert_eq!(tree(&d), before);
+        // Writing other names keeps both foreign files.
+        let o = OutputDir::create(&d, true).unwrap();
+        std::fs::write(o.path().join("report.json"), "{}").unwrap();
+        o.commit().unwrap();
+        let after = tree(&d);
+        assert_eq!(after["measurements.csv"], b"measured");
+        assert_eq!(after["notes.txt"], b"mine");
+        assert_eq!(after["report.json"], b"{}");
+    }
+
+    #[test]
+    fn force_replaces_own_files_drops_stale_ones_and_extends_logs() {
+        let t = tempfile::tempdir().unwrap();
+        let d = t.path().join("d");
+        let o = OutputDir::create(&d, false).unwrap();
+        std::fs::write(o.path().join("truth.json"), "t").unwrap();
+        std::fs::write(o.path().join("m.csv"), "1").unwrap();
+        std::fs::write(o.path().join("raw.bin"), "ab").unwrap();
+        o.commit().unwrap();
+        let mut o = OutputDir::create(&d, true).unwrap();
+        o.appends("raw.bin");
+        std::fs::write(o.path().join("m.csv"), "2").unwrap();
+        std::fs::write(o.path().join("raw.bin"), "abc").unwrap();
+        o.commit().unwrap();
+        let after = tree(&d);
+        assert_eq!(after["m.csv"], b"2");
+        assert_eq!(after["raw.bin"], b"abc");
+        assert!(!after.contains_key("truth.json"));
+        // A raw log that does not extend the old one is refused.
+        let mut o = OutputDir::create(&d, true).unwrap();
+        o.appends("raw.bin");
+        std::fs::write(o.path().join("raw.bin"), "xyz").unwrap();
+        let e = o.commit().unwrap_err().to_string();
+        assert!(e.contains("append-only"), "{e}");
+        assert_eq!(tree(&d), after);
+        // A command that does not write the log keeps it.
+        let o = OutputDir::create(&d, true).unwrap();
+        std::fs::write(o.path().join("m.csv"), "3").unwrap();
+        o.commit().unwrap();
+        assert_eq!(tree(&d)["raw.bin"], b"abc");
+    }
+
+    #[test]
+    fn symlinks_inside_out_are_moved_not_followed() {
+        let t = tempfile::tempdir().unwrap();
+        let outside = t.path().join("outside.csv");
+        std::fs::write(&outside, "precious").unwrap();
+        let d = t.path().join("d");
+        std::fs::create_dir(&d).unwrap();
+        std::os::unix::fs::symlink(&outside, d.join("measurements.csv")).unwrap();
+        let o = OutputDir::create(&d, true).unwrap();
+        std::fs::write(o.path().join("measurements.csv"), "new").unwrap();
+        assert!(o.commit().is_err());
+        let o = OutputDir::create(&d, true).unwrap();
+        std::fs::write(o.path().join("other.csv"), "new").unwrap();
+        o.commit().unwrap();
+        assert_eq!(std::fs::read(&outside).unwrap(), b"precious");
+        assert!(d
+            .join("measurements.csv")
+            .symlink_metadata()
+            .unwrap()
+            .file_type()
+            .is_symlink());
+    }
+}

@@ -1,0 +1,79 @@
+//! How much memory a simulation needs, estimated before anything large is
+//! allocated, against what the machine has.
+
+use super::machine::Machine;
+
+/// Estimated peak memory [bytes] of `simulate` on `machine` over `speeds`
+/// speeds: the banded model (five real band arrays and one complex working
+/// matrix, LAPACK storage with fill-in rows), the per-speed results and the
+/// run directory's rows. Shaft node responses are not kept by `simulate`.
+pub fn simulate_bytes(machine: &Machine, speeds: usize) -> u64 {
+    let nodes = machine.node_positions.len() as u64;
+    let pedestals = machine
+        .bearings
+        .iter()
+        .filter(|b| b.pedestal.is_some())
+        .count() as u64;
+    let most_at_a_node = (0..machine.node_positions.len())
+        .map(|n| {
+            machine
+                .bearings
+                .iter()
+                .filter(|b| b.node == n && b.pedestal.is_some())
+                .count()
+        })
+        .max()
+        .unwrap_or(0) as u64;
+    let n_dof = 4 * nodes + 2 * pedestals;
+    let half_band = 7 + 2 * most_at_a_node;
+    let ldab = 3 * half_band + 1;
+    let band = n_dof * ldab * 8 * (5 + 2);
+    let per_row = 640; // result, measurement and bearing row per speed and bearing
+    let rows = speeds as u64 * machine.bearings.len() as u64 * per_row;
+    let vectors = n_dof * 16 * 4 + nodes * 64;
+    band + rows + vectors + (16 << 20)
+}
+
+/// Memory the operating system can still give this process [bytes]
+/// (`MemAvailable` of /proc/meminfo), `None` where that is unknown.
+pub fn available_bytes() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Refuses a request of `needed` bytes beyond `available` with both figures
+/// and what to change.
+pub fn check(what: &str, needed: u64, available: Option<u64>) -> Result<(), String> {
+    match available {
+        Some(a) if needed > a => Err(format!(
+            "{what} needs about {} MB of memory and this machine has {} MB available: use fewer shaft elements (shaft.sections[].elements) or fewer speeds",
+            needed >> 20,
+            a >> 20
+        )),
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn estimate_is_linear_and_refusal_names_the_figures() {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../examples/feng-hahn-1997.toml"
+        ))
+        .unwrap();
+        let m = Machine::from_toml_str(&text, "feng-hahn-1997.toml").unwrap();
+        let a = simulate_bytes(&m, 196);
+        let b = simulate_bytes(&m, 392);
+        assert!(b > a && b < 2 * a);
+        let e = check("simulating", 3 << 30, Some(1 << 30)).unwrap_err();
+        assert!(e.contains("3072 MB") && e.contains("1024 MB"), "{e}");
+        assert!(check("simulating", 1 << 20, Some(1 << 30)).is_ok());
+        assert!(check("simulating", 1 << 40, None).is_ok());
+    }
+}
