@@ -337,6 +337,19 @@ fn sibling(path: &Path, tag: &str, n: u32) -> PathBuf {
     parent.join(format!(".{name}.{tag}-{n}"))
 }
 
+/// Writes a whole output directory at `out` through `write`, which fills the
+/// staging directory it is given: [`OutputDir::create`], `write`, then
+/// [`OutputDir::commit`]. On any error nothing at `out` has changed.
+pub fn write_dir(
+    out: &Path,
+    force: bool,
+    write: impl FnOnce(&Path) -> anyhow::Result<()>,
+) -> anyhow::Result<PathBuf> {
+    let staged = OutputDir::create(out, force)?;
+    write(staged.path())?;
+    Ok(staged.commit()?)
+}
+
 /// Checks `out`: returns whether it exists (as a directory that may be
 /// written into).
 fn check_target(out: &Path, force: bool) -> Result<bool, OutputError> {

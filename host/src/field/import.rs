@@ -11,7 +11,6 @@
 //! LAYOUT.toml's key.
 
 use super::angle::{resolve, Rotation, View};
-use super::output::write_dir_atomically;
 use super::slow_roll::{subtract_slow_roll, SlowRoll, SlowRollBand};
 use super::transducer::{angle_of, group_by_bearing, Placement, Quantity};
 use super::units::{reading_phasor, to_displacement, AmplitudeUnit, PhaseConvention, UNIT_HELP};
@@ -380,7 +379,7 @@ pub fn write_run(
     plots: bool,
     transducers: &[Placement],
 ) -> Result<()> {
-    write_dir_atomically(out, force, |dir| {
+    crate::output::write_dir(out, force, |dir| {
         run.write(dir)?;
         if let Some(s) = slow_roll {
             s.write(dir)?;
@@ -393,7 +392,8 @@ pub fn write_run(
             super::plot::plot_run_with(run, &dir.join("figures"), &t, super::angle::Rotation::Ccw)?;
         }
         Ok(())
-    })
+    })?;
+    Ok(())
 }
 
 /// Runs `plinth import`.

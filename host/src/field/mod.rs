@@ -8,7 +8,6 @@
 
 pub mod angle;
 pub mod import;
-pub mod output;
 pub mod plot;
 pub mod slow_roll;
 pub mod transducer;

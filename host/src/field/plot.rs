@@ -13,7 +13,6 @@
 //!   at three o'clock ([`polar_point`], checked by hand in the tests).
 
 use super::angle::Rotation;
-use super::output::write_dir_atomically;
 use super::transducer::Quantity;
 use crate::plots::{
     colour, ensure_fonts, peak_to_peak_and_lag, write_both, PhaseStyle, PhasorFigure, PhasorPanel,
@@ -288,7 +287,7 @@ fn trim(v: f64) -> String {
 pub fn run(args: &Args) -> Result<()> {
     let run = RunDir::read(&args.dir)?;
     let mut n = 0;
-    write_dir_atomically(&args.out, args.force, |dir| {
+    crate::output::write_dir(&args.out, args.force, |dir| {
         n = plot_run_with(&run, dir, &[], args.rotation.into())?.len();
         Ok(())
     })?;
