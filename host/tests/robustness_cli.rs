@@ -116,7 +116,9 @@ fn simulate_never_replaces_a_measured_run() {
     assert!(!o.status.success());
     let msg = text(&o);
     assert!(
-        msg.contains("bearings.csv (and measurements.csv) would be replaced, but Plinth did not write it"),
+        msg.contains(
+            "bearings.csv (and measurements.csv) would be replaced, but Plinth did not write it"
+        ),
         "{msg}"
     );
     assert_eq!(snapshot(&run), before);

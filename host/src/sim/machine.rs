@@ -40,6 +40,16 @@
 //! #              viscosity = 0.0069, load = "weight" }   # or load = 1500.0 [N]
 //! pedestal = { m = 200.0, k_y = 1e7, k_z = 8e6, c_y = 0.0, c_z = 0.0 }
 //! # Omit `pedestal` for a bearing on rigid ground.
+//! base = "skid"                    # optional: the pedestal stands on this base
+//!
+//! [[base]]                         # optional rigid bases (skid, baseplate, frame)
+//! name = "skid"
+//! m = 400.0                        # [kg], or m_y and m_z per direction
+//! k_y = 5e7                        # stiffness to ground [N/m]
+//! k_z = 4e7
+//! c_y = 2e3                        # optional viscous damping to ground [N·s/m]
+//! c_z = 2e3
+//! eta = 0.0                        # optional hysteretic loss factor [-]
 //!
 //! [[unbalance]]                    # optional extra unbalances at shaft nodes
 //! node = 5                         # or position [m]
@@ -56,6 +66,7 @@
 //! right. Every problem is reported with the key it concerns, e.g.
 //! `shaft.sections[3].outer_diameter: must be > inner_diameter (got 0.05 <= 0.06)`.
 
+use super::base::Base;
 use super::disk::{inertia_from_geometry, Disk};
 use super::oil_film::OilFilmBearing;
 use super::pedestal::PedestalParams;
@@ -112,6 +123,25 @@ struct RawMachine {
     bearings: Vec<RawBearing>,
     #[serde(default)]
     unbalance: Vec<RawUnbalance>,
+    #[serde(default)]
+    base: Vec<RawBase>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawBase {
+    name: String,
+    m: Option<f64>,
+    m_y: Option<f64>,
+    m_z: Option<f64>,
+    k_y: f64,
+    k_z: f64,
+    #[serde(default)]
+    c_y: f64,
+    #[serde(default)]
+    c_z: f64,
+    #[serde(default)]
+    eta: f64,
 }
 
 #[derive(Deserialize, Debug, Clone, Copy)]
@@ -219,6 +249,7 @@ struct RawBearing {
     coefficients: Option<Vec<RawCoefficientRow>>,
     oil_film: Option<RawOilFilm>,
     pedestal: Option<RawPedestal>,
+    base: Option<String>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -255,6 +286,9 @@ pub struct Bearing {
     pub model: BearingModel,
     /// The pedestal under the bearing; `None` = bearing on rigid ground.
     pub pedestal: Option<PedestalParams>,
+    /// Index into [`Machine::bases`] of the base the pedestal stands on;
+    /// `None` = the pedestal stands on rigid ground.
+    pub base: Option<usize>,
 }
 
 /// An unbalance m·e at a shaft node.
@@ -288,6 +322,8 @@ pub struct Machine {
     pub unbalances: Vec<Unbalance>,
     /// Gravitational acceleration [m/s²].
     pub gravity: f64,
+    /// Bases that pedestals stand on (file order; see [`super::base`]).
+    pub bases: Vec<Base>,
 }
 
 /// Standard gravity [m/s²].
@@ -357,6 +393,86 @@ fn material(ctx: &Ctx, key: &str, m: &RawMaterial) -> Result<Material, MachineEr
         young,
         shear,
         density,
+    })
+}
+
+/// The `[[base]]` tables, checked (names unique and CSV-safe).
+fn read_bases(ctx: &Ctx, raw: &[RawBase]) -> Result<Vec<Base>, MachineError> {
+    let mut bases: Vec<Base> = Vec::new();
+    for (i, rb) in raw.iter().enumerate() {
+        let key = format!("base[{i}]");
+        if !bearing_name_ok(&rb.name) {
+            return Err(ctx.err(
+                format!("{key}.name"),
+                format!("{:?}: use letters, digits, '_', '-', '.' only", rb.name),
+            ));
+        }
+        if let Some(other) = bases.iter().position(|b| b.name == rb.name) {
+            return Err(ctx.err(
+                format!("{key}.name"),
+                format!("{:?} is already the name of base[{other}]", rb.name),
+            ));
+        }
+        let m = match (rb.m, rb.m_y, rb.m_z) {
+            (Some(m), None, None) => {
+                let m = ctx.positive(&format!("{key}.m"), m)?;
+                [m, m]
+            }
+            (None, Some(my), Some(mz)) => [
+                ctx.positive(&format!("{key}.m_y"), my)?,
+                ctx.positive(&format!("{key}.m_z"), mz)?,
+            ],
+            _ => {
+                return Err(ctx.err(
+                    key,
+                    "give the mass as either m [kg] or both m_y and m_z [kg]",
+                ))
+            }
+        };
+        bases.push(Base {
+            name: rb.name.clone(),
+            m,
+            k: [
+                ctx.positive(&format!("{key}.k_y"), rb.k_y)?,
+                ctx.positive(&format!("{key}.k_z"), rb.k_z)?,
+            ],
+            c: [
+                ctx.non_negative(&format!("{key}.c_y"), rb.c_y)?,
+                ctx.non_negative(&format!("{key}.c_z"), rb.c_z)?,
+            ],
+            eta: ctx.non_negative(&format!("{key}.eta"), rb.eta)?,
+        });
+    }
+    Ok(bases)
+}
+
+/// Index of the base `name` that bearing `key` stands on (it needs a pedestal).
+fn base_of(
+    ctx: &Ctx,
+    key: &str,
+    name: &str,
+    has_pedestal: bool,
+    bases: &[Base],
+) -> Result<usize, MachineError> {
+    if !has_pedestal {
+        return Err(ctx.err(
+            format!("{key}.base"),
+            "a bearing on a base needs a `pedestal` between bearing and base",
+        ));
+    }
+    bases.iter().position(|b| b.name == name).ok_or_else(|| {
+        let known: Vec<&str> = bases.iter().map(|b| b.name.as_str()).collect();
+        ctx.err(
+            format!("{key}.base"),
+            format!(
+                "no [[base]] named {name:?} (bases: {})",
+                if known.is_empty() {
+                    "none".to_string()
+                } else {
+                    known.join(", ")
+                }
+            ),
+        )
     })
 }
 
@@ -600,6 +716,7 @@ impl Machine {
         if raw.bearings.is_empty() {
             return Err(ctx.err("bearings", "needs at least one bearing"));
         }
+        let bases = read_bases(&ctx, &raw.base)?;
         let mut bearings = Vec::new();
         let mut weight_share: Vec<usize> = Vec::new();
         for (b, rb) in raw.bearings.iter().enumerate() {
@@ -717,11 +834,16 @@ impl Machine {
                 }
                 None => None,
             };
+            let base = match &rb.base {
+                Some(name) => Some(base_of(&ctx, &key, name, pedestal.is_some(), &bases)?),
+                None => None,
+            };
             bearings.push(Bearing {
                 name: rb.name.clone(),
                 node,
                 model,
                 pedestal,
+                base,
             });
         }
         let mut machine = Machine {
@@ -732,6 +854,7 @@ impl Machine {
             bearings,
             unbalances,
             gravity,
+            bases,
         };
         if !weight_share.is_empty() {
             let loads = machine.static_bearing_loads().map_err(|m| {
@@ -865,6 +988,21 @@ impl Machine {
                     "bearing {:?}: node {} out of range",
                     b.name, b.node
                 ));
+            }
+        }
+        for (i, base) in self.bases.iter().enumerate() {
+            if let Err(m) = base.check() {
+                return bad(format!("base {i} ({:?}): {m}", base.name));
+            }
+        }
+        for b in &self.bearings {
+            if let Some(i) = b.base {
+                if i >= self.bases.len() || b.pedestal.is_none() {
+                    return bad(format!(
+                        "bearing {:?}: base {i} does not exist or the bearing has no pedestal",
+                        b.name
+                    ));
+                }
             }
         }
         for u in &self.unbalances {

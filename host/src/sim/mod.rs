@@ -21,6 +21,7 @@
 //! ```
 pub mod assembly;
 pub mod banded;
+pub mod base;
 pub mod budget;
 pub mod cli;
 pub mod disk;

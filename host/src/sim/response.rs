@@ -288,8 +288,13 @@ impl UnbalanceSolver {
             x[d] = *u * w2;
             x[d + 1] = *u * w2 * C64::new(0.0, -1.0);
         }
-        self.assembly.solve(work, x).map_err(singular)?;
+        self.assembly.solve(work, omega, x).map_err(singular)?;
         Ok(coefs)
+    }
+
+    /// The machine's bases for `truth.json`.
+    fn base_truth(&self) -> Vec<crate::rundir::BaseTruth> {
+        super::base::truth(&self.machine)
     }
 
     /// Names the machine-file keys behind a zero pivot at `speed_hz` [Hz].
@@ -297,6 +302,9 @@ impl UnbalanceSolver {
         let super::banded::BandError::Singular { column } = *e else {
             return e.to_string();
         };
+        if column >= self.assembly.bases.first_dof {
+            return "the bases with their pedestals are singular at this speed: check the [[base]] m, k_y, k_z".into();
+        }
         const DIRS: [&str; 4] = ["y", "z", "θ_y", "θ_z"];
         for (b, p) in self.assembly.pedestal_dof.iter().enumerate() {
             if let Some(p) = *p {
@@ -471,6 +479,7 @@ impl UnbalanceSolver {
                 pedestals,
                 effects,
                 effect_details: details,
+                bases: self.base_truth(),
             },
         })
     }
