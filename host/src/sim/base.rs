@@ -261,3 +261,15 @@ pub fn truth(machine: &super::machine::Machine) -> Vec<crate::rundir::BaseTruth>
         })
         .collect()
 }
+
+impl BaseBorder {
+    /// The (y, z) phasors [m] of every base from a full solution vector `x`.
+    pub fn motion(&self, x: &[C64]) -> Vec<[C64; 2]> {
+        (0..self.bases.len())
+            .map(|j| {
+                let d = self.first_dof + 2 * j;
+                [x[d], x[d + 1]]
+            })
+            .collect()
+    }
+}

@@ -98,6 +98,9 @@ pub struct Response {
     pub bearing_names: Vec<String>,
     /// `bearings[s][b]`: response at speed s, bearing b.
     pub bearings: Vec<Vec<BearingResponse>>,
+    /// `bases[s][j]`: absolute (y, z) 1X phasors [m] of base j (machine
+    /// order) at speed s; empty rows when the machine has no base.
+    pub bases: Vec<Vec<Phasor2<f64>>>,
     /// Axial node positions [m].
     pub node_positions: Vec<f64>,
     /// `shaft[s][node]`: shaft displacement phasors (y, z) [m] at every node
@@ -369,6 +372,7 @@ impl UnbalanceSolver {
         let mut work = self.assembly.new_matrix();
         let mut x = vec![C64::new(0.0, 0.0); self.assembly.n_dof];
         let mut bearings = Vec::with_capacity(speeds_hz.len());
+        let mut bases = Vec::with_capacity(speeds_hz.len());
         let mut shaft = Vec::with_capacity(speeds_hz.len());
         for &s in speeds_hz {
             let coefs = self.solve_speed(s, &mut work, &mut x)?;
@@ -386,6 +390,7 @@ impl UnbalanceSolver {
                 });
             }
             bearings.push(row);
+            bases.push(self.assembly.bases.motion(&x));
             done(bearings.len());
             if !keep_shaft {
                 continue;
@@ -472,6 +477,7 @@ impl UnbalanceSolver {
             speeds_hz: speeds_hz.to_vec(),
             bearing_names: self.machine.bearing_names(),
             bearings,
+            bases,
             node_positions: self.machine.node_positions.clone(),
             shaft,
             sensors,
