@@ -290,3 +290,67 @@ fn machine_file_errors_name_the_base_key() {
         assert!(err.contains("machine-c.toml"), "{err}");
     }
 }
+
+/// Example machine on a skid: `base.csv` round-trips, and identification
+/// relative to the measured base motion recovers every pedestal, where the
+/// rigid-ground fit (the paper's model) is far off.
+#[test]
+fn measured_base_makes_the_pedestal_model_linear_again() {
+    use plinth::base_csv;
+    use plinth::identify::base::identify_on_measured_base;
+    use plinth::identify::{identify_run, Options, Parameter};
+    let path =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../examples/two-pedestals-on-skid.toml");
+    let machine = Machine::from_toml_path(&path).unwrap();
+    let speeds: Vec<f64> = (5..=100).map(f64::from).collect();
+    let resp = unbalance_response(&machine, &speeds, &EffectSet::none()).unwrap();
+    let run = resp.to_run_dir(None).unwrap();
+    let bases: Vec<(String, Vec<String>)> = resp
+        .truth
+        .bases
+        .iter()
+        .map(|b| (b.name.clone(), b.bearings.clone()))
+        .collect();
+    let rows = base_csv::rows_of(&resp, &bases);
+    assert_eq!(rows.len(), speeds.len());
+    let dir = tempfile::tempdir().unwrap();
+    base_csv::write(dir.path(), &rows).unwrap();
+    let back = base_csv::read(dir.path()).unwrap().unwrap();
+    assert_eq!(back, rows, "base.csv does not round-trip");
+    // The skid moves: a sizeable share of the pedestal motion.
+    let fits = identify_on_measured_base(&run, &back).unwrap();
+    assert_eq!(fits.len(), 2);
+    let rigid = identify_run(&run, &Options::default()).unwrap();
+    for (fit, truth) in fits.iter().zip(&resp.truth.pedestals) {
+        assert_eq!(fit.bearing, truth.bearing);
+        assert_eq!(fit.base, "skid");
+        for (p, want, tol) in [
+            (Parameter::Ky, truth.k_y, 1e-6),
+            (Parameter::Kz, truth.k_z, 1e-6),
+            (Parameter::M, truth.m, 1e-6),
+            (Parameter::Cy, truth.c_y, 1e-4),
+            (Parameter::Cz, truth.c_z, 1e-4),
+        ] {
+            let got = fit.get(p);
+            assert!(
+                (got - want).abs() <= tol * want,
+                "{} {}: {got} vs {want}",
+                fit.bearing,
+                p.name()
+            );
+        }
+        let r = rigid.pedestal(&fit.bearing).unwrap();
+        let off = (r.k_y - truth.k_y).abs() / truth.k_y;
+        assert!(
+            off > 0.05,
+            "rigid-ground fit of {} only {off:.2e} off: base too stiff for this test",
+            fit.bearing
+        );
+    }
+    // Errors name file, line and column.
+    let text = std::fs::read_to_string(dir.path().join("base.csv")).unwrap();
+    let bad = text.replacen("skid,left;right,", "skid,left;right,abc", 1);
+    std::fs::write(dir.path().join("base.csv"), bad).unwrap();
+    let err = base_csv::read(dir.path()).unwrap_err().to_string();
+    assert!(err.contains("base.csv:2:4"), "{err}");
+}
