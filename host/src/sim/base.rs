@@ -190,13 +190,13 @@ impl BaseBorder {
         // S = D − B'·W, rhs = fb − B'·x0 (B' rows: base, columns: pedestal).
         let mut rhs = nalgebra::DVector::<C64>::from_fn(nb, |i, _| tail[i]);
         for (l, blk) in self.links.iter().zip(&b) {
-            for i in 0..2 {
+            for (i, blk_row) in blk.iter().enumerate() {
                 let row = 2 * l.base + i;
-                for j in 0..2 {
+                for (j, &z) in blk_row.iter().enumerate() {
                     let dof = l.pedestal_dof + j;
-                    rhs[row] -= blk[i][j] * head[dof];
+                    rhs[row] -= z * head[dof];
                     for (col, wc) in w.iter().enumerate() {
-                        s[(row, col)] -= blk[i][j] * wc[dof];
+                        s[(row, col)] -= z * wc[dof];
                     }
                 }
             }
