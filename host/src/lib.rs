@@ -4,6 +4,7 @@
 #![warn(missing_docs)]
 
 pub mod args;
+pub mod base_csv;
 pub mod csv_layout;
 pub mod demo;
 pub mod diagnose;

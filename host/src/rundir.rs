@@ -82,6 +82,33 @@ pub struct Truth {
     /// The same effects with their bearing and parameters.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub effect_details: Vec<EffectTruth>,
+    /// Bases the pedestals stood on (extension: absent = rigid ground).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bases: Vec<BaseTruth>,
+}
+
+/// A base body a simulated run was made with (`truth.json`, `bases`): its
+/// pedestals' springs and dampers act between pedestal and base.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BaseTruth {
+    /// Base name.
+    pub name: String,
+    /// Bearings whose pedestals stand on it.
+    pub bearings: Vec<String>,
+    /// Vertical mass [kg].
+    pub m_y: f64,
+    /// Horizontal mass [kg].
+    pub m_z: f64,
+    /// Vertical stiffness to ground [N/m].
+    pub k_y: f64,
+    /// Horizontal stiffness to ground [N/m].
+    pub k_z: f64,
+    /// Vertical viscous damping to ground [N·s/m].
+    pub c_y: f64,
+    /// Horizontal viscous damping to ground [N·s/m].
+    pub c_z: f64,
+    /// Hysteretic loss factor of the springs to ground [-].
+    pub eta: f64,
 }
 
 /// A whole run directory in memory.

@@ -12,6 +12,7 @@
 //! Library entry points: [`identify_run`] (a whole [`RunDir`]),
 //! [`pedestal_points`] + [`fit_pedestal`] (one pedestal from data in memory).
 
+pub mod base;
 mod checks;
 pub mod cli;
 pub mod lsq;

@@ -162,6 +162,7 @@ impl SyntheticRun {
                 pedestals: self.pedestals.clone(),
                 effects: Vec::new(),
                 effect_details: Vec::new(),
+                bases: Vec::new(),
             }),
         })
     }

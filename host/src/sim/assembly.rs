@@ -9,12 +9,16 @@
 //! the pedestal stands on the ground through its own M, K, C (and η).
 //! Springs between two pedestals (foundation coupling) would break the band:
 //! they are kept apart as a low-rank term and solved by Woodbury's identity.
+//! Bases (`super::base`) carry pedestals that may be far apart: their DOFs
+//! come after all others, outside the band, and the bordered system is
+//! solved by a Schur complement (one extra banded solve per base DOF).
 //!
 //! Dynamic stiffness at spin Ω [rad/s] (synchronous, excitation at Ω):
 //! A(Ω) = K + iΩ(C + Ω·G) − Ω²M + bearings(Ω), with A·X = F and
 //! q(t) = Re{X e^{iΩt}}.
 
 use super::banded::{BandError, BandMatrix, BandShape, C64};
+use super::base::{BaseBorder, BaseLink};
 use super::machine::Machine;
 use super::pedestal::PedestalDynamics;
 use plinth_shared::bearing::BearingCoefficients;
@@ -54,6 +58,8 @@ pub struct Assembly {
     bearing_idx: Vec<[[[usize; 2]; 2]; 4]>,
     /// Springs outside the band.
     pub couplings: Vec<CouplingSpring>,
+    /// Base DOFs (after the banded part) and their links to pedestals.
+    pub bases: BaseBorder,
 }
 
 #[derive(Clone, Copy)]
@@ -214,8 +220,23 @@ impl Assembly {
             }
         }
         let [k_re, k_im, m, c, g] = arrays;
+        let mut links = Vec::new();
+        for (b, brg) in machine.bearings.iter().enumerate() {
+            if let (Some(base), Some(p), Some(pd)) = (brg.base, pedestals[b], pedestal_dof[b]) {
+                links.push(BaseLink {
+                    pedestal_dof: pd,
+                    base,
+                    pedestal: p,
+                });
+            }
+        }
+        let bases = BaseBorder {
+            bases: machine.bases.clone(),
+            links,
+            first_dof: n_dof,
+        };
         Ok(Assembly {
-            n_dof,
+            n_dof: n_dof + bases.n_dof(),
             node_dof,
             pedestal_dof,
             bearing_node: machine.bearings.iter().map(|b| b.node).collect(),
@@ -227,6 +248,7 @@ impl Assembly {
             g,
             bearing_idx,
             couplings: springs,
+            bases,
         })
     }
 
@@ -298,6 +320,7 @@ impl Assembly {
                 }
             }
         }
+        self.bases.add_dense(&mut k, &mut m);
         for sp in &self.couplings {
             k[(sp.a, sp.a)] += sp.k;
             k[(sp.b, sp.b)] += sp.k;
@@ -307,9 +330,27 @@ impl Assembly {
         (k, m)
     }
 
-    /// Solves A·x = f for a factored banded part `a` plus the coupling springs
-    /// (Woodbury identity, one extra solve per spring); `f` is overwritten by x.
-    pub fn solve(&self, a: &BandMatrix, f: &mut [C64]) -> Result<(), BandError> {
+    /// Solves A(Ω)·x = f at spin Ω [rad/s] (the speed `a` was filled at):
+    /// the factored banded part `a`, the coupling springs and the bases;
+    /// `f` (length `n_dof`) is overwritten by x.
+    pub fn solve(&self, a: &BandMatrix, omega: f64, f: &mut [C64]) -> Result<(), BandError> {
+        if f.len() != self.n_dof {
+            return Err(BandError::Dimension {
+                expected: self.n_dof,
+                got: f.len(),
+            });
+        }
+        self.bases.solve(
+            omega,
+            f,
+            |r| self.solve_band(a, r),
+            |column| BandError::Singular { column },
+        )
+    }
+
+    /// Solves (banded part + coupling springs)·x = f on the DOFs before the
+    /// bases (Woodbury identity, one extra solve per spring).
+    fn solve_band(&self, a: &BandMatrix, f: &mut [C64]) -> Result<(), BandError> {
         a.solve_in_place(f)?;
         if self.couplings.is_empty() {
             return Ok(());
@@ -318,7 +359,7 @@ impl Assembly {
         let r = self.couplings.len();
         let mut w = Vec::with_capacity(r); // A0⁻¹ u_i
         for s in &self.couplings {
-            let mut u = vec![C64::new(0.0, 0.0); self.n_dof];
+            let mut u = vec![C64::new(0.0, 0.0); self.bases.first_dof];
             u[s.a] = C64::new(1.0, 0.0);
             u[s.b] = C64::new(-1.0, 0.0);
             a.solve_in_place(&mut u)?;

@@ -154,6 +154,13 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
     };
     run.write_with(out.path(), &options)
         .with_context(|| format!("writing {}", args.out.display()))?;
+    if !machine.bases.is_empty() {
+        let bases: Vec<(String, Vec<String>)> = super::base::truth(&machine)
+            .into_iter()
+            .map(|b| (b.name, b.bearings))
+            .collect();
+        crate::base_csv::write(out.path(), &crate::base_csv::rows_of(&response, &bases))?;
+    }
     out.commit()?;
     println!(
         "{}: {} speeds x {} bearings -> {}",

@@ -40,6 +40,16 @@
 //! #              viscosity = 0.0069, load = "weight" }   # or load = 1500.0 [N]
 //! pedestal = { m = 200.0, k_y = 1e7, k_z = 8e6, c_y = 0.0, c_z = 0.0 }
 //! # Omit `pedestal` for a bearing on rigid ground.
+//! base = "skid"                    # optional: the pedestal stands on this base
+//!
+//! [[base]]                         # optional rigid bases (skid, baseplate, frame)
+//! name = "skid"
+//! m = 400.0                        # [kg], or m_y and m_z per direction
+//! k_y = 5e7                        # stiffness to ground [N/m]
+//! k_z = 4e7
+//! c_y = 2e3                        # optional viscous damping to ground [N·s/m]
+//! c_z = 2e3
+//! eta = 0.0                        # optional hysteretic loss factor [-]
 //!
 //! [[unbalance]]                    # optional extra unbalances at shaft nodes
 //! node = 5                         # or position [m]
@@ -60,6 +70,7 @@
 //! and checks) is [`super::machine_file`], the rotor's weight on the bearings
 //! [`super::static_load`].
 
+use super::base::Base;
 use super::disk::Disk;
 use super::oil_film::OilFilmBearing;
 use super::pedestal::PedestalParams;
@@ -124,6 +135,9 @@ pub struct Bearing {
     pub model: BearingModel,
     /// The pedestal under the bearing; `None` = bearing on rigid ground.
     pub pedestal: Option<PedestalParams>,
+    /// Index into [`Machine::bases`] of the base the pedestal stands on;
+    /// `None` = the pedestal stands on rigid ground.
+    pub base: Option<usize>,
 }
 
 /// An unbalance m·e at a shaft node.
@@ -157,6 +171,8 @@ pub struct Machine {
     pub unbalances: Vec<Unbalance>,
     /// Gravitational acceleration [m/s²].
     pub gravity: f64,
+    /// Bases that pedestals stand on (file order; see [`super::base`]).
+    pub bases: Vec<Base>,
 }
 
 /// Standard gravity [m/s²].
@@ -272,6 +288,21 @@ impl Machine {
                     "bearing {:?}: node {} out of range",
                     b.name, b.node
                 ));
+            }
+        }
+        for (i, base) in self.bases.iter().enumerate() {
+            if let Err(m) = base.check() {
+                return bad(format!("base {i} ({:?}): {m}", base.name));
+            }
+        }
+        for b in &self.bearings {
+            if let Some(i) = b.base {
+                if i >= self.bases.len() || b.pedestal.is_none() {
+                    return bad(format!(
+                        "bearing {:?}: base {i} does not exist or the bearing has no pedestal",
+                        b.name
+                    ));
+                }
             }
         }
         for u in &self.unbalances {

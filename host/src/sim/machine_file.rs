@@ -2,6 +2,7 @@
 //! file may hold) and its validation into a [`Machine`], every problem named
 //! by file and key. The format is documented in [`super::machine`].
 
+use super::base::Base;
 use super::disk::{inertia_from_geometry, Disk};
 use super::machine::{Bearing, BearingModel, Machine, MachineError, Unbalance, STANDARD_GRAVITY};
 use super::oil_film::OilFilmBearing;
@@ -25,6 +26,25 @@ struct RawMachine {
     bearings: Vec<RawBearing>,
     #[serde(default)]
     unbalance: Vec<RawUnbalance>,
+    #[serde(default)]
+    base: Vec<RawBase>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+struct RawBase {
+    name: String,
+    m: Option<f64>,
+    m_y: Option<f64>,
+    m_z: Option<f64>,
+    k_y: f64,
+    k_z: f64,
+    #[serde(default)]
+    c_y: f64,
+    #[serde(default)]
+    c_z: f64,
+    #[serde(default)]
+    eta: f64,
 }
 
 #[derive(Deserialize, Debug, Clone, Copy)]
@@ -132,6 +152,7 @@ struct RawBearing {
     coefficients: Option<Vec<RawCoefficientRow>>,
     oil_film: Option<RawOilFilm>,
     pedestal: Option<RawPedestal>,
+    base: Option<String>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -208,6 +229,86 @@ fn material(ctx: &Ctx, key: &str, m: &RawMaterial) -> Result<Material, MachineEr
         young,
         shear,
         density,
+    })
+}
+
+/// The `[[base]]` tables, checked (names unique and CSV-safe).
+fn read_bases(ctx: &Ctx, raw: &[RawBase]) -> Result<Vec<Base>, MachineError> {
+    let mut bases: Vec<Base> = Vec::new();
+    for (i, rb) in raw.iter().enumerate() {
+        let key = format!("base[{i}]");
+        if !bearing_name_ok(&rb.name) {
+            return Err(ctx.err(
+                format!("{key}.name"),
+                format!("{:?}: use letters, digits, '_', '-', '.' only", rb.name),
+            ));
+        }
+        if let Some(other) = bases.iter().position(|b| b.name == rb.name) {
+            return Err(ctx.err(
+                format!("{key}.name"),
+                format!("{:?} is already the name of base[{other}]", rb.name),
+            ));
+        }
+        let m = match (rb.m, rb.m_y, rb.m_z) {
+            (Some(m), None, None) => {
+                let m = ctx.positive(&format!("{key}.m"), m)?;
+                [m, m]
+            }
+            (None, Some(my), Some(mz)) => [
+                ctx.positive(&format!("{key}.m_y"), my)?,
+                ctx.positive(&format!("{key}.m_z"), mz)?,
+            ],
+            _ => {
+                return Err(ctx.err(
+                    key,
+                    "give the mass as either m [kg] or both m_y and m_z [kg]",
+                ))
+            }
+        };
+        bases.push(Base {
+            name: rb.name.clone(),
+            m,
+            k: [
+                ctx.positive(&format!("{key}.k_y"), rb.k_y)?,
+                ctx.positive(&format!("{key}.k_z"), rb.k_z)?,
+            ],
+            c: [
+                ctx.non_negative(&format!("{key}.c_y"), rb.c_y)?,
+                ctx.non_negative(&format!("{key}.c_z"), rb.c_z)?,
+            ],
+            eta: ctx.non_negative(&format!("{key}.eta"), rb.eta)?,
+        });
+    }
+    Ok(bases)
+}
+
+/// Index of the base `name` that bearing `key` stands on (it needs a pedestal).
+fn base_of(
+    ctx: &Ctx,
+    key: &str,
+    name: &str,
+    has_pedestal: bool,
+    bases: &[Base],
+) -> Result<usize, MachineError> {
+    if !has_pedestal {
+        return Err(ctx.err(
+            format!("{key}.base"),
+            "a bearing on a base needs a `pedestal` between bearing and base",
+        ));
+    }
+    bases.iter().position(|b| b.name == name).ok_or_else(|| {
+        let known: Vec<&str> = bases.iter().map(|b| b.name.as_str()).collect();
+        ctx.err(
+            format!("{key}.base"),
+            format!(
+                "no [[base]] named {name:?} (bases: {})",
+                if known.is_empty() {
+                    "none".to_string()
+                } else {
+                    known.join(", ")
+                }
+            ),
+        )
     })
 }
 
@@ -451,6 +552,7 @@ impl Machine {
         if raw.bearings.is_empty() {
             return Err(ctx.err("bearings", "needs at least one bearing"));
         }
+        let bases = read_bases(&ctx, &raw.base)?;
         let mut bearings = Vec::new();
         let mut weight_share: Vec<usize> = Vec::new();
         for (b, rb) in raw.bearings.iter().enumerate() {
@@ -568,11 +670,16 @@ impl Machine {
                 }
                 None => None,
             };
+            let base = match &rb.base {
+                Some(name) => Some(base_of(&ctx, &key, name, pedestal.is_some(), &bases)?),
+                None => None,
+            };
             bearings.push(Bearing {
                 name: rb.name.clone(),
                 node,
                 model,
                 pedestal,
+                base,
             });
         }
         let mut machine = Machine {
@@ -583,6 +690,7 @@ impl Machine {
             bearings,
             unbalances,
             gravity,
+            bases,
         };
         if !weight_share.is_empty() {
             let loads = machine.static_bearing_loads().map_err(|m| {

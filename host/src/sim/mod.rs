@@ -1,7 +1,7 @@
 //! Rotor-bearing-pedestal machine simulator: reads a machine file
 //! ([`machine`], TOML, SI units), builds a Timoshenko finite-element model of
 //! the rotor with rigid disks, bearings (speed tables or short-bearing oil
-//! films) and pedestals on rigid ground, injects the effects of
+//! films) and pedestals on rigid ground or on bases ([`base`]), injects the effects of
 //! `crate::effects`, and computes the synchronous unbalance response over a
 //! list of speeds with one banded complex LU per speed.
 //!
@@ -21,6 +21,7 @@
 //! ```
 pub mod assembly;
 pub mod banded;
+pub mod base;
 pub mod budget;
 pub mod cli;
 pub mod disk;

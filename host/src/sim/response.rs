@@ -98,6 +98,9 @@ pub struct Response {
     pub bearing_names: Vec<String>,
     /// `bearings[s][b]`: response at speed s, bearing b.
     pub bearings: Vec<Vec<BearingResponse>>,
+    /// `bases[s][j]`: absolute (y, z) 1X phasors [m] of base j (machine
+    /// order) at speed s; empty rows when the machine has no base.
+    pub bases: Vec<Vec<Phasor2<f64>>>,
     /// Axial node positions [m].
     pub node_positions: Vec<f64>,
     /// `shaft[s][node]`: shaft displacement phasors (y, z) [m] at every node
@@ -288,8 +291,13 @@ impl UnbalanceSolver {
             x[d] = *u * w2;
             x[d + 1] = *u * w2 * C64::new(0.0, -1.0);
         }
-        self.assembly.solve(work, x).map_err(singular)?;
+        self.assembly.solve(work, omega, x).map_err(singular)?;
         Ok(coefs)
+    }
+
+    /// The machine's bases for `truth.json`.
+    fn base_truth(&self) -> Vec<crate::rundir::BaseTruth> {
+        super::base::truth(&self.machine)
     }
 
     /// Names the machine-file keys behind a zero pivot at `speed_hz` [Hz].
@@ -297,6 +305,9 @@ impl UnbalanceSolver {
         let super::banded::BandError::Singular { column } = *e else {
             return e.to_string();
         };
+        if column >= self.assembly.bases.first_dof {
+            return "the bases with their pedestals are singular at this speed: check the [[base]] m, k_y, k_z".into();
+        }
         const DIRS: [&str; 4] = ["y", "z", "θ_y", "θ_z"];
         for (b, p) in self.assembly.pedestal_dof.iter().enumerate() {
             if let Some(p) = *p {
@@ -361,6 +372,7 @@ impl UnbalanceSolver {
         let mut work = self.assembly.new_matrix();
         let mut x = vec![C64::new(0.0, 0.0); self.assembly.n_dof];
         let mut bearings = Vec::with_capacity(speeds_hz.len());
+        let mut bases = Vec::with_capacity(speeds_hz.len());
         let mut shaft = Vec::with_capacity(speeds_hz.len());
         for &s in speeds_hz {
             let coefs = self.solve_speed(s, &mut work, &mut x)?;
@@ -378,6 +390,7 @@ impl UnbalanceSolver {
                 });
             }
             bearings.push(row);
+            bases.push(self.assembly.bases.motion(&x));
             done(bearings.len());
             if !keep_shaft {
                 continue;
@@ -464,6 +477,7 @@ impl UnbalanceSolver {
             speeds_hz: speeds_hz.to_vec(),
             bearing_names: self.machine.bearing_names(),
             bearings,
+            bases,
             node_positions: self.machine.node_positions.clone(),
             shaft,
             sensors,
@@ -471,6 +485,7 @@ impl UnbalanceSolver {
                 pedestals,
                 effects,
                 effect_details: details,
+                bases: self.base_truth(),
             },
         })
     }

@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
 """Reference unbalance responses from ROSS 2.3.0 for Plinth's simulator.
 
-Usage:  python3 tests/reference/ross/make_reference.py          (writes *.json here)
+Usage:  python3 tests/reference/ross/make_reference.py [machine-c ...]  (writes *.json here)
         python3 tests/reference/ross/make_reference.py --time   (ROSS timing only)
 
 Builds the same machines as Plinth's machine files (machine-a.toml,
 machine-b.toml, read with tomllib) in ROSS: Timoshenko shaft elements with
 shear, rotary inertia and gyroscopics; DiskElement; each bearing a
 BearingElement from the shaft node to a PointMass (n_link), and the pedestal
-a second BearingElement from the point mass to the ground.
+a second BearingElement from the point mass to the ground, or, when the
+bearing names a `base` (machine-c.toml), to that base: each [[base]] is a
+PointMass (mx, my) with its own BearingElement to the ground.
 
 Axes. Plinth: x along the rotor, y vertical, z horizontal, spin about +x,
 forward whirl y -> z, unbalance angle from +y towards +z. ROSS: z along the
@@ -170,6 +172,29 @@ def build(spec, speeds_hz):
         bearings.append(rs.BearingElement(n=pn, kxx=p["k_y"], kyy=p["k_z"],
                                           cxx=p.get("c_y", 0.0), cyy=p.get("c_z", 0.0),
                                           tag=f"ground_{b['name']}"))
+    base_node = {}
+    for j, base in enumerate(spec.get("base", [])):
+        bn = n_nodes + len(spec["bearings"]) + j
+        base_node[base["name"]] = bn
+        my_, mz_ = (base["m"], base["m"]) if "m" in base else (base["m_y"], base["m_z"])
+        assert base.get("eta", 0.0) == 0.0, "ROSS has no hysteretic base damping"
+        # mz: ROSS's axial DOF of the point mass (no axial spring anywhere, so
+        # it needs a mass to keep the matrix regular; it does not couple).
+        masses.append(rs.PointMass(n=bn, mx=my_, my=mz_, mz=0.5 * (my_ + mz_),
+                                   tag=f"base_{base['name']}"))
+        bearings.append(rs.BearingElement(n=bn, kxx=base["k_y"], kyy=base["k_z"],
+                                          cxx=base.get("c_y", 0.0), cyy=base.get("c_z", 0.0),
+                                          tag=f"basegr_{base['name']}"))
+    for i, b in enumerate(spec["bearings"]):
+        if "base" in b:
+            # The pedestal acts between pedestal and base, not ground.
+            el = [e for e in bearings if e.tag == f"ground_{b['name']}"][0]
+            k = bearings.index(el)
+            p = b["pedestal"]
+            bearings[k] = rs.BearingElement(n=n_nodes + i, n_link=base_node[b["base"]],
+                                            kxx=p["k_y"], kyy=p["k_z"],
+                                            cxx=p.get("c_y", 0.0), cyy=p.get("c_z", 0.0),
+                                            tag=f"pedbase_{b['name']}")
     rotor = rs.Rotor(shaft, disk_elements, bearings, point_mass_elements=masses)
     return rotor, x, unb, coef_record
 
@@ -194,12 +219,20 @@ def run(name):
         n = node_of(b, x)
         pn = n_nodes + i
         sx = X[ndof_node * n + 0]; sy = X[ndof_node * n + 1]
-        gi = rotor.point_mass_elements[i].dof_global_index
+        gi = {e.tag: e for e in rotor.point_mass_elements}[f"ped_{b['name']}"].dof_global_index
         px = X[gi[f"x_{pn}"]]; py = X[gi[f"y_{pn}"]]
         rel_y, rel_z, ped_y, ped_z = sx - px, sy - py, px, py
         out["bearings"][b["name"]] = {
             k: {"re": list(map(float, v.real)), "im": list(map(float, v.imag))}
             for k, v in (("rel_y", rel_y), ("rel_z", rel_z), ("ped_y", ped_y), ("ped_z", ped_z))}
+    pm = {e.tag: e for e in rotor.point_mass_elements}
+    for j, base in enumerate(spec.get("base", [])):
+        bn = n_nodes + len(spec["bearings"]) + j
+        gi = pm[f"base_{base['name']}"].dof_global_index
+        by = X[gi[f"x_{bn}"]]; bz = X[gi[f"y_{bn}"]]
+        out.setdefault("bases", {})[base["name"]] = {
+            k: {"re": list(map(float, v.real)), "im": list(map(float, v.imag))}
+            for k, v in (("y", by), ("z", bz))}
     return out, elapsed, len(speeds), rotor.ndof
 
 
@@ -219,7 +252,8 @@ def main():
         print(f"ROSS {rs_version()}: machine-a, {rotor.ndof} DOF (ROSS counts 6 per node), "
               f"1000 speeds: {el:.3f} s total, {el / 1000 * 1e3:.3f} ms per speed")
         return
-    for name in ("machine-a", "machine-b"):
+    names = [a for a in sys.argv[1:] if not a.startswith("-")] or ["machine-a", "machine-b", "machine-c"]
+    for name in names:
         out, el, n, ndof = run(name)
         with open(os.path.join(HERE, name + ".json"), "w") as f:
             json.dump(out, f)
