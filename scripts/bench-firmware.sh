@@ -17,7 +17,7 @@ out="$CARGO_TARGET_DIR/thumbv7em-none-eabihf/release"
 size_tool=""
 for c in "$(rustc --print sysroot)/lib/rustlib/x86_64-unknown-linux-gnu/bin/llvm-size" \
   $(ls ~/.rustup/toolchains/*/lib/rustlib/x86_64-unknown-linux-gnu/bin/llvm-size 2>/dev/null) \
-  "$(command -v arm-none-eabi-size || true)"; do
+  "$(command -v llvm-size || true)" "$(command -v arm-none-eabi-size || true)"; do
   if [ -n "$c" ] && [ -x "$c" ]; then size_tool="$c"; break; fi
 done
 [ -n "$size_tool" ] || { echo "no llvm-size: rustup component add llvm-tools" >&2; exit 1; }
