@@ -216,22 +216,10 @@ mod tests {
     fn the_gain_is_the_variance_of_averaged_corrected_noise() {
         // Independent check: push many draws of unit circular noise through
         // the same mean of mid-revolution corrections and measure E|y|².
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut noise = crate::testing::Gauss(0x9e37_79b9_7f4a_7c15);
         let mut gauss = move || {
-            // xorshift64* and Box–Muller.
-            let mut u = || {
-                state ^= state >> 12;
-                state ^= state << 25;
-                state ^= state >> 27;
-                ((state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 + 0.5)
-                    / (1u64 << 53) as f64
-            };
-            let (a, b) = (u(), u());
-            let r = (-2.0 * a.ln()).sqrt() * std::f64::consts::FRAC_1_SQRT_2;
-            Phasor::new(
-                (r * (std::f64::consts::TAU * b).cos()) as f32,
-                (r * (std::f64::consts::TAU * b).sin()) as f32,
-            )
+            let n = noise.complex(1.0);
+            Phasor::new(n.re as f32, n.im as f32)
         };
         for kind in KINDS {
             for r in [1u16, 2, 4] {

@@ -7,23 +7,7 @@
 //! model of it. Over a run the reported sd² must average to the real |error|².
 
 use super::*;
-
-/// Gaussian draws from xorshift64* and Box–Muller (no dependency).
-struct Gauss(u64);
-
-impl Gauss {
-    fn uniform(&mut self) -> f64 {
-        let s = &mut self.0;
-        *s ^= *s >> 12;
-        *s ^= *s << 25;
-        *s ^= *s >> 27;
-        ((s.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn next(&mut self) -> f64 {
-        let (a, b) = (self.uniform(), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (TAU * b).cos()
-    }
-}
+use crate::testing::Gauss;
 
 /// Per channel: sqrt(Σ reported sd² / Σ real |error|²) over the outputs, and
 /// how many outputs.
