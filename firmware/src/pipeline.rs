@@ -8,13 +8,14 @@ use crate::config::{Configuration, TABLE_ROWS};
 use crate::source::{SampleBuffer, CHANNELS};
 use plinth_shared::bearing::BearingTable;
 use plinth_shared::extractor::{
-    ConfigError, Event, ExtractorConfig, FaultKind, PhasorExtractor, Phasors,
+    long_run_factor, ConfigError, Event, ExtractorConfig, FaultKind, PhasorExtractor, Phasors,
 };
 use plinth_shared::phasor::{omega_from_hz, Phasor, Phasor2};
 use plinth_shared::protocol::{
     BearingPhasors, DeviceCounters, DeviceMessage, EstimateFrame, PedestalEstimateEntry,
     PhasorFrame, WirePhasor, MAX_BEARINGS,
 };
+use plinth_shared::regression::force_noise_sd;
 use plinth_shared::rls::PedestalRls;
 
 /// Most extractor events one sample buffer can produce that are kept; more
@@ -76,17 +77,35 @@ pub struct Pipeline {
 impl Pipeline {
     /// A pipeline for `config` at `sample_rate_hz` [Hz].
     pub fn new(config: &Configuration, sample_rate_hz: f32) -> Result<Self, ConfigError> {
-        let mut ec = ExtractorConfig::new(sample_rate_hz, config.sensors());
+        let sensors = config.sensors();
+        let mut ec = ExtractorConfig::new(sample_rate_hz, sensors);
         ec.revolutions_per_output = config.revolutions_per_phasor;
         let extractor = PhasorExtractor::new(ec)?;
         let channels = config.bearing_channels();
         let scale = config.rls.parameter_scale();
         let lambda = config.rls.forgetting_factor;
+        // Consecutive phasors share revolutions (the run-down correction's
+        // differences): their errors correlate, negatively on balance, so
+        // the independent-phasor variances are scaled by φ ≤ 1 (0.57 to 0.96,
+        // see `long_run_factor`); of the pedestal's channels the largest φ,
+        // the least reduction.
+        let phi = |b: usize| {
+            channels[b]
+                .iter()
+                .flatten()
+                .map(|&c| {
+                    long_run_factor(
+                        sensors[c as usize % CHANNELS].kind,
+                        config.revolutions_per_phasor,
+                    )
+                })
+                .fold(0.0f32, f32::max)
+        };
         Ok(Self {
             extractor,
             bearings: core::array::from_fn(|b| BearingSlot {
                 channels: channels[b],
-                rls: PedestalRls::new(scale, lambda),
+                rls: PedestalRls::new(scale, lambda).with_long_run_factor(phi(b)),
             }),
             last_revolution: 0,
             counters: PipelineCounters::default(),
@@ -160,6 +179,8 @@ impl Pipeline {
             ch.map(|c| p.displacement[c as usize % CHANNELS])
         };
         let wire = |q: Option<Phasor>| q.map(WirePhasor::from).unwrap_or(UNMEASURED);
+        let sd =
+            |ch: Option<u8>| -> f32 { ch.map_or(f32::NAN, |c| p.noise_sd[c as usize % CHANNELS]) };
 
         let mut frame = PhasorFrame {
             revolution: first,
@@ -176,6 +197,8 @@ impl Pipeline {
                 bearing: b as u8,
                 rel: [wire(q[0]), wire(q[1])],
                 ped: [wire(q[2]), wire(q[3])],
+                rel_sd: [sd(slot.channels[0]), sd(slot.channels[1])],
+                ped_sd: [sd(slot.channels[2]), sd(slot.channels[3])],
             });
         }
         emit(DeviceMessage::Phasors(frame));
@@ -195,7 +218,10 @@ impl Pipeline {
                     let rel: Phasor2 = [ry, rz];
                     let ped: Phasor2 = [py, pz];
                     let force = coefficients.force(omega, &rel);
-                    slot.rls.update(omega, &ped, &force);
+                    let sds = slot.channels.map(sd);
+                    let force_sd = force_noise_sd(&coefficients, omega, &[sds[0], sds[1]]);
+                    slot.rls
+                        .update_weighted(omega, &ped, &force, force_sd, [sds[2], sds[3]]);
                 }
                 Err(_) => {
                     self.counters.speed_outside_table =

@@ -1,6 +1,7 @@
 //! The run directory re-derived from the whole raw byte log: every phasor
 //! frame that ever arrived, including those received by an earlier host
-//! process that crashed or was killed, becomes rows of `measurements.csv`.
+//! process that crashed or was killed, becomes rows of `measurements.csv`,
+//! with the box's noise of each phasor as formats.md's `*_sd` columns.
 
 use super::config::{BearingTables, StreamConfig};
 use crate::rundir::{BearingRow, Measurement, RunDir};
@@ -54,8 +55,9 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
     }
     let link = *rx.stats();
 
-    // Group by (bearing, speed): (weight, Σ w·rel, Σ w·ped).
-    type Acc = (f64, Phasor2<f64>, Phasor2<f64>);
+    // Group by (bearing, speed): (weight, Σ w·rel, Σ w·ped, Σ w²·sd² of
+    // rel y, rel z, ped y, ped z, or None once one is not a valid sd).
+    type Acc = (f64, Phasor2<f64>, Phasor2<f64>, Option<[f64; 4]>);
     let zero = Complex::new(0.0, 0.0);
     let mut order: Vec<(String, u32)> = Vec::new();
     let mut rows: BTreeMap<(String, u32), (f64, Acc, usize)> = BTreeMap::new();
@@ -102,7 +104,7 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
             let key = (name.clone(), f.speed_hz.to_bits());
             let entry = rows.entry(key.clone()).or_insert_with(|| {
                 order.push(key.clone());
-                (speed, (0.0, [zero; 2], [zero; 2]), 0)
+                (speed, (0.0, [zero; 2], [zero; 2], Some([0.0; 4])), 0)
             });
             let (_, acc, count) = entry;
             acc.0 += w;
@@ -110,6 +112,17 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
                 acc.1[k] += rel[k] * w;
                 acc.2[k] += ped[k] * w;
             }
+            // The noise of a revolution-weighted mean: sqrt(Σ w²·sd²)/Σ w.
+            let sds = [b.rel_sd[0], b.rel_sd[1], b.ped_sd[0], b.ped_sd[1]].map(widen);
+            acc.3 = match acc.3 {
+                Some(mut v) if sds.iter().all(|s| s.is_finite() && *s >= 0.0) => {
+                    for (v, s) in v.iter_mut().zip(sds) {
+                        *v += w * w * s * s;
+                    }
+                    Some(v)
+                }
+                _ => None,
+            };
             *count += 1;
             if *count > 1 {
                 merged += 1;
@@ -119,13 +132,15 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
     let measurements = order
         .iter()
         .filter_map(|key| rows.get(key).map(|r| (key, r)))
-        .map(|((name, _), (speed, (w, rel, ped), _))| Measurement {
-            speed_hz: *speed,
-            bearing: name.clone(),
-            rel: [rel[0] / *w, rel[1] / *w],
-            ped: [ped[0] / *w, ped[1] / *w],
-            noise_sd: None,
-        })
+        .map(
+            |((name, _), (speed, (w, rel, ped, noise), _))| Measurement {
+                speed_hz: *speed,
+                bearing: name.clone(),
+                rel: [rel[0] / *w, rel[1] / *w],
+                ped: [ped[0] / *w, ped[1] / *w],
+                noise_sd: noise.map(|v| v.map(|v| v.sqrt() / *w)),
+            },
+        )
         .collect();
     let bearings: Vec<BearingRow> = tables.rows.clone();
     Derived {

@@ -207,6 +207,12 @@ mod tests {
                     "{kind:?} R={r}: R·G = {rg}"
                 );
             }
+            std::println!(
+                "{kind:?}: G(1) = {g1:.3}, φ(1) = {:.3}, G(4) = {:.4}, φ(4) = {:.3}",
+                long_run_factor(kind, 1),
+                average_noise_gain(kind, 4),
+                long_run_factor(kind, 4)
+            );
             let phi = long_run_factor(kind, 1);
             assert!((phi * g1 - 1.0).abs() < 1e-6);
         }

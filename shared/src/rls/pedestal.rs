@@ -272,13 +272,19 @@ mod tests {
 
     /// A machine-like pedestal with a cross-coupled bearing: θ, the bearing,
     /// and per speed Ω [rad/s], rel [m] and the exact ped [m] (eq. 3).
-    fn bench_case(
-        speeds: usize,
-    ) -> (
+    fn bench_case(speeds: usize) -> Case {
+        bench_case_with(speeds, response)
+    }
+
+    /// θ, the bearing, and per speed (Ω [rad/s], rel [m], ped [m]).
+    type Case = (
         [f64; 5],
         BearingCoefficients<f64>,
         Vec<(f64, Phasor2<f64>, Phasor2<f64>)>,
-    ) {
+    );
+
+    /// [`bench_case`] with rel phasors from `rel_at(speed index)`.
+    fn bench_case_with(speeds: usize, rel_at: impl Fn(usize) -> Phasor2<f64>) -> Case {
         let theta = [8.0e6, 6.0e6, 150.0, 2000.0, 1500.0];
         let bearing = BearingCoefficients {
             k: [[2.0e8, 3.0e7], [-2.0e7, 1.5e8]],
@@ -287,7 +293,7 @@ mod tests {
         let points = (0..speeds)
             .map(|i| {
                 let omega = 2.0 * core::f64::consts::PI * (10.0 + 50.0 * i as f64 / speeds as f64);
-                let rel = response(i);
+                let rel = rel_at(i);
                 let f = bearing.force(omega, &rel);
                 let z = |k: f64, c: f64| Complex::new(k - omega * omega * theta[2], omega * c);
                 let ped = [f[0] / z(theta[0], theta[3]), f[1] / z(theta[1], theta[4])];
@@ -409,5 +415,72 @@ mod tests {
             0
         );
         assert_eq!(weighted.estimate().unwrap().rejected, 4);
+    }
+
+    #[test]
+    fn standard_errors_allow_for_phasors_sharing_revolutions() {
+        // Pedestal-phasor noise as the extractor makes it with one revolution
+        // per phasor: white per-revolution noise through the run-down
+        // correction (each phasor shares revolutions with its neighbours), of
+        // sd sqrt(G)·σ per phasor as the box reports. With φ the reported
+        // standard errors match the scatter; the independent-phasor formula
+        // would be off by 1/sqrt(φ).
+        use crate::extractor::{average_noise_gain, long_run_factor, mid_revolution, SensorKind};
+        let kind = SensorKind::Acceleration;
+        let phi = f64::from(long_run_factor(kind, 1));
+        let gain = f64::from(average_noise_gain(kind, 1));
+        // A run-down: consecutive phasors at nearby speeds, rows changing
+        // slowly (the condition under which φ holds).
+        let slow = |i: usize| {
+            let a = i as f64;
+            [
+                Complex::from_polar(1e-6 * (1.0 + 0.5 * (0.02 * a).sin()), 0.01 * a),
+                Complex::from_polar(2e-6 * (1.0 + 0.4 * (0.015 * a).cos()), 1.0 - 0.012 * a),
+            ]
+        };
+        let (theta, bearing, points) = bench_case_with(300, slow);
+        let mut gauss = crate::testing::Gauss(23);
+        let draws = 300;
+        let (mut scatter, mut reported) = ([0.0f64; 5], [0.0f64; 5]);
+        for _ in 0..draws {
+            let mut est = PedestalRls::<f64>::default().with_long_run_factor(phi);
+            // Per direction, the revolutions' noise (unit sd), one ahead.
+            let unit = |g: &mut crate::testing::Gauss| {
+                let n = g.complex(1.0);
+                Complex::new(n.re as f32, n.im as f32)
+            };
+            let mut revs: Vec<[Complex<f32>; 2]> = (0..points.len() + 3)
+                .map(|_| [unit(&mut gauss), unit(&mut gauss)])
+                .collect();
+            revs.truncate(points.len() + 3);
+            for (i, (omega, rel, ped)) in points.iter().enumerate() {
+                let sigma = ped.map(|p| 0.005 * p.norm());
+                let noisy: Phasor2<f64> = core::array::from_fn(|d| {
+                    let n = mid_revolution(
+                        kind,
+                        [Some(revs[i][d]), Some(revs[i + 1][d])],
+                        revs[i + 2][d],
+                        revs[i + 3][d],
+                    );
+                    ped[d] + Complex::new(f64::from(n.re), f64::from(n.im)) * sigma[d]
+                });
+                let ped_sd = sigma.map(|s| s * gain.sqrt());
+                let force = bearing.force(*omega, rel);
+                est.update_weighted(*omega, &noisy, &force, [0.0; 2], ped_sd);
+            }
+            let e = est.estimate().unwrap();
+            for k in 0..5 {
+                scatter[k] += (e.theta[k] - theta[k]).powi(2);
+                reported[k] += e.std_err[k].powi(2);
+            }
+        }
+        for k in 0..5 {
+            let ratio = (reported[k] / scatter[k]).sqrt();
+            std::println!(
+                "θ{k}: reported/observed {ratio:.3} with φ = {phi:.3}, {:.3} without",
+                ratio / phi.sqrt()
+            );
+            assert!((ratio - 1.0).abs() < 0.15, "{k}: {ratio}");
+        }
     }
 }
