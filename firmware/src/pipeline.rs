@@ -8,14 +8,13 @@ use crate::config::{Configuration, TABLE_ROWS};
 use crate::source::{SampleBuffer, CHANNELS};
 use plinth_shared::bearing::BearingTable;
 use plinth_shared::extractor::{
-    long_run_factor, ConfigError, Event, ExtractorConfig, FaultKind, PhasorExtractor, Phasors,
+    ConfigError, Event, ExtractorConfig, FaultKind, PhasorExtractor, Phasors,
 };
 use plinth_shared::phasor::{omega_from_hz, Phasor, Phasor2};
 use plinth_shared::protocol::{
     BearingPhasors, DeviceCounters, DeviceMessage, EstimateFrame, PedestalEstimateEntry,
     PhasorFrame, WirePhasor, MAX_BEARINGS,
 };
-use plinth_shared::regression::force_noise_sd;
 use plinth_shared::rls::PedestalRls;
 
 /// Most extractor events one sample buffer can produce that are kept; more
@@ -77,8 +76,7 @@ pub struct Pipeline {
 impl Pipeline {
     /// A pipeline for `config` at `sample_rate_hz` [Hz].
     pub fn new(config: &Configuration, sample_rate_hz: f32) -> Result<Self, ConfigError> {
-        let sensors = config.sensors();
-        let mut ec = ExtractorConfig::new(sample_rate_hz, sensors);
+        let mut ec = ExtractorConfig::new(sample_rate_hz, config.sensors());
         ec.revolutions_per_output = config.revolutions_per_phasor;
         let extractor = PhasorExtractor::new(ec)?;
         let channels = config.bearing_channels();
@@ -93,20 +91,16 @@ impl Pipeline {
             channels[b]
                 .iter()
                 .flatten()
-                .map(|&c| {
-                    long_run_factor(
-                        sensors[c as usize % CHANNELS].kind,
-                        config.revolutions_per_phasor,
-                    )
-                })
+                .map(|&c| extractor.long_run_factor(c as usize))
                 .fold(0.0f32, f32::max)
         };
+        let bearings = core::array::from_fn(|b| BearingSlot {
+            channels: channels[b],
+            rls: PedestalRls::new(scale, lambda).with_long_run_factor(phi(b)),
+        });
         Ok(Self {
             extractor,
-            bearings: core::array::from_fn(|b| BearingSlot {
-                channels: channels[b],
-                rls: PedestalRls::new(scale, lambda).with_long_run_factor(phi(b)),
-            }),
+            bearings,
             last_revolution: 0,
             counters: PipelineCounters::default(),
         })
@@ -217,11 +211,15 @@ impl Pipeline {
                 Ok(coefficients) => {
                     let rel: Phasor2 = [ry, rz];
                     let ped: Phasor2 = [py, pz];
-                    let force = coefficients.force(omega, &rel);
                     let sds = slot.channels.map(sd);
-                    let force_sd = force_noise_sd(&coefficients, omega, &[sds[0], sds[1]]);
-                    slot.rls
-                        .update_weighted(omega, &ped, &force, force_sd, [sds[2], sds[3]]);
+                    slot.rls.update_weighted(
+                        omega,
+                        &ped,
+                        &rel,
+                        &coefficients,
+                        [sds[0], sds[1]],
+                        [sds[2], sds[3]],
+                    );
                 }
                 Err(_) => {
                     self.counters.speed_outside_table =

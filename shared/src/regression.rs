@@ -147,19 +147,23 @@ pub fn equations_for_mode<T: Float>(
     }
 }
 
-/// Standard deviation sqrt(E|n_F|²) [N] of the noise of the bearing force
+/// Variance E|n_F|² [N²] of the noise of the bearing force
 /// F = (K_b + iΩC_b)·rel per direction (y, z), for rotor-relative phasors
 /// whose noises are independent, circular, of standard deviations `rel_sd`
-/// [m] (y, z): sqrt(Σ_j |K_ij + iΩC_ij|²·σ_j²), cross terms included.
-/// `omega` [rad/s]. Overflow-safe (hypot).
-pub fn force_noise_sd<T: Float>(
+/// [m] (y, z): Σ_j |K_ij + iΩC_ij|²·σ_j², cross terms included. `omega`
+/// [rad/s]. Squares: scale the phasors to order one first (see
+/// [`PedestalRls::update_weighted`](crate::rls::PedestalRls::update_weighted)).
+pub fn force_noise_variance<T: Float>(
     bearing: &BearingCoefficients<T>,
     omega: T,
     rel_sd: &[T; 2],
 ) -> [T; 2] {
     core::array::from_fn(|i| {
-        let term = |j: usize| bearing.k[i][j].hypot(omega * bearing.c[i][j]) * rel_sd[j];
-        term(0).hypot(term(1))
+        let term = |j: usize| {
+            let (k, c) = (bearing.k[i][j], omega * bearing.c[i][j]);
+            (k * k + c * c) * rel_sd[j] * rel_sd[j]
+        };
+        term(0) + term(1)
     })
 }
 
@@ -289,9 +293,9 @@ mod tests {
                 }
             }
         }
-        let got = force_noise_sd(&b, omega, &sd);
+        let got = force_noise_variance(&b, omega, &sd);
         for i in 0..2 {
-            assert!((got[i] - var[i].sqrt()).abs() < 1e-12 * got[i], "{i}");
+            assert!((got[i] - var[i]).abs() < 1e-12 * got[i], "{i}");
         }
     }
 

@@ -388,6 +388,15 @@ impl<const N: usize> PhasorExtractor<N> {
         &self.config
     }
 
+    /// φ of channel `channel` ([`long_run_factor`]): how much the parameter
+    /// variances of a fit that takes consecutive outputs as independent must
+    /// be scaled (they share revolutions). 1 for a channel out of range.
+    pub fn long_run_factor(&self, channel: usize) -> f32 {
+        self.gain.get(channel).map_or(1.0, |&g| {
+            long_run_factor(self.config.revolutions_per_output, g)
+        })
+    }
+
     /// Whether a revolution is being integrated (synchronised to the keyphasor).
     pub fn is_tracking(&self) -> bool {
         self.state == State::Tracking

@@ -100,6 +100,7 @@ pub fn revolution_variance(
 /// independent circular per-revolution noise of variance σ² (see the module
 /// documentation). Exact for the steady state (three revolutions of history),
 /// O(1) work for any R.
+#[inline(never)]
 pub fn average_noise_gain(kind: SensorKind, revolutions: u16) -> f32 {
     let r = i32::from(revolutions.max(1));
     let inv = 1.0 / r as f32;
@@ -131,12 +132,13 @@ pub fn average_noise_gain(kind: SensorKind, revolutions: u16) -> f32 {
     gain
 }
 
-/// φ = 1/(R·G): the long-run variance of consecutive outputs per output,
-/// over the variance of one (see the module documentation). Multiply the
-/// parameter variances of a fit that takes the outputs as independent by φ.
-pub fn long_run_factor(kind: SensorKind, revolutions: u16) -> f32 {
-    let r = f32::from(revolutions.max(1));
-    1.0 / (r * average_noise_gain(kind, revolutions))
+/// φ = 1/(R·G) for outputs of `revolutions` (R) revolutions with noise gain
+/// `gain` (G, [`average_noise_gain`]): the long-run variance of consecutive
+/// outputs per output, over the variance of one (see the module
+/// documentation). Multiply the parameter variances of a fit that takes the
+/// outputs as independent by φ.
+pub fn long_run_factor(revolutions: u16, gain: f32) -> f32 {
+    1.0 / (f32::from(revolutions.max(1)) * gain)
 }
 
 #[cfg(test)]
@@ -209,11 +211,11 @@ mod tests {
             }
             std::println!(
                 "{kind:?}: G(1) = {g1:.3}, φ(1) = {:.3}, G(4) = {:.4}, φ(4) = {:.3}",
-                long_run_factor(kind, 1),
+                long_run_factor(1, g1),
                 average_noise_gain(kind, 4),
-                long_run_factor(kind, 4)
+                long_run_factor(4, average_noise_gain(kind, 4))
             );
-            let phi = long_run_factor(kind, 1);
+            let phi = long_run_factor(1, g1);
             assert!((phi * g1 - 1.0).abs() < 1e-6);
         }
     }

@@ -275,7 +275,8 @@ pub struct Averaging {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RlsSettings {
-    /// Forgetting factor λ per equation, in (0, 1]; 1 = never forget.
+    /// Forgetting factor λ per speed (all four equations of a phasor frame
+    /// alike), in (0, 1]; 1 = never forget.
     pub forgetting_factor: f32,
     /// Stiffness column scale [N/m].
     pub scale_k: f32,

@@ -111,32 +111,47 @@ impl<T: Float, const P: usize> Rls<T, P> {
         }
     }
 
-    /// Largest row or right-hand-side magnitude folded in as it is: its
-    /// square times 2³² equations stays finite.
-    fn limit() -> T {
-        T::max_value().sqrt() * T::from(1.0 / 65536.0).unwrap_or_else(T::one)
+    /// Folds in one equation `row·θ = rhs` with unit weight (see
+    /// [`update_weighted`](Self::update_weighted)).
+    pub fn update(&mut self, row: &[T; P], rhs: T) -> bool {
+        self.update_weighted(row, rhs, T::one())
     }
 
-    /// Folds in one equation `row·θ = rhs` (unit weight: whiten it first for
-    /// a weighted fit). Non-finite input is rejected and reported as `false`,
-    /// so one bad sample cannot poison the estimate; a finite equation too
-    /// large to square is scaled down by a power of two (see the module
+    /// Folds in one equation `row·θ = rhs` with weight `weight` (1/variance
+    /// of its error). Non-finite input and a weight that is not finite and
+    /// positive are rejected and reported as `false`, so one bad sample
+    /// cannot poison the estimate; a finite equation whose weighted squares
+    /// would overflow is scaled down by powers of two (see the module
     /// documentation).
-    pub fn update(&mut self, row: &[T; P], rhs: T) -> bool {
-        if !rhs.is_finite() || row.iter().any(|x| !x.is_finite()) {
+    pub fn update_weighted(&mut self, row: &[T; P], rhs: T, weight: T) -> bool {
+        if !rhs.is_finite()
+            || row.iter().any(|x| !x.is_finite())
+            || !(weight.is_finite() && weight > T::zero())
+        {
             self.rejected = self.rejected.saturating_add(1);
             return false;
         }
         let mut row = *row;
         let mut rhs = rhs;
-        let largest = row.iter().fold(rhs.abs(), |m, x| m.max(x.abs()));
-        let limit = Self::limit();
-        if largest > limit {
-            // A power of two: exact, whatever the precision.
-            let two = T::one() + T::one();
-            let mut s = T::one();
-            while largest * s > limit {
-                s = s / (two * two * two * two);
+        let largest = row.iter().fold(rhs.abs(), |m, x| larger(m, x.abs()));
+        // Weighted squares up to max/2³², so that 2³² of them stay finite.
+        let two = T::one() + T::one();
+        let sixteen = two * two * two * two;
+        let limit = T::max_value()
+            / (sixteen * sixteen * sixteen * sixteen * sixteen * sixteen * sixteen * sixteen);
+        let fits = |s: T| {
+            let m = largest * s;
+            m * m * weight <= limit
+        };
+        if !fits(T::one()) {
+            // Powers of two: exact, whatever the precision.
+            let mut s = T::one() / sixteen;
+            while !fits(s) {
+                s = s / sixteen;
+                if s == T::zero() {
+                    self.rejected = self.rejected.saturating_add(1);
+                    return false;
+                }
             }
             for x in row.iter_mut() {
                 *x = *x * s;
@@ -146,12 +161,12 @@ impl<T: Float, const P: usize> Rls<T, P> {
         }
         self.n_eff = self.n_eff + T::one();
         for (ss, x) in self.column_ss.iter_mut().zip(&row) {
-            *ss = *ss + *x * *x;
+            *ss = *ss + weight * *x * *x;
         }
 
         let mut x = row;
         let mut y = rhs;
-        let mut w = T::one();
+        let mut w = weight;
         for i in 0..P {
             if w == T::zero() {
                 break;
@@ -289,6 +304,18 @@ impl<T: Float, const P: usize> Rls<T, P> {
             }
         }
         worst
+    }
+}
+
+/// The larger of two numbers that are not NaN: a compare and a select (the
+/// M4F has no float max instruction; `Float::max` is a library call with
+/// NaN handling).
+#[inline(always)]
+pub(crate) fn larger<T: PartialOrd>(a: T, b: T) -> T {
+    if b > a {
+        b
+    } else {
+        a
     }
 }
 

@@ -6,12 +6,12 @@
 //! Eq. 4's residual in direction d at one speed is e = Z_d·X_d − F_d with
 //! Z_d = k_d − Ω²m + iΩc_d. Noise n_X on the pedestal phasor and n_rel on the
 //! rotor-relative phasors (through F = (K_b + iΩC_b)·rel, cross terms
-//! included: [`force_noise_sd`](crate::regression::force_noise_sd)) make it
+//! included: [`force_noise_variance`](crate::regression::force_noise_variance)) make it
 //! e's noise Z_d·n_X − n_F, of variance |Z_d|²σ_X² + σ_F², half in each of
 //! the real and imaginary equations (circular noise stays circular when
 //! multiplied by a complex number, so the two are uncorrelated). Each
-//! equation is divided by that standard deviation (whitened) before it is
-//! folded in: the recursive form of weighted least squares.
+//! equation is folded in with the weight 1/variance: the recursive form of
+//! weighted least squares.
 //!
 //! Z_d is taken at the current estimate once 4·P equations are in (an
 //! estimate of the parameters independent of this speed's own noise), and
@@ -42,9 +42,10 @@
 //! ([`long_run_factor`](crate::extractor::long_run_factor): their errors
 //! correlate, so the independent-equation formula is off by φ).
 
-use super::{libm_sqrt, Rls, RlsError};
+use super::{larger, libm_sqrt, Rls, RlsError};
+use crate::bearing::BearingCoefficients;
 use crate::phasor::{Complex, Phasor2};
-use crate::regression::{equations, ParameterScale, PARAMETERS};
+use crate::regression::{equations, force_noise_variance, ParameterScale, PARAMETERS};
 use num_traits::Float;
 
 /// A pedestal's identified parameters with their standard errors, in physical
@@ -119,55 +120,80 @@ impl<T: Float> PedestalRls<T> {
         self.fold(omega, ped, force, [T::one(); 2])
     }
 
-    /// Folds in one speed weighted by its noise: as [`update`](Self::update),
-    /// with the noise standard deviations sqrt(E|n|²) of the force `force_sd`
-    /// [N] and of the pedestal phasors `ped_sd` [m], per direction (y, z).
+    /// Folds in one speed weighted by its noise: `omega` [rad/s], the
+    /// absolute pedestal 1X displacement `ped` [m], the rotor-relative one
+    /// `rel` [m] and the bearing's coefficients at this speed (the force on
+    /// the pedestal is F = (K_b + iΩC_b)·rel), with the noise standard
+    /// deviations sqrt(E|n|²) of the rel phasors `rel_sd` and of the ped
+    /// phasors `ped_sd` [m], (y, z). Returns how many of the four equations
+    /// were accepted.
+    ///
+    /// Eq. 4 is homogeneous in (ped, rel): all phasors and their noise are
+    /// first divided by their largest magnitude, which changes nothing in
+    /// the fit but keeps every square in range, so huge but valid phasors
+    /// (a tiny sensitivity) are as good as any.
     pub fn update_weighted(
         &mut self,
         omega: T,
         ped: &Phasor2<T>,
-        force: &Phasor2<T>,
-        force_sd: [T; 2],
+        rel: &Phasor2<T>,
+        bearing: &BearingCoefficients<T>,
+        rel_sd: [T; 2],
         ped_sd: [T; 2],
     ) -> usize {
+        let size = |c: &Complex<T>| larger(c.re.abs(), c.im.abs());
+        let largest = ped
+            .iter()
+            .chain(rel)
+            .map(size)
+            .chain(rel_sd)
+            .chain(ped_sd)
+            .fold(T::zero(), larger);
+        if !(largest.is_finite() && largest > T::zero()) {
+            return self.fold(omega, ped, &bearing.force(omega, rel), [T::nan(); 2]);
+        }
+        let k = T::one() / largest;
+        let ped = ped.map(|p| p * k);
+        let rel = rel.map(|r| r * k);
+        let force = bearing.force(omega, &rel);
+        let force_var = force_noise_variance(bearing, omega, &rel_sd.map(|s| s * k));
         let settled = T::from(4 * PARAMETERS).unwrap_or_else(T::one);
         let theta = match self.rls.estimate() {
             Ok(t) if self.rls.equations() >= settled => Some(self.scale.unscale(&t)),
             _ => None,
         };
-        let half = T::from(core::f64::consts::FRAC_1_SQRT_2).unwrap_or_else(T::one);
         let floor = T::epsilon() * T::from(8.0).unwrap_or_else(T::one);
-        let mut sd = [T::nan(); 2];
+        let mut weight = [T::nan(); 2];
         for d in 0..2 {
-            let x = ped[d].norm();
-            let f = force[d].norm();
-            let z = match theta {
-                Some(t) => Complex::new(t[d] - omega * omega * t[2], omega * t[3 + d]).norm(),
-                None => f / x,
+            let x2 = ped[d].norm_sqr();
+            let f2 = force[d].norm_sqr();
+            let z2 = match theta {
+                Some(t) => Complex::new(t[d] - omega * omega * t[2], omega * t[3 + d]).norm_sqr(),
+                None => f2 / x2,
             };
-            let s = (z * ped_sd[d]).hypot(force_sd[d]) * half;
-            sd[d] = s.max(floor * f.max(z * x));
+            let s = ped_sd[d] * k;
+            // Complex variance of the residual; half of it in each of the
+            // real and imaginary equations.
+            let var = larger(
+                z2 * s * s + force_var[d],
+                floor * floor * larger(f2, z2 * x2),
+            );
+            weight[d] = (T::one() + T::one()) / var;
         }
-        self.fold(omega, ped, force, sd)
+        self.fold(omega, &ped, &force, weight)
     }
 
     /// Forgets once, then folds in the four equations of one speed, each
-    /// divided by its direction's standard deviation `sd` [N].
-    fn fold(&mut self, omega: T, ped: &Phasor2<T>, force: &Phasor2<T>, sd: [T; 2]) -> usize {
+    /// with its direction's weight `weight` [1/N²] (NaN: rejected).
+    fn fold(&mut self, omega: T, ped: &Phasor2<T>, force: &Phasor2<T>, weight: [T; 2]) -> usize {
         self.rls.forget();
         let mut accepted = 0;
         for (i, eq) in equations(omega, ped, force).iter().enumerate() {
             let scaled = self.scale.scale(eq);
-            let s = sd[i / 2];
-            // No finite, positive noise: the equation cannot be weighted
-            // (a zero row would count as an equation): rejected as NaN.
-            let w = if s.is_finite() && s > T::zero() {
-                T::one() / s
-            } else {
-                T::nan()
-            };
-            let row = scaled.row.map(|x| x * w);
-            if self.rls.update(&row, scaled.rhs * w) {
+            if self
+                .rls
+                .update_weighted(&scaled.row, scaled.rhs, weight[i / 2])
+            {
                 accepted += 1;
             }
         }
@@ -203,8 +229,6 @@ impl<T: Float> PedestalRls<T> {
 mod tests {
     extern crate std;
     use super::*;
-    use crate::bearing::BearingCoefficients;
-    use crate::regression::force_noise_sd;
     use std::vec::Vec;
 
     /// Forces of an exact pedestal (eq. 3) for a given pedestal response.
@@ -325,9 +349,8 @@ mod tests {
                 let ped_n: Phasor2<f64> =
                     core::array::from_fn(|d| ped[d] + gauss.complex(ped_sd[d]));
                 let force = bearing.force(*omega, &rel_n);
-                let force_sd = force_noise_sd(&bearing, *omega, &rel_sd);
                 assert_eq!(
-                    weighted.update_weighted(*omega, &ped_n, &force, force_sd, ped_sd),
+                    weighted.update_weighted(*omega, &ped_n, &rel_n, &bearing, rel_sd, ped_sd),
                     4
                 );
                 plain.update(*omega, &ped_n, &force);
@@ -390,9 +413,8 @@ mod tests {
             let force = b.force(w, &rel);
             let rel_sd = rel.map(|r| 1e-3 * r.norm());
             let ped_sd = ped.map(|p| 1e-3 * p.norm());
-            let force_sd = force_noise_sd(&b, w, &rel_sd);
             assert_eq!(
-                weighted.update_weighted(w, &ped, &force, force_sd, ped_sd),
+                weighted.update_weighted(w, &ped, &rel, &b, rel_sd, ped_sd),
                 4
             );
             assert_eq!(plain.update(w, &ped, &force), 4);
@@ -410,8 +432,9 @@ mod tests {
         // A phasor with no usable noise (zero force and pedestal, zero sd) is
         // rejected, not folded in as an empty equation.
         let zero = [Complex::new(0.0f32, 0.0); 2];
+        let b = bearing.cast::<f32>();
         assert_eq!(
-            weighted.update_weighted(100.0, &zero, &zero, [0.0; 2], [0.0; 2]),
+            weighted.update_weighted(100.0, &zero, &zero, &b, [0.0; 2], [0.0; 2]),
             0
         );
         assert_eq!(weighted.estimate().unwrap().rejected, 4);
@@ -427,8 +450,9 @@ mod tests {
         // would be off by 1/sqrt(φ).
         use crate::extractor::{average_noise_gain, long_run_factor, mid_revolution, SensorKind};
         let kind = SensorKind::Acceleration;
-        let phi = f64::from(long_run_factor(kind, 1));
-        let gain = f64::from(average_noise_gain(kind, 1));
+        let gain = average_noise_gain(kind, 1);
+        let phi = f64::from(long_run_factor(1, gain));
+        let gain = f64::from(gain);
         // A run-down: consecutive phasors at nearby speeds, rows changing
         // slowly (the condition under which φ holds).
         let slow = |i: usize| {
@@ -465,8 +489,7 @@ mod tests {
                     ped[d] + Complex::new(f64::from(n.re), f64::from(n.im)) * sigma[d]
                 });
                 let ped_sd = sigma.map(|s| s * gain.sqrt());
-                let force = bearing.force(*omega, rel);
-                est.update_weighted(*omega, &noisy, &force, [0.0; 2], ped_sd);
+                est.update_weighted(*omega, &noisy, rel, &bearing, [0.0; 2], ped_sd);
             }
             let e = est.estimate().unwrap();
             for k in 0..5 {
