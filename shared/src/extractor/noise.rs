@@ -112,7 +112,7 @@ pub fn average_noise_gain(kind: SensorKind, revolutions: u16) -> f32 {
     let units = [Phasor::new(1.0, 0.0), Phasor::new(0.0, 1.0)];
     for m in -2..=r {
         let (lo, hi) = ((m - 1).max(0), (m + 2).min(r - 1));
-        if m - 1 >= 0 && m + 2 <= r - 1 {
+        if m > 0 && m + 2 < r {
             continue;
         }
         let mut y = [ZERO; 2];
@@ -121,7 +121,7 @@ pub fn average_noise_gain(kind: SensorKind, revolutions: u16) -> f32 {
             for j in lo..=hi {
                 y[u] += mid_revolution(kind, [Some(at(j - 2)), Some(at(j - 1))], at(j), at(j + 1));
             }
-            y[u] = y[u] * inv;
+            y[u] *= inv;
         }
         // y = a·n + b·n̄ at n = 1 and n = i: a = (y₁ − i·yᵢ)/2, b = (y₁ + i·yᵢ)/2.
         let iy = Phasor::new(-y[1].im, y[1].re);
@@ -239,7 +239,7 @@ mod tests {
                     for j in 0..r as usize {
                         y += mid_revolution(kind, [Some(n[j]), Some(n[j + 1])], n[j + 2], n[j + 3]);
                     }
-                    y = y * (1.0 / f32::from(r));
+                    y *= 1.0 / f32::from(r);
                     sum += f64::from(y.norm_sqr());
                 }
                 let measured = sum / draws as f64;
