@@ -171,9 +171,14 @@ fn host_only_demo_identifies_the_paper_machine() {
     // appended to) and gives the same result: the demo is deterministic.
     let again = demo(&short_demo(&out)).expect("the demo runs again");
     assert_eq!(again.report.table, o.report.table);
-    assert_eq!(
-        again.stream.raw_log_bytes, o.stream.raw_log_bytes,
-        "the raw log was appended to"
+    // The box's status frames follow the wall clock (one per period), so
+    // the log's length varies by a frame or two between runs; appending would
+    // double it.
+    assert!(
+        again.stream.raw_log_bytes < o.stream.raw_log_bytes + o.stream.raw_log_bytes / 2,
+        "the raw log was appended to: {} then {} bytes",
+        o.stream.raw_log_bytes,
+        again.stream.raw_log_bytes
     );
 }
 
