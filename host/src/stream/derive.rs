@@ -157,3 +157,110 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
         sessions: link.restarts + u32::from(link.frames_ok > 0),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plinth_shared::bearing::BearingCoefficients;
+    use plinth_shared::protocol::{BearingPhasors, Transmitter, WirePhasor, MAX_FRAME_SIZE};
+    use std::path::Path;
+
+    const CONFIG: &str = r#"
+bearings = "bearings.csv"
+[[channels]]
+adc = 0
+bearing = "left"
+quantity = "rel_y"
+sensor = "proximity"
+sensitivity = 7870.0
+[[channels]]
+adc = 1
+bearing = "left"
+quantity = "rel_z"
+sensor = "proximity"
+sensitivity = 7870.0
+[[channels]]
+adc = 2
+bearing = "left"
+quantity = "ped_y"
+sensor = "velocity"
+sensitivity = 20.0
+[[channels]]
+adc = 3
+bearing = "left"
+quantity = "ped_z"
+sensor = "velocity"
+sensitivity = 20.0
+"#;
+
+    fn frame(revolutions: u16, speed_hz: f32, sd: [f32; 4]) -> DeviceMessage {
+        let p = |re: f32| WirePhasor { re, im: -re };
+        let mut f = PhasorFrame {
+            revolution: 0,
+            revolutions,
+            speed_hz,
+            bearings: Default::default(),
+        };
+        f.bearings
+            .push(BearingPhasors {
+                bearing: 0,
+                rel: [p(1e-6), p(2e-6)],
+                ped: [p(3e-7), p(4e-7)],
+                rel_sd: [sd[0], sd[1]],
+                ped_sd: [sd[2], sd[3]],
+            })
+            .unwrap();
+        DeviceMessage::Phasors(f)
+    }
+
+    fn derived(frames: &[DeviceMessage]) -> Derived {
+        let config = StreamConfig::parse(CONFIG, Path::new(".")).unwrap();
+        let tables = BearingTables {
+            rows: [10.0, 100.0]
+                .map(|speed_hz| BearingRow {
+                    speed_hz,
+                    bearing: "left".into(),
+                    coefficients: BearingCoefficients::isotropic(1e8, 1e4),
+                })
+                .to_vec(),
+        };
+        let mut tx = Transmitter::new();
+        let mut raw = Vec::new();
+        for f in frames {
+            let mut buf = [0u8; MAX_FRAME_SIZE];
+            raw.extend_from_slice(tx.encode(f, &mut buf).unwrap().1);
+        }
+        derive(&raw, &config, &tables)
+    }
+
+    #[test]
+    fn the_box_noise_becomes_the_sd_columns_and_merges_as_a_weighted_mean() {
+        // Two frames at one speed (a dwell), 4 and 2 revolutions: the row is
+        // their revolution-weighted mean, whose noise is sqrt(Σw²sd²)/Σw.
+        let d = derived(&[
+            frame(4, 50.0, [1e-8, 2e-8, 3e-9, 4e-9]),
+            frame(2, 50.0, [2e-8, 2e-8, 6e-9, 0.0]),
+            frame(4, 40.0, [5e-9, 5e-9, 5e-9, 5e-9]),
+        ]);
+        assert_eq!(d.run.measurements.len(), 2);
+        let sd = d.run.measurements[0].noise_sd.expect("noise columns");
+        let want = |a: f64, b: f64| ((16.0 * a * a + 4.0 * b * b) as f64).sqrt() / 6.0;
+        let got_want = [
+            (sd[0], want(1e-8, 2e-8)),
+            (sd[1], want(2e-8, 2e-8)),
+            (sd[2], want(3e-9, 6e-9)),
+            (sd[3], want(4e-9, 0.0)),
+        ];
+        for (i, (g, w)) in got_want.iter().enumerate() {
+            assert!((g - w).abs() < 1e-6 * w, "{i}: {g} vs {w}");
+        }
+        assert!(d.run.measurements[1].noise_sd.is_some());
+    }
+
+    #[test]
+    fn a_phasor_without_a_valid_noise_has_no_sd() {
+        let d = derived(&[frame(4, 50.0, [1e-8, f32::NAN, 3e-9, 4e-9])]);
+        assert_eq!(d.run.measurements.len(), 1);
+        assert_eq!(d.run.measurements[0].noise_sd, None);
+    }
+}
