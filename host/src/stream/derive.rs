@@ -244,7 +244,7 @@ sensitivity = 20.0
         ]);
         assert_eq!(d.run.measurements.len(), 2);
         let sd = d.run.measurements[0].noise_sd.expect("noise columns");
-        let want = |a: f64, b: f64| ((16.0 * a * a + 4.0 * b * b) as f64).sqrt() / 6.0;
+        let want = |a: f64, b: f64| (16.0 * a * a + 4.0 * b * b).sqrt() / 6.0;
         let got_want = [
             (sd[0], want(1e-8, 2e-8)),
             (sd[1], want(2e-8, 2e-8)),
