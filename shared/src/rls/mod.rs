@@ -124,23 +124,26 @@ impl<T: Float, const P: usize> Rls<T, P> {
     /// would overflow is scaled down by powers of two (see the module
     /// documentation).
     pub fn update_weighted(&mut self, row: &[T; P], rhs: T, weight: T) -> bool {
-        if !rhs.is_finite()
-            || row.iter().any(|x| !x.is_finite())
-            || !(weight.is_finite() && weight > T::zero())
-        {
+        // The mean magnitude: NaN and infinity propagate into it (one test
+        // for all), it cannot overflow, and the largest entry is at most
+        // P + 1 times it.
+        let entries = T::from(P + 1).unwrap_or_else(T::one);
+        let inv = T::one() / entries;
+        let mean = row.iter().fold(rhs.abs() * inv, |t, x| t + x.abs() * inv);
+        if !(mean.is_finite() && weight.is_finite() && weight > T::zero()) {
             self.rejected = self.rejected.saturating_add(1);
             return false;
         }
         let mut row = *row;
         let mut rhs = rhs;
-        let largest = row.iter().fold(rhs.abs(), |m, x| larger(m, x.abs()));
         // Weighted squares up to max/2³², so that 2³² of them stay finite.
         let two = T::one() + T::one();
         let sixteen = two * two * two * two;
         let limit = T::max_value()
-            / (sixteen * sixteen * sixteen * sixteen * sixteen * sixteen * sixteen * sixteen);
+            / (sixteen * sixteen * sixteen * sixteen * sixteen * sixteen * sixteen * sixteen)
+            / (entries * entries);
         let fits = |s: T| {
-            let m = largest * s;
+            let m = mean * s;
             m * m * weight <= limit
         };
         if !fits(T::one()) {
