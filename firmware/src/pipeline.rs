@@ -21,6 +21,16 @@ use plinth_shared::rls::PedestalRls;
 /// (impossible at ≥ 64 samples per revolution) are counted as dropped.
 const EVENTS_PER_BUFFER: usize = 8;
 
+/// Phasors over which the RLS weights pool each channel's noise variance.
+///
+/// One phasor's variance comes from the scatter of its own few revolutions
+/// (2 real degrees of freedom per revolution of fourth differences): as a
+/// weight, 1/variance of so few degrees of freedom is erratic (with one
+/// revolution its mean is infinite). The noise of a channel changes slowly
+/// with speed, so the weights use the exponential mean of the variance over
+/// about this many phasors, while every phasor frame carries its own sd.
+pub const POOLED_PHASORS: f32 = 8.0;
+
 /// A phasor that was not measured (its channel is not configured).
 const UNMEASURED: WirePhasor = WirePhasor {
     re: f32::NAN,
@@ -69,6 +79,10 @@ pub struct Pipeline {
     bearings: [BearingSlot; MAX_BEARINGS],
     /// Revolution index of the last estimate update (for estimate frames).
     last_revolution: u32,
+    /// Per channel, the phasor noise variance [m²] pooled over the last
+    /// phasors (exponential mean over about [`POOLED_PHASORS`]), NaN before
+    /// the first: what the RLS weights use.
+    pooled_variance: [f32; CHANNELS],
     /// What went wrong so far.
     pub counters: PipelineCounters,
 }
@@ -82,13 +96,27 @@ impl Pipeline {
         let channels = config.bearing_channels();
         let scale = config.rls.parameter_scale();
         let lambda = config.rls.forgetting_factor;
+        // Consecutive phasors share revolutions (the run-down correction's
+        // differences): their errors correlate, negatively on balance, so
+        // the independent-phasor variances are scaled by φ ≤ 1 (0.57 to 0.96,
+        // see `long_run_factor`); of the pedestal's channels the largest φ,
+        // the least reduction.
+        let phi = |b: usize| {
+            channels[b]
+                .iter()
+                .flatten()
+                .map(|&c| extractor.long_run_factor(c as usize))
+                .fold(0.0f32, f32::max)
+        };
+        let bearings = core::array::from_fn(|b| BearingSlot {
+            channels: channels[b],
+            rls: PedestalRls::new(scale, lambda).with_long_run_factor(phi(b)),
+        });
         Ok(Self {
             extractor,
-            bearings: core::array::from_fn(|b| BearingSlot {
-                channels: channels[b],
-                rls: PedestalRls::new(scale, lambda),
-            }),
+            bearings,
             last_revolution: 0,
+            pooled_variance: [f32::NAN; CHANNELS],
             counters: PipelineCounters::default(),
         })
     }
@@ -160,6 +188,8 @@ impl Pipeline {
             ch.map(|c| p.displacement[c as usize % CHANNELS])
         };
         let wire = |q: Option<Phasor>| q.map(WirePhasor::from).unwrap_or(UNMEASURED);
+        let sd =
+            |ch: Option<u8>| -> f32 { ch.map_or(f32::NAN, |c| p.noise_sd[c as usize % CHANNELS]) };
 
         let mut frame = PhasorFrame {
             revolution: first,
@@ -176,10 +206,24 @@ impl Pipeline {
                 bearing: b as u8,
                 rel: [wire(q[0]), wire(q[1])],
                 ped: [wire(q[2]), wire(q[3])],
+                rel_sd: [sd(slot.channels[0]), sd(slot.channels[1])],
+                ped_sd: [sd(slot.channels[2]), sd(slot.channels[3])],
             });
         }
         emit(DeviceMessage::Phasors(frame));
 
+        for (pooled, sd) in self.pooled_variance.iter_mut().zip(&p.noise_sd) {
+            let v = sd * sd;
+            if !pooled.is_finite() {
+                *pooled = v;
+            } else if v.is_finite() {
+                *pooled += (v - *pooled) / POOLED_PHASORS;
+            }
+        }
+        let pooled = &self.pooled_variance;
+        let weight_sd = |ch: Option<u8>| -> f32 {
+            ch.map_or(f32::NAN, |c| libm::sqrtf(pooled[c as usize % CHANNELS]))
+        };
         let omega = omega_from_hz(p.speed_hz);
         let mut estimates = EstimateFrame {
             revolution: last,
@@ -194,8 +238,15 @@ impl Pipeline {
                 Ok(coefficients) => {
                     let rel: Phasor2 = [ry, rz];
                     let ped: Phasor2 = [py, pz];
-                    let force = coefficients.force(omega, &rel);
-                    slot.rls.update(omega, &ped, &force);
+                    let sds = slot.channels.map(weight_sd);
+                    slot.rls.update_weighted(
+                        omega,
+                        &ped,
+                        &rel,
+                        &coefficients,
+                        [sds[0], sds[1]],
+                        [sds[2], sds[3]],
+                    );
                 }
                 Err(_) => {
                     self.counters.speed_outside_table =

@@ -17,3 +17,6 @@ pub mod phasor;
 pub mod protocol;
 pub mod regression;
 pub mod rls;
+
+#[cfg(test)]
+pub(crate) mod testing;

@@ -12,6 +12,7 @@
 //! Parameters are handled in scaled units (θ_i / scale_i) so that the columns of
 //! the regression are of similar size and f32 stays well conditioned.
 
+use crate::bearing::BearingCoefficients;
 use crate::phasor::Phasor2;
 use num_traits::Float;
 
@@ -146,6 +147,26 @@ pub fn equations_for_mode<T: Float>(
     }
 }
 
+/// Variance E|n_F|² [N²] of the noise of the bearing force
+/// F = (K_b + iΩC_b)·rel per direction (y, z), for rotor-relative phasors
+/// whose noises are independent, circular, of standard deviations `rel_sd`
+/// [m] (y, z): Σ_j |K_ij + iΩC_ij|²·σ_j², cross terms included. `omega`
+/// [rad/s]. Squares: scale the phasors to order one first (see
+/// [`PedestalRls::update_weighted`](crate::rls::PedestalRls::update_weighted)).
+pub fn force_noise_variance<T: Float>(
+    bearing: &BearingCoefficients<T>,
+    omega: T,
+    rel_sd: &[T; 2],
+) -> [T; 2] {
+    core::array::from_fn(|i| {
+        let term = |j: usize| {
+            let (k, c) = (bearing.k[i][j], omega * bearing.c[i][j]);
+            (k * k + c * c) * rel_sd[j] * rel_sd[j]
+        };
+        term(0) + term(1)
+    })
+}
+
 /// Nominal parameter sizes used to scale the regression columns: the solver
 /// works with θ_i / scale_i, which are of order one for typical pedestals.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -248,6 +269,34 @@ mod tests {
         let lhs: f64 = se.row.iter().zip(&scaled).map(|(a, b)| a * b).sum();
         let lhs0: f64 = eq.row.iter().zip(&theta).map(|(a, b)| a * b).sum();
         assert!((lhs - lhs0).abs() < 1e-6 * lhs0.abs());
+    }
+
+    #[test]
+    fn force_noise_is_the_scatter_of_forces_from_noisy_rel() {
+        // Cross-coupled oil-film-like coefficients; the force noise of each
+        // direction by brute force over the four real noise directions.
+        let b = BearingCoefficients {
+            k: [[2.0e8, 5.0e7], [-3.0e7, 1.5e8]],
+            c: [[4.0e5, 1.0e4], [2.0e4, 3.0e5]],
+        };
+        let omega = 250.0;
+        let sd = [2e-7, 5e-7];
+        // Circular noise of sd σ: σ/√2 on each of re and im.
+        let mut var = [0.0f64; 2];
+        for j in 0..2 {
+            for unit in [Complex::new(1.0, 0.0), Complex::new(0.0, 1.0)] {
+                let mut rel = [Complex::new(0.0, 0.0); 2];
+                rel[j] = unit * (sd[j] / 2f64.sqrt());
+                let f = b.force(omega, &rel);
+                for i in 0..2 {
+                    var[i] += f[i].norm_sqr();
+                }
+            }
+        }
+        let got = force_noise_variance(&b, omega, &sd);
+        for i in 0..2 {
+            assert!((got[i] - var[i]).abs() < 1e-12 * got[i], "{i}");
+        }
     }
 
     #[test]

@@ -104,27 +104,44 @@ fn host_only_demo_identifies_the_paper_machine() {
     }
     assert_eq!(checked, 6, "k_y, k_z, m of two pedestals");
 
-    // The box's RLS (f32, on the box) and the batch fit (f64, SVD) solve the
-    // same least-squares problem on the same rows.
+    // The box's RLS (f32, on the box) weighs every equation by the noise of
+    // its phasors, which it measured itself: a different (weighted) least
+    // squares from the host's ordinary one, so the two differ within their
+    // errors. The box must be statistically consistent with the truth,
+    // within 4 of its own standard errors, for every parameter (its errors
+    // allow for the noise it measured and for consecutive phasors sharing
+    // revolutions), and its standard errors of k and m must be of the size
+    // of the host fit's (neither blown up nor implausibly small).
     for row in &r.table {
-        let d = row.box_minus_batch_pct.expect("box and batch values");
-        let tol = match row.parameter.as_str() {
-            "k_y" | "k_z" | "m" => 0.05,
-            // Damping is small against its standard error: compare in σ.
-            _ => {
-                let se = row.batch_std_err.unwrap();
-                let diff = row.box_value.unwrap() - row.batch_value.unwrap();
-                assert!(diff.abs() < 0.01 * se, "{} {}", row.bearing, row.parameter);
-                continue;
-            }
-        };
+        let (truth, value, se) = (
+            row.truth.expect("truth"),
+            row.box_value.expect("box value"),
+            row.box_std_err.expect("box std err"),
+        );
         assert!(
-            d.abs() < tol,
-            "{} {}: box − batch {d} %",
+            (value - truth).abs() <= 4.0 * se,
+            "{} {}: box {value} ± {se} vs truth {truth}",
             row.bearing,
             row.parameter
         );
+        if matches!(row.parameter.as_str(), "k_y" | "k_z" | "m") {
+            let ratio = se / row.batch_std_err.expect("batch std err");
+            assert!(
+                (0.25..4.0).contains(&ratio),
+                "{} {}: box σ {se} vs host σ {ratio}×",
+                row.bearing,
+                row.parameter
+            );
+        }
     }
+
+    // The run directory carries the box's noise of every phasor.
+    let csv = std::fs::read_to_string(o.run_dir.join("measurements.csv")).unwrap();
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with("rel_y_sd,rel_z_sd,ped_y_sd,ped_z_sd"));
 
     // The run directory reads back as `plinth identify` reads it, with the
     // truth, and the raw log and stream report are kept.
@@ -154,9 +171,14 @@ fn host_only_demo_identifies_the_paper_machine() {
     // appended to) and gives the same result: the demo is deterministic.
     let again = demo(&short_demo(&out)).expect("the demo runs again");
     assert_eq!(again.report.table, o.report.table);
-    assert_eq!(
-        again.stream.raw_log_bytes, o.stream.raw_log_bytes,
-        "the raw log was appended to"
+    // The box's status frames follow the wall clock (one per period), so
+    // the log's length varies by a frame or two between runs; appending would
+    // double it.
+    assert!(
+        again.stream.raw_log_bytes < o.stream.raw_log_bytes + o.stream.raw_log_bytes / 2,
+        "the raw log was appended to: {} then {} bytes",
+        o.stream.raw_log_bytes,
+        again.stream.raw_log_bytes
     );
 }
 

@@ -32,6 +32,7 @@ mod image {
     use plinth_firmware::acquisition::handover::{DoubleBuffer, HalfCompletions};
     use plinth_firmware::ad7606::Range;
     use plinth_firmware::source::{SampleBuffer, SampleSource};
+    use plinth_shared::bearing::BearingCoefficients;
     use plinth_shared::extractor::{
         Event, ExtractorConfig, KeyphasorEdge, PhasorExtractor, Sensor,
     };
@@ -197,26 +198,40 @@ mod image {
         );
         hprintln!("BENCH extractor_revolutions_emitted {}", phasors);
 
-        // ---- pedestal RLS: one speed = 4 equations ----
+        // ---- pedestal RLS: one speed = 4 equations, weighted by the noise
+        // of its phasors (the pipeline's path) ----
         let mut rls = PedestalRls::<f32>::default();
         let theta = [8.0e6f32, 6.0e6, 150.0, 2000.0, 1500.0];
+        let bearing = BearingCoefficients::isotropic(2.0e8f32, 2.0e4);
         let mut update = 0.0f32;
+        let mut plain = PedestalRls::<f32>::default();
+        let mut plain_update = 0.0f32;
         let mut estimate = 0.0f32;
         let updates = 50;
         for i in 0..updates {
             let f = 20.0 + i as f32;
             let w = TAU * f;
-            let ped = [
+            let rel = [
                 Complex::from_polar(1e-5, 0.1 * i as f32),
                 Complex::from_polar(2e-5, -0.2 * i as f32),
             ];
+            let force = bearing.force(w, &rel);
             let dyn_y = Complex::new(theta[0] - w * w * theta[2], w * theta[3]);
             let dyn_z = Complex::new(theta[1] - w * w * theta[2], w * theta[4]);
-            let force = [dyn_y * ped[0], dyn_z * ped[1]];
+            let ped = [force[0] / dyn_y, force[1] / dyn_z];
+            let rel_sd = [1e-8f32, 2e-8];
+            let ped_sd = [3e-9f32, 4e-9];
             update += instructions(overhead, || {
-                let _ = rls.update(w, &ped, &force);
+                let _ = rls.update_weighted(w, &ped, &rel, &bearing, rel_sd, ped_sd);
+            });
+            plain_update += instructions(overhead, || {
+                let _ = plain.update(w, &ped, &force);
             });
         }
+        hprintln!(
+            "BENCH rls_instr_per_unweighted_update {}",
+            plain_update / updates as f32
+        );
         for _ in 0..10 {
             estimate += instructions(overhead, || {
                 let _ = core::hint::black_box(rls.estimate());

@@ -1,6 +1,7 @@
 //! The demo's result table: per pedestal and parameter, the true value, the
-//! box's final recursive (RLS) estimate, the batch least-squares fit of the
-//! run directory, and their differences.
+//! box's final recursive (RLS, noise-weighted) estimate, the host's batch
+//! least-squares fit of the run directory, each with its ± and its error
+//! against the truth in % and in its own standard errors.
 
 use crate::identify::Identification;
 use crate::rundir::Truth;
@@ -125,7 +126,20 @@ fn pct_text(x: Option<f64>) -> String {
     x.map_or("—".into(), |v| format!("{v:+.2}%"))
 }
 
-/// The table as aligned text, one block per pedestal.
+/// The estimators shown side by side, in column order: (name, value,
+/// standard error). The one place where a column is added: the host
+/// maximum-likelihood fit (branch issue9-core) adds
+/// `("host ML", r.ml_value, r.ml_std_err)` here, with those fields on
+/// [`ComparisonRow`] filled in [`rows`] from the stream report.
+pub fn estimators(r: &ComparisonRow) -> Vec<(&'static str, Option<f64>, Option<f64>)> {
+    vec![
+        ("box RLS", r.box_value, r.box_std_err),
+        ("host OLS", r.batch_value, r.batch_std_err),
+    ]
+}
+
+/// The table as aligned text, one block per pedestal: per estimator its
+/// value ± σ, its error against the truth [%] and in its own σ.
 pub fn render(rows: &[ComparisonRow], identification: &Identification) -> String {
     let mut s = String::new();
     let mut bearings: Vec<&str> = Vec::new();
@@ -136,10 +150,16 @@ pub fn render(rows: &[ComparisonRow], identification: &Identification) -> String
     }
     for b in bearings {
         let fit = identification.pedestal(b);
+        let mine: Vec<&ComparisonRow> = rows.iter().filter(|r| r.bearing == b).collect();
+        let names: Vec<&str> = mine
+            .first()
+            .map(|r| estimators(r).iter().map(|e| e.0).collect())
+            .unwrap_or_default();
         s.push_str(&format!(
-            "pedestal {b}: box RLS vs batch least squares{} vs truth\n",
+            "pedestal {b}: {} vs truth{}\n",
+            names.join(" vs "),
             fit.map_or(String::new(), |f| format!(
-                " ({} speeds {:.1}-{:.1} Hz, condition {:.1e}{})",
+                " (host: {} speeds {:.1}-{:.1} Hz, condition {:.1e}{})",
                 f.speeds,
                 f.speed_range_hz[0],
                 f.speed_range_hz[1],
@@ -147,33 +167,32 @@ pub fn render(rows: &[ComparisonRow], identification: &Identification) -> String
                 if f.trusted { "" } else { ", NOT TRUSTED" }
             ))
         ));
-        let mut table: Vec<[String; 9]> = vec![[
-            "".into(),
-            "unit".into(),
-            "truth".into(),
-            "box RLS ± σ".into(),
-            "batch ± σ".into(),
-            "box−truth".into(),
-            "batch−truth".into(),
-            "[σ]".into(),
-            "box−batch".into(),
-        ]];
-        for r in rows.iter().filter(|r| r.bearing == b) {
+        let mut header: Vec<String> = vec!["".into(), "unit".into(), "truth".into()];
+        for n in &names {
+            header.push(format!("{n} ± σ"));
+            header.push("−truth".into());
+            header.push("[σ]".into());
+        }
+        let mut table: Vec<Vec<String>> = vec![header];
+        for r in &mine {
             let (unit, k) = display_unit(&r.unit);
-            table.push([
+            let mut line = vec![
                 r.parameter.clone(),
                 unit.into(),
                 r.truth.map_or("—".into(), |t| sig(t * k, 6)),
-                value_pm(r.box_value, r.box_std_err, k),
-                value_pm(r.batch_value, r.batch_std_err, k),
-                pct_text(r.box_error_pct),
-                pct_text(r.batch_error_pct),
-                r.batch_error_sigmas
-                    .map_or("—".into(), |v| format!("{v:+.1}")),
-                pct_text(r.box_minus_batch_pct),
-            ]);
+            ];
+            for (_, v, e) in estimators(r) {
+                line.push(value_pm(v, e, k));
+                line.push(pct_text(pct(v, r.truth)));
+                line.push(match (v, r.truth, e) {
+                    (Some(v), Some(t), Some(e)) if e > 0.0 => format!("{:+.1}", (v - t) / e),
+                    _ => "—".into(),
+                });
+            }
+            table.push(line);
         }
-        let widths: Vec<usize> = (0..9)
+        let columns = table.first().map_or(0, Vec::len);
+        let widths: Vec<usize> = (0..columns)
             .map(|c| {
                 table
                     .iter()

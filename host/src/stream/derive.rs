@@ -1,6 +1,7 @@
 //! The run directory re-derived from the whole raw byte log: every phasor
 //! frame that ever arrived, including those received by an earlier host
-//! process that crashed or was killed, becomes rows of `measurements.csv`.
+//! process that crashed or was killed, becomes rows of `measurements.csv`,
+//! with the box's noise of each phasor as formats.md's `*_sd` columns.
 
 use super::config::{BearingTables, StreamConfig};
 use crate::rundir::{BearingRow, Measurement, RunDir};
@@ -54,8 +55,9 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
     }
     let link = *rx.stats();
 
-    // Group by (bearing, speed): (weight, Σ w·rel, Σ w·ped).
-    type Acc = (f64, Phasor2<f64>, Phasor2<f64>);
+    // Group by (bearing, speed): (weight, Σ w·rel, Σ w·ped, Σ w²·sd² of
+    // rel y, rel z, ped y, ped z, or None once one is not a valid sd).
+    type Acc = (f64, Phasor2<f64>, Phasor2<f64>, Option<[f64; 4]>);
     let zero = Complex::new(0.0, 0.0);
     let mut order: Vec<(String, u32)> = Vec::new();
     let mut rows: BTreeMap<(String, u32), (f64, Acc, usize)> = BTreeMap::new();
@@ -102,7 +104,7 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
             let key = (name.clone(), f.speed_hz.to_bits());
             let entry = rows.entry(key.clone()).or_insert_with(|| {
                 order.push(key.clone());
-                (speed, (0.0, [zero; 2], [zero; 2]), 0)
+                (speed, (0.0, [zero; 2], [zero; 2], Some([0.0; 4])), 0)
             });
             let (_, acc, count) = entry;
             acc.0 += w;
@@ -110,6 +112,17 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
                 acc.1[k] += rel[k] * w;
                 acc.2[k] += ped[k] * w;
             }
+            // The noise of a revolution-weighted mean: sqrt(Σ w²·sd²)/Σ w.
+            let sds = [b.rel_sd[0], b.rel_sd[1], b.ped_sd[0], b.ped_sd[1]].map(widen);
+            acc.3 = match acc.3 {
+                Some(mut v) if sds.iter().all(|s| s.is_finite() && *s >= 0.0) => {
+                    for (v, s) in v.iter_mut().zip(sds) {
+                        *v += w * w * s * s;
+                    }
+                    Some(v)
+                }
+                _ => None,
+            };
             *count += 1;
             if *count > 1 {
                 merged += 1;
@@ -119,13 +132,15 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
     let measurements = order
         .iter()
         .filter_map(|key| rows.get(key).map(|r| (key, r)))
-        .map(|((name, _), (speed, (w, rel, ped), _))| Measurement {
-            speed_hz: *speed,
-            bearing: name.clone(),
-            rel: [rel[0] / *w, rel[1] / *w],
-            ped: [ped[0] / *w, ped[1] / *w],
-            noise_sd: None,
-        })
+        .map(
+            |((name, _), (speed, (w, rel, ped, noise), _))| Measurement {
+                speed_hz: *speed,
+                bearing: name.clone(),
+                rel: [rel[0] / *w, rel[1] / *w],
+                ped: [ped[0] / *w, ped[1] / *w],
+                noise_sd: noise.map(|v| v.map(|v| v.sqrt() / *w)),
+            },
+        )
         .collect();
     let bearings: Vec<BearingRow> = tables.rows.clone();
     Derived {
@@ -140,5 +155,112 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
         dropped_rows: dropped,
         last_estimates,
         sessions: link.restarts + u32::from(link.frames_ok > 0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plinth_shared::bearing::BearingCoefficients;
+    use plinth_shared::protocol::{BearingPhasors, Transmitter, WirePhasor, MAX_FRAME_SIZE};
+    use std::path::Path;
+
+    const CONFIG: &str = r#"
+bearings = "bearings.csv"
+[[channels]]
+adc = 0
+bearing = "left"
+quantity = "rel_y"
+sensor = "proximity"
+sensitivity = 7870.0
+[[channels]]
+adc = 1
+bearing = "left"
+quantity = "rel_z"
+sensor = "proximity"
+sensitivity = 7870.0
+[[channels]]
+adc = 2
+bearing = "left"
+quantity = "ped_y"
+sensor = "velocity"
+sensitivity = 20.0
+[[channels]]
+adc = 3
+bearing = "left"
+quantity = "ped_z"
+sensor = "velocity"
+sensitivity = 20.0
+"#;
+
+    fn frame(revolutions: u16, speed_hz: f32, sd: [f32; 4]) -> DeviceMessage {
+        let p = |re: f32| WirePhasor { re, im: -re };
+        let mut f = PhasorFrame {
+            revolution: 0,
+            revolutions,
+            speed_hz,
+            bearings: Default::default(),
+        };
+        f.bearings
+            .push(BearingPhasors {
+                bearing: 0,
+                rel: [p(1e-6), p(2e-6)],
+                ped: [p(3e-7), p(4e-7)],
+                rel_sd: [sd[0], sd[1]],
+                ped_sd: [sd[2], sd[3]],
+            })
+            .unwrap();
+        DeviceMessage::Phasors(f)
+    }
+
+    fn derived(frames: &[DeviceMessage]) -> Derived {
+        let config = StreamConfig::parse(CONFIG, Path::new(".")).unwrap();
+        let tables = BearingTables {
+            rows: [10.0, 100.0]
+                .map(|speed_hz| BearingRow {
+                    speed_hz,
+                    bearing: "left".into(),
+                    coefficients: BearingCoefficients::isotropic(1e8, 1e4),
+                })
+                .to_vec(),
+        };
+        let mut tx = Transmitter::new();
+        let mut raw = Vec::new();
+        for f in frames {
+            let mut buf = [0u8; MAX_FRAME_SIZE];
+            raw.extend_from_slice(tx.encode(f, &mut buf).unwrap().1);
+        }
+        derive(&raw, &config, &tables)
+    }
+
+    #[test]
+    fn the_box_noise_becomes_the_sd_columns_and_merges_as_a_weighted_mean() {
+        // Two frames at one speed (a dwell), 4 and 2 revolutions: the row is
+        // their revolution-weighted mean, whose noise is sqrt(Σw²sd²)/Σw.
+        let d = derived(&[
+            frame(4, 50.0, [1e-8, 2e-8, 3e-9, 4e-9]),
+            frame(2, 50.0, [2e-8, 2e-8, 6e-9, 0.0]),
+            frame(4, 40.0, [5e-9, 5e-9, 5e-9, 5e-9]),
+        ]);
+        assert_eq!(d.run.measurements.len(), 2);
+        let sd = d.run.measurements[0].noise_sd.expect("noise columns");
+        let want = |a: f64, b: f64| (16.0 * a * a + 4.0 * b * b).sqrt() / 6.0;
+        let got_want = [
+            (sd[0], want(1e-8, 2e-8)),
+            (sd[1], want(2e-8, 2e-8)),
+            (sd[2], want(3e-9, 6e-9)),
+            (sd[3], want(4e-9, 0.0)),
+        ];
+        for (i, (g, w)) in got_want.iter().enumerate() {
+            assert!((g - w).abs() < 1e-6 * w, "{i}: {g} vs {w}");
+        }
+        assert!(d.run.measurements[1].noise_sd.is_some());
+    }
+
+    #[test]
+    fn a_phasor_without_a_valid_noise_has_no_sd() {
+        let d = derived(&[frame(4, 50.0, [1e-8, f32::NAN, 3e-9, 4e-9])]);
+        assert_eq!(d.run.measurements.len(), 1);
+        assert_eq!(d.run.measurements[0].noise_sd, None);
     }
 }

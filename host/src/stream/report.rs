@@ -50,6 +50,12 @@ pub struct PedestalComparison {
     pub parameters: Vec<ParameterComparison>,
     /// Equations the box folded in (effective, with forgetting).
     pub box_equations: Option<f64>,
+    /// The box's reduced χ² (whitened residuals: 1 when they are as large as
+    /// the phasors' noise says).
+    pub box_reduced_chi_square: Option<f64>,
+    /// Equations the box scaled down (squares beyond f32) and rejected (not
+    /// finite).
+    pub box_guarded: Option<(u32, u32)>,
     /// The batch fit is trusted (no warning says otherwise).
     pub batch_trusted: Option<bool>,
 }
@@ -101,6 +107,8 @@ pub fn compare(
                 bearing: name.clone(),
                 parameters,
                 box_equations: entry.map(|e| e.equations as f64),
+                box_reduced_chi_square: entry.and_then(|e| finite(e.reduced_chi_square as f64)),
+                box_guarded: entry.map(|e| (e.rescaled, e.rejected)),
                 batch_trusted: fit.map(|f| f.trusted),
             }
         })
@@ -114,32 +122,58 @@ fn num(x: Option<f64>) -> String {
     }
 }
 
-/// The comparison as a text table for the terminal.
+/// The estimators shown side by side for one parameter, in column order:
+/// (name, value, standard error). The one place where a column is added:
+/// the host maximum-likelihood fit (branch issue9-core) adds
+/// `("host ML", p.ml_value, p.ml_std_err)` here, with those two fields on
+/// [`ParameterComparison`] filled in [`compare`].
+pub fn estimators(p: &ParameterComparison) -> Vec<(&'static str, Option<f64>, Option<f64>)> {
+    vec![
+        ("box RLS", p.box_value, p.box_std_err),
+        ("host OLS", p.batch_value, p.batch_std_err),
+    ]
+}
+
+/// The comparison as a text table for the terminal: every estimator's
+/// value ± standard error, then box − host OLS.
 pub fn render(comparisons: &[PedestalComparison]) -> String {
     let mut s = String::new();
     for c in comparisons {
         s.push_str(&format!(
-            "pedestal {}: box RLS ({} equations) vs batch least squares{}\n",
+            "pedestal {}: box RLS ({} equations{}{}) vs host fits{}\n",
             c.bearing,
             c.box_equations
                 .map_or("no".to_string(), |n| format!("{n:.0}")),
+            c.box_reduced_chi_square
+                .map_or(String::new(), |x| format!(", reduced χ² {x:.2}")),
+            match c.box_guarded {
+                Some((r, j)) if r + j > 0 => {
+                    format!(", {r} equations rescaled and {j} rejected by the overflow guard")
+                }
+                _ => String::new(),
+            },
             match c.batch_trusted {
                 Some(false) => " (batch fit NOT trusted: see `plinth identify`)",
                 _ => "",
             }
         ));
-        s.push_str(&format!(
-            "  {:<4} {:>13} {:>11} {:>13} {:>11} {:>13} {:>9}  unit\n",
-            "", "box", "± std err", "batch", "± std err", "box − batch", "%"
-        ));
+        let names: Vec<&str> = c
+            .parameters
+            .first()
+            .map(|p| estimators(p).iter().map(|e| e.0).collect())
+            .unwrap_or_default();
+        s.push_str(&format!("  {:<4}", ""));
+        for n in &names {
+            s.push_str(&format!(" {:>13} {:>11}", n, "± std err"));
+        }
+        s.push_str(&format!(" {:>13} {:>9}  unit\n", "box − OLS", "%"));
         for p in &c.parameters {
+            s.push_str(&format!("  {:<4}", p.parameter));
+            for (_, v, e) in estimators(p) {
+                s.push_str(&format!(" {:>13} {:>11}", num(v), num(e)));
+            }
             s.push_str(&format!(
-                "  {:<4} {:>13} {:>11} {:>13} {:>11} {:>13} {:>9}  {}\n",
-                p.parameter,
-                num(p.box_value),
-                num(p.box_std_err),
-                num(p.batch_value),
-                num(p.batch_std_err),
+                " {:>13} {:>9}  {}\n",
                 num(p.difference),
                 p.difference_percent
                     .map_or("—".to_string(), |v| format!("{v:+.3}")),
@@ -261,7 +295,9 @@ mod tests {
                 theta: [1.01e7, 2.0e7, 100.0, 50.0, 0.0],
                 std_err: [1e4, 1e4, 0.1, f32::NAN, 1.0],
                 equations: 40.0,
-                residual_rms: 0.1,
+                reduced_chi_square: 1.1,
+                rescaled: 0,
+                rejected: 2,
             })
             .unwrap();
         let c = compare(&["left".to_string(), "right".to_string()], Some(&e), None);
@@ -272,5 +308,7 @@ mod tests {
         assert!(c[1].parameters.iter().all(|p| p.box_value.is_none()));
         let text = render(&c);
         assert!(text.contains("pedestal left") && text.contains("k_y") && text.contains("N·s/m"));
+        assert!(text.contains("box RLS") && text.contains("host OLS"));
+        assert!(text.contains("reduced χ² 1.10") && text.contains("2 rejected"));
     }
 }

@@ -30,6 +30,16 @@
 //! are averaged (the angle-domain coefficient over 2πR) and the speed is
 //! R/(their total duration).
 //!
+//! # Noise
+//!
+//! Each output also carries the standard deviation of its noise per channel,
+//! from the scatter between revolutions once the modelled trend (a cubic in
+//! the revolution number) is removed by a fourth difference, propagated
+//! through the run-down correction and the average (module `noise`:
+//! [`revolution_variance`], [`average_noise_gain`]). A fit that treats
+//! consecutive outputs as independent scales its parameter variances by
+//! [`long_run_factor`], because neighbouring outputs share revolutions.
+//!
 //! # How
 //!
 //! The shaft angle within a revolution is modelled with constant angular
@@ -71,6 +81,7 @@
 //! plus about one per channel-sample of per-chunk work.
 
 mod integrator;
+mod noise;
 mod rotator;
 mod sensor;
 mod shaft;
@@ -80,6 +91,7 @@ mod variation;
 mod tests;
 
 pub use integrator::{RevolutionIntegrator, CHUNK, SEGMENTS};
+pub use noise::{average_noise_gain, long_run_factor, revolution_variance};
 pub use rotator::{expi_neg, expi_neg_small, Rotator};
 pub use sensor::{Conversion, Kinematics, Sensor, SensorKind};
 pub use shaft::{EdgeTime, ShaftModel};
@@ -188,6 +200,11 @@ pub struct Phasors<const N: usize> {
     /// Displacement phasor of each channel [m], q(θ) = Re{Q·e^{iθ}} with θ
     /// the shaft angle, 0 at the keyphasor edge.
     pub displacement: [Phasor; N],
+    /// Standard deviation of each displacement phasor's noise [m],
+    /// sqrt(E|n|²) of the complex noise n (formats.md's noise columns), from
+    /// the scatter between the revolutions it is made of (see
+    /// [`noise`](self#noise)).
+    pub noise_sd: [f32; N],
     /// Mean speed over the revolution(s): revolutions / duration [Hz].
     pub speed_hz: f32,
     /// Number of keyphasor edges received up to and including the one that
@@ -286,13 +303,25 @@ pub struct PhasorExtractor<const N: usize> {
     /// The confirmed revolution before it, until `pending` is confirmed too:
     /// its run-down correction needs a trustworthy next revolution.
     confirmed: Option<Pending<N>>,
-    /// Constant-D phasors [m] of the two revolutions before `confirmed`
-    /// (oldest first), each if contiguous, for the run-down correction.
-    before: [Option<[Phasor; N]>; 2],
+    /// Constant-D phasors [m] of the three revolutions before `confirmed`
+    /// (oldest first), each if contiguous: the last two for the run-down
+    /// correction, all three for the noise.
+    before: [Option<[Phasor; N]>; 3],
     /// Running average: Σ displacement [m], Σ period [samples], count.
     sum: [Phasor; N],
     sum_period: f32,
     count: u16,
+    /// Σ of the per-revolution noise variance estimates [m²] of the average
+    /// so far from fourth differences, and how many.
+    scatter: [f32; N],
+    scattered: u16,
+    /// The same from lower differences (before the history is complete).
+    rough: [f32; N],
+    /// The last per-revolution variance [m²] from fourth differences per
+    /// channel, kept across faults (NaN before the first).
+    last_variance: [f32; N],
+    /// Noise gain G of an output per channel (see [`average_noise_gain`]).
+    gain: [f32; N],
 }
 
 impl<const N: usize> PhasorExtractor<N> {
@@ -340,16 +369,32 @@ impl<const N: usize> PhasorExtractor<N> {
             integrator: RevolutionIntegrator::default(),
             pending: None,
             confirmed: None,
-            before: [None, None],
+            before: [None, None, None],
             sum: [ZERO; N],
             sum_period: 0.0,
             count: 0,
+            scatter: [0.0; N],
+            scattered: 0,
+            rough: [0.0; N],
+            last_variance: [f32::NAN; N],
+            gain: config
+                .sensors
+                .map(|s| average_noise_gain(s.kind, config.revolutions_per_output)),
         })
     }
 
     /// The settings.
     pub fn config(&self) -> &ExtractorConfig<N> {
         &self.config
+    }
+
+    /// φ of channel `channel` ([`long_run_factor`]): how much the parameter
+    /// variances of a fit that takes consecutive outputs as independent must
+    /// be scaled (they share revolutions). 1 for a channel out of range.
+    pub fn long_run_factor(&self, channel: usize) -> f32 {
+        self.gain.get(channel).map_or(1.0, |&g| {
+            long_run_factor(self.config.revolutions_per_output, g)
+        })
     }
 
     /// Whether a revolution is being integrated (synchronised to the keyphasor).
@@ -611,41 +656,88 @@ impl<const N: usize> PhasorExtractor<N> {
                 // The displacement in the middle of the revolution, from its
                 // neighbours (see [`mid_revolution`]).
                 let mut mid = ready;
+                let mut variance = [0.0; N];
+                let mut order = 0;
                 for (c, d) in mid.displacement.iter_mut().enumerate() {
+                    let [_, two, one] = self.before.map(|b| b.map(|b| b[c]));
                     *d = mid_revolution(
                         self.config.sensors[c].kind,
+                        [two, one],
+                        ready.displacement[c],
+                        newly.displacement[c],
+                    );
+                    (variance[c], order) = revolution_variance(
                         self.before.map(|b| b.map(|b| b[c])),
                         ready.displacement[c],
                         newly.displacement[c],
                     );
                 }
-                self.before = [self.before[1], Some(ready.displacement)];
-                self.average(mid, sink);
+                self.before = [self.before[1], self.before[2], Some(ready.displacement)];
+                self.average(mid, &variance, order == 4, sink);
             }
         }
     }
 
-    /// Add a confirmed revolution to the average; emit it when R are in.
-    fn average(&mut self, revolution: Pending<N>, sink: &mut impl FnMut(Event<N>)) {
+    /// Add a confirmed revolution with its noise variance estimates [m²]
+    /// (`full`: from fourth differences) to the average; emit it when R are
+    /// in.
+    fn average(
+        &mut self,
+        revolution: Pending<N>,
+        variance: &[f32; N],
+        full: bool,
+        sink: &mut impl FnMut(Event<N>),
+    ) {
         for (s, d) in self.sum.iter_mut().zip(&revolution.displacement) {
             *s += *d;
+        }
+        let sums = if full {
+            self.scattered += 1;
+            &mut self.scatter
+        } else {
+            &mut self.rough
+        };
+        for (s, v) in sums.iter_mut().zip(variance) {
+            *s += *v;
         }
         self.sum_period += revolution.period;
         self.count += 1;
         let r = self.config.revolutions_per_output;
         if self.count >= r {
             let scale = 1.0 / r as f32;
+            let mut noise_sd = [0.0; N];
+            for c in 0..N {
+                let variance = if self.scattered > 0 {
+                    let v = self.scatter[c] / f32::from(self.scattered);
+                    self.last_variance[c] = v;
+                    v
+                } else if self.last_variance[c].is_finite() {
+                    self.last_variance[c]
+                } else {
+                    self.rough[c] / f32::from(self.count)
+                };
+                noise_sd[c] = libm::sqrtf(self.gain[c] * variance);
+            }
             sink(Event::Phasors(Phasors {
                 displacement: self.sum.map(|s| s * scale),
+                noise_sd,
                 speed_hz: self.config.sample_rate_hz * r as f32 / self.sum_period,
                 revolution: revolution.revolution,
                 revolutions: r,
                 end: revolution.end,
             }));
-            self.sum = [ZERO; N];
-            self.sum_period = 0.0;
-            self.count = 0;
+            self.clear_average();
         }
+    }
+
+    /// Empty the running average.
+    fn clear_average(&mut self) {
+        self.sum = [ZERO; N];
+        self.sum_period = 0.0;
+        self.count = 0;
+        self.scatter = [0.0; N];
+        self.scattered = 0;
+        self.rough = [0.0; N];
     }
 
     /// Start acquiring afresh with `edge` as the first edge.
@@ -658,10 +750,8 @@ impl<const N: usize> PhasorExtractor<N> {
     fn discard(&mut self) {
         self.pending = None;
         self.confirmed = None;
-        self.before = [None, None];
-        self.sum = [ZERO; N];
-        self.sum_period = 0.0;
-        self.count = 0;
+        self.before = [None, None, None];
+        self.clear_average();
     }
 
     /// Report a fault and drop everything it may have corrupted.

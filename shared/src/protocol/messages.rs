@@ -39,8 +39,9 @@ use serde::{Deserialize, Serialize};
 use super::receiver::LinkStats;
 
 /// Version of this protocol; both ends must agree (see the compatibility rule
-/// in the module docs).
-pub const PROTOCOL_VERSION: u16 = 1;
+/// in the module docs). 2: phasor frames carry each phasor's noise, estimate
+/// entries the reduced χ² and the guarded-equation counts.
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// Most ADC channels one [`HostMessage::ConfigureChannels`] can describe and
 /// [`DeviceCounters::adc_saturation`] can report.
@@ -267,7 +268,8 @@ pub struct Averaging {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RlsSettings {
-    /// Forgetting factor λ per equation, in (0, 1]; 1 = never forget.
+    /// Forgetting factor λ per speed (all four equations of a phasor frame
+    /// alike), in (0, 1]; 1 = never forget.
     pub forgetting_factor: f32,
     /// Stiffness column scale [N/m].
     pub scale_k: f32,
@@ -538,6 +540,11 @@ pub struct BearingPhasors {
     pub rel: [WirePhasor; 2],
     /// Absolute pedestal, (y, z) \[m].
     pub ped: [WirePhasor; 2],
+    /// Noise of each `rel` phasor, (y, z): sqrt(E|n|²) of its complex noise
+    /// \[m] (formats.md's `rel_y_sd`, `rel_z_sd`); NaN where not measured.
+    pub rel_sd: [f32; 2],
+    /// Noise of each `ped` phasor, (y, z) \[m] (`ped_y_sd`, `ped_z_sd`).
+    pub ped_sd: [f32; 2],
 }
 
 /// Box → host: one revolution-average of 1X phasors.
@@ -566,8 +573,13 @@ pub struct PedestalEstimateEntry {
     pub std_err: [f32; PARAMETERS],
     /// Number of equations folded in (effective, with forgetting).
     pub equations: f32,
-    /// RMS of the equation residuals \[N].
-    pub residual_rms: f32,
+    /// Σ(whitened residual)²/(n − 5): 1 when the residuals are as large as
+    /// the phasors' noise says (dimensionless); NaN while n ≤ 5.
+    pub reduced_chi_square: f32,
+    /// Equations scaled down because their squares would overflow f32.
+    pub rescaled: u32,
+    /// Equations rejected as not finite.
+    pub rejected: u32,
 }
 
 impl PedestalEstimateEntry {
@@ -578,7 +590,9 @@ impl PedestalEstimateEntry {
             theta: e.theta,
             std_err: e.std_err,
             equations: e.equations,
-            residual_rms: e.residual_rms,
+            reduced_chi_square: e.reduced_chi_square,
+            rescaled: e.rescaled,
+            rejected: e.rejected,
         }
     }
 
@@ -588,7 +602,9 @@ impl PedestalEstimateEntry {
             theta: self.theta,
             std_err: self.std_err,
             equations: self.equations,
-            residual_rms: self.residual_rms,
+            reduced_chi_square: self.reduced_chi_square,
+            rescaled: self.rescaled,
+            rejected: self.rejected,
         }
     }
 }

@@ -140,18 +140,24 @@ fn device_messages() -> Vec<DeviceMessage> {
             bearing: 0,
             rel: [phasor(12.5e-6, -3.25e-6), phasor(-4.0e-6, 8.5e-6)],
             ped: [phasor(1.5e-6, 0.75e-6), phasor(-0.5e-6, -2.0e-6)],
+            rel_sd: [1.25e-8, 3.0e-9],
+            ped_sd: [7.5e-10, f32::NAN],
         },
         BearingPhasors {
             bearing: 1,
             rel: [phasor(-22.0e-6, 1.0e-7), phasor(3.0e-9, -6.5e-6)],
             ped: [phasor(0.0, -0.0), phasor(2.5e-6, 9.75e-7)],
+            rel_sd: [0.0, 1.0e-30],
+            ped_sd: [2.5e-7, 6.0e-9],
         },
     ];
     let estimate = |s: f32| crate::rls::PedestalEstimate {
         theta: [1.0e7 * s, 1.5e7 * s, 100.0 * s, 80.0 * s, 95.0 * s],
         std_err: [2.0e4, 3.0e4, 0.25, 1.5, f32::INFINITY],
         equations: 412.5,
-        residual_rms: 0.0625,
+        reduced_chi_square: 1.0625,
+        rescaled: 3,
+        rejected: u32::MAX,
     };
     let saturation: Vec<u32> = (0..16).map(|i| i * i * 1001).collect();
     std::vec![
@@ -305,7 +311,9 @@ fn nan_estimates_survive_the_wire() {
         theta: [f32::NAN; 5],
         std_err: [f32::NAN; 5],
         equations: 0.0,
-        residual_rms: f32::NAN,
+        reduced_chi_square: f32::NAN,
+        rescaled: 0,
+        rejected: 0,
     };
     let m = DeviceMessage::Estimates(EstimateFrame {
         revolution: 1,
@@ -317,7 +325,7 @@ fn nan_estimates_survive_the_wire() {
         [(5, DeviceMessage::Estimates(f))] => {
             let back = f.pedestals[0].estimate();
             assert!(back.theta.iter().all(|x| x.is_nan()));
-            assert!(back.residual_rms.is_nan());
+            assert!(back.reduced_chi_square.is_nan());
             assert_eq!(f.pedestals[0].bearing, 2);
         }
         other => panic!("unexpected {other:?}"),
@@ -370,7 +378,9 @@ fn largest_messages_fit() {
         theta: [1.0; 5],
         std_err: [1.0; 5],
         equations: 1.0,
-        residual_rms: 1.0,
+        reduced_chi_square: 1.0,
+        rescaled: u32::MAX,
+        rejected: u32::MAX,
     };
     let stats = LinkStats {
         frames_ok: u32::MAX,
@@ -393,6 +403,8 @@ fn largest_messages_fit() {
                     bearing: u8::MAX,
                     rel: [phasor; 2],
                     ped: [phasor; 2],
+                    rel_sd: [1.0; 2],
+                    ped_sd: [1.0; 2],
                 }; MAX_BEARINGS],
             ),
         }),

@@ -11,6 +11,8 @@ use super::*;
 use core::f64::consts::TAU;
 use std::vec::Vec;
 
+mod noise;
+
 const FS: f64 = 51_200.0;
 
 /// A shaft whose speed falls linearly: f(t) = f0 − rate·t [Hz], with the
@@ -190,6 +192,19 @@ fn simulate<const N: usize>(
     block: usize,
     edit: impl FnOnce(&mut Vec<f64>),
 ) -> Outcome<N> {
+    simulate_with_noise(config, shaft, channels, seconds, block, edit, |_| 0.0)
+}
+
+/// [`simulate`] with `noise(channel)` [V] added to every sample.
+fn simulate_with_noise<const N: usize>(
+    config: ExtractorConfig<N>,
+    shaft: RunDown,
+    channels: &[Channel; N],
+    seconds: f64,
+    block: usize,
+    edit: impl FnOnce(&mut Vec<f64>),
+    mut noise: impl FnMut(usize) -> f64,
+) -> Outcome<N> {
     let total = (seconds * FS) as usize;
     let mut edges: Vec<f64> = (0..)
         .map_while(|j| shaft.edge(j))
@@ -211,7 +226,7 @@ fn simulate<const N: usize>(
             let k = start + i;
             let t = k as f64 / FS;
             samples.push(core::array::from_fn(|c| {
-                channels[c].volts(&shaft, t) as f32
+                (channels[c].volts(&shaft, t) + noise(c)) as f32
             }));
             // Edges in (k − 1, k] belong to sample k.
             while next_edge < edges.len() && edges[next_edge] <= k as f64 {

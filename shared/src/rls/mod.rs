@@ -9,9 +9,22 @@
 //! construction whenever every d_i > 0, there is no square root or matrix
 //! inverse per update, and without forgetting it reproduces the batch
 //! least-squares solution exactly (no prior is needed).
+//!
+//! Forgetting is a separate step ([`Rls::forget`]) so that a caller decays
+//! the information once per observation, however many equations it makes
+//! (the pedestal estimator: once per speed, all four equations alike).
+//!
+//! An equation whose squares would overflow the working precision (a finite
+//! but huge row: a tiny sensor sensitivity, a weight from a tiny noise) is
+//! scaled down by a power of two before it is folded in, so that it cannot
+//! turn the factor into infinities; that lowers its weight, so it is
+//! counted ([`Rls::rescaled`]). An equation that is not finite is rejected
+//! and counted ([`Rls::rejected`]).
 
-use crate::phasor::Phasor2;
-use crate::regression::{equations, ParameterScale, PARAMETERS};
+mod pedestal;
+
+pub use pedestal::{PedestalEstimate, PedestalRls};
+
 use num_traits::Float;
 
 /// Exponentially weighted least squares over `P` unknowns.
@@ -31,6 +44,10 @@ pub struct Rls<T, const P: usize> {
     n_eff: T,
     /// Forgetting factor λ in (0, 1]; 1 = no forgetting.
     lambda: T,
+    /// Equations scaled down to keep their squares finite.
+    rescaled: u32,
+    /// Equations refused as not finite.
+    rejected: u32,
 }
 
 /// Why an estimate is not available.
@@ -70,6 +87,8 @@ impl<T: Float, const P: usize> Rls<T, P> {
             rss: T::zero(),
             n_eff: T::zero(),
             lambda,
+            rescaled: 0,
+            rejected: 0,
         }
     }
 
@@ -78,12 +97,9 @@ impl<T: Float, const P: usize> Rls<T, P> {
         *self = Self::new(self.lambda);
     }
 
-    /// Folds in one equation `row·θ = rhs`. Non-finite input is ignored and
-    /// reported as `false`, so one bad sample cannot poison the estimate.
-    pub fn update(&mut self, row: &[T; P], rhs: T) -> bool {
-        if !rhs.is_finite() || row.iter().any(|x| !x.is_finite()) {
-            return false;
-        }
+    /// Decays everything known by λ: once per observation, before its
+    /// equations are folded in.
+    pub fn forget(&mut self) {
         let lambda = self.lambda;
         if lambda < T::one() {
             for i in 0..P {
@@ -91,15 +107,69 @@ impl<T: Float, const P: usize> Rls<T, P> {
                 self.column_ss[i] = self.column_ss[i] * lambda;
             }
             self.rss = self.rss * lambda;
+            self.n_eff = self.n_eff * lambda;
         }
-        self.n_eff = self.n_eff * lambda + T::one();
-        for (ss, x) in self.column_ss.iter_mut().zip(row) {
-            *ss = *ss + *x * *x;
+    }
+
+    /// Folds in one equation `row·θ = rhs` with unit weight (see
+    /// [`update_weighted`](Self::update_weighted)).
+    pub fn update(&mut self, row: &[T; P], rhs: T) -> bool {
+        self.update_weighted(row, rhs, T::one())
+    }
+
+    /// Folds in one equation `row·θ = rhs` with weight `weight` (1/variance
+    /// of its error). Non-finite input and a weight that is not finite and
+    /// positive are rejected and reported as `false`, so one bad sample
+    /// cannot poison the estimate; a finite equation whose weighted squares
+    /// would overflow is scaled down by powers of two (see the module
+    /// documentation).
+    pub fn update_weighted(&mut self, row: &[T; P], rhs: T, weight: T) -> bool {
+        // The mean magnitude: NaN and infinity propagate into it (one test
+        // for all), it cannot overflow, and the largest entry is at most
+        // P + 1 times it.
+        let entries = T::from(P + 1).unwrap_or_else(T::one);
+        let inv = T::one() / entries;
+        let mean = row.iter().fold(rhs.abs() * inv, |t, x| t + x.abs() * inv);
+        if !(mean.is_finite() && weight.is_finite() && weight > T::zero()) {
+            self.rejected = self.rejected.saturating_add(1);
+            return false;
+        }
+        let mut row = *row;
+        let mut rhs = rhs;
+        // Weighted squares up to max/2³², so that 2³² of them stay finite.
+        let two = T::one() + T::one();
+        let sixteen = two * two * two * two;
+        let limit = T::max_value()
+            / (sixteen * sixteen * sixteen * sixteen * sixteen * sixteen * sixteen * sixteen)
+            / (entries * entries);
+        let fits = |s: T| {
+            let m = mean * s;
+            m * m * weight <= limit
+        };
+        if !fits(T::one()) {
+            // Powers of two: exact, whatever the precision.
+            let mut s = T::one() / sixteen;
+            while !fits(s) {
+                s = s / sixteen;
+                if s == T::zero() {
+                    self.rejected = self.rejected.saturating_add(1);
+                    return false;
+                }
+            }
+            for x in row.iter_mut() {
+                *x = *x * s;
+            }
+            rhs = rhs * s;
+            self.rescaled = self.rescaled.saturating_add(1);
+        }
+        self.n_eff = self.n_eff + T::one();
+        for (ss, x) in self.column_ss.iter_mut().zip(&row) {
+            *ss = *ss + weight * *x * *x;
         }
 
-        let mut x = *row;
+        let mut x = row;
         let mut y = rhs;
-        let mut w = T::one();
+        let mut w = weight;
         for i in 0..P {
             if w == T::zero() {
                 break;
@@ -209,9 +279,20 @@ impl<T: Float, const P: usize> Rls<T, P> {
         self.rss
     }
 
-    /// Effective number of equations folded in, Σ λ^k.
+    /// Effective number of equations folded in (each observation's decayed
+    /// by λ per later observation).
     pub fn equations(&self) -> T {
         self.n_eff
+    }
+
+    /// Equations scaled down because their squares would overflow.
+    pub fn rescaled(&self) -> u32 {
+        self.rescaled
+    }
+
+    /// Equations rejected as not finite.
+    pub fn rejected(&self) -> u32 {
+        self.rejected
     }
 
     /// Smallest 1 − R² of a column on the columns before it, in [0, 1]: near
@@ -229,11 +310,23 @@ impl<T: Float, const P: usize> Rls<T, P> {
     }
 }
 
+/// The larger of two numbers that are not NaN: a compare and a select (the
+/// M4F has no float max instruction; `Float::max` is a library call with
+/// NaN handling).
+#[inline(always)]
+pub(crate) fn larger<T: PartialOrd>(a: T, b: T) -> T {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
 /// Square root through libm, in the working precision, so the host computes
 /// bit for bit what the MCU computes (IEEE sqrt is correctly rounded in both)
 /// and the M4F never falls back to software double precision.
 #[inline]
-fn libm_sqrt<T: Float>(x: T) -> T {
+pub(crate) fn libm_sqrt<T: Float>(x: T) -> T {
     if core::mem::size_of::<T>() == core::mem::size_of::<f32>() {
         match x.to_f32() {
             Some(v) => T::from(libm::sqrtf(v)).unwrap_or_else(T::nan),
@@ -247,158 +340,9 @@ fn libm_sqrt<T: Float>(x: T) -> T {
     }
 }
 
-/// A pedestal's identified parameters with their standard errors, in physical
-/// units: θ = (k_y [N/m], k_z [N/m], m [kg], c_y [N·s/m], c_z [N·s/m]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PedestalEstimate<T = f32> {
-    /// Parameter values (k_y, k_z, m, c_y, c_z).
-    pub theta: [T; PARAMETERS],
-    /// Standard errors in the same units; NaN when not yet estimable.
-    pub std_err: [T; PARAMETERS],
-    /// Number of equations folded in (effective, with forgetting).
-    pub equations: T,
-    /// RMS of the equation residuals [N].
-    pub residual_rms: T,
-}
-
-/// The recursive estimator of one pedestal's (k_y, k_z, m, c_y, c_z) from
-/// eq. 4, with parameter scaling so that f32 suffices.
-#[derive(Clone, Debug)]
-pub struct PedestalRls<T = f32> {
-    rls: Rls<T, PARAMETERS>,
-    scale: ParameterScale<T>,
-}
-
-impl<T: Float> Default for PedestalRls<T> {
-    fn default() -> Self {
-        Self::new(ParameterScale::default(), T::one())
-    }
-}
-
-impl<T: Float> PedestalRls<T> {
-    /// A new estimator with the given column scales and forgetting factor λ.
-    pub fn new(scale: ParameterScale<T>, lambda: T) -> Self {
-        Self {
-            rls: Rls::new(lambda),
-            scale,
-        }
-    }
-
-    /// Forgets all data.
-    pub fn reset(&mut self) {
-        self.rls.reset();
-    }
-
-    /// Folds in one speed: `omega` [rad/s], the absolute pedestal 1X
-    /// displacement `ped` [m] and the bearing force on the pedestal `force`
-    /// [N]. Returns how many of the four equations were accepted (finite).
-    pub fn update(&mut self, omega: T, ped: &Phasor2<T>, force: &Phasor2<T>) -> usize {
-        let mut accepted = 0;
-        for eq in equations(omega, ped, force) {
-            let scaled = self.scale.scale(&eq);
-            if self.rls.update(&scaled.row, scaled.rhs) {
-                accepted += 1;
-            }
-        }
-        accepted
-    }
-
-    /// The current estimate in physical units.
-    pub fn estimate(&self) -> Result<PedestalEstimate<T>, RlsError> {
-        let scaled = self.rls.estimate()?;
-        let theta = self.scale.unscale(&scaled);
-        let std_err = match self.rls.std_errors() {
-            Ok(se) => self.scale.unscale(&se),
-            Err(_) => [T::nan(); PARAMETERS],
-        };
-        let n = self.rls.equations();
-        let residual_rms = if n > T::zero() {
-            libm_sqrt(self.rls.residual_sum_of_squares() / n)
-        } else {
-            T::nan()
-        };
-        Ok(PedestalEstimate {
-            theta,
-            std_err,
-            equations: n,
-            residual_rms,
-        })
-    }
-
-    /// See [`Rls::collinearity_margin`].
-    pub fn collinearity_margin(&self) -> T {
-        self.rls.collinearity_margin()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::phasor::Complex;
-
-    /// Forces of an exact pedestal (eq. 3) for a given pedestal response.
-    fn pedestal_forces(theta: &[f64; 5], omega: f64, ped: &Phasor2<f64>) -> Phasor2<f64> {
-        let dyn_stiffness = |k: f64, c: f64| Complex::new(k - omega * omega * theta[2], omega * c);
-        [
-            dyn_stiffness(theta[0], theta[3]) * ped[0],
-            dyn_stiffness(theta[1], theta[4]) * ped[1],
-        ]
-    }
-
-    fn response(i: usize) -> Phasor2<f64> {
-        // Deterministic, varied phasors of micrometre size.
-        let a = i as f64;
-        [
-            Complex::from_polar(1e-6 * (1.0 + 0.5 * (0.3 * a).sin()), 0.7 * a),
-            Complex::from_polar(2e-6 * (1.0 + 0.4 * (0.2 * a).cos()), -0.4 * a + 1.0),
-        ]
-    }
-
-    #[test]
-    fn recovers_exact_pedestal_in_f64() {
-        let theta = [8.0e6, 6.0e6, 150.0, 100.0, 70.0];
-        let mut est = PedestalRls::<f64>::default();
-        for i in 0..60 {
-            let omega = 2.0 * core::f64::consts::PI * (5.0 + 3.0 * i as f64);
-            let ped = response(i);
-            assert_eq!(
-                est.update(omega, &ped, &pedestal_forces(&theta, omega, &ped)),
-                4
-            );
-        }
-        let e = est.estimate().unwrap();
-        for i in 0..5 {
-            assert!(
-                (e.theta[i] - theta[i]).abs() <= 1e-8 * theta[i],
-                "{i}: {}",
-                e.theta[i]
-            );
-        }
-        assert!(e.residual_rms < 1e-9);
-    }
-
-    #[test]
-    fn recovers_exact_pedestal_in_f32() {
-        let theta = [8.0e6, 6.0e6, 150.0, 100.0, 70.0];
-        let mut est = PedestalRls::<f32>::default();
-        for i in 0..100 {
-            let omega = 2.0 * core::f64::consts::PI * (2.0 + 2.0 * i as f64);
-            let ped = response(i);
-            let f = pedestal_forces(&theta, omega, &ped);
-            let c32 = |c: Complex<f64>| Complex::new(c.re as f32, c.im as f32);
-            est.update(
-                omega as f32,
-                &[c32(ped[0]), c32(ped[1])],
-                &[c32(f[0]), c32(f[1])],
-            );
-        }
-        let e = est.estimate().unwrap();
-        for i in 0..5 {
-            let rel = ((e.theta[i] as f64) - theta[i]).abs() / theta[i];
-            assert!(rel < 1e-3, "param {i}: {} vs {}", e.theta[i], theta[i]);
-        }
-    }
 
     #[test]
     fn matches_the_normal_equations_on_noisy_data() {
@@ -481,6 +425,26 @@ mod tests {
         assert!(!rls.update(&[f32::NAN, 1.0], 1.0));
         assert!(!rls.update(&[1.0, 1.0], f32::INFINITY));
         assert_eq!(rls.equations(), 0.0);
+        assert_eq!(rls.rejected(), 2);
+    }
+
+    #[test]
+    fn a_row_too_large_to_square_is_scaled_not_folded_as_infinity() {
+        // y = 2x + 1 with one equation at x = 1e30 (its square overflows
+        // f32): the estimate stays finite and exact, and the rescale counted.
+        let mut rls = Rls::<f32, 2>::default();
+        for x in [0.0f32, 1.0, 2.0, 3.0] {
+            assert!(rls.update(&[x, 1.0], 2.0 * x + 1.0));
+        }
+        assert!(rls.update(&[1e30, 1.0], 2e30 + 1.0));
+        assert_eq!(rls.rescaled(), 1);
+        let theta = rls.estimate().unwrap();
+        assert!(
+            (theta[0] - 2.0).abs() < 1e-5 && (theta[1] - 1.0).abs() < 1e-3,
+            "{theta:?}"
+        );
+        let se = rls.covariance_diagonal().unwrap();
+        assert!(se.iter().all(|v| v.is_finite()), "{se:?}");
     }
 
     #[test]
@@ -490,6 +454,7 @@ mod tests {
         let mut steady = Rls::<f64, 1>::default();
         for i in 0..200 {
             let y = if i < 100 { 1.0 } else { 3.0 };
+            forgetful.forget();
             forgetful.update(&[1.0], y);
             steady.update(&[1.0], y);
         }
