@@ -6,6 +6,7 @@
 pub mod demo;
 pub mod diagnose;
 pub mod effects;
+pub mod estimate;
 pub mod identify;
 pub mod paper;
 pub mod plots;
