@@ -32,11 +32,13 @@
 //!    under which the standardised samples are the more homogeneous (smaller
 //!    interquartile range of log|u|) is kept.
 //!
-//! The digits are always a floor. Scatter is used instead when, on some
-//! channel, it exceeds twice the digits' noise (the numbers carry more digits
-//! than their noise justifies); the variance of each number is then the
-//! larger of the two. The absolute scale of the scatter estimate is refined
-//! after the fit: the fit's whitened residuals give χ², and the noise is
+//! Without noise columns the model starts from the digits, and the fit
+//! decides: when its χ² says the data scatter significantly more than their
+//! digits allow (the numbers carry more digits than their noise justifies),
+//! the fit switches to the scatter ([`BearingNoise::use_scatter`]; each
+//! number's variance is then the larger of the two) and refits. The scatter's
+//! local fits set the relative level of the channels and speeds; its absolute
+//! scale is the fit's: the whitened residuals give χ², and the noise is
 //! rescaled by χ²/dof ([`BearingNoise::rescale`], done by the caller).
 
 use crate::rundir::Measurement;
@@ -224,6 +226,9 @@ pub struct BearingNoise {
     pub var: Vec<[f64; 8]>,
     /// The scatter law found per complex channel (`None`: too few speeds).
     pub scatter: [Option<Scatter>; 4],
+    /// The variances under the scatter law (floored by the digits), while
+    /// the source is still the digits.
+    pub scatter_var: Option<Vec<[f64; 8]>>,
     /// Factor the variances were multiplied by after the fit (1 until
     /// [`BearingNoise::rescale`]).
     pub variance_scale: f64,
@@ -233,9 +238,6 @@ pub struct BearingNoise {
 const WINDOW: usize = 7;
 /// Degree of the local smooth fit.
 const DEGREE: usize = 3;
-/// Scatter above this multiple of the digits' noise means the numbers carry
-/// noise beyond their digits.
-const DIGITS_EXPLAIN: f64 = 2.0;
 const MEDIAN_ABS_NORMAL: f64 = 0.674_489_750_196_081_7;
 
 impl BearingNoise {
@@ -266,46 +268,21 @@ impl BearingNoise {
                 quantisation,
                 var,
                 scatter: [None; 4],
+                scatter_var: None,
                 variance_scale: 1.0,
             };
         }
         let mut order: Vec<usize> = (0..rows.len()).collect();
         order.sort_by(|&a, &b| rows[a].speed_hz.total_cmp(&rows[b].speed_hz));
         let mut scatter = [None; 4];
-        let mut beyond_digits = false;
         for (ch, slot) in scatter.iter_mut().enumerate() {
             let series: Vec<(f64, Complex<f64>)> = order
                 .iter()
                 .map(|&i| (rows[i].speed_hz, complex_value(rows[i], ch)))
                 .collect();
             *slot = scatter_law(&series);
-            if let Some(law) = slot {
-                let n = rows.len().max(1) as f64;
-                let scatter_ms: f64 = rows
-                    .iter()
-                    .map(|m| 2.0 * law.sd(complex_value(m, ch).norm()).powi(2))
-                    .sum::<f64>()
-                    / n;
-                let digits_ms: f64 = digits_var
-                    .iter()
-                    .map(|v| v[2 * ch] + v[2 * ch + 1])
-                    .sum::<f64>()
-                    / n;
-                if scatter_ms > DIGITS_EXPLAIN * DIGITS_EXPLAIN * digits_ms {
-                    beyond_digits = true;
-                }
-            }
         }
-        if !beyond_digits {
-            return Self {
-                source: NoiseSource::Digits,
-                quantisation,
-                var: digits_var,
-                scatter,
-                variance_scale: 1.0,
-            };
-        }
-        let var = rows
+        let scatter_var = rows
             .iter()
             .zip(&digits_var)
             .map(|(m, dv)| {
@@ -317,11 +294,30 @@ impl BearingNoise {
             })
             .collect();
         Self {
-            source: NoiseSource::Scatter,
+            source: NoiseSource::Digits,
             quantisation,
-            var,
+            var: digits_var,
             scatter,
+            scatter_var: Some(scatter_var),
             variance_scale: 1.0,
+        }
+    }
+
+    /// Switches from the digits to the scatter between neighbouring speeds
+    /// (floored by the digits): what a fit does when its χ² says the numbers
+    /// carry more noise than their digits. False when there is no scatter
+    /// estimate (too few speeds, or the source is not the digits).
+    pub fn use_scatter(&mut self) -> bool {
+        if self.source != NoiseSource::Digits {
+            return false;
+        }
+        match self.scatter_var.take() {
+            Some(v) if self.scatter.iter().any(Option::is_some) => {
+                self.var = v;
+                self.source = NoiseSource::Scatter;
+                true
+            }
+            _ => false,
         }
     }
 
