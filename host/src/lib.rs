@@ -3,6 +3,7 @@
 //! the model-discrepancy workflow. The `plinth` binary is a thin CLI over it.
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod demo;
 pub mod diagnose;
 pub mod effects;

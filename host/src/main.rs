@@ -15,7 +15,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Batch least-squares identification of every pedestal in a run directory.
+    /// Identification of every pedestal in a run directory (maximum likelihood or the paper's least squares).
     Identify(plinth::identify::cli::Args),
     /// Unbalance response of a machine file, written as a run directory.
     Simulate(plinth::sim::cli::SimulateArgs),
@@ -31,6 +31,8 @@ enum Command {
     Demo(plinth::demo::Args),
     /// Find, name and fix what the pedestal model is missing.
     Diagnose(plinth::diagnose::Args),
+    /// Monte-Carlo of OLS and ML against the Cramér–Rao bound on a simulated machine.
+    Accuracy(plinth::accuracy::Args),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +46,7 @@ fn main() -> ExitCode {
         Command::Stream(a) => plinth::stream::run(&a),
         Command::Demo(a) => plinth::demo::run(&a),
         Command::Diagnose(a) => plinth::diagnose::run(&a),
+        Command::Accuracy(a) => plinth::accuracy::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

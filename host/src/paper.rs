@@ -40,7 +40,7 @@ use crate::plots::{
     phase_lag_deg, Mark, PhaseStyle, PhasorFigure, PhasorPanel, PhasorSeries, PhasorView, Quantity,
     Rows, ScalarFigure, ScalarSeries,
 };
-use crate::rundir::{significant_digits, DigitsMode, Measurement, RunDir};
+use crate::rundir::{round_to_digits, DigitsMode, Measurement, RunDir};
 use crate::sim::cli::parse_speeds;
 use crate::sim::predict::{compare, predict_run, Comparison, IdentifiedPedestal};
 use crate::sim::{unbalance_response, EffectSet, Machine};
@@ -314,8 +314,8 @@ fn load_machine(path: Option<&Path>, bundled: &str, name: &str) -> Result<Machin
 pub fn reduce_digits(run: &RunDir, digits: u32, mode: DigitsMode) -> RunDir {
     let r = |c: Complex<f64>| {
         Complex::new(
-            significant_digits(c.re, digits, mode),
-            significant_digits(c.im, digits, mode),
+            round_to_digits(c.re, digits, mode),
+            round_to_digits(c.im, digits, mode),
         )
     };
     let mut out = run.clone();
@@ -418,7 +418,7 @@ fn heavy_damping_scale(machine: &Machine, target: f64) -> Result<f64> {
             machine.name
         ));
     }
-    Ok(significant_digits(target / mean, 2, DigitsMode::Round))
+    Ok(round_to_digits(target / mean, 2, DigitsMode::Round))
 }
 
 /// Table 2's rows for one damping case: the four modes of eq. 4 on `damped`

@@ -412,7 +412,7 @@ pub fn format_number(x: f64) -> String {
 /// `x` reduced to `digits` significant decimal digits (at least one), working
 /// on the shortest decimal text of `x` so that e.g. 0.29 truncates to 0.29,
 /// not 0.28. Non-finite values are returned unchanged.
-pub fn significant_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
+pub fn round_to_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
     if !x.is_finite() || x == 0.0 {
         return x;
     }
@@ -654,7 +654,7 @@ impl RunDir {
             source,
         })?;
         let reduce = |x: f64| match options.digits {
-            Some(d) => significant_digits(x, d, options.digits_mode),
+            Some(d) => round_to_digits(x, d, options.digits_mode),
             None => x,
         };
 
