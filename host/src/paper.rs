@@ -445,7 +445,7 @@ fn table2_rows(
         EquationMode::Real,
         EquationMode::Imag,
     ] {
-        let options = Options::with_mode(mode);
+        let options = Options::with_mode(mode).ols();
         let model = options.model();
         let id = identify_run(&run, &options).with_context(|| {
             format!(
@@ -582,7 +582,7 @@ pub fn reproduce_with(
         let run = reduce_digits(&undamped, digits, opts.digits_mode);
         let options = Options {
             model: Some(Model::UNDAMPED),
-            ..Options::with_mode(EquationMode::RealAndImag)
+            ..Options::with_mode(EquationMode::RealAndImag).ols()
         };
         let id = identify_run(&run, &options)
             .with_context(|| format!("identifying the {digits}-digit undamped run"))?;

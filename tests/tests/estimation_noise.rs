@@ -133,7 +133,12 @@ fn noise_columns_are_used_and_checked_by_chi2() {
     for p in &id.pedestals {
         let noise = &id.noise[&p.bearing];
         assert_eq!(noise.source, NoiseSource::Columns);
-        assert!(noise.p_value > 1e-3, "{}: χ² p {}", p.bearing, noise.p_value);
+        assert!(
+            noise.p_value > 1e-3,
+            "{}: χ² p {}",
+            p.bearing,
+            noise.p_value
+        );
         assert!(!p.has_warning(WarningKind::NoiseScaleMismatch));
         assert!(p.trusted);
     }
@@ -146,7 +151,11 @@ fn noise_columns_are_used_and_checked_by_chi2() {
     let read = RunDir::read(dir.path()).unwrap();
     let small = identify_run(&read, &Options::default()).unwrap();
     for (p, q) in small.pedestals.iter().zip(&id.pedestals) {
-        assert!(p.has_warning(WarningKind::NoiseScaleMismatch), "{}", p.bearing);
+        assert!(
+            p.has_warning(WarningKind::NoiseScaleMismatch),
+            "{}",
+            p.bearing
+        );
         let ratio = p.std_err.k_y / q.std_err.k_y;
         assert!((ratio - 1.0).abs() < 0.1, "{}: {ratio}", p.bearing);
     }
