@@ -3,8 +3,10 @@
 //! stiffness K* = K_b + iΩ·C_b at each measured speed and the noise standard
 //! deviation of every real number (see [`super::noise`]).
 
-use super::noise::{NoiseModel, CHANNELS};
-use crate::rundir::RunDir;
+use super::noise::{BearingNoise, ColumnDigits, NoiseModel, CHANNELS};
+use crate::estimate::noise::Quantisation;
+use crate::identify::{estimator::fit_ml, observations, Options as IdentifyOptions, PedestalFit};
+use crate::rundir::{Measurement, RunDir};
 use anyhow::{anyhow, bail, Context, Result};
 use num_complex::Complex;
 use plinth_shared::phasor::{omega_from_hz, Phasor2};
@@ -71,6 +73,9 @@ pub struct Prepared {
     pub points: Vec<Vec<Option<Point>>>,
     /// The measurement noise model the standard deviations come from.
     pub noise: NoiseModel,
+    /// Per bearing, the maximum-likelihood fit of the paper's five-parameter
+    /// model that decided the noise (`plinth identify`'s default fit).
+    pub base_fits: Vec<PedestalFit>,
 }
 
 impl Prepared {
@@ -89,7 +94,6 @@ impl Prepared {
         let mut speeds_hz: Vec<f64> = run.measurements.iter().map(|m| m.speed_hz).collect();
         speeds_hz.sort_by(f64::total_cmp);
         speeds_hz.dedup();
-        let noise = NoiseModel::estimate(run, &bearings)?;
         let schedules = run.bearing_schedules();
         let mut points: Vec<Vec<Option<Point>>> = vec![vec![None; speeds_hz.len()]; bearings.len()];
         for (row, m) in run.measurements.iter().enumerate() {
@@ -132,10 +136,46 @@ impl Prepared {
                 sigma: [0.0; 8],
             };
             for c in 0..CHANNELS.len() {
-                point.sigma[c] = noise.sigma(b, c, point.channel(c), point_magnitude(&point, c));
+                point.sigma[c] = 0.0;
             }
             points[b][j] = Some(point);
         }
+        let columns = ColumnDigits::of_run(&run.measurements);
+        let mut noises = Vec::with_capacity(bearings.len());
+        let mut base_fits = Vec::with_capacity(bearings.len());
+        for (b, name) in bearings.iter().enumerate() {
+            let mut rows: Vec<&Measurement> = run
+                .measurements
+                .iter()
+                .filter(|m| &m.bearing == name)
+                .collect();
+            rows.sort_by(|x, y| x.speed_hz.total_cmp(&y.speed_hz));
+            let mut noise = BearingNoise::estimate(&rows, &columns, Quantisation::Rounding);
+            let schedule = schedules
+                .get(name)
+                .ok_or_else(|| anyhow!("bearings.csv has no coefficients for bearing {name}"))?;
+            let obs = observations(&rows, schedule, &noise)
+                .with_context(|| format!("bearings.csv, bearing {name}"))?;
+            let (fit, _) = fit_ml(name, &obs, &mut noise, &IdentifyOptions::default())
+                .with_context(|| format!("fitting the base model of bearing {name}"))?;
+            // The noise from the data alone (module docs of `noise`).
+            let scale = noise.variance_scale;
+            noise.rescale(1.0 / scale);
+            for (m, var) in rows.iter().zip(&noise.var) {
+                let j = speeds_hz.partition_point(|&s| s < m.speed_hz);
+                if let Some(p) = points[b].get_mut(j).and_then(Option::as_mut) {
+                    for (sd, v) in p.sigma.iter_mut().zip(var) {
+                        *sd = v.sqrt().max(f64::MIN_POSITIVE);
+                    }
+                }
+            }
+            noises.push(noise);
+            base_fits.push(fit);
+        }
+        let noise = NoiseModel {
+            columns,
+            bearings: noises,
+        };
         for (b, name) in bearings.iter().enumerate() {
             let n = points[b].iter().flatten().count();
             if n < 3 {
@@ -149,6 +189,7 @@ impl Prepared {
             speeds_hz,
             points,
             noise,
+            base_fits,
         })
     }
 
