@@ -150,13 +150,20 @@ impl Prepared {
                 .filter(|m| &m.bearing == name)
                 .collect();
             rows.sort_by(|x, y| x.speed_hz.total_cmp(&y.speed_hz));
-            let mut noise = BearingNoise::estimate(&rows, &columns, Quantisation::Rounding);
+            // The written digits cannot tell rounding from truncation: the
+            // significance tests take truncation's mean square (ulp²/3), which
+            // bounds both, so that a truncation bias is not named an effect.
+            let mut noise = BearingNoise::estimate(&rows, &columns, Quantisation::Truncation);
             let schedule = schedules
                 .get(name)
                 .ok_or_else(|| anyhow!("bearings.csv has no coefficients for bearing {name}"))?;
             let obs = observations(&rows, schedule, &noise)
                 .with_context(|| format!("bearings.csv, bearing {name}"))?;
-            let (fit, _) = fit_ml(name, &obs, &mut noise, &IdentifyOptions::default())
+            let options = IdentifyOptions {
+                quantisation: Quantisation::Truncation,
+                ..IdentifyOptions::default()
+            };
+            let (fit, _) = fit_ml(name, &obs, &mut noise, &options)
                 .with_context(|| format!("fitting the base model of bearing {name}"))?;
             // The noise from the data alone (module docs of `noise`).
             let scale = noise.variance_scale;
@@ -164,8 +171,9 @@ impl Prepared {
             for (m, var) in rows.iter().zip(&noise.var) {
                 let j = speeds_hz.partition_point(|&s| s < m.speed_hz);
                 if let Some(p) = points[b].get_mut(j).and_then(Option::as_mut) {
-                    for (sd, v) in p.sigma.iter_mut().zip(var) {
-                        *sd = v.sqrt().max(f64::MIN_POSITIVE);
+                    let magnitude: [f64; 8] = std::array::from_fn(|c| point_magnitude(p, c));
+                    for ((sd, v), m) in p.sigma.iter_mut().zip(var).zip(magnitude) {
+                        *sd = v.sqrt().max(PRECISION * m).max(f64::MIN_POSITIVE);
                     }
                 }
             }
@@ -198,6 +206,13 @@ impl Prepared {
         self.bearings.iter().position(|b| b == name)
     }
 }
+
+/// Relative precision below which no phasor's digits are information: a
+/// response computed in double precision (an FE assembly and LU solve, an
+/// extraction) keeps about 10 significant digits, so the significance tests
+/// never take a number as more accurate than 1e-10 of its phasor's magnitude
+/// (it matters only for data written with more than about 10 digits).
+const PRECISION: f64 = 1e-10;
 
 /// |phasor| [m] of the complex channel real channel `c` belongs to.
 pub fn point_magnitude(p: &Point, c: usize) -> f64 {

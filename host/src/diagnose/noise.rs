@@ -2,7 +2,9 @@
 //! [`crate::estimate::noise`], per bearing, decided by the same
 //! maximum-likelihood base fit `plinth identify` makes
 //! ([`crate::identify::estimator::fit_ml`]): the `*_sd` columns, else the
-//! digits each number carries (rounding: variance ulp²/12), else, when the
+//! digits each number carries (taken as truncated, mean square ulp²/3,
+//! which bounds rounding too: the digits cannot tell the two apart, and a
+//! truncation bias must not pass for an effect), else, when the
 //! base fit's χ² says the numbers scatter more than their digits, the scatter
 //! between neighbouring speeds from local smooth fits.
 //!
