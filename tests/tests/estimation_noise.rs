@@ -188,3 +188,36 @@ fn ols_stays_the_papers_fit_and_compare_ols_reports_its_efficiency() {
         }
     }
 }
+
+#[test]
+fn diagnose_base_fit_is_identifys_fit_and_its_floor_is_a_floor() {
+    let run = simulated("examples/feng-hahn-1997-damped.toml")
+        .to_run_dir(None)
+        .unwrap();
+    let dir = write_run(&run, Some(3));
+    let run = RunDir::read(dir.path()).unwrap();
+    let id = identify_run(&run, &Options::default()).unwrap();
+    let out = plinth::diagnose::diagnose(&run, &plinth::diagnose::Options::default()).unwrap();
+    let d = &out.diagnosis;
+    assert!(d.effects_added.is_empty(), "{:?}", d.effects_added);
+    for p in &d.pedestals_before {
+        let fit = id.pedestal(&p.bearing).unwrap();
+        for param in Parameter::ALL {
+            let v = p.values[param.name()];
+            assert!(
+                rel_err(v, fit.get(param)) < 1e-9,
+                "{} {}: diagnose {v} vs identify {}",
+                p.bearing,
+                param.name(),
+                fit.get(param)
+            );
+        }
+    }
+    // Clean 3-digit data: the gap is the rounding's, and the floor says so
+    // (the floor takes truncation's ulp²/3, which bounds rounding's ulp²/12).
+    let (gap, floor) = (d.gap_before, d.noise.gap_floor_before);
+    assert!(
+        gap <= floor && floor <= 2.5 * gap,
+        "gap {gap} vs floor {floor}"
+    );
+}

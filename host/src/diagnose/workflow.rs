@@ -189,7 +189,9 @@ fn infer_group(
     let fit = fit_group(prep, model, &params.nl, weights, group)?;
     let nl_index = model.group_nonlinear(group);
     let jac = jacobian(prep, model, &params.nl, weights, &fit, &nl_index)?;
-    let mut estimate: Vec<f64> = fit.beta.clone();
+    // The state's own values (for the base model: the maximum-likelihood
+    // fit), with the covariance of the weighted fit at these weights.
+    let mut estimate: Vec<f64> = fit.terms.iter().map(|&t| params.beta[t]).collect();
     estimate.extend(nl_index.iter().map(|&k| params.nl[k]));
     let mut refs: Vec<ParamRef> = fit.terms.iter().map(|&t| ParamRef::Term(t)).collect();
     refs.extend(nl_index.iter().map(|&k| ParamRef::Nonlinear(k)));
