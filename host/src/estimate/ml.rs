@@ -122,8 +122,8 @@ fn dynamic_stiffness(theta: &[f64; PARAMETERS], omega: f64) -> [Complex<f64>; 2]
 pub fn equation_covariance(o: &Observation, theta: &[f64; PARAMETERS]) -> Matrix4<f64> {
     let h = dynamic_stiffness(theta, o.omega());
     let mut b = SMatrix::<f64, 4, 8>::zeros();
-    for d in 0..2 {
-        put(&mut b, 2 * d, 4 + 2 * d, h[d]);
+    for (d, &hd) in h.iter().enumerate() {
+        put(&mut b, 2 * d, 4 + 2 * d, hd);
         for c in 0..2 {
             put(&mut b, 2 * d, 2 * c, -o.kstar[d][c]);
         }
@@ -235,7 +235,7 @@ fn inverse_psd(f: &DMatrix<f64>) -> (DMatrix<f64>, f64) {
     } else {
         f64::INFINITY
     };
-    if !(lo > hi * 1e-14) {
+    if lo.is_nan() || lo <= hi * 1e-14 {
         let mut inf = DMatrix::zeros(p, p);
         for i in 0..p {
             inf[(i, i)] = f64::INFINITY;

@@ -427,7 +427,7 @@ pub fn local_residuals(series: &[(f64, Complex<f64>)]) -> Vec<(Complex<f64>, Com
         };
         let xj = nalgebra::DVector::from_fn(DEGREE + 1, |c, _| if c == 0 { 1.0 } else { 0.0 });
         let leverage = (xj.transpose() * &xtx_inv * &xj)[(0, 0)];
-        if !(leverage < 1.0 - 1e-9) {
+        if leverage.is_nan() || leverage >= 1.0 - 1e-9 {
             continue;
         }
         let coef = |part: fn(&Complex<f64>) -> f64| {
