@@ -523,19 +523,8 @@ impl BearingSchedule {
             min_hz,
             max_hz,
         };
-        if !(speed_hz >= min_hz && speed_hz <= max_hz) {
-            return Err(out);
-        }
-        let hi = self.speeds_hz.partition_point(|&s| s < speed_hz);
-        let (Some(&s_hi), Some(c_hi)) = (self.speeds_hz.get(hi), self.coefficients.get(hi)) else {
-            return Err(out);
-        };
-        if hi == 0 || s_hi == speed_hz {
-            return Ok(*c_hi);
-        }
-        let s_lo = self.speeds_hz[hi - 1];
-        let t = (speed_hz - s_lo) / (s_hi - s_lo);
-        Ok(self.coefficients[hi - 1].lerp(c_hi, t))
+        plinth_shared::bearing::interpolate(&self.speeds_hz, &self.coefficients, speed_hz)
+            .ok_or(out)
     }
 }
 
