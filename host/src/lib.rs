@@ -3,12 +3,14 @@
 //! the model-discrepancy workflow. The `plinth` binary is a thin CLI over it.
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod args;
 pub mod base_csv;
 pub mod csv_layout;
 pub mod demo;
 pub mod diagnose;
 pub mod effects;
+pub mod estimate;
 pub mod extract;
 pub mod field;
 pub mod identify;

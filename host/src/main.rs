@@ -15,7 +15,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Batch least-squares identification of every pedestal in a run directory.
+    /// Identification of every pedestal in a run directory (maximum likelihood or the paper's least squares).
     Identify(plinth::identify::cli::Args),
     /// Unbalance response of a machine file, written as a run directory.
     Simulate(plinth::sim::cli::SimulateArgs),
@@ -37,6 +37,8 @@ enum Command {
     Extract(plinth::extract::Args),
     /// Bode and polar plots of a run directory.
     Plot(plinth::field::plot::Args),
+    /// Monte-Carlo of OLS and ML against the Cramér–Rao bound on a simulated machine.
+    Accuracy(plinth::accuracy::Args),
 }
 
 fn main() -> ExitCode {
@@ -53,6 +55,7 @@ fn main() -> ExitCode {
         Command::Import(a) => plinth::field::import::run(&a),
         Command::Extract(a) => plinth::extract::run(&a),
         Command::Plot(a) => plinth::field::plot::run(&a),
+        Command::Accuracy(a) => plinth::accuracy::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -40,7 +40,7 @@ use crate::plots::{
     phase_lag_deg, Mark, PhaseStyle, PhasorFigure, PhasorPanel, PhasorSeries, PhasorView, Quantity,
     Rows, ScalarFigure, ScalarSeries,
 };
-use crate::rundir::{significant_digits, DigitsMode, Measurement, RunDir};
+use crate::rundir::{round_to_digits, DigitsMode, Measurement, RunDir};
 use crate::sim::cli::parse_speeds;
 use crate::sim::predict::{compare, predict_run, Comparison, IdentifiedPedestal};
 use crate::sim::{unbalance_response, EffectSet, Machine};
@@ -153,10 +153,15 @@ pub struct Table1Row {
     pub param: String,
     /// The machine's value.
     pub truth: f64,
-    /// The identified value.
+    /// The identified value (the paper's OLS).
     pub identified: f64,
     /// 100·(identified − truth)/truth [%].
     pub error_pct: f64,
+    /// The maximum-likelihood estimate of the same data and model
+    /// (`plinth identify`'s default).
+    pub ml: f64,
+    /// 100·(ml − truth)/truth [%].
+    pub ml_error_pct: f64,
 }
 
 /// Which pedestal damping a Table 2 row was computed with.
@@ -196,10 +201,16 @@ pub struct Table2Row {
     pub param: String,
     /// The machine's value.
     pub truth: f64,
-    /// The identified value.
+    /// The identified value (the paper's OLS).
     pub identified: f64,
     /// 100·(identified − truth)/truth [%].
     pub error_pct: f64,
+    /// R&I only: the maximum-likelihood estimate of the same data and model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ml: Option<f64>,
+    /// R&I only: 100·(ml − truth)/truth [%].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ml_error_pct: Option<f64>,
 }
 
 /// The pedestal damping of one Table 2 case, one entry per pedestal.
@@ -318,8 +329,8 @@ fn load_machine(path: Option<&Path>, bundled: &str, name: &str) -> Result<Machin
 pub fn reduce_digits(run: &RunDir, digits: u32, mode: DigitsMode) -> RunDir {
     let r = |c: Complex<f64>| {
         Complex::new(
-            significant_digits(c.re, digits, mode),
-            significant_digits(c.im, digits, mode),
+            round_to_digits(c.re, digits, mode),
+            round_to_digits(c.im, digits, mode),
         )
     };
     let mut out = run.clone();
@@ -361,6 +372,14 @@ fn fit_value(f: &PedestalFit, name: &str) -> f64 {
         "m" => f.m,
         "c_y" => f.c_y,
         _ => f.c_z,
+    }
+}
+
+/// The noise model's reading of how the paper's digits were reduced.
+fn quantisation_of(mode: DigitsMode) -> crate::estimate::noise::Quantisation {
+    match mode {
+        DigitsMode::Round => crate::estimate::noise::Quantisation::Rounding,
+        DigitsMode::Truncate => crate::estimate::noise::Quantisation::Truncation,
     }
 }
 
@@ -422,7 +441,7 @@ fn heavy_damping_scale(machine: &Machine, target: f64) -> Result<f64> {
             machine.name
         ));
     }
-    Ok(significant_digits(target / mean, 2, DigitsMode::Round))
+    Ok(round_to_digits(target / mean, 2, DigitsMode::Round))
 }
 
 /// Table 2's rows for one damping case: the four modes of eq. 4 on `damped`
@@ -449,8 +468,25 @@ fn table2_rows(
         EquationMode::Real,
         EquationMode::Imag,
     ] {
-        let options = Options::with_mode(mode);
+        let options = Options {
+            quantisation: quantisation_of(digits_mode),
+            ..Options::with_mode(mode).ols()
+        };
         let model = options.model();
+        let ml_id = if mode == EquationMode::RealAndImag {
+            let ml_options = Options {
+                estimator: crate::identify::Estimator::Ml,
+                ..options
+            };
+            Some(identify_run(&run, &ml_options).with_context(|| {
+                format!(
+                    "identifying the {digits_text} damped run ({}) by maximum likelihood",
+                    case.name()
+                )
+            })?)
+        } else {
+            None
+        };
         let id = identify_run(&run, &options).with_context(|| {
             format!(
                 "identifying the {digits_text} damped run ({}) with {}",
@@ -463,9 +499,11 @@ fn table2_rows(
                 .pedestal(b)
                 .ok_or_else(|| anyhow!("no fit for pedestal {b:?} ({})", case.name()))?;
             let truth = truth_of(damped, b)?;
+            let ml_fit = ml_id.as_ref().and_then(|id| id.pedestal(b));
             for param in model.parameters() {
                 let name = param.name();
                 let (t, v) = (param_value(&truth, name), fit_value(fit, name));
+                let ml = ml_fit.map(|f| fit_value(f, name));
                 rows.push(Table2Row {
                     case,
                     damping_scale,
@@ -475,6 +513,8 @@ fn table2_rows(
                     truth: t,
                     identified: v,
                     error_pct: error_pct(v, t),
+                    ml,
+                    ml_error_pct: ml.map(|m| error_pct(m, t)),
                 });
             }
         }
@@ -586,10 +626,21 @@ pub fn reproduce_with(
         let run = reduce_digits(&undamped, digits, opts.digits_mode);
         let options = Options {
             model: Some(Model::UNDAMPED),
-            ..Options::with_mode(EquationMode::RealAndImag)
+            quantisation: quantisation_of(opts.digits_mode),
+            ..Options::with_mode(EquationMode::RealAndImag).ols()
         };
         let id = identify_run(&run, &options)
             .with_context(|| format!("identifying the {digits}-digit undamped run"))?;
+        let ml_id = identify_run(
+            &run,
+            &Options {
+                estimator: crate::identify::Estimator::Ml,
+                ..options
+            },
+        )
+        .with_context(|| {
+            format!("identifying the {digits}-digit undamped run by maximum likelihood")
+        })?;
         for b in &bearings {
             let fit = id
                 .pedestal(b)
@@ -597,6 +648,7 @@ pub fn reproduce_with(
             let truth = truth_of(&undamped, b)?;
             for param in ["k_y", "k_z", "m"] {
                 let (t, v) = (param_value(&truth, param), fit_value(fit, param));
+                let ml = ml_id.pedestal(b).map_or(f64::NAN, |f| fit_value(f, param));
                 table1.push(Table1Row {
                     digits,
                     digits_mode: opts.digits_mode,
@@ -605,6 +657,8 @@ pub fn reproduce_with(
                     truth: t,
                     identified: v,
                     error_pct: error_pct(v, t),
+                    ml,
+                    ml_error_pct: error_pct(ml, t),
                 });
             }
         }
@@ -1002,20 +1056,23 @@ pub fn tables_text(t: &Tables) -> String {
             DigitsMode::Truncate => "truncated",
         }
     );
+    s += "  identified: the paper's least squares; ML: maximum likelihood, errors in variables (plinth identify's default)\n";
     s += &format!(
-        "{:<10} {:<6} {:<5} {:>12} {:>12} {:>10}\n",
-        "digits", "ped", "param", "truth", "identified", "error [%]"
+        "{:<10} {:<6} {:<5} {:>12} {:>12} {:>10} {:>12} {:>10}\n",
+        "digits", "ped", "param", "truth", "identified", "error [%]", "ML", "error [%]"
     );
     for r in &t.table1 {
         let (u, k) = unit_of(&r.param);
         s += &format!(
-            "{:<10} {:<6} {:<5} {:>12} {:>12} {:>10.3}  {u}\n",
+            "{:<10} {:<6} {:<5} {:>12} {:>12} {:>10.3} {:>12} {:>10.3}  {u}\n",
             format!("{} {}", r.digits, digits_mode_name(r.digits_mode)),
             r.bearing,
             r.param,
             fmt_value(r.truth, k),
             fmt_value(r.identified, k),
-            r.error_pct
+            r.error_pct,
+            fmt_value(r.ml, k),
+            r.ml_error_pct
         );
     }
     s += &format!(
@@ -1042,19 +1099,25 @@ pub fn tables_text(t: &Tables) -> String {
             s += "\n";
         }
         s += &format!(
-            "{:<10} {:<6} {:<5} {:>12} {:>12} {:>10}\n",
-            "mode", "ped", "param", "truth", "identified", "error [%]"
+            "{:<10} {:<6} {:<5} {:>12} {:>12} {:>10} {:>12} {:>10}\n",
+            "mode", "ped", "param", "truth", "identified", "error [%]", "ML", "error [%]"
         );
         for r in t.table2.iter().filter(|r| r.case == case.case) {
             let (u, k) = unit_of(&r.param);
+            let (ml, ml_err) = match (r.ml, r.ml_error_pct) {
+                (Some(v), Some(e)) => (fmt_value(v, k), format!("{e:.3}")),
+                _ => (String::new(), String::new()),
+            };
             s += &format!(
-                "{:<10} {:<6} {:<5} {:>12} {:>12} {:>10.3}  {u}\n",
+                "{:<10} {:<6} {:<5} {:>12} {:>12} {:>10.3} {:>12} {:>10}  {u}\n",
                 r.mode,
                 r.bearing,
                 r.param,
                 fmt_value(r.truth, k),
                 fmt_value(r.identified, k),
-                r.error_pct
+                r.error_pct,
+                ml,
+                ml_err
             );
         }
         let w = |m: &str| worst_error(&t.table2, case.case, m, &KM);

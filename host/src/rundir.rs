@@ -439,7 +439,7 @@ pub fn format_number(x: f64) -> String {
 /// `x` reduced to `digits` significant decimal digits (at least one), working
 /// on the shortest decimal text of `x` so that e.g. 0.29 truncates to 0.29,
 /// not 0.28. Non-finite values are returned unchanged.
-pub fn significant_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
+pub fn round_to_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
     if !x.is_finite() || x == 0.0 {
         return x;
     }
@@ -550,19 +550,8 @@ impl BearingSchedule {
             min_hz,
             max_hz,
         };
-        if !(speed_hz >= min_hz && speed_hz <= max_hz) {
-            return Err(out);
-        }
-        let hi = self.speeds_hz.partition_point(|&s| s < speed_hz);
-        let (Some(&s_hi), Some(c_hi)) = (self.speeds_hz.get(hi), self.coefficients.get(hi)) else {
-            return Err(out);
-        };
-        if hi == 0 || s_hi == speed_hz {
-            return Ok(*c_hi);
-        }
-        let s_lo = self.speeds_hz[hi - 1];
-        let t = (speed_hz - s_lo) / (s_hi - s_lo);
-        Ok(self.coefficients[hi - 1].lerp(c_hi, t))
+        plinth_shared::bearing::interpolate(&self.speeds_hz, &self.coefficients, speed_hz)
+            .ok_or(out)
     }
 }
 
@@ -698,7 +687,7 @@ impl RunDir {
             source,
         })?;
         let reduce = |x: f64| match options.digits {
-            Some(d) => significant_digits(x, d, options.digits_mode),
+            Some(d) => round_to_digits(x, d, options.digits_mode),
             None => x,
         };
 

@@ -161,15 +161,38 @@ impl<const N: usize, T: Float> BearingTable<N, T> {
         if !inside {
             return Err(BearingTableError::OutOfRange);
         }
-        // First index whose speed is >= speed_hz.
-        let hi = self.speeds_hz.partition_point(|&s| s < speed_hz);
-        if hi == 0 || self.speeds_hz[hi] == speed_hz {
-            return Ok(self.coefficients[hi]);
-        }
-        let lo = hi - 1;
-        let t = (speed_hz - self.speeds_hz[lo]) / (self.speeds_hz[hi] - self.speeds_hz[lo]);
-        Ok(self.coefficients[lo].lerp(&self.coefficients[hi], t))
+        interpolate(&self.speeds_hz, &self.coefficients, speed_hz)
+            .ok_or(BearingTableError::OutOfRange)
     }
+}
+
+/// Bearing coefficients at `speed_hz` [Hz] from a table listed at strictly
+/// increasing `speeds_hz` [Hz] (`coefficients[i]` at `speeds_hz[i]`):
+/// linear in speed between the two nearest listed speeds, `None` outside
+/// the listed range (no extrapolation, formats.md), for an empty table or
+/// slices of different lengths. The one speed-table interpolation of the
+/// workspace (the box's [`BearingTable`], the host's run-directory schedule
+/// and the simulator's tables all call it).
+pub fn interpolate<T: Float>(
+    speeds_hz: &[T],
+    coefficients: &[BearingCoefficients<T>],
+    speed_hz: T,
+) -> Option<BearingCoefficients<T>> {
+    if speeds_hz.len() != coefficients.len() {
+        return None;
+    }
+    let (first, last) = (*speeds_hz.first()?, *speeds_hz.last()?);
+    if !(speed_hz >= first && speed_hz <= last) {
+        return None;
+    }
+    // First index whose speed is >= speed_hz.
+    let hi = speeds_hz.partition_point(|&s| s < speed_hz);
+    let (s_hi, c_hi) = (*speeds_hz.get(hi)?, coefficients.get(hi)?);
+    if hi == 0 || s_hi == speed_hz {
+        return Some(*c_hi);
+    }
+    let (s_lo, c_lo) = (*speeds_hz.get(hi - 1)?, coefficients.get(hi - 1)?);
+    Some(c_lo.lerp(c_hi, (speed_hz - s_lo) / (s_hi - s_lo)))
 }
 
 #[cfg(test)]

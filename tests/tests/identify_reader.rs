@@ -4,7 +4,7 @@
 
 use num_complex::Complex;
 use plinth::identify::synthetic::SyntheticRun;
-use plinth::rundir::{significant_digits, DigitsMode, RunDir, WriteOptions};
+use plinth::rundir::{round_to_digits, DigitsMode, RunDir, WriteOptions};
 use std::fs;
 use tempfile::TempDir;
 
@@ -114,7 +114,7 @@ fn digits_round_the_phasors_only() {
         for (x, y) in values(a).into_iter().zip(values(b)) {
             // Rounding to 2 digits: at most half a unit in the 2nd digit.
             assert!((x - y).abs() <= 0.05 * y.abs() + 1e-300, "{x} vs {y}");
-            assert_eq!(significant_digits(x, 2, DigitsMode::Round), x);
+            assert_eq!(round_to_digits(x, 2, DigitsMode::Round), x);
             changed += usize::from(x != y);
         }
     }
@@ -139,16 +139,16 @@ fn digits_round_the_phasors_only() {
 #[test]
 fn significant_digits_work_on_the_decimal_text() {
     use DigitsMode::{Round, Truncate};
-    assert_eq!(significant_digits(0.29, 2, Truncate), 0.29);
-    assert_eq!(significant_digits(0.299, 2, Truncate), 0.29);
-    assert_eq!(significant_digits(1234.5, 2, Truncate), 1200.0);
-    assert_eq!(significant_digits(-1234.5, 2, Round), -1200.0);
-    assert_eq!(significant_digits(1250.0, 2, Round), 1300.0);
-    assert_eq!(significant_digits(9.96, 2, Round), 10.0);
-    assert_eq!(significant_digits(-0.0123456, 3, Round), -0.0123);
-    assert_eq!(significant_digits(9.99e-7, 1, Round), 1e-6);
-    assert_eq!(significant_digits(0.0, 2, Round), 0.0);
-    assert_eq!(significant_digits(12.0, 5, Round), 12.0);
+    assert_eq!(round_to_digits(0.29, 2, Truncate), 0.29);
+    assert_eq!(round_to_digits(0.299, 2, Truncate), 0.29);
+    assert_eq!(round_to_digits(1234.5, 2, Truncate), 1200.0);
+    assert_eq!(round_to_digits(-1234.5, 2, Round), -1200.0);
+    assert_eq!(round_to_digits(1250.0, 2, Round), 1300.0);
+    assert_eq!(round_to_digits(9.96, 2, Round), 10.0);
+    assert_eq!(round_to_digits(-0.0123456, 3, Round), -0.0123);
+    assert_eq!(round_to_digits(9.99e-7, 1, Round), 1e-6);
+    assert_eq!(round_to_digits(0.0, 2, Round), 0.0);
+    assert_eq!(round_to_digits(12.0, 5, Round), 12.0);
 }
 
 #[test]

@@ -528,7 +528,8 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
     std::fs::write(&truth_path, text + "\n")
         .with_context(|| format!("cannot write {}", truth_path.display()))?;
     let measured = RunDir::read(&run_dir)?;
-    let identification = identify_run(&measured, &Options::default())
+    // The paper's OLS: the same least-squares problem the box's RLS solves.
+    let identification = identify_run(&measured, &Options::default().ols())
         .with_context(|| format!("identifying {}", run_dir.display()))?;
     let mut warnings = Vec::new();
     for p in &identification.pedestals {

@@ -3,8 +3,10 @@
 //! stiffness K* = K_b + iΩ·C_b at each measured speed and the noise standard
 //! deviation of every real number (see [`super::noise`]).
 
-use super::noise::{NoiseModel, CHANNELS};
-use crate::rundir::RunDir;
+use super::noise::{BearingNoise, ColumnDigits, NoiseModel, CHANNELS};
+use crate::estimate::noise::Quantisation;
+use crate::identify::{estimator::fit_ml, observations, Options as IdentifyOptions, PedestalFit};
+use crate::rundir::{Measurement, RunDir};
 use anyhow::{anyhow, bail, Context, Result};
 use num_complex::Complex;
 use plinth_shared::phasor::{omega_from_hz, Phasor2};
@@ -71,6 +73,9 @@ pub struct Prepared {
     pub points: Vec<Vec<Option<Point>>>,
     /// The measurement noise model the standard deviations come from.
     pub noise: NoiseModel,
+    /// Per bearing, the maximum-likelihood fit of the paper's five-parameter
+    /// model that decided the noise (`plinth identify`'s default fit).
+    pub base_fits: Vec<PedestalFit>,
 }
 
 impl Prepared {
@@ -89,7 +94,6 @@ impl Prepared {
         let mut speeds_hz: Vec<f64> = run.measurements.iter().map(|m| m.speed_hz).collect();
         speeds_hz.sort_by(f64::total_cmp);
         speeds_hz.dedup();
-        let noise = NoiseModel::estimate(run, &bearings)?;
         let schedules = run.bearing_schedules();
         let mut points: Vec<Vec<Option<Point>>> = vec![vec![None; speeds_hz.len()]; bearings.len()];
         for (row, m) in run.measurements.iter().enumerate() {
@@ -132,10 +136,54 @@ impl Prepared {
                 sigma: [0.0; 8],
             };
             for c in 0..CHANNELS.len() {
-                point.sigma[c] = noise.sigma(b, c, point.channel(c), point_magnitude(&point, c));
+                point.sigma[c] = 0.0;
             }
             points[b][j] = Some(point);
         }
+        let columns = ColumnDigits::of_run(&run.measurements);
+        let mut noises = Vec::with_capacity(bearings.len());
+        let mut base_fits = Vec::with_capacity(bearings.len());
+        for (b, name) in bearings.iter().enumerate() {
+            let mut rows: Vec<&Measurement> = run
+                .measurements
+                .iter()
+                .filter(|m| &m.bearing == name)
+                .collect();
+            rows.sort_by(|x, y| x.speed_hz.total_cmp(&y.speed_hz));
+            // The written digits cannot tell rounding from truncation: the
+            // significance tests take truncation's mean square (ulp²/3), which
+            // bounds both, so that a truncation bias is not named an effect.
+            let mut noise = BearingNoise::estimate(&rows, &columns, Quantisation::Truncation);
+            let schedule = schedules
+                .get(name)
+                .ok_or_else(|| anyhow!("bearings.csv has no coefficients for bearing {name}"))?;
+            let obs = observations(&rows, schedule, &noise)
+                .with_context(|| format!("bearings.csv, bearing {name}"))?;
+            let options = IdentifyOptions {
+                quantisation: Quantisation::Truncation,
+                ..IdentifyOptions::default()
+            };
+            let (fit, _) = fit_ml(name, &obs, &mut noise, &options)
+                .with_context(|| format!("fitting the base model of bearing {name}"))?;
+            // The noise from the data alone (module docs of `noise`).
+            let scale = noise.variance_scale;
+            noise.rescale(1.0 / scale);
+            for (m, var) in rows.iter().zip(&noise.var) {
+                let j = speeds_hz.partition_point(|&s| s < m.speed_hz);
+                if let Some(p) = points[b].get_mut(j).and_then(Option::as_mut) {
+                    let magnitude: [f64; 8] = std::array::from_fn(|c| point_magnitude(p, c));
+                    for ((sd, v), m) in p.sigma.iter_mut().zip(var).zip(magnitude) {
+                        *sd = v.sqrt().max(PRECISION * m).max(f64::MIN_POSITIVE);
+                    }
+                }
+            }
+            noises.push(noise);
+            base_fits.push(fit);
+        }
+        let noise = NoiseModel {
+            columns,
+            bearings: noises,
+        };
         for (b, name) in bearings.iter().enumerate() {
             let n = points[b].iter().flatten().count();
             if n < 3 {
@@ -149,6 +197,7 @@ impl Prepared {
             speeds_hz,
             points,
             noise,
+            base_fits,
         })
     }
 
@@ -157,6 +206,13 @@ impl Prepared {
         self.bearings.iter().position(|b| b == name)
     }
 }
+
+/// Relative precision below which no phasor's digits are information: a
+/// response computed in double precision (an FE assembly and LU solve, an
+/// extraction) keeps about 10 significant digits, so the significance tests
+/// never take a number as more accurate than 1e-10 of its phasor's magnitude
+/// (it matters only for data written with more than about 10 digits).
+const PRECISION: f64 = 1e-10;
 
 /// |phasor| [m] of the complex channel real channel `c` belongs to.
 pub fn point_magnitude(p: &Point, c: usize) -> f64 {

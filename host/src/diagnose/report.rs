@@ -91,8 +91,8 @@ pub struct Pedestal {
 pub struct NoiseSummary {
     /// Significant digits of each `measurements.csv` column (by column name).
     pub digits: BTreeMap<String, u32>,
-    /// Scatter law between neighbouring speeds per bearing and channel.
-    pub scatter: BTreeMap<String, BTreeMap<String, super::noise::Scatter>>,
+    /// Per bearing: the noise source, sd per channel and the scatter law.
+    pub bearings: BTreeMap<String, super::noise::BearingNoiseSummary>,
     /// Noise floor of the pedestal-level gap with the base model [-].
     pub gap_floor_before: f64,
     /// Noise floor of the pedestal-level gap with the final model [-].
@@ -156,6 +156,15 @@ impl Diagnosis {
             .map(|(k, v)| format!("{k} {v}"))
             .collect();
         let _ = writeln!(s, "Digits written: {}", digits.join(", "));
+        for (bearing, n) in &self.noise.bearings {
+            let sd: Vec<String> = n.sd.iter().map(|(k, v)| format!("{k} {v:.2e}")).collect();
+            let _ = writeln!(
+                s,
+                "Noise at {bearing}: from the {}, sd [m] {}",
+                n.source.name(),
+                sd.join(", ")
+            );
+        }
         let _ = writeln!(s, "\nWhere the disagreement lives (base model):");
         for l in self.where_before.iter().take(4) {
             let _ = writeln!(s, "  {}", l.summary);

@@ -9,7 +9,7 @@ use super::fit::{fit_group, jacobian, profile, search_interval, Weights};
 use super::gap::{Gap, Prediction};
 use super::locate::locate;
 use super::model::{Model, Params, Term};
-use super::noise::{CHANNELS, COMPLEX_CHANNELS};
+use super::noise::CHANNELS;
 use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
 use crate::rundir::RunDir;
 use anyhow::{anyhow, Result};
@@ -106,6 +106,31 @@ impl State {
         })
     }
 
+    /// The base model: with the paper's five parameters, the maximum-
+    /// likelihood fit `plinth identify` makes (the same function, through
+    /// [`Prepared::base_fits`]); with a reduced `--base`, the weighted fit of
+    /// [`State::fit`].
+    pub fn base(prep: &Prepared, base: &[Parameter]) -> Result<Self> {
+        let model = base_model(base, prep.bearings.len());
+        if base != Parameter::ALL.as_slice() || prep.base_fits.len() != prep.bearings.len() {
+            return Self::fit(prep, model, Vec::new());
+        }
+        let beta: Vec<f64> = prep.base_fits.iter().flat_map(|f| f.params()).collect();
+        if beta.len() != model.terms.len() || !beta.iter().all(|v| v.is_finite()) {
+            return Self::fit(prep, model, Vec::new());
+        }
+        let params = Params {
+            beta,
+            nl: Vec::new(),
+        };
+        let weights = Weights::propagate(prep, &model, &params);
+        Ok(Self {
+            model,
+            params,
+            weights,
+        })
+    }
+
     /// The pedestal-level prediction and gap of this state.
     pub fn gap(&self, prep: &Prepared) -> (Prediction, Gap) {
         let pred = Prediction::new(prep, &self.model, &self.params);
@@ -167,7 +192,9 @@ fn infer_group(
     let fit = fit_group(prep, model, &params.nl, weights, group)?;
     let nl_index = model.group_nonlinear(group);
     let jac = jacobian(prep, model, &params.nl, weights, &fit, &nl_index)?;
-    let mut estimate: Vec<f64> = fit.beta.clone();
+    // The state's own values (for the base model: the maximum-likelihood
+    // fit), with the covariance of the weighted fit at these weights.
+    let mut estimate: Vec<f64> = fit.terms.iter().map(|&t| params.beta[t]).collect();
     estimate.extend(nl_index.iter().map(|&k| params.nl[k]));
     let mut refs: Vec<ParamRef> = fit.terms.iter().map(|&t| ParamRef::Term(t)).collect();
     refs.extend(nl_index.iter().map(|&k| ParamRef::Nonlinear(k)));
@@ -344,8 +371,7 @@ pub struct Outcome {
 /// Runs the whole workflow on a run directory at the pedestal level.
 pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let prep = Prepared::from_run(run)?;
-    let nb = prep.bearings.len();
-    let mut state = State::fit(&prep, base_model(&opts.base, nb), Vec::new())?;
+    let mut state = State::base(&prep, &opts.base)?;
     let (pred0, gap0) = state.gap(&prep);
     let where_before = locate(&prep, &state.model, &state.params, &pred0);
     let pedestals_before = pedestals(&prep, &state)?;
@@ -429,15 +455,11 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     for (c, q) in prep.noise.columns.iter().enumerate() {
         digits.insert(CHANNELS[c].to_string(), q.digits);
     }
-    let mut scatter = BTreeMap::new();
+    let mut bearings_noise = BTreeMap::new();
     for (b, name) in prep.bearings.iter().enumerate() {
-        let mut m = BTreeMap::new();
-        for (c, s) in prep.noise.scatter[b].iter().enumerate() {
-            if let Some(s) = s {
-                m.insert(COMPLEX_CHANNELS[c].to_string(), *s);
-            }
+        if let Some(summary) = prep.noise.summary(b) {
+            bearings_noise.insert(name.clone(), summary);
         }
-        scatter.insert(name.clone(), m);
     }
     let diagnosis = Diagnosis {
         base_model: opts.base.iter().map(|p| p.name().to_string()).collect(),
@@ -449,7 +471,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         machine_gap_after: None,
         noise: NoiseSummary {
             digits,
-            scatter,
+            bearings: bearings_noise,
             gap_floor_before: gap0.floor,
             gap_floor_after: gap1.floor,
         },

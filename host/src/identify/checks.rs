@@ -88,16 +88,21 @@ pub(super) fn warnings(
             .iter()
             .zip(solution.theta.iter().zip(&solution.std_err))
         {
-            if se.is_nan() || se > value.abs() {
-                let (kind, note) = match c {
-                    Parameter::Cy | Parameter::Cz => (
+            let damping = matches!(c, Parameter::Cy | Parameter::Cz);
+            // A damping is resolved when it differs from zero by 2σ; a
+            // stiffness or mass is determined when its σ is below its value.
+            let reach = if damping { 2.0 * se } else { se };
+            if se.is_nan() || reach > value.abs() {
+                let (kind, note) = if damping {
+                    (
                         WarningKind::DampingNotResolved,
-                        "consistent with zero: the data do not resolve this damping",
-                    ),
-                    _ => (
+                        "consistent with zero at 2σ: the data do not resolve this damping",
+                    )
+                } else {
+                    (
                         WarningKind::Undetermined,
                         "its standard error exceeds its value: not determined",
-                    ),
+                    )
                 };
                 warn(
                     kind,

@@ -1,9 +1,10 @@
 //! `plinth identify`: batch identification of every pedestal in a run directory.
 
 use super::{
-    identify_run, mode_label, EquationMode, Identification, Model, Options, Parameter, PedestalFit,
-    DEFAULT_MAX_CONDITION_NUMBER,
+    identify_run, mode_label, EquationMode, Estimator, Identification, Model, Options, Parameter,
+    PedestalFit, DEFAULT_MAX_CONDITION_NUMBER,
 };
+use crate::estimate::noise::Quantisation;
 use crate::rundir::{RunDir, Truth};
 use anyhow::Context;
 use std::path::PathBuf;
@@ -37,10 +38,16 @@ impl From<Equations> for EquationMode {
 #[command(after_help = "\
 Reads DIR/measurements.csv and DIR/bearings.csv (and DIR/truth.json when present, to show \
 the errors), computes each bearing's force on its pedestal from the known bearing \
-coefficients, and fits k_y, k_z [N/m], m [kg], c_y, c_z [N·s/m] of every pedestal by least \
-squares on Feng & Hahn's eq. 4. Prints value ± standard error per parameter, the residual RMS \
-[N] and the condition number; warnings go to stderr (and into the JSON), and a pedestal whose \
-fit cannot be trusted is marked UNTRUSTED.
+coefficients, and fits k_y, k_z [N/m], m [kg], c_y, c_z [N·s/m] of every pedestal on Feng & \
+Hahn's eq. 4. Prints value ± standard error per parameter, the residual RMS [N] and the \
+condition number; warnings go to stderr (and into the JSON), and a pedestal whose fit cannot \
+be trusted is marked UNTRUSTED.
+
+Default estimator (--estimator ml): maximum likelihood with noise in both the rotor-relative \
+and the pedestal phasors (errors in variables), the noise of every number from the *_sd \
+columns, else from the digits the numbers carry, else from the scatter between neighbouring \
+speeds (its level then set by the fit's χ²); standard errors from the Fisher information (the \
+Cramér–Rao bound at the estimate). --estimator ols is the paper's least squares.
 
 Default model: all five parameters for --equations r-and-i; k_y,k_z,m for real, imag and \
 r-plus-i, which the paper used on undamped pedestals only (with damping they are biased: use \
@@ -62,6 +69,18 @@ pub struct Args {
     /// not trusted.
     #[arg(long, default_value_t = DEFAULT_MAX_CONDITION_NUMBER)]
     pub max_condition: f64,
+    /// Estimator: ml (maximum likelihood, errors in variables; R&I only) or
+    /// ols (the paper's least squares; always used with the other --equations).
+    #[arg(long, value_enum, default_value_t = Estimator::Ml)]
+    pub estimator: Estimator,
+    /// With ml: also show the paper's OLS and its efficiency (bound variance /
+    /// OLS variance under the noise model) per parameter.
+    #[arg(long)]
+    pub compare_ols: bool,
+    /// The numbers were truncated to their digits, not rounded (noise model:
+    /// mean square ulp²/3 instead of ulp²/12).
+    #[arg(long)]
+    pub truncated: bool,
 }
 
 impl Args {
@@ -71,6 +90,13 @@ impl Args {
             mode: self.equations.into(),
             model: self.model,
             max_condition_number: self.max_condition,
+            estimator: self.estimator,
+            quantisation: if self.truncated {
+                Quantisation::Truncation
+            } else {
+                Quantisation::Rounding
+            },
+            compare_ols: self.compare_ols,
             ..Options::default()
         }
     }
@@ -78,6 +104,13 @@ impl Args {
 
 /// Runs `plinth identify`: the table (or JSON) on stdout, warnings on stderr.
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    let equations: EquationMode = args.equations.into();
+    if args.estimator == Estimator::Ml && equations != EquationMode::RealAndImag {
+        anyhow::bail!(
+            "--equations {}: the paper's equation variants are least-squares variants; add --estimator ols",
+            super::mode_name(equations)
+        );
+    }
     let run = RunDir::read(&args.dir)?;
     let identification = identify_run(&run, &args.options())
         .with_context(|| format!("identifying {}", args.dir.display()))?;
@@ -100,10 +133,35 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 /// one of the relative errors under each pedestal.
 pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
     let mode = super::parse_mode(&identification.equations).map_or("?", mode_label);
+    let estimator = match identification.estimator.as_str() {
+        "ml" => "maximum likelihood (errors in variables)",
+        _ => "least squares (the paper's)",
+    };
     let mut out = format!(
-        "equations {mode}, model {}\n\n",
+        "estimator {estimator}, equations {mode}, model {}\n",
         identification.model.join(",")
     );
+    for fit in &identification.pedestals {
+        if let Some(n) = identification.noise.get(&fit.bearing) {
+            let sd: Vec<String> = crate::estimate::noise::CHANNELS
+                .iter()
+                .map(|c| format!("{c} {}", sig(n.sd.get(*c).copied().unwrap_or(f64::NAN), 2)))
+                .collect();
+            out.push_str(&format!(
+                "noise {}: {}{}, sd [m] {}; χ²/dof {}\n",
+                fit.bearing,
+                n.source.name(),
+                if n.scale_estimated {
+                    " (level from the fit's χ²)"
+                } else {
+                    ""
+                },
+                sd.join(", "),
+                sig(n.chi2 / n.dof.max(1) as f64, 3)
+            ));
+        }
+    }
+    out.push('\n');
     let units = |p: Parameter| match p {
         Parameter::Ky | Parameter::Kz => ("MN/m", 1.0e6),
         Parameter::M => ("kg", 1.0),
@@ -136,6 +194,25 @@ pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
         });
         row.push(if fit.trusted { "ok" } else { "UNTRUSTED" }.into());
         rows.push(row);
+
+        if let Some(ols) = &fit.ols {
+            let mut ols_row = vec!["  ols".to_string()];
+            let mut eff_row = vec!["  ols eff.".to_string()];
+            for p in Parameter::ALL {
+                let scale = units(p).1;
+                match (ols.estimate.get(p.name()), ols.std_err.get(p.name())) {
+                    (Some(v), Some(se)) => ols_row.push(value_pm(v / scale, se / scale)),
+                    _ => ols_row.push("-".into()),
+                }
+                eff_row.push(
+                    ols.efficiency
+                        .get(p.name())
+                        .map_or("-".into(), |e| format!("{:.0}%", 100.0 * e)),
+                );
+            }
+            rows.push(ols_row);
+            rows.push(eff_row);
+        }
 
         if let Some(t) = truth.and_then(|t| t.pedestals.iter().find(|t| t.bearing == fit.bearing)) {
             let values = [t.k_y, t.k_z, t.m, t.c_y, t.c_z];

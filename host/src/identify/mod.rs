@@ -1,11 +1,14 @@
-//! Batch least-squares identification of pedestals (Feng & Hahn eq. 4), in f64.
+//! Batch identification of pedestals (Feng & Hahn eq. 4), in f64: by
+//! maximum likelihood with noise in every measured phasor (the default,
+//! [`estimator`] over [`crate::estimate`]) or by the paper's least squares.
 //!
 //! Per pedestal (one per bearing), every measured speed gives the force the
 //! bearing transmits, F = (K_b + iΩ·C_b)·rel (eq. 2, with the known bearing
 //! coefficients interpolated to that speed), and eq. 3,
 //! (k − Ω²m + iΩc)·ped = F per direction, gives up to four real equations
 //! linear in θ = (k_y, k_z, m, c_y, c_z). They are stacked over speeds and
-//! solved by column-scaled least squares ([`lsq`]); the fit reports standard
+//! solved by column-scaled least squares ([`lsq`]), the paper's OLS and the
+//! maximum-likelihood fit's start; the fit reports standard
 //! errors, the residual and the condition number, and warns ([`Warning`])
 //! whenever the data cannot support what it returns.
 //!
@@ -15,18 +18,23 @@
 pub mod base;
 mod checks;
 pub mod cli;
+pub mod estimator;
 pub mod lsq;
 pub mod model;
 pub mod synthetic;
 
+pub use estimator::{Estimator, NoiseReport, OlsComparison};
 pub use model::{mode_label, mode_name, parse_mode, Model, ModelError};
 pub use plinth_shared::regression::{EquationMode, Parameter};
 
+use crate::estimate::noise::{BearingNoise, ColumnDigits, Quantisation};
+use crate::estimate::{complex_stiffness, Observation};
 use crate::rundir::{BearingSchedule, Measurement, OutOfRange, RunDir, RunDirError};
 use nalgebra::{DMatrix, DVector};
 use plinth_shared::phasor::{omega_from_hz, Phasor2};
 use plinth_shared::regression::{equations_for_mode, PARAMETERS};
 use serde::{Deserialize, Deserializer, Serialize};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// One speed's data for one pedestal: what eq. 3 relates.
@@ -53,6 +61,14 @@ pub struct Options {
     pub max_condition_number: f64,
     /// Fewest distinct speeds for a trusted fit.
     pub min_speeds: usize,
+    /// The estimator; ML applies to R&I only (the paper's other equation
+    /// variants are least-squares variants and always use OLS).
+    pub estimator: Estimator,
+    /// How the digits of the numbers were reduced (the noise model's
+    /// `digits` source).
+    pub quantisation: Quantisation,
+    /// With ML: also report OLS and its efficiency against the bound.
+    pub compare_ols: bool,
 }
 
 impl Default for Options {
@@ -62,6 +78,9 @@ impl Default for Options {
             model: None,
             max_condition_number: DEFAULT_MAX_CONDITION_NUMBER,
             min_speeds: DEFAULT_MIN_SPEEDS,
+            estimator: Estimator::default(),
+            quantisation: Quantisation::default(),
+            compare_ols: false,
         }
     }
 }
@@ -88,6 +107,21 @@ impl Options {
     pub fn model(&self) -> Model {
         self.model.unwrap_or_else(|| Model::default_for(self.mode))
     }
+
+    /// The paper's OLS with these options (what `plinth paper` reports).
+    pub fn ols(mut self) -> Self {
+        self.estimator = Estimator::Ols;
+        self
+    }
+
+    /// The estimator in effect: ML only with the R&I equations.
+    pub fn effective_estimator(&self) -> Estimator {
+        if self.mode == EquationMode::RealAndImag {
+            self.estimator
+        } else {
+            Estimator::Ols
+        }
+    }
 }
 
 /// What a warning is about. Serialised in snake_case.
@@ -105,14 +139,20 @@ pub enum WarningKind {
     IllConditioned,
     /// A stiffness or mass whose standard error exceeds its value. Fit not trusted.
     Undetermined,
-    /// A damping whose standard error exceeds its value: the data do not
-    /// resolve the damping (it is consistent with zero). Informative.
+    /// A damping within two standard errors of zero: the data do not
+    /// resolve the damping (it is consistent with zero at 2σ). Informative.
     DampingNotResolved,
     /// k − Ω²m keeps its sign over the measured speeds in both directions:
     /// no pedestal resonance in range, so m rests on the curvature alone.
     NoResonance,
     /// Some speeds had non-finite numbers and were left out.
     NonFiniteInput,
+    /// The fit's χ² does not fit the noise model's absolute scale (the data
+    /// scatter more, or less, than the known noise). Informative.
+    NoiseScaleMismatch,
+    /// The maximum-likelihood fit failed or did not converge (the OLS
+    /// estimate is reported when it failed). Informative.
+    MlFailed,
 }
 
 impl WarningKind {
@@ -202,6 +242,9 @@ pub struct PedestalFit {
     pub speed_range_hz: [f64; 2],
     /// Everything the user must know about this fit.
     pub warnings: Vec<Warning>,
+    /// With `--compare-ols`: the paper's OLS next to this ML fit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ols: Option<OlsComparison>,
 }
 
 impl PedestalFit {
@@ -235,8 +278,18 @@ pub struct Identification {
     pub model: Vec<String>,
     /// How eq. 4 was used: `r-and-i`, `r-plus-i`, `real` or `imag`.
     pub equations: String,
+    /// The estimator used: `ml` or `ols`.
+    #[serde(default = "ols_name")]
+    pub estimator: String,
     /// One fit per measured bearing, in order of first appearance.
     pub pedestals: Vec<PedestalFit>,
+    /// The noise model of each bearing, by bearing name.
+    #[serde(default)]
+    pub noise: BTreeMap<String, NoiseReport>,
+}
+
+fn ols_name() -> String {
+    Estimator::Ols.name().to_string()
 }
 
 impl Identification {
@@ -301,7 +354,9 @@ pub fn pedestal_points<'a>(
 }
 
 /// Identifies one pedestal from its per-speed data by least squares on
-/// eq. 4 (rows from [`plinth_shared::regression`]). Never fails on
+/// eq. 4 (rows from [`plinth_shared::regression`]): the paper's OLS, whatever
+/// [`Options::estimator`] says (the ML fit needs the rotor-relative phasors
+/// and the noise: [`identify_run`] or [`estimator::fit_ml`]). Never fails on
 /// poor data: the fit carries warnings and `trusted = false` instead. Fails
 /// only when no point is finite.
 pub fn fit_pedestal(
@@ -309,6 +364,16 @@ pub fn fit_pedestal(
     points: &[PedestalPoint],
     options: &Options,
 ) -> Result<PedestalFit, IdentifyError> {
+    Ok(ols_solution(bearing, points, options)?.0)
+}
+
+/// The OLS fit of [`fit_pedestal`] with the least-squares solution, the
+/// finite points used (sorted by speed) and the number left out.
+pub(crate) fn ols_solution(
+    bearing: &str,
+    points: &[PedestalPoint],
+    options: &Options,
+) -> Result<(PedestalFit, lsq::LeastSquares, Vec<PedestalPoint>, usize), IdentifyError> {
     let model = options.model();
     let columns = model.parameters();
     let finite = |p: &&PedestalPoint| {
@@ -372,41 +437,86 @@ pub fn fit_pedestal(
         equations: solution.equations,
         speed_range_hz: [used[0].speed_hz, used[used.len() - 1].speed_hz],
         warnings: Vec::new(),
+        ols: None,
     };
     fit.warnings = checks::warnings(&fit, &used, skipped, &solution, &columns, options);
     fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
-    Ok(fit)
+    Ok((fit, solution, used, skipped))
+}
+
+/// The observations of one bearing's rows: phasors, the complex bearing
+/// stiffness interpolated from `schedule` at each speed (formats.md; no
+/// extrapolation) and the noise variances of `noise` (made from the same
+/// rows, in the same order).
+pub fn observations(
+    rows: &[&Measurement],
+    schedule: &BearingSchedule,
+    noise: &BearingNoise,
+) -> Result<Vec<Observation>, OutOfRange> {
+    rows.iter()
+        .zip(&noise.var)
+        .map(|(m, var)| {
+            let coefficients = schedule.at(m.speed_hz)?;
+            Ok(Observation {
+                speed_hz: m.speed_hz,
+                rel: m.rel,
+                ped: m.ped,
+                kstar: complex_stiffness(&coefficients, omega_from_hz(m.speed_hz)),
+                var: *var,
+            })
+        })
+        .collect()
 }
 
 /// Identifies every measured pedestal of a run, in the order the bearings
-/// first appear in `measurements.csv`.
+/// first appear in `measurements.csv`, with the estimator of `options`
+/// (default: maximum likelihood with the noise model of
+/// [`crate::estimate::noise`]).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
     let bearings = run.measured_bearings();
     if bearings.is_empty() {
         return Err(IdentifyError::NoMeasurements);
     }
     let schedules = run.bearing_schedules();
+    let columns = ColumnDigits::of_run(&run.measurements);
+    let estimator = options.effective_estimator();
     let mut pedestals = Vec::with_capacity(bearings.len());
+    let mut noise_reports = BTreeMap::new();
     for bearing in bearings {
         let schedule = schedules
             .get(bearing)
             .ok_or_else(|| IdentifyError::UnknownBearing {
                 bearing: bearing.to_string(),
             })?;
-        let points = pedestal_points(
-            run.measurements.iter().filter(|m| m.bearing == bearing),
-            schedule,
-        )
-        .map_err(|source| IdentifyError::BearingRange {
-            bearing: bearing.to_string(),
-            source,
+        let rows: Vec<&Measurement> = run
+            .measurements
+            .iter()
+            .filter(|m| m.bearing == bearing)
+            .collect();
+        let mut noise = BearingNoise::estimate(&rows, &columns, options.quantisation);
+        let obs = observations(&rows, schedule, &noise).map_err(|source| {
+            IdentifyError::BearingRange {
+                bearing: bearing.to_string(),
+                source,
+            }
         })?;
-        pedestals.push(fit_pedestal(bearing, &points, options)?);
+        let (fit, report) = match estimator {
+            Estimator::Ml => estimator::fit_ml(bearing, &obs, &mut noise, options)?,
+            Estimator::Ols => {
+                let fit = fit_pedestal(bearing, &estimator::points_of(&obs), options)?;
+                let report = estimator::ols_noise_report(&fit, &obs, &noise);
+                (fit, report)
+            }
+        };
+        noise_reports.insert(bearing.to_string(), report);
+        pedestals.push(fit);
     }
     Ok(Identification {
         model: options.model().names(),
         equations: mode_name(options.mode).to_string(),
+        estimator: estimator.name().to_string(),
         pedestals,
+        noise: noise_reports,
     })
 }
 

@@ -314,28 +314,19 @@ impl Machine {
     }
 }
 
-/// Coefficients from a speed table: constant for one row, linear between
-/// rows, `None` outside the listed speeds.
+/// Coefficients from a speed table: constant for one row (a machine file's
+/// speed-independent bearing), else [`plinth_shared::bearing::interpolate`]
+/// (linear between rows, `None` outside the listed speeds).
 fn table_at(
     rows: &[(f64, BearingCoefficients<f64>)],
     speed_hz: f64,
 ) -> Option<BearingCoefficients<f64>> {
     match rows {
-        [] => None,
         [(_, c)] => Some(*c),
         _ => {
-            let first = rows[0].0;
-            let last = rows[rows.len() - 1].0;
-            if !(speed_hz >= first && speed_hz <= last) {
-                return None;
-            }
-            let hi = rows.partition_point(|r| r.0 < speed_hz);
-            if rows[hi].0 == speed_hz || hi == 0 {
-                return Some(rows[hi].1);
-            }
-            let (s0, c0) = rows[hi - 1];
-            let (s1, c1) = rows[hi];
-            Some(c0.lerp(&c1, (speed_hz - s0) / (s1 - s0)))
+            let (speeds, coefficients): (Vec<f64>, Vec<BearingCoefficients<f64>>) =
+                rows.iter().copied().unzip();
+            plinth_shared::bearing::interpolate(&speeds, &coefficients, speed_hz)
         }
     }
 }

@@ -323,7 +323,11 @@ pub fn finish(
     let (batch, batch_error) = if derived.run.measurements.is_empty() {
         (None, Some("no phasor frames were received".to_string()))
     } else {
-        match crate::identify::identify_run(&derived.run, &crate::identify::Options::default()) {
+        // The paper's OLS: the same least-squares problem the box's RLS solves.
+        match crate::identify::identify_run(
+            &derived.run,
+            &crate::identify::Options::default().ols(),
+        ) {
             Ok(id) => (Some(id), None),
             Err(e) => (None, Some(e.to_string())),
         }

@@ -1,0 +1,571 @@
+//! The measurement noise model: per phasor and channel, the noise of every
+//! real number of `measurements.csv`, from the best source available.
+//!
+//! **Model.** Each measured complex phasor Q (rel y, rel z, ped y, ped z of a
+//! bearing at a speed) is the true phasor plus noise n whose real and
+//! imaginary parts are independent, zero-mean, with variances v_re, v_im
+//! [m²]; formats.md's noise sd is sqrt(E|n|²) = sqrt(v_re + v_im). Noise of
+//! different phasors and speeds is taken as independent.
+//!
+//! **Sources, best first** ([`NoiseSource`]):
+//! 1. `columns`: formats.md's `rel_y_sd, rel_z_sd, ped_y_sd, ped_z_sd`
+//!    (the scatter between the revolutions that made the phasor), split
+//!    equally: v_re = v_im = sd²/2. Never below the digits' variance.
+//! 2. `digits`: the digits each number carries. A number written with D
+//!    significant digits and decimal exponent e has ulp = 10^(e−D+1) (D is
+//!    the column's digit count, detected as the fewest digits that reproduce
+//!    every value of the column; a fixed-decimals column has an absolute ulp,
+//!    and the larger of the two applies). Rounding (the default) leaves an
+//!    error uniform on ±ulp/2: variance ulp²/12. Truncation
+//!    ([`Quantisation::Truncation`], an option, e.g. the paper's data) leaves
+//!    an error uniform on [0, ulp) toward zero: its mean square ulp²/3 is
+//!    used (bias and scatter together).
+//! 3. `scatter`: noise beyond the digits shows as scatter between
+//!    neighbouring speeds that a smooth response does not have. Per channel,
+//!    every point is compared with a cubic fitted over its 7 nearest speeds
+//!    (re and im separately); the residual divided by sqrt(1 − leverage) is a
+//!    sample of that point's noise when the response is locally cubic, which
+//!    a resonance sampled a few points per bandwidth is. The few points where
+//!    it is not (a sharp resonance) are kept from counting by a robust scale
+//!    (from the median, then the RMS of the samples within 3.5 sd). Two laws are tried, a constant sd per
+//!    channel and an sd proportional to the local magnitude, and the one
+//!    under which the standardised samples are the more homogeneous (smaller
+//!    interquartile range of log|u|) is kept.
+//!
+//! Without noise columns the model starts from the digits, and the fit
+//! decides: when its χ² says the data scatter significantly more than their
+//! digits allow (the numbers carry more digits than their noise justifies),
+//! the fit switches to the scatter ([`BearingNoise::use_scatter`]; each
+//! number's variance is then the larger of the two) and refits. The scatter's
+//! local fits set the relative level of the channels and speeds; its absolute
+//! scale is the fit's: the whitened residuals give χ², and the noise is
+//! rescaled by χ²/dof ([`BearingNoise::rescale`], done by the caller).
+
+use crate::rundir::Measurement;
+use num_complex::Complex;
+use serde::{Deserialize, Serialize};
+
+/// Complex channels per bearing: rel y, rel z, ped y, ped z.
+pub const CHANNELS: [&str; 4] = ["rel_y", "rel_z", "ped_y", "ped_z"];
+
+/// The real numbers of a measurement row, in the order used for variances
+/// (formats.md column names).
+pub const REAL_CHANNELS: [&str; 8] = [
+    "rel_y_re", "rel_y_im", "rel_z_re", "rel_z_im", "ped_y_re", "ped_y_im", "ped_z_re", "ped_z_im",
+];
+
+/// Where a bearing's noise model comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseSource {
+    /// formats.md's `*_sd` columns.
+    Columns,
+    /// The digits each number is written with.
+    Digits,
+    /// The scatter between neighbouring speeds.
+    Scatter,
+}
+
+impl NoiseSource {
+    /// The name used in output: `columns`, `digits`, `scatter`.
+    pub fn name(self) -> &'static str {
+        match self {
+            NoiseSource::Columns => "columns",
+            NoiseSource::Digits => "digits",
+            NoiseSource::Scatter => "scatter",
+        }
+    }
+
+    /// True when the absolute noise level is an estimate the fit's χ² should
+    /// rescale (scatter), false when it is known (columns, digits).
+    pub fn scale_estimated(self) -> bool {
+        self == NoiseSource::Scatter
+    }
+}
+
+/// How the written numbers were reduced to their digits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Quantisation {
+    /// Rounded to nearest: error uniform on ±ulp/2, variance ulp²/12.
+    #[default]
+    Rounding,
+    /// Truncated toward zero: error on [0, ulp), mean square ulp²/3.
+    Truncation,
+}
+
+impl Quantisation {
+    /// Mean square error [ulp²] of one number reduced this way.
+    pub fn mean_square_ulps(self) -> f64 {
+        match self {
+            Quantisation::Rounding => 1.0 / 12.0,
+            Quantisation::Truncation => 1.0 / 3.0,
+        }
+    }
+}
+
+/// The fewest significant digits (1..=17) that reproduce `v` exactly when
+/// printed in scientific notation and parsed back, with the decimal exponent
+/// of that printing; `None` for zero and non-finite values.
+pub fn written_digits(v: f64) -> Option<(u32, i32)> {
+    if v == 0.0 || !v.is_finite() {
+        return None;
+    }
+    for d in 1..=17u32 {
+        let s = format!("{:.*e}", (d - 1) as usize, v);
+        if s.parse::<f64>() == Ok(v) {
+            return Some((d, exponent_of(&s)));
+        }
+    }
+    Some((17, exponent_of(&format!("{v:e}"))))
+}
+
+/// Decimal exponent of a number printed by Rust's `{:e}`.
+fn exponent_of(s: &str) -> i32 {
+    s.rsplit('e')
+        .next()
+        .and_then(|e| e.parse().ok())
+        .unwrap_or(0)
+}
+
+/// How one column of `measurements.csv` is written.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ColumnDigits {
+    /// Significant digits the column is written with (max over its values).
+    pub digits: u32,
+    /// Lowest decimal exponent of a last written digit in the column.
+    pub lowest_digit_exponent: i32,
+}
+
+impl ColumnDigits {
+    /// The digits of one column from its values.
+    pub fn of(values: impl IntoIterator<Item = f64>) -> Self {
+        let mut digits = 1;
+        let mut lowest = i32::MAX;
+        for v in values {
+            if let Some((d, e)) = written_digits(v) {
+                digits = digits.max(d);
+                lowest = lowest.min(e - d as i32 + 1);
+            }
+        }
+        if lowest == i32::MAX {
+            // An all-zero column: zeros are taken to be exact.
+            lowest = -330;
+        }
+        Self {
+            digits,
+            lowest_digit_exponent: lowest,
+        }
+    }
+
+    /// The digits of every real column ([`REAL_CHANNELS`] order) of a run.
+    pub fn of_run(measurements: &[Measurement]) -> [ColumnDigits; 8] {
+        std::array::from_fn(|c| Self::of(measurements.iter().map(|m| real_value(m, c))))
+    }
+
+    /// Unit in the last digit [m] of a value `v` [m] written in this column.
+    pub fn ulp(&self, v: f64) -> f64 {
+        let absolute = 10f64.powi(self.lowest_digit_exponent);
+        if v == 0.0 || !v.is_finite() {
+            return absolute;
+        }
+        let s = format!("{:.*e}", (self.digits.max(1) - 1) as usize, v);
+        let e = exponent_of(&s);
+        10f64.powi(e - self.digits as i32 + 1).max(absolute)
+    }
+}
+
+/// Real number `c` ([`REAL_CHANNELS`] order) of a measurement row [m].
+pub fn real_value(m: &Measurement, c: usize) -> f64 {
+    let z = complex_value(m, c / 2);
+    if c % 2 == 0 {
+        z.re
+    } else {
+        z.im
+    }
+}
+
+/// Complex channel `ch` ([`CHANNELS`] order) of a measurement row [m].
+pub fn complex_value(m: &Measurement, ch: usize) -> Complex<f64> {
+    if ch < 2 {
+        m.rel[ch]
+    } else {
+        m.ped[ch - 2]
+    }
+}
+
+/// The scatter law of one complex channel: the sd of each real part.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Scatter {
+    /// The same sd [m] at every speed.
+    Absolute(f64),
+    /// sd = value·|phasor| (a fraction of the local magnitude) [-].
+    Relative(f64),
+}
+
+impl Scatter {
+    /// The sd [m] of each real part of a phasor of magnitude `magnitude` [m].
+    pub fn sd(&self, magnitude: f64) -> f64 {
+        match *self {
+            Scatter::Absolute(s) => s,
+            Scatter::Relative(f) => f * magnitude,
+        }
+    }
+}
+
+/// The noise model of one bearing's rows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BearingNoise {
+    /// Where the variances come from.
+    pub source: NoiseSource,
+    /// How the digits were taken to be reduced.
+    pub quantisation: Quantisation,
+    /// Variance [m²] of every real number, per row in the order given to
+    /// [`BearingNoise::estimate`], in [`REAL_CHANNELS`] order.
+    pub var: Vec<[f64; 8]>,
+    /// The scatter law found per complex channel (`None`: too few speeds).
+    pub scatter: [Option<Scatter>; 4],
+    /// The variances under the scatter law (floored by the digits), while
+    /// the source is still the digits.
+    pub scatter_var: Option<Vec<[f64; 8]>>,
+    /// Factor the variances were multiplied by after the fit (1 until
+    /// [`BearingNoise::rescale`]).
+    pub variance_scale: f64,
+}
+
+/// Most points a local smooth fit uses.
+const WINDOW: usize = 7;
+/// Degree of the local smooth fit.
+const DEGREE: usize = 3;
+const MEDIAN_ABS_NORMAL: f64 = 0.674_489_750_196_081_7;
+
+impl BearingNoise {
+    /// The noise of one bearing's `rows` (any order; each row one speed),
+    /// with the digits of the run's columns.
+    pub fn estimate(
+        rows: &[&Measurement],
+        columns: &[ColumnDigits; 8],
+        quantisation: Quantisation,
+    ) -> Self {
+        let msu = quantisation.mean_square_ulps();
+        let digits_var: Vec<[f64; 8]> = rows
+            .iter()
+            .map(|m| std::array::from_fn(|c| msu * columns[c].ulp(real_value(m, c)).powi(2)))
+            .collect();
+        let with_columns = !rows.is_empty() && rows.iter().all(|m| m.noise_sd.is_some());
+        if with_columns {
+            let var = rows
+                .iter()
+                .zip(&digits_var)
+                .map(|(m, dv)| {
+                    let sd = m.noise_sd.unwrap_or([0.0; 4]);
+                    std::array::from_fn(|c| (0.5 * sd[c / 2] * sd[c / 2]).max(dv[c]))
+                })
+                .collect();
+            return Self {
+                source: NoiseSource::Columns,
+                quantisation,
+                var,
+                scatter: [None; 4],
+                scatter_var: None,
+                variance_scale: 1.0,
+            };
+        }
+        let mut order: Vec<usize> = (0..rows.len()).collect();
+        order.sort_by(|&a, &b| rows[a].speed_hz.total_cmp(&rows[b].speed_hz));
+        let mut scatter = [None; 4];
+        for (ch, slot) in scatter.iter_mut().enumerate() {
+            let series: Vec<(f64, Complex<f64>)> = order
+                .iter()
+                .map(|&i| (rows[i].speed_hz, complex_value(rows[i], ch)))
+                .collect();
+            *slot = scatter_law(&series);
+        }
+        let scatter_var = rows
+            .iter()
+            .zip(&digits_var)
+            .map(|(m, dv)| {
+                std::array::from_fn(|c| {
+                    let s =
+                        scatter[c / 2].map_or(0.0, |law| law.sd(complex_value(m, c / 2).norm()));
+                    (s * s).max(dv[c])
+                })
+            })
+            .collect();
+        Self {
+            source: NoiseSource::Digits,
+            quantisation,
+            var: digits_var,
+            scatter,
+            scatter_var: Some(scatter_var),
+            variance_scale: 1.0,
+        }
+    }
+
+    /// Switches from the digits to the scatter between neighbouring speeds
+    /// (floored by the digits): what a fit does when its χ² says the numbers
+    /// carry more noise than their digits. False when there is no scatter
+    /// estimate (too few speeds, or the source is not the digits).
+    pub fn use_scatter(&mut self) -> bool {
+        if self.source != NoiseSource::Digits {
+            return false;
+        }
+        match self.scatter_var.take() {
+            Some(v) if self.scatter.iter().any(Option::is_some) => {
+                self.var = v;
+                self.source = NoiseSource::Scatter;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Multiplies every variance by `factor` (> 0, finite): the absolute
+    /// scale of an estimated noise level corrected by a fit's χ²/dof.
+    pub fn rescale(&mut self, factor: f64) {
+        if factor.is_finite() && factor > 0.0 {
+            for v in &mut self.var {
+                for x in v.iter_mut() {
+                    *x *= factor;
+                }
+            }
+            self.variance_scale *= factor;
+        }
+    }
+
+    /// RMS over rows of each complex channel's noise sd, sqrt(mean E|n|²)
+    /// [m], in [`CHANNELS`] order.
+    pub fn sd(&self) -> [f64; 4] {
+        let n = self.var.len().max(1) as f64;
+        std::array::from_fn(|ch| {
+            (self
+                .var
+                .iter()
+                .map(|v| v[2 * ch] + v[2 * ch + 1])
+                .sum::<f64>()
+                / n)
+                .sqrt()
+        })
+    }
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Rejection threshold of [`robust_sd`] [sd].
+const REJECT: f64 = 3.5;
+/// sd of a standard normal truncated to ±[`REJECT`].
+const TRUNCATED_SD: f64 = 0.996_940;
+
+/// The sd of zero-mean normal samples given as |x|, some of which are
+/// contaminated by large values (points a local fit cannot follow): start
+/// from the median, then drop samples beyond 3.5 sd and take the RMS of the
+/// rest (corrected for the truncation), until the set settles.
+fn robust_sd(abs: &mut [f64]) -> f64 {
+    let mut sd = median(abs) / MEDIAN_ABS_NORMAL;
+    for _ in 0..10 {
+        let kept: Vec<f64> = abs.iter().copied().filter(|&x| x <= REJECT * sd).collect();
+        if kept.len() < 4 {
+            break;
+        }
+        let next =
+            (kept.iter().map(|x| x * x).sum::<f64>() / kept.len() as f64).sqrt() / TRUNCATED_SD;
+        if (next - sd).abs() <= 1e-9 * sd {
+            sd = next;
+            break;
+        }
+        sd = next;
+    }
+    sd
+}
+
+/// Interquartile range of log|u|: how homogeneous standardised samples are,
+/// robust to the few points a local fit cannot follow.
+fn log_spread(u: &[f64]) -> f64 {
+    let mut logs: Vec<f64> = u.iter().filter(|x| **x > 0.0).map(|x| x.ln()).collect();
+    if logs.len() < 4 {
+        return f64::INFINITY;
+    }
+    logs.sort_by(f64::total_cmp);
+    let q = |f: f64| logs[((logs.len() - 1) as f64 * f).round() as usize];
+    q(0.75) - q(0.25)
+}
+
+/// Standardised residuals of a local cubic fit (module docs) of a complex
+/// series sampled at increasing speeds [Hz]: per point (residual, smooth
+/// value), the residual divided by sqrt(1 − leverage) so that its real and
+/// imaginary parts have the sd of that point's noise. Empty with fewer than
+/// `DEGREE + 3` points.
+pub fn local_residuals(series: &[(f64, Complex<f64>)]) -> Vec<(Complex<f64>, Complex<f64>)> {
+    let n = series.len();
+    let w = WINDOW.min(n);
+    if w < DEGREE + 3 {
+        return Vec::new();
+    }
+    let mut out = Vec::with_capacity(n);
+    for j in 0..n {
+        let start = j.saturating_sub(w / 2).min(n - w);
+        let window = &series[start..start + w];
+        let f0 = series[j].0;
+        let span = (window[w - 1].0 - window[0].0).abs().max(f64::MIN_POSITIVE);
+        let x = nalgebra::DMatrix::from_fn(w, DEGREE + 1, |r, c| {
+            ((window[r].0 - f0) / span).powi(c as i32)
+        });
+        let Some(xtx_inv) = (x.transpose() * &x).try_inverse() else {
+            continue;
+        };
+        let xj = nalgebra::DVector::from_fn(DEGREE + 1, |c, _| if c == 0 { 1.0 } else { 0.0 });
+        let leverage = (xj.transpose() * &xtx_inv * &xj)[(0, 0)];
+        if leverage.is_nan() || leverage >= 1.0 - 1e-9 {
+            continue;
+        }
+        let coef = |part: fn(&Complex<f64>) -> f64| {
+            let y = nalgebra::DVector::from_fn(w, |r, _| part(&window[r].1));
+            (&xtx_inv * (x.transpose() * y))[0]
+        };
+        let smooth = Complex::new(coef(|z| z.re), coef(|z| z.im));
+        let r = (series[j].1 - smooth) / (1.0 - leverage).sqrt();
+        out.push((r, smooth));
+    }
+    out
+}
+
+/// The robust scatter law (module docs) of a complex series at increasing
+/// speeds [Hz]; `None` with too few points or no signal.
+pub fn scatter_law(series: &[(f64, Complex<f64>)]) -> Option<Scatter> {
+    // (|component of the standardised residual|, local magnitude)
+    let samples: Vec<(f64, f64)> = local_residuals(series)
+        .into_iter()
+        .filter(|(_, s)| s.norm() > 0.0 && s.norm().is_finite())
+        .flat_map(|(r, s)| [(r.re.abs(), s.norm()), (r.im.abs(), s.norm())])
+        .collect();
+    if samples.len() < 4 {
+        return None;
+    }
+    let mut abs: Vec<f64> = samples.iter().map(|s| s.0).collect();
+    let mut rel: Vec<f64> = samples.iter().map(|s| s.0 / s.1).collect();
+    let sigma = robust_sd(&mut abs);
+    let fraction = robust_sd(&mut rel);
+    let u_abs: Vec<f64> = samples
+        .iter()
+        .map(|s| s.0 / sigma.max(f64::MIN_POSITIVE))
+        .collect();
+    let u_rel: Vec<f64> = samples
+        .iter()
+        .map(|s| s.0 / (fraction * s.1).max(f64::MIN_POSITIVE))
+        .collect();
+    if log_spread(&u_abs) <= log_spread(&u_rel) {
+        Some(Scatter::Absolute(sigma))
+    } else {
+        Some(Scatter::Relative(fraction))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    fn normal(rng: &mut rand::rngs::StdRng) -> f64 {
+        rng.sample::<f64, _>(rand_distr::StandardNormal)
+    }
+
+    #[test]
+    fn digits_of_printed_numbers() {
+        assert_eq!(written_digits(1.23e-6), Some((3, -6)));
+        assert_eq!(written_digits(-4.5e-9), Some((2, -9)));
+        assert_eq!(written_digits(1.0), Some((1, 0)));
+        assert_eq!(written_digits(0.0), None);
+        let v: f64 = "1.23456789012e-5".parse().unwrap();
+        assert_eq!(written_digits(v), Some((12, -5)));
+    }
+
+    #[test]
+    fn ulp_follows_each_values_magnitude() {
+        let q = ColumnDigits {
+            digits: 3,
+            lowest_digit_exponent: -12,
+        };
+        assert!((q.ulp(1.23e-6) - 1e-8).abs() < 1e-20);
+        assert!((q.ulp(-9.87e-9) - 1e-11).abs() < 1e-23);
+        let f = ColumnDigits {
+            digits: 7,
+            lowest_digit_exponent: -9,
+        };
+        assert!((f.ulp(1.234567e-3) - 1e-9).abs() < 1e-21);
+    }
+
+    /// A lightly damped resonance sampled at 1 Hz: its curvature is not noise.
+    fn resonance(f: f64) -> Complex<f64> {
+        let (fn_, zeta) = (60.0, 0.02);
+        let r = f / fn_;
+        Complex::new(1e-6, 0.0) / Complex::new(1.0 - r * r, 2.0 * zeta * r)
+    }
+
+    #[test]
+    fn resonance_curvature_is_not_read_as_noise() {
+        let series: Vec<_> = (10..=150)
+            .map(|f| (f as f64, resonance(f as f64)))
+            .collect();
+        let peak = resonance(60.0).norm();
+        let sd = match scatter_law(&series).unwrap() {
+            Scatter::Absolute(a) => a,
+            Scatter::Relative(r) => r * 1e-6,
+        };
+        assert!(sd < 1e-4 * peak, "{sd:e} vs peak {peak:e}");
+    }
+
+    #[test]
+    fn constant_noise_level_is_recovered_through_a_resonance() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let sigma = 2e-8;
+        let mut estimates = Vec::new();
+        for _ in 0..20 {
+            let series: Vec<_> = (10..=150)
+                .map(|f| {
+                    let n = Complex::new(normal(&mut rng), normal(&mut rng)) * sigma;
+                    (f as f64, resonance(f as f64) + n)
+                })
+                .collect();
+            // Over a decade of magnitude either law may describe the
+            // scatter; the level it implies must be the noise's.
+            let law = scatter_law(&series).unwrap();
+            let ms = series
+                .iter()
+                .map(|(_, z)| law.sd(z.norm()).powi(2))
+                .sum::<f64>()
+                / series.len() as f64;
+            estimates.push(ms.sqrt() / sigma);
+        }
+        let mean = estimates.iter().sum::<f64>() / estimates.len() as f64;
+        assert!((mean - 1.0).abs() < 0.08, "{mean}");
+    }
+
+    #[test]
+    fn relative_noise_law_is_recognised() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let series: Vec<_> = (0..200)
+            .map(|j| {
+                let f = 5.0 + j as f64;
+                let z = Complex::from_polar(1e-8 * f * f / 25.0, f / 40.0);
+                let n = Complex::new(normal(&mut rng), normal(&mut rng));
+                (f, z + n * (0.01 * z.norm()))
+            })
+            .collect();
+        match scatter_law(&series).unwrap() {
+            Scatter::Relative(s) => assert!((s - 0.01).abs() < 0.0015, "{s}"),
+            other => panic!("relative noise read as {other:?}"),
+        }
+    }
+}

@@ -1,0 +1,276 @@
+//! Which estimator `identify` uses, and the maximum-likelihood path: the
+//! noise model of [`crate::estimate::noise`] and the errors-in-variables fit
+//! of [`crate::estimate::ml`] started from the paper's OLS, with the χ² check
+//! of the noise scale and, on request, OLS's efficiency against the
+//! Cramér–Rao bound.
+
+use super::{checks, ols_solution, Options, PedestalFit, PedestalPoint, Warning, WarningKind};
+use crate::estimate::ml::{self, MlFit};
+use crate::estimate::noise::{BearingNoise, NoiseSource, Quantisation, CHANNELS};
+use crate::estimate::Observation;
+use crate::identify::IdentifyError;
+use plinth_shared::regression::{Parameter, PARAMETERS};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// The estimator of the pedestal parameters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Estimator {
+    /// Maximum likelihood, errors in variables (noise in rel and ped), from
+    /// the noise model; standard errors from the Fisher information (the
+    /// Cramér–Rao bound at the estimate). R&I equations only.
+    #[default]
+    Ml,
+    /// The paper's ordinary least squares on eq. 4 (every equation weighted
+    /// alike, noise in the regressors ignored).
+    Ols,
+}
+
+impl Estimator {
+    /// `ml` or `ols`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimator::Ml => "ml",
+            Estimator::Ols => "ols",
+        }
+    }
+}
+
+/// Two-sided p-value of χ² below which the noise scale is said not to fit.
+pub const CHI2_P_THRESHOLD: f64 = 1e-3;
+
+/// One bearing's noise model as `identify --json` reports it (`"noise"`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NoiseReport {
+    /// `columns`, `digits` or `scatter` (see [`crate::estimate::noise`]).
+    pub source: NoiseSource,
+    /// How digits were taken to be reduced: `rounding` or `truncation`.
+    pub quantisation: Quantisation,
+    /// RMS over speeds of each channel's complex noise sd, sqrt(E|n|²) [m],
+    /// keyed `rel_y`, `rel_z`, `ped_y`, `ped_z` (after any χ² rescaling).
+    pub sd: BTreeMap<String, f64>,
+    /// Σ eᵀΣ⁻¹e of the fit under the noise model before rescaling [-].
+    pub chi2: f64,
+    /// Its degrees of freedom (equations − parameters).
+    pub dof: usize,
+    /// Two-sided p-value of χ² under χ²(dof).
+    pub p_value: f64,
+    /// True when the absolute noise level was estimated from the data and
+    /// set by χ²/dof (source `scatter`); false when it was known.
+    pub scale_estimated: bool,
+    /// Factor applied to the noise variances and the parameter covariance
+    /// (χ²/dof when estimated or when the data scatter significantly more
+    /// than a known noise, else 1) [-].
+    pub variance_scale: f64,
+}
+
+/// The paper's OLS next to the ML estimate (`identify --compare-ols`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OlsComparison {
+    /// OLS estimate per estimated parameter (θ units).
+    pub estimate: BTreeMap<String, f64>,
+    /// The standard error OLS itself reports (equal, independent equation
+    /// errors assumed).
+    pub std_err: BTreeMap<String, f64>,
+    /// OLS's actual standard deviation under the noise model (sandwich).
+    pub sd_under_noise: BTreeMap<String, f64>,
+    /// Efficiency of OLS: Cramér–Rao variance / OLS variance, in (0, 1].
+    pub efficiency: BTreeMap<String, f64>,
+}
+
+/// The ML fit of one pedestal from its observations (any order; non-finite
+/// ones are left out with a warning): the OLS start, the ML estimate, its
+/// standard errors, warnings and the noise report. `noise` is the model the
+/// observations' variances came from, row for row (`noise.var[i]` belongs
+/// to `observations[i]`); when the digits do not explain the fit's χ² it
+/// switches to the scatter and the fit is redone, and an estimated level is
+/// rescaled by χ²/dof.
+pub fn fit_ml(
+    bearing: &str,
+    observations: &[Observation],
+    noise: &mut BearingNoise,
+    options: &Options,
+) -> Result<(PedestalFit, NoiseReport), IdentifyError> {
+    let points = points_of(observations);
+    let (ols_fit, solution, used, skipped) = ols_solution(bearing, &points, options)?;
+    let columns = options.model().parameters();
+    let with_noise = |noise: &BearingNoise| -> Vec<Observation> {
+        let mut obs: Vec<Observation> = observations
+            .iter()
+            .zip(&noise.var)
+            .map(|(o, var)| Observation { var: *var, ..*o })
+            .filter(Observation::is_finite)
+            .collect();
+        obs.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
+        obs
+    };
+    let mut obs = with_noise(noise);
+    let start = ols_fit.params();
+    let mut attempt = ml::fit(&obs, &columns, &start);
+    if let Ok(f) = &attempt {
+        let p = ml::chi2_two_sided_p(f.chi2, f.dof);
+        if p < CHI2_P_THRESHOLD && f.chi2_per_dof() > 1.0 && noise.use_scatter() {
+            obs = with_noise(noise);
+            attempt = ml::fit(&obs, &columns, &f.theta);
+        }
+    }
+    let ml_fit = match attempt {
+        Ok(f) if f.theta.iter().all(|v| v.is_finite()) => f,
+        other => {
+            let why = match other {
+                Err(e) => e.to_string(),
+                Ok(_) => "a non-finite estimate".to_string(),
+            };
+            let mut fit = ols_fit;
+            fit.warnings.push(Warning {
+                kind: WarningKind::MlFailed,
+                message: format!("the maximum-likelihood fit failed ({why}); this is the OLS fit"),
+            });
+            let report = report(noise, f64::NAN, 0, 1.0);
+            return Ok((fit, report));
+        }
+    };
+    let chi2 = ml_fit.chi2;
+    let dof = ml_fit.dof;
+    let ratio = ml_fit.chi2_per_dof();
+    let p_value = ml::chi2_two_sided_p(chi2, dof);
+    let mut extra = Vec::new();
+    let variance_scale = if noise.source.scale_estimated() {
+        ratio
+    } else if p_value < CHI2_P_THRESHOLD && ratio > 1.0 {
+        extra.push(Warning {
+            kind: WarningKind::NoiseScaleMismatch,
+            message: format!(
+                "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows (a larger noise or a model discrepancy); standard errors are scaled by {:.3}",
+                noise.source.name(),
+                ratio.sqrt()
+            ),
+        });
+        ratio
+    } else if p_value < CHI2_P_THRESHOLD {
+        extra.push(Warning {
+            kind: WarningKind::NoiseScaleMismatch,
+            message: format!(
+                "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter less than the noise of their {} says; standard errors are kept at that noise (an upper bound)",
+                noise.source.name()
+            ),
+        });
+        1.0
+    } else {
+        1.0
+    };
+    if noise.source.scale_estimated() {
+        noise.rescale(variance_scale);
+    }
+    let se = ml_fit.std_err(variance_scale);
+    let mut fit = ols_fit.clone();
+    fit.k_y = ml_fit.theta[0];
+    fit.k_z = ml_fit.theta[1];
+    fit.m = ml_fit.theta[2];
+    fit.c_y = ml_fit.theta[3];
+    fit.c_z = ml_fit.theta[4];
+    fit.std_err = super::StdErr {
+        k_y: se[0],
+        k_z: se[1],
+        m: se[2],
+        c_y: se[3],
+        c_z: se[4],
+    };
+    fit.residual_rms = ml_fit.residual_rms;
+    fit.condition_number = ml_fit.condition_number;
+    let mut view = solution.clone();
+    for (k, &c) in columns.iter().enumerate() {
+        view.theta[k] = ml_fit.theta[c as usize];
+        view.std_err[k] = se[c as usize];
+    }
+    view.condition_number = ml_fit.condition_number;
+    fit.warnings = checks::warnings(&fit, &used, skipped, &view, &columns, options);
+    if !ml_fit.converged {
+        fit.warnings.push(Warning {
+            kind: WarningKind::MlFailed,
+            message: format!(
+                "the maximum-likelihood iteration stopped after {} steps without meeting its convergence test",
+                ml_fit.iterations
+            ),
+        });
+    }
+    fit.warnings.extend(extra);
+    fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
+    if options.compare_ols {
+        fit.ols = Some(compare(&ols_fit, &ml_fit, &obs, &columns, variance_scale));
+    }
+    Ok((fit, report(noise, chi2, dof, variance_scale)))
+}
+
+fn report(noise: &BearingNoise, chi2: f64, dof: usize, variance_scale: f64) -> NoiseReport {
+    let sd = noise.sd();
+    NoiseReport {
+        source: noise.source,
+        quantisation: noise.quantisation,
+        sd: CHANNELS
+            .iter()
+            .zip(sd)
+            .map(|(n, v)| (n.to_string(), v))
+            .collect(),
+        chi2,
+        dof,
+        p_value: if dof > 0 {
+            ml::chi2_two_sided_p(chi2, dof)
+        } else {
+            f64::NAN
+        },
+        scale_estimated: noise.source.scale_estimated(),
+        variance_scale,
+    }
+}
+
+/// The noise report of an OLS fit: χ² of the OLS estimate under the noise model.
+pub fn ols_noise_report(
+    fit: &PedestalFit,
+    observations: &[Observation],
+    noise: &BearingNoise,
+) -> NoiseReport {
+    let obs: Vec<Observation> = observations
+        .iter()
+        .filter(|o| o.is_finite())
+        .copied()
+        .collect();
+    let p = PARAMETERS - fit.fixed.len();
+    let chi2 = ml::cost(&obs, &fit.params()).unwrap_or(f64::NAN);
+    report(noise, chi2, (4 * obs.len()).saturating_sub(p), 1.0)
+}
+
+fn compare(
+    ols: &PedestalFit,
+    ml_fit: &MlFit,
+    obs: &[Observation],
+    columns: &[Parameter],
+    variance_scale: f64,
+) -> OlsComparison {
+    let sandwich = ml::ols_covariance(obs, columns, &ml_fit.theta);
+    let named = |f: &dyn Fn(usize) -> f64| -> BTreeMap<String, f64> {
+        columns
+            .iter()
+            .map(|&c| (c.name().to_string(), f(c as usize)))
+            .collect()
+    };
+    OlsComparison {
+        estimate: named(&|i| ols.params()[i]),
+        std_err: named(&|i| ols.std_errs()[i]),
+        sd_under_noise: named(&|i| (variance_scale * sandwich[i][i]).sqrt()),
+        efficiency: named(&|i| ml_fit.covariance[i][i] / sandwich[i][i]),
+    }
+}
+
+/// The per-speed points of OLS (pedestal phasors and bearing forces).
+pub fn points_of(observations: &[Observation]) -> Vec<PedestalPoint> {
+    observations
+        .iter()
+        .map(|o| PedestalPoint {
+            speed_hz: o.speed_hz,
+            ped: o.ped,
+            force: o.force(),
+        })
+        .collect()
+}
