@@ -49,7 +49,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            if e.is::<plinth::identify::physical::NotPhysical>() {
+                ExitCode::from(plinth::identify::physical::EXIT_NOT_PHYSICAL)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

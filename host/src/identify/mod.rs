@@ -14,8 +14,10 @@
 
 mod checks;
 pub mod cli;
+pub mod convention;
 pub mod lsq;
 pub mod model;
+pub mod physical;
 pub mod synthetic;
 
 pub use model::{mode_label, mode_name, parse_mode, Model, ModelError};
@@ -112,6 +114,12 @@ pub enum WarningKind {
     NoResonance,
     /// Some speeds had non-finite numbers and were left out.
     NonFiniteInput,
+    /// A negative mass or stiffness, or a damping significantly below zero:
+    /// no passive pedestal ([`physical`]). Fit not trusted.
+    PhysicallyImpossible,
+    /// The data fit a passive pedestal to the noise floor only with a
+    /// convention mistake undone ([`convention`]). Fit not trusted.
+    SuspectedConventionError,
 }
 
 impl WarningKind {
@@ -123,6 +131,8 @@ impl WarningKind {
                 | WarningKind::RankDeficient
                 | WarningKind::IllConditioned
                 | WarningKind::Undetermined
+                | WarningKind::PhysicallyImpossible
+                | WarningKind::SuspectedConventionError
         )
     }
 }
@@ -201,6 +211,10 @@ pub struct PedestalFit {
     pub speed_range_hz: [f64; 2],
     /// Everything the user must know about this fit.
     pub warnings: Vec<Warning>,
+    /// The convention mistake the data most likely carry ([`convention`]),
+    /// when one explains an impossible or poor fit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub suspected_convention_error: Option<convention::Convention>,
 }
 
 impl PedestalFit {
@@ -276,6 +290,9 @@ pub enum IdentifyError {
     /// The run directory could not be read.
     #[error(transparent)]
     RunDir(#[from] RunDirError),
+    /// A fit's result is not a finite number (an overflow).
+    #[error(transparent)]
+    NonFinite(#[from] physical::NonFiniteResult),
 }
 
 /// The per-speed data of one pedestal: the measured pedestal phasors and the
@@ -371,15 +388,27 @@ pub fn fit_pedestal(
         equations: solution.equations,
         speed_range_hz: [used[0].speed_hz, used[used.len() - 1].speed_hz],
         warnings: Vec::new(),
+        suspected_convention_error: None,
     };
     fit.warnings = checks::warnings(&fit, &used, skipped, &solution, &columns, options);
+    physical::check_finite(&fit)?;
+    fit.warnings.extend(physical::violations(&fit));
     fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
     Ok(fit)
 }
 
 /// Identifies every measured pedestal of a run, in the order the bearings
-/// first appear in `measurements.csv`.
+/// first appear in `measurements.csv`; a pedestal whose fit is impossible or
+/// poor is checked for the usual convention mistakes ([`convention`]).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
+    let mut identification = fit_run(run, options)?;
+    let findings = convention::diagnose(run, &identification, &|r| fit_run(r, options));
+    convention::mark(&mut identification, &findings);
+    Ok(identification)
+}
+
+/// Fits every measured pedestal of a run ([`fit_pedestal`]), nothing more.
+pub fn fit_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
     let bearings = run.measured_bearings();
     if bearings.is_empty() {
         return Err(IdentifyError::NoMeasurements);

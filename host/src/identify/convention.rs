@@ -1,0 +1,499 @@
+//! Convention-mistake diagnosis: when a pedestal's fit is physically
+//! impossible, or fits far worse than the noise the data carry, try the usual
+//! ways field data get their conventions wrong, undo each on the raw run,
+//! refit, and name the one under which the data become a passive pedestal
+//! that fits to the noise floor, clearly better than every other reading.
+//!
+//! The mistakes ([`Convention`]) and what undoing each does to the run:
+//! - `conjugated`: every phasor conjugated (phase lag read as lead, or
+//!   e^{−iΩt} for e^{+iΩt}): conjugate every `rel` and `ped` phasor. With
+//!   undamped bearings this only flips the sign of the pedestal damping; with
+//!   the bearing's own damping the data fit no passive pedestal.
+//! - `swapped_yz`: the y and z readings exchanged at the sensors (the bearing
+//!   coefficients still in formats.md's axes): exchange y and z of `rel`,
+//!   `ped` (and their noise columns).
+//! - `rel_negated`: `rel` written as pedestal minus rotor: negate `rel`; the
+//!   mistake negates every bearing force, hence k, m and c alike.
+//! - `bearing_transposed`: K_b and C_b given transposed (kyz for kzy): swap the
+//!   off-diagonal terms of every row of `bearings.csv`; invisible (and never
+//!   named) for symmetric bearing matrices.
+//! - `cross_coupling_sign`: the cross terms kyz, kzy, cyz, czy with the wrong
+//!   sign (the rotation sense or an axis taken the other way): negate them.
+//! - `speed_in_rpm`: speeds written in rpm where formats.md wants Hz: divide
+//!   the measurement speeds by 60, and the bearing table's speeds too when the
+//!   table is in the same unit (it covers the measured speeds as written).
+//!
+//! The comparison is a likelihood one. For a pedestal estimate θ the residual
+//! of eq. 3 at each speed, e = Z(θ)·ped − (K_b + iΩC_b)·rel (complex, y and
+//! z), has the covariance S = Z·Σ_ped·Z^H + B·Σ_rel·B^H from the noise of
+//! both readings, per real component, and χ² = Σ e^H S⁻¹ e has 4·speeds −
+//! parameters degrees of freedom when the model and the conventions are
+//! right. The noise comes from one function ([`noise_floor`]): the
+//! measurement's noise columns when present, else the digits/scatter estimate
+//! of `diagnose::noise`. Between readings with the same number of parameters
+//! Δχ² is −2·ln of the likelihood ratio; with a noise floor that may be off by
+//! a factor, Δχ² is first divided by the best reading's χ²/ν (when above 1:
+//! quasi-likelihood). A reading is named only when it is passive, its χ²/ν is
+//! at most [`FLOOR_CHI2_PER_DOF`], and it beats every other reading (the data
+//! as found included) by [`DECISIVE_DELTA_CHI2`]; otherwise nothing is named.
+//!
+//! The fit itself is a parameter ([`FitRun`]): any estimator that turns a run
+//! into an [`Identification`] (estimates and standard errors) plugs in.
+
+use super::physical::is_plausible;
+use super::{Identification, IdentifyError, PedestalFit, Warning, WarningKind};
+use crate::diagnose::noise::{NoiseModel, CHANNELS};
+use crate::rundir::{Measurement, RunDir};
+use plinth_shared::phasor::{omega_from_hz, Complex};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+type C64 = Complex<f64>;
+
+/// A convention mistake that field data commonly carry (formats.md names
+/// them; serialised in snake_case: `conjugated`, `swapped_yz`, ...).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Convention {
+    /// Every phasor conjugated (phase lag read as lead).
+    Conjugated,
+    /// y and z of the readings exchanged.
+    SwappedYz,
+    /// `rel` written as pedestal minus rotor.
+    RelNegated,
+    /// Bearing matrices K_b, C_b transposed.
+    BearingTransposed,
+    /// The bearing's cross-coupling terms with the wrong sign.
+    CrossCouplingSign,
+    /// Speeds in rpm read as Hz.
+    SpeedInRpm,
+}
+
+impl Convention {
+    /// Every mistake tried, in report order.
+    pub const ALL: [Convention; 6] = [
+        Convention::Conjugated,
+        Convention::SwappedYz,
+        Convention::RelNegated,
+        Convention::BearingTransposed,
+        Convention::CrossCouplingSign,
+        Convention::SpeedInRpm,
+    ];
+
+    /// The name used in `--json` and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Convention::Conjugated => "conjugated",
+            Convention::SwappedYz => "swapped_yz",
+            Convention::RelNegated => "rel_negated",
+            Convention::BearingTransposed => "bearing_transposed",
+            Convention::CrossCouplingSign => "cross_coupling_sign",
+            Convention::SpeedInRpm => "speed_in_rpm",
+        }
+    }
+
+    /// What the mistake is, for people.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Convention::Conjugated => {
+                "the phasors are conjugated (phase lag read as lead: formats.md wants q(t) = Re{Q·e^{iΩt}})"
+            }
+            Convention::SwappedYz => {
+                "the y and z readings are swapped (formats.md: y vertical, z horizontal)"
+            }
+            Convention::RelNegated => {
+                "rel is pedestal minus rotor (formats.md: rel = rotor − pedestal)"
+            }
+            Convention::BearingTransposed => {
+                "the bearing matrices are transposed (kyz and kzy, cyz and czy exchanged)"
+            }
+            Convention::CrossCouplingSign => {
+                "the bearing cross terms kyz, kzy, cyz, czy have the wrong sign"
+            }
+            Convention::SpeedInRpm => "the speeds are in rpm, not Hz",
+        }
+    }
+
+    /// The run as it would be had the mistake not been made: the mistake
+    /// undone on the raw data (module docs).
+    pub fn correct(self, run: &RunDir) -> RunDir {
+        let mut out = run.clone();
+        match self {
+            Convention::Conjugated => {
+                for m in &mut out.measurements {
+                    for z in m.rel.iter_mut().chain(m.ped.iter_mut()) {
+                        *z = z.conj();
+                    }
+                }
+            }
+            Convention::SwappedYz => {
+                for m in &mut out.measurements {
+                    m.rel.swap(0, 1);
+                    m.ped.swap(0, 1);
+                    if let Some(sd) = &mut m.noise_sd {
+                        sd.swap(0, 1);
+                        sd.swap(2, 3);
+                    }
+                }
+            }
+            Convention::RelNegated => {
+                for m in &mut out.measurements {
+                    for z in &mut m.rel {
+                        *z = -*z;
+                    }
+                }
+            }
+            Convention::BearingTransposed => {
+                for b in &mut out.bearings {
+                    let c = &mut b.coefficients;
+                    (c.k[0][1], c.k[1][0]) = (c.k[1][0], c.k[0][1]);
+                    (c.c[0][1], c.c[1][0]) = (c.c[1][0], c.c[0][1]);
+                }
+            }
+            Convention::CrossCouplingSign => {
+                for b in &mut out.bearings {
+                    let c = &mut b.coefficients;
+                    for (i, j) in [(0, 1), (1, 0)] {
+                        c.k[i][j] = -c.k[i][j];
+                        c.c[i][j] = -c.c[i][j];
+                    }
+                }
+            }
+            Convention::SpeedInRpm => {
+                let schedules = run.bearing_schedules();
+                let table_in_same_unit = run.measurements.iter().all(|m| {
+                    schedules
+                        .get(&m.bearing)
+                        .is_some_and(|s| s.at(m.speed_hz).is_ok())
+                });
+                for m in &mut out.measurements {
+                    m.speed_hz /= RPM_PER_HZ;
+                }
+                if table_in_same_unit {
+                    for b in &mut out.bearings {
+                        b.speed_hz /= RPM_PER_HZ;
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+impl fmt::Display for Convention {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Revolutions per minute in one hertz.
+const RPM_PER_HZ: f64 = 60.0;
+
+/// χ²/ν above which a fit is far worse than its noise floor and the mistakes
+/// are tried even when the pedestal is passive. The noise floor may be off by
+/// a factor of a few (digits give a bound, scatter an estimate), so only a
+/// misfit of an order of magnitude in variance counts.
+pub const MISFIT_CHI2_PER_DOF: f64 = 10.0;
+
+/// Largest χ²/ν of a reading that "fits to the noise floor": a few times the
+/// expected 1, for a noise floor known to a factor of about two in σ.
+pub const FLOOR_CHI2_PER_DOF: f64 = 4.0;
+
+/// Least Δχ² (scaled by the best reading's χ²/ν when above 1) by which the
+/// named reading must beat every other: 2·ln(1000), a likelihood ratio of
+/// 1000 ("decisive"), as all readings have the same parameters.
+pub const DECISIVE_DELTA_CHI2: f64 = 13.815_510_557_964_274;
+
+/// A fitter: the run (as found, or with a mistake undone) in, every
+/// pedestal's estimate with standard errors out.
+pub type FitRun<'a> = dyn Fn(&RunDir) -> Result<Identification, IdentifyError> + 'a;
+
+/// How well one reading of the data fits one pedestal.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Reading {
+    /// The mistake undone, or `None` for the data as found.
+    pub convention: Option<Convention>,
+    /// Noise-whitened residual sum of squares χ² [-] at the fit's estimate.
+    pub chi2: f64,
+    /// Degrees of freedom ν = 4·speeds − parameters.
+    pub dof: usize,
+    /// Whether the estimate is a passive pedestal ([`is_plausible`]).
+    pub plausible: bool,
+}
+
+impl Reading {
+    /// χ²/ν [-]; 1 on average when model, conventions and noise are right.
+    pub fn chi2_per_dof(&self) -> f64 {
+        self.chi2 / self.dof.max(1) as f64
+    }
+
+    fn label(&self) -> &'static str {
+        self.convention.map_or("as found", Convention::name)
+    }
+}
+
+/// A convention mistake named for one pedestal.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Finding {
+    /// Bearing name.
+    pub bearing: String,
+    /// The mistake the data most likely carry.
+    pub convention: Convention,
+    /// The reading with the mistake undone.
+    pub corrected: Reading,
+    /// The data as found.
+    pub as_found: Reading,
+    /// The next-best reading (the data as found or another mistake).
+    pub runner_up: Reading,
+    /// The pedestal identified with the mistake undone.
+    pub corrected_fit: PedestalFit,
+}
+
+impl Finding {
+    /// One sentence for people: the mistake, the evidence and the corrected
+    /// estimate.
+    pub fn message(&self) -> String {
+        let f = &self.corrected_fit;
+        let passive = |r: &Reading| {
+            if r.plausible {
+                "passive"
+            } else {
+                "not passive"
+            }
+        };
+        format!(
+            "suspected convention error `{}`: {}. With it undone the pedestal is passive and fits to the noise floor (χ²/ν {:.3}; as found {:.3}, {}; best other reading {} {:.3}, {}), giving k_y = {:.4e} N/m, k_z = {:.4e} N/m, m = {:.4e} kg, c_y = {:.4e} N·s/m, c_z = {:.4e} N·s/m; fix the data and run again",
+            self.convention,
+            self.convention.describe(),
+            self.corrected.chi2_per_dof(),
+            self.as_found.chi2_per_dof(),
+            passive(&self.as_found),
+            self.runner_up.label(),
+            self.runner_up.chi2_per_dof(),
+            passive(&self.runner_up),
+            f.k_y,
+            f.k_z,
+            f.m,
+            f.c_y,
+            f.c_z
+        )
+    }
+}
+
+/// The noise standard deviation per real component [m] of the four phasors
+/// (rel y, rel z, ped y, ped z) of every measurement of a run, in the order of
+/// `run.measurements`. The one place where the noise floor is chosen: the
+/// measurement's noise columns (formats.md: sqrt(E|n|²), split equally
+/// between real and imaginary parts) when present, else the digits and
+/// scatter of `diagnose::noise`. `None` when the run's noise cannot be
+/// estimated.
+pub fn noise_floor(run: &RunDir) -> Option<Vec<[f64; 4]>> {
+    let bearings: Vec<String> = run
+        .measured_bearings()
+        .into_iter()
+        .map(String::from)
+        .collect();
+    let model = NoiseModel::estimate(run, &bearings).ok()?;
+    run.measurements
+        .iter()
+        .map(|m| {
+            if let Some(sd) = m.noise_sd {
+                return Some(sd.map(|s| s / std::f64::consts::SQRT_2));
+            }
+            let b = bearings.iter().position(|n| *n == m.bearing)?;
+            let mut out = [0.0; 4];
+            for (ch, slot) in out.iter_mut().enumerate() {
+                let z = if ch < 2 { m.rel[ch] } else { m.ped[ch - 2] };
+                let s_re = model.sigma(b, 2 * ch, z.re, z.norm());
+                let s_im = model.sigma(b, 2 * ch + 1, z.im, z.norm());
+                debug_assert!(CHANNELS[2 * ch].ends_with("_re"));
+                *slot = (0.5 * (s_re * s_re + s_im * s_im)).sqrt();
+            }
+            Some(out)
+        })
+        .collect()
+}
+
+/// χ² and ν of `fit` on the measurements of its bearing in `run`, with the
+/// per-measurement noise `sigma` ([`noise_floor`]). `None` when no speed can
+/// be evaluated.
+pub fn chi2(run: &RunDir, sigma: &[[f64; 4]], fit: &PedestalFit) -> Option<(f64, usize)> {
+    let schedule = run.bearing_schedules().remove(&fit.bearing)?;
+    let th = fit.params();
+    let mut total = 0.0;
+    let mut speeds = 0usize;
+    for (m, s) in run.measurements.iter().zip(sigma) {
+        if m.bearing != fit.bearing || !finite(m) {
+            continue;
+        }
+        let Ok(bc) = schedule.at(m.speed_hz) else {
+            continue;
+        };
+        let w = omega_from_hz(m.speed_hz);
+        let z = [
+            C64::new(th[0] - w * w * th[2], w * th[3]),
+            C64::new(th[1] - w * w * th[2], w * th[4]),
+        ];
+        let b = [
+            [
+                C64::new(bc.k[0][0], w * bc.c[0][0]),
+                C64::new(bc.k[0][1], w * bc.c[0][1]),
+            ],
+            [
+                C64::new(bc.k[1][0], w * bc.c[1][0]),
+                C64::new(bc.k[1][1], w * bc.c[1][1]),
+            ],
+        ];
+        let e: [C64; 2] =
+            std::array::from_fn(|d| z[d] * m.ped[d] - b[d][0] * m.rel[0] - b[d][1] * m.rel[1]);
+        // S = Z Σ_ped Z^H + B Σ_rel B^H (Hermitian 2×2).
+        let var_rel = [s[0] * s[0], s[1] * s[1]];
+        let mut cov = [[C64::new(0.0, 0.0); 2]; 2];
+        for (i, row) in cov.iter_mut().enumerate() {
+            for (j, cij) in row.iter_mut().enumerate() {
+                *cij = (0..2).map(|k| b[i][k] * b[j][k].conj() * var_rel[k]).sum();
+            }
+            row[i] += z[i].norm_sqr() * s[2 + i] * s[2 + i];
+        }
+        let (a, d, c) = (cov[0][0].re, cov[1][1].re, cov[0][1]);
+        let det = a * d - c.norm_sqr();
+        if !(det > 0.0 && det.is_finite()) {
+            continue;
+        }
+        // e^H S⁻¹ e with S⁻¹ = [[d, −c], [−c̄, a]] / det.
+        let q =
+            (d * e[0].norm_sqr() + a * e[1].norm_sqr() - 2.0 * (e[0].conj() * c * e[1]).re) / det;
+        total += q;
+        speeds += 1;
+    }
+    let params = super::PARAMETERS - fit.fixed.len();
+    (speeds > 0).then(|| (total, (4 * speeds).saturating_sub(params)))
+}
+
+fn finite(m: &Measurement) -> bool {
+    m.speed_hz.is_finite()
+        && m.rel
+            .iter()
+            .chain(&m.ped)
+            .all(|z| z.re.is_finite() && z.im.is_finite())
+}
+
+/// The readings of every pedestal of `identification` (fitted by `fit` on
+/// `run`) that need the diagnosis, and the named mistakes. A pedestal is
+/// examined when it is not passive or fits worse than
+/// [`MISFIT_CHI2_PER_DOF`]; readings whose refit fails (e.g. speeds outside
+/// the bearing table) are left out.
+pub fn diagnose(run: &RunDir, identification: &Identification, fit: &FitRun) -> Vec<Finding> {
+    let Some(sigma) = noise_floor(run) else {
+        return Vec::new();
+    };
+    let reading = |run: &RunDir, sigma: &[[f64; 4]], p: &PedestalFit, c| {
+        chi2(run, sigma, p).map(|(chi2, dof)| Reading {
+            convention: c,
+            chi2,
+            dof,
+            plausible: is_plausible(p),
+        })
+    };
+    let as_found: Vec<Option<Reading>> = identification
+        .pedestals
+        .iter()
+        .map(|p| reading(run, &sigma, p, None))
+        .collect();
+    let examine: Vec<bool> = identification
+        .pedestals
+        .iter()
+        .zip(&as_found)
+        .map(|(p, r)| !is_plausible(p) || r.is_some_and(|r| r.chi2_per_dof() > MISFIT_CHI2_PER_DOF))
+        .collect();
+    if !examine.iter().any(|&e| e) {
+        return Vec::new();
+    }
+    // Every correction, refitted once for the whole run.
+    let mut corrected: Vec<(Convention, Identification, RunDir, Vec<[f64; 4]>)> = Vec::new();
+    for c in Convention::ALL {
+        let fixed = c.correct(run);
+        if fixed == *run {
+            continue; // the mistake changes nothing in these data
+        }
+        let (Ok(id), Some(s)) = (fit(&fixed), noise_floor(&fixed)) else {
+            continue;
+        };
+        corrected.push((c, id, fixed, s));
+    }
+    let mut findings = Vec::new();
+    for (k, p) in identification.pedestals.iter().enumerate() {
+        let Some(found) = as_found[k].filter(|_| examine[k]) else {
+            continue;
+        };
+        let mut readings = vec![(found, p)];
+        for (c, id, fixed, s) in &corrected {
+            if let Some(q) = id.pedestal(&p.bearing) {
+                if let Some(r) = reading(fixed, s, q, Some(*c)) {
+                    readings.push((r, q));
+                }
+            }
+        }
+        if let Some((best, runner_up, q)) = decide(&readings) {
+            let Some(convention) = best.convention else {
+                continue;
+            };
+            findings.push(Finding {
+                bearing: p.bearing.clone(),
+                convention,
+                corrected: best,
+                as_found: found,
+                runner_up,
+                corrected_fit: q.clone(),
+            });
+        }
+    }
+    findings
+}
+
+/// The decisive reading (module docs) with the runner-up and its fit, or
+/// `None` when no reading is passive, at the noise floor and decisively best.
+/// Only passive readings compete with it: one that is not passive cannot be
+/// what happened, however well it fits (negating `rel` and every parameter
+/// leaves χ² unchanged, for one). The runner-up reported is the best other
+/// reading, passive or not.
+fn decide<'a>(
+    readings: &[(Reading, &'a PedestalFit)],
+) -> Option<(Reading, Reading, &'a PedestalFit)> {
+    let by_chi2 =
+        |a: &&(Reading, &PedestalFit), b: &&(Reading, &PedestalFit)| a.0.chi2.total_cmp(&b.0.chi2);
+    let (best, fit) = readings
+        .iter()
+        .filter(|(r, _)| r.plausible && r.chi2.is_finite())
+        .min_by(by_chi2)?;
+    if best.chi2_per_dof() > FLOOR_CHI2_PER_DOF {
+        return None;
+    }
+    let others = || readings.iter().filter(|(r, _)| r != best);
+    let scale = best.chi2_per_dof().max(1.0);
+    let decisive = others()
+        .filter(|(r, _)| r.plausible)
+        .all(|(r, _)| (r.chi2 - best.chi2) / scale >= DECISIVE_DELTA_CHI2);
+    let runner_up = others().min_by(by_chi2)?.0;
+    decisive.then_some((*best, runner_up, *fit))
+}
+
+/// Marks every pedestal of `identification` that a [`Finding`] names: not
+/// trusted, `suspected_convention_error` set, and a warning
+/// ([`WarningKind::SuspectedConventionError`]) with the evidence.
+pub fn mark(identification: &mut Identification, findings: &[Finding]) {
+    for f in findings {
+        if let Some(p) = identification
+            .pedestals
+            .iter_mut()
+            .find(|p| p.bearing == f.bearing)
+        {
+            p.suspected_convention_error = Some(f.convention);
+            p.trusted = false;
+            p.warnings.push(Warning {
+                kind: WarningKind::SuspectedConventionError,
+                message: f.message(),
+            });
+        }
+    }
+}

@@ -1,0 +1,153 @@
+//! Physical plausibility of an identified pedestal, and the finiteness of
+//! every number a fit reports.
+//!
+//! A pedestal is passive: its mass and stiffnesses cannot be negative (a
+//! negative estimate is physically impossible, whatever its standard error),
+//! and its damping cannot be below zero by more than the noise allows
+//! ([`DAMPING_SIGMAS`] standard errors: a damping too small for the data to
+//! resolve may come out slightly negative). A fit that breaks either rule is
+//! not trusted, and the warning says which value and why; the usual cause is
+//! a convention mistake in the data ([`super::convention`]).
+//!
+//! A result that is not a finite number (an overflow in the arithmetic, e.g.
+//! data in the wrong unit by many decades) is an error, not a row of a table;
+//! the only non-finite figures a fit may carry are the documented "not
+//! estimable" ones: infinite standard errors and condition number of a fit
+//! already untrusted because the data do not determine it.
+
+use super::{PedestalFit, Warning, WarningKind};
+use plinth_shared::regression::Parameter;
+
+/// Standard errors below zero beyond which a damping is significantly
+/// negative (two-sided 95 %: 1.96, rounded up).
+pub const DAMPING_SIGMAS: f64 = 2.0;
+
+/// The physical impossibilities of `fit`, one warning
+/// ([`WarningKind::PhysicallyImpossible`]) per offending parameter; empty
+/// when the pedestal is passive. Parameters fixed by the model are 0 and pass.
+pub fn violations(fit: &PedestalFit) -> Vec<Warning> {
+    let mut out = Vec::new();
+    let se = fit.std_errs();
+    for p in Parameter::ALL {
+        let value = fit.get(p);
+        let sigma = se[p as usize];
+        let (unit, damping) = match p {
+            Parameter::Ky | Parameter::Kz => ("N/m", false),
+            Parameter::M => ("kg", false),
+            Parameter::Cy | Parameter::Cz => ("N·s/m", true),
+        };
+        let message = if damping {
+            (sigma.is_finite() && value < -DAMPING_SIGMAS * sigma).then(|| {
+                format!(
+                    "{} = {value:.4e} ± {sigma:.2e} {unit} is negative by {:.1} standard errors: a passive pedestal cannot have negative damping",
+                    p.name(),
+                    -value / sigma
+                )
+            })
+        } else {
+            (value < 0.0).then(|| {
+                format!(
+                    "{} = {value:.4e} ± {sigma:.2e} {unit} is negative: a passive pedestal cannot have a negative {}",
+                    p.name(),
+                    if p == Parameter::M { "mass" } else { "stiffness" }
+                )
+            })
+        };
+        if let Some(message) = message {
+            out.push(Warning {
+                kind: WarningKind::PhysicallyImpossible,
+                message,
+            });
+        }
+    }
+    out
+}
+
+/// True when `fit` describes a passive pedestal ([`violations`] is empty).
+pub fn is_plausible(fit: &PedestalFit) -> bool {
+    violations(fit).is_empty()
+}
+
+/// A number of a fit that is not finite where it must be.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("pedestal `{bearing}`: the fit's {quantity} is {value} (an overflow in the arithmetic: are the numbers of measurements.csv and bearings.csv in SI units, m, N/m, N·s/m?)")]
+pub struct NonFiniteResult {
+    /// Bearing name.
+    pub bearing: String,
+    /// Which figure, e.g. `k_y`, `std_err.m`, `residual_rms`.
+    pub quantity: String,
+    /// Its value (inf, -inf or NaN).
+    pub value: f64,
+}
+
+/// Checks that every figure of `fit` is a number: the parameters and the
+/// residual always; the standard errors and the condition number unless the
+/// fit is already untrusted because the data do not determine it (then +∞
+/// means "not estimable" and is written as `null`).
+pub fn check_finite(fit: &PedestalFit) -> Result<(), NonFiniteResult> {
+    let undetermined =
+        fit.has_warning(WarningKind::RankDeficient) || fit.has_warning(WarningKind::TooFewSpeeds);
+    let error = |quantity: String, value: f64| NonFiniteResult {
+        bearing: fit.bearing.clone(),
+        quantity,
+        value,
+    };
+    for p in Parameter::ALL {
+        let v = fit.get(p);
+        if !v.is_finite() {
+            return Err(error(p.name().to_string(), v));
+        }
+        let s = fit.std_errs()[p as usize];
+        if s.is_nan() || s < 0.0 || (s.is_infinite() && !undetermined) {
+            return Err(error(format!("std_err.{}", p.name()), s));
+        }
+    }
+    if !fit.residual_rms.is_finite() {
+        return Err(error("residual_rms".into(), fit.residual_rms));
+    }
+    let c = fit.condition_number;
+    if c.is_nan() || (c.is_infinite() && !undetermined) {
+        return Err(error("condition_number".into(), c));
+    }
+    Ok(())
+}
+
+/// `plinth identify`'s exit code when it ran and printed everything but some
+/// pedestal is physically impossible or carries a suspected convention
+/// mistake (1 is an error that stopped it).
+pub const EXIT_NOT_PHYSICAL: u8 = 2;
+
+/// The pedestals of an identification that no passive pedestal explains:
+/// returned (after printing) by `plinth identify`, which then exits with
+/// [`EXIT_NOT_PHYSICAL`].
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}", .0.join("; "))]
+pub struct NotPhysical(pub Vec<String>);
+
+impl NotPhysical {
+    /// One line per pedestal that is physically impossible or has a
+    /// suspected convention error; `None` when every pedestal is passive.
+    pub fn of(identification: &super::Identification) -> Option<Self> {
+        let lines: Vec<String> = identification
+            .pedestals
+            .iter()
+            .filter_map(|p| {
+                if let Some(c) = p.suspected_convention_error {
+                    Some(format!(
+                        "pedestal `{}`: suspected convention error `{c}`: {}",
+                        p.bearing,
+                        c.describe()
+                    ))
+                } else if p.has_warning(WarningKind::PhysicallyImpossible) {
+                    Some(format!(
+                        "pedestal `{}`: physically impossible (no passive pedestal: see the warnings)",
+                        p.bearing
+                    ))
+                } else {
+                    None
+                }
+            })
+            .collect();
+        (!lines.is_empty()).then_some(Self(lines))
+    }
+}
