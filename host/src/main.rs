@@ -49,11 +49,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            if e.is::<plinth::identify::physical::NotPhysical>() {
-                ExitCode::from(plinth::identify::physical::EXIT_NOT_PHYSICAL)
-            } else {
-                ExitCode::FAILURE
-            }
+            ExitCode::from(plinth::identify::physical::exit_code(&e))
         }
     }
 }

@@ -497,3 +497,47 @@ pub fn mark(identification: &mut Identification, findings: &[Finding]) {
         }
     }
 }
+
+/// A convention mistake as `plinth diagnose` lists it among its findings.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConventionFinding {
+    /// Bearing name.
+    pub bearing: String,
+    /// The mistake the data most likely carry (`conjugated`, ...).
+    pub convention: Convention,
+    /// χ²/ν of the data as found [-].
+    pub chi2_per_dof_as_found: f64,
+    /// χ²/ν with the mistake undone [-].
+    pub chi2_per_dof_corrected: f64,
+    /// The sentence `plinth identify` prints.
+    pub message: String,
+}
+
+/// The convention mistakes [`diagnose`] names in `run` when each pedestal is
+/// fitted (by the batch fit, R&I) with the parameters `base`; empty when the
+/// run cannot be identified at all (the caller reports that itself).
+pub fn findings_for_run(
+    run: &RunDir,
+    base: &[plinth_shared::regression::Parameter],
+) -> Vec<ConventionFinding> {
+    let Ok(model) = super::Model::from_parameters(base) else {
+        return Vec::new();
+    };
+    let options = super::Options {
+        model: Some(model),
+        ..super::Options::default()
+    };
+    let Ok(identification) = super::fit_run(run, &options) else {
+        return Vec::new();
+    };
+    diagnose(run, &identification, &|r| super::fit_run(r, &options))
+        .into_iter()
+        .map(|f| ConventionFinding {
+            message: f.message(),
+            bearing: f.bearing,
+            convention: f.convention,
+            chi2_per_dof_as_found: f.as_found.chi2_per_dof(),
+            chi2_per_dof_corrected: f.corrected.chi2_per_dof(),
+        })
+        .collect()
+}

@@ -151,3 +151,13 @@ impl NotPhysical {
         (!lines.is_empty()).then_some(Self(lines))
     }
 }
+
+/// The process exit code for an error a command returned:
+/// [`EXIT_NOT_PHYSICAL`] for [`NotPhysical`], 1 for anything else.
+pub fn exit_code(error: &anyhow::Error) -> u8 {
+    if error.is::<NotPhysical>() {
+        EXIT_NOT_PHYSICAL
+    } else {
+        1
+    }
+}
