@@ -5,7 +5,8 @@
 //! negative estimate is physically impossible, whatever its standard error),
 //! and its damping cannot be below zero by more than the noise allows
 //! ([`DAMPING_SIGMAS`] standard errors: a damping too small for the data to
-//! resolve may come out slightly negative). A fit that breaks either rule is
+//! resolve may come out slightly negative; one whose loss factor is below
+//! [`NEGLIGIBLE_LOSS_FACTOR`] is numerically zero). A fit that breaks either rule is
 //! not trusted, and the warning says which value and why; the usual cause is
 //! a convention mistake in the data ([`super::convention`]).
 //!
@@ -22,6 +23,12 @@ use plinth_shared::regression::Parameter;
 /// negative (two-sided 95 %: 1.96, rounded up).
 pub const DAMPING_SIGMAS: f64 = 2.0;
 
+/// Loss factor Ω_max·|c|/k [-] below which a negative damping is numerically
+/// zero, whatever its standard error: exact (12-digit) data leave dampings of
+/// order 1e-12 N·s/m whose least-squares standard errors understate the
+/// round-off. Real structures have loss factors of 1e-4 and more.
+pub const NEGLIGIBLE_LOSS_FACTOR: f64 = 1e-6;
+
 /// The physical impossibilities of `fit`, one warning
 /// ([`WarningKind::PhysicallyImpossible`]) per offending parameter; empty
 /// when the pedestal is passive. Parameters fixed by the model are 0 and pass.
@@ -37,7 +44,10 @@ pub fn violations(fit: &PedestalFit) -> Vec<Warning> {
             Parameter::Cy | Parameter::Cz => ("N·s/m", true),
         };
         let message = if damping {
-            (sigma.is_finite() && value < -DAMPING_SIGMAS * sigma).then(|| {
+            let k = if p == Parameter::Cy { fit.k_y } else { fit.k_z };
+            let omega_max = 2.0 * std::f64::consts::PI * fit.speed_range_hz[1];
+            let material = omega_max * value.abs() > NEGLIGIBLE_LOSS_FACTOR * k.abs();
+            (sigma.is_finite() && value < -DAMPING_SIGMAS * sigma && material).then(|| {
                 format!(
                     "{} = {value:.4e} ± {sigma:.2e} {unit} is negative by {:.1} standard errors: a passive pedestal cannot have negative damping",
                     p.name(),
@@ -159,5 +169,96 @@ pub fn exit_code(error: &anyhow::Error) -> u8 {
         EXIT_NOT_PHYSICAL
     } else {
         1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::StdErr;
+
+    fn fit(theta: [f64; 5], se: [f64; 5]) -> PedestalFit {
+        PedestalFit {
+            bearing: "left".into(),
+            k_y: theta[0],
+            k_z: theta[1],
+            m: theta[2],
+            c_y: theta[3],
+            c_z: theta[4],
+            std_err: StdErr {
+                k_y: se[0],
+                k_z: se[1],
+                m: se[2],
+                c_y: se[3],
+                c_z: se[4],
+            },
+            residual_rms: 1.0,
+            condition_number: 3.0,
+            fixed: Vec::new(),
+            trusted: true,
+            speeds: 50,
+            equations: 200,
+            speed_range_hz: [5.0, 200.0],
+            warnings: Vec::new(),
+            suspected_convention_error: None,
+        }
+    }
+
+    const SE: [f64; 5] = [1e4, 1e4, 0.1, 50.0, 50.0];
+
+    fn offending(f: &PedestalFit) -> Vec<String> {
+        violations(f)
+            .iter()
+            .map(|w| w.message.split(' ').next().unwrap_or("").to_string())
+            .collect()
+    }
+
+    #[test]
+    fn passive_pedestals_pass() {
+        let f = fit([1e7, 8e6, 150.0, 100.0, 80.0], SE);
+        assert!(is_plausible(&f));
+        // Damping consistent with zero, even below it within 2 σ, is fine.
+        assert!(is_plausible(&fit([1e7, 8e6, 150.0, -90.0, -10.0], SE)));
+        // Round-off damping of exact data: loss factor far below 1e-6.
+        assert!(is_plausible(&fit(
+            [1e7, 8e6, 150.0, -3e-12, 0.0],
+            [1e-6, 1e-6, 1e-12, 1e-13, 1e-13]
+        )));
+    }
+
+    #[test]
+    fn negative_mass_stiffness_and_damping_are_named() {
+        assert_eq!(offending(&fit([-1e7, 8e6, 150.0, 0.0, 0.0], SE)), ["k_y"]);
+        assert_eq!(offending(&fit([1e7, -8e6, 150.0, 0.0, 0.0], SE)), ["k_z"]);
+        // Negative mass is impossible whatever its standard error.
+        assert_eq!(offending(&fit([1e7, 8e6, -0.01, 0.0, 0.0], SE)), ["m"]);
+        assert_eq!(
+            offending(&fit([1e7, 8e6, 150.0, -101.0, -5000.0], SE)),
+            ["c_y", "c_z"]
+        );
+        let w = &violations(&fit([1e7, 8e6, -150.0, 0.0, 0.0], SE))[0];
+        assert_eq!(w.kind, WarningKind::PhysicallyImpossible);
+        assert!(w.message.contains("negative mass"), "{}", w.message);
+    }
+
+    #[test]
+    fn non_finite_results_are_errors() {
+        assert!(check_finite(&fit([1e7, 8e6, 150.0, 1.0, 1.0], SE)).is_ok());
+        let e = check_finite(&fit([f64::INFINITY, 8e6, 150.0, 1.0, 1.0], SE)).unwrap_err();
+        assert_eq!(e.quantity, "k_y");
+        let e = check_finite(&fit([1e7, 8e6, f64::NAN, 1.0, 1.0], SE)).unwrap_err();
+        assert_eq!(e.quantity, "m");
+        let mut se = SE;
+        se[3] = f64::INFINITY;
+        let e = check_finite(&fit([1e7, 8e6, 150.0, 1.0, 1.0], se)).unwrap_err();
+        assert_eq!(e.quantity, "std_err.c_y");
+        // "Not estimable" is allowed where the fit already says so.
+        let mut f = fit([1e7, 8e6, 150.0, 1.0, 1.0], se);
+        f.condition_number = f64::INFINITY;
+        f.warnings.push(Warning {
+            kind: WarningKind::RankDeficient,
+            message: String::new(),
+        });
+        assert!(check_finite(&f).is_ok());
     }
 }
