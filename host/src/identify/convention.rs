@@ -528,3 +528,207 @@ pub fn findings_for_run(
         })
         .collect()
 }
+
+/// When the run cannot be identified because measured speeds lie outside
+/// the bearing table, but every speed divided by 60 lies inside it: the
+/// sentence naming `speed_in_rpm` (the measurements in rpm, the table in Hz).
+pub fn speed_in_rpm_hint(run: &RunDir) -> Option<String> {
+    let schedules = run.bearing_schedules();
+    let inside = |m: &Measurement, speed_hz: f64| {
+        schedules
+            .get(&m.bearing)
+            .is_some_and(|s| s.at(speed_hz).is_ok())
+    };
+    let outside_as_written = run.measurements.iter().any(|m| !inside(m, m.speed_hz));
+    let inside_as_rpm = run
+        .measurements
+        .iter()
+        .all(|m| inside(m, m.speed_hz / RPM_PER_HZ));
+    (outside_as_written && inside_as_rpm).then(|| {
+        format!(
+            "suspected convention error `{}`: {} (divided by 60, every measured speed falls inside the bearing table)",
+            Convention::SpeedInRpm,
+            Convention::SpeedInRpm.describe()
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rundir::BearingRow;
+    use plinth_shared::bearing::BearingCoefficients;
+
+    fn run() -> RunDir {
+        let c = |re: f64, im: f64| C64::new(re, im);
+        let bearing = |speed_hz: f64| BearingRow {
+            speed_hz,
+            bearing: "left".into(),
+            coefficients: BearingCoefficients {
+                k: [[2e7, 1e6], [-3e6, 1.2e7]],
+                c: [[4e4, 3e3], [2e3, 3e4]],
+            },
+        };
+        RunDir {
+            measurements: vec![Measurement {
+                speed_hz: 50.0,
+                bearing: "left".into(),
+                rel: [c(1.0, 2.0), c(3.0, -4.0)],
+                ped: [c(-5.0, 6.0), c(7.0, 8.0)],
+                noise_sd: Some([0.1, 0.2, 0.3, 0.4]),
+            }],
+            bearings: vec![bearing(0.0), bearing(100.0)],
+            truth: None,
+        }
+    }
+
+    #[test]
+    fn corrections_undo_their_mistake() {
+        let r = run();
+        for c in Convention::ALL {
+            let once = c.correct(&r);
+            assert_ne!(once, r, "{c} changes these data");
+            if c != Convention::SpeedInRpm {
+                assert_eq!(c.correct(&once), r, "{c} is its own inverse");
+            }
+        }
+        let m = &Convention::Conjugated.correct(&r).measurements[0];
+        assert_eq!(m.rel[0], C64::new(1.0, -2.0));
+        assert_eq!(m.ped[1], C64::new(7.0, -8.0));
+        let m = &Convention::SwappedYz.correct(&r).measurements[0];
+        assert_eq!(
+            (m.rel[0], m.ped[0]),
+            (r.measurements[0].rel[1], r.measurements[0].ped[1])
+        );
+        assert_eq!(m.noise_sd, Some([0.2, 0.1, 0.4, 0.3]));
+        let m = &Convention::RelNegated.correct(&r).measurements[0];
+        assert_eq!(m.rel[1], C64::new(-3.0, 4.0));
+        assert_eq!(m.ped, r.measurements[0].ped);
+        let b = &Convention::BearingTransposed.correct(&r).bearings[0].coefficients;
+        assert_eq!(
+            (b.k[0][1], b.k[1][0], b.c[0][1], b.c[1][0]),
+            (-3e6, 1e6, 2e3, 3e3)
+        );
+        let b = &Convention::CrossCouplingSign.correct(&r).bearings[0].coefficients;
+        assert_eq!(
+            (b.k[0][1], b.k[1][0], b.c[0][1], b.c[1][0]),
+            (-1e6, 3e6, -3e3, -2e3)
+        );
+        assert_eq!((b.k[0][0], b.c[1][1]), (2e7, 3e4));
+        // Speeds in rpm: the bearing table covers 50 as written, so it is in
+        // the same unit and is converted too.
+        let s = Convention::SpeedInRpm.correct(&r);
+        assert!((s.measurements[0].speed_hz - 50.0 / 60.0).abs() < 1e-15);
+        assert!((s.bearings[1].speed_hz - 100.0 / 60.0).abs() < 1e-15);
+        // A table in Hz that does not cover the rpm figures stays as it is;
+        // identify's error then names the mistake.
+        let mut rpm = r.clone();
+        rpm.measurements[0].speed_hz = 3000.0;
+        let s = Convention::SpeedInRpm.correct(&rpm);
+        assert_eq!(s.measurements[0].speed_hz, 50.0);
+        assert_eq!(s.bearings, r.bearings);
+        let hint = speed_in_rpm_hint(&rpm).expect("hint");
+        assert!(hint.contains("speed_in_rpm"), "{hint}");
+        assert_eq!(speed_in_rpm_hint(&r), None);
+    }
+
+    #[test]
+    fn names_are_formats_words() {
+        for c in Convention::ALL {
+            let json = serde_json::to_string(&c).unwrap();
+            assert_eq!(json, format!("\"{}\"", c.name()));
+            assert_eq!(serde_json::from_str::<Convention>(&json).unwrap(), c);
+        }
+    }
+
+    #[test]
+    fn noise_columns_are_the_floor_when_present() {
+        let s = noise_floor(&run()).unwrap();
+        let want = [0.1, 0.2, 0.3, 0.4].map(|x: f64| x / std::f64::consts::SQRT_2);
+        for (a, b) in s[0].iter().zip(want) {
+            assert!((a - b).abs() < 1e-15);
+        }
+    }
+
+    fn reading(convention: Option<Convention>, chi2: f64, plausible: bool) -> Reading {
+        Reading {
+            convention,
+            chi2,
+            dof: 100,
+            plausible,
+        }
+    }
+
+    #[test]
+    fn only_a_passive_decisive_reading_at_the_floor_is_named() {
+        let fit = crate::identify::PedestalFit {
+            bearing: "left".into(),
+            k_y: 1.0,
+            k_z: 1.0,
+            m: 1.0,
+            c_y: 0.0,
+            c_z: 0.0,
+            std_err: crate::identify::StdErr {
+                k_y: 0.0,
+                k_z: 0.0,
+                m: 0.0,
+                c_y: 0.0,
+                c_z: 0.0,
+            },
+            residual_rms: 0.0,
+            condition_number: 1.0,
+            fixed: Vec::new(),
+            trusted: true,
+            speeds: 26,
+            equations: 104,
+            speed_range_hz: [5.0, 200.0],
+            warnings: Vec::new(),
+            suspected_convention_error: None,
+        };
+        let conj = Some(Convention::Conjugated);
+        let swap = Some(Convention::SwappedYz);
+        let named = |rs: &[Reading]| {
+            let v: Vec<(Reading, &PedestalFit)> = rs.iter().map(|r| (*r, &fit)).collect();
+            decide(&v).and_then(|(best, _, _)| best.convention)
+        };
+        // Decisive: as found not passive, the correction at the floor.
+        assert_eq!(
+            named(&[reading(None, 9000.0, false), reading(conj, 90.0, true)]),
+            conj
+        );
+        // A reading that is not passive does not compete, however well it
+        // fits (rel negated: same χ², negated parameters).
+        assert_eq!(
+            named(&[reading(None, 90.0, false), reading(conj, 90.0, true)]),
+            conj
+        );
+        // Two passive readings within the decisive margin: nothing named.
+        assert_eq!(
+            named(&[
+                reading(None, 9000.0, false),
+                reading(conj, 90.0, true),
+                reading(swap, 100.0, true)
+            ]),
+            None
+        );
+        // The data as found are the best passive reading: nothing named.
+        assert_eq!(
+            named(&[reading(None, 90.0, true), reading(conj, 900.0, true)]),
+            None
+        );
+        // Passive but far above the noise floor: nothing named.
+        assert_eq!(
+            named(&[reading(None, 1e6, false), reading(conj, 5000.0, true)]),
+            None
+        );
+        // The margin scales with the best reading's χ²/ν above 1.
+        assert_eq!(
+            named(&[reading(conj, 500.0, true), reading(swap, 550.0, true)]),
+            None
+        );
+        assert_eq!(
+            named(&[reading(conj, 500.0, true), reading(swap, 600.0, true)]),
+            conj
+        );
+    }
+}
