@@ -26,19 +26,26 @@
 //!   the measurement speeds by 60, and the bearing table's speeds too when the
 //!   table is in the same unit (it covers the measured speeds as written).
 //!
-//! The comparison is a likelihood one. For a pedestal estimate θ the residual
-//! of eq. 3 at each speed, e = Z(θ)·ped − (K_b + iΩC_b)·rel (complex, y and
-//! z), has the covariance S = Z·Σ_ped·Z^H + B·Σ_rel·B^H from the noise of
-//! both readings, per real component, and χ² = Σ e^H S⁻¹ e has 4·speeds −
-//! parameters degrees of freedom when the model and the conventions are
-//! right. The noise comes from one function ([`noise_floor`]): the
-//! measurement's noise columns when present, else the digits/scatter estimate
-//! of `diagnose::noise`. Between readings with the same number of parameters
-//! Δχ² is −2·ln of the likelihood ratio; with a noise floor that may be off by
-//! a factor, Δχ² is first divided by the best reading's χ²/ν (when above 1:
-//! quasi-likelihood). A reading is named only when it is passive, its χ²/ν is
-//! at most [`FLOOR_CHI2_PER_DOF`], and it beats every other reading (the data
-//! as found included) by [`DECISIVE_DELTA_CHI2`]; otherwise nothing is named.
+//! Two figures judge a reading. For a pedestal estimate θ the residual of
+//! eq. 3 at each speed is e = Z(θ)·ped − (K_b + iΩC_b)·rel (complex, y and z).
+//! - Against the noise floor: e has the covariance S = Z·Σ_ped·Z^H +
+//!   B·Σ_rel·B^H from the noise of both readings, and χ² = Σ e^H S⁻¹ e has
+//!   ν = 4·speeds − parameters degrees of freedom when model and conventions
+//!   are right. The noise comes from one function ([`noise_floor`]): the
+//!   measurement's noise columns when present, else the digits/scatter
+//!   estimate of `diagnose::noise`. A reading "fits to the noise floor" when
+//!   χ²/ν ≤ [`FLOOR_CHI2_PER_DOF`].
+//! - Between readings: a likelihood ratio with the noise scale profiled out,
+//!   ν·ln(r_b/r_a), r = Σ|e|²/Σ|F|² the residual relative to the bearing
+//!   forces (all readings have the same parameters). It does not depend on
+//!   the noise floor's shape, which the digits/scatter estimate can get badly
+//!   wrong (on sharp resonances with 1-3 % noise it can take σ for 30 % of
+//!   each phasor, and every χ² then looks alike).
+//!
+//! A reading is named only when it is passive, fits to the noise floor, has
+//! the smallest r of the passive readings, and beats every other passive
+//! reading (the data as found included) by [`DECISIVE_DELTA_CHI2`];
+//! otherwise nothing is named.
 //!
 //! The fit itself is a parameter ([`FitRun`]): any estimator that turns a run
 //! into an [`Identification`] (estimates and standard errors) plugs in.
@@ -200,9 +207,9 @@ const RPM_PER_HZ: f64 = 60.0;
 /// what decides.
 pub const FLOOR_CHI2_PER_DOF: f64 = 10.0;
 
-/// Least Δχ² (scaled by the best reading's χ²/ν when above 1) by which the
-/// named reading must beat every other: 2·ln(1000), a likelihood ratio of
-/// 1000 ("decisive"), as all readings have the same parameters.
+/// Least −2·ln(likelihood ratio) by which the named reading must beat every
+/// other passive one: 2·ln(1000), a likelihood ratio of 1000 ("decisive"),
+/// as all readings have the same parameters.
 pub const DECISIVE_DELTA_CHI2: f64 = 13.815_510_557_964_274;
 
 /// A fitter: the run (as found, or with a mistake undone) in, every
@@ -218,6 +225,8 @@ pub struct Reading {
     pub chi2: f64,
     /// Degrees of freedom ν = 4·speeds − parameters.
     pub dof: usize,
+    /// Σ|e|²/Σ|F|² [-] ([`Misfit::relative_residual`]).
+    pub relative_residual: f64,
     /// Whether the estimate is a passive pedestal ([`is_plausible`]).
     pub plausible: bool,
 }
@@ -263,14 +272,15 @@ impl Finding {
             }
         };
         format!(
-            "suspected convention error `{}`: {}. With it undone the pedestal is passive and fits to the noise floor (χ²/ν {:.3}; as found {:.3}, {}; best other reading {} {:.3}, {}), giving k_y = {:.4e} N/m, k_z = {:.4e} N/m, m = {:.4e} kg, c_y = {:.4e} N·s/m, c_z = {:.4e} N·s/m; fix the data and run again",
+            "suspected convention error `{}`: {}. With it undone the pedestal is passive and fits to the noise floor (χ²/ν {:.3}) with a residual of {:.2e} of the bearing forces, against {:.2e} as found ({}) and {:.2e} for the best other reading, {} ({}); it gives k_y = {:.4e} N/m, k_z = {:.4e} N/m, m = {:.4e} kg, c_y = {:.4e} N·s/m, c_z = {:.4e} N·s/m: fix the data and run again",
             self.convention,
             self.convention.describe(),
             self.corrected.chi2_per_dof(),
-            self.as_found.chi2_per_dof(),
+            self.corrected.relative_residual.sqrt(),
+            self.as_found.relative_residual.sqrt(),
             passive(&self.as_found),
+            self.runner_up.relative_residual.sqrt(),
             self.runner_up.label(),
-            self.runner_up.chi2_per_dof(),
             passive(&self.runner_up),
             f.k_y,
             f.k_z,
@@ -315,13 +325,28 @@ pub fn noise_floor(run: &RunDir) -> Option<Vec<[f64; 4]>> {
         .collect()
 }
 
-/// χ² and ν of `fit` on the measurements of its bearing in `run`, with the
+/// How far one pedestal estimate is from its data.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Misfit {
+    /// Noise-whitened residual sum of squares χ² [-].
+    pub chi2: f64,
+    /// Degrees of freedom ν = 4·speeds − parameters.
+    pub dof: usize,
+    /// Σ|e|² / Σ|F|² [-]: the residual of eq. 3 relative to the bearing
+    /// forces, unweighted (what least squares minimises, free of the scale
+    /// of the data).
+    pub relative_residual: f64,
+}
+
+/// The misfit of `fit` on the measurements of its bearing in `run`, with the
 /// per-measurement noise `sigma` ([`noise_floor`]). `None` when no speed can
 /// be evaluated.
-pub fn chi2(run: &RunDir, sigma: &[[f64; 4]], fit: &PedestalFit) -> Option<(f64, usize)> {
+pub fn misfit(run: &RunDir, sigma: &[[f64; 4]], fit: &PedestalFit) -> Option<Misfit> {
     let schedule = run.bearing_schedules().remove(&fit.bearing)?;
     let th = fit.params();
     let mut total = 0.0;
+    let mut residual = 0.0;
+    let mut force = 0.0;
     let mut speeds = 0usize;
     for (m, s) in run.measurements.iter().zip(sigma) {
         if m.bearing != fit.bearing || !finite(m) {
@@ -365,10 +390,18 @@ pub fn chi2(run: &RunDir, sigma: &[[f64; 4]], fit: &PedestalFit) -> Option<(f64,
         let q =
             (d * e[0].norm_sqr() + a * e[1].norm_sqr() - 2.0 * (e[0].conj() * c * e[1]).re) / det;
         total += q;
+        residual += e[0].norm_sqr() + e[1].norm_sqr();
+        force += (0..2)
+            .map(|d| (b[d][0] * m.rel[0] + b[d][1] * m.rel[1]).norm_sqr())
+            .sum::<f64>();
         speeds += 1;
     }
     let params = super::PARAMETERS - fit.fixed.len();
-    (speeds > 0).then(|| (total, (4 * speeds).saturating_sub(params)))
+    (speeds > 0 && force > 0.0).then(|| Misfit {
+        chi2: total,
+        dof: (4 * speeds).saturating_sub(params),
+        relative_residual: residual / force,
+    })
 }
 
 fn finite(m: &Measurement) -> bool {
@@ -389,10 +422,11 @@ pub fn diagnose(run: &RunDir, identification: &Identification, fit: &FitRun) -> 
         return Vec::new();
     };
     let reading = |run: &RunDir, sigma: &[[f64; 4]], p: &PedestalFit, c| {
-        chi2(run, sigma, p).map(|(chi2, dof)| Reading {
+        misfit(run, sigma, p).map(|m| Reading {
             convention: c,
-            chi2,
-            dof,
+            chi2: m.chi2,
+            dof: m.dof,
+            relative_residual: m.relative_residual,
             plausible: is_plausible(p),
         })
     };
@@ -442,27 +476,35 @@ pub fn diagnose(run: &RunDir, identification: &Identification, fit: &FitRun) -> 
 /// `None` when no reading is passive, at the noise floor and decisively best.
 /// Only passive readings compete with it: one that is not passive cannot be
 /// what happened, however well it fits (negating `rel` and every parameter
-/// leaves χ² unchanged, for one). The runner-up reported is the best other
-/// reading, passive or not.
+/// leaves every residual unchanged, for one). The runner-up reported is the
+/// best other reading, passive or not.
 fn decide<'a>(
     readings: &[(Reading, &'a PedestalFit)],
 ) -> Option<(Reading, Reading, &'a PedestalFit)> {
-    let by_chi2 =
-        |a: &&(Reading, &PedestalFit), b: &&(Reading, &PedestalFit)| a.0.chi2.total_cmp(&b.0.chi2);
+    let by_residual = |a: &&(Reading, &PedestalFit), b: &&(Reading, &PedestalFit)| {
+        a.0.relative_residual.total_cmp(&b.0.relative_residual)
+    };
     let (best, fit) = readings
         .iter()
-        .filter(|(r, _)| r.plausible && r.chi2.is_finite())
-        .min_by(by_chi2)?;
-    if best.chi2_per_dof() > FLOOR_CHI2_PER_DOF {
+        .filter(|(r, _)| r.plausible && r.relative_residual.is_finite())
+        .min_by(by_residual)?;
+    if !(best.chi2_per_dof() <= FLOOR_CHI2_PER_DOF) {
         return None;
     }
     let others = || readings.iter().filter(|(r, _)| r != best);
-    let scale = best.chi2_per_dof().max(1.0);
     let decisive = others()
         .filter(|(r, _)| r.plausible)
-        .all(|(r, _)| (r.chi2 - best.chi2) / scale >= DECISIVE_DELTA_CHI2);
-    let runner_up = others().min_by(by_chi2)?.0;
+        .all(|(r, _)| log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2);
+    let runner_up = others().min_by(by_residual)?.0;
     decisive.then_some((*best, runner_up, *fit))
+}
+
+/// −2·ln of the likelihood ratio of reading `b` against `a`, Gaussian
+/// equation errors with their variance profiled out of each (unknown noise
+/// scale): ν·ln(r_b/r_a) with r the relative residual. Free of the noise
+/// floor's shape, which the digits/scatter estimate can get badly wrong.
+fn log_likelihood_ratio(a: &Reading, b: &Reading) -> f64 {
+    a.dof as f64 * (b.relative_residual / a.relative_residual).ln()
 }
 
 /// Marks every pedestal of `identification` that a [`Finding`] names: not
@@ -650,11 +692,13 @@ mod tests {
         }
     }
 
-    fn reading(convention: Option<Convention>, chi2: f64, plausible: bool) -> Reading {
+    /// A reading with χ²/ν `q` and relative residual `r`.
+    fn reading(convention: Option<Convention>, q: f64, r: f64, plausible: bool) -> Reading {
         Reading {
             convention,
-            chi2,
+            chi2: q * 100.0,
             dof: 100,
+            relative_residual: r,
             plausible,
         }
     }
@@ -693,42 +737,54 @@ mod tests {
         };
         // Decisive: as found not passive, the correction at the floor.
         assert_eq!(
-            named(&[reading(None, 9000.0, false), reading(conj, 90.0, true)]),
+            named(&[
+                reading(None, 90.0, 1e-1, false),
+                reading(conj, 0.9, 1e-3, true)
+            ]),
             conj
         );
         // A reading that is not passive does not compete, however well it
-        // fits (rel negated: same χ², negated parameters).
-        assert_eq!(
-            named(&[reading(None, 90.0, false), reading(conj, 90.0, true)]),
-            conj
-        );
-        // Two passive readings within the decisive margin: nothing named.
+        // fits (rel negated: same residuals, negated parameters).
         assert_eq!(
             named(&[
-                reading(None, 9000.0, false),
-                reading(conj, 90.0, true),
-                reading(swap, 100.0, true)
+                reading(None, 0.9, 1e-3, false),
+                reading(conj, 0.9, 1e-3, true)
+            ]),
+            conj
+        );
+        // Two passive readings within the decisive margin: nothing named
+        // (100·ln 1.02 = 2 < 13.8).
+        assert_eq!(
+            named(&[
+                reading(None, 90.0, 1e-1, false),
+                reading(conj, 0.9, 1.00e-3, true),
+                reading(swap, 1.0, 1.02e-3, true)
             ]),
             None
         );
+        // 100·ln 1.2 = 18 > 13.8: decisive.
+        assert_eq!(
+            named(&[
+                reading(conj, 0.9, 1.0e-3, true),
+                reading(swap, 1.0, 1.2e-3, true)
+            ]),
+            conj
+        );
         // The data as found are the best passive reading: nothing named.
         assert_eq!(
-            named(&[reading(None, 90.0, true), reading(conj, 900.0, true)]),
+            named(&[
+                reading(None, 0.9, 1e-3, true),
+                reading(conj, 9.0, 1e-2, true)
+            ]),
             None
         );
-        // Passive but far above the noise floor: nothing named.
+        // Passive and decisive but far above the noise floor: nothing named.
         assert_eq!(
-            named(&[reading(None, 1e6, false), reading(conj, 5000.0, true)]),
+            named(&[
+                reading(None, 900.0, 1e-1, false),
+                reading(conj, 50.0, 1e-3, true)
+            ]),
             None
-        );
-        // The margin scales with the best reading's χ²/ν above 1.
-        assert_eq!(
-            named(&[reading(conj, 500.0, true), reading(swap, 550.0, true)]),
-            None
-        );
-        assert_eq!(
-            named(&[reading(conj, 500.0, true), reading(swap, 600.0, true)]),
-            conj
         );
     }
 }

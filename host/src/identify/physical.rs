@@ -150,7 +150,7 @@ impl NotPhysical {
                     ))
                 } else if p.has_warning(WarningKind::PhysicallyImpossible) {
                     Some(format!(
-                        "pedestal `{}`: physically impossible (no passive pedestal: see the warnings)",
+                        "pedestal `{}`: physically impossible (see the warnings; no usual convention mistake explains it: an effect the pedestal model lacks? try `plinth diagnose`)",
                         p.bearing
                     ))
                 } else {
