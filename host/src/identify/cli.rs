@@ -87,15 +87,8 @@ impl Args {
 /// Runs `plinth identify`: the table (or JSON) on stdout, warnings on stderr.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let run = RunDir::read(&args.dir)?;
-    let identification = identify_run(&run, &args.options()).with_context(|| {
-        // Speeds outside the bearing table that fit it in rpm: say so.
-        let hint = super::convention::speed_in_rpm_hint(&run).map(|h| format!(" ({h})"));
-        format!(
-            "identifying {}{}",
-            args.dir.display(),
-            hint.unwrap_or_default()
-        )
-    })?;
+    let identification = identify_run(&run, &args.options())
+        .with_context(|| format!("identifying {}", args.dir.display()))?;
     for p in &identification.pedestals {
         for w in &p.warnings {
             eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);

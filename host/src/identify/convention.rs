@@ -488,7 +488,7 @@ fn decide<'a>(
         .iter()
         .filter(|(r, _)| r.plausible && r.relative_residual.is_finite())
         .min_by(by_residual)?;
-    if !(best.chi2_per_dof() <= FLOOR_CHI2_PER_DOF) {
+    if best.chi2_per_dof().is_nan() || best.chi2_per_dof() > FLOOR_CHI2_PER_DOF {
         return None;
     }
     let others = || readings.iter().filter(|(r, _)| r != best);
@@ -571,30 +571,6 @@ pub fn findings_for_run(
         .collect()
 }
 
-/// When the run cannot be identified because measured speeds lie outside
-/// the bearing table, but every speed divided by 60 lies inside it: the
-/// sentence naming `speed_in_rpm` (the measurements in rpm, the table in Hz).
-pub fn speed_in_rpm_hint(run: &RunDir) -> Option<String> {
-    let schedules = run.bearing_schedules();
-    let inside = |m: &Measurement, speed_hz: f64| {
-        schedules
-            .get(&m.bearing)
-            .is_some_and(|s| s.at(speed_hz).is_ok())
-    };
-    let outside_as_written = run.measurements.iter().any(|m| !inside(m, m.speed_hz));
-    let inside_as_rpm = run
-        .measurements
-        .iter()
-        .all(|m| inside(m, m.speed_hz / RPM_PER_HZ));
-    (outside_as_written && inside_as_rpm).then(|| {
-        format!(
-            "suspected convention error `{}`: {} (divided by 60, every measured speed falls inside the bearing table)",
-            Convention::SpeedInRpm,
-            Convention::SpeedInRpm.describe()
-        )
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -662,16 +638,12 @@ mod tests {
         let s = Convention::SpeedInRpm.correct(&r);
         assert!((s.measurements[0].speed_hz - 50.0 / 60.0).abs() < 1e-15);
         assert!((s.bearings[1].speed_hz - 100.0 / 60.0).abs() < 1e-15);
-        // A table in Hz that does not cover the rpm figures stays as it is;
-        // identify's error then names the mistake.
+        // A table in Hz that does not cover the rpm figures stays as it is.
         let mut rpm = r.clone();
         rpm.measurements[0].speed_hz = 3000.0;
         let s = Convention::SpeedInRpm.correct(&rpm);
         assert_eq!(s.measurements[0].speed_hz, 50.0);
         assert_eq!(s.bearings, r.bearings);
-        let hint = speed_in_rpm_hint(&rpm).expect("hint");
-        assert!(hint.contains("speed_in_rpm"), "{hint}");
-        assert_eq!(speed_in_rpm_hint(&r), None);
     }
 
     #[test]
