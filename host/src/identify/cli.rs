@@ -43,8 +43,8 @@ squares on Feng & Hahn's eq. 4. Prints value ± standard error per parameter, th
 fit cannot be trusted is marked UNTRUSTED, with the reasons under the table.
 
 A passive pedestal has no negative mass or stiffness and no damping below zero by more than \
-2 standard errors; a fit that breaks this, or fits far worse than the data's noise floor, is \
-refitted with each usual convention mistake undone (conjugated, swapped_yz, rel_negated, \
+2 standard errors; a fit that breaks this is UNTRUSTED. Every pedestal is also refitted with \
+each usual convention mistake undone (conjugated, swapped_yz, rel_negated, \
 bearing_transposed, cross_coupling_sign, speed_in_rpm), and the one under which the data fit \
 a passive pedestal to the noise floor, decisively better than every other reading, is named \
 (`suspected_convention_error` in the JSON). Exit code 2 when any pedestal is physically \

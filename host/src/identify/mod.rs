@@ -212,7 +212,7 @@ pub struct PedestalFit {
     /// Everything the user must know about this fit.
     pub warnings: Vec<Warning>,
     /// The convention mistake the data most likely carry ([`convention`]),
-    /// when one explains an impossible or poor fit.
+    /// when undoing one makes the data a passive pedestal at the noise floor.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub suspected_convention_error: Option<convention::Convention>,
 }
@@ -398,8 +398,8 @@ pub fn fit_pedestal(
 }
 
 /// Identifies every measured pedestal of a run, in the order the bearings
-/// first appear in `measurements.csv`; a pedestal whose fit is impossible or
-/// poor is checked for the usual convention mistakes ([`convention`]).
+/// first appear in `measurements.csv`; every pedestal is checked for the
+/// usual convention mistakes ([`convention`]: six refits of the run).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
     let mut identification = fit_run(run, options)?;
     let findings = convention::diagnose(run, &identification, &|r| fit_run(r, options));
