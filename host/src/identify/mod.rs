@@ -16,6 +16,7 @@ mod checks;
 pub mod cli;
 pub mod convention;
 pub mod lsq;
+pub mod misfit;
 pub mod model;
 pub mod physical;
 pub mod synthetic;
