@@ -61,7 +61,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", plinth::error_text(&e));
-            ExitCode::FAILURE
+            ExitCode::from(plinth::identify::physical::exit_code(&e))
         }
     }
 }

@@ -134,12 +134,28 @@ pub struct Diagnosis {
     pub significance_level: f64,
     /// One-paragraph conclusion.
     pub verdict: String,
+    /// Convention mistakes the data most likely carry, per pedestal
+    /// (`identify::convention`): with one, every other finding is suspect.
+    pub suspected_convention_errors: Vec<crate::identify::convention::ConventionFinding>,
 }
 
 impl Diagnosis {
     /// The text report.
     pub fn to_text(&self) -> String {
         let mut s = String::new();
+        for c in &self.suspected_convention_errors {
+            let _ = writeln!(
+                s,
+                "SUSPECTED CONVENTION ERROR at {}: {}\n  {}",
+                c.bearing, c.convention, c.message
+            );
+        }
+        if !self.suspected_convention_errors.is_empty() {
+            let _ = writeln!(
+                s,
+                "  (the findings below are of the data as found: fix the data first)\n"
+            );
+        }
         let _ = writeln!(s, "Base model: {}", self.base_model.join(", "));
         let _ = writeln!(
             s,

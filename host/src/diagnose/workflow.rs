@@ -482,6 +482,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         best_rejected,
         significance_level: opts.alpha,
         verdict,
+        suspected_convention_errors: crate::identify::convention::findings_for_run(run, &opts.base),
     };
     Ok(Outcome {
         diagnosis,

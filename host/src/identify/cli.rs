@@ -2,7 +2,7 @@
 
 use super::{
     identify_run, mode_label, EquationMode, Estimator, Identification, Model, Options, Parameter,
-    PedestalFit, DEFAULT_MAX_CONDITION_NUMBER,
+    PedestalFit, WarningKind, DEFAULT_MAX_CONDITION_NUMBER,
 };
 use crate::estimate::noise::Quantisation;
 use crate::rundir::{RunDir, Truth};
@@ -41,13 +41,21 @@ the errors), computes each bearing's force on its pedestal from the known bearin
 coefficients, and fits k_y, k_z [N/m], m [kg], c_y, c_z [N·s/m] of every pedestal on Feng & \
 Hahn's eq. 4. Prints value ± standard error per parameter, the residual RMS [N] and the \
 condition number; warnings go to stderr (and into the JSON), and a pedestal whose fit cannot \
-be trusted is marked UNTRUSTED.
+be trusted is marked UNTRUSTED, with the reasons under the table.
 
 Default estimator (--estimator ml): maximum likelihood with noise in both the rotor-relative \
 and the pedestal phasors (errors in variables), the noise of every number from the *_sd \
 columns, else from the digits the numbers carry, else from the scatter between neighbouring \
 speeds (its level then set by the fit's χ²); standard errors from the Fisher information (the \
 Cramér–Rao bound at the estimate). --estimator ols is the paper's least squares.
+
+A passive pedestal has no negative mass or stiffness and no damping below zero by more than \
+2 standard errors; a fit that breaks this is UNTRUSTED. Every pedestal is also refitted with \
+each usual convention mistake undone (conjugated, swapped_yz, rel_negated, \
+bearing_transposed, cross_coupling_sign, speed_in_rpm), and the one under which the data fit \
+a passive pedestal to the noise floor, decisively better than every other reading, is named \
+(`suspected_convention_error` in the JSON). Exit code 2 when any pedestal is physically \
+impossible or has a suspected convention error (everything is printed first); 1 on errors.
 
 Default model: all five parameters for --equations r-and-i; k_y,k_z,m for real, imag and \
 r-plus-i, which the paper used on undamped pedestals only (with damping they are biased: use \
@@ -123,8 +131,30 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string_pretty(&identification)?);
     } else {
         print!("{}", table(&identification, run.truth.as_ref()));
+        print!("{}", untrusted_reasons(&identification));
     }
-    Ok(())
+    // A physically impossible pedestal or a suspected convention mistake:
+    // everything is printed, then exit code 2 (`physical::EXIT_NOT_PHYSICAL`).
+    match super::physical::NotPhysical::of(&identification) {
+        Some(e) => Err(e.into()),
+        None => Ok(()),
+    }
+}
+
+/// Under the table: why each UNTRUSTED pedestal is not trusted (the warnings
+/// that make it so), the suspected convention mistake first.
+pub fn untrusted_reasons(identification: &Identification) -> String {
+    let mut out = String::new();
+    for p in identification.pedestals.iter().filter(|p| !p.trusted) {
+        out.push_str(&format!("\n{} UNTRUSTED:\n", p.bearing));
+        let reasons = p.warnings.iter().filter(|w| w.kind.makes_untrusted());
+        let (first, rest): (Vec<_>, Vec<_>) =
+            reasons.partition(|w| w.kind == WarningKind::SuspectedConventionError);
+        for w in first.into_iter().chain(rest) {
+            out.push_str(&format!("  {}\n", w.message));
+        }
+    }
+    out
 }
 
 /// The identification as an aligned text table: value ± standard error per

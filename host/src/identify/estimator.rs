@@ -196,6 +196,8 @@ pub fn fit_ml(
         });
     }
     fit.warnings.extend(extra);
+    super::physical::check_finite(&fit)?;
+    fit.warnings.extend(super::physical::violations(&fit));
     fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
     if options.compare_ols {
         fit.ols = Some(compare(&ols_fit, &ml_fit, &obs, &columns, variance_scale));

@@ -18,9 +18,12 @@
 pub mod base;
 mod checks;
 pub mod cli;
+pub mod convention;
 pub mod estimator;
 pub mod lsq;
+pub mod misfit;
 pub mod model;
+pub mod physical;
 pub mod synthetic;
 
 pub use estimator::{Estimator, NoiseReport, OlsComparison};
@@ -153,6 +156,12 @@ pub enum WarningKind {
     /// The maximum-likelihood fit failed or did not converge (the OLS
     /// estimate is reported when it failed). Informative.
     MlFailed,
+    /// A negative mass or stiffness, or a damping significantly below zero:
+    /// no passive pedestal ([`physical`]). Fit not trusted.
+    PhysicallyImpossible,
+    /// The data fit a passive pedestal to the noise floor only with a
+    /// convention mistake undone ([`convention`]). Fit not trusted.
+    SuspectedConventionError,
 }
 
 impl WarningKind {
@@ -164,6 +173,8 @@ impl WarningKind {
                 | WarningKind::RankDeficient
                 | WarningKind::IllConditioned
                 | WarningKind::Undetermined
+                | WarningKind::PhysicallyImpossible
+                | WarningKind::SuspectedConventionError
         )
     }
 }
@@ -245,6 +256,10 @@ pub struct PedestalFit {
     /// With `--compare-ols`: the paper's OLS next to this ML fit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ols: Option<OlsComparison>,
+    /// The convention mistake the data most likely carry ([`convention`]),
+    /// when undoing one makes the data a passive pedestal at the noise floor.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub suspected_convention_error: Option<convention::Convention>,
 }
 
 impl PedestalFit {
@@ -330,6 +345,9 @@ pub enum IdentifyError {
     /// The run directory could not be read.
     #[error(transparent)]
     RunDir(#[from] RunDirError),
+    /// A fit's result is not a finite number (an overflow).
+    #[error(transparent)]
+    NonFinite(#[from] physical::NonFiniteResult),
 }
 
 /// The per-speed data of one pedestal: the measured pedestal phasors and the
@@ -438,8 +456,11 @@ pub(crate) fn ols_solution(
         speed_range_hz: [used[0].speed_hz, used[used.len() - 1].speed_hz],
         warnings: Vec::new(),
         ols: None,
+        suspected_convention_error: None,
     };
     fit.warnings = checks::warnings(&fit, &used, skipped, &solution, &columns, options);
+    physical::check_finite(&fit)?;
+    fit.warnings.extend(physical::violations(&fit));
     fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
     Ok((fit, solution, used, skipped))
 }
@@ -471,8 +492,17 @@ pub fn observations(
 /// Identifies every measured pedestal of a run, in the order the bearings
 /// first appear in `measurements.csv`, with the estimator of `options`
 /// (default: maximum likelihood with the noise model of
-/// [`crate::estimate::noise`]).
+/// [`crate::estimate::noise`]); every pedestal is checked for the usual
+/// convention mistakes ([`convention`]: six refits of the run).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
+    let mut identification = fit_run(run, options)?;
+    let findings = convention::diagnose(run, &identification, &|r| fit_run(r, options));
+    convention::mark(&mut identification, &findings);
+    Ok(identification)
+}
+
+/// Fits every measured pedestal of a run ([`fit_pedestal`]), nothing more.
+pub fn fit_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
     let bearings = run.measured_bearings();
     if bearings.is_empty() {
         return Err(IdentifyError::NoMeasurements);

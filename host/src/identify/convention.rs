@@ -1,0 +1,642 @@
+//! Convention-mistake diagnosis: for every pedestal, try the usual ways field
+//! data get their conventions wrong, undo each on the raw run, refit, and
+//! name the one under which the data become a passive pedestal that fits to
+//! the noise floor, clearly better than every other reading (the data as
+//! found included). A physically impossible fit is the usual symptom; a fit
+//! far worse than the noise floor is the other (a y-z swap of a pedestal with
+//! similar stiffnesses can stay passive). Trying costs six refits, a few
+//! milliseconds, so it is always done.
+//!
+//! The mistakes ([`Convention`]) and what undoing each does to the run:
+//! - `conjugated`: every phasor conjugated (phase lag read as lead, or
+//!   e^{−iΩt} for e^{+iΩt}): conjugate every `rel` and `ped` phasor. With
+//!   undamped bearings this only flips the sign of the pedestal damping; with
+//!   the bearing's own damping the data fit no passive pedestal.
+//! - `swapped_yz`: the y and z readings exchanged at the sensors (the bearing
+//!   coefficients still in formats.md's axes): exchange y and z of `rel`,
+//!   `ped` (and their noise columns).
+//! - `rel_negated`: `rel` written as pedestal minus rotor: negate `rel`; the
+//!   mistake negates every bearing force, hence k, m and c alike.
+//! - `bearing_transposed`: K_b and C_b given transposed (kyz for kzy): swap the
+//!   off-diagonal terms of every row of `bearings.csv`; invisible (and never
+//!   named) for symmetric bearing matrices.
+//! - `cross_coupling_sign`: the cross terms kyz, kzy, cyz, czy with the wrong
+//!   sign (the rotation sense or an axis taken the other way): negate them.
+//! - `speed_in_rpm`: speeds written in rpm where formats.md wants Hz: divide
+//!   the measurement speeds by 60, and the bearing table's speeds too when the
+//!   table is in the same unit (it covers the measured speeds as written).
+//!
+//! Two figures judge a reading. For a pedestal estimate θ the residual of
+//! eq. 3 at each speed is e = Z(θ)·ped − (K_b + iΩC_b)·rel (complex, y and z).
+//! - Against the noise floor: e has the covariance S = Z·Σ_ped·Z^H +
+//!   B·Σ_rel·B^H from the noise of both readings, and χ² = Σ e^H S⁻¹ e has
+//!   ν = 4·speeds − parameters degrees of freedom when model and conventions
+//!   are right. The noise comes from one function ([`noise_floor`]): the
+//!   measurement's noise columns when present, else the digits/scatter
+//!   estimate of `diagnose::noise`. A reading "fits to the noise floor" when
+//!   χ²/ν ≤ [`FLOOR_CHI2_PER_DOF`].
+//! - Between readings: a likelihood ratio with the noise scale profiled out,
+//!   ν·ln(r_b/r_a), r = Σ|e|²/Σ|F|² the residual relative to the bearing
+//!   forces (all readings have the same parameters). It does not depend on
+//!   the noise floor's shape, which the digits/scatter estimate can get badly
+//!   wrong (on sharp resonances with 1-3 % noise it can take σ for 30 % of
+//!   each phasor, and every χ² then looks alike).
+//!
+//! A reading is named only when it is passive, fits to the noise floor, has
+//! the smallest r of the passive readings, and beats every other passive
+//! reading (the data as found included) by [`DECISIVE_DELTA_CHI2`];
+//! otherwise nothing is named.
+//!
+//! The fit itself is a parameter ([`FitRun`]): any estimator that turns a run
+//! into an [`Identification`] (estimates and standard errors) plugs in.
+
+use super::misfit::{misfit, noise_floor};
+use super::physical::is_plausible;
+use super::{Identification, IdentifyError, PedestalFit, Warning, WarningKind};
+use crate::rundir::RunDir;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// A convention mistake that field data commonly carry (formats.md names
+/// them; serialised in snake_case: `conjugated`, `swapped_yz`, ...).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Convention {
+    /// Every phasor conjugated (phase lag read as lead).
+    Conjugated,
+    /// y and z of the readings exchanged.
+    SwappedYz,
+    /// `rel` written as pedestal minus rotor.
+    RelNegated,
+    /// Bearing matrices K_b, C_b transposed.
+    BearingTransposed,
+    /// The bearing's cross-coupling terms with the wrong sign.
+    CrossCouplingSign,
+    /// Speeds in rpm read as Hz.
+    SpeedInRpm,
+}
+
+impl Convention {
+    /// Every mistake tried, in report order.
+    pub const ALL: [Convention; 6] = [
+        Convention::Conjugated,
+        Convention::SwappedYz,
+        Convention::RelNegated,
+        Convention::BearingTransposed,
+        Convention::CrossCouplingSign,
+        Convention::SpeedInRpm,
+    ];
+
+    /// The name used in `--json` and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Convention::Conjugated => "conjugated",
+            Convention::SwappedYz => "swapped_yz",
+            Convention::RelNegated => "rel_negated",
+            Convention::BearingTransposed => "bearing_transposed",
+            Convention::CrossCouplingSign => "cross_coupling_sign",
+            Convention::SpeedInRpm => "speed_in_rpm",
+        }
+    }
+
+    /// What the mistake is, for people.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Convention::Conjugated => {
+                "the phasors are conjugated (phase lag read as lead: formats.md wants q(t) = Re{Q·e^{iΩt}})"
+            }
+            Convention::SwappedYz => {
+                "the y and z readings are swapped (formats.md: y vertical, z horizontal)"
+            }
+            Convention::RelNegated => {
+                "rel is pedestal minus rotor (formats.md: rel = rotor − pedestal)"
+            }
+            Convention::BearingTransposed => {
+                "the bearing matrices are transposed (kyz and kzy, cyz and czy exchanged)"
+            }
+            Convention::CrossCouplingSign => {
+                "the bearing cross terms kyz, kzy, cyz, czy have the wrong sign"
+            }
+            Convention::SpeedInRpm => "the speeds are in rpm, not Hz",
+        }
+    }
+
+    /// The run as it would be had the mistake not been made: the mistake
+    /// undone on the raw data (module docs).
+    pub fn correct(self, run: &RunDir) -> RunDir {
+        let mut out = run.clone();
+        match self {
+            Convention::Conjugated => {
+                for m in &mut out.measurements {
+                    for z in m.rel.iter_mut().chain(m.ped.iter_mut()) {
+                        *z = z.conj();
+                    }
+                }
+            }
+            Convention::SwappedYz => {
+                for m in &mut out.measurements {
+                    m.rel.swap(0, 1);
+                    m.ped.swap(0, 1);
+                    if let Some(sd) = &mut m.noise_sd {
+                        sd.swap(0, 1);
+                        sd.swap(2, 3);
+                    }
+                }
+            }
+            Convention::RelNegated => {
+                for m in &mut out.measurements {
+                    for z in &mut m.rel {
+                        *z = -*z;
+                    }
+                }
+            }
+            Convention::BearingTransposed => {
+                for b in &mut out.bearings {
+                    let c = &mut b.coefficients;
+                    (c.k[0][1], c.k[1][0]) = (c.k[1][0], c.k[0][1]);
+                    (c.c[0][1], c.c[1][0]) = (c.c[1][0], c.c[0][1]);
+                }
+            }
+            Convention::CrossCouplingSign => {
+                for b in &mut out.bearings {
+                    let c = &mut b.coefficients;
+                    for (i, j) in [(0, 1), (1, 0)] {
+                        c.k[i][j] = -c.k[i][j];
+                        c.c[i][j] = -c.c[i][j];
+                    }
+                }
+            }
+            Convention::SpeedInRpm => {
+                let schedules = run.bearing_schedules();
+                let table_in_same_unit = run.measurements.iter().all(|m| {
+                    schedules
+                        .get(&m.bearing)
+                        .is_some_and(|s| s.at(m.speed_hz).is_ok())
+                });
+                for m in &mut out.measurements {
+                    m.speed_hz /= RPM_PER_HZ;
+                }
+                if table_in_same_unit {
+                    for b in &mut out.bearings {
+                        b.speed_hz /= RPM_PER_HZ;
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+impl fmt::Display for Convention {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Revolutions per minute in one hertz.
+const RPM_PER_HZ: f64 = 60.0;
+
+/// Largest χ²/ν of a reading that "fits to the noise floor". The noise
+/// floor of `diagnose::noise` is uncertain by a factor of about three in σ
+/// (its scatter law can read resonance curvature as noise, or pick the
+/// relative law for absolute noise), so a reading within an order of
+/// magnitude of it in variance counts; the comparison between readings is
+/// what decides.
+pub const FLOOR_CHI2_PER_DOF: f64 = 10.0;
+
+/// Least −2·ln(likelihood ratio) by which the named reading must beat every
+/// other passive one: 2·ln(1000), a likelihood ratio of 1000 ("decisive"),
+/// as all readings have the same parameters.
+pub const DECISIVE_DELTA_CHI2: f64 = 13.815_510_557_964_274;
+
+/// A fitter: the run (as found, or with a mistake undone) in, every
+/// pedestal's estimate with standard errors out.
+pub type FitRun<'a> = dyn Fn(&RunDir) -> Result<Identification, IdentifyError> + 'a;
+
+/// How well one reading of the data fits one pedestal.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Reading {
+    /// The mistake undone, or `None` for the data as found.
+    pub convention: Option<Convention>,
+    /// Noise-whitened residual sum of squares χ² [-] at the fit's estimate.
+    pub chi2: f64,
+    /// Degrees of freedom ν = 4·speeds − parameters.
+    pub dof: usize,
+    /// Σ|e|²/Σ|F|² [-] ([`super::misfit::Misfit::relative_residual`]).
+    pub relative_residual: f64,
+    /// Whether the estimate is a passive pedestal ([`is_plausible`]).
+    pub plausible: bool,
+}
+
+impl Reading {
+    /// χ²/ν [-]; 1 on average when model, conventions and noise are right.
+    pub fn chi2_per_dof(&self) -> f64 {
+        self.chi2 / self.dof.max(1) as f64
+    }
+
+    fn label(&self) -> &'static str {
+        self.convention.map_or("as found", Convention::name)
+    }
+}
+
+/// A convention mistake named for one pedestal.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Finding {
+    /// Bearing name.
+    pub bearing: String,
+    /// The mistake the data most likely carry.
+    pub convention: Convention,
+    /// The reading with the mistake undone.
+    pub corrected: Reading,
+    /// The data as found.
+    pub as_found: Reading,
+    /// The next-best reading (the data as found or another mistake).
+    pub runner_up: Reading,
+    /// The pedestal identified with the mistake undone.
+    pub corrected_fit: PedestalFit,
+}
+
+impl Finding {
+    /// One sentence for people: the mistake, the evidence and the corrected
+    /// estimate.
+    pub fn message(&self) -> String {
+        let f = &self.corrected_fit;
+        let passive = |r: &Reading| {
+            if r.plausible {
+                "passive"
+            } else {
+                "not passive"
+            }
+        };
+        format!(
+            "suspected convention error `{}`: {}. With it undone the pedestal is passive and fits to the noise floor (χ²/ν {:.3}) with a residual of {:.2e} of the bearing forces, against {:.2e} as found ({}) and {:.2e} for the best other reading, {} ({}); it gives k_y = {:.4e} N/m, k_z = {:.4e} N/m, m = {:.4e} kg, c_y = {:.4e} N·s/m, c_z = {:.4e} N·s/m: fix the data and run again",
+            self.convention,
+            self.convention.describe(),
+            self.corrected.chi2_per_dof(),
+            self.corrected.relative_residual.sqrt(),
+            self.as_found.relative_residual.sqrt(),
+            passive(&self.as_found),
+            self.runner_up.relative_residual.sqrt(),
+            self.runner_up.label(),
+            passive(&self.runner_up),
+            f.k_y,
+            f.k_z,
+            f.m,
+            f.c_y,
+            f.c_z
+        )
+    }
+}
+
+/// The named mistakes of every pedestal of `identification` (fitted by `fit`
+/// on `run`). Every pedestal is examined, passive or not: a mistake can leave
+/// a passive pedestal that fits far worse than the data allow (a swap of y and
+/// z with similar stiffnesses). Readings whose refit fails (e.g. speeds
+/// outside the bearing table) are left out.
+pub fn diagnose(run: &RunDir, identification: &Identification, fit: &FitRun) -> Vec<Finding> {
+    let Some(sigma) = noise_floor(run) else {
+        return Vec::new();
+    };
+    let reading = |run: &RunDir, sigma: &[[f64; 4]], p: &PedestalFit, c| {
+        misfit(run, sigma, p).map(|m| Reading {
+            convention: c,
+            chi2: m.chi2,
+            dof: m.dof,
+            relative_residual: m.relative_residual,
+            plausible: is_plausible(p),
+        })
+    };
+    // Every correction, refitted once for the whole run.
+    let mut corrected: Vec<(Convention, Identification, RunDir, Vec<[f64; 4]>)> = Vec::new();
+    for c in Convention::ALL {
+        let fixed = c.correct(run);
+        if fixed == *run {
+            continue; // the mistake changes nothing in these data
+        }
+        let (Ok(id), Some(s)) = (fit(&fixed), noise_floor(&fixed)) else {
+            continue;
+        };
+        corrected.push((c, id, fixed, s));
+    }
+    let mut findings = Vec::new();
+    for p in &identification.pedestals {
+        let Some(found) = reading(run, &sigma, p, None) else {
+            continue;
+        };
+        let mut readings = vec![(found, p)];
+        for (c, id, fixed, s) in &corrected {
+            if let Some(q) = id.pedestal(&p.bearing) {
+                if let Some(r) = reading(fixed, s, q, Some(*c)) {
+                    readings.push((r, q));
+                }
+            }
+        }
+        if let Some((best, runner_up, q)) = decide(&readings) {
+            let Some(convention) = best.convention else {
+                continue;
+            };
+            findings.push(Finding {
+                bearing: p.bearing.clone(),
+                convention,
+                corrected: best,
+                as_found: found,
+                runner_up,
+                corrected_fit: q.clone(),
+            });
+        }
+    }
+    findings
+}
+
+/// The decisive reading (module docs) with the runner-up and its fit, or
+/// `None` when no reading is passive, at the noise floor and decisively best.
+/// Only passive readings compete with it: one that is not passive cannot be
+/// what happened, however well it fits (negating `rel` and every parameter
+/// leaves every residual unchanged, for one). The runner-up reported is the
+/// best other reading, passive or not.
+fn decide<'a>(
+    readings: &[(Reading, &'a PedestalFit)],
+) -> Option<(Reading, Reading, &'a PedestalFit)> {
+    let by_residual = |a: &&(Reading, &PedestalFit), b: &&(Reading, &PedestalFit)| {
+        a.0.relative_residual.total_cmp(&b.0.relative_residual)
+    };
+    let (best, fit) = readings
+        .iter()
+        .filter(|(r, _)| r.plausible && r.relative_residual.is_finite())
+        .min_by(by_residual)?;
+    if best.chi2_per_dof().is_nan() || best.chi2_per_dof() > FLOOR_CHI2_PER_DOF {
+        return None;
+    }
+    let others = || readings.iter().filter(|(r, _)| r != best);
+    let decisive = others()
+        .filter(|(r, _)| r.plausible)
+        .all(|(r, _)| log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2);
+    let runner_up = others().min_by(by_residual)?.0;
+    decisive.then_some((*best, runner_up, *fit))
+}
+
+/// −2·ln of the likelihood ratio of reading `b` against `a`, Gaussian
+/// equation errors with their variance profiled out of each (unknown noise
+/// scale): ν·ln(r_b/r_a) with r the relative residual. Free of the noise
+/// floor's shape, which the digits/scatter estimate can get badly wrong.
+fn log_likelihood_ratio(a: &Reading, b: &Reading) -> f64 {
+    a.dof as f64 * (b.relative_residual / a.relative_residual).ln()
+}
+
+/// Marks every pedestal of `identification` that a [`Finding`] names: not
+/// trusted, `suspected_convention_error` set, and a warning
+/// ([`WarningKind::SuspectedConventionError`]) with the evidence.
+pub fn mark(identification: &mut Identification, findings: &[Finding]) {
+    for f in findings {
+        if let Some(p) = identification
+            .pedestals
+            .iter_mut()
+            .find(|p| p.bearing == f.bearing)
+        {
+            p.suspected_convention_error = Some(f.convention);
+            p.trusted = false;
+            p.warnings.push(Warning {
+                kind: WarningKind::SuspectedConventionError,
+                message: f.message(),
+            });
+        }
+    }
+}
+
+/// A convention mistake as `plinth diagnose` lists it among its findings.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ConventionFinding {
+    /// Bearing name.
+    pub bearing: String,
+    /// The mistake the data most likely carry (`conjugated`, ...).
+    pub convention: Convention,
+    /// χ²/ν of the data as found [-].
+    pub chi2_per_dof_as_found: f64,
+    /// χ²/ν with the mistake undone [-].
+    pub chi2_per_dof_corrected: f64,
+    /// The sentence `plinth identify` prints.
+    pub message: String,
+}
+
+/// The convention mistakes [`diagnose`] names in `run` when each pedestal is
+/// fitted (by the batch fit, R&I) with the parameters `base`; empty when the
+/// run cannot be identified at all (the caller reports that itself).
+pub fn findings_for_run(
+    run: &RunDir,
+    base: &[plinth_shared::regression::Parameter],
+) -> Vec<ConventionFinding> {
+    let Ok(model) = super::Model::from_parameters(base) else {
+        return Vec::new();
+    };
+    let options = super::Options {
+        model: Some(model),
+        ..super::Options::default()
+    };
+    let Ok(identification) = super::fit_run(run, &options) else {
+        return Vec::new();
+    };
+    diagnose(run, &identification, &|r| super::fit_run(r, &options))
+        .into_iter()
+        .map(|f| ConventionFinding {
+            message: f.message(),
+            bearing: f.bearing,
+            convention: f.convention,
+            chi2_per_dof_as_found: f.as_found.chi2_per_dof(),
+            chi2_per_dof_corrected: f.corrected.chi2_per_dof(),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rundir::{BearingRow, Measurement};
+    use plinth_shared::phasor::Complex;
+
+    type C64 = Complex<f64>;
+    use plinth_shared::bearing::BearingCoefficients;
+
+    fn run() -> RunDir {
+        let c = |re: f64, im: f64| C64::new(re, im);
+        let bearing = |speed_hz: f64| BearingRow {
+            speed_hz,
+            bearing: "left".into(),
+            coefficients: BearingCoefficients {
+                k: [[2e7, 1e6], [-3e6, 1.2e7]],
+                c: [[4e4, 3e3], [2e3, 3e4]],
+            },
+        };
+        RunDir {
+            measurements: vec![Measurement {
+                speed_hz: 50.0,
+                bearing: "left".into(),
+                rel: [c(1.0, 2.0), c(3.0, -4.0)],
+                ped: [c(-5.0, 6.0), c(7.0, 8.0)],
+                noise_sd: Some([0.1, 0.2, 0.3, 0.4]),
+            }],
+            bearings: vec![bearing(0.0), bearing(100.0)],
+            truth: None,
+        }
+    }
+
+    #[test]
+    fn corrections_undo_their_mistake() {
+        let r = run();
+        for c in Convention::ALL {
+            let once = c.correct(&r);
+            assert_ne!(once, r, "{c} changes these data");
+            if c != Convention::SpeedInRpm {
+                assert_eq!(c.correct(&once), r, "{c} is its own inverse");
+            }
+        }
+        let m = &Convention::Conjugated.correct(&r).measurements[0];
+        assert_eq!(m.rel[0], C64::new(1.0, -2.0));
+        assert_eq!(m.ped[1], C64::new(7.0, -8.0));
+        let m = &Convention::SwappedYz.correct(&r).measurements[0];
+        assert_eq!(
+            (m.rel[0], m.ped[0]),
+            (r.measurements[0].rel[1], r.measurements[0].ped[1])
+        );
+        assert_eq!(m.noise_sd, Some([0.2, 0.1, 0.4, 0.3]));
+        let m = &Convention::RelNegated.correct(&r).measurements[0];
+        assert_eq!(m.rel[1], C64::new(-3.0, 4.0));
+        assert_eq!(m.ped, r.measurements[0].ped);
+        let b = &Convention::BearingTransposed.correct(&r).bearings[0].coefficients;
+        assert_eq!(
+            (b.k[0][1], b.k[1][0], b.c[0][1], b.c[1][0]),
+            (-3e6, 1e6, 2e3, 3e3)
+        );
+        let b = &Convention::CrossCouplingSign.correct(&r).bearings[0].coefficients;
+        assert_eq!(
+            (b.k[0][1], b.k[1][0], b.c[0][1], b.c[1][0]),
+            (-1e6, 3e6, -3e3, -2e3)
+        );
+        assert_eq!((b.k[0][0], b.c[1][1]), (2e7, 3e4));
+        // Speeds in rpm: the bearing table covers 50 as written, so it is in
+        // the same unit and is converted too.
+        let s = Convention::SpeedInRpm.correct(&r);
+        assert!((s.measurements[0].speed_hz - 50.0 / 60.0).abs() < 1e-15);
+        assert!((s.bearings[1].speed_hz - 100.0 / 60.0).abs() < 1e-15);
+        // A table in Hz that does not cover the rpm figures stays as it is.
+        let mut rpm = r.clone();
+        rpm.measurements[0].speed_hz = 3000.0;
+        let s = Convention::SpeedInRpm.correct(&rpm);
+        assert_eq!(s.measurements[0].speed_hz, 50.0);
+        assert_eq!(s.bearings, r.bearings);
+    }
+
+    #[test]
+    fn names_are_formats_words() {
+        for c in Convention::ALL {
+            let json = serde_json::to_string(&c).unwrap();
+            assert_eq!(json, format!("\"{}\"", c.name()));
+            assert_eq!(serde_json::from_str::<Convention>(&json).unwrap(), c);
+        }
+    }
+
+    #[test]
+    fn noise_columns_are_the_floor_when_present() {
+        let s = noise_floor(&run()).unwrap();
+        let want = [0.1, 0.2, 0.3, 0.4].map(|x: f64| x / std::f64::consts::SQRT_2);
+        for (a, b) in s[0].iter().zip(want) {
+            assert!((a - b).abs() < 1e-15);
+        }
+    }
+
+    /// A reading with χ²/ν `q` and relative residual `r`.
+    fn reading(convention: Option<Convention>, q: f64, r: f64, plausible: bool) -> Reading {
+        Reading {
+            convention,
+            chi2: q * 100.0,
+            dof: 100,
+            relative_residual: r,
+            plausible,
+        }
+    }
+
+    #[test]
+    fn only_a_passive_decisive_reading_at_the_floor_is_named() {
+        let fit = crate::identify::PedestalFit {
+            bearing: "left".into(),
+            k_y: 1.0,
+            k_z: 1.0,
+            m: 1.0,
+            c_y: 0.0,
+            c_z: 0.0,
+            std_err: crate::identify::StdErr {
+                k_y: 0.0,
+                k_z: 0.0,
+                m: 0.0,
+                c_y: 0.0,
+                c_z: 0.0,
+            },
+            residual_rms: 0.0,
+            condition_number: 1.0,
+            fixed: Vec::new(),
+            trusted: true,
+            speeds: 26,
+            equations: 104,
+            speed_range_hz: [5.0, 200.0],
+            warnings: Vec::new(),
+            suspected_convention_error: None,
+            ols: None,
+        };
+        let conj = Some(Convention::Conjugated);
+        let swap = Some(Convention::SwappedYz);
+        let named = |rs: &[Reading]| {
+            let v: Vec<(Reading, &PedestalFit)> = rs.iter().map(|r| (*r, &fit)).collect();
+            decide(&v).and_then(|(best, _, _)| best.convention)
+        };
+        // Decisive: as found not passive, the correction at the floor.
+        assert_eq!(
+            named(&[
+                reading(None, 90.0, 1e-1, false),
+                reading(conj, 0.9, 1e-3, true)
+            ]),
+            conj
+        );
+        // A reading that is not passive does not compete, however well it
+        // fits (rel negated: same residuals, negated parameters).
+        assert_eq!(
+            named(&[
+                reading(None, 0.9, 1e-3, false),
+                reading(conj, 0.9, 1e-3, true)
+            ]),
+            conj
+        );
+        // Two passive readings within the decisive margin: nothing named
+        // (100·ln 1.02 = 2 < 13.8).
+        assert_eq!(
+            named(&[
+                reading(None, 90.0, 1e-1, false),
+                reading(conj, 0.9, 1.00e-3, true),
+                reading(swap, 1.0, 1.02e-3, true)
+            ]),
+            None
+        );
+        // 100·ln 1.2 = 18 > 13.8: decisive.
+        assert_eq!(
+            named(&[
+                reading(conj, 0.9, 1.0e-3, true),
+                reading(swap, 1.0, 1.2e-3, true)
+            ]),
+            conj
+        );
+        // The data as found are the best passive reading: nothing named.
+        assert_eq!(
+            named(&[
+                reading(None, 0.9, 1e-3, true),
+                reading(conj, 9.0, 1e-2, true)
+            ]),
+            None
+        );
+        // Passive and decisive but far above the noise floor: nothing named.
+        assert_eq!(
+            named(&[
+                reading(None, 900.0, 1e-1, false),
+                reading(conj, 50.0, 1e-3, true)
+            ]),
+            None
+        );
+    }
+}

@@ -1,0 +1,265 @@
+//! Physical plausibility of an identified pedestal, and the finiteness of
+//! every number a fit reports.
+//!
+//! A pedestal is passive: its mass and stiffnesses cannot be negative (a
+//! negative estimate is physically impossible, whatever its standard error),
+//! and its damping cannot be below zero by more than the noise allows
+//! ([`DAMPING_SIGMAS`] standard errors: a damping too small for the data to
+//! resolve may come out slightly negative; one whose loss factor is below
+//! [`NEGLIGIBLE_LOSS_FACTOR`] is numerically zero). A fit that breaks either rule is
+//! not trusted, and the warning says which value and why; the usual cause is
+//! a convention mistake in the data ([`super::convention`]).
+//!
+//! A result that is not a finite number (an overflow in the arithmetic, e.g.
+//! data in the wrong unit by many decades) is an error, not a row of a table;
+//! the only non-finite figures a fit may carry are the documented "not
+//! estimable" ones: infinite standard errors and condition number of a fit
+//! already untrusted because the data do not determine it.
+
+use super::{PedestalFit, Warning, WarningKind};
+use plinth_shared::regression::Parameter;
+
+/// Standard errors below zero beyond which a damping is significantly
+/// negative (two-sided 95 %: 1.96, rounded up).
+pub const DAMPING_SIGMAS: f64 = 2.0;
+
+/// Loss factor Ω_max·|c|/k [-] below which a negative damping is numerically
+/// zero, whatever its standard error: exact (12-digit) data leave dampings of
+/// order 1e-12 N·s/m whose least-squares standard errors understate the
+/// round-off. Real structures have loss factors of 1e-4 and more.
+pub const NEGLIGIBLE_LOSS_FACTOR: f64 = 1e-6;
+
+/// The physical impossibilities of `fit`, one warning
+/// ([`WarningKind::PhysicallyImpossible`]) per offending parameter; empty
+/// when the pedestal is passive. Parameters fixed by the model are 0 and pass.
+pub fn violations(fit: &PedestalFit) -> Vec<Warning> {
+    let mut out = Vec::new();
+    let se = fit.std_errs();
+    for p in Parameter::ALL {
+        let value = fit.get(p);
+        let sigma = se[p as usize];
+        let (unit, damping) = match p {
+            Parameter::Ky | Parameter::Kz => ("N/m", false),
+            Parameter::M => ("kg", false),
+            Parameter::Cy | Parameter::Cz => ("N·s/m", true),
+        };
+        let message = if damping {
+            let k = if p == Parameter::Cy { fit.k_y } else { fit.k_z };
+            let omega_max = 2.0 * std::f64::consts::PI * fit.speed_range_hz[1];
+            let material = omega_max * value.abs() > NEGLIGIBLE_LOSS_FACTOR * k.abs();
+            (sigma.is_finite() && value < -DAMPING_SIGMAS * sigma && material).then(|| {
+                format!(
+                    "{} = {value:.4e} ± {sigma:.2e} {unit} is negative by {:.1} standard errors: a passive pedestal cannot have negative damping",
+                    p.name(),
+                    -value / sigma
+                )
+            })
+        } else {
+            (value < 0.0).then(|| {
+                format!(
+                    "{} = {value:.4e} ± {sigma:.2e} {unit} is negative: a passive pedestal cannot have a negative {}",
+                    p.name(),
+                    if p == Parameter::M { "mass" } else { "stiffness" }
+                )
+            })
+        };
+        if let Some(message) = message {
+            out.push(Warning {
+                kind: WarningKind::PhysicallyImpossible,
+                message,
+            });
+        }
+    }
+    out
+}
+
+/// True when `fit` describes a passive pedestal ([`violations`] is empty).
+pub fn is_plausible(fit: &PedestalFit) -> bool {
+    violations(fit).is_empty()
+}
+
+/// A number of a fit that is not finite where it must be.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("pedestal `{bearing}`: the fit's {quantity} is {value} (an overflow in the arithmetic: are the numbers of measurements.csv and bearings.csv in SI units, m, N/m, N·s/m?)")]
+pub struct NonFiniteResult {
+    /// Bearing name.
+    pub bearing: String,
+    /// Which figure, e.g. `k_y`, `std_err.m`, `residual_rms`.
+    pub quantity: String,
+    /// Its value (inf, -inf or NaN).
+    pub value: f64,
+}
+
+/// Checks that every figure of `fit` is a number: the parameters and the
+/// residual always; the standard errors and the condition number unless the
+/// fit is already untrusted because the data do not determine it (then +∞
+/// means "not estimable" and is written as `null`).
+pub fn check_finite(fit: &PedestalFit) -> Result<(), NonFiniteResult> {
+    let undetermined =
+        fit.has_warning(WarningKind::RankDeficient) || fit.has_warning(WarningKind::TooFewSpeeds);
+    let error = |quantity: String, value: f64| NonFiniteResult {
+        bearing: fit.bearing.clone(),
+        quantity,
+        value,
+    };
+    for p in Parameter::ALL {
+        let v = fit.get(p);
+        if !v.is_finite() {
+            return Err(error(p.name().to_string(), v));
+        }
+        let s = fit.std_errs()[p as usize];
+        if s.is_nan() || s < 0.0 || (s.is_infinite() && !undetermined) {
+            return Err(error(format!("std_err.{}", p.name()), s));
+        }
+    }
+    if !fit.residual_rms.is_finite() {
+        return Err(error("residual_rms".into(), fit.residual_rms));
+    }
+    let c = fit.condition_number;
+    if c.is_nan() || (c.is_infinite() && !undetermined) {
+        return Err(error("condition_number".into(), c));
+    }
+    Ok(())
+}
+
+/// `plinth identify`'s exit code when it ran and printed everything but some
+/// pedestal is physically impossible or carries a suspected convention
+/// mistake (1 is an error that stopped it).
+pub const EXIT_NOT_PHYSICAL: u8 = 2;
+
+/// The pedestals of an identification that no passive pedestal explains:
+/// returned (after printing) by `plinth identify`, which then exits with
+/// [`EXIT_NOT_PHYSICAL`].
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}", .0.join("; "))]
+pub struct NotPhysical(pub Vec<String>);
+
+impl NotPhysical {
+    /// One line per pedestal that is physically impossible or has a
+    /// suspected convention error; `None` when every pedestal is passive.
+    pub fn of(identification: &super::Identification) -> Option<Self> {
+        let lines: Vec<String> = identification
+            .pedestals
+            .iter()
+            .filter_map(|p| {
+                if let Some(c) = p.suspected_convention_error {
+                    Some(format!(
+                        "pedestal `{}`: suspected convention error `{c}`: {}",
+                        p.bearing,
+                        c.describe()
+                    ))
+                } else if p.has_warning(WarningKind::PhysicallyImpossible) {
+                    Some(format!(
+                        "pedestal `{}`: physically impossible (see the warnings; no usual convention mistake explains it: an effect the pedestal model lacks? try `plinth diagnose`)",
+                        p.bearing
+                    ))
+                } else {
+                    None
+                }
+            })
+            .collect();
+        (!lines.is_empty()).then_some(Self(lines))
+    }
+}
+
+/// The process exit code for an error a command returned:
+/// [`EXIT_NOT_PHYSICAL`] for [`NotPhysical`], 1 for anything else.
+pub fn exit_code(error: &anyhow::Error) -> u8 {
+    if error.is::<NotPhysical>() {
+        EXIT_NOT_PHYSICAL
+    } else {
+        1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::StdErr;
+
+    fn fit(theta: [f64; 5], se: [f64; 5]) -> PedestalFit {
+        PedestalFit {
+            bearing: "left".into(),
+            k_y: theta[0],
+            k_z: theta[1],
+            m: theta[2],
+            c_y: theta[3],
+            c_z: theta[4],
+            std_err: StdErr {
+                k_y: se[0],
+                k_z: se[1],
+                m: se[2],
+                c_y: se[3],
+                c_z: se[4],
+            },
+            residual_rms: 1.0,
+            condition_number: 3.0,
+            fixed: Vec::new(),
+            trusted: true,
+            speeds: 50,
+            equations: 200,
+            speed_range_hz: [5.0, 200.0],
+            warnings: Vec::new(),
+            suspected_convention_error: None,
+            ols: None,
+        }
+    }
+
+    const SE: [f64; 5] = [1e4, 1e4, 0.1, 50.0, 50.0];
+
+    fn offending(f: &PedestalFit) -> Vec<String> {
+        violations(f)
+            .iter()
+            .map(|w| w.message.split(' ').next().unwrap_or("").to_string())
+            .collect()
+    }
+
+    #[test]
+    fn passive_pedestals_pass() {
+        let f = fit([1e7, 8e6, 150.0, 100.0, 80.0], SE);
+        assert!(is_plausible(&f));
+        // Damping consistent with zero, even below it within 2 σ, is fine.
+        assert!(is_plausible(&fit([1e7, 8e6, 150.0, -90.0, -10.0], SE)));
+        // Round-off damping of exact data: loss factor far below 1e-6.
+        assert!(is_plausible(&fit(
+            [1e7, 8e6, 150.0, -3e-12, 0.0],
+            [1e-6, 1e-6, 1e-12, 1e-13, 1e-13]
+        )));
+    }
+
+    #[test]
+    fn negative_mass_stiffness_and_damping_are_named() {
+        assert_eq!(offending(&fit([-1e7, 8e6, 150.0, 0.0, 0.0], SE)), ["k_y"]);
+        assert_eq!(offending(&fit([1e7, -8e6, 150.0, 0.0, 0.0], SE)), ["k_z"]);
+        // Negative mass is impossible whatever its standard error.
+        assert_eq!(offending(&fit([1e7, 8e6, -0.01, 0.0, 0.0], SE)), ["m"]);
+        assert_eq!(
+            offending(&fit([1e7, 8e6, 150.0, -101.0, -5000.0], SE)),
+            ["c_y", "c_z"]
+        );
+        let w = &violations(&fit([1e7, 8e6, -150.0, 0.0, 0.0], SE))[0];
+        assert_eq!(w.kind, WarningKind::PhysicallyImpossible);
+        assert!(w.message.contains("negative mass"), "{}", w.message);
+    }
+
+    #[test]
+    fn non_finite_results_are_errors() {
+        assert!(check_finite(&fit([1e7, 8e6, 150.0, 1.0, 1.0], SE)).is_ok());
+        let e = check_finite(&fit([f64::INFINITY, 8e6, 150.0, 1.0, 1.0], SE)).unwrap_err();
+        assert_eq!(e.quantity, "k_y");
+        let e = check_finite(&fit([1e7, 8e6, f64::NAN, 1.0, 1.0], SE)).unwrap_err();
+        assert_eq!(e.quantity, "m");
+        let mut se = SE;
+        se[3] = f64::INFINITY;
+        let e = check_finite(&fit([1e7, 8e6, 150.0, 1.0, 1.0], se)).unwrap_err();
+        assert_eq!(e.quantity, "std_err.c_y");
+        // "Not estimable" is allowed where the fit already says so.
+        let mut f = fit([1e7, 8e6, 150.0, 1.0, 1.0], se);
+        f.condition_number = f64::INFINITY;
+        f.warnings.push(Warning {
+            kind: WarningKind::RankDeficient,
+            message: String::new(),
+        });
+        assert!(check_finite(&f).is_ok());
+    }
+}
