@@ -223,6 +223,7 @@ fn identify_exit_code(dir: &Path) -> u8 {
         estimator: plinth::identify::Estimator::Ml,
         compare_ols: false,
         truncated: false,
+        slow_roll: None,
     };
     match identify_cli(&args) {
         Ok(()) => 0,

@@ -89,6 +89,10 @@ pub struct Args {
     /// mean square ulp²/3 instead of ulp²/12).
     #[arg(long)]
     pub truncated: bool,
+    /// Subtract each bearing's mean `rel` vector between LO and HI Hz (the
+    /// slow-roll vector: probe runout) from every `rel` phasor before fitting.
+    #[arg(long, value_name = "LO:HI")]
+    pub slow_roll: Option<crate::field::slow_roll::SlowRollBand>,
 }
 
 impl Args {
@@ -119,7 +123,19 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             super::mode_name(equations)
         );
     }
-    let run = RunDir::read(&args.dir)?;
+    let mut run = RunDir::read(&args.dir)?;
+    if let Some(band) = args.slow_roll {
+        let removed = crate::field::slow_roll::subtract_slow_roll(&mut run.measurements, band)?;
+        for v in &removed.vectors {
+            eprintln!(
+                "slow roll {}..{} Hz, bearing `{}`: subtracted rel_y = {:.4e}{:+.4e}i m, rel_z = {:.4e}{:+.4e}i m (mean of {} speeds)",
+                band.lo_hz, band.hi_hz, v.bearing, v.rel[0].re, v.rel[0].im, v.rel[1].re, v.rel[1].im, v.speeds
+            );
+        }
+        for w in &removed.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
     let identification = identify_run(&run, &args.options())
         .with_context(|| format!("identifying {}", args.dir.display()))?;
     for p in &identification.pedestals {

@@ -536,7 +536,13 @@ mod tests {
 
     #[test]
     fn noise_columns_are_the_floor_when_present() {
-        let s = noise_floor(&run()).unwrap();
+        // Numbers written with ten digits: their rounding lies far below the
+        // columns' noise, which is then the floor as it stands.
+        let mut r = run();
+        let c = |re: f64, im: f64| C64::new(re, im);
+        r.measurements[0].rel = [c(1.234567891, 2.345678912), c(3.456789123, -4.567891234)];
+        r.measurements[0].ped = [c(-5.678912345, 6.789123456), c(7.891234567, 8.912345678)];
+        let s = noise_floor(&r).unwrap();
         let want = [0.1, 0.2, 0.3, 0.4].map(|x: f64| x / std::f64::consts::SQRT_2);
         for (a, b) in s[0].iter().zip(want) {
             assert!((a - b).abs() < 1e-15);
