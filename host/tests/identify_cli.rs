@@ -34,7 +34,9 @@ fn table_and_json() {
     );
     let table = String::from_utf8(out.stdout).unwrap();
     assert!(
-        table.starts_with("equations R&I, model k_y,k_z,m,c_y,c_z"),
+        table.starts_with(
+            "estimator maximum likelihood (errors in variables), equations R&I, model k_y,k_z,m,c_y,c_z"
+        ),
         "{table}"
     );
     assert!(
@@ -47,6 +49,8 @@ fn table_and_json() {
         .args([
             "identify",
             "--json",
+            "--estimator",
+            "ols",
             "--equations",
             "real",
             "--model",

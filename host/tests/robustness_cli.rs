@@ -452,7 +452,7 @@ fn predict_takes_damping_consistent_with_zero_as_zero() {
     let o = plinth()
         .arg("identify")
         .arg(&run)
-        .arg("--json")
+        .args(["--json", "--estimator", "ols"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", text(&o));
