@@ -22,7 +22,7 @@ pub mod recording;
 
 use crate::field::angle::resolve;
 use crate::field::import::write_run;
-use crate::field::slow_roll::{subtract_slow_roll, SlowRollBand};
+use crate::field::slow_roll::SlowRollBand;
 use crate::rundir::{read_bearings, Measurement, RunDir};
 use anyhow::{bail, Result};
 use channels::Channels;
@@ -269,22 +269,7 @@ pub fn run(args: &Args) -> Result<()> {
             args.bearings.display()
         );
     }
-    let slow_roll = match args.slow_roll {
-        Some(band) => {
-            let s = subtract_slow_roll(&mut rows, band)?;
-            for w in &s.warnings {
-                eprintln!("warning: {w}");
-            }
-            Some(s)
-        }
-        None => None,
-    };
     let n_rows = rows.len();
-    let run = RunDir {
-        measurements: rows,
-        bearings,
-        truth: None,
-    };
     let placements: Vec<_> = config
         .channels
         .iter()
@@ -293,8 +278,9 @@ pub fn run(args: &Args) -> Result<()> {
     write_run(
         &args.out,
         args.force,
-        &run,
-        slow_roll.as_ref(),
+        rows,
+        bearings,
+        args.slow_roll,
         args.plots,
         &placements,
     )?;

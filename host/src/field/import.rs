@@ -11,7 +11,7 @@
 //! LAYOUT.toml's key.
 
 use super::angle::{resolve, Rotation, View};
-use super::slow_roll::{subtract_slow_roll, SlowRoll, SlowRollBand};
+use super::slow_roll::{subtract_slow_roll, SlowRollBand};
 use super::transducer::{angle_of, group_by_bearing, Placement, Quantity};
 use super::units::{reading_phasor, to_displacement, AmplitudeUnit, PhaseConvention, UNIT_HELP};
 use crate::rundir::{read_bearings, BearingRow, Measurement, RunDir};
@@ -367,20 +367,40 @@ pub fn check_against_bearings(
     Ok(())
 }
 
-/// Writes the run directory: measurements, bearings, and `slow_roll.csv`
-/// when slow roll was subtracted; with `plots`, Bode and polar figures in
+/// Writes the run directory of imported or extracted `rows` (with the
+/// known `bearings`): first subtracts the slow-roll vector of `slow_roll`
+/// when given (warnings on stderr, the vectors in `slow_roll.csv`), then
+/// writes measurements and bearings; with `plots`, Bode and polar figures in
 /// `figures/` for the resolved y/z phasors and every transducer in
-/// `transducers` (bearing, quantity, angle [deg]).
+/// `transducers` (bearing, quantity, angle [deg]). Returns the run written.
 pub fn write_run(
     out: &Path,
     force: bool,
-    run: &RunDir,
-    slow_roll: Option<&SlowRoll>,
+    mut rows: Vec<Measurement>,
+    bearings: Vec<BearingRow>,
+    slow_roll: Option<SlowRollBand>,
     plots: bool,
     transducers: &[Placement],
-) -> Result<()> {
+) -> Result<RunDir> {
+    let slow_roll = match slow_roll {
+        Some(band) => {
+            let s = subtract_slow_roll(&mut rows, band)?;
+            for w in &s.warnings {
+                eprintln!("warning: {w}");
+            }
+            Some(s)
+        }
+        None => None,
+    };
+    let run = RunDir {
+        measurements: rows,
+        bearings,
+        truth: None,
+    };
+    let slow_roll = slow_roll.as_ref();
+    let run_ref = &run;
     crate::output::write_dir(out, force, |dir| {
-        run.write(dir)?;
+        run_ref.write(dir)?;
         if let Some(s) = slow_roll {
             s.write(dir)?;
         }
@@ -389,11 +409,16 @@ pub fn write_run(
                 .iter()
                 .map(|p| (p.bearing.clone(), p.quantity, p.angle_deg))
                 .collect();
-            super::plot::plot_run_with(run, &dir.join("figures"), &t, super::angle::Rotation::Ccw)?;
+            super::plot::plot_run_with(
+                run_ref,
+                &dir.join("figures"),
+                &t,
+                super::angle::Rotation::Ccw,
+            )?;
         }
         Ok(())
     })?;
-    Ok(())
+    Ok(run)
 }
 
 /// Runs `plinth import`.
@@ -408,33 +433,19 @@ pub fn run(args: &Args) -> Result<()> {
         &args.table.display().to_string(),
         &args.bearings.display().to_string(),
     )?;
-    let mut rows: Vec<Measurement> = imported.into_iter().map(|r| r.measurement).collect();
-    let slow_roll = match args.slow_roll {
-        Some(band) => {
-            let s = subtract_slow_roll(&mut rows, band)?;
-            for w in &s.warnings {
-                eprintln!("warning: {w}");
-            }
-            Some(s)
-        }
-        None => None,
-    };
+    let rows: Vec<Measurement> = imported.into_iter().map(|r| r.measurement).collect();
     let n = rows.len();
-    let run = RunDir {
-        measurements: rows,
-        bearings,
-        truth: None,
-    };
     let placements: Vec<Placement> = layout
         .transducers
         .iter()
         .map(|t| t.placement.clone())
         .collect();
-    write_run(
+    let run = write_run(
         &args.out,
         args.force,
-        &run,
-        slow_roll.as_ref(),
+        rows,
+        bearings,
+        args.slow_roll,
         args.plots,
         &placements,
     )?;
