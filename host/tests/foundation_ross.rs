@@ -1,0 +1,168 @@
+//! Pedestals on a flexible base, judged on data Plinth has never made: run
+//! directories simulated by ROSS 2.3.0 and written by
+//! `tests/reference/ross/foundation/make_runs.py` straight from formats.md
+//! (no Plinth simulator, writer or noise model on that path), read by the
+//! `plinth` binary as a user would.
+//!
+//! - `fd-skid-two`: two pedestals on one 250 kg skid, base modes near 29 Hz
+//!   (y) and 35 Hz (z) inside the 5–100 Hz run-down; 0.5 % noise with the
+//!   noise columns, and noise-free at 3 significant digits.
+//! - `fd-frame-three`: three pedestals on one stiff 400 kg frame, modes above
+//!   the 5–70 Hz run-down: only the quasi-static compliance 1/K_B shows.
+//! - `fd-rigid-three`: the same rotor on rigid ground (the control).
+//!
+//! Expected: pedestal k and m within 2 % of the truth, the base's parameters
+//! within 10 % where the data determine them (K_B, M_B, C_B with the mode
+//! in range; 1/K_B above it), no base motion on rigid ground; `diagnose`
+//! names `foundation_coupling` on the bases and nothing on rigid ground.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn run_dir(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/reference/ross/foundation")
+        .join(name)
+}
+
+fn truth(name: &str) -> Value {
+    let text = std::fs::read_to_string(run_dir(name).join("truth.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Runs `plinth ARGS` and parses its JSON on stdout; `ok_codes` are the
+/// exit codes accepted (2 = results not to be trusted).
+fn plinth_json(args: &[&str], ok_codes: &[i32]) -> Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_plinth"))
+        .args(args)
+        .output()
+        .unwrap();
+    let code = out.status.code().unwrap_or(-1);
+    assert!(
+        ok_codes.contains(&code),
+        "plinth {args:?} exited {code}:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "plinth {args:?}: no JSON on stdout ({e}):\n{}",
+            String::from_utf8_lossy(&out.stdout)
+        )
+    })
+}
+
+fn rel_err(got: f64, want: f64) -> f64 {
+    (got - want).abs() / want.abs()
+}
+
+/// Every pedestal's k_y, k_z and m within `tol` of the truth.
+fn check_pedestals(json: &Value, truth: &Value, tol: f64, what: &str) {
+    let want = truth["pedestals"].as_array().unwrap();
+    for t in want {
+        let name = t["bearing"].as_str().unwrap();
+        let got = json["pedestals"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["bearing"] == name)
+            .unwrap_or_else(|| panic!("{what}: no pedestal {name} in the output"));
+        for key in ["k_y", "k_z", "m"] {
+            let (g, w) = (got[key].as_f64().unwrap(), t[key].as_f64().unwrap());
+            let e = rel_err(g, w);
+            eprintln!("{what} {name} {key}: {g:.5e} (truth {w:.5e}, {:.2} %)", 100.0 * e);
+            assert!(e < tol, "{what} {name} {key} = {g:.5e}, truth {w:.5e}");
+        }
+    }
+}
+
+/// `(value, standard error)` of a base entry written as `[value, se]`.
+fn pair(v: &Value) -> (f64, f64) {
+    let a = v
+        .as_array()
+        .unwrap_or_else(|| panic!("expected [value, std_err], got {v}"));
+    (a[0].as_f64().unwrap(), a[1].as_f64().unwrap())
+}
+
+fn identify_on_base(name: &str, group: &str) -> Value {
+    plinth_json(
+        &[
+            "identify",
+            run_dir(name).to_str().unwrap(),
+            "--unmeasured-base",
+            group,
+            "--json",
+        ],
+        &[0],
+    )
+}
+
+#[test]
+fn skid_with_its_mode_in_range_is_identified_with_the_pedestals() {
+    for variant in ["fd-skid-two-noisy", "fd-skid-two-3digits"] {
+        let json = identify_on_base(variant, "DE,NDE");
+        let t = truth(variant);
+        check_pedestals(&json, &t, 0.02, variant);
+        let base = &json["bases"][0];
+        let want = &t["bases"][0];
+        for dir in ["y", "z"] {
+            let got = &base[dir];
+            assert_eq!(
+                got["identifiable"], "full",
+                "{variant} {dir}: the skid's mode is inside the run-down: {got}"
+            );
+            for (key, truth_key) in [("k", "k_"), ("m", "m_"), ("c", "c_")] {
+                let (v, se) = pair(&got[key]);
+                let w = want[format!("{truth_key}{dir}")].as_f64().unwrap();
+                let e = rel_err(v, w);
+                eprintln!(
+                    "{variant} base {key}_{dir}: {v:.5e} ± {se:.2e} (truth {w:.5e}, {:.2} %)",
+                    100.0 * e
+                );
+                assert!(e < 0.10, "{variant} base {key}_{dir} = {v:.4e}, truth {w:.4e}");
+                // The ± means what it says: the truth within 4 standard errors.
+                assert!(
+                    (v - w).abs() < 4.0 * se,
+                    "{variant} base {key}_{dir} = {v:.4e} ± {se:.2e}, truth {w:.4e}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn stiff_frame_above_the_range_gives_its_compliance_not_a_mass() {
+    let name = "fd-frame-three-noisy";
+    let json = identify_on_base(name, "B1,B2,B3");
+    let t = truth(name);
+    check_pedestals(&json, &t, 0.02, name);
+    let base = &json["bases"][0];
+    for dir in ["y", "z"] {
+        let got = &base[dir];
+        assert_eq!(got["identifiable"], "quasi_static", "{name} {dir}: {got}");
+        assert!(
+            got["m"].is_null(),
+            "{name} {dir}: a mass was reported although the data cannot determine it: {got}"
+        );
+        let (v, se) = pair(&got["compliance_m_per_n"]);
+        let w = 1.0 / t["bases"][0][format!("k_{dir}")].as_f64().unwrap();
+        eprintln!("{name} base 1/K_{dir}: {v:.4e} ± {se:.1e} (truth {w:.4e})");
+        assert!(rel_err(v, w) < 0.10, "{name} 1/K_{dir} = {v:.4e}, truth {w:.4e}");
+    }
+}
+
+#[test]
+fn rigid_ground_shows_no_base_motion() {
+    let name = "fd-rigid-three-noisy";
+    let json = identify_on_base(name, "B1,B2,B3");
+    check_pedestals(&json, &truth(name), 0.02, name);
+    for dir in ["y", "z"] {
+        assert_eq!(
+            json["bases"][0][dir]["identifiable"],
+            "not_detected",
+            "{name} {dir}: {}",
+            json["bases"][0][dir]
+        );
+    }
+}
