@@ -166,3 +166,80 @@ fn rigid_ground_shows_no_base_motion() {
         );
     }
 }
+
+fn diagnose(name: &str) -> Value {
+    // Exit code 2 means "not to be trusted": accepted here, then judged.
+    plinth_json(
+        &["diagnose", run_dir(name).to_str().unwrap(), "--json"],
+        &[0, 2],
+    )
+}
+
+/// Named `foundation_coupling` alone, the gap down to about its floor, the
+/// pedestals within 2 %, trusted.
+fn check_named(json: &Value, name: &str) {
+    assert_eq!(
+        json["effects_added"],
+        serde_json::json!(["foundation_coupling"]),
+        "{name}: {}",
+        json["verdict"]
+    );
+    let step = &json["steps"][0];
+    let (after, floor) = (
+        step["gap_after"].as_f64().unwrap(),
+        step["gap_floor_after"].as_f64().unwrap(),
+    );
+    eprintln!(
+        "{name}: gap {:.4} -> {after:.4} (floor {floor:.4})",
+        json["gap_before"].as_f64().unwrap()
+    );
+    assert!(after < 2.0 * floor, "{name}: gap {after} vs floor {floor}");
+    assert_eq!(json["trusted"], true, "{name}: {}", json["trust_reasons"]);
+    let as_identify = serde_json::json!({ "pedestals": json["pedestals_after"] });
+    check_pedestals(&as_identify, &truth(name), 0.02, name);
+}
+
+#[test]
+fn diagnose_names_the_skid_and_its_parameters() {
+    let name = "fd-skid-two-noisy";
+    let json = diagnose(name);
+    check_named(&json, name);
+    let group = &json["steps"][0]["foundation"]["groups"][0];
+    let want = &truth(name)["bases"][0];
+    for (d, dir) in ["y", "z"].iter().enumerate() {
+        assert_eq!(group["identifiability"][d]["kind"], "full", "{group}");
+        for key in ["k", "m", "c"] {
+            let v = group["base"][key][d].as_f64().unwrap();
+            let w = want[format!("{key}_{dir}")].as_f64().unwrap();
+            assert!(rel_err(v, w) < 0.10, "{name} base {key}_{dir} = {v:.4e}, truth {w:.4e}");
+        }
+    }
+}
+
+#[test]
+fn diagnose_names_the_stiff_frame_by_its_compliance() {
+    let name = "fd-frame-three-noisy";
+    let json = diagnose(name);
+    check_named(&json, name);
+    let group = &json["steps"][0]["foundation"]["groups"][0];
+    let want = &truth(name)["bases"][0];
+    for (d, dir) in ["y", "z"].iter().enumerate() {
+        let id = &group["identifiability"][d];
+        assert_eq!(id["kind"], "quasi_static", "{group}");
+        let v = id["compliance_m_per_n"].as_f64().unwrap();
+        let w = 1.0 / want[format!("k_{dir}")].as_f64().unwrap();
+        assert!(rel_err(v, w) < 0.10, "{name} 1/K_{dir} = {v:.4e}, truth {w:.4e}");
+    }
+}
+
+#[test]
+fn diagnose_names_nothing_on_rigid_ground() {
+    let name = "fd-rigid-three-noisy";
+    let json = diagnose(name);
+    assert_eq!(
+        json["effects_added"],
+        serde_json::json!([]),
+        "{name}: {}",
+        json["verdict"]
+    );
+}
