@@ -71,7 +71,10 @@ fn check_pedestals(json: &Value, truth: &Value, tol: f64, what: &str) {
         for key in ["k_y", "k_z", "m"] {
             let (g, w) = (got[key].as_f64().unwrap(), t[key].as_f64().unwrap());
             let e = rel_err(g, w);
-            eprintln!("{what} {name} {key}: {g:.5e} (truth {w:.5e}, {:.2} %)", 100.0 * e);
+            eprintln!(
+                "{what} {name} {key}: {g:.5e} (truth {w:.5e}, {:.2} %)",
+                100.0 * e
+            );
             assert!(e < tol, "{what} {name} {key} = {g:.5e}, truth {w:.5e}");
         }
     }
@@ -120,7 +123,10 @@ fn skid_with_its_mode_in_range_is_identified_with_the_pedestals() {
                     "{variant} base {key}_{dir}: {v:.5e} ± {se:.2e} (truth {w:.5e}, {:.2} %)",
                     100.0 * e
                 );
-                assert!(e < 0.10, "{variant} base {key}_{dir} = {v:.4e}, truth {w:.4e}");
+                assert!(
+                    e < 0.10,
+                    "{variant} base {key}_{dir} = {v:.4e}, truth {w:.4e}"
+                );
                 // The ± means what it says: the truth within 4 standard errors.
                 assert!(
                     (v - w).abs() < 4.0 * se,
@@ -148,7 +154,10 @@ fn stiff_frame_above_the_range_gives_its_compliance_not_a_mass() {
         let (v, se) = pair(&got["compliance_m_per_n"]);
         let w = 1.0 / t["bases"][0][format!("k_{dir}")].as_f64().unwrap();
         eprintln!("{name} base 1/K_{dir}: {v:.4e} ± {se:.1e} (truth {w:.4e})");
-        assert!(rel_err(v, w) < 0.10, "{name} 1/K_{dir} = {v:.4e}, truth {w:.4e}");
+        assert!(
+            rel_err(v, w) < 0.10,
+            "{name} 1/K_{dir} = {v:.4e}, truth {w:.4e}"
+        );
     }
 }
 
@@ -159,8 +168,7 @@ fn rigid_ground_shows_no_base_motion() {
     check_pedestals(&json, &truth(name), 0.02, name);
     for dir in ["y", "z"] {
         assert_eq!(
-            json["bases"][0][dir]["identifiable"],
-            "not_detected",
+            json["bases"][0][dir]["identifiable"], "not_detected",
             "{name} {dir}: {}",
             json["bases"][0][dir]
         );
@@ -211,7 +219,10 @@ fn diagnose_names_the_skid_and_its_parameters() {
         for key in ["k", "m", "c"] {
             let v = group["base"][key][d].as_f64().unwrap();
             let w = want[format!("{key}_{dir}")].as_f64().unwrap();
-            assert!(rel_err(v, w) < 0.10, "{name} base {key}_{dir} = {v:.4e}, truth {w:.4e}");
+            assert!(
+                rel_err(v, w) < 0.10,
+                "{name} base {key}_{dir} = {v:.4e}, truth {w:.4e}"
+            );
         }
     }
 }
@@ -228,7 +239,10 @@ fn diagnose_names_the_stiff_frame_by_its_compliance() {
         assert_eq!(id["kind"], "quasi_static", "{group}");
         let v = id["compliance_m_per_n"].as_f64().unwrap();
         let w = 1.0 / want[format!("k_{dir}")].as_f64().unwrap();
-        assert!(rel_err(v, w) < 0.10, "{name} 1/K_{dir} = {v:.4e}, truth {w:.4e}");
+        assert!(
+            rel_err(v, w) < 0.10,
+            "{name} 1/K_{dir} = {v:.4e}, truth {w:.4e}"
+        );
     }
 }
 

@@ -379,3 +379,42 @@ fn plots_on_request() {
         assert!(len > 1000, "{name}: {len} bytes");
     }
 }
+
+/// `plinth plot DIR` on an imported run (no `--plots` at import) draws every
+/// transducer too, from the `transducers.csv` the import left in the run.
+#[test]
+fn plot_later_draws_every_transducer() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let t = fixtures().join("tables");
+    let a = args(
+        &t.join("bently_um_pp_lag.csv"),
+        &t.join("bently_um_pp_lag.toml"),
+        &out,
+    );
+    run(&a).unwrap();
+    let placed = plinth::field::transducers_csv::read(&out).unwrap().unwrap();
+    assert!(placed
+        .iter()
+        .any(|(b, _, angle)| b == "left" && *angle == 45.0));
+    let figures = dir.path().join("figures");
+    plinth::field::plot::run(&plinth::field::plot::Args {
+        dir: out.clone(),
+        out: figures.clone(),
+        rotation: plinth::field::plot::RotationArg::Ccw,
+        force: false,
+    })
+    .unwrap();
+    for name in [
+        "bode_left_rel.png",
+        "polar_left_rel_y.png",
+        "polar_left_rel_45deg.png",
+        "polar_right_rel_-45deg.svg",
+        "polar_left_ped_90deg.png",
+    ] {
+        let len = std::fs::metadata(figures.join(name))
+            .map(|m| m.len())
+            .unwrap_or(0);
+        assert!(len > 1000, "{name}: {len} bytes");
+    }
+}

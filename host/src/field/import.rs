@@ -370,7 +370,8 @@ pub fn check_against_bearings(
 /// Writes the run directory of imported or extracted `rows` (with the
 /// known `bearings`): first subtracts the slow-roll vector of `slow_roll`
 /// when given (warnings on stderr, the vectors in `slow_roll.csv`), then
-/// writes measurements and bearings; with `plots`, Bode and polar figures in
+/// writes measurements and bearings, and the transducers' placement
+/// (`transducers.csv`, for `plinth plot`); with `plots`, Bode and polar figures in
 /// `figures/` for the resolved y/z phasors and every transducer in
 /// `transducers` (bearing, quantity, angle [deg]). Returns the run written.
 pub fn write_run(
@@ -401,6 +402,7 @@ pub fn write_run(
     let run_ref = &run;
     crate::output::write_dir(out, force, |dir| {
         run_ref.write(dir)?;
+        super::transducers_csv::write(dir, transducers)?;
         if let Some(s) = slow_roll {
             s.write(dir)?;
         }

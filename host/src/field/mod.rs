@@ -2,7 +2,8 @@
 //! share with recorded waveforms (`plinth extract`, [`crate::extract`]):
 //! amplitude units and phase conventions ([`units`]), transducer angles and
 //! their resolution into y and z ([`angle`], [`transducer`]), slow-roll
-//! compensation ([`slow_roll`]), Bode and polar plots ([`plot`]) and the
+//! compensation ([`slow_roll`]), the transducers' placement kept in the run
+//! directory ([`transducers_csv`]), Bode and polar plots ([`plot`]) and the
 //! all-or-nothing output directory ([`output`]). The contract is formats.md,
 //! "Field data".
 
@@ -11,4 +12,5 @@ pub mod import;
 pub mod plot;
 pub mod slow_roll;
 pub mod transducer;
+pub mod transducers_csv;
 pub mod units;

@@ -1,6 +1,6 @@
 //! `plinth plot DIR --out FIGS`: the figures the field expects of a run-down,
-//! for every bearing's resolved y and z phasors (and, from import/extract,
-//! every transducer's own reading):
+//! for every bearing's resolved y and z phasors and, for a run made by
+//! import/extract (its `transducers.csv`), every transducer's own reading:
 //!
 //! - **Bode**: amplitude [µm pk-pk] and phase lag [deg] against speed
 //!   (`bode_<bearing>_<rel|ped>.png/.svg`);
@@ -286,9 +286,12 @@ fn trim(v: f64) -> String {
 /// Runs `plinth plot`.
 pub fn run(args: &Args) -> Result<()> {
     let run = RunDir::read(&args.dir)?;
+    // An imported or extracted run keeps where its transducers sat: draw
+    // each one's reading too.
+    let transducers = super::transducers_csv::read(&args.dir)?.unwrap_or_default();
     let mut n = 0;
     crate::output::write_dir(&args.out, args.force, |dir| {
-        n = plot_run_with(&run, dir, &[], args.rotation.into())?.len();
+        n = plot_run_with(&run, dir, &transducers, args.rotation.into())?.len();
         Ok(())
     })?;
     println!("{n} figure files -> {}", args.out.display());
