@@ -412,10 +412,12 @@ fn box_and_extract_agree_on_the_same_samples() {
             });
         }
         assert_eq!(frames_out.len(), host.outputs.len(), "bearing {bearing}");
+        let mut sds = 0;
         for (b, h) in frames_out.iter().zip(&host.outputs) {
             assert!((f64::from(b.speed_hz) - h.speed_hz).abs() < 1e-5 * h.speed_hz);
             let bp = &b.bearings[0];
             let wire = [bp.rel[0], bp.rel[1], bp.ped[0], bp.ped[1]];
+            let wire_sd = [bp.rel_sd[0], bp.rel_sd[1], bp.ped_sd[0], bp.ped_sd[1]];
             for (c, w) in wire.iter().enumerate() {
                 let hq = h.displacement[4 * bearing + c];
                 let diff = Complex::new(w.re - hq.re, w.im - hq.im).norm();
@@ -423,8 +425,17 @@ fn box_and_extract_agree_on_the_same_samples() {
                     diff <= 4.0 * f32::EPSILON * hq.norm(),
                     "bearing {bearing} channel {c}: box {w:?}, extract {hq}"
                 );
+                // The same noise: one definition, the shared extractor's.
+                let hs = h.noise_sd[4 * bearing + c].expect("extract's noise sd");
+                let bs = f64::from(wire_sd[c]);
+                assert!(
+                    (bs - hs).abs() <= 4.0 * f64::from(f32::EPSILON) * hs,
+                    "bearing {bearing} channel {c}: box sd {bs:e}, extract sd {hs:e}"
+                );
+                sds += 1;
             }
         }
+        assert_eq!(sds, 4 * frames_out.len(), "bearing {bearing}");
     }
 }
 
