@@ -286,6 +286,7 @@ fn simulated_rundown_phasors_within_1e_3_and_identification_within_quarter_perce
     let mut ratios = Vec::new();
     for q in ChannelQuantity::ALL {
         let k = ChannelQuantity::ALL.iter().position(|x| *x == q).unwrap();
+        let (mut e2, mut s2, mut n) = (0.0, 0.0, 0);
         for m in got
             .measurements
             .iter()
@@ -294,7 +295,16 @@ fn simulated_rundown_phasors_within_1e_3_and_identification_within_quarter_perce
             let truth = spline.at(&m.bearing, q, m.speed_hz).unwrap();
             let sd = m.noise_sd.unwrap()[k];
             ratios.push((q.of(m) - truth).norm_sqr() / (sd * sd));
+            e2 += (q.of(m) - truth).norm_sqr();
+            s2 += sd * sd;
+            n += 1;
         }
+        eprintln!(
+            "{}: rms error {:.3e}, rms sd {:.3e} m over {n} phasors",
+            q.name(),
+            (e2 / n as f64).sqrt(),
+            (s2 / n as f64).sqrt()
+        );
     }
     let mean_ratio = ratios.iter().sum::<f64>() / ratios.len() as f64;
     eprintln!(
