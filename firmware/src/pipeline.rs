@@ -21,16 +21,6 @@ use plinth_shared::rls::PedestalRls;
 /// (impossible at ≥ 64 samples per revolution) are counted as dropped.
 const EVENTS_PER_BUFFER: usize = 8;
 
-/// Phasors over which the RLS weights pool each channel's noise variance.
-///
-/// One phasor's variance comes from the scatter of its own few revolutions
-/// (2 real degrees of freedom per revolution of fourth differences): as a
-/// weight, 1/variance of so few degrees of freedom is erratic (with one
-/// revolution its mean is infinite). The noise of a channel changes slowly
-/// with speed, so the weights use the exponential mean of the variance over
-/// about this many phasors, while every phasor frame carries its own sd.
-pub const POOLED_PHASORS: f32 = 8.0;
-
 /// A phasor that was not measured (its channel is not configured).
 const UNMEASURED: WirePhasor = WirePhasor {
     re: f32::NAN,
@@ -79,10 +69,6 @@ pub struct Pipeline {
     bearings: [BearingSlot; MAX_BEARINGS],
     /// Revolution index of the last estimate update (for estimate frames).
     last_revolution: u32,
-    /// Per channel, the phasor noise variance [m²] pooled over the last
-    /// phasors (exponential mean over about [`POOLED_PHASORS`]), NaN before
-    /// the first: what the RLS weights use.
-    pooled_variance: [f32; CHANNELS],
     /// What went wrong so far.
     pub counters: PipelineCounters,
 }
@@ -116,7 +102,6 @@ impl Pipeline {
             extractor,
             bearings,
             last_revolution: 0,
-            pooled_variance: [f32::NAN; CHANNELS],
             counters: PipelineCounters::default(),
         })
     }
@@ -212,18 +197,6 @@ impl Pipeline {
         }
         emit(DeviceMessage::Phasors(frame));
 
-        for (pooled, sd) in self.pooled_variance.iter_mut().zip(&p.noise_sd) {
-            let v = sd * sd;
-            if !pooled.is_finite() {
-                *pooled = v;
-            } else if v.is_finite() {
-                *pooled += (v - *pooled) / POOLED_PHASORS;
-            }
-        }
-        let pooled = &self.pooled_variance;
-        let weight_sd = |ch: Option<u8>| -> f32 {
-            ch.map_or(f32::NAN, |c| libm::sqrtf(pooled[c as usize % CHANNELS]))
-        };
         let omega = omega_from_hz(p.speed_hz);
         let mut estimates = EstimateFrame {
             revolution: last,
@@ -238,7 +211,10 @@ impl Pipeline {
                 Ok(coefficients) => {
                     let rel: Phasor2 = [ry, rz];
                     let ped: Phasor2 = [py, pz];
-                    let sds = slot.channels.map(weight_sd);
+                    // The phasor's own sd: the extractor pools the scatter
+                    // over the last revolutions, so it is steady enough to
+                    // weigh by (`plinth_shared::extractor::NoisePool`).
+                    let sds = slot.channels.map(sd);
                     slot.rls.update_weighted(
                         omega,
                         &ped,

@@ -1,21 +1,21 @@
 //! The extraction loop: recording blocks → keyphasor edges → the box's own
 //! phasor extractor (`plinth_shared::extractor::PhasorExtractor`, one per
-//! group of the box's [`GROUP`] channels, all fed the same edges) → R-revolution
-//! averages with their noise.
+//! group of the box's [`GROUP`] channels, all fed the same edges) → phasors
+//! with their noise.
 //!
-//! The extractor runs with one revolution per output, exactly as on the box
-//! (its run-down correction and seismic conversion included); the R
-//! revolutions of a phasor are then averaged here the way the box's
-//! extractor averages them (a sum of R contiguous revolutions in f32, times
-//! 1/R), so that their scatter is available for the noise columns. A fault
-//! (missing or extra pulse) drops a partial average, as on the box.
+//! The extractor runs exactly as on the box: R revolutions per output, its
+//! run-down correction, seismic conversion and noise estimate (the scatter
+//! between revolutions, `plinth_shared::extractor` module `noise`: the one
+//! definition of a phasor's noise). The outputs of the groups are matched by
+//! revolution; a fault (missing or extra pulse) drops a partial average
+//! inside the extractor, as on the box.
 
 use super::channels::Channels;
 use super::keyphasor::{EdgeDetector, MIN_SAMPLES_PER_REVOLUTION};
 use super::recording::Recording;
 use anyhow::{bail, Result};
 use plinth_shared::extractor::{
-    Event, ExtractorConfig, Fault, FaultKind, KeyphasorEdge, PhasorExtractor, Sensor,
+    Event, ExtractorConfig, Fault, FaultKind, KeyphasorEdge, PhasorExtractor, Phasors, Sensor,
 };
 use plinth_shared::phasor::Phasor;
 
@@ -34,8 +34,9 @@ pub struct Output {
     pub time_s: f64,
     /// Displacement phasor of each configured channel [m], in `Channels::channels` order.
     pub displacement: Vec<Phasor>,
-    /// Noise standard deviation of each [m] (scatter between revolutions),
-    /// when enough contiguous revolutions were there to tell.
+    /// Noise standard deviation of each [m], sqrt(E|n|²) of the complex
+    /// noise: the shared extractor's estimate from the scatter between
+    /// revolutions (`None` if it is not finite).
     pub noise_sd: Vec<Option<f64>>,
 }
 
@@ -52,124 +53,6 @@ pub struct Extraction {
     pub frames: u64,
     /// Sample rate [Hz].
     pub sample_rate_hz: f64,
-}
-
-/// A single revolution of every channel.
-#[derive(Clone, Debug)]
-struct Single {
-    revolution: u32,
-    speed_hz: f32,
-    end_sample: u64,
-    displacement: Vec<Phasor>,
-}
-
-/// Revolutions the box's run-down correction ties together: the phasor of
-/// revolution j is made from revolutions j−2 … j+1, so phasors 4 or more
-/// revolutions apart have independent noise.
-pub const CORRELATED_REVOLUTIONS: usize = 4;
-
-/// HOST-SIDE NOISE ESTIMATE, to be replaced by the shared extractor's own
-/// per-phasor noise estimate (issue 9, branch issue9-box) when it lands.
-///
-/// `history`: one channel's consecutive output phasors [m] (each the average
-/// of `revolutions` revolutions), the newest last. Their scatter is measured
-/// by second differences at a lag L of outputs spanning at least
-/// [`CORRELATED_REVOLUTIONS`] revolutions, a_{k} − 2a_{k+L} + a_{k+2L}:
-/// blind to a response changing linearly (a run-down), and over phasors
-/// whose noise is independent, so that E|d|² = 6·E|n|² (formats.md's
-/// sqrt(E|n|²)). The last three such differences are averaged; `None` until
-/// 2L + 1 outputs are there. (Adjacent phasors are not independent: their
-/// second differences underestimate the noise by about √3.)
-pub fn revolution_scatter_sd(history: &[Phasor], revolutions: usize) -> Option<f64> {
-    let lag = CORRELATED_REVOLUTIONS.div_ceil(revolutions.max(1));
-    if history.len() < 2 * lag + 1 {
-        return None;
-    }
-    let d: Vec<f64> = (0..history.len() - 2 * lag)
-        .rev()
-        .take(3)
-        .map(|k| f64::from((history[k] - history[k + lag] * 2.0 + history[k + 2 * lag]).norm_sqr()))
-        .collect();
-    Some((d.iter().sum::<f64>() / (6.0 * d.len() as f64)).sqrt())
-}
-
-/// Outputs kept per channel for [`revolution_scatter_sd`].
-fn history_len(revolutions: usize) -> usize {
-    2 * CORRELATED_REVOLUTIONS.div_ceil(revolutions.max(1)) + 3
-}
-
-/// Host-side state of R-revolution averaging.
-struct Averager {
-    revolutions: usize,
-    /// Contiguous singles since the last break (the last R + 2 kept).
-    run: Vec<Single>,
-    /// Singles in the run since the last output.
-    count: usize,
-    /// The outputs of the current contiguous run (the last few), for the
-    /// noise estimate.
-    history: Vec<Vec<Phasor>>,
-    fs: f64,
-}
-
-impl Averager {
-    fn brk(&mut self) {
-        self.run.clear();
-        self.count = 0;
-        self.history.clear();
-    }
-
-    fn push(&mut self, s: Single, out: &mut Vec<Output>) {
-        if self
-            .run
-            .last()
-            .is_some_and(|l| l.revolution.wrapping_add(1) != s.revolution)
-        {
-            self.brk();
-        }
-        self.run.push(s);
-        self.count += 1;
-        let r = self.revolutions;
-        if self.count < r {
-            return;
-        }
-        self.count = 0;
-        let group = &self.run[self.run.len() - r..];
-        let channels = group[0].displacement.len();
-        let scale = 1.0 / r as f32;
-        let mut displacement = vec![Phasor::new(0.0, 0.0); channels];
-        let mut sum_period = 0.0f32;
-        let fs = self.fs as f32;
-        for s in group {
-            for (d, q) in displacement.iter_mut().zip(&s.displacement) {
-                *d += *q;
-            }
-            sum_period += fs / s.speed_hz;
-        }
-        for d in &mut displacement {
-            *d *= scale;
-        }
-        self.history.push(displacement.clone());
-        let keep = history_len(r);
-        if self.history.len() > keep {
-            self.history.drain(..self.history.len() - keep);
-        }
-        let noise_sd = (0..channels)
-            .map(|c| {
-                let h: Vec<Phasor> = self.history.iter().map(|o| o[c]).collect();
-                revolution_scatter_sd(&h, r)
-            })
-            .collect();
-        let last = &group[r - 1];
-        out.push(Output {
-            speed_hz: f64::from(fs * r as f32 / sum_period),
-            time_s: last.end_sample as f64 / self.fs,
-            displacement,
-            noise_sd,
-        });
-        // Only contiguity matters from here on.
-        let n = self.run.len();
-        self.run.drain(..n - 1);
-    }
 }
 
 /// Runs the extraction over the whole recording; `progress` is told the
@@ -222,7 +105,7 @@ pub fn extract(
             };
         }
         let mut ec = ExtractorConfig::new(fs as f32, sensors);
-        ec.revolutions_per_output = 1;
+        ec.revolutions_per_output = config.revolutions;
         ec.min_speed_hz = min_speed as f32;
         ec.max_speed_hz = max_speed as f32;
         ec.period_tolerance = config.period_tolerance as f32;
@@ -233,13 +116,6 @@ pub fn extract(
         );
     }
     let mut detector = EdgeDetector::new(&config.keyphasor);
-    let mut averager = Averager {
-        revolutions: usize::from(config.revolutions),
-        run: Vec::new(),
-        count: 0,
-        history: Vec::new(),
-        fs,
-    };
     let mut result = Extraction {
         sample_rate_hz: fs,
         ..Extraction::default()
@@ -318,7 +194,7 @@ pub fn extract(
                     anyhow::anyhow!("{file}: keyphasor edges refused at frame {first_frame}: {e:?}")
                 })?;
         }
-        collect(&events, &mut averager, &mut result, config.channels.len());
+        collect(&events, &mut result, config.channels.len());
         result.frames += frames as u64;
         progress(result.frames);
     }
@@ -343,30 +219,21 @@ pub fn extract(
     Ok(result)
 }
 
-/// Matches the groups' events by revolution and feeds the averager.
-fn collect(
-    events: &[Vec<Event<GROUP>>],
-    averager: &mut Averager,
-    result: &mut Extraction,
-    channels: usize,
-) {
+/// Matches the groups' events by revolution into outputs.
+fn collect(events: &[Vec<Event<GROUP>>], result: &mut Extraction, channels: usize) {
+    let fs = result.sample_rate_hz;
     let mut others: Vec<std::collections::VecDeque<&Event<GROUP>>> =
         events.iter().skip(1).map(|e| e.iter().collect()).collect();
     for e in &events[0] {
         match e {
-            Event::Fault(f) => {
-                result.faults.push(*f);
-                averager.brk();
-            }
+            Event::Fault(f) => result.faults.push(*f),
             Event::Phasors(p) => {
-                let mut displacement: Vec<Phasor> = p.displacement.to_vec();
-                let mut complete = true;
+                let mut found: Vec<&Phasors<GROUP>> = vec![p];
                 for q in others.iter_mut() {
-                    let mut found = None;
                     while let Some(o) = q.pop_front() {
                         match o {
                             Event::Phasors(op) if op.revolution == p.revolution => {
-                                found = Some(op);
+                                found.push(op);
                                 break;
                             }
                             Event::Phasors(op) if op.revolution > p.revolution => {
@@ -379,25 +246,26 @@ fn collect(
                             _ => {}
                         }
                     }
-                    match found {
-                        Some(op) => displacement.extend_from_slice(&op.displacement),
-                        None => complete = false,
-                    }
                 }
-                if !complete {
-                    averager.brk();
+                if found.len() < events.len() {
+                    // A group lost this output (a non-finite phasor there).
                     continue;
                 }
+                let mut displacement: Vec<Phasor> =
+                    found.iter().flat_map(|g| g.displacement).collect();
+                let mut noise_sd: Vec<Option<f64>> = found
+                    .iter()
+                    .flat_map(|g| g.noise_sd)
+                    .map(|s| s.is_finite().then_some(f64::from(s)))
+                    .collect();
                 displacement.truncate(channels);
-                averager.push(
-                    Single {
-                        revolution: p.revolution,
-                        speed_hz: p.speed_hz,
-                        end_sample: p.end.sample,
-                        displacement,
-                    },
-                    &mut result.outputs,
-                );
+                noise_sd.truncate(channels);
+                result.outputs.push(Output {
+                    speed_hz: f64::from(p.speed_hz),
+                    time_s: p.end.sample as f64 / fs,
+                    displacement,
+                    noise_sd,
+                });
             }
         }
     }

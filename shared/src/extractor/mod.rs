@@ -34,9 +34,11 @@
 //!
 //! Each output also carries the standard deviation of its noise per channel,
 //! from the scatter between revolutions once the modelled trend (a cubic in
-//! the revolution number) is removed by a fourth difference, propagated
-//! through the run-down correction and the average (module `noise`:
-//! [`revolution_variance`], [`average_noise_gain`]). A fit that treats
+//! the revolution number) is removed by a fourth difference, pooled over the
+//! last [`POOLED_REVOLUTIONS`] revolutions at the speed law of white noise
+//! (one output's own revolutions are too few to weigh it by), and
+//! propagated through the run-down correction and the average (module
+//! `noise`: [`revolution_variance`], [`NoisePool`], [`average_noise_gain`]). A fit that treats
 //! consecutive outputs as independent scales its parameter variances by
 //! [`long_run_factor`], because neighbouring outputs share revolutions.
 //!
@@ -91,7 +93,10 @@ mod variation;
 mod tests;
 
 pub use integrator::{RevolutionIntegrator, CHUNK, SEGMENTS};
-pub use noise::{average_noise_gain, long_run_factor, revolution_variance};
+pub use noise::{
+    average_noise_gain, long_run_factor, revolution_variance, white_noise_law, NoisePool,
+    POOLED_REVOLUTIONS,
+};
 pub use rotator::{expi_neg, expi_neg_small, Rotator};
 pub use sensor::{Conversion, Kinematics, Sensor, SensorKind};
 pub use shaft::{EdgeTime, ShaftModel};
@@ -202,8 +207,8 @@ pub struct Phasors<const N: usize> {
     pub displacement: [Phasor; N],
     /// Standard deviation of each displacement phasor's noise [m],
     /// sqrt(E|n|²) of the complex noise n (formats.md's noise columns), from
-    /// the scatter between the revolutions it is made of (see
-    /// [`noise`](self#noise)).
+    /// the scatter between the revolutions it is made of and those just
+    /// before (see [`noise`](self#noise)).
     pub noise_sd: [f32; N],
     /// Mean speed over the revolution(s): revolutions / duration [Hz].
     pub speed_hz: f32,
@@ -311,15 +316,9 @@ pub struct PhasorExtractor<const N: usize> {
     sum: [Phasor; N],
     sum_period: f32,
     count: u16,
-    /// Σ of the per-revolution noise variance estimates [m²] of the average
-    /// so far from fourth differences, and how many.
-    scatter: [f32; N],
-    scattered: u16,
-    /// The same from lower differences (before the history is complete).
-    rough: [f32; N],
-    /// The last per-revolution variance [m²] from fourth differences per
-    /// channel, kept across faults (NaN before the first).
-    last_variance: [f32; N],
+    /// Each channel's per-revolution noise variance, pooled over the last
+    /// revolutions (kept across faults).
+    noise: NoisePool<N>,
     /// Noise gain G of an output per channel (see [`average_noise_gain`]).
     gain: [f32; N],
 }
@@ -373,10 +372,7 @@ impl<const N: usize> PhasorExtractor<N> {
             sum: [ZERO; N],
             sum_period: 0.0,
             count: 0,
-            scatter: [0.0; N],
-            scattered: 0,
-            rough: [0.0; N],
-            last_variance: [f32::NAN; N],
+            noise: NoisePool::new(config.sensors.map(|s| s.kind)),
             gain: config
                 .sensors
                 .map(|s| average_noise_gain(s.kind, config.revolutions_per_output)),
@@ -673,55 +669,38 @@ impl<const N: usize> PhasorExtractor<N> {
                     );
                 }
                 self.before = [self.before[1], self.before[2], Some(ready.displacement)];
-                self.average(mid, &variance, order == 4, sink);
+                // The difference spans revolutions j + 1 − order … j + 1:
+                // its variance is the noise's at their middle speed.
+                let fs = self.config.sample_rate_hz;
+                let (this_hz, next_hz) = (fs / ready.period, fs / newly.period);
+                let middle_hz = next_hz + 0.5 * order as f32 * (this_hz - next_hz);
+                self.noise.add(&variance, order, middle_hz);
+                self.average(mid, sink);
             }
         }
     }
 
-    /// Add a confirmed revolution with its noise variance estimates [m²]
-    /// (`full`: from fourth differences) to the average; emit it when R are
-    /// in.
-    fn average(
-        &mut self,
-        revolution: Pending<N>,
-        variance: &[f32; N],
-        full: bool,
-        sink: &mut impl FnMut(Event<N>),
-    ) {
+    /// Add a confirmed, run-down-corrected revolution to the average; emit
+    /// it when R are in, with its noise from the pooled per-revolution
+    /// variance at its speed times the gain G.
+    fn average(&mut self, revolution: Pending<N>, sink: &mut impl FnMut(Event<N>)) {
         for (s, d) in self.sum.iter_mut().zip(&revolution.displacement) {
             *s += *d;
-        }
-        let sums = if full {
-            self.scattered += 1;
-            &mut self.scatter
-        } else {
-            &mut self.rough
-        };
-        for (s, v) in sums.iter_mut().zip(variance) {
-            *s += *v;
         }
         self.sum_period += revolution.period;
         self.count += 1;
         let r = self.config.revolutions_per_output;
         if self.count >= r {
             let scale = 1.0 / r as f32;
+            let speed_hz = self.config.sample_rate_hz * r as f32 / self.sum_period;
             let mut noise_sd = [0.0; N];
-            for c in 0..N {
-                let variance = if self.scattered > 0 {
-                    let v = self.scatter[c] / f32::from(self.scattered);
-                    self.last_variance[c] = v;
-                    v
-                } else if self.last_variance[c].is_finite() {
-                    self.last_variance[c]
-                } else {
-                    self.rough[c] / f32::from(self.count)
-                };
-                noise_sd[c] = libm::sqrtf(self.gain[c] * variance);
+            for (c, sd) in noise_sd.iter_mut().enumerate() {
+                *sd = libm::sqrtf(self.gain[c] * self.noise.variance(c, speed_hz));
             }
             sink(Event::Phasors(Phasors {
                 displacement: self.sum.map(|s| s * scale),
                 noise_sd,
-                speed_hz: self.config.sample_rate_hz * r as f32 / self.sum_period,
+                speed_hz,
                 revolution: revolution.revolution,
                 revolutions: r,
                 end: revolution.end,
@@ -735,9 +714,6 @@ impl<const N: usize> PhasorExtractor<N> {
         self.sum = [ZERO; N];
         self.sum_period = 0.0;
         self.count = 0;
-        self.scatter = [0.0; N];
-        self.scattered = 0;
-        self.rough = [0.0; N];
     }
 
     /// Start acquiring afresh with `edge` as the first edge.

@@ -124,18 +124,38 @@ impl<T: Float, const P: usize> Rls<T, P> {
     /// would overflow is scaled down by powers of two (see the module
     /// documentation).
     pub fn update_weighted(&mut self, row: &[T; P], rhs: T, weight: T) -> bool {
+        self.update_weighted_on(core::array::from_fn::<usize, P, _>(|i| i), row, rhs, weight)
+    }
+
+    /// [`update_weighted`](Self::update_weighted) for a row that is zero
+    /// outside the columns `support` (ascending, each < P), in a problem
+    /// whose rows keep the factor's fill-in inside the supports: every
+    /// row's support must contain, after its first column, every column
+    /// that any earlier row shares a pivot with (for the pedestal: the y
+    /// rows on (k_y, c_y, m), the z rows on (k_z, c_z, m), with m last).
+    /// The rotations then touch only those columns: exact, and for three
+    /// of five columns less than half the work.
+    pub(crate) fn update_weighted_on<const S: usize>(
+        &mut self,
+        support: [usize; S],
+        row: &[T; P],
+        rhs: T,
+        weight: T,
+    ) -> bool {
         // The mean magnitude: NaN and infinity propagate into it (one test
         // for all), it cannot overflow, and the largest entry is at most
         // P + 1 times it.
         let entries = T::from(P + 1).unwrap_or_else(T::one);
         let inv = T::one() / entries;
-        let mean = row.iter().fold(rhs.abs() * inv, |t, x| t + x.abs() * inv);
+        let mean = row
+            .iter()
+            .fold(magnitude(rhs) * inv, |t, x| t + magnitude(*x) * inv);
         if !(mean.is_finite() && weight.is_finite() && weight > T::zero()) {
             self.rejected = self.rejected.saturating_add(1);
             return false;
         }
-        let mut row = *row;
-        let mut rhs = rhs;
+        let mut x = *row;
+        let mut y = rhs;
         // Weighted squares up to max/2³², so that 2³² of them stay finite.
         let two = T::one() + T::one();
         let sixteen = two * two * two * two;
@@ -156,35 +176,33 @@ impl<T: Float, const P: usize> Rls<T, P> {
                     return false;
                 }
             }
-            for x in row.iter_mut() {
-                *x = *x * s;
+            for v in x.iter_mut() {
+                *v = *v * s;
             }
-            rhs = rhs * s;
+            y = y * s;
             self.rescaled = self.rescaled.saturating_add(1);
         }
         self.n_eff = self.n_eff + T::one();
-        for (ss, x) in self.column_ss.iter_mut().zip(&row) {
-            *ss = *ss + weight * *x * *x;
-        }
+        let scaled = x;
 
-        let mut x = row;
-        let mut y = rhs;
         let mut w = weight;
-        for i in 0..P {
-            if w == T::zero() {
-                break;
-            }
+        // Branch-free, so that the loops unroll into straight-line code with
+        // fixed offsets: a zero entry, or a row already absorbed (w = 0),
+        // makes the rotation the identity exactly (c̄ = d/d = 1, s̄ = 0), the
+        // one case 0/0 is mapped to it.
+        for (a, &i) in support.iter().enumerate() {
             let xi = x[i];
-            if xi == T::zero() {
-                continue;
-            }
+            self.column_ss[i] = self.column_ss[i] + weight * scaled[i] * scaled[i];
             let di = self.d[i];
             let dpi = di + w * xi * xi;
-            let cbar = di / dpi;
-            let sbar = w * xi / dpi;
+            let (cbar, sbar) = if dpi > T::zero() {
+                (di / dpi, w * xi / dpi)
+            } else {
+                (T::one(), T::zero())
+            };
             w = cbar * w;
             self.d[i] = dpi;
-            for k in (i + 1)..P {
+            for &k in &support[a + 1..] {
                 let xk = x[k];
                 x[k] = xk - xi * self.r[i][k];
                 self.r[i][k] = cbar * self.r[i][k] + sbar * xk;
@@ -319,6 +337,18 @@ pub(crate) fn larger<T: PartialOrd>(a: T, b: T) -> T {
         b
     } else {
         a
+    }
+}
+
+/// |x|, inline: a compare and a negation (`Float::abs` goes through libm,
+/// which the M4F image builds for size and does not inline: a call per
+/// entry on the update path). NaN stays NaN.
+#[inline(always)]
+pub(crate) fn magnitude<T: Float>(x: T) -> T {
+    if x < T::zero() {
+        -x
+    } else {
+        x
     }
 }
 

@@ -13,9 +13,14 @@
 //! equation is folded in with the weight 1/variance: the recursive form of
 //! weighted least squares.
 //!
-//! Z_d is taken at the current estimate once 4·P equations are in (an
-//! estimate of the parameters independent of this speed's own noise), and
-//! before that from this speed's own data, |Z_d| = |F_d|/|X_d|. What this
+//! Z_d is taken at an estimate once 4·P equations are in (an estimate of
+//! the parameters independent of this speed's own noise), and before that
+//! from this speed's own data, |Z_d| = |F_d|/|X_d|. The estimate for the
+//! weights is refreshed every [`WEIGHT_REFRESH`] speeds, not at every one:
+//! a back-substitution per speed is a fifth of the update's cost, and
+//! weights from an estimate a few speeds old are as good (a weight is
+//! optimal to first order around the right value; once settled the
+//! estimate moves by a fraction of its standard error per speed). What this
 //! leaves out, and why it is good enough: the y and z equations share the
 //! rel noise when the bearing is cross-coupled (their correlation is ignored:
 //! the estimate stays unbiased, the weights slightly less than optimal), and
@@ -42,11 +47,46 @@
 //! ([`long_run_factor`](crate::extractor::long_run_factor): their errors
 //! correlate, so the independent-equation formula is off by φ).
 
-use super::{larger, libm_sqrt, Rls, RlsError};
+use super::{larger, libm_sqrt, magnitude, Rls, RlsError};
 use crate::bearing::BearingCoefficients;
 use crate::phasor::{Complex, Phasor2};
 use crate::regression::{equations, force_noise_variance, ParameterScale, PARAMETERS};
 use num_traits::Float;
+
+/// The solver's column order: θ's indices (k_y, k_z, m, c_y, c_z) as
+/// (k_y, c_y, k_z, c_z, m). The y equations then live on solver columns
+/// 0, 1, 4 and the z equations on 2, 3, 4, and with the shared mass last
+/// the factor never fills in between y and z: each equation rotates three
+/// columns, not five.
+const SOLVER_ORDER: [usize; PARAMETERS] = [0, 3, 1, 4, 2];
+
+/// Solver columns of the y and of the z equations.
+const Y_COLUMNS: [usize; 3] = [0, 1, 4];
+const Z_COLUMNS: [usize; 3] = [2, 3, 4];
+
+/// θ order from solver order.
+fn from_solver<T: Copy>(v: &[T; PARAMETERS]) -> [T; PARAMETERS] {
+    let mut out = *v;
+    for (s, &p) in SOLVER_ORDER.iter().enumerate() {
+        out[p] = v[s];
+    }
+    out
+}
+
+/// The solver's result in θ order (an undetermined solver column named by
+/// its θ index).
+fn solved<T: Copy>(r: Result<[T; PARAMETERS], RlsError>) -> Result<[T; PARAMETERS], RlsError> {
+    match r {
+        Ok(v) => Ok(from_solver(&v)),
+        Err(RlsError::Undetermined { index }) => Err(RlsError::Undetermined {
+            index: SOLVER_ORDER.get(index).copied().unwrap_or(index),
+        }),
+        Err(e) => Err(e),
+    }
+}
+
+/// Speeds between two refreshes of the estimate the weights use.
+pub const WEIGHT_REFRESH: u16 = 8;
 
 /// A pedestal's identified parameters with their standard errors, in physical
 /// units: θ = (k_y [N/m], k_z [N/m], m [kg], c_y [N·s/m], c_z [N·s/m]).
@@ -78,6 +118,10 @@ pub struct PedestalRls<T = f32> {
     scale: ParameterScale<T>,
     /// φ: parameter variances per independent-equation variance.
     long_run_factor: T,
+    /// The estimate (physical units) the weights use, and the speeds
+    /// folded in since it was taken.
+    weight_theta: Option<[T; PARAMETERS]>,
+    weight_age: u16,
 }
 
 impl<T: Float> Default for PedestalRls<T> {
@@ -94,6 +138,8 @@ impl<T: Float> PedestalRls<T> {
             rls: Rls::new(lambda),
             scale,
             long_run_factor: T::one(),
+            weight_theta: None,
+            weight_age: 0,
         }
     }
 
@@ -110,6 +156,8 @@ impl<T: Float> PedestalRls<T> {
     /// Forgets all data.
     pub fn reset(&mut self) {
         self.rls.reset();
+        self.weight_theta = None;
+        self.weight_age = 0;
     }
 
     /// Folds in one speed with unit weights (ordinary least squares):
@@ -141,7 +189,7 @@ impl<T: Float> PedestalRls<T> {
         rel_sd: [T; 2],
         ped_sd: [T; 2],
     ) -> usize {
-        let size = |c: &Complex<T>| larger(c.re.abs(), c.im.abs());
+        let size = |c: &Complex<T>| larger(magnitude(c.re), magnitude(c.im));
         let largest = ped
             .iter()
             .chain(rel)
@@ -158,10 +206,15 @@ impl<T: Float> PedestalRls<T> {
         let force = bearing.force(omega, &rel);
         let force_var = force_noise_variance(bearing, omega, &rel_sd.map(|s| s * k));
         let settled = T::from(4 * PARAMETERS).unwrap_or_else(T::one);
-        let theta = match self.rls.estimate() {
-            Ok(t) if self.rls.equations() >= settled => Some(self.scale.unscale(&t)),
-            _ => None,
-        };
+        if self.weight_theta.is_none() || self.weight_age >= WEIGHT_REFRESH {
+            self.weight_theta = match solved(self.rls.estimate()) {
+                Ok(t) if self.rls.equations() >= settled => Some(self.scale.unscale(&t)),
+                _ => None,
+            };
+            self.weight_age = 0;
+        }
+        self.weight_age = self.weight_age.saturating_add(1);
+        let theta = self.weight_theta;
         let floor = T::epsilon() * T::from(8.0).unwrap_or_else(T::one);
         let mut weight = [T::nan(); 2];
         for d in 0..2 {
@@ -190,10 +243,15 @@ impl<T: Float> PedestalRls<T> {
         let mut accepted = 0;
         for (i, eq) in equations(omega, ped, force).iter().enumerate() {
             let scaled = self.scale.scale(eq);
-            if self
-                .rls
-                .update_weighted(&scaled.row, scaled.rhs, weight[i / 2])
-            {
+            let row = SOLVER_ORDER.map(|p| scaled.row[p]);
+            let folded = if i < 2 {
+                self.rls
+                    .update_weighted_on(Y_COLUMNS, &row, scaled.rhs, weight[0])
+            } else {
+                self.rls
+                    .update_weighted_on(Z_COLUMNS, &row, scaled.rhs, weight[1])
+            };
+            if folded {
                 accepted += 1;
             }
         }
@@ -202,10 +260,10 @@ impl<T: Float> PedestalRls<T> {
 
     /// The current estimate in physical units.
     pub fn estimate(&self) -> Result<PedestalEstimate<T>, RlsError> {
-        let scaled = self.rls.estimate()?;
+        let scaled = solved(self.rls.estimate())?;
         let theta = self.scale.unscale(&scaled);
         let phi = libm_sqrt(self.long_run_factor);
-        let std_err = match self.rls.std_errors() {
+        let std_err = match solved(self.rls.std_errors()) {
             Ok(se) => self.scale.unscale(&se.map(|s| s * phi)),
             Err(_) => [T::nan(); PARAMETERS],
         };
