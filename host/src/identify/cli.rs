@@ -130,22 +130,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             super::mode_name(equations)
         );
     }
-    let mut run = RunDir::read(&args.dir)?;
-    if let Some(band) = args.slow_roll {
-        let removed = crate::field::slow_roll::subtract_slow_roll(&mut run.measurements, band)?;
-        for v in &removed.vectors {
-            eprintln!(
-                "slow roll {}..{} Hz, bearing `{}`: subtracted rel_y = {:.4e}{:+.4e}i m, rel_z = {:.4e}{:+.4e}i m (mean of {} speeds)",
-                band.lo_hz, band.hi_hz, v.bearing, v.rel[0].re, v.rel[0].im, v.rel[1].re, v.rel[1].im, v.speeds
-            );
-        }
-        for w in &removed.warnings {
-            eprintln!("warning: {w}");
-        }
-    }
-    let mut identification = identify_run(&run, &args.options())
-        .with_context(|| format!("identifying {}", args.dir.display()))?;
-    on_bases(args, &run, &mut identification)?;
+    let (run, identification) = identify_args(args)?;
     for p in &identification.pedestals {
         for w in &p.warnings {
             eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
@@ -164,6 +149,29 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Some(e) => Err(e.into()),
         None => Ok(()),
     }
+}
+
+/// What `plinth identify` computes for `args` (the run as read, after any
+/// slow-roll subtraction, and its identification, pedestals on bases
+/// included), without printing it.
+pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
+    let mut run = RunDir::read(&args.dir)?;
+    if let Some(band) = args.slow_roll {
+        let removed = crate::field::slow_roll::subtract_slow_roll(&mut run.measurements, band)?;
+        for v in &removed.vectors {
+            eprintln!(
+                "slow roll {}..{} Hz, bearing `{}`: subtracted rel_y = {:.4e}{:+.4e}i m, rel_z = {:.4e}{:+.4e}i m (mean of {} speeds)",
+                band.lo_hz, band.hi_hz, v.bearing, v.rel[0].re, v.rel[0].im, v.rel[1].re, v.rel[1].im, v.speeds
+            );
+        }
+        for w in &removed.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    let mut identification = identify_run(&run, &args.options())
+        .with_context(|| format!("identifying {}", args.dir.display()))?;
+    on_bases(args, &run, &mut identification)?;
+    Ok((run, identification))
 }
 
 /// Pedestals on bases: refitted on the measured base of DIR/base.csv, then

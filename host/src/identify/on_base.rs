@@ -198,6 +198,8 @@ fn apply(
     };
     fit.fixed.clear();
     fit.ols = None;
+    // The rigid-ground misfit a convention mistake was sought for is gone.
+    fit.suspected_convention_error = None;
     fit.warnings.retain(|w| {
         matches!(
             w.kind,
