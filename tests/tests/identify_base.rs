@@ -75,8 +75,8 @@ fn simulated(
             let sd = rms.map(|r| noise * r);
             for &i in &idx {
                 let m = &mut run.measurements[i];
-                for ch in 0..4 {
-                    let n = gauss(sd[ch]);
+                for (ch, &sd_ch) in sd.iter().enumerate() {
+                    let n = gauss(sd_ch);
                     if ch < 2 {
                         m.rel[ch] += n;
                     } else {
@@ -95,8 +95,8 @@ fn simulated(
                 .sqrt()
         });
         for r in &mut base_rows {
-            for d in 0..2 {
-                r.motion[d] += gauss(noise * rms[d]);
+            for (z, r_d) in r.motion.iter_mut().zip(rms) {
+                *z += gauss(noise * r_d);
             }
             r.noise_sd = Some(rms.map(|x| noise * x));
         }

@@ -599,17 +599,26 @@ pub fn fit_on_unmeasured_base(
     })
 }
 
-/// The model's prediction of every group member's pedestal motion (y, z)
-/// [m] at each common speed, given the measured bearing forces (from each
-/// observation's rel), the pedestals `theta` (group order) and `base`:
-/// the solution of the coupled equations of the module docs. Outer index:
-/// speed (as in [`BaseFitResult::speeds_hz`]), inner: group member.
+/// The model's pedestal motion of a group at one speed ([`predict`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// Rotor speed [Hz].
+    pub speed_hz: f64,
+    /// Pedestal motion (y, z) [m] of each group member (group order).
+    pub ped: Vec<[C; 2]>,
+}
+
+/// The model's prediction of every group member's pedestal motion at each
+/// speed all members share (as in [`BaseFitResult::speeds_hz`]), given the
+/// measured bearing forces (from each observation's rel), the pedestals
+/// `theta` (group order) and `base`: the solution of the coupled equations
+/// of the module docs. Compare with the measured `ped` for a gap.
 pub fn predict(
     obs: &[Vec<Observation>],
     group: &BaseGroup,
     theta: &[[f64; 5]],
     base: &BaseParams,
-) -> Result<Vec<(f64, Vec<[C; 2]>)>, BaseFitError> {
+) -> Result<Vec<Prediction>, BaseFitError> {
     let speeds = common_speeds(obs, group)?;
     let n = group.bearings.len();
     if theta.len() != n {
@@ -637,11 +646,14 @@ pub fn predict(
                 sp.obs[i].force()[d] + spring(&theta[i], d, w) * g * f_sum
             });
             let sol = a.lu().solve(&rhs).ok_or(BaseFitError::NotEvaluable)?;
-            for i in 0..n {
-                x[i][d] = sol[i];
+            for (xi, v) in x.iter_mut().zip(sol.iter()) {
+                xi[d] = *v;
             }
         }
-        out.push((w / TAU, x));
+        out.push(Prediction {
+            speed_hz: w / TAU,
+            ped: x,
+        });
     }
     Ok(out)
 }
