@@ -234,6 +234,27 @@ fn three_pedestals_on_a_stiff_frame_give_its_quasi_static_compliance() {
 }
 
 #[test]
+fn skid_with_its_modes_below_the_range_gives_its_mass() {
+    let dir = simulated(SKID, &speeds(45, 200, 1), 0.01, 15, None);
+    let (truth, id) = unmeasured(dir.path());
+    assert_pedestals(&truth, &id, 0.02, "modes below the range");
+    let b = &truth.bases[0];
+    let r = &id.bases[0];
+    for (axis, d, m) in [
+        ("y", r.y.as_ref().unwrap(), b.m_y),
+        ("z", r.z.as_ref().unwrap(), b.m_z),
+    ] {
+        assert_eq!(d.identifiable, "mass_line", "{axis}: {d:?}");
+        let [got, se] = d.m.unwrap();
+        assert!(
+            rel_err(got, m) < 0.10,
+            "{axis}: M_B = {got:.4e} ± {se:.2e}, truth {m}"
+        );
+        assert!(d.k.is_none() && d.compliance_m_per_n.is_none());
+    }
+}
+
+#[test]
 fn rigid_ground_shows_no_base_motion() {
     let dir = simulated(
         "tests/machines/three-bearing-tabulated.toml",

@@ -356,11 +356,14 @@ pub fn apply_unmeasured_bases(
         let mut starts = Vec::new();
         for n in names {
             let (o, noise) = bearing_data(run, n, options)?;
-            // The rigid-ground ML fit (its own noise copy: the rigid misfit
-            // must not set the noise level of the joint fit).
-            let mut rigid_noise = noise.clone();
-            let (rigid, _) = fit_ml(n, &o, &mut rigid_noise, options)?;
-            starts.push(rigid.params());
+            // The rigid-ground fit already made, else the ML fit (on its
+            // own noise copy: the rigid misfit must not set the noise level
+            // of the joint fit).
+            let start = match identification.pedestal(n) {
+                Some(p) if p.params().iter().all(|v| v.is_finite()) => p.params(),
+                _ => fit_ml(n, &o, &mut noise.clone(), options)?.0.params(),
+            };
+            starts.push(start);
             obs.push(with_noise(&o, &noise));
             noises.push(noise);
         }

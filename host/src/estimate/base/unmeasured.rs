@@ -151,7 +151,7 @@ fn common_speeds(obs: &[Vec<Observation>], group: &BaseGroup) -> Result<Vec<Spee
 }
 
 /// Most iterations of a profiling fit and of the final fit.
-const GRID_ITERATIONS: usize = 20;
+const GRID_ITERATIONS: usize = 8;
 const FINAL_ITERATIONS: usize = 200;
 /// Base frequencies of the profile grid, and the damping ratio each of its
 /// fits starts from.
