@@ -157,6 +157,8 @@ const FINAL_ITERATIONS: usize = 200;
 /// fits starts from.
 const GRID_FREQUENCIES: usize = 24;
 const GRID_DAMPING: f64 = 0.05;
+/// Largest relative standard error of μ = 1/Ω_B² for a full identification.
+const MODE_REL_SE: f64 = 1.0 / 3.0;
 /// Likelihood-ratio threshold (J_rigid − J) for base motion in one
 /// direction: the 1e-3 upper point of χ²(3) (three base parameters).
 pub const DETECTION_THRESHOLD: f64 = 16.27;
@@ -365,6 +367,23 @@ pub fn fit_on_unmeasured_base(
         base_se.c[d] = delta(&at, &[-gamma / (kappa * kappa), 0.0, 1.0 / kappa]);
         if mu > 0.0 {
             base_frequency_hz[d] = 1.0 / (TAU * mu.sqrt());
+        }
+        // A mode inside the range whose frequency the Fisher information
+        // does not pin down (μ = 1/Ω_B² uncertain by more than a third) is
+        // no full identification: say what is determined on its side.
+        let pinned = se(o + 1) < MODE_REL_SE * mu.abs();
+        if ident[d] == BaseIdentifiability::Full && !pinned {
+            ident[d] = if mu > 0.0 && mu.sqrt() * w_mid < 1.0 {
+                BaseIdentifiability::QuasiStatic {
+                    compliance_m_per_n: kappa,
+                    std_err: f64::NAN,
+                }
+            } else {
+                BaseIdentifiability::MassLine {
+                    mass_kg: mu / kappa,
+                    std_err: f64::NAN,
+                }
+            };
         }
         match &mut ident[d] {
             BaseIdentifiability::QuasiStatic {
