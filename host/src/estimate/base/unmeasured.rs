@@ -516,3 +516,88 @@ pub fn chi2(
     }
     gh::cost(&Unmeasured { speeds }, &p).ok_or(BaseFitError::NotEvaluable)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use num_complex::Complex;
+
+    /// Two bearings at 20 speeds with arbitrary rel and bearing stiffness;
+    /// ped left at zero (set by the caller).
+    fn observations() -> Vec<Vec<Observation>> {
+        (0..2)
+            .map(|b| {
+                (0..20)
+                    .map(|j| {
+                        let f = 10.0 + 5.0 * j as f64;
+                        let w = TAU * f;
+                        let s = 1.0 + 0.3 * b as f64;
+                        Observation {
+                            speed_hz: f,
+                            rel: [
+                                Complex::from_polar(1e-5 * s, 0.05 * f),
+                                Complex::from_polar(8e-6, 1.0 - 0.03 * f * s),
+                            ],
+                            ped: [Complex::new(0.0, 0.0); 2],
+                            kstar: [
+                                [Complex::new(3e7 * s, w * 2e3), Complex::new(8e6, w * 1e2)],
+                                [Complex::new(-6e6, -w * 1e2), Complex::new(2.5e7, w * 1.5e3)],
+                            ],
+                            var: [1e-20; 8],
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn predicted_motion_satisfies_the_equations() {
+        let mut obs = observations();
+        let group = BaseGroup {
+            bearings: vec![0, 1],
+        };
+        let theta = [
+            [1e7, 8e6, 80.0, 300.0, 250.0],
+            [6e6, 9e6, 60.0, 200.0, 350.0],
+        ];
+        let base = BaseParams {
+            k: [1e7, 8e6],
+            c: [3e3, 2.5e3],
+            m: [300.0, 250.0],
+        };
+        let pred = predict(&obs, &group, &theta, &base).unwrap();
+        for (s, p) in pred.iter().enumerate() {
+            for (b, o) in obs.iter_mut().enumerate() {
+                o[s].ped = p.ped[b];
+            }
+        }
+        let j = chi2(&obs, &group, &theta, &base).unwrap();
+        let rigid = chi2(&obs, &group, &theta, &BaseParams::RIGID).unwrap();
+        assert!(j < 1e-12 * rigid, "χ² {j:e} (rigid ground {rigid:e})");
+    }
+
+    #[test]
+    fn bad_groups_are_errors() {
+        let obs = observations();
+        let start = [[1e7, 1e7, 50.0, 0.0, 0.0]; 2];
+        let fit = |b: Vec<usize>| fit_on_unmeasured_base(&obs, &BaseGroup { bearings: b }, &start);
+        assert!(matches!(
+            fit(vec![0, 2]),
+            Err(BaseFitError::NoSuchBearing { index: 2, .. })
+        ));
+        assert!(matches!(fit(vec![0, 0]), Err(BaseFitError::BadGroup(_))));
+        assert!(matches!(fit(vec![]), Err(BaseFitError::BadGroup(_))));
+        let few: Vec<Vec<Observation>> = obs.iter().map(|o| o[..2].to_vec()).collect();
+        assert!(matches!(
+            fit_on_unmeasured_base(
+                &few,
+                &BaseGroup {
+                    bearings: vec![0, 1]
+                },
+                &start
+            ),
+            Err(BaseFitError::TooFewEquations { .. })
+        ));
+    }
+}
