@@ -1,0 +1,603 @@
+//! The joint fit of a group of pedestals with an unmeasured base (module
+//! docs of [`super`]): the equations with X_B eliminated, the profile of the
+//! base mode, the identifiability decision, and the model's prediction.
+
+use super::{
+    put, spring, BaseFitError, BaseFitResult, BaseGroup, BaseIdentifiability, BaseParams, C,
+};
+use crate::estimate::gauss_helmert::{self as gh, Equations};
+use crate::estimate::Observation;
+use nalgebra::{DMatrix, DVector};
+use std::f64::consts::TAU;
+
+/// One speed of a group: the observation of each group member.
+struct Speed {
+    omega: f64,
+    obs: Vec<Observation>,
+    /// Each member's bearing force F = K*·rel [N].
+    force: Vec<[C; 2]>,
+    var: Vec<f64>,
+}
+
+/// The unmeasured-base equations of a group (module docs); parameters
+/// p = (θ of each member, then (κ, μ, γ) for y, then for z).
+struct Unmeasured {
+    speeds: Vec<Speed>,
+}
+
+/// Offset of the base parameters of direction `d` in p for `n` pedestals.
+fn base_at(n: usize, d: usize) -> usize {
+    5 * n + 3 * d
+}
+
+impl Equations for Unmeasured {
+    fn speeds(&self) -> usize {
+        self.speeds.len()
+    }
+
+    fn variance(&self, s: usize) -> &[f64] {
+        &self.speeds[s].var
+    }
+
+    fn error(&self, s: usize, p: &[f64]) -> DVector<f64> {
+        let sp = &self.speeds[s];
+        let n = sp.obs.len();
+        let w = sp.omega;
+        let w2 = w * w;
+        let mut e = DVector::zeros(4 * n);
+        for d in 0..2 {
+            let q = &p[base_at(n, d)..base_at(n, d) + 3];
+            let g = C::new(q[0], 0.0) / C::new(1.0 - w2 * q[1], w * q[2]);
+            let t: C = sp
+                .obs
+                .iter()
+                .enumerate()
+                .map(|(j, o)| sp.force[j][d] + w2 * p[5 * j + 2] * o.ped[d])
+                .sum();
+            for (i, o) in sp.obs.iter().enumerate() {
+                let th = &p[5 * i..5 * i + 5];
+                let di = spring(th, d, w);
+                let r = (di - w2 * th[2]) * o.ped[d] - sp.force[i][d] - di * g * t;
+                e[4 * i + 2 * d] = r.re;
+                e[4 * i + 2 * d + 1] = r.im;
+            }
+        }
+        e
+    }
+
+    fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        let sp = &self.speeds[s];
+        let n = sp.obs.len();
+        let w = sp.omega;
+        let w2 = w * w;
+        let mut e = DVector::zeros(4 * n);
+        let mut b = DMatrix::zeros(4 * n, 8 * n);
+        for d in 0..2 {
+            let q = &p[base_at(n, d)..base_at(n, d) + 3];
+            let g = C::new(q[0], 0.0) / C::new(1.0 - w2 * q[1], w * q[2]);
+            let t: C = sp
+                .obs
+                .iter()
+                .enumerate()
+                .map(|(j, o)| sp.force[j][d] + w2 * p[5 * j + 2] * o.ped[d])
+                .sum();
+            for (i, o) in sp.obs.iter().enumerate() {
+                let th = &p[5 * i..5 * i + 5];
+                let di = spring(th, d, w);
+                let h = di - w2 * th[2];
+                let r = h * o.ped[d] - sp.force[i][d] - di * g * t;
+                e[4 * i + 2 * d] = r.re;
+                e[4 * i + 2 * d + 1] = r.im;
+                for (j, oj) in sp.obs.iter().enumerate() {
+                    let coupling = -di * g;
+                    // ∂e_i/∂X_j and ∂e_i/∂rel_j (through F_j = K*_j·rel_j).
+                    let dx =
+                        coupling * (w2 * p[5 * j + 2]) + if i == j { h } else { C::new(0.0, 0.0) };
+                    put(&mut b, 4 * i + 2 * d, 8 * j + 4 + 2 * d, dx);
+                    let df = coupling - if i == j { 1.0 } else { 0.0 };
+                    for c in 0..2 {
+                        put(&mut b, 4 * i + 2 * d, 8 * j + 2 * c, df * oj.kstar[d][c]);
+                    }
+                }
+            }
+        }
+        (e, b)
+    }
+}
+
+/// The speeds every member of `group` has, with their observations.
+fn common_speeds(obs: &[Vec<Observation>], group: &BaseGroup) -> Result<Vec<Speed>, BaseFitError> {
+    let mut seen = Vec::new();
+    for &i in &group.bearings {
+        if i >= obs.len() {
+            return Err(BaseFitError::NoSuchBearing {
+                index: i,
+                available: obs.len(),
+            });
+        }
+        if seen.contains(&i) {
+            return Err(BaseFitError::BadGroup(group.bearings.clone()));
+        }
+        seen.push(i);
+    }
+    let Some(&first) = group.bearings.first() else {
+        return Err(BaseFitError::BadGroup(Vec::new()));
+    };
+    let mut speeds: Vec<Speed> = Vec::new();
+    for o in obs[first].iter().filter(|o| o.is_finite()) {
+        let members: Option<Vec<Observation>> = group
+            .bearings
+            .iter()
+            .map(|&i| {
+                obs[i]
+                    .iter()
+                    .find(|x| x.speed_hz == o.speed_hz && x.is_finite())
+                    .copied()
+            })
+            .collect();
+        if let Some(members) = members {
+            let var = members.iter().flat_map(|m| m.var).collect();
+            speeds.push(Speed {
+                omega: o.omega(),
+                force: members.iter().map(Observation::force).collect(),
+                obs: members,
+                var,
+            });
+        }
+    }
+    speeds.sort_by(|a, b| a.omega.total_cmp(&b.omega));
+    speeds.dedup_by(|a, b| a.omega == b.omega);
+    Ok(speeds)
+}
+
+/// Most iterations of a profiling fit and of the final fit.
+const GRID_ITERATIONS: usize = 8;
+const FINAL_ITERATIONS: usize = 200;
+/// Base frequencies of the profile grid, and the damping ratio each of its
+/// fits starts from.
+const GRID_FREQUENCIES: usize = 24;
+const GRID_DAMPING: f64 = 0.05;
+/// Largest relative standard error of μ = 1/Ω_B² for a full identification.
+const MODE_REL_SE: f64 = 1.0 / 3.0;
+/// Likelihood-ratio threshold (J_rigid − J) for base motion in one
+/// direction: the 1e-3 upper point of χ²(3) (three base parameters).
+pub const DETECTION_THRESHOLD: f64 = 16.27;
+
+/// Joint ML fit of all pedestals of `group` and its base (module docs).
+/// `obs[b]` are bearing b's observations (with their noise variances, from
+/// [`crate::estimate::noise`]); `start[b]` its rigid-ground fit θ (both indexed like
+/// `obs`; only the group's entries are read).
+pub fn fit_on_unmeasured_base(
+    obs: &[Vec<Observation>],
+    group: &BaseGroup,
+    start: &[[f64; 5]],
+) -> Result<BaseFitResult, BaseFitError> {
+    let speeds = common_speeds(obs, group)?;
+    let n = group.bearings.len();
+    let n_par = 5 * n + 6;
+    let n_eq = 4 * n * speeds.len();
+    if n_eq <= n_par || speeds.len() < 4 {
+        return Err(BaseFitError::TooFewEquations {
+            equations: n_eq,
+            parameters: n_par,
+        });
+    }
+    let (w_lo, w_hi) = (speeds[0].omega, speeds[speeds.len() - 1].omega);
+    let w_mid = (w_lo * w_hi).sqrt();
+    let eq = Unmeasured { speeds };
+    let mut p0 = vec![0.0; n_par];
+    let mut scale = vec![1.0; n_par];
+    let mut k_sum = 0.0;
+    for (i, &b) in group.bearings.iter().enumerate() {
+        let th = start.get(b).copied().unwrap_or([0.0; 5]);
+        p0[5 * i..5 * i + 5].copy_from_slice(&th);
+        let k = th[0].abs().max(th[1].abs()).max(1.0);
+        k_sum += k;
+        scale[5 * i] = th[0].abs().max(1e-3 * k);
+        scale[5 * i + 1] = th[1].abs().max(1e-3 * k);
+        scale[5 * i + 2] = th[2].abs().max(1e-3 * k / (w_mid * w_mid));
+        scale[5 * i + 3] = th[3].abs().max(1e-3 * k / w_mid);
+        scale[5 * i + 4] = th[4].abs().max(1e-3 * k / w_mid);
+    }
+    for d in 0..2 {
+        let o = base_at(n, d);
+        scale[o] = 1.0 / k_sum;
+        scale[o + 1] = 1.0 / (w_mid * w_mid);
+        scale[o + 2] = 1.0 / w_mid;
+    }
+    let pedestal_free: Vec<bool> = (0..n_par).map(|k| k < 5 * n).collect();
+    let frozen: Vec<DMatrix<f64>> = (0..eq.speeds())
+        .map(|s| gh::whitening(&eq, s, &p0))
+        .collect::<Option<_>>()
+        .ok_or(BaseFitError::NotEvaluable)?;
+
+    // Rigid ground, refitted under this model's weights (the null).
+    let rigid = gh::fit(&eq, &p0, &scale, &pedestal_free, None, FINAL_ITERATIONS)
+        .ok_or(BaseFitError::NotEvaluable)?;
+
+    // Profile the base frequency with frozen weights: every fit of the grid
+    // starts from the rigid pedestals with the base mode at f (both
+    // directions, then each direction alone) and frees everything.
+    let (f_lo, f_hi) = (w_lo / TAU, w_hi / TAU);
+    let grid: Vec<f64> = (0..GRID_FREQUENCIES)
+        .map(|j| {
+            let (a, b) = ((f_lo / 3.0).ln(), (3.0 * f_hi).ln());
+            (a + (b - a) * j as f64 / (GRID_FREQUENCIES - 1) as f64).exp()
+        })
+        .collect();
+    let all = vec![true; n_par];
+    let shaped = |from: &[f64], d: usize, f: f64, zeta: f64| -> Vec<f64> {
+        let mut p = from.to_vec();
+        let wb = TAU * f;
+        let o = base_at(n, d);
+        // A base as compliant as the pedestals together, mode at f.
+        p[o] = scale[o];
+        p[o + 1] = 1.0 / (wb * wb);
+        p[o + 2] = 2.0 * zeta / wb;
+        p
+    };
+    let mut best = rigid.p.clone();
+    let mut best_cost =
+        gh::whitened(&eq, &best, Some(&frozen)).map_or(f64::INFINITY, |w| w.norm_squared());
+    let consider =
+        |p: Vec<f64>, frozen: &[DMatrix<f64>], best: &mut Vec<f64>, best_cost: &mut f64| {
+            if let Some(m) = gh::fit(&eq, &p, &scale, &all, Some(frozen), GRID_ITERATIONS) {
+                if m.cost < *best_cost {
+                    *best_cost = m.cost;
+                    *best = m.p;
+                }
+            }
+        };
+    for &f in &grid {
+        let p = shaped(&shaped(&rigid.p, 0, f, GRID_DAMPING), 1, f, GRID_DAMPING);
+        consider(p, &frozen, &mut best, &mut best_cost);
+    }
+    // Weights at the best so far, then each direction's mode on its own.
+    let refrozen: Vec<DMatrix<f64>> = (0..eq.speeds())
+        .map(|s| gh::whitening(&eq, s, &best))
+        .collect::<Option<_>>()
+        .unwrap_or(frozen);
+    best_cost =
+        gh::whitened(&eq, &best, Some(&refrozen)).map_or(f64::INFINITY, |w| w.norm_squared());
+    for d in 0..2 {
+        let from = best.clone();
+        for &f in &grid {
+            consider(
+                shaped(&from, d, f, GRID_DAMPING),
+                &refrozen,
+                &mut best,
+                &mut best_cost,
+            );
+        }
+    }
+
+    // Everything free, with the likelihood's own weights.
+    let full = gh::fit(&eq, &best, &scale, &all, None, FINAL_ITERATIONS)
+        .ok_or(BaseFitError::NotEvaluable)?;
+    let full = if full.cost <= rigid.cost {
+        full
+    } else {
+        rigid.clone()
+    };
+    let mut p = full.p.clone();
+    let mut free = all.clone();
+
+    // What the data determine, per direction.
+    let mut ident = [BaseIdentifiability::NotDetected; 2];
+    for (d, slot) in ident.iter_mut().enumerate() {
+        let o = base_at(n, d);
+        let mut null = p.clone();
+        null[o..o + 3].copy_from_slice(&[0.0; 3]);
+        let mut free_null = all.clone();
+        free_null[o..o + 3].copy_from_slice(&[false; 3]);
+        let j_null = gh::fit(&eq, &null, &scale, &free_null, None, FINAL_ITERATIONS)
+            .map_or(f64::INFINITY, |m| m.cost);
+        if j_null - full.cost < DETECTION_THRESHOLD {
+            p[o..o + 3].copy_from_slice(&[0.0; 3]);
+            free[o..o + 3].copy_from_slice(&[false; 3]);
+            continue;
+        }
+        let (kappa, mu) = (p[o], p[o + 1]);
+        let w_b = if mu > 0.0 {
+            mu.powf(-0.5)
+        } else {
+            f64::INFINITY
+        };
+        *slot = if w_b < w_lo {
+            BaseIdentifiability::MassLine {
+                mass_kg: mu / kappa,
+                std_err: f64::NAN,
+            }
+        } else if w_b > w_hi {
+            BaseIdentifiability::QuasiStatic {
+                compliance_m_per_n: kappa,
+                std_err: f64::NAN,
+            }
+        } else {
+            BaseIdentifiability::Full
+        };
+    }
+    // Refit with the undetected directions held rigid.
+    let fin = if free != all {
+        gh::fit(&eq, &p, &scale, &free, None, FINAL_ITERATIONS).ok_or(BaseFitError::NotEvaluable)?
+    } else {
+        full
+    };
+    let p = fin.p.clone();
+    let idx: Vec<usize> = (0..n_par).filter(|&k| free[k]).collect();
+    let f_all = gh::fisher(&eq, &p, &scale).ok_or(BaseFitError::NotEvaluable)?;
+    let f = DMatrix::from_fn(idx.len(), idx.len(), |r, c| f_all[(idx[r], idx[c])]);
+    let mut cov = DMatrix::from_element(n_par, n_par, 0.0);
+    let inv = gh::inverse_psd(&f);
+    for (r, &a) in idx.iter().enumerate() {
+        for (c, &b) in idx.iter().enumerate() {
+            cov[(a, b)] = inv[(r, c)];
+        }
+    }
+    let se = |k: usize| cov[(k, k)].max(0.0).sqrt();
+    // Delta method: variance of g(p) with gradient `grad` over indices `at`.
+    let delta = |at: &[usize], grad: &[f64]| -> f64 {
+        let mut v = 0.0;
+        for (a, ga) in at.iter().zip(grad) {
+            for (b, gb) in at.iter().zip(grad) {
+                v += ga * gb * cov[(*a, *b)];
+            }
+        }
+        v.max(0.0).sqrt()
+    };
+    let mut base = BaseParams::RIGID;
+    let mut base_se = BaseParams {
+        k: [f64::INFINITY; 2],
+        c: [f64::INFINITY; 2],
+        m: [f64::INFINITY; 2],
+    };
+    let mut base_frequency_hz = [f64::NAN; 2];
+    for d in 0..2 {
+        let o = base_at(n, d);
+        let (kappa, mu, gamma) = (p[o], p[o + 1], p[o + 2]);
+        if ident[d] == BaseIdentifiability::NotDetected {
+            continue;
+        }
+        let at = [o, o + 1, o + 2];
+        base.k[d] = 1.0 / kappa;
+        base.m[d] = mu / kappa;
+        base.c[d] = gamma / kappa;
+        base_se.k[d] = delta(&at, &[-1.0 / (kappa * kappa), 0.0, 0.0]);
+        base_se.m[d] = delta(&at, &[-mu / (kappa * kappa), 1.0 / kappa, 0.0]);
+        base_se.c[d] = delta(&at, &[-gamma / (kappa * kappa), 0.0, 1.0 / kappa]);
+        if mu > 0.0 {
+            base_frequency_hz[d] = 1.0 / (TAU * mu.sqrt());
+        }
+        // A mode inside the range whose frequency the Fisher information
+        // does not pin down (μ = 1/Ω_B² uncertain by more than a third) is
+        // no full identification: say what is determined on its side.
+        let pinned = se(o + 1) < MODE_REL_SE * mu.abs();
+        if ident[d] == BaseIdentifiability::Full && !pinned {
+            ident[d] = if mu > 0.0 && mu.sqrt() * w_mid < 1.0 {
+                BaseIdentifiability::QuasiStatic {
+                    compliance_m_per_n: kappa,
+                    std_err: f64::NAN,
+                }
+            } else {
+                BaseIdentifiability::MassLine {
+                    mass_kg: mu / kappa,
+                    std_err: f64::NAN,
+                }
+            };
+        }
+        match &mut ident[d] {
+            BaseIdentifiability::QuasiStatic {
+                compliance_m_per_n,
+                std_err,
+            } => {
+                *compliance_m_per_n = kappa;
+                *std_err = se(o);
+            }
+            BaseIdentifiability::MassLine { mass_kg, std_err } => {
+                *mass_kg = base.m[d];
+                *std_err = base_se.m[d];
+            }
+            _ => {}
+        }
+    }
+    Ok(BaseFitResult {
+        pedestals: (0..n)
+            .map(|i| std::array::from_fn(|k| p[5 * i + k]))
+            .collect(),
+        pedestal_std_err: (0..n)
+            .map(|i| std::array::from_fn(|k| se(5 * i + k)))
+            .collect(),
+        base,
+        base_std_err: base_se,
+        base_frequency_hz,
+        identifiability: ident,
+        chi2: fin.cost,
+        dof: n_eq - idx.len(),
+        chi2_rigid: rigid.cost,
+        pedestal_residual_rms: (0..n)
+            .map(|i| {
+                let ss: f64 = (0..eq.speeds())
+                    .map(|s| eq.residual(s, &p).0.rows(4 * i, 4).norm_squared())
+                    .sum();
+                (ss / (4 * eq.speeds()) as f64).sqrt()
+            })
+            .collect(),
+        condition_number: gh::condition_number(&f),
+        converged: fin.converged,
+        iterations: fin.iterations,
+        speeds_hz: eq.speeds.iter().map(|s| s.omega / TAU).collect(),
+    })
+}
+
+/// The model's pedestal motion of a group at one speed ([`predict`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// Rotor speed [Hz].
+    pub speed_hz: f64,
+    /// Pedestal motion (y, z) [m] of each group member (group order).
+    pub ped: Vec<[C; 2]>,
+}
+
+/// The model's prediction of every group member's pedestal motion at each
+/// speed all members share (as in [`BaseFitResult::speeds_hz`]), given the
+/// measured bearing forces (from each observation's rel), the pedestals
+/// `theta` (group order) and `base`: the solution of the coupled equations
+/// of the module docs. Compare with the measured `ped` for a gap.
+pub fn predict(
+    obs: &[Vec<Observation>],
+    group: &BaseGroup,
+    theta: &[[f64; 5]],
+    base: &BaseParams,
+) -> Result<Vec<Prediction>, BaseFitError> {
+    let speeds = common_speeds(obs, group)?;
+    let n = group.bearings.len();
+    if theta.len() != n {
+        return Err(BaseFitError::BadGroup(group.bearings.clone()));
+    }
+    let mut out = Vec::with_capacity(speeds.len());
+    for sp in &speeds {
+        let w = sp.omega;
+        let w2 = w * w;
+        let mut x = vec![[C::new(0.0, 0.0); 2]; n];
+        for d in 0..2 {
+            let g = base.receptance(d, w);
+            // (d_i − Ω²m_i)·X_i − d_i·G·Σ_j Ω²m_j·X_j = F_i + d_i·G·Σ_j F_j
+            let f_sum: C = sp.obs.iter().map(|o| o.force()[d]).sum();
+            let a = DMatrix::from_fn(n, n, |i, j| {
+                let di = spring(&theta[i], d, w);
+                let diag = if i == j {
+                    di - w2 * theta[i][2]
+                } else {
+                    C::new(0.0, 0.0)
+                };
+                diag - di * g * w2 * theta[j][2]
+            });
+            let rhs = DVector::from_fn(n, |i, _| {
+                sp.obs[i].force()[d] + spring(&theta[i], d, w) * g * f_sum
+            });
+            let sol = a.lu().solve(&rhs).ok_or(BaseFitError::NotEvaluable)?;
+            for (xi, v) in x.iter_mut().zip(sol.iter()) {
+                xi[d] = *v;
+            }
+        }
+        out.push(Prediction {
+            speed_hz: w / TAU,
+            ped: x,
+        });
+    }
+    Ok(out)
+}
+
+/// J = Σ eᵀΣ⁻¹e [-] of the group's equations (module docs) at given
+/// pedestals (group order) and base, with the observations' noise: the
+/// misfit a diagnosis compares with its degrees of freedom.
+pub fn chi2(
+    obs: &[Vec<Observation>],
+    group: &BaseGroup,
+    theta: &[[f64; 5]],
+    base: &BaseParams,
+) -> Result<f64, BaseFitError> {
+    let speeds = common_speeds(obs, group)?;
+    let n = group.bearings.len();
+    if theta.len() != n {
+        return Err(BaseFitError::BadGroup(group.bearings.clone()));
+    }
+    let mut p: Vec<f64> = theta.iter().flatten().copied().collect();
+    for d in 0..2 {
+        if base.k[d].is_finite() && base.k[d] != 0.0 {
+            p.extend([
+                1.0 / base.k[d],
+                base.m[d] / base.k[d],
+                base.c[d] / base.k[d],
+            ]);
+        } else {
+            p.extend([0.0; 3]);
+        }
+    }
+    gh::cost(&Unmeasured { speeds }, &p).ok_or(BaseFitError::NotEvaluable)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use num_complex::Complex;
+
+    /// Two bearings at 20 speeds with arbitrary rel and bearing stiffness;
+    /// ped left at zero (set by the caller).
+    fn observations() -> Vec<Vec<Observation>> {
+        (0..2)
+            .map(|b| {
+                (0..20)
+                    .map(|j| {
+                        let f = 10.0 + 5.0 * j as f64;
+                        let w = TAU * f;
+                        let s = 1.0 + 0.3 * b as f64;
+                        Observation {
+                            speed_hz: f,
+                            rel: [
+                                Complex::from_polar(1e-5 * s, 0.05 * f),
+                                Complex::from_polar(8e-6, 1.0 - 0.03 * f * s),
+                            ],
+                            ped: [Complex::new(0.0, 0.0); 2],
+                            kstar: [
+                                [Complex::new(3e7 * s, w * 2e3), Complex::new(8e6, w * 1e2)],
+                                [Complex::new(-6e6, -w * 1e2), Complex::new(2.5e7, w * 1.5e3)],
+                            ],
+                            var: [1e-20; 8],
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn predicted_motion_satisfies_the_equations() {
+        let mut obs = observations();
+        let group = BaseGroup {
+            bearings: vec![0, 1],
+        };
+        let theta = [
+            [1e7, 8e6, 80.0, 300.0, 250.0],
+            [6e6, 9e6, 60.0, 200.0, 350.0],
+        ];
+        let base = BaseParams {
+            k: [1e7, 8e6],
+            c: [3e3, 2.5e3],
+            m: [300.0, 250.0],
+        };
+        let pred = predict(&obs, &group, &theta, &base).unwrap();
+        for (s, p) in pred.iter().enumerate() {
+            for (b, o) in obs.iter_mut().enumerate() {
+                o[s].ped = p.ped[b];
+            }
+        }
+        let j = chi2(&obs, &group, &theta, &base).unwrap();
+        let rigid = chi2(&obs, &group, &theta, &BaseParams::RIGID).unwrap();
+        assert!(j < 1e-12 * rigid, "χ² {j:e} (rigid ground {rigid:e})");
+    }
+
+    #[test]
+    fn bad_groups_are_errors() {
+        let obs = observations();
+        let start = [[1e7, 1e7, 50.0, 0.0, 0.0]; 2];
+        let fit = |b: Vec<usize>| fit_on_unmeasured_base(&obs, &BaseGroup { bearings: b }, &start);
+        assert!(matches!(
+            fit(vec![0, 2]),
+            Err(BaseFitError::NoSuchBearing { index: 2, .. })
+        ));
+        assert!(matches!(fit(vec![0, 0]), Err(BaseFitError::BadGroup(_))));
+        assert!(matches!(fit(vec![]), Err(BaseFitError::BadGroup(_))));
+        let few: Vec<Vec<Observation>> = obs.iter().map(|o| o[..2].to_vec()).collect();
+        assert!(matches!(
+            fit_on_unmeasured_base(
+                &few,
+                &BaseGroup {
+                    bearings: vec![0, 1]
+                },
+                &start
+            ),
+            Err(BaseFitError::TooFewEquations { .. })
+        ));
+    }
+}
