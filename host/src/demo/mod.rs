@@ -16,8 +16,9 @@
 //! 3. **Run directory**: every byte the box sent is kept (`raw.bin`), and the
 //!    run directory (formats.md) is re-derived from it, with the simulation's
 //!    `truth.json` added.
-//! 4. **Batch fit**: [`crate::identify`] on the run directory.
-//! 5. **Table and figures**: box RLS vs batch fit vs truth with their
+//! 4. **Batch fits**: [`crate::identify`] on the run directory, the paper's OLS
+//!    and the maximum-likelihood fit (`plinth identify`'s default).
+//! 5. **Table and figures**: box RLS vs host OLS vs host ML vs truth with their
 //!    differences ([`table`]), and the amplitude, phase and phase-difference
 //!    figures, box-extracted phasors over the simulated truth, PNG and SVG
 //!    ([`figures`]).
@@ -269,9 +270,9 @@ pub struct DemoReport {
     pub phasor_frames: usize,
     /// Rows of measurements.csv.
     pub measurement_rows: usize,
-    /// Box RLS vs batch fit vs truth, per pedestal and parameter.
+    /// Box RLS vs host OLS vs host ML vs truth, per pedestal and parameter.
     pub table: Vec<ComparisonRow>,
-    /// Warnings of the batch fit, per pedestal.
+    /// Warnings of the host fits, per estimator and pedestal.
     pub warnings: Vec<String>,
     /// Wall-clock times.
     pub timings: Timings,
@@ -290,8 +291,11 @@ pub struct DemoOutcome {
     pub report: DemoReport,
     /// The stream's own report (also in `out/run/stream-report.json`).
     pub stream: StreamReport,
-    /// The batch fit of the run directory.
+    /// The batch fit of the run directory (the paper's OLS).
     pub identification: Identification,
+    /// The maximum-likelihood fit of the run directory (`plinth identify`'s
+    /// default).
+    pub ml: Identification,
     /// The machine's pedestals.
     pub truth: Truth,
 }
@@ -520,7 +524,7 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
     // would, and the batch fit.
     note(
         opts.progress,
-        "[3/5] batch least-squares fit of the run directory",
+        "[3/5] batch fits (OLS and maximum likelihood) of the run directory",
     );
     let t = Instant::now();
     let truth_path = run_dir.join(TRUTH_FILE);
@@ -528,13 +532,18 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
     std::fs::write(&truth_path, text + "\n")
         .with_context(|| format!("cannot write {}", truth_path.display()))?;
     let measured = RunDir::read(&run_dir)?;
-    // The paper's OLS: the same least-squares problem the box's RLS solves.
+    // The paper's OLS: the same least-squares problem the box's RLS solves;
+    // and the maximum-likelihood fit `plinth identify` makes by default.
     let identification = identify_run(&measured, &Options::default().ols())
-        .with_context(|| format!("identifying {}", run_dir.display()))?;
+        .with_context(|| format!("identifying {} (OLS)", run_dir.display()))?;
+    let ml = identify_run(&measured, &Options::default())
+        .with_context(|| format!("identifying {} (ML)", run_dir.display()))?;
     let mut warnings = Vec::new();
-    for p in &identification.pedestals {
-        for w in &p.warnings {
-            warnings.push(format!("pedestal `{}`: {}", p.bearing, w.message));
+    for (name, id) in [("host OLS", &identification), ("host ML", &ml)] {
+        for p in &id.pedestals {
+            for w in &p.warnings {
+                warnings.push(format!("{name}, pedestal `{}`: {}", p.bearing, w.message));
+            }
         }
     }
     let rows = table::rows(&stream_report.pedestals, &truth);
@@ -600,6 +609,7 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
         report,
         stream: stream_report,
         identification,
+        ml,
         truth,
     })
 }
@@ -820,7 +830,7 @@ pub fn summary(o: &DemoOutcome) -> String {
         r.measurement_rows,
         o.stream.dropped_rows.len()
     ));
-    s.push_str(&table::render(&r.table, &o.identification));
+    s.push_str(&table::render(&r.table, &o.identification, &o.ml));
     for w in &r.warnings {
         s.push_str(&format!("warning: {w}\n"));
     }
