@@ -566,11 +566,33 @@ pub fn equation_var_for_chi2(
 }
 
 /// Most outer iterations of [`fit_with_equation_error`] (θ, then τ²).
-const MAX_EQUATION_ERROR_ITERATIONS: usize = 30;
+const MAX_EQUATION_ERROR_ITERATIONS: usize = 10;
+
+/// Relative change of τ² at which [`fit_with_equation_error`] stops.
+const EQUATION_ERROR_TOLERANCE: f64 = 1e-2;
+
+/// Σ ln det Σ_i over the speeds, Σ_i the covariance of speed i's four
+/// equations with an equation error of variance `equation_var` [N²]:
+/// with J, the Gaussian log-likelihood of the residuals is
+/// −½(J + Σ ln det Σ_i) + const, which compares two noise hypotheses with
+/// the same number of free parameters (e.g. a rescaled noise against an
+/// added equation error).
+pub fn log_det(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+) -> Result<f64, MlError> {
+    let mut sum = 0.0;
+    for o in obs {
+        let l = cholesky(covariance_with(o, theta, equation_var), o.speed_hz)?;
+        sum += 2.0 * (0..4).map(|k| l[(k, k)].ln()).sum::<f64>();
+    }
+    Ok(sum)
+}
 
 /// The ML fit of the combined model (module docs, "Equation error"): noise
 /// in the variables plus an equation error of variance τ² set by χ² = 4n − p,
-/// iterated with θ from `start` until τ² changes by less than 0.1 %.
+/// iterated with θ from `start` until τ² changes by less than 1 %.
 /// Returns the fit (its `equation_var` is τ²) and whether the iteration
 /// settled.
 pub fn fit_with_equation_error(
@@ -582,7 +604,8 @@ pub fn fit_with_equation_error(
     let dof = fit.dof;
     for _ in 0..MAX_EQUATION_ERROR_ITERATIONS {
         let var = equation_var_for_chi2(obs, &fit.theta, dof)?;
-        let settled = (var - fit.equation_var).abs() <= 1e-3 * var.max(fit.equation_var);
+        let settled =
+            (var - fit.equation_var).abs() <= EQUATION_ERROR_TOLERANCE * var.max(fit.equation_var);
         fit = fit_with(obs, columns, &fit.theta, var)?;
         if settled {
             return Ok((fit, true));

@@ -156,13 +156,26 @@ pub fn fit_ml(
     };
     let mut ml_fit = ml_fit;
     let variance_scale = if p_value < CHI2_P_THRESHOLD && ratio > excess_limit {
-        match ml::fit_with_equation_error(&obs, &columns, &ml_fit.theta) {
-            Ok((f, settled)) if f.theta.iter().all(|v| v.is_finite()) => {
+        // Two explanations of the excess, each with one free level: the
+        // noise larger by χ²/dof everywhere, or an equation error on top of
+        // it; the one under which the residuals are the more likely wins.
+        let n = obs.len() as f64;
+        let rescaled =
+            ml::log_det(&obs, &ml_fit.theta, 0.0).map(|d| d + 4.0 * n * ratio.ln() + dof as f64);
+        let combined =
+            ml::fit_with_equation_error(&obs, &columns, &ml_fit.theta).and_then(|(f, settled)| {
+                let d = ml::log_det(&obs, &f.theta, f.equation_var)? + f.chi2;
+                Ok((f, settled, d))
+            });
+        match (combined, rescaled) {
+            (Ok((f, settled, d)), Ok(d_rescaled))
+                if f.theta.iter().all(|v| v.is_finite()) && d < d_rescaled =>
+            {
                 ml_fit = f;
                 extra.push(Warning {
                     kind: WarningKind::NoiseScaleMismatch,
                     message: format!(
-                        "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows (a model discrepancy or a larger noise); the excess is modelled as an equation error of {:.3e} N on every real equation (the paper's OLS error model) added to the noise, and the fit and its standard errors are those of the combined model{}",
+                        "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows, and not in its pattern (a model discrepancy); the excess is modelled as an equation error of {:.3e} N on every real equation (the paper's OLS error model) added to the noise, and the fit and its standard errors are those of the combined model{}",
                         noise.source.name(),
                         ml_fit.equation_var.sqrt(),
                         if settled {
@@ -174,11 +187,12 @@ pub fn fit_ml(
                 });
                 1.0
             }
+            _ if noise.source.scale_estimated() => ratio,
             _ => {
                 extra.push(Warning {
                     kind: WarningKind::NoiseScaleMismatch,
                     message: format!(
-                        "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows (a larger noise or a model discrepancy); standard errors are scaled by {:.3}",
+                        "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows (a larger noise); standard errors are scaled by {:.3}",
                         noise.source.name(),
                         ratio.sqrt()
                     ),
