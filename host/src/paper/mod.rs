@@ -35,8 +35,8 @@
 //! known exactly (they are the paper's "assumed known" bearing properties);
 //! only the measured phasors are reduced to digits.
 //!
-//! Files: [`experiment`] (simulate, reduce, identify, re-predict),
-//! [`tables`] (the rows and their text), [`figures`] (the plots); this file
+//! Files: `experiment` (simulate, reduce, identify, re-predict),
+//! `tables` (the rows and their text), `figures` (the plots); this file
 //! holds the command.
 
 mod experiment;
