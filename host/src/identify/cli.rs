@@ -6,7 +6,6 @@ use super::{
 };
 use crate::estimate::noise::Quantisation;
 use crate::rundir::{RunDir, Truth};
-use anyhow::Context;
 use std::path::PathBuf;
 
 /// How eq. 4 is used (the paper's Table 2 variants).
@@ -123,6 +122,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             super::mode_name(equations)
         );
     }
+    check_run_dir(&args.dir)?;
     let mut run = RunDir::read(&args.dir)?;
     if let Some(band) = args.slow_roll {
         let removed = crate::field::slow_roll::subtract_slow_roll(&mut run.measurements, band)?;
@@ -136,8 +136,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             eprintln!("warning: {w}");
         }
     }
-    let identification = identify_run(&run, &args.options())
-        .with_context(|| format!("identifying {}", args.dir.display()))?;
+    let identification = identify_run(&run, &args.options()).map_err(|e| located(&args.dir, e))?;
     for p in &identification.pedestals {
         for w in &p.warnings {
             eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
@@ -155,6 +154,37 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         Some(e) => Err(e.into()),
         None => Ok(()),
     }
+}
+
+/// The run directory's own error before its files are read, in the CLI's
+/// form (`DIR: what is wrong`), so that a missing directory or a file given
+/// for one is not reported as a missing `DIR/measurements.csv` with the
+/// operating system's text. Shared by `identify` and `diagnose`.
+pub(crate) fn check_run_dir(dir: &std::path::Path) -> anyhow::Result<()> {
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => anyhow::bail!(
+            "{}: not a directory: a run directory holds measurements.csv and bearings.csv (formats.md)",
+            dir.display()
+        ),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            anyhow::bail!("{}: no such run directory", dir.display())
+        }
+        Err(e) => anyhow::bail!("{}: cannot read the run directory ({e})", dir.display()),
+    }
+}
+
+/// An identification error with the file it is about (`DIR/measurements.csv`
+/// for the measured data, `DIR/bearings.csv` for the coefficients); errors
+/// that already name their file, line and column pass unchanged.
+fn located(dir: &std::path::Path, e: super::IdentifyError) -> anyhow::Error {
+    use super::IdentifyError as E;
+    let file = match &e {
+        E::NoMeasurements | E::NoData { .. } => crate::rundir::MEASUREMENTS_FILE,
+        E::UnknownBearing { .. } | E::BearingRange { .. } => crate::rundir::BEARINGS_FILE,
+        E::RunDir(_) | E::NonFinite(_) => return e.into(),
+    };
+    anyhow::anyhow!("{}: {e}", dir.join(file).display())
 }
 
 /// Under the table: why each UNTRUSTED pedestal is not trusted (the warnings
