@@ -104,6 +104,34 @@ fn host_only_demo_identifies_the_paper_machine() {
     }
     assert_eq!(checked, 6, "k_y, k_z, m of two pedestals");
 
+    // The host's maximum-likelihood fit (identify's default, computed by
+    // the same path) is in the table with its Fisher standard error, which
+    // must mean what it says: k and m within 4 of them and within the same
+    // caps. (The data scatter about 1.5× more than the box's noise columns
+    // say, a model discrepancy the fit takes up as an equation error.)
+    for row in &r.table {
+        let limit = match row.parameter.as_str() {
+            "k_y" | "k_z" => 4.0,
+            "m" => 1.5,
+            _ => continue,
+        };
+        let (truth, ml, se) = (
+            row.truth.expect("truth"),
+            row.ml_value.expect("ML value"),
+            row.ml_std_err.expect("ML std err"),
+        );
+        let pct = row.ml_error_pct.expect("ML error");
+        assert!(
+            pct.abs() <= limit && (ml - truth).abs() <= 4.0 * se,
+            "{} {}: ML {ml} ± {se} vs truth {truth} ({pct:+.2} %)",
+            row.bearing,
+            row.parameter
+        );
+        assert_eq!(row.ml_error_sigmas, Some((ml - truth) / se));
+    }
+    let text = plinth::demo::summary(&o);
+    assert!(text.contains("host ML ± σ") && text.contains("host OLS ± σ"));
+
     // The box's RLS (f32, on the box) weighs every equation by the noise of
     // its phasors, which it measured itself: a different (weighted) least
     // squares from the host's ordinary one, so the two differ within their

@@ -111,4 +111,9 @@ fn qemu_firmware_matches_the_host_only_pipeline() {
         }
     }
     assert!(report.batch_error.is_none(), "{:?}", report.batch_error);
+    assert!(report.ml_error.is_none(), "{:?}", report.ml_error);
+    assert!(report
+        .pedestals
+        .iter()
+        .all(|p| p.parameters.iter().all(|c| c.ml_value.is_some())));
 }

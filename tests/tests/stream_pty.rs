@@ -63,12 +63,18 @@ fn a_clean_link_gives_the_host_only_pipeline_result() {
         outcome.last_estimates.as_ref().map(|e| &e.pedestals),
         reference.last_estimates.as_ref().map(|e| &e.pedestals)
     );
-    // And the batch fit ran on them.
+    // And both host fits (OLS and ML) ran on them, with their ±.
     assert!(report.batch_error.is_none(), "{:?}", report.batch_error);
+    assert!(report.ml_error.is_none(), "{:?}", report.ml_error);
     for p in &report.pedestals {
-        assert!(p
-            .parameters
-            .iter()
-            .all(|c| c.batch_value.is_some() && c.box_value.is_some()));
+        assert!(p.parameters.iter().all(|c| c.batch_value.is_some()
+            && c.box_value.is_some()
+            && c.ml_value.is_some()
+            && c.ml_std_err.is_some_and(|s| s > 0.0)));
     }
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join(plinth::stream::report::REPORT_FILE)).unwrap(),
+    )
+    .unwrap();
+    assert!(json["pedestals"][0]["parameters"][0]["ml_std_err"].is_number());
 }

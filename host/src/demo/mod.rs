@@ -16,8 +16,9 @@
 //! 3. **Run directory**: every byte the box sent is kept (`raw.bin`), and the
 //!    run directory (formats.md) is re-derived from it, with the simulation's
 //!    `truth.json` added.
-//! 4. **Batch fit**: [`crate::identify`] on the run directory.
-//! 5. **Table and figures**: box RLS vs batch fit vs truth with their
+//! 4. **Batch fits**: [`crate::identify`] on the run directory, the paper's OLS
+//!    and the maximum-likelihood fit (`plinth identify`'s default).
+//! 5. **Table and figures**: box RLS vs host OLS vs host ML vs truth with their
 //!    differences ([`table`]), and the amplitude, phase and phase-difference
 //!    figures, box-extracted phasors over the simulated truth, PNG and SVG
 //!    ([`figures`]).
@@ -36,18 +37,27 @@
 //! slower than real time, so `--qemu` replays a short run-down through the
 //! pedestal resonances (62 → 48 Hz at 35 Hz/s, 0.4 s) with one revolution
 //! per phasor.
+//!
+//! Files: this one (the command and the chain), `box_config` (the box's
+//! configuration and bearing table), `report` (`demo-report.json` and the
+//! end-of-demo text), [`table`], [`figures`], [`inprocess`], [`qemu`].
 
 pub mod figures;
 pub mod inprocess;
 pub mod qemu;
 pub mod table;
 
-use crate::identify::{identify_run, Identification, Options};
+mod box_config;
+mod report;
+
+pub use box_config::*;
+pub use report::*;
+
+use crate::identify::{identify_run, Options};
 use crate::paper::DAMPED_MACHINE;
-use crate::rundir::{BearingRow, RunDir, Truth, TRUTH_FILE};
+use crate::rundir::{RunDir, TRUTH_FILE};
 use crate::sim::signals::{
     default_seismic_sensitivity, synthesise, write_truth, RunDown, SensorKind, SignalOptions,
-    SignalSet,
 };
 use crate::sim::{EffectSet, Machine};
 use crate::stream::config::{BearingTables, StreamConfig};
@@ -55,16 +65,13 @@ use crate::stream::port::{Backoff, Connector, SerialConnector};
 use crate::stream::progress::Progress;
 use crate::stream::rawlog::RAW_LOG_FILE;
 use crate::stream::replay::{SignalSetReplay, JOURNAL_FILE};
-use crate::stream::report::StreamReport;
 use crate::stream::session::SessionOptions;
 use anyhow::{anyhow, bail, Context, Result};
 use plinth_firmware::ad7606::Range;
 use plinth_firmware::config::TABLE_ROWS;
 use plinth_firmware::device::SAMPLE_RATE_HZ;
-use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use table::ComparisonRow;
 
 /// Run-down of the host-only demo: 200 → 5 Hz at 10 Hz/s (19.5 s, 2000
 /// revolutions).
@@ -221,83 +228,6 @@ pub fn bundled_machine() -> Result<Machine> {
     Machine::from_toml_str(DAMPED_MACHINE, BUNDLED_MACHINE_NAME)
         .with_context(|| format!("the bundled machine {BUNDLED_MACHINE_NAME}"))
 }
-
-/// Wall-clock time of each stage [s].
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct Timings {
-    /// Response and time-signal synthesis.
-    pub signals_s: f64,
-    /// Streaming to the box (replay, phasors, RLS) and re-deriving the run directory.
-    pub stream_s: f64,
-    /// Batch fit and table.
-    pub fit_s: f64,
-    /// Figures.
-    pub figures_s: f64,
-    /// Everything.
-    pub total_s: f64,
-}
-
-/// `demo-report.json`: what was run, what came out, where it was written.
-#[derive(Clone, Debug, Serialize)]
-pub struct DemoReport {
-    /// Machine name.
-    pub machine: String,
-    /// The box the signals went to.
-    pub target: String,
-    /// The speed ramp.
-    pub rundown: RunDown,
-    /// Duration of the run-down [s].
-    pub duration_s: f64,
-    /// Keyphasor revolutions in the run-down.
-    pub revolutions: u64,
-    /// Sample rate per channel [Hz].
-    pub sample_rate_hz: f64,
-    /// Sample vectors replayed.
-    pub sample_vectors: usize,
-    /// Channels per sample vector.
-    pub channels: usize,
-    /// Revolutions per phasor.
-    pub averaging: u32,
-    /// Noise seed.
-    pub seed: u64,
-    /// Rows of the box's bearing table per bearing.
-    pub bearing_table_rows: usize,
-    /// Largest relative error of the box's (linearly interpolated) bearing
-    /// table against the exact coefficients over the run.
-    pub bearing_table_max_rel_error: f64,
-    /// Phasor frames the box sent.
-    pub phasor_frames: usize,
-    /// Rows of measurements.csv.
-    pub measurement_rows: usize,
-    /// Box RLS vs batch fit vs truth, per pedestal and parameter.
-    pub table: Vec<ComparisonRow>,
-    /// Warnings of the batch fit, per pedestal.
-    pub warnings: Vec<String>,
-    /// Wall-clock times.
-    pub timings: Timings,
-    /// Every file written (besides the run directory's own).
-    pub files: Vec<PathBuf>,
-}
-
-/// What a demo run produced.
-#[derive(Clone, Debug)]
-pub struct DemoOutcome {
-    /// The run directory (`out/run`).
-    pub run_dir: PathBuf,
-    /// The figures directory (`out/figures`).
-    pub figures_dir: PathBuf,
-    /// The report (also in `out/demo-report.json`).
-    pub report: DemoReport,
-    /// The stream's own report (also in `out/run/stream-report.json`).
-    pub stream: StreamReport,
-    /// The batch fit of the run directory.
-    pub identification: Identification,
-    /// The machine's pedestals.
-    pub truth: Truth,
-}
-
-/// File name of the demo report inside the output directory.
-pub const REPORT_FILE: &str = "demo-report.json";
 
 /// Runs `plinth demo`.
 pub fn run(args: &Args) -> Result<()> {
@@ -520,7 +450,7 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
     // would, and the batch fit.
     note(
         opts.progress,
-        "[3/5] batch least-squares fit of the run directory",
+        "[3/5] batch fits (OLS and maximum likelihood) of the run directory",
     );
     let t = Instant::now();
     let truth_path = run_dir.join(TRUTH_FILE);
@@ -528,13 +458,18 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
     std::fs::write(&truth_path, text + "\n")
         .with_context(|| format!("cannot write {}", truth_path.display()))?;
     let measured = RunDir::read(&run_dir)?;
-    // The paper's OLS: the same least-squares problem the box's RLS solves.
+    // The paper's OLS: the same least-squares problem the box's RLS solves;
+    // and the maximum-likelihood fit `plinth identify` makes by default.
     let identification = identify_run(&measured, &Options::default().ols())
-        .with_context(|| format!("identifying {}", run_dir.display()))?;
+        .with_context(|| format!("identifying {} (OLS)", run_dir.display()))?;
+    let ml = identify_run(&measured, &Options::default())
+        .with_context(|| format!("identifying {} (ML)", run_dir.display()))?;
     let mut warnings = Vec::new();
-    for p in &identification.pedestals {
-        for w in &p.warnings {
-            warnings.push(format!("pedestal `{}`: {}", p.bearing, w.message));
+    for (name, id) in [("host OLS", &identification), ("host ML", &ml)] {
+        for p in &id.pedestals {
+            for w in &p.warnings {
+                warnings.push(format!("{name}, pedestal `{}`: {}", p.bearing, w.message));
+            }
         }
     }
     let rows = table::rows(&stream_report.pedestals, &truth);
@@ -600,6 +535,7 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
         report,
         stream: stream_report,
         identification,
+        ml,
         truth,
     })
 }
@@ -648,202 +584,4 @@ fn prepare_run_dir(dir: &Path) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// Writes the box's configuration into `dir` (`stream.toml` with the signal
-/// set's channels on ADC channels 0.., `bearings.csv` with `table`) and
-/// loads it back as `plinth stream` would.
-pub fn write_box_config(
-    dir: &Path,
-    set: &SignalSet,
-    table: &[BearingRow],
-    averaging: u32,
-) -> Result<StreamConfig> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    RunDir {
-        measurements: Vec::new(),
-        bearings: table.to_vec(),
-        truth: None,
-    }
-    .write(dir)
-    .with_context(|| format!("writing the box's bearing table into {}", dir.display()))?;
-    // RunDir::write also wrote an empty measurements.csv: not part of a configuration.
-    let _ = std::fs::remove_file(dir.join(crate::rundir::MEASUREMENTS_FILE));
-    let path = dir.join("stream.toml");
-    std::fs::write(&path, config_text(set, "bearings.csv", averaging))
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    StreamConfig::load(&path)
-}
-
-/// A stream configuration for a signal set's channels (ADC channel = the
-/// set's column, so the replay needs no reordering).
-pub fn config_text(set: &SignalSet, bearings_csv: &str, averaging: u32) -> String {
-    let mut s = format!(
-        "# Field box configuration written by `plinth demo` for {}.\n\
-         # Known bearing coefficients (formats.md), relative to this file.\n\
-         bearings = \"{bearings_csv}\"\n\n[averaging]\nrevolutions = {averaging}\n\n[rls]\nforgetting_factor = 1.0\n",
-        set.header.machine
-    );
-    for (adc, ch) in set.header.channels.iter().enumerate() {
-        let sensor = match ch.kind {
-            SensorKind::Displacement => "proximity",
-            SensorKind::Velocity => "velocity",
-            SensorKind::Acceleration => "acceleration",
-        };
-        s.push_str(&format!(
-            "\n[[channels]]\nadc = {adc}\nbearing = \"{}\"\nquantity = \"{}\"\nsensor = \"{sensor}\"\nsensitivity = {:e}\n",
-            ch.bearing,
-            ch.quantity.name(),
-            ch.sensitivity
-        ));
-    }
-    s
-}
-
-/// Relative difference of two bearing coefficient sets: the largest
-/// stiffness difference over the largest stiffness magnitude, or the same
-/// for damping, whichever is larger.
-fn coefficient_error(
-    a: &plinth_shared::bearing::BearingCoefficients<f64>,
-    b: &plinth_shared::bearing::BearingCoefficients<f64>,
-) -> f64 {
-    let rel = |x: &[[f64; 2]; 2], y: &[[f64; 2]; 2]| {
-        let mut d: f64 = 0.0;
-        let mut n: f64 = 0.0;
-        for i in 0..2 {
-            for j in 0..2 {
-                d = d.max((x[i][j] - y[i][j]).abs());
-                n = n.max(y[i][j].abs());
-            }
-        }
-        if n > 0.0 {
-            d / n
-        } else {
-            d
-        }
-    };
-    rel(&a.k, &b.k).max(rel(&a.c, &b.c))
-}
-
-/// The bearing table the box holds (at most `max_rows` rows per bearing,
-/// the firmware's capacity), chosen from the exact coefficients `exact` on a
-/// fine speed grid so that linear interpolation between the chosen rows is
-/// as close to them as the row budget allows over [`lo_hz`, `hi_hz`]: the
-/// rows bracketing the run first, then repeatedly the grid row where the
-/// interpolated table is worst. Returns the rows and the largest relative
-/// error left (see `coefficient_error`).
-pub fn box_bearing_table(
-    exact: &[BearingRow],
-    lo_hz: f64,
-    hi_hz: f64,
-    max_rows: usize,
-) -> Result<(Vec<BearingRow>, f64)> {
-    if max_rows < 2 {
-        bail!("a bearing table needs at least 2 rows");
-    }
-    let mut names: Vec<&str> = Vec::new();
-    for r in exact {
-        if !names.contains(&r.bearing.as_str()) {
-            names.push(&r.bearing);
-        }
-    }
-    let mut out = Vec::new();
-    let mut worst_all: f64 = 0.0;
-    for name in names {
-        let mut grid: Vec<&BearingRow> = exact.iter().filter(|r| r.bearing == name).collect();
-        grid.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
-        let first = grid.iter().rposition(|r| r.speed_hz <= lo_hz);
-        let last = grid.iter().position(|r| r.speed_hz >= hi_hz);
-        let (Some(first), Some(last)) = (first, last) else {
-            bail!("bearing {name:?}: the exact coefficients do not cover {lo_hz}-{hi_hz} Hz");
-        };
-        let span = &grid[first..=last];
-        let mut chosen: Vec<usize> = vec![0, span.len() - 1];
-        chosen.dedup();
-        let worst = loop {
-            // Interpolation error at every grid row between chosen rows.
-            let mut max = (0.0, None);
-            for w in chosen.windows(2) {
-                let (a, b) = (span[w[0]], span[w[1]]);
-                for (i, r) in span.iter().enumerate().take(w[1]).skip(w[0] + 1) {
-                    let t = (r.speed_hz - a.speed_hz) / (b.speed_hz - a.speed_hz);
-                    let interp = a.coefficients.lerp(&b.coefficients, t);
-                    let e = coefficient_error(&interp, &r.coefficients);
-                    if e > max.0 {
-                        max = (e, Some(i));
-                    }
-                }
-            }
-            match max.1 {
-                Some(i) if chosen.len() < max_rows => {
-                    let at = chosen.partition_point(|&c| c < i);
-                    chosen.insert(at, i);
-                }
-                _ => break max.0,
-            }
-        };
-        worst_all = worst_all.max(worst);
-        out.extend(chosen.iter().map(|&i| span[i].clone()));
-    }
-    Ok((out, worst_all))
-}
-
-/// The end-of-demo text: what ran, the table, the warnings, the files.
-pub fn summary(o: &DemoOutcome) -> String {
-    let r = &o.report;
-    let mut s = String::new();
-    s.push_str(&format!(
-        "\nplinth demo: {} run down {} → {} Hz at {} Hz/s ({:.2} s, {} revolutions), {} sample vectors × {} channels at {} Hz\n",
-        r.machine,
-        r.rundown.start_hz,
-        r.rundown.end_hz,
-        r.rundown.rate_hz_per_s,
-        r.duration_s,
-        r.revolutions,
-        r.sample_vectors,
-        r.channels,
-        r.sample_rate_hz
-    ));
-    s.push_str(&format!("box: {}\n", r.target));
-    s.push_str(&format!(
-        "     bearing table {} rows per bearing (linear interpolation within {:.2e} of the exact coefficients), {} revolution(s) per phasor\n",
-        r.bearing_table_rows, r.bearing_table_max_rel_error, r.averaging
-    ));
-    s.push_str(&crate::stream::report::render_link(
-        "link",
-        &o.stream.link_raw_log,
-    ));
-    s.push('\n');
-    s.push_str(&format!(
-        "{} phasor frames -> {} measurement rows ({} dropped)\n\n",
-        r.phasor_frames,
-        r.measurement_rows,
-        o.stream.dropped_rows.len()
-    ));
-    s.push_str(&table::render(&r.table, &o.identification));
-    for w in &r.warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s.push_str(&format!(
-        "\nwritten to {}:\n",
-        o.run_dir
-            .parent()
-            .map_or(o.run_dir.clone(), Path::to_path_buf)
-            .display()
-    ));
-    s.push_str(&format!(
-        "  {}  run directory (measurements.csv, bearings.csv, truth.json, raw.bin, stream-report.json): try `plinth identify {}`\n",
-        o.run_dir.display(),
-        o.run_dir.display()
-    ));
-    s.push_str(&format!(
-        "  {}  amplitudes, phases, phase_difference (.png and .svg)\n",
-        o.figures_dir.display()
-    ));
-    for f in &r.files {
-        if !f.starts_with(&o.figures_dir) {
-            s.push_str(&format!("  {}\n", f.display()));
-        }
-    }
-    s
 }

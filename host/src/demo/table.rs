@@ -1,6 +1,7 @@
 //! The demo's result table: per pedestal and parameter, the true value, the
 //! box's final recursive (RLS, noise-weighted) estimate, the host's batch
-//! least-squares fit of the run directory, each with its ± and its error
+//! fits of the run directory (the paper's OLS and the maximum-likelihood fit
+//! `plinth identify` makes by default), each with its ± and its error
 //! against the truth in % and in its own standard errors.
 
 use crate::identify::Identification;
@@ -23,10 +24,14 @@ pub struct ComparisonRow {
     pub box_value: Option<f64>,
     /// Its standard error.
     pub box_std_err: Option<f64>,
-    /// The batch least-squares value.
+    /// The batch least-squares value (the paper's OLS).
     pub batch_value: Option<f64>,
     /// Its standard error.
     pub batch_std_err: Option<f64>,
+    /// The host's maximum-likelihood value (errors in variables).
+    pub ml_value: Option<f64>,
+    /// Its standard error (Fisher information).
+    pub ml_std_err: Option<f64>,
     /// 100·(box − truth)/|truth| [%].
     pub box_error_pct: Option<f64>,
     /// 100·(batch − truth)/|truth| [%].
@@ -34,6 +39,11 @@ pub struct ComparisonRow {
     /// (batch − truth)/batch standard error: how many standard errors the
     /// batch fit is off.
     pub batch_error_sigmas: Option<f64>,
+    /// 100·(ML − truth)/|truth| [%].
+    pub ml_error_pct: Option<f64>,
+    /// (ML − truth)/ML standard error: how many standard errors the ML fit
+    /// is off.
+    pub ml_error_sigmas: Option<f64>,
     /// 100·(box − batch)/|batch| [%].
     pub box_minus_batch_pct: Option<f64>,
 }
@@ -58,7 +68,7 @@ pub fn rows(comparisons: &[PedestalComparison], truth: &Truth) -> Vec<Comparison
                 "c_y" => t.c_y,
                 _ => t.c_z,
             });
-            let sigmas = match (p.batch_value, tv, p.batch_std_err) {
+            let sigmas = |v: Option<f64>, s: Option<f64>| match (v, tv, s) {
                 (Some(b), Some(t), Some(s)) if s > 0.0 => Some((b - t) / s),
                 _ => None,
             };
@@ -71,9 +81,13 @@ pub fn rows(comparisons: &[PedestalComparison], truth: &Truth) -> Vec<Comparison
                 box_std_err: p.box_std_err,
                 batch_value: p.batch_value,
                 batch_std_err: p.batch_std_err,
+                ml_value: p.ml_value,
+                ml_std_err: p.ml_std_err,
                 box_error_pct: pct(p.box_value, tv),
                 batch_error_pct: pct(p.batch_value, tv),
-                batch_error_sigmas: sigmas,
+                batch_error_sigmas: sigmas(p.batch_value, p.batch_std_err),
+                ml_error_pct: pct(p.ml_value, tv),
+                ml_error_sigmas: sigmas(p.ml_value, p.ml_std_err),
                 box_minus_batch_pct: pct(p.box_value, p.batch_value),
             });
         }
@@ -127,20 +141,20 @@ fn pct_text(x: Option<f64>) -> String {
 }
 
 /// The estimators shown side by side, in column order: (name, value,
-/// standard error). The one place where a column is added: the host
-/// maximum-likelihood fit (branch issue9-core) adds
-/// `("host ML", r.ml_value, r.ml_std_err)` here, with those fields on
-/// [`ComparisonRow`] filled in [`rows`] from the stream report.
+/// standard error). The one place where a column is added.
 pub fn estimators(r: &ComparisonRow) -> Vec<(&'static str, Option<f64>, Option<f64>)> {
     vec![
         ("box RLS", r.box_value, r.box_std_err),
         ("host OLS", r.batch_value, r.batch_std_err),
+        ("host ML", r.ml_value, r.ml_std_err),
     ]
 }
 
 /// The table as aligned text, one block per pedestal: per estimator its
-/// value ± σ, its error against the truth [%] and in its own σ.
-pub fn render(rows: &[ComparisonRow], identification: &Identification) -> String {
+/// value ± σ, its error against the truth [%] and in its own σ. `ols` and
+/// `ml` are the host's two fits (for the speeds used and whether each is
+/// trusted).
+pub fn render(rows: &[ComparisonRow], ols: &Identification, ml: &Identification) -> String {
     let mut s = String::new();
     let mut bearings: Vec<&str> = Vec::new();
     for r in rows {
@@ -149,12 +163,17 @@ pub fn render(rows: &[ComparisonRow], identification: &Identification) -> String
         }
     }
     for b in bearings {
-        let fit = identification.pedestal(b);
+        let fit = ml.pedestal(b).or_else(|| ols.pedestal(b));
         let mine: Vec<&ComparisonRow> = rows.iter().filter(|r| r.bearing == b).collect();
         let names: Vec<&str> = mine
             .first()
             .map(|r| estimators(r).iter().map(|e| e.0).collect())
             .unwrap_or_default();
+        let untrusted: Vec<&str> = [("host OLS", ols), ("host ML", ml)]
+            .iter()
+            .filter(|(_, id)| id.pedestal(b).is_some_and(|f| !f.trusted))
+            .map(|(n, _)| *n)
+            .collect();
         s.push_str(&format!(
             "pedestal {b}: {} vs truth{}\n",
             names.join(" vs "),
@@ -164,7 +183,11 @@ pub fn render(rows: &[ComparisonRow], identification: &Identification) -> String
                 f.speed_range_hz[0],
                 f.speed_range_hz[1],
                 f.condition_number,
-                if f.trusted { "" } else { ", NOT TRUSTED" }
+                if untrusted.is_empty() {
+                    String::new()
+                } else {
+                    format!(", {} NOT TRUSTED", untrusted.join(" and "))
+                }
             ))
         ));
         let mut header: Vec<String> = vec!["".into(), "unit".into(), "truth".into()];

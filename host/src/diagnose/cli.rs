@@ -72,14 +72,16 @@ pub fn run(args: &Args) -> Result<()> {
     let plots = (args.plots.as_deref())
         .map(|d| crate::output::OutputDir::create(d, args.force))
         .transpose()?;
-    let run = RunDir::read(&args.dir).with_context(|| format!("reading {}", args.dir.display()))?;
-    let mut outcome = diagnose(&run, &options)?;
+    // Reader errors name their file, line and column already.
+    crate::identify::cli::check_run_dir(&args.dir)?;
+    let run = RunDir::read(&args.dir)?;
+    let mut outcome = diagnose(&run, &options).with_context(|| args.dir.display().to_string())?;
     if let Some(path) = &args.machine {
-        let machine =
-            Machine::from_toml_path(path).with_context(|| format!("reading {}", path.display()))?;
+        let machine = Machine::from_toml_path(path)?;
         let mut gaps = Vec::new();
         for (i, state) in outcome.states.iter().enumerate() {
-            let readings = resimulate(&machine, &outcome.prep, state)?;
+            let readings = resimulate(&machine, &outcome.prep, state)
+                .with_context(|| format!("--machine {}", path.display()))?;
             gaps.push(machine_gap(&outcome.prep, &readings));
             if let Some(dir) = plots.as_ref().map(|o| o.path()) {
                 if i == 0 || i + 1 == outcome.states.len() {

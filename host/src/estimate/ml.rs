@@ -37,6 +37,22 @@
 //! covariance reported, at the truth the bound `plinth accuracy` compares with.
 //! At the minimum J is χ² with 4n − p degrees of freedom when the noise model
 //! is right: the check of its absolute scale.
+//!
+//! **Equation error.** When J is far above its degrees of freedom with a
+//! noise level that was measured (noise columns, digits), the residuals hold
+//! something the noise does not: a model error (bearing coefficients a little
+//! off, a constant vector left on `rel`, unsteady phasors through a fast
+//! resonance). Σ(θ) then says nothing about it, and the fit, free to trade
+//! residual against Σ(θ), goes where the model error is small relative to
+//! the *noise* (near the pedestal resonance, where H(θ)·ped is small) rather
+//! than where the data are right: on field-like data it can end further from
+//! the truth than OLS. [`fit_with_equation_error`] adds the paper's own error
+//! model to the noise: an independent error of the same variance τ² [N²] on
+//! every real equation (what OLS assumes), Σ_τ(θ) = Σ(θ) + τ²·I, with τ² set
+//! so that J = 4n − p (the method of moments, iterated with θ). τ = 0 when
+//! the noise explains the residuals (the ML fit unchanged); when the model
+//! error dominates the fit tends to OLS, and its Fisher information, the
+//! covariance of the combined model, grows accordingly.
 
 use super::Observation;
 use nalgebra::{DMatrix, DVector, Matrix4, SMatrix, Vector4};
@@ -75,6 +91,9 @@ pub struct MlFit {
     /// and columns for fixed ones, infinite diagonal when not estimable):
     /// the covariance if the noise model's absolute scale is right.
     pub covariance: [[f64; PARAMETERS]; PARAMETERS],
+    /// The equation error's variance the fit assumed [N²] per real equation
+    /// (0 unless [`fit_with_equation_error`]; see [`fit_with_equation_error`]).
+    pub equation_var: f64,
     /// J(θ̂) = Σ eᵀΣ⁻¹e at the estimate [-].
     pub chi2: f64,
     /// Degrees of freedom 4n − p.
@@ -167,11 +186,21 @@ fn cholesky(s: Matrix4<f64>, speed_hz: f64) -> Result<Matrix4<f64>, MlError> {
         .ok_or(MlError::NoNoise { speed_hz })
 }
 
+/// Σ(θ) of one speed plus an equation error of variance `equation_var`
+/// [N²] on each of its four real equations ([`fit_with_equation_error`]).
+fn covariance_with(o: &Observation, theta: &[f64; PARAMETERS], equation_var: f64) -> Matrix4<f64> {
+    equation_covariance(o, theta) + Matrix4::identity() * equation_var
+}
+
 /// Whitened residuals L⁻¹e of every speed, stacked [-].
-fn whitened(obs: &[Observation], theta: &[f64; PARAMETERS]) -> Result<DVector<f64>, MlError> {
+fn whitened(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+) -> Result<DVector<f64>, MlError> {
     let mut out = DVector::zeros(4 * obs.len());
     for (j, o) in obs.iter().enumerate() {
-        let l = cholesky(equation_covariance(o, theta), o.speed_hz)?;
+        let l = cholesky(covariance_with(o, theta, equation_var), o.speed_hz)?;
         let e = equation_residual(o, theta);
         let w = l.solve_lower_triangular(&e).ok_or(MlError::NoNoise {
             speed_hz: o.speed_hz,
@@ -183,7 +212,17 @@ fn whitened(obs: &[Observation], theta: &[f64; PARAMETERS]) -> Result<DVector<f6
 
 /// J(θ) = Σ eᵀΣ(θ)⁻¹e over the speeds [-].
 pub fn cost(obs: &[Observation], theta: &[f64; PARAMETERS]) -> Result<f64, MlError> {
-    Ok(whitened(obs, theta)?.norm_squared())
+    cost_with(obs, theta, 0.0)
+}
+
+/// J(θ) with an equation error of variance `equation_var` [N²] per real
+/// equation ([`fit_with_equation_error`]) [-].
+pub fn cost_with(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+) -> Result<f64, MlError> {
+    Ok(whitened(obs, theta, equation_var)?.norm_squared())
 }
 
 /// Fisher information Σ Aᵀ Σ(θ)⁻¹ A over `columns` (θ units) at `theta`:
@@ -194,11 +233,20 @@ pub fn fisher_information(
     columns: &[Parameter],
     theta: &[f64; PARAMETERS],
 ) -> Result<DMatrix<f64>, MlError> {
+    fisher_with(obs, columns, theta, 0.0)
+}
+
+fn fisher_with(
+    obs: &[Observation],
+    columns: &[Parameter],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+) -> Result<DMatrix<f64>, MlError> {
     let p = columns.len();
     let mut f = DMatrix::zeros(p, p);
     for o in obs {
         let (a, _) = rows(o);
-        let l = cholesky(equation_covariance(o, theta), o.speed_hz)?;
+        let l = cholesky(covariance_with(o, theta, equation_var), o.speed_hz)?;
         let sel = DMatrix::from_fn(4, p, |r, c| a[(r, columns[c] as usize)]);
         let l_dyn = DMatrix::from_fn(4, 4, |r, c| l[(r, c)]);
         let w = l_dyn.solve_lower_triangular(&sel).ok_or(MlError::NoNoise {
@@ -260,7 +308,16 @@ pub fn bound(
     columns: &[Parameter],
     theta: &[f64; PARAMETERS],
 ) -> Result<([[f64; PARAMETERS]; PARAMETERS], f64), MlError> {
-    let f = fisher_information(obs, columns, theta)?;
+    bound_with(obs, columns, theta, 0.0)
+}
+
+fn bound_with(
+    obs: &[Observation],
+    columns: &[Parameter],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+) -> Result<([[f64; PARAMETERS]; PARAMETERS], f64), MlError> {
+    let f = fisher_with(obs, columns, theta, equation_var)?;
     let (inv, condition) = inverse_psd(&f);
     let mut cov = [[0.0; PARAMETERS]; PARAMETERS];
     for (r, &pr) in columns.iter().enumerate() {
@@ -280,13 +337,24 @@ pub fn ols_covariance(
     columns: &[Parameter],
     theta: &[f64; PARAMETERS],
 ) -> [[f64; PARAMETERS]; PARAMETERS] {
+    ols_covariance_with(obs, columns, theta, 0.0)
+}
+
+/// [`ols_covariance`] with an equation error of variance `equation_var`
+/// [N²] per real equation ([`fit_with_equation_error`]).
+pub fn ols_covariance_with(
+    obs: &[Observation],
+    columns: &[Parameter],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+) -> [[f64; PARAMETERS]; PARAMETERS] {
     let p = columns.len();
     let mut ata = DMatrix::zeros(p, p);
     let mut meat = DMatrix::zeros(p, p);
     for o in obs {
         let (a, _) = rows(o);
         let sel = DMatrix::from_fn(4, p, |r, c| a[(r, columns[c] as usize)]);
-        let s = equation_covariance(o, theta);
+        let s = covariance_with(o, theta, equation_var);
         let s_dyn = DMatrix::from_fn(4, 4, |r, c| s[(r, c)]);
         ata += sel.transpose() * &sel;
         meat += sel.transpose() * s_dyn * &sel;
@@ -315,6 +383,17 @@ pub fn fit(
     obs: &[Observation],
     columns: &[Parameter],
     start: &[f64; PARAMETERS],
+) -> Result<MlFit, MlError> {
+    fit_with(obs, columns, start, 0.0)
+}
+
+/// [`fit`] with an equation error of variance `equation_var` [N²] on every
+/// real equation ([`fit_with_equation_error`]).
+pub fn fit_with(
+    obs: &[Observation],
+    columns: &[Parameter],
+    start: &[f64; PARAMETERS],
+    equation_var: f64,
 ) -> Result<MlFit, MlError> {
     let p = columns.len();
     let n_eq = 4 * obs.len();
@@ -357,7 +436,7 @@ pub fn fit(
         t
     };
     let mut u = DVector::from_fn(p, |k, _| start[columns[k] as usize] / scale[k]);
-    let mut r = whitened(obs, &theta_of(&u))?;
+    let mut r = whitened(obs, &theta_of(&u), equation_var)?;
     let mut cost_now = r.norm_squared();
     let mut lambda = 1e-3;
     let mut converged = false;
@@ -372,7 +451,9 @@ pub fn fit(
             up[k] += h;
             let mut dn = u.clone();
             dn[k] -= h;
-            let d = (whitened(obs, &theta_of(&up))? - whitened(obs, &theta_of(&dn))?) / (2.0 * h);
+            let d = (whitened(obs, &theta_of(&up), equation_var)?
+                - whitened(obs, &theta_of(&dn), equation_var)?)
+                / (2.0 * h);
             jac.set_column(k, &d);
         }
         let g = jac.transpose() * &r;
@@ -388,7 +469,7 @@ pub fn fit(
                 continue;
             };
             let u_new = &u + &delta;
-            let r_new = match whitened(obs, &theta_of(&u_new)) {
+            let r_new = match whitened(obs, &theta_of(&u_new), equation_var) {
                 Ok(r) if r.iter().all(|v| v.is_finite()) => r,
                 _ => {
                     lambda *= 4.0;
@@ -429,7 +510,7 @@ pub fn fit(
         }
     }
     let theta = theta_of(&u);
-    let (covariance, condition_number) = bound(obs, columns, &theta)?;
+    let (covariance, condition_number) = bound_with(obs, columns, &theta, equation_var)?;
     let residual_rms = (obs
         .iter()
         .map(|o| equation_residual(o, &theta).norm_squared())
@@ -439,6 +520,7 @@ pub fn fit(
     Ok(MlFit {
         theta,
         covariance,
+        equation_var,
         chi2: cost_now,
         dof: n_eq - p,
         iterations,
@@ -446,6 +528,90 @@ pub fn fit(
         condition_number,
         residual_rms,
     })
+}
+
+/// The equation error's variance τ² [N²] (module docs) under which
+/// J(θ) = `dof` at `theta`: 0 when J(θ) ≤ `dof` with the noise alone.
+/// J falls monotonically with τ², and with τ² = Σ|e|²/dof alone it is at
+/// most `dof`, so bisection between the two finds it.
+pub fn equation_var_for_chi2(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    dof: usize,
+) -> Result<f64, MlError> {
+    let target = dof.max(1) as f64;
+    if cost_with(obs, theta, 0.0)? <= target {
+        return Ok(0.0);
+    }
+    let sum_sq: f64 = obs
+        .iter()
+        .map(|o| equation_residual(o, theta).norm_squared())
+        .sum();
+    let (mut lo, mut hi) = (0.0, sum_sq / target);
+    if !(hi.is_finite() && hi > 0.0) {
+        return Err(MlError::NonFinite);
+    }
+    for _ in 0..200 {
+        let mid = if lo > 0.0 { (lo * hi).sqrt() } else { 0.5 * hi };
+        if cost_with(obs, theta, mid)? > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo <= 1e-6 * hi {
+            break;
+        }
+    }
+    Ok(hi)
+}
+
+/// Most outer iterations of [`fit_with_equation_error`] (θ, then τ²).
+const MAX_EQUATION_ERROR_ITERATIONS: usize = 10;
+
+/// Relative change of τ² at which [`fit_with_equation_error`] stops.
+const EQUATION_ERROR_TOLERANCE: f64 = 1e-2;
+
+/// Σ ln det Σ_i over the speeds, Σ_i the covariance of speed i's four
+/// equations with an equation error of variance `equation_var` [N²]:
+/// with J, the Gaussian log-likelihood of the residuals is
+/// −½(J + Σ ln det Σ_i) + const, which compares two noise hypotheses with
+/// the same number of free parameters (e.g. a rescaled noise against an
+/// added equation error).
+pub fn log_det(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+) -> Result<f64, MlError> {
+    let mut sum = 0.0;
+    for o in obs {
+        let l = cholesky(covariance_with(o, theta, equation_var), o.speed_hz)?;
+        sum += 2.0 * (0..4).map(|k| l[(k, k)].ln()).sum::<f64>();
+    }
+    Ok(sum)
+}
+
+/// The ML fit of the combined model (module docs, "Equation error"): noise
+/// in the variables plus an equation error of variance τ² set by χ² = 4n − p,
+/// iterated with θ from `start` until τ² changes by less than 1 %.
+/// Returns the fit (its `equation_var` is τ²) and whether the iteration
+/// settled.
+pub fn fit_with_equation_error(
+    obs: &[Observation],
+    columns: &[Parameter],
+    start: &[f64; PARAMETERS],
+) -> Result<(MlFit, bool), MlError> {
+    let mut fit = fit_with(obs, columns, start, 0.0)?;
+    let dof = fit.dof;
+    for _ in 0..MAX_EQUATION_ERROR_ITERATIONS {
+        let var = equation_var_for_chi2(obs, &fit.theta, dof)?;
+        let settled =
+            (var - fit.equation_var).abs() <= EQUATION_ERROR_TOLERANCE * var.max(fit.equation_var);
+        fit = fit_with(obs, columns, &fit.theta, var)?;
+        if settled {
+            return Ok((fit, true));
+        }
+    }
+    Ok((fit, false))
 }
 
 /// Where χ² = `chi2` falls in the χ²(`dof`) distribution: the probability of
@@ -553,6 +719,79 @@ mod tests {
             );
         }
         assert!((chi2 - 1.0).abs() < 0.05, "χ²/dof {chi2}");
+    }
+
+    /// A model error the noise does not explain (a constant vector left on
+    /// every `rel` reading, as after an imperfect slow-roll subtraction,
+    /// far above the stated noise): the combined model's fit stays within
+    /// 1.5 × OLS's error, its τ² brings χ²/dof to 1, and on data the noise
+    /// explains it adds nothing.
+    #[test]
+    fn equation_error_absorbs_a_model_error() {
+        let (clean, noisy, theta) = synthetic(0.001, 7);
+        let offset = [
+            Complex::from_polar(4e-7, 0.3),
+            Complex::from_polar(3e-7, -1.2),
+        ];
+        let spoiled: Vec<Observation> = noisy
+            .iter()
+            .map(|o| {
+                let mut o = *o;
+                o.rel[0] += offset[0];
+                o.rel[1] += offset[1];
+                o
+            })
+            .collect();
+        let worst = |t: &[f64; 5]| -> f64 {
+            (0..3)
+                .map(|i| ((t[i] - theta[i]) / theta[i]).abs())
+                .fold(0.0, f64::max)
+        };
+        // OLS on the regression rows (the same rows, equal weights).
+        let ols = {
+            let mut ata = DMatrix::<f64>::zeros(5, 5);
+            let mut atb = DVector::<f64>::zeros(5);
+            for o in &spoiled {
+                let (a, b) = rows(o);
+                let a = DMatrix::from_fn(4, 5, |r, c| a[(r, c)]);
+                let b = DVector::from_fn(4, |r, _| b[r]);
+                ata += a.transpose() * &a;
+                atb += a.transpose() * b;
+            }
+            let d: Vec<f64> = (0..5).map(|i| ata[(i, i)].sqrt()).collect();
+            let scaled = DMatrix::from_fn(5, 5, |r, c| ata[(r, c)] / (d[r] * d[c]));
+            let x = scaled
+                .lu()
+                .solve(&DVector::from_fn(5, |r, _| atb[r] / d[r]))
+                .unwrap();
+            let t: [f64; 5] = std::array::from_fn(|i| x[i] / d[i]);
+            t
+        };
+        let plain = fit(&spoiled, &Parameter::ALL, &ols).unwrap();
+        assert!(plain.chi2_per_dof() > 100.0, "{}", plain.chi2_per_dof());
+        let (combined, settled) = fit_with_equation_error(&spoiled, &Parameter::ALL, &ols).unwrap();
+        assert!(settled);
+        assert!(combined.equation_var > 0.0);
+        assert!(
+            (combined.chi2_per_dof() - 1.0).abs() < 0.01,
+            "{}",
+            combined.chi2_per_dof()
+        );
+        let (e_ols, e_plain, e_comb) = (worst(&ols), worst(&plain.theta), worst(&combined.theta));
+        assert!(
+            e_comb <= 1.5 * e_ols,
+            "OLS {e_ols}, ML {e_plain}, ML with equation error {e_comb}"
+        );
+        // Noise alone: τ² = 0 and the plain ML fit.
+        let (_, noisy, _) = synthetic(0.01, 8);
+        let start = theta;
+        let (f, _) = fit_with_equation_error(&noisy, &Parameter::ALL, &start).unwrap();
+        let g = fit(&noisy, &Parameter::ALL, &start).unwrap();
+        if g.chi2 <= g.dof as f64 {
+            assert_eq!(f.equation_var, 0.0);
+            assert_eq!(f.theta, g.theta);
+        }
+        let _ = clean;
     }
 
     #[test]

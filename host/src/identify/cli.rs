@@ -6,7 +6,6 @@ use super::{
 };
 use crate::estimate::noise::Quantisation;
 use crate::rundir::{RunDir, Truth};
-use anyhow::Context;
 use std::path::PathBuf;
 
 /// How eq. 4 is used (the paper's Table 2 variants).
@@ -162,6 +161,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 /// slow-roll subtraction, and its identification, pedestals on bases
 /// included), without printing it.
 pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
+    check_run_dir(&args.dir)?;
     let mut run = RunDir::read(&args.dir)?;
     if let Some(band) = args.slow_roll {
         let removed = crate::field::slow_roll::subtract_slow_roll(&mut run.measurements, band)?;
@@ -175,8 +175,8 @@ pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
             eprintln!("warning: {w}");
         }
     }
-    let mut identification = identify_run(&run, &args.options())
-        .with_context(|| format!("identifying {}", args.dir.display()))?;
+    let mut identification =
+        identify_run(&run, &args.options()).map_err(|e| located(&args.dir, e))?;
     on_bases(args, &run, &mut identification)?;
     Ok((run, identification))
 }
@@ -198,6 +198,37 @@ fn on_bases(args: &Args, run: &RunDir, identification: &mut Identification) -> a
         identification.bases.extend(reports);
     }
     Ok(())
+}
+
+/// The run directory's own error before its files are read, in the CLI's
+/// form (`DIR: what is wrong`), so that a missing directory or a file given
+/// for one is not reported as a missing `DIR/measurements.csv` with the
+/// operating system's text. Shared by `identify` and `diagnose`.
+pub(crate) fn check_run_dir(dir: &std::path::Path) -> anyhow::Result<()> {
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => anyhow::bail!(
+            "{}: not a directory: a run directory holds measurements.csv and bearings.csv (formats.md)",
+            dir.display()
+        ),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            anyhow::bail!("{}: no such run directory", dir.display())
+        }
+        Err(e) => anyhow::bail!("{}: cannot read the run directory ({e})", dir.display()),
+    }
+}
+
+/// An identification error with the file it is about (`DIR/measurements.csv`
+/// for the measured data, `DIR/bearings.csv` for the coefficients); errors
+/// that already name their file, line and column pass unchanged.
+fn located(dir: &std::path::Path, e: super::IdentifyError) -> anyhow::Error {
+    use super::IdentifyError as E;
+    let file = match &e {
+        E::NoMeasurements | E::NoData { .. } => crate::rundir::MEASUREMENTS_FILE,
+        E::UnknownBearing { .. } | E::BearingRange { .. } => crate::rundir::BEARINGS_FILE,
+        E::RunDir(_) | E::NonFinite(_) | E::Base(_) => return e.into(),
+    };
+    anyhow::anyhow!("{}: {e}", dir.join(file).display())
 }
 
 /// Under the table: why each UNTRUSTED pedestal is not trusted (the warnings

@@ -40,6 +40,11 @@ impl Estimator {
 /// Two-sided p-value of χ² below which the noise scale is said not to fit.
 pub const CHI2_P_THRESHOLD: f64 = 1e-3;
 
+/// Factor by which χ²/dof may exceed 1 at the scatter's own level (its
+/// local fits' estimate, itself uncertain) before the excess is taken for a
+/// model error rather than a level to rescale [-].
+pub const SCATTER_LEVEL_TOLERANCE: f64 = 4.0;
+
 /// One bearing's noise model as `identify --json` reports it (`"noise"`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NoiseReport {
@@ -60,9 +65,13 @@ pub struct NoiseReport {
     /// set by χ²/dof (source `scatter`); false when it was known.
     pub scale_estimated: bool,
     /// Factor applied to the noise variances and the parameter covariance
-    /// (χ²/dof when estimated or when the data scatter significantly more
-    /// than a known noise, else 1) [-].
+    /// (χ²/dof when the level was estimated, else 1) [-].
     pub variance_scale: f64,
+    /// sd τ [N] of the equation error added to the noise on every real
+    /// equation when the data scatter far more than the noise allows
+    /// (a model discrepancy; 0 when the noise explains the residuals).
+    #[serde(default)]
+    pub equation_error_sd: f64,
 }
 
 /// The paper's OLS next to the ML estimate (`identify --compare-ols`).
@@ -127,7 +136,7 @@ pub fn fit_ml(
                 kind: WarningKind::MlFailed,
                 message: format!("the maximum-likelihood fit failed ({why}); this is the OLS fit"),
             });
-            let report = report(noise, f64::NAN, 0, 1.0);
+            let report = report(noise, f64::NAN, 0, 1.0, 0.0);
             return Ok((fit, report));
         }
     };
@@ -136,17 +145,62 @@ pub fn fit_ml(
     let ratio = ml_fit.chi2_per_dof();
     let p_value = ml::chi2_two_sided_p(chi2, dof);
     let mut extra = Vec::new();
-    let variance_scale = if noise.source.scale_estimated() {
-        ratio
-    } else if p_value < CHI2_P_THRESHOLD && ratio > 1.0 {
-        extra.push(Warning {
-            kind: WarningKind::NoiseScaleMismatch,
-            message: format!(
-                "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows (a larger noise or a model discrepancy); standard errors are scaled by {:.3}",
-                noise.source.name(),
-                ratio.sqrt()
-            ),
-        });
+    // A measured noise level (columns, digits, or the scatter's own level
+    // from its local fits) that the residuals exceed by far: the model
+    // error, not the noise, dominates, and is modelled as the paper's
+    // equation error on top of the noise (estimate::ml, "Equation error").
+    let excess_limit = if noise.source.scale_estimated() {
+        SCATTER_LEVEL_TOLERANCE
+    } else {
+        1.0
+    };
+    let mut ml_fit = ml_fit;
+    let variance_scale = if p_value < CHI2_P_THRESHOLD && ratio > excess_limit {
+        // Two explanations of the excess, each with one free level: the
+        // noise larger by χ²/dof everywhere, or an equation error on top of
+        // it; the one under which the residuals are the more likely wins.
+        let n = obs.len() as f64;
+        let rescaled =
+            ml::log_det(&obs, &ml_fit.theta, 0.0).map(|d| d + 4.0 * n * ratio.ln() + dof as f64);
+        let combined =
+            ml::fit_with_equation_error(&obs, &columns, &ml_fit.theta).and_then(|(f, settled)| {
+                let d = ml::log_det(&obs, &f.theta, f.equation_var)? + f.chi2;
+                Ok((f, settled, d))
+            });
+        match (combined, rescaled) {
+            (Ok((f, settled, d)), Ok(d_rescaled))
+                if f.theta.iter().all(|v| v.is_finite()) && d < d_rescaled =>
+            {
+                ml_fit = f;
+                extra.push(Warning {
+                    kind: WarningKind::NoiseScaleMismatch,
+                    message: format!(
+                        "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows, and not in its pattern (a model discrepancy); the excess is modelled as an equation error of {:.3e} N on every real equation (the paper's OLS error model) added to the noise, and the fit and its standard errors are those of the combined model{}",
+                        noise.source.name(),
+                        ml_fit.equation_var.sqrt(),
+                        if settled {
+                            ""
+                        } else {
+                            " (its level did not settle)"
+                        }
+                    ),
+                });
+                1.0
+            }
+            _ if noise.source.scale_estimated() => ratio,
+            _ => {
+                extra.push(Warning {
+                    kind: WarningKind::NoiseScaleMismatch,
+                    message: format!(
+                        "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows (a larger noise); standard errors are scaled by {:.3}",
+                        noise.source.name(),
+                        ratio.sqrt()
+                    ),
+                });
+                ratio
+            }
+        }
+    } else if noise.source.scale_estimated() {
         ratio
     } else if p_value < CHI2_P_THRESHOLD {
         extra.push(Warning {
@@ -202,15 +256,22 @@ pub fn fit_ml(
     if options.compare_ols {
         fit.ols = Some(compare(&ols_fit, &ml_fit, &obs, &columns, variance_scale));
     }
-    Ok((fit, report(noise, chi2, dof, variance_scale)))
+    Ok((
+        fit,
+        report(noise, chi2, dof, variance_scale, ml_fit.equation_var.sqrt()),
+    ))
 }
 
-/// The noise report of a fit with `chi2` on `dof` under `noise`, its variances scaled by `variance_scale`.
+/// The noise report of a fit with `chi2` on `dof` under `noise`, its
+/// variances scaled by `variance_scale`, with an equation error of
+/// `equation_error_sd` [N] added where the noise model could not explain the
+/// residuals.
 pub(crate) fn report(
     noise: &BearingNoise,
     chi2: f64,
     dof: usize,
     variance_scale: f64,
+    equation_error_sd: f64,
 ) -> NoiseReport {
     let sd = noise.sd();
     NoiseReport {
@@ -230,6 +291,7 @@ pub(crate) fn report(
         },
         scale_estimated: noise.source.scale_estimated(),
         variance_scale,
+        equation_error_sd,
     }
 }
 
@@ -246,7 +308,7 @@ pub fn ols_noise_report(
         .collect();
     let p = PARAMETERS - fit.fixed.len();
     let chi2 = ml::cost(&obs, &fit.params()).unwrap_or(f64::NAN);
-    report(noise, chi2, (4 * obs.len()).saturating_sub(p), 1.0)
+    report(noise, chi2, (4 * obs.len()).saturating_sub(p), 1.0, 0.0)
 }
 
 fn compare(
@@ -256,7 +318,7 @@ fn compare(
     columns: &[Parameter],
     variance_scale: f64,
 ) -> OlsComparison {
-    let sandwich = ml::ols_covariance(obs, columns, &ml_fit.theta);
+    let sandwich = ml::ols_covariance_with(obs, columns, &ml_fit.theta, ml_fit.equation_var);
     let named = |f: &dyn Fn(usize) -> f64| -> BTreeMap<String, f64> {
         columns
             .iter()

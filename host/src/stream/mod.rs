@@ -320,22 +320,25 @@ pub fn finish(
         .run
         .write(out)
         .with_context(|| format!("cannot write the run directory {}", out.display()))?;
-    let (batch, batch_error) = if derived.run.measurements.is_empty() {
-        (None, Some("no phasor frames were received".to_string()))
-    } else {
-        // The paper's OLS: the same least-squares problem the box's RLS solves.
-        match crate::identify::identify_run(
-            &derived.run,
-            &crate::identify::Options::default().ols(),
-        ) {
-            Ok(id) => (Some(id), None),
-            Err(e) => (None, Some(e.to_string())),
+    let fit = |options: crate::identify::Options| {
+        if derived.run.measurements.is_empty() {
+            (None, Some("no phasor frames were received".to_string()))
+        } else {
+            match crate::identify::identify_run(&derived.run, &options) {
+                Ok(id) => (Some(id), None),
+                Err(e) => (None, Some(e.to_string())),
+            }
         }
     };
+    // The paper's OLS: the same least-squares problem the box's RLS solves;
+    // and the maximum-likelihood fit `plinth identify` makes by default.
+    let (batch, batch_error) = fit(crate::identify::Options::default().ols());
+    let (ml, ml_error) = fit(crate::identify::Options::default());
     let pedestals = report::compare(
         &config.bearings,
         derived.last_estimates.as_ref(),
         batch.as_ref(),
+        ml.as_ref(),
     );
     let report = StreamReport {
         completed: outcome.is_none_or(|o| o.completed),
@@ -356,6 +359,7 @@ pub fn finish(
         box_sessions: derived.sessions,
         pedestals,
         batch_error,
+        ml_error,
     };
     let path = out.join(REPORT_FILE);
     let text = serde_json::to_string_pretty(&report).context("cannot encode the stream report")?;
@@ -404,7 +408,12 @@ pub fn summary(report: &StreamReport) -> String {
         ));
     }
     if let Some(e) = &report.batch_error {
-        s.push_str(&format!("batch fit: not possible: {e}\n"));
+        s.push_str(&format!("host OLS fit: not possible: {e}\n"));
+    }
+    if let Some(e) = &report.ml_error {
+        if report.batch_error.as_ref() != Some(e) {
+            s.push_str(&format!("host ML fit: not possible: {e}\n"));
+        }
     }
     s.push_str(&report::render(&report.pedestals));
     s

@@ -1,8 +1,10 @@
-//! The end of a stream: the box's final recursive estimates beside the batch
-//! fit of the whole run directory, with their differences, and a JSON record
-//! of the session (`stream-report.json`) for scripts and tests.
+//! The end of a stream: the box's final recursive estimates beside the host's
+//! batch fits of the whole run directory (the paper's OLS, the same
+//! least-squares problem the box solves, and the maximum-likelihood fit
+//! `plinth identify` makes by default), with their differences, and a JSON
+//! record of the session (`stream-report.json`) for scripts and tests.
 
-use crate::identify::Identification;
+use crate::identify::{Identification, WarningKind};
 use plinth_shared::protocol::{EstimateFrame, LinkStats};
 use plinth_shared::regression::Parameter;
 use serde::Serialize;
@@ -19,8 +21,8 @@ pub fn unit(p: Parameter) -> &'static str {
     }
 }
 
-/// One parameter of one pedestal: the box's value, the batch value, and
-/// their differences.
+/// One parameter of one pedestal: the box's value, the host's OLS and ML
+/// values, and the box's difference from OLS.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ParameterComparison {
     /// Parameter name (formats.md).
@@ -31,10 +33,19 @@ pub struct ParameterComparison {
     pub box_value: Option<f64>,
     /// Its standard error.
     pub box_std_err: Option<f64>,
-    /// The batch least-squares value (`null` if the fit failed).
+    /// The batch least-squares value (the paper's OLS; `null` if the fit
+    /// failed).
     pub batch_value: Option<f64>,
-    /// Its standard error.
+    /// Its standard error (OLS's own: equal, independent equation errors).
     pub batch_std_err: Option<f64>,
+    /// The host's maximum-likelihood value (errors in variables, the noise
+    /// model of the run directory: `plinth identify`'s default; `null` if
+    /// the fit failed).
+    pub ml_value: Option<f64>,
+    /// Its standard error from the Fisher information (the Cramér–Rao bound
+    /// at the estimate, scaled up by χ²/dof when the data scatter more than
+    /// their noise says).
+    pub ml_std_err: Option<f64>,
     /// box − batch, in the parameter's unit.
     pub difference: Option<f64>,
     /// (box − batch) / |batch| · 100 [%]; `null` where batch is 0.
@@ -56,19 +67,27 @@ pub struct PedestalComparison {
     /// Equations the box scaled down (squares beyond f32) and rejected (not
     /// finite).
     pub box_guarded: Option<(u32, u32)>,
-    /// The batch fit is trusted (no warning says otherwise).
+    /// The batch (OLS) fit is trusted (no warning says otherwise).
     pub batch_trusted: Option<bool>,
+    /// The ML fit is trusted.
+    pub ml_trusted: Option<bool>,
+    /// The ML iteration failed (the values are then OLS's, as `plinth
+    /// identify` reports them) or stopped before converging.
+    pub ml_failed: Option<bool>,
 }
 
 fn finite(x: f64) -> Option<f64> {
     x.is_finite().then_some(x)
 }
 
-/// Compares the box's last estimates with the batch fit, per configured bearing.
+/// Compares the box's last estimates with the host's batch fits (`batch`:
+/// the paper's OLS; `ml`: the maximum-likelihood identification), per
+/// configured bearing.
 pub fn compare(
     bearings: &[String],
     estimates: Option<&EstimateFrame>,
     batch: Option<&Identification>,
+    ml: Option<&Identification>,
 ) -> Vec<PedestalComparison> {
     bearings
         .iter()
@@ -77,6 +96,7 @@ pub fn compare(
             let entry =
                 estimates.and_then(|e| e.pedestals.iter().find(|p| p.bearing as usize == index));
             let fit = batch.and_then(|b| b.pedestal(name));
+            let ml_fit = ml.and_then(|b| b.pedestal(name));
             let parameters = Parameter::ALL
                 .iter()
                 .map(|&p| {
@@ -98,6 +118,8 @@ pub fn compare(
                         box_std_err: entry.and_then(|e| finite(e.std_err[i] as f64)),
                         batch_value,
                         batch_std_err: fit.and_then(|f| finite(f.std_errs()[i])),
+                        ml_value: ml_fit.and_then(|f| finite(f.params()[i])),
+                        ml_std_err: ml_fit.and_then(|f| finite(f.std_errs()[i])),
                         difference,
                         difference_percent,
                     }
@@ -110,6 +132,8 @@ pub fn compare(
                 box_reduced_chi_square: entry.and_then(|e| finite(e.reduced_chi_square as f64)),
                 box_guarded: entry.map(|e| (e.rescaled, e.rejected)),
                 batch_trusted: fit.map(|f| f.trusted),
+                ml_trusted: ml_fit.map(|f| f.trusted),
+                ml_failed: ml_fit.map(|f| f.has_warning(WarningKind::MlFailed)),
             }
         })
         .collect()
@@ -123,14 +147,12 @@ fn num(x: Option<f64>) -> String {
 }
 
 /// The estimators shown side by side for one parameter, in column order:
-/// (name, value, standard error). The one place where a column is added:
-/// the host maximum-likelihood fit (branch issue9-core) adds
-/// `("host ML", p.ml_value, p.ml_std_err)` here, with those two fields on
-/// [`ParameterComparison`] filled in [`compare`].
+/// (name, value, standard error). The one place where a column is added.
 pub fn estimators(p: &ParameterComparison) -> Vec<(&'static str, Option<f64>, Option<f64>)> {
     vec![
         ("box RLS", p.box_value, p.box_std_err),
         ("host OLS", p.batch_value, p.batch_std_err),
+        ("host ML", p.ml_value, p.ml_std_err),
     ]
 }
 
@@ -152,10 +174,17 @@ pub fn render(comparisons: &[PedestalComparison]) -> String {
                 }
                 _ => String::new(),
             },
-            match c.batch_trusted {
-                Some(false) => " (batch fit NOT trusted: see `plinth identify`)",
-                _ => "",
-            }
+            [
+                (c.batch_trusted == Some(false))
+                    .then_some(" (host OLS NOT trusted: see `plinth identify --estimator ols`)"),
+                (c.ml_trusted == Some(false))
+                    .then_some(" (host ML NOT trusted: see `plinth identify`)"),
+                (c.ml_failed == Some(true))
+                    .then_some(" (host ML did not converge: see `plinth identify`)"),
+            ]
+            .into_iter()
+            .flatten()
+            .collect::<String>()
         ));
         let names: Vec<&str> = c
             .parameters
@@ -272,10 +301,12 @@ pub struct StreamReport {
     /// estimator, so its final estimates cover only the last session's data
     /// while the batch fit covers all of them).
     pub box_sessions: u32,
-    /// Box vs batch per pedestal.
+    /// Box vs host OLS vs host ML per pedestal.
     pub pedestals: Vec<PedestalComparison>,
-    /// Why the batch fit could not run, if it could not.
+    /// Why the batch (OLS) fit could not run, if it could not.
     pub batch_error: Option<String>,
+    /// Why the host ML fit could not run, if it could not.
+    pub ml_error: Option<String>,
 }
 
 #[cfg(test)]
@@ -300,7 +331,12 @@ mod tests {
                 rejected: 2,
             })
             .unwrap();
-        let c = compare(&["left".to_string(), "right".to_string()], Some(&e), None);
+        let c = compare(
+            &["left".to_string(), "right".to_string()],
+            Some(&e),
+            None,
+            None,
+        );
         assert_eq!(c.len(), 2);
         assert_eq!(c[0].parameters[0].box_value, Some(1.01e7));
         assert_eq!(c[0].parameters[3].box_std_err, None);
@@ -308,7 +344,8 @@ mod tests {
         assert!(c[1].parameters.iter().all(|p| p.box_value.is_none()));
         let text = render(&c);
         assert!(text.contains("pedestal left") && text.contains("k_y") && text.contains("N·s/m"));
-        assert!(text.contains("box RLS") && text.contains("host OLS"));
+        assert!(text.contains("box RLS") && text.contains("host OLS") && text.contains("host ML"));
+        assert!(c[0].parameters[0].ml_value.is_none());
         assert!(text.contains("reduced χ² 1.10") && text.contains("2 rejected"));
     }
 }

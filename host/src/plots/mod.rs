@@ -1,0 +1,363 @@
+//! Plots an engineer puts in a report: 1X amplitude and phase against rotor
+//! speed, the phase difference between a pedestal's response and the force
+//! transmitted to it, and measured-versus-predicted overlays.
+//!
+//! Every figure is written twice, as PNG (bitmap) and SVG, from the same
+//! drawing code. Text is laid out with a bundled font (DejaVu Sans, Bitstream
+//! Vera licence, `host/assets/fonts/`) registered with plotters' `ab_glyph`
+//! backend, so figures render identically on a machine without any system
+//! fonts (CI containers, a newcomer's fresh laptop).
+//!
+//! Phasor conventions (formats.md): a signal q(t) has phasor Q when
+//! q(t) = Re{Q·e^{iΩt}}, t = 0 at the keyphasor. The engineer's view
+//! ([`PhasorView::Engineer`]) shows what field instruments print: the
+//! peak-to-peak amplitude 2|Q| and the phase *lag* −arg Q in degrees, either
+//! wrapped to [0, 360) or unwrapped along the speed axis (continuous, starting
+//! in [0, 360) at the lowest speed). The raw views show the complex number
+//! itself: real and imaginary parts, or |Q| and the angle arg Q (a lead,
+//! wrapped to (−180, 180]).
+//!
+//! Files: this one (fonts, the figure types, writing both formats),
+//! `phase` (phase conventions), `chart` (drawing), `axis` (ticks).
+
+mod axis;
+mod chart;
+mod phase;
+
+use axis::*;
+pub use chart::*;
+pub use phase::*;
+
+use anyhow::{anyhow, Context, Result};
+use num_complex::Complex;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// The bundled sans-serif font (DejaVu Sans 2.37, Bitstream Vera licence).
+static DEJAVU_SANS: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Font family name every figure uses; registered once with [`ensure_fonts`].
+const FONT: &str = "sans-serif";
+
+/// Registers the bundled font with plotters (idempotent, thread-safe).
+///
+/// Called by every drawing function; public so callers that draw their own
+/// plotters charts get the same font.
+pub fn ensure_fonts() -> Result<()> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, DEJAVU_SANS).is_ok()
+            && plotters::style::register_font(FONT, FontStyle::Bold, DEJAVU_SANS).is_ok()
+    });
+    if ok {
+        Ok(())
+    } else {
+        Err(anyhow!(
+            "the bundled font DejaVuSans.ttf could not be parsed"
+        ))
+    }
+}
+
+/// What a phasor's magnitude measures, for axis labels and scaling.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quantity {
+    /// Displacement: phasors in m, plotted in µm.
+    DisplacementMicrons,
+    /// Force: phasors in N, plotted in N.
+    ForceNewtons,
+    /// Force: phasors in N, plotted in kN.
+    ForceKilonewtons,
+}
+
+impl Quantity {
+    /// Factor from the phasor's SI unit to the plotted unit.
+    pub fn scale(self) -> f64 {
+        match self {
+            Quantity::DisplacementMicrons => 1e6,
+            Quantity::ForceNewtons => 1.0,
+            Quantity::ForceKilonewtons => 1e-3,
+        }
+    }
+
+    /// Unit symbol of the plotted values.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Quantity::DisplacementMicrons => "µm",
+            Quantity::ForceNewtons => "N",
+            Quantity::ForceKilonewtons => "kN",
+        }
+    }
+}
+
+/// How the phase of an engineer's plot is shown.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhaseStyle {
+    /// Phase lag −arg Q in degrees, wrapped to [0, 360); lines break at wraps.
+    Wrapped,
+    /// Phase lag in degrees made continuous along increasing speed, starting
+    /// in [0, 360) at the lowest speed.
+    Unwrapped,
+}
+
+/// Which pair of rows a phasor figure shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhasorView {
+    /// Peak-to-peak amplitude 2|Q| and phase lag [deg] (field instruments).
+    Engineer(PhaseStyle),
+    /// Re Q and Im Q of q(t) = Re{Q·e^{iΩt}}.
+    ReIm,
+    /// |Q| (zero-to-peak) and arg Q [deg] in (−180, 180].
+    AmplitudeAngle,
+}
+
+/// Which rows of a phasor figure are drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rows {
+    /// The magnitude-like row (amplitude, or Re) and the angle-like row.
+    Both,
+    /// Only the magnitude-like row (e.g. the paper's Figs. 3 and 7).
+    First,
+    /// Only the angle-like row (e.g. the paper's Figs. 4 and 8).
+    Second,
+}
+
+/// How a series is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mark {
+    /// A solid line through the points.
+    Line,
+    /// Hollow circles at the points (measured data over a predicted line).
+    Markers,
+}
+
+/// One named curve of 1X phasors against rotor speed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhasorSeries {
+    /// Legend entry, e.g. `Ly` (left bearing, vertical).
+    pub name: String,
+    /// (rotor speed [Hz], phasor [SI unit of the figure's quantity]).
+    pub points: Vec<(f64, Complex<f64>)>,
+    /// Line or markers.
+    pub mark: Mark,
+}
+
+impl PhasorSeries {
+    /// A solid-line series.
+    pub fn line(name: impl Into<String>, points: Vec<(f64, Complex<f64>)>) -> Self {
+        Self {
+            name: name.into(),
+            points,
+            mark: Mark::Line,
+        }
+    }
+
+    /// A marker series.
+    pub fn markers(name: impl Into<String>, points: Vec<(f64, Complex<f64>)>) -> Self {
+        Self {
+            name: name.into(),
+            points,
+            mark: Mark::Markers,
+        }
+    }
+}
+
+/// One named curve of real values against rotor speed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScalarSeries {
+    /// Legend entry.
+    pub name: String,
+    /// (rotor speed [Hz], value [unit of the panel's y axis]).
+    pub points: Vec<(f64, f64)>,
+    /// Line or markers.
+    pub mark: Mark,
+}
+
+/// A panel (one column of a phasor figure) with its own subtitle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhasorPanel {
+    /// Panel subtitle, e.g. "Rotor (relative to pedestal)".
+    pub title: String,
+    /// The curves in this panel.
+    pub series: Vec<PhasorSeries>,
+}
+
+/// A figure of 1X phasors against speed: one column per panel, one or two
+/// rows depending on [`Rows`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhasorFigure {
+    /// Figure title.
+    pub title: String,
+    /// What the phasors measure (axis units).
+    pub quantity: Quantity,
+    /// Engineer's or raw complex view.
+    pub view: PhasorView,
+    /// Which rows to draw.
+    pub rows: Rows,
+    /// Columns of the figure.
+    pub panels: Vec<PhasorPanel>,
+}
+
+/// A figure of real values against speed (e.g. phase differences).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScalarFigure {
+    /// Figure title.
+    pub title: String,
+    /// Y-axis label with unit, e.g. "Phase difference [deg]".
+    pub y_label: String,
+    /// Fixed y range, or `None` to fit the data.
+    pub y_range: Option<(f64, f64)>,
+    /// Spacing of y tick marks, or `None` for plotters' choice.
+    pub y_tick_step: Option<f64>,
+    /// The curves.
+    pub series: Vec<ScalarSeries>,
+}
+
+/// Renders a figure once to PNG and once to SVG beside each other.
+pub fn write_both(
+    stem: &Path,
+    size: (u32, u32),
+    png: impl FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> Result<()>,
+    svg: impl FnOnce(&DrawingArea<SVGBackend<'_>, Shift>) -> Result<()>,
+) -> Result<[PathBuf; 2]> {
+    let png_path = stem.with_extension("png");
+    let svg_path = stem.with_extension("svg");
+    if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating figure directory {}", dir.display()))?;
+    }
+    {
+        let root = BitMapBackend::new(&png_path, size).into_drawing_area();
+        png(&root).with_context(|| format!("rendering {}", png_path.display()))?;
+        root.present()
+            .map_err(|e| anyhow!("writing {}: {e:?}", png_path.display()))?;
+    }
+    {
+        let root = SVGBackend::new(&svg_path, size).into_drawing_area();
+        svg(&root).with_context(|| format!("rendering {}", svg_path.display()))?;
+        root.present()
+            .map_err(|e| anyhow!("writing {}: {e:?}", svg_path.display()))?;
+    }
+    Ok([png_path, svg_path])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn resonance(k: f64, m: f64, c: f64) -> Vec<(f64, Complex<f64>)> {
+        (1..=200)
+            .map(|i| {
+                let f = i as f64;
+                let w = std::f64::consts::TAU * f;
+                let x = Complex::new(1e-3, 0.0) / Complex::new(k - w * w * m, w * c);
+                (f, x)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn unwrap_removes_jumps() {
+        let u = unwrap_deg(&[350.0, 10.0, 30.0, 300.0]);
+        assert_eq!(u, vec![350.0, 370.0, 390.0, 300.0]);
+    }
+
+    #[test]
+    fn phase_lag_of_a_pedestal_goes_from_0_to_180() {
+        let (k, m, c): (f64, f64, f64) = (1e7, 100.0, 500.0);
+        let fr = (k / m).sqrt() / std::f64::consts::TAU;
+        for (f, x) in resonance(k, m, c) {
+            let lag = phase_lag_deg(x, Complex::new(1e-3, 0.0));
+            assert!((-1e-9..=180.0).contains(&lag), "lag {lag} at {f}");
+            if f < 0.5 * fr {
+                assert!(lag < 10.0);
+            }
+            if f > 2.0 * fr {
+                assert!(lag > 170.0);
+            }
+        }
+    }
+
+    #[test]
+    fn wrapped_phase_is_split_at_wraps() {
+        let s = PhasorSeries::line(
+            "x",
+            vec![
+                (1.0, Complex::from_polar(1.0, -350f64.to_radians())),
+                (2.0, Complex::from_polar(1.0, -5f64.to_radians())),
+                (3.0, Complex::from_polar(1.0, -15f64.to_radians())),
+            ],
+        );
+        let segs = view_rows(&s, PhasorView::Engineer(PhaseStyle::Wrapped), 1, 1.0);
+        assert_eq!(segs.len(), 2);
+        let segs = view_rows(&s, PhasorView::Engineer(PhaseStyle::Unwrapped), 1, 1.0);
+        assert_eq!(segs.len(), 1);
+        assert!((segs[0][1].1 - 365.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn figures_render_to_png_and_svg() {
+        let dir = tempfile::tempdir().unwrap();
+        let keep = std::env::var_os("PLINTH_PLOT_DIR");
+        let out = keep
+            .as_ref()
+            .map(std::path::PathBuf::from)
+            .unwrap_or_else(|| dir.path().to_path_buf());
+        let a = resonance(1e7, 100.0, 0.0);
+        let b = resonance(1.5e7, 80.0, 2000.0);
+        let fig = PhasorFigure {
+            title: "Test response".into(),
+            quantity: Quantity::DisplacementMicrons,
+            view: PhasorView::Engineer(PhaseStyle::Wrapped),
+            rows: Rows::Both,
+            panels: vec![
+                PhasorPanel {
+                    title: "Rotor (relative)".into(),
+                    series: vec![
+                        PhasorSeries::line("Ly", a.clone()),
+                        PhasorSeries::line("Lz", b.clone()),
+                    ],
+                },
+                PhasorPanel {
+                    title: "Pedestal (absolute)".into(),
+                    series: vec![
+                        PhasorSeries::markers(
+                            "Ly measured",
+                            a.iter().step_by(5).copied().collect(),
+                        ),
+                        PhasorSeries::line("Ly predicted", a.clone()),
+                    ],
+                },
+            ],
+        };
+        let [png, svg] = fig.write(&out.join("test_response")).unwrap();
+        let bytes = std::fs::read(&png).unwrap();
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+        let text = std::fs::read_to_string(&svg).unwrap();
+        assert!(text.starts_with("<svg") && text.contains("Rotor speed [Hz]"));
+        let diff = ScalarFigure {
+            title: "Phase difference".into(),
+            y_label: "Lag of response behind force [deg]".into(),
+            y_range: Some((-30.0, 210.0)),
+            y_tick_step: Some(30.0),
+            series: vec![ScalarSeries {
+                name: "Ly".into(),
+                points: b
+                    .iter()
+                    .map(|&(f, x)| (f, phase_lag_deg(x, Complex::new(1e-3, 0.0))))
+                    .collect(),
+                mark: Mark::Line,
+            }],
+        };
+        diff.write(&out.join("test_phase_diff")).unwrap();
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(format_tick(0.0), "0");
+        assert_eq!(format_tick(90.0), "90");
+        assert_eq!(format_tick(2.5), "2.5");
+        assert_eq!(format_tick(12.3456), "12.35");
+    }
+}
