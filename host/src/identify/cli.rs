@@ -6,6 +6,7 @@ use super::{
 };
 use crate::estimate::noise::Quantisation;
 use crate::rundir::{RunDir, Truth};
+use anyhow::Context;
 use std::path::PathBuf;
 
 /// How eq. 4 is used (the paper's Table 2 variants).

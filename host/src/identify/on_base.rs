@@ -305,9 +305,10 @@ pub fn apply_measured_base(
             noise.rescale(scale);
         }
         let se = ml.std_err(scale);
-        identification
-            .noise
-            .insert(fit.bearing.clone(), report(&noise, ml.chi2, ml.dof, scale));
+        identification.noise.insert(
+            fit.bearing.clone(),
+            report(&noise, ml.chi2, ml.dof, scale, 0.0),
+        );
         let bearing = fit.bearing.clone();
         apply(fit, &ml.theta, &se, ml.converged, &name, true);
         fit.residual_rms = ml.residual_rms;
@@ -398,7 +399,7 @@ pub fn apply_unmeasured_bases(
             }
             identification
                 .noise
-                .insert(n.clone(), report(&noises[k], fit.chi2, fit.dof, scale));
+                .insert(n.clone(), report(&noises[k], fit.chi2, fit.dof, scale, 0.0));
             let Some(pf) = identification
                 .pedestals
                 .iter_mut()

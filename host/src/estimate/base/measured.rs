@@ -117,6 +117,8 @@ pub fn fit_on_measured_base(
         converged: m.converged,
         condition_number,
         residual_rms,
+        // No equation error: the base fit's noise model is the measured one.
+        equation_var: 0.0,
     })
 }
 
