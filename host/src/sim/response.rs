@@ -9,7 +9,7 @@
 use super::assembly::Assembly;
 use super::banded::C64;
 use super::inject::{default_size, EffectSet};
-use super::machine::{Machine, MachineError};
+use super::machine::{BearingModel, Machine, MachineError};
 use super::pedestal::PedestalDynamics;
 use crate::effects::EffectKind;
 use crate::rundir::{BearingRow, EffectTruth, Measurement, PedestalTruth, RunDir, Truth};
@@ -278,12 +278,13 @@ impl UnbalanceSolver {
     ) -> Result<Vec<BearingCoefficients<f64>>, SimError> {
         let coefs = self.bearing_coefficients(speed_hz)?;
         let omega = std::f64::consts::TAU * speed_hz;
-        self.assembly.fill(work, omega, &coefs);
         let singular = |e: super::banded::BandError| SimError::Singular {
             speed_hz,
             detail: self.where_singular(&e, speed_hz),
         };
-        work.factor().map_err(singular)?;
+        self.assembly
+            .fill_and_factor(work, omega, &coefs)
+            .map_err(singular)?;
         x.fill(C64::new(0.0, 0.0));
         let w2 = omega * omega;
         for (node, u) in self.unbalance.iter().enumerate() {
@@ -338,11 +339,18 @@ impl UnbalanceSolver {
             .bearings
             .iter()
             .enumerate()
-            .map(|(i, b)| format!("bearings[{i}] (name = {:?}, node {})", b.name, b.node))
+            .map(|(i, b)| {
+                format!(
+                    "bearings[{i}] (name = {:?}, node {}): {}",
+                    b.name,
+                    b.node,
+                    coefficient_source(i, &b.model, speed_hz)
+                )
+            })
             .collect::<Vec<_>>()
-            .join(", ");
+            .join("; ");
         format!(
-            "nothing holds shaft node {node} (x = {x} m) in {d} at {speed_hz} Hz: check the `coefficients` (kyy, kzz) or `oil_film` of the bearings at this speed: {near}"
+            "nothing holds shaft node {node} (x = {x} m) in {d} at {speed_hz} Hz: check the bearing coefficients (kyy, kzz) in force at this speed: {near}"
         )
     }
 
@@ -488,6 +496,27 @@ impl UnbalanceSolver {
                 bases: self.base_truth(),
             },
         })
+    }
+}
+
+/// The machine-file key the coefficients of `bearings[index]` come from at
+/// `speed_hz` [Hz]: the `coefficients` table row(s) in force there (one row
+/// beyond the table's ends, two around a speed between rows) or the
+/// `oil_film`.
+fn coefficient_source(index: usize, model: &BearingModel, speed_hz: f64) -> String {
+    match model {
+        BearingModel::OilFilm(_) => format!("bearings[{index}].oil_film"),
+        BearingModel::Table(rows) => {
+            let after = rows.partition_point(|(s, _)| *s < speed_hz);
+            let key = |r: usize| format!("bearings[{index}].coefficients[{r}]");
+            let last = rows.len().saturating_sub(1);
+            match after {
+                0 => key(0),
+                a if a > last => key(last),
+                a if rows[a].0 == speed_hz => key(a),
+                a => format!("{} and {}", key(a - 1), key(a)),
+            }
+        }
     }
 }
 
