@@ -646,7 +646,7 @@ impl RunDir {
             }
         }
 
-        let truth = match std::fs::read_to_string(&t_path) {
+        let truth = match crate::input_file::read_to_string(&t_path) {
             Ok(text) => {
                 Some(
                     serde_json::from_str::<Truth>(&text).map_err(|e| RunDirError::Truth {

@@ -226,7 +226,9 @@ impl Assembly {
                         pair(p + 1, s + 1);
                     }
                 }
-                on(Visit::Complete(node_dof.get(node).copied().unwrap_or(n_dof)));
+                on(Visit::Complete(
+                    node_dof.get(node).copied().unwrap_or(n_dof),
+                ));
             }
         };
         let (mut kl, mut ku) = (0usize, 0usize);
@@ -282,7 +284,10 @@ impl Assembly {
                 }
             }
         });
-        let damping = damping_at.into_iter().map(|(i, (k, c))| (i, k, c)).collect();
+        let damping = damping_at
+            .into_iter()
+            .map(|(i, (k, c))| (i, k, c))
+            .collect();
         let idx = |r: usize, c: usize| shape.index(r, c).unwrap_or(usize::MAX);
         let mut bearing_idx = Vec::new();
         for (b, brg) in machine.bearings.iter().enumerate() {
@@ -426,10 +431,7 @@ impl Assembly {
         let w2 = omega * omega;
         let (fill, band) = storage.split_at_mut(kl);
         fill.fill(C64::new(0.0, 0.0));
-        for (d, &[k, m, g]) in band
-            .iter_mut()
-            .zip(self.kmg.column(c))
-        {
+        for (d, &[k, m, g]) in band.iter_mut().zip(self.kmg.column(c)) {
             *d = C64::new(k - w2 * m, w2 * g);
         }
         let end = (c + 1) * ldab;
@@ -458,7 +460,8 @@ impl Assembly {
         for r in 0..n {
             for c in 0..n {
                 if let Some(i) = self.shape.index(r, c) {
-                    let [ki, mi, _] = self.kmg.column(c)[compact(&self.shape, i) - c * (self.shape.kl + self.shape.ku + 1)];
+                    let [ki, mi, _] = self.kmg.column(c)
+                        [compact(&self.shape, i) - c * (self.shape.kl + self.shape.ku + 1)];
                     k[(r, c)] = ki;
                     m[(r, c)] = mi;
                 }

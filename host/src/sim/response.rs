@@ -628,3 +628,62 @@ fn add_noise(measurements: &mut [Measurement], bearings: &[String], noise: Noise
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::banded::BandError;
+
+    /// The paper machine with the left bearing as a two-row coefficient
+    /// table (rows at 0 and 10 Hz) and the right one an oil film.
+    fn machine() -> Machine {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../examples/feng-hahn-1997.toml"
+        ))
+        .unwrap();
+        let table = "coefficients = [ \
+            { speed_hz = 0.0, kyy = 1e8, kyz = 0.0, kzy = 0.0, kzz = 1e8, cyy = 1e3, cyz = 0.0, czy = 0.0, czz = 1e3 }, \
+            { speed_hz = 10.0, kyy = 1e8, kyz = 0.0, kzy = 0.0, kzz = 1e8, cyy = 1e3, cyz = 0.0, czy = 0.0, czz = 1e3 } ]";
+        let first_oil = text.find("oil_film").unwrap();
+        let line_end = first_oil + text[first_oil..].find('\n').unwrap();
+        let text = format!("{}{}{}", &text[..first_oil], table, &text[line_end..]);
+        Machine::from_toml_str(&text, "m.toml").unwrap()
+    }
+
+    #[test]
+    fn a_zero_pivot_is_named_by_its_machine_file_key() {
+        let m = machine();
+        let solver = UnbalanceSolver::new(&m, &EffectSet::none()).unwrap();
+        let asm = solver.assembly();
+        // A shaft DOF: every bearing's coefficient source at that speed.
+        let shaft = asm.node_dof[5] + 1;
+        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 5.0);
+        assert!(
+            msg.contains("shaft node 5") && msg.contains(" in z "),
+            "{msg}"
+        );
+        assert!(
+            msg.contains("bearings[0].coefficients[0] and bearings[0].coefficients[1]")
+                && msg.contains("bearings[1].oil_film"),
+            "{msg}"
+        );
+        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 10.0);
+        assert!(msg.contains("bearings[0].coefficients[1]"), "{msg}");
+        assert!(!msg.contains("coefficients[0]"), "{msg}");
+        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 50.0);
+        assert!(msg.contains("bearings[0].coefficients[1]"), "{msg}");
+        // A pedestal DOF: that pedestal's keys.
+        let p = asm.pedestal_dof[1].unwrap();
+        let msg = solver.where_singular(&BandError::Singular { column: p }, 5.0);
+        assert!(
+            msg.contains("bearings[1]") && msg.contains("\"right\"") && msg.contains("k_y"),
+            "{msg}"
+        );
+        let err = SimError::Singular {
+            speed_hz: 5.0,
+            detail: msg,
+        };
+        assert!(err.to_string().contains("singular at 5 Hz"), "{err}");
+    }
+}
