@@ -42,6 +42,11 @@ pub fn seconds(text: &str) -> Result<Duration, String> {
     Ok(Duration::from_secs_f64(v))
 }
 
+/// Any finite number (an offset, a voltage that may be negative).
+pub fn finite(text: &str) -> Result<f64, String> {
+    number(text)
+}
+
 /// A finite number > 0.
 pub fn positive(text: &str) -> Result<f64, String> {
     let v = number(text)?;
@@ -101,6 +106,8 @@ mod tests {
         assert!(probability("1").is_err());
         assert!(probability("0.01").is_ok());
         assert!(count("0").is_err());
+        assert_eq!(finite("-9").unwrap(), -9.0);
+        assert!(finite("nan").is_err() && finite("-inf").is_err());
         assert_eq!(count("4").unwrap(), 4);
     }
 }

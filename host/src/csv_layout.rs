@@ -28,17 +28,7 @@ pub enum LayoutError {
 /// separators pass unchanged; anything else that looks like a spreadsheet
 /// export is described.
 pub fn check(path: &Path, expected: &str) -> Result<Layout, LayoutError> {
-    let meta = std::fs::metadata(path).map_err(|e| LayoutError::NotAFile(e.to_string()))?;
-    if !meta.is_file() {
-        let kind = if meta.is_dir() {
-            "a directory"
-        } else {
-            "not a regular file (a FIFO, socket or device)"
-        };
-        return Err(LayoutError::NotAFile(format!(
-            "is {kind}: give the table as a regular file"
-        )));
-    }
+    crate::input_file::ensure_regular(path).map_err(|e| LayoutError::NotAFile(e.to_string()))?;
     let mut head = Vec::with_capacity(4096);
     std::fs::File::open(path)
         .and_then(|f| f.take(4096).read_to_end(&mut head))

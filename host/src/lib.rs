@@ -14,6 +14,7 @@ pub mod estimate;
 pub mod extract;
 pub mod field;
 pub mod identify;
+pub mod input_file;
 pub mod output;
 pub mod paper;
 pub mod plots;

@@ -120,12 +120,19 @@ impl OutputDir {
     /// `out` that already holds something (files Plinth did not write are
     /// still never deleted or replaced).
     pub fn create(out: &Path, force: bool) -> Result<OutputDir, OutputError> {
+        for note in clean_leftovers(out) {
+            eprintln!("{note}");
+        }
         let existing = check_target(out, force)?;
         let staging = sibling(out, "plinth-partial", std::process::id());
         if staging.symlink_metadata().is_ok() {
             std::fs::remove_dir_all(&staging).map_err(io("cannot clear", &staging))?;
         }
         std::fs::create_dir(&staging).map_err(io("cannot create", &staging))?;
+        // The staging directory's mark: an empty manifest (the commit
+        // writes the real one), so a leftover is known to be Plinth's.
+        std::fs::write(staging.join(MANIFEST_FILE), "")
+            .map_err(io("cannot write", &staging.join(MANIFEST_FILE)))?;
         Ok(OutputDir {
             target: out.to_path_buf(),
             staging,
@@ -142,6 +149,9 @@ impl OutputDir {
     /// output is dropped uncommitted (it may hold a raw log): remove it
     /// with [`OutputDir::discard`].
     pub fn resume(out: &Path, staging: &Path, force: bool) -> Result<OutputDir, OutputError> {
+        for note in clean_leftovers(out) {
+            eprintln!("{note}");
+        }
         let existing = check_target(out, force)?;
         if !staging.is_dir() {
             std::fs::create_dir(staging).map_err(io("cannot create", staging))?;
@@ -322,6 +332,93 @@ impl Drop for OutputDir {
             }
         }
     }
+}
+
+/// Whether process `pid` is still running (`/proc/PID`); where that cannot
+/// be known it is assumed to run, so its files are left alone.
+fn process_is_running(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    let proc_fs = Path::new("/proc/self");
+    if !proc_fs.exists() {
+        return true;
+    }
+    Path::new("/proc").join(pid.to_string()).exists()
+}
+
+/// Clears what an interrupted (killed) Plinth command left beside `out`,
+/// and returns one line per thing done, for the user:
+///
+/// - a staging directory `.NAME.plinth-partial-PID` of a process that has
+///   ended and that Plinth made (it holds the manifest mark
+///   [`MANIFEST_FILE`]) is removed: it only ever holds new, incomplete
+///   output;
+/// - a backup `.NAME.plinth-old-PID` of an ended process while `NAME` itself
+///   is missing (killed between the two renames of a commit) is the
+///   previous directory: it is moved back to `NAME`.
+///
+/// Anything else (another name, a running process, no mark) is left alone.
+/// Failures are reported as notes, never as errors: the command goes on.
+pub fn clean_leftovers(out: &Path) -> Vec<String> {
+    let mut notes = Vec::new();
+    let Some(name) = out.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+        return notes;
+    };
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let Ok(entries) = std::fs::read_dir(&parent) else {
+        return notes;
+    };
+    for e in entries.filter_map(Result::ok) {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file.strip_prefix(&format!(".{name}.")) else {
+            continue;
+        };
+        let Some((tag, pid)) = rest.rsplit_once('-') else {
+            continue;
+        };
+        let Ok(pid) = pid.parse::<u32>() else {
+            continue;
+        };
+        let path = e.path();
+        let is_dir = e.file_type().map(|t| t.is_dir()).unwrap_or(false);
+        if !is_dir || process_is_running(pid) {
+            continue;
+        }
+        match tag {
+            "plinth-partial" if path.join(MANIFEST_FILE).is_file() => {
+                match std::fs::remove_dir_all(&path) {
+                    Ok(()) => notes.push(format!(
+                        "note: removed {}, the unfinished output of an interrupted Plinth command (process {pid}, no longer running)",
+                        path.display()
+                    )),
+                    Err(err) => notes.push(format!(
+                        "warning: cannot remove {}, the unfinished output of an interrupted Plinth command: {err}",
+                        path.display()
+                    )),
+                }
+            }
+            "plinth-old" if out.symlink_metadata().is_err() => {
+                match std::fs::rename(&path, out) {
+                    Ok(()) => notes.push(format!(
+                        "note: restored {} from {}, where an interrupted Plinth command (process {pid}) had moved it",
+                        out.display(),
+                        path.display()
+                    )),
+                    Err(err) => notes.push(format!(
+                        "warning: {} holds the previous {} (an interrupted Plinth command moved it): cannot move it back: {err}",
+                        path.display(),
+                        out.display()
+                    )),
+                }
+            }
+            _ => {}
+        }
+    }
+    notes
 }
 
 /// `.NAME.TAG-N` beside `path`.

@@ -131,6 +131,11 @@ impl Args {
 /// Runs `plinth identify`: the table (or JSON) on stdout, warnings on stderr.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let equations: EquationMode = args.equations.into();
+    if args.compare_ols && args.estimator == Estimator::Ols {
+        anyhow::bail!(
+            "--compare-ols compares the ML fit with OLS: it cannot be used with --estimator ols"
+        );
+    }
     if args.estimator == Estimator::Ml && equations != EquationMode::RealAndImag {
         anyhow::bail!(
             "--equations {}: the paper's equation variants are least-squares variants; add --estimator ols",

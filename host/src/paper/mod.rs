@@ -79,7 +79,7 @@ pub struct Args {
     pub plots: Option<PathBuf>,
     /// Write into an existing --plots/--out directory that already holds
     /// files (files Plinth did not write there are kept, never replaced).
-    #[arg(long)]
+    #[arg(long, requires = "plots")]
     pub force: bool,
     /// Measurement speeds [Hz]: START:STOP:STEP (inclusive) or a list.
     #[arg(long, default_value = "5:200:1")]

@@ -46,13 +46,12 @@ pub struct Assembly {
     /// Shaft node of each bearing.
     pub bearing_node: Vec<usize>,
     shape: BandShape,
-    /// Band-storage arrays, same layout as `template`: K real and imaginary
-    /// parts, M, C, G.
-    k_re: Vec<f64>,
-    k_im: Vec<f64>,
-    m: Vec<f64>,
-    c: Vec<f64>,
-    g: Vec<f64>,
+    /// [K, M, G] of every band element (the `kl + ku + 1` band rows of each
+    /// column, without LAPACK's fill-in rows), column by column.
+    kmg: ColumnTable,
+    /// The few nonzero (storage index, imaginary K = η·K, C) of the
+    /// pedestals: structural damping and viscous damping live only there.
+    damping: Vec<(usize, f64, f64)>,
     /// Storage index of the (shaft, shaft), (shaft, ped), (ped, shaft),
     /// (ped, ped) 2×2 blocks of each bearing (`usize::MAX` when absent).
     bearing_idx: Vec<[[[usize; 2]; 2]; 4]>,
@@ -60,6 +59,63 @@ pub struct Assembly {
     pub couplings: Vec<CouplingSpring>,
     /// Base DOFs (after the banded part) and their links to pedestals.
     pub bases: BaseBorder,
+}
+
+/// Index into the fill-free band arrays (`kl + ku + 1` rows per column) of
+/// LAPACK band storage index `i` (a band row, not a fill-in row).
+fn compact(shape: &BandShape, i: usize) -> usize {
+    let ldab = shape.ldab();
+    (i / ldab) * (ldab - shape.kl) + i % ldab - shape.kl
+}
+
+/// One step of the assembly's walk over the model.
+enum Visit {
+    /// Add a value of a kind at (row, column).
+    Add(usize, usize, Kind, f64),
+    /// Every column before this one is complete.
+    Complete(usize),
+}
+
+/// The speed-independent [K, M, G] band columns, each distinct column
+/// stored once (identical elements give identical columns), so memory and
+/// the bytes read per speed do not grow with a uniform mesh's fineness.
+#[derive(Clone, Debug)]
+struct ColumnTable {
+    width: usize,
+    /// Distinct columns, `width` entries each.
+    distinct: Vec<[f64; 3]>,
+    /// Which distinct column each matrix column is.
+    of_column: Vec<u32>,
+    /// Distinct column by its bit pattern.
+    seen: std::collections::HashMap<Vec<u64>, u32>,
+}
+
+impl ColumnTable {
+    fn new(width: usize, n: usize) -> Self {
+        Self {
+            width,
+            distinct: Vec::new(),
+            of_column: Vec::with_capacity(n),
+            seen: Default::default(),
+        }
+    }
+
+    /// Appends the next matrix column.
+    fn push(&mut self, column: &[[f64; 3]]) {
+        let key: Vec<u64> = column.iter().flatten().map(|v| v.to_bits()).collect();
+        let next = (self.distinct.len() / self.width.max(1)) as u32;
+        let id = *self.seen.entry(key).or_insert_with(|| {
+            self.distinct.extend_from_slice(column);
+            next
+        });
+        self.of_column.push(id);
+    }
+
+    /// Column `c`'s `width` band entries.
+    fn column(&self, c: usize) -> &[[f64; 3]] {
+        let id = self.of_column[c] as usize;
+        &self.distinct[id * self.width..(id + 1) * self.width]
+    }
 }
 
 #[derive(Clone, Copy)]
@@ -100,87 +156,138 @@ impl Assembly {
             }
         }
         let n_dof = next;
-        // Every structural entry, visited twice (band pattern, then values):
-        // nothing per element is stored, so memory stays linear and small.
-        let visit = |add: &mut dyn FnMut(usize, usize, Kind, f64)| {
-            for (e, el) in machine.elements.iter().enumerate() {
-                let dof = |i: usize| {
-                    if i < 4 {
-                        node_dof[e] + i
-                    } else {
-                        node_dof[e + 1] + i - 4
-                    }
-                };
-                let (me, ke, ge) = (
-                    el.mass_matrix(),
-                    el.stiffness_matrix(),
-                    el.gyroscopic_matrix(),
-                );
-                for i in 0..8 {
-                    for j in 0..8 {
-                        add(dof(i), dof(j), Kind::M, me[i][j]);
-                        add(dof(i), dof(j), Kind::KRe, ke[i][j]);
-                        add(dof(i), dof(j), Kind::G, ge[i][j]);
-                    }
-                }
-            }
-            for d in &machine.disks {
-                let (md, gd) = (d.mass_matrix(), d.gyroscopic_matrix());
-                let base = node_dof[d.node];
-                for i in 0..4 {
-                    for j in 0..4 {
-                        add(base + i, base + j, Kind::M, md[i][j]);
-                        add(base + i, base + j, Kind::G, gd[i][j]);
-                    }
-                }
-            }
-            for (b, p) in pedestals.iter().enumerate() {
-                if let (Some(p), Some(pd)) = (p, pedestal_dof[b]) {
-                    for i in 0..2 {
-                        add(pd + i, pd + i, Kind::M, p.m[i]);
-                        for j in 0..2 {
-                            add(pd + i, pd + j, Kind::KRe, p.k[i][j]);
-                            add(pd + i, pd + j, Kind::KIm, p.eta * p.k[i][j]);
-                            add(pd + i, pd + j, Kind::C, p.c[i][j]);
+        // Every structural entry, visited twice (band pattern, then values)
+        // node by node, in the order the entries were always summed:
+        // element i − 1, then node i − 1's disks, pedestals and bearings;
+        // after that, every column before node i is complete
+        // (`Visit::Complete`). Nothing per element is stored.
+        let visit = |on: &mut dyn FnMut(Visit)| {
+            for node in 1..=nn {
+                let e = node - 1;
+                if let Some(el) = machine.elements.get(e).filter(|_| node < nn) {
+                    let dof = |i: usize| {
+                        if i < 4 {
+                            node_dof[e] + i
+                        } else {
+                            node_dof[e + 1] + i - 4
+                        }
+                    };
+                    let (me, ke, ge) = (
+                        el.mass_matrix(),
+                        el.stiffness_matrix(),
+                        el.gyroscopic_matrix(),
+                    );
+                    for i in 0..8 {
+                        for j in 0..8 {
+                            on(Visit::Add(dof(i), dof(j), Kind::M, me[i][j]));
+                            on(Visit::Add(dof(i), dof(j), Kind::KRe, ke[i][j]));
+                            on(Visit::Add(dof(i), dof(j), Kind::G, ge[i][j]));
                         }
                     }
                 }
-            }
-            // Bearing blocks take part in the band pattern.
-            for (b, brg) in machine.bearings.iter().enumerate() {
-                let s = node_dof[brg.node];
-                let mut pair = |r: usize, c: usize| add(r, c, Kind::KRe, 0.0);
-                pair(s, s + 1);
-                pair(s + 1, s);
-                if let Some(p) = pedestal_dof[b] {
-                    pair(s, p + 1);
-                    pair(p + 1, s);
-                    pair(s + 1, p + 1);
-                    pair(p + 1, s + 1);
+                for d in machine.disks.iter().filter(|d| d.node == e) {
+                    let (md, gd) = (d.mass_matrix(), d.gyroscopic_matrix());
+                    let base = node_dof[d.node];
+                    for i in 0..4 {
+                        for j in 0..4 {
+                            on(Visit::Add(base + i, base + j, Kind::M, md[i][j]));
+                            on(Visit::Add(base + i, base + j, Kind::G, gd[i][j]));
+                        }
+                    }
                 }
+                for (b, brg) in machine.bearings.iter().enumerate() {
+                    if brg.node != e {
+                        continue;
+                    }
+                    if let (Some(p), Some(pd)) = (&pedestals[b], pedestal_dof[b]) {
+                        for i in 0..2 {
+                            on(Visit::Add(pd + i, pd + i, Kind::M, p.m[i]));
+                            for j in 0..2 {
+                                on(Visit::Add(pd + i, pd + j, Kind::KRe, p.k[i][j]));
+                                on(Visit::Add(pd + i, pd + j, Kind::KIm, p.eta * p.k[i][j]));
+                                on(Visit::Add(pd + i, pd + j, Kind::C, p.c[i][j]));
+                            }
+                        }
+                    }
+                }
+                // Bearing blocks take part in the band pattern.
+                for (b, brg) in machine.bearings.iter().enumerate() {
+                    if brg.node != e {
+                        continue;
+                    }
+                    let s = node_dof[brg.node];
+                    let mut pair = |r: usize, c: usize| on(Visit::Add(r, c, Kind::KRe, 0.0));
+                    pair(s, s + 1);
+                    pair(s + 1, s);
+                    if let Some(p) = pedestal_dof[b] {
+                        pair(s, p + 1);
+                        pair(p + 1, s);
+                        pair(s + 1, p + 1);
+                        pair(p + 1, s + 1);
+                    }
+                }
+                on(Visit::Complete(
+                    node_dof.get(node).copied().unwrap_or(n_dof),
+                ));
             }
         };
         let (mut kl, mut ku) = (0usize, 0usize);
-        visit(&mut |r, c, _, _| {
-            kl = kl.max(r.saturating_sub(c));
-            ku = ku.max(c.saturating_sub(r));
+        visit(&mut |v| {
+            if let Visit::Add(r, c, _, _) = v {
+                kl = kl.max(r.saturating_sub(c));
+                ku = ku.max(c.saturating_sub(r));
+            }
         });
         let shape = BandShape { n: n_dof, kl, ku };
-        let len = shape.len();
-        let mut arrays = [
-            vec![0.0; len],
-            vec![0.0; len],
-            vec![0.0; len],
-            vec![0.0; len],
-            vec![0.0; len],
-        ];
-        visit(&mut |r, c, kind, v| {
-            if v != 0.0 {
-                if let Some(idx) = shape.index(r, c) {
-                    arrays[kind as usize][idx] += v;
+        let width = kl + ku + 1;
+        // Columns are summed while open (from `first_open` on), then kept
+        // once in the table: a shaft section's identical elements give
+        // identical columns, so the table stays small however fine the mesh.
+        let mut columns = ColumnTable::new(width, n_dof);
+        let mut open: std::collections::VecDeque<Vec<[f64; 3]>> = Default::default();
+        let mut first_open = 0usize;
+        let mut damping_at = std::collections::BTreeMap::<usize, (f64, f64)>::new();
+        visit(&mut |v| match v {
+            Visit::Add(r, c, kind, v) => {
+                if v == 0.0 {
+                    return;
+                }
+                let Some(i) = shape.index(r, c) else { return };
+                let slot = match kind {
+                    Kind::KRe => 0,
+                    Kind::M => 1,
+                    Kind::G => 2,
+                    Kind::KIm => {
+                        damping_at.entry(i).or_default().0 += v;
+                        return;
+                    }
+                    Kind::C => {
+                        damping_at.entry(i).or_default().1 += v;
+                        return;
+                    }
+                };
+                // Entries only reach columns not yet complete.
+                let Some(k) = c.checked_sub(first_open) else {
+                    debug_assert!(false, "entry in completed column {c}");
+                    return;
+                };
+                while open.len() <= k {
+                    open.push_back(vec![[0.0; 3]; width]);
+                }
+                open[k][compact(&shape, i) - c * width][slot] += v;
+            }
+            Visit::Complete(before) => {
+                while first_open < before {
+                    let column = open.pop_front().unwrap_or_else(|| vec![[0.0; 3]; width]);
+                    columns.push(&column);
+                    first_open += 1;
                 }
             }
         });
+        let damping = damping_at
+            .into_iter()
+            .map(|(i, (k, c))| (i, k, c))
+            .collect();
         let idx = |r: usize, c: usize| shape.index(r, c).unwrap_or(usize::MAX);
         let mut bearing_idx = Vec::new();
         for (b, brg) in machine.bearings.iter().enumerate() {
@@ -219,7 +326,6 @@ impl Assembly {
                 }
             }
         }
-        let [k_re, k_im, m, c, g] = arrays;
         let mut links = Vec::new();
         for (b, brg) in machine.bearings.iter().enumerate() {
             if let (Some(base), Some(p), Some(pd)) = (brg.base, pedestals[b], pedestal_dof[b]) {
@@ -241,11 +347,8 @@ impl Assembly {
             pedestal_dof,
             bearing_node: machine.bearings.iter().map(|b| b.node).collect(),
             shape,
-            k_re,
-            k_im,
-            m,
-            c,
-            g,
+            kmg: columns,
+            damping,
             bearing_idx,
             couplings: springs,
             bases,
@@ -265,14 +368,36 @@ impl Assembly {
     /// Fills `a` with the banded part of A(Ω) for spin Ω [rad/s] and bearing
     /// coefficients `bearings` (one per bearing).
     pub fn fill(&self, a: &mut BandMatrix, omega: f64, bearings: &[BearingCoefficients<f64>]) {
-        let w2 = omega * omega;
-        let data = a.data_mut();
-        for (i, d) in data.iter_mut().enumerate() {
-            *d = C64::new(
-                self.k_re[i] - w2 * self.m[i],
-                self.k_im[i] + omega * self.c[i] + w2 * self.g[i],
-            );
+        let ldab = self.shape.ldab();
+        let extras = self.extras(omega, bearings);
+        let mut next = 0;
+        for (c, storage) in a.data_mut().chunks_exact_mut(ldab).enumerate() {
+            next = self.write_column(c, storage, omega, &extras, next);
         }
+    }
+
+    /// Fills `a` with the banded part of A(Ω) (as [`Assembly::fill`]) and
+    /// factors it, each column written as the elimination reaches it.
+    pub fn fill_and_factor(
+        &self,
+        a: &mut BandMatrix,
+        omega: f64,
+        bearings: &[BearingCoefficients<f64>],
+    ) -> Result<(), BandError> {
+        let extras = self.extras(omega, bearings);
+        let mut next = 0;
+        a.factor_with(|c, storage| next = self.write_column(c, storage, omega, &extras, next))
+    }
+
+    /// The few entries of A(Ω) beyond K − Ω²M + iΩ²G: the pedestals'
+    /// damping and the bearings, as (storage index, value) sorted by index
+    /// (so by column).
+    fn extras(&self, omega: f64, bearings: &[BearingCoefficients<f64>]) -> Vec<(usize, C64)> {
+        let mut extras: Vec<(usize, C64)> = self
+            .damping
+            .iter()
+            .map(|&(i, k_im, c)| (i, C64::new(0.0, k_im + omega * c)))
+            .collect();
         for (blocks, coef) in self.bearing_idx.iter().zip(bearings) {
             for i in 0..2 {
                 for j in 0..2 {
@@ -280,12 +405,46 @@ impl Assembly {
                     for (blk, sign) in blocks.iter().zip([1.0, -1.0, -1.0, 1.0]) {
                         let idx = blk[i][j];
                         if idx != usize::MAX {
-                            data[idx] += z * sign;
+                            extras.push((idx, z * sign));
                         }
                     }
                 }
             }
         }
+        extras.sort_by_key(|e| e.0);
+        extras
+    }
+
+    /// Writes column `c`'s band storage at spin Ω [rad/s]: fill-in rows
+    /// zero, K − Ω²M + iΩ²G, plus the `extras` of this column, which start at
+    /// `extras[next]` (columns are written in increasing order); returns
+    /// the first extra of a later column.
+    fn write_column(
+        &self,
+        c: usize,
+        storage: &mut [C64],
+        omega: f64,
+        extras: &[(usize, C64)],
+        mut next: usize,
+    ) -> usize {
+        let (kl, ldab) = (self.shape.kl, self.shape.ldab());
+        let w2 = omega * omega;
+        let (fill, band) = storage.split_at_mut(kl);
+        fill.fill(C64::new(0.0, 0.0));
+        for (d, &[k, m, g]) in band.iter_mut().zip(self.kmg.column(c)) {
+            *d = C64::new(k - w2 * m, w2 * g);
+        }
+        let end = (c + 1) * ldab;
+        while let Some(&(i, v)) = extras.get(next) {
+            if i >= end {
+                break;
+            }
+            if i >= c * ldab {
+                storage[i - c * ldab] += v;
+            }
+            next += 1;
+        }
+        next
     }
 
     /// Dense real stiffness (structure, pedestals, couplings and the bearing
@@ -301,8 +460,10 @@ impl Assembly {
         for r in 0..n {
             for c in 0..n {
                 if let Some(i) = self.shape.index(r, c) {
-                    k[(r, c)] = self.k_re[i];
-                    m[(r, c)] = self.m[i];
+                    let [ki, mi, _] = self.kmg.column(c)
+                        [compact(&self.shape, i) - c * (self.shape.kl + self.shape.ku + 1)];
+                    k[(r, c)] = ki;
+                    m[(r, c)] = mi;
                 }
             }
         }

@@ -80,6 +80,10 @@ pub struct BandMatrix {
     ldab: usize,
     data: Vec<C64>,
     pivots: Vec<usize>,
+    /// Per column of L: rows below the diagonal that hold multipliers.
+    lower: Vec<u32>,
+    /// Per column of U: its first nonzero row.
+    upper_top: Vec<usize>,
     factored: bool,
 }
 
@@ -94,6 +98,8 @@ impl BandMatrix {
             ldab,
             data: vec![C64::new(0.0, 0.0); ldab * n],
             pivots: vec![0; n],
+            lower: Vec::new(),
+            upper_top: Vec::new(),
             factored: false,
         }
     }
@@ -155,21 +161,57 @@ impl BandMatrix {
     }
 
     /// LU factorisation in place with partial pivoting (row interchanges),
-    /// unblocked LAPACK `zgbtf2`.
+    /// unblocked LAPACK `zgbtf2`. Only the structural nonzeros are worked
+    /// on: each column's multipliers stop at its last nonzero row and each
+    /// U column's back substitution starts at its first nonzero row (a
+    /// shaft's Timoshenko band is 7 wide; only the pedestal nodes reach
+    /// `kl`, `ku`), so the cost follows the actual profile, not the widest.
     pub fn factor(&mut self) -> Result<(), BandError> {
+        let kl = self.kl;
+        self.factor_with(|_, column| column[..kl].fill(C64::new(0.0, 0.0)))
+    }
+
+    /// [`BandMatrix::factor`] of a matrix whose columns are written by
+    /// `column(c, storage)` just before the elimination first reaches
+    /// column c (storage: the column's `ldab` stored elements, fill-in rows
+    /// first, which `column` must set to zero). Writing each column while it
+    /// is about to be used saves a pass over the whole band per solve.
+    pub fn factor_with(
+        &mut self,
+        mut column: impl FnMut(usize, &mut [C64]),
+    ) -> Result<(), BandError> {
         let (n, kl, ku, ldab) = (self.n, self.kl, self.ku, self.ldab);
         let kv = kl + ku;
+        self.factored = false;
         let a = &mut self.data;
-        // The fill-in rows must start at zero.
-        for c in 0..n {
-            for r in 0..kl {
-                a[c * ldab + r] = C64::new(0.0, 0.0);
+        // Columns are written (fill-in rows zero) as the elimination is
+        // about to reach them: the first kv now, column j + kv at step j
+        // (the fill-in of step j reaches column j + kv at most).
+        let mut write = |a: &mut [C64], c: usize| {
+            if c < n {
+                column(c, &mut a[c * ldab..(c + 1) * ldab]);
             }
+        };
+        for c in 0..kv {
+            write(a, c);
         }
+        self.lower.clear();
+        self.lower.resize(n, 0);
+        self.upper_top.clear();
+        self.upper_top.extend(0..n);
         let mut ju = 0usize;
         for j in 0..n {
-            let km = kl.min(n - 1 - j);
+            write(a, j + kv);
             let col = j * ldab;
+            // The last nonzero below the diagonal (fill from earlier columns
+            // included: column j is fully updated by now).
+            let mut km = kl.min(n - 1 - j);
+            while km > 0 && {
+                let v = a[col + kv + km];
+                v.re == 0.0 && v.im == 0.0
+            } {
+                km -= 1;
+            }
             let mut jp = 0usize;
             let mut best = a[col + kv].norm_sqr();
             for i in 1..=km {
@@ -180,6 +222,7 @@ impl BandMatrix {
                 }
             }
             self.pivots[j] = j + jp;
+            self.lower[j] = km as u32;
             if best == 0.0 || !best.is_finite() {
                 return Err(BandError::Singular { column: j });
             }
@@ -190,25 +233,26 @@ impl BandMatrix {
                     a.swap(base + j - c, base + j + jp - c);
                 }
             }
-            if km > 0 {
-                let inv = C64::new(1.0, 0.0) / a[col + kv];
-                for i in 1..=km {
-                    a[col + kv + i] *= inv;
+            let inv = C64::new(1.0, 0.0) / a[col + kv];
+            for i in 1..=km {
+                a[col + kv + i] *= inv;
+            }
+            // Column j's multipliers and each later column as slices
+            // (no index checks in the inner loop).
+            let (left, right) = a.split_at_mut((j + 1) * ldab);
+            let l = &left[col + kv + 1..=col + kv + km];
+            for c in j + 1..=ju {
+                let base = (c - j - 1) * ldab + kv + j - c;
+                let t = right[base];
+                if t.re == 0.0 && t.im == 0.0 {
+                    continue;
                 }
-                // Column j's multipliers and each later column as slices
-                // (no index checks in the inner loop).
-                let (left, right) = a.split_at_mut((j + 1) * ldab);
-                let l = &left[col + kv + 1..=col + kv + km];
-                for c in j + 1..=ju {
-                    let base = (c - j - 1) * ldab + kv + j - c;
-                    let t = right[base];
-                    if t.re == 0.0 && t.im == 0.0 {
-                        continue;
-                    }
-                    let target = &mut right[base + 1..=base + km];
-                    for (x, &li) in target.iter_mut().zip(l) {
-                        *x -= li * t;
-                    }
+                if self.upper_top[c] == c {
+                    self.upper_top[c] = j;
+                }
+                let target = &mut right[base + 1..=base + km];
+                for (x, &li) in target.iter_mut().zip(l) {
+                    *x -= li * t;
                 }
             }
         }
@@ -225,12 +269,12 @@ impl BandMatrix {
             });
         }
         debug_assert!(self.factored, "solve before factor");
-        let (n, kl, ldab) = (self.n, self.kl, self.ldab);
-        let kv = kl + self.ku;
+        let (n, ldab) = (self.n, self.ldab);
+        let kv = self.kl + self.ku;
         let a = &self.data;
         // L: forward elimination with the row interchanges.
         for j in 0..n.saturating_sub(1) {
-            let lm = kl.min(n - 1 - j);
+            let lm = self.lower[j] as usize;
             let p = self.pivots[j];
             if p != j {
                 b.swap(p, j);
@@ -240,18 +284,22 @@ impl BandMatrix {
                 continue;
             }
             let col = j * ldab + kv;
-            for i in 1..=lm {
-                b[j + i] -= a[col + i] * bj;
+            for (bi, &l) in b[j + 1..=j + lm].iter_mut().zip(&a[col + 1..=col + lm]) {
+                *bi -= l * bj;
             }
         }
-        // U: back substitution, U has kl + ku super-diagonals.
+        // U: back substitution, from each column's first nonzero row.
         for j in (0..n).rev() {
             let col = j * ldab + kv;
             b[j] /= a[col];
             let bj = b[j];
-            let top = j.saturating_sub(kv);
-            for i in top..j {
-                b[i] -= a[col + i - j] * bj;
+            if bj.re == 0.0 && bj.im == 0.0 {
+                continue;
+            }
+            let top = self.upper_top[j];
+            let (head, _) = b.split_at_mut(j);
+            for (bi, &u) in head[top..].iter_mut().zip(&a[col + top - j..col]) {
+                *bi -= u * bj;
             }
         }
         Ok(())

@@ -34,6 +34,24 @@ pub fn simulate_bytes(machine: &Machine, speeds: usize) -> u64 {
     band + rows + vectors + (16 << 20)
 }
 
+/// Estimated peak memory [bytes] of `signals` on `machine`: the model (as
+/// [`simulate_bytes`] over the `grid_points` + `check_points` speeds), the
+/// splines of every channel over the grid (value and three coefficient
+/// phasors per grid point and channel, plus the grid's truth rows) and the
+/// ADC codes (`samples` × channels × 2 bytes, i16), all held at once.
+pub fn signals_bytes(
+    machine: &Machine,
+    samples: u64,
+    grid_points: usize,
+    check_points: usize,
+) -> u64 {
+    let channels = 4 * machine.bearings.len() as u64;
+    let model = simulate_bytes(machine, grid_points + check_points);
+    let splines = grid_points as u64 * channels * 16 * 5;
+    let codes = samples.saturating_mul(channels).saturating_mul(2);
+    model.saturating_add(splines).saturating_add(codes)
+}
+
 /// Memory the operating system can still give this process [bytes]
 /// (`MemAvailable` of /proc/meminfo), `None` where that is unknown.
 pub fn available_bytes() -> Option<u64> {
@@ -49,6 +67,19 @@ pub fn check(what: &str, needed: u64, available: Option<u64>) -> Result<(), Stri
     match available {
         Some(a) if needed > a => Err(format!(
             "{what} needs about {} MB of memory and this machine has {} MB available: use fewer shaft elements (shaft.sections[].elements) or fewer speeds",
+            needed >> 20,
+            a >> 20
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// [`check`] of `signals`: the message names the figures and the options
+/// that set them.
+pub fn check_signals(what: &str, needed: u64, available: Option<u64>) -> Result<(), String> {
+    match available {
+        Some(a) if needed > a => Err(format!(
+            "{what} needs about {} MB of memory and this machine has {} MB available: use a shorter run (--rundown), a lower --rate, a larger --grid-step or fewer shaft elements",
             needed >> 20,
             a >> 20
         )),
@@ -75,5 +106,14 @@ mod tests {
         assert!(e.contains("3072 MB") && e.contains("1024 MB"), "{e}");
         assert!(check("simulating", 1 << 20, Some(1 << 30)).is_ok());
         assert!(check("simulating", 1 << 40, None).is_ok());
+        let small = signals_bytes(&m, 1_000, 100, 20);
+        let long = signals_bytes(&m, 1_000_000_000, 100, 20);
+        assert!(
+            long - small >= 999_000_000 * 8 * 2,
+            "codes: 8 channels × i16"
+        );
+        assert!(signals_bytes(&m, 1_000, 200_000, 20) > small);
+        let e = check_signals("signals", 5 << 30, Some(1 << 30)).unwrap_err();
+        assert!(e.contains("5120 MB") && e.contains("--rate"), "{e}");
     }
 }

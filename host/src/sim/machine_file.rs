@@ -369,7 +369,7 @@ impl Machine {
     pub fn from_toml_path(path: impl AsRef<Path>) -> Result<Machine, MachineError> {
         let path = path.as_ref();
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| MachineError::Io {
+        let text = crate::input_file::read_to_string(path).map_err(|source| MachineError::Io {
             file: file.clone(),
             source,
         })?;

@@ -124,8 +124,8 @@ impl IdentifiedPedestal {
 
 /// Reads the pedestals of an identification JSON file (formats.md).
 pub fn read_identified(path: &Path) -> anyhow::Result<Vec<IdentifiedPedestal>> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = crate::input_file::read_to_string(path)
+        .with_context(|| format!("reading {}", path.display()))?;
     let file: IdentifiedFile = serde_json::from_str(&text).map_err(|e| {
         anyhow!(
             "{}:{}:{}: not an identification file (formats.md): {e}",

@@ -9,7 +9,7 @@
 use super::assembly::Assembly;
 use super::banded::C64;
 use super::inject::{default_size, EffectSet};
-use super::machine::{Machine, MachineError};
+use super::machine::{BearingModel, Machine, MachineError};
 use super::pedestal::PedestalDynamics;
 use crate::effects::EffectKind;
 use crate::rundir::{BearingRow, EffectTruth, Measurement, PedestalTruth, RunDir, Truth};
@@ -278,12 +278,13 @@ impl UnbalanceSolver {
     ) -> Result<Vec<BearingCoefficients<f64>>, SimError> {
         let coefs = self.bearing_coefficients(speed_hz)?;
         let omega = std::f64::consts::TAU * speed_hz;
-        self.assembly.fill(work, omega, &coefs);
         let singular = |e: super::banded::BandError| SimError::Singular {
             speed_hz,
             detail: self.where_singular(&e, speed_hz),
         };
-        work.factor().map_err(singular)?;
+        self.assembly
+            .fill_and_factor(work, omega, &coefs)
+            .map_err(singular)?;
         x.fill(C64::new(0.0, 0.0));
         let w2 = omega * omega;
         for (node, u) in self.unbalance.iter().enumerate() {
@@ -338,11 +339,18 @@ impl UnbalanceSolver {
             .bearings
             .iter()
             .enumerate()
-            .map(|(i, b)| format!("bearings[{i}] (name = {:?}, node {})", b.name, b.node))
+            .map(|(i, b)| {
+                format!(
+                    "bearings[{i}] (name = {:?}, node {}): {}",
+                    b.name,
+                    b.node,
+                    coefficient_source(i, &b.model, speed_hz)
+                )
+            })
             .collect::<Vec<_>>()
-            .join(", ");
+            .join("; ");
         format!(
-            "nothing holds shaft node {node} (x = {x} m) in {d} at {speed_hz} Hz: check the `coefficients` (kyy, kzz) or `oil_film` of the bearings at this speed: {near}"
+            "nothing holds shaft node {node} (x = {x} m) in {d} at {speed_hz} Hz: check the bearing coefficients (kyy, kzz) in force at this speed: {near}"
         )
     }
 
@@ -491,6 +499,27 @@ impl UnbalanceSolver {
     }
 }
 
+/// The machine-file key the coefficients of `bearings[index]` come from at
+/// `speed_hz` [Hz]: the `coefficients` table row(s) in force there (one row
+/// beyond the table's ends, two around a speed between rows) or the
+/// `oil_film`.
+fn coefficient_source(index: usize, model: &BearingModel, speed_hz: f64) -> String {
+    match model {
+        BearingModel::OilFilm(_) => format!("bearings[{index}].oil_film"),
+        BearingModel::Table(rows) => {
+            let after = rows.partition_point(|(s, _)| *s < speed_hz);
+            let key = |r: usize| format!("bearings[{index}].coefficients[{r}]");
+            let last = rows.len().saturating_sub(1);
+            match after {
+                0 => key(0),
+                a if a > last => key(last),
+                a if rows[a].0 == speed_hz => key(a),
+                a => format!("{} and {}", key(a - 1), key(a)),
+            }
+        }
+    }
+}
+
 /// Unbalance response of `machine` at `speeds_hz` [Hz] with `effects` injected.
 pub fn unbalance_response(
     machine: &Machine,
@@ -597,5 +626,64 @@ fn add_noise(measurements: &mut [Measurement], bearings: &[String], noise: Noise
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::banded::BandError;
+
+    /// The paper machine with the left bearing as a two-row coefficient
+    /// table (rows at 0 and 10 Hz) and the right one an oil film.
+    fn machine() -> Machine {
+        let text = std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../examples/feng-hahn-1997.toml"
+        ))
+        .unwrap();
+        let table = "coefficients = [ \
+            { speed_hz = 0.0, kyy = 1e8, kyz = 0.0, kzy = 0.0, kzz = 1e8, cyy = 1e3, cyz = 0.0, czy = 0.0, czz = 1e3 }, \
+            { speed_hz = 10.0, kyy = 1e8, kyz = 0.0, kzy = 0.0, kzz = 1e8, cyy = 1e3, cyz = 0.0, czy = 0.0, czz = 1e3 } ]";
+        let first_oil = text.find("oil_film").unwrap();
+        let line_end = first_oil + text[first_oil..].find('\n').unwrap();
+        let text = format!("{}{}{}", &text[..first_oil], table, &text[line_end..]);
+        Machine::from_toml_str(&text, "m.toml").unwrap()
+    }
+
+    #[test]
+    fn a_zero_pivot_is_named_by_its_machine_file_key() {
+        let m = machine();
+        let solver = UnbalanceSolver::new(&m, &EffectSet::none()).unwrap();
+        let asm = solver.assembly();
+        // A shaft DOF: every bearing's coefficient source at that speed.
+        let shaft = asm.node_dof[5] + 1;
+        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 5.0);
+        assert!(
+            msg.contains("shaft node 5") && msg.contains(" in z "),
+            "{msg}"
+        );
+        assert!(
+            msg.contains("bearings[0].coefficients[0] and bearings[0].coefficients[1]")
+                && msg.contains("bearings[1].oil_film"),
+            "{msg}"
+        );
+        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 10.0);
+        assert!(msg.contains("bearings[0].coefficients[1]"), "{msg}");
+        assert!(!msg.contains("coefficients[0]"), "{msg}");
+        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 50.0);
+        assert!(msg.contains("bearings[0].coefficients[1]"), "{msg}");
+        // A pedestal DOF: that pedestal's keys.
+        let p = asm.pedestal_dof[1].unwrap();
+        let msg = solver.where_singular(&BandError::Singular { column: p }, 5.0);
+        assert!(
+            msg.contains("bearings[1]") && msg.contains("\"right\"") && msg.contains("k_y"),
+            "{msg}"
+        );
+        let err = SimError::Singular {
+            speed_hz: 5.0,
+            detail: msg,
+        };
+        assert!(err.to_string().contains("singular at 5 Hz"), "{err}");
     }
 }

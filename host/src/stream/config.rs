@@ -204,7 +204,7 @@ impl StreamConfig {
     /// Reads and validates a configuration file; relative paths in it are
     /// relative to the file's directory.
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path)
+        let text = crate::input_file::read_to_string(path)
             .with_context(|| format!("cannot read the stream configuration {}", path.display()))?;
         let base = path.parent().unwrap_or(Path::new("."));
         Self::parse(&text, base)

@@ -132,7 +132,7 @@ pub const CONFIG_COPY_FILE: &str = "stream.toml";
 /// Runs `plinth stream`.
 pub fn run(args: &Args) -> Result<()> {
     // Everything that is read is read before anything is written.
-    let config_text = std::fs::read(&args.config).with_context(|| {
+    let config_text = crate::input_file::read_to_string(&args.config).with_context(|| {
         format!(
             "cannot read the stream configuration {}",
             args.config.display()
@@ -169,7 +169,7 @@ pub fn run(args: &Args) -> Result<()> {
             args.out.display()
         );
     }
-    crate::output::write_atomically(&staging.join(CONFIG_COPY_FILE), &config_text)?;
+    crate::output::write_atomically(&staging.join(CONFIG_COPY_FILE), config_text.as_bytes())?;
     let raw_before = std::fs::metadata(staging.join(RAW_LOG_FILE)).map_or(0, |m| m.len());
     let result = stream_into(args, &staging, &config, &tables);
     let raw_after = std::fs::metadata(staging.join(RAW_LOG_FILE)).map_or(0, |m| m.len());

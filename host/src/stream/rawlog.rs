@@ -97,7 +97,8 @@ impl RawLog {
     /// Reads a whole log (every session's bytes, in arrival order).
     pub fn read_all(path: &Path) -> Result<Vec<u8>> {
         let mut bytes = Vec::new();
-        File::open(path)
+        crate::input_file::ensure_regular(path)
+            .and_then(|()| File::open(path))
             .and_then(|mut f| f.read_to_end(&mut bytes))
             .with_context(|| format!("cannot read the raw log {}", path.display()))?;
         Ok(bytes)

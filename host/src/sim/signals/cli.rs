@@ -14,35 +14,35 @@ pub struct SignalsArgs {
     #[arg(long, default_value = "200:5:5")]
     pub rundown: String,
     /// Sample rate per channel [Hz].
-    #[arg(long, default_value_t = 51_200.0)]
+    #[arg(long, default_value = "51200", value_parser = crate::args::positive)]
     pub rate: f64,
     /// Proximity probe sensitivity [V/mm].
-    #[arg(long, default_value_t = 7.87)]
+    #[arg(long, default_value = "7.87", value_parser = crate::args::positive)]
     pub probe_v_per_mm: f64,
     /// Proximity probe gap voltage [V].
-    #[arg(long, default_value_t = -9.0, allow_hyphen_values = true)]
+    #[arg(long, default_value = "-9", allow_hyphen_values = true, value_parser = crate::args::finite)]
     pub probe_gap: f64,
     /// Probe channel noise [mV RMS].
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value = "1", value_parser = crate::args::non_negative)]
     pub probe_noise_mv: f64,
     /// Transducer on the pedestals: displacement, velocity or acceleration.
     #[arg(long, value_parser = parse_sensor_kind, default_value = "acceleration")]
     pub seismic: SensorKind,
     /// Seismic sensitivity [V/(m/s²), V/(m/s) or V/m]; default by kind:
     /// 100 mV/g, 20 mV/(mm/s), 7.87 V/mm.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::args::positive)]
     pub seismic_sensitivity: Option<f64>,
     /// Seismic channel noise [mV RMS].
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value = "1", value_parser = crate::args::non_negative)]
     pub seismic_noise_mv: f64,
     /// ADC resolution [bits].
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=16))]
     pub adc_bits: u32,
     /// ADC full scale [±V].
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value = "10", value_parser = crate::args::positive)]
     pub adc_range: f64,
     /// Speed step of the precomputed response [Hz].
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value = "0.01", value_parser = crate::args::positive)]
     pub grid_step: f64,
     /// Noise seed.
     #[arg(long, default_value_t = 1)]

@@ -125,7 +125,7 @@ impl SignalSet {
     /// Reads and checks a signal set (not the truth; see [`read_truth`]).
     pub fn read(dir: &Path) -> Result<SignalSet, SignalsError> {
         let hp = dir.join(HEADER_FILE);
-        let text = std::fs::read_to_string(&hp).map_err(io_err(&hp))?;
+        let text = crate::input_file::read_to_string(&hp).map_err(io_err(&hp))?;
         let header: SignalHeader = serde_json::from_str(&text).map_err(|e| SignalsError::Json {
             file: hp.clone(),
             line: e.line(),
@@ -144,6 +144,7 @@ impl SignalSet {
                 file: hp.clone(),
                 message: "samples × channels overflows".into(),
             })?;
+        crate::input_file::ensure_regular(&sp).map_err(io_err(&sp))?;
         let mut f = std::fs::File::open(&sp).map_err(io_err(&sp))?;
         let len = f.metadata().map_err(io_err(&sp))?.len();
         if len != expected {
@@ -261,7 +262,7 @@ fn check_header(h: &SignalHeader, file: &Path) -> Result<(), SignalsError> {
 }
 
 fn read_keyphasor(file: &Path, samples: u64) -> Result<Vec<f64>, SignalsError> {
-    let text = std::fs::read_to_string(file).map_err(io_err(file))?;
+    let text = crate::input_file::read_to_string(file).map_err(io_err(file))?;
     let bad = |line: usize, message: String| SignalsError::Keyphasor {
         file: file.to_path_buf(),
         line,

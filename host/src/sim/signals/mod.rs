@@ -89,7 +89,7 @@ pub use synthesis::*;
 
 use super::inject::{EffectRequest, EffectSet};
 use super::machine::Machine;
-use super::response::{unbalance_response, SimError};
+use super::response::SimError;
 use crate::rundir::{Measurement, RunDir, RunDirError};
 use anyhow::Context;
 use num_complex::Complex;

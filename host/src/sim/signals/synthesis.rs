@@ -2,6 +2,9 @@
 //! with the interpolation error measured and bounded.
 
 use super::*;
+use crate::progress::Ticker;
+use crate::sim::budget;
+use crate::sim::response::UnbalanceSolver;
 
 /// Everything `plinth signals` can be told.
 #[derive(Clone, Debug, PartialEq)]
@@ -129,12 +132,6 @@ pub fn synthesise(
     // Sample count: every sample time within [−p0/fs, duration].
     let duration = r.duration_s();
     let samples = ((duration * fs + opts.t0_sample_position).floor() as u64) + 1;
-    if samples.saturating_mul(machine.bearings.len() as u64 * 4) > 2_000_000_000 {
-        return Err(SignalsError::Request(format!(
-            "{samples} samples × {} channels is too large",
-            machine.bearings.len() * 4
-        )));
-    }
 
     // Speed grid covering the run with 4 steps of margin each side.
     let lo = r.start_hz.min(r.end_hz);
@@ -149,9 +146,32 @@ pub fn synthesise(
         )));
     }
     let n_grid = points as usize;
+    // Memory before anything large is allocated (the check speeds are at
+    // most one per grid interval plus CHECK_SPEEDS + 1).
+    let needed = budget::signals_bytes(machine, samples, n_grid, n_grid + CHECK_SPEEDS + 1);
+    budget::check_signals(
+        &format!(
+            "signals: {samples} samples × {} channels, {n_grid} grid speeds",
+            machine.bearings.len() * 4
+        ),
+        needed,
+        budget::available_bytes(),
+    )
+    .map_err(SignalsError::Request)?;
+    // The sample file indexes i16 codes by a 64-bit count; beyond this a
+    // run is a mistake, whatever the memory.
+    if samples.saturating_mul(machine.bearings.len() as u64 * 4) > 2_000_000_000 {
+        return Err(SignalsError::Request(format!(
+            "{samples} samples × {} channels is too large",
+            machine.bearings.len() * 4
+        )));
+    }
     let grid: Vec<f64> = (0..n_grid).map(|i| g0 + i as f64 * step).collect();
-    let response = unbalance_response(machine, &grid, effects)?;
-    let truth = response.to_run_dir(None)?;
+    let solver = UnbalanceSolver::new(machine, effects)?;
+    let mut ticker = Ticker::new("signals: grid speeds", n_grid, true);
+    let response = solver.run_with(&grid, false, &mut |done| ticker.tick(done));
+    ticker.finish();
+    let truth = response?.to_run_dir(None)?;
     let spline =
         PhasorSpline::from_measurements(&truth.measurements).map_err(SignalsError::Request)?;
 
@@ -166,7 +186,7 @@ pub fn synthesise(
     checks.extend((0..=CHECK_SPEEDS).map(|i| lo + (hi - lo) * i as f64 / CHECK_SPEEDS as f64));
     checks.sort_by(f64::total_cmp);
     checks.dedup();
-    let check_rows = unbalance_response(machine, &checks, effects)?.measurements();
+    let check_rows = solver.run_with(&checks, false, &mut |_| {})?.measurements();
 
     // Channels: per bearing rel_y, rel_z (probes), ped_y, ped_z (seismic).
     let mut channels = Vec::new();

@@ -1,0 +1,405 @@
+//! Reading run directories: every fault named by file, line and column.
+
+use super::*;
+
+/// Reads and checks a `bearings.csv` on its own (formats.md layout), e.g. the
+/// bearing table given to `plinth import` or `plinth extract`.
+pub fn read_bearings(path: impl AsRef<Path>) -> Result<Vec<BearingRow>, RunDirError> {
+    let rows = read_table(path.as_ref(), &BEARING_COLUMNS, None, false)?;
+    Ok(rows
+        .iter()
+        .map(|r| BearingRow {
+            speed_hz: r.speed_hz,
+            bearing: r.bearing.clone(),
+            coefficients: BearingCoefficients {
+                k: [[r.values[0], r.values[1]], [r.values[2], r.values[3]]],
+                c: [[r.values[4], r.values[5]], [r.values[6], r.values[7]]],
+            },
+        })
+        .collect())
+}
+
+impl RunDir {
+    /// Reads and checks a run directory: `measurements.csv` and
+    /// `bearings.csv` are required, `truth.json` is optional. Every
+    /// measurement's bearing must have rows in `bearings.csv` that cover its
+    /// speed. Columns are found by header name; header columns Plinth does
+    /// not know are ignored (formats.md allows new optional columns).
+    pub fn read(dir: impl AsRef<Path>) -> Result<RunDir, RunDirError> {
+        let dir = dir.as_ref();
+        let m_path = dir.join(MEASUREMENTS_FILE);
+        let b_path = dir.join(BEARINGS_FILE);
+        let t_path = dir.join(TRUTH_FILE);
+
+        let m_rows = read_table(&m_path, &MEASUREMENT_COLUMNS, Some(&NOISE_COLUMNS), true)?;
+        let b_rows = read_table(&b_path, &BEARING_COLUMNS, None, false)?;
+
+        let bearings: Vec<BearingRow> = b_rows
+            .iter()
+            .map(|r| BearingRow {
+                speed_hz: r.speed_hz,
+                bearing: r.bearing.clone(),
+                coefficients: BearingCoefficients {
+                    k: [[r.values[0], r.values[1]], [r.values[2], r.values[3]]],
+                    c: [[r.values[4], r.values[5]], [r.values[6], r.values[7]]],
+                },
+            })
+            .collect();
+        let run = RunDir {
+            measurements: m_rows
+                .iter()
+                .map(|r| {
+                    let v = &r.values;
+                    Measurement {
+                        speed_hz: r.speed_hz,
+                        bearing: r.bearing.clone(),
+                        rel: [Complex::new(v[0], v[1]), Complex::new(v[2], v[3])],
+                        ped: [Complex::new(v[4], v[5]), Complex::new(v[6], v[7])],
+                        noise_sd: r.noise_sd,
+                    }
+                })
+                .collect(),
+            bearings,
+            truth: None,
+        };
+
+        // Every measurement must be covered by its bearing's table.
+        let schedules = run.bearing_schedules();
+        for r in &m_rows {
+            let Some(schedule) = schedules.get(&r.bearing) else {
+                let first = m_rows
+                    .iter()
+                    .find(|x| x.bearing == r.bearing)
+                    .map_or(r.line, |x| x.line);
+                return Err(RunDirError::UnknownBearing {
+                    file: m_path,
+                    line: first,
+                    column: r.bearing_column,
+                    bearing: r.bearing.clone(),
+                    bearings_file: b_path,
+                });
+            };
+            if let Err(e) = schedule.at(r.speed_hz) {
+                return Err(RunDirError::SpeedOutOfRange {
+                    file: m_path,
+                    line: r.line,
+                    column: r.speed_column,
+                    speed_hz: r.speed_hz,
+                    bearing: r.bearing.clone(),
+                    min_hz: e.min_hz,
+                    max_hz: e.max_hz,
+                    bearings_file: b_path,
+                });
+            }
+        }
+
+        let truth = match crate::input_file::read_to_string(&t_path) {
+            Ok(text) => {
+                Some(
+                    serde_json::from_str::<Truth>(&text).map_err(|e| RunDirError::Truth {
+                        file: t_path.clone(),
+                        line: e.line(),
+                        column: e.column(),
+                        message: e.to_string(),
+                    })?,
+                )
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(source) => {
+                return Err(RunDirError::Io {
+                    file: t_path,
+                    source,
+                })
+            }
+        };
+        Ok(RunDir { truth, ..run })
+    }
+}
+
+/// One parsed data row of either CSV file: speed, bearing and the eight numbers
+/// after them in the order of the expected columns.
+struct TableRow {
+    line: u64,
+    speed_hz: f64,
+    speed_column: usize,
+    bearing: String,
+    bearing_column: usize,
+    values: [f64; 8],
+    /// The optional noise columns, when the header has them.
+    noise_sd: Option<NoiseSd>,
+}
+
+/// Reads a CSV table whose columns are `speed_hz`, `bearing` and eight numbers,
+/// plus, when `optional` is given and the header names them, four
+/// non-negative numbers (all four or none).
+fn read_table(
+    path: &Path,
+    columns: &[&'static str; 10],
+    optional: Option<&[&'static str; 4]>,
+    positive_speed: bool,
+) -> Result<Vec<TableRow>, RunDirError> {
+    let file = || path.to_path_buf();
+    let expected = columns.join(",");
+    // Spreadsheet exports and non-files are named before the CSV reader runs.
+    let layout = crate::csv_layout::check(path, &expected).map_err(|e| match e {
+        crate::csv_layout::LayoutError::NotAFile(m) => RunDirError::Io {
+            file: file(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, m),
+        },
+        crate::csv_layout::LayoutError::At(line, message) => RunDirError::Csv {
+            file: file(),
+            line,
+            message,
+        },
+    })?;
+    let mut handle = std::fs::File::open(path).map_err(|source| RunDirError::Io {
+        file: file(),
+        source,
+    })?;
+    std::io::Seek::seek(&mut handle, std::io::SeekFrom::Start(layout.skip)).map_err(|source| {
+        RunDirError::Io {
+            file: file(),
+            source,
+        }
+    })?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .quoting(false)
+        .trim(csv::Trim::All)
+        .from_reader(std::io::BufReader::new(handle));
+    let csv_error = |e: csv::Error| match e.kind() {
+        csv::ErrorKind::Io(_) => match e.into_kind() {
+            csv::ErrorKind::Io(source) => RunDirError::Io {
+                file: file(),
+                source,
+            },
+            _ => unreachable_csv(file()),
+        },
+        _ => RunDirError::Csv {
+            file: file(),
+            line: e.position().map_or(0, csv::Position::line),
+            message: e.to_string(),
+        },
+    };
+    let mut records = reader.records();
+
+    // Header.
+    let header = match records.next() {
+        None => {
+            return Err(RunDirError::MissingHeader {
+                file: file(),
+                expected,
+            })
+        }
+        Some(r) => r.map_err(csv_error)?,
+    };
+    let header_line = header.position().map_or(1, csv::Position::line);
+    if header
+        .iter()
+        .next()
+        .is_some_and(|f| f.parse::<f64>().is_ok())
+    {
+        return Err(RunDirError::MissingHeader {
+            file: file(),
+            expected,
+        });
+    }
+    for (i, name) in header.iter().enumerate() {
+        let reason = if name.is_empty() {
+            Some("empty column name")
+        } else if header.iter().take(i).any(|n| n == name) {
+            Some("appears twice")
+        } else {
+            None
+        };
+        if let Some(reason) = reason {
+            return Err(RunDirError::BadHeaderColumn {
+                file: file(),
+                line: header_line,
+                column: i + 1,
+                name: name.to_string(),
+                reason,
+            });
+        }
+    }
+    let mut index = [0usize; 10];
+    for (slot, name) in index.iter_mut().zip(columns) {
+        *slot = header.iter().position(|h| h == *name).ok_or_else(|| {
+            RunDirError::MissingHeaderColumn {
+                file: file(),
+                line: header_line,
+                name: name.to_string(),
+                expected: expected.clone(),
+            }
+        })?;
+    }
+    let mut noise_index: Option<[usize; 4]> = None;
+    if let Some(names) = optional {
+        let found = names.map(|n| header.iter().position(|h| h == n));
+        let present: Vec<&str> = names
+            .iter()
+            .zip(&found)
+            .filter_map(|(n, f)| f.map(|_| *n))
+            .collect();
+        if present.len() == 4 {
+            noise_index = Some(found.map(|f| f.unwrap_or_default()));
+        } else if !present.is_empty() {
+            let missing: Vec<&str> = names
+                .iter()
+                .zip(&found)
+                .filter_map(|(n, f)| f.is_none().then_some(*n))
+                .collect();
+            return Err(RunDirError::PartialNoiseColumns {
+                file: file(),
+                line: header_line,
+                present: present.join(","),
+                missing: missing.join(","),
+            });
+        }
+    }
+    let width = header.len();
+
+    let mut rows = Vec::new();
+    let mut seen: HashMap<(u64, String), u64> = HashMap::new();
+    for record in records {
+        let record = record.map_err(csv_error)?;
+        let line = record.position().map_or(0, csv::Position::line);
+        if record.len() < width {
+            let column = record.len() + 1;
+            return Err(RunDirError::MissingColumn {
+                file: file(),
+                line,
+                column,
+                name: header.get(record.len()).unwrap_or_default().to_string(),
+                found: record.len(),
+                expected: width,
+            });
+        }
+        if record.len() > width {
+            return Err(RunDirError::ExtraColumn {
+                file: file(),
+                line,
+                column: width + 1,
+                found: record.len(),
+                expected: width,
+            });
+        }
+        let number_at = |col: usize, name: &'static str| -> Result<f64, RunDirError> {
+            let text = record.get(col).unwrap_or_default();
+            let value: f64 = text.parse().map_err(|_| RunDirError::BadNumber {
+                file: file(),
+                line,
+                column: col + 1,
+                name,
+                text: text.to_string(),
+            })?;
+            if !value.is_finite() {
+                return Err(RunDirError::NonFinite {
+                    file: file(),
+                    line,
+                    column: col + 1,
+                    name,
+                    text: text.to_string(),
+                });
+            }
+            Ok(value)
+        };
+        let number = |k: usize| number_at(index[k], columns[k]);
+        let speed_hz = number(0)?;
+        let speed_ok = if positive_speed {
+            speed_hz > 0.0
+        } else {
+            speed_hz >= 0.0
+        };
+        if !speed_ok {
+            return Err(RunDirError::BadSpeed {
+                file: file(),
+                line,
+                column: index[0] + 1,
+                speed_hz,
+                requirement: if positive_speed {
+                    "positive"
+                } else {
+                    "zero or positive"
+                },
+            });
+        }
+        let bearing = record.get(index[1]).unwrap_or_default();
+        if bearing.is_empty() {
+            return Err(RunDirError::EmptyBearing {
+                file: file(),
+                line,
+                column: index[1] + 1,
+            });
+        }
+        if !bearing_name_ok(bearing) {
+            return Err(RunDirError::BadBearingName {
+                file: file(),
+                line,
+                column: index[1] + 1,
+                name: bearing.to_string(),
+            });
+        }
+        let mut values = [0.0; 8];
+        for (k, v) in values.iter_mut().enumerate() {
+            *v = number(k + 2)?;
+        }
+        let noise_sd = match (noise_index, optional) {
+            (Some(cols), Some(names)) => {
+                let mut sd = [0.0; 4];
+                for ((v, &col), &name) in sd.iter_mut().zip(&cols).zip(names) {
+                    *v = number_at(col, name)?;
+                    if *v < 0.0 {
+                        return Err(RunDirError::NegativeNoise {
+                            file: file(),
+                            line,
+                            column: col + 1,
+                            name,
+                            value: *v,
+                        });
+                    }
+                }
+                Some(sd)
+            }
+            _ => None,
+        };
+        // -0.0 and 0.0 are the same speed.
+        let key = ((speed_hz + 0.0).to_bits(), bearing.to_string());
+        if let Some(&first_line) = seen.get(&key) {
+            return Err(RunDirError::Duplicate {
+                file: file(),
+                line,
+                first_line,
+                speed_hz,
+                bearing: bearing.to_string(),
+            });
+        }
+        seen.insert(key, line);
+        rows.push(TableRow {
+            line,
+            speed_hz,
+            speed_column: index[0] + 1,
+            bearing: bearing.to_string(),
+            bearing_column: index[1] + 1,
+            values,
+            noise_sd,
+        });
+    }
+    Ok(rows)
+}
+
+/// The csv crate only hands out an I/O kind for I/O errors; this keeps the
+/// match total without a panic.
+fn unreachable_csv(file: PathBuf) -> RunDirError {
+    RunDirError::Csv {
+        file,
+        line: 0,
+        message: "unexpected CSV error".to_string(),
+    }
+}
+
+/// A bearing name formats.md allows: no quotes, commas or line breaks.
+pub(super) fn bearing_name_ok(name: &str) -> bool {
+    !name.is_empty() && !name.contains(['"', '\'', ',', '\n', '\r']) && name.trim() == name
+}

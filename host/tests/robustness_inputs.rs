@@ -1,0 +1,413 @@
+//! Issue 13, the rest: inputs that are not regular files never block,
+//! leftovers of killed commands are cleared by the next one, `signals`
+//! validates every number and its memory before allocating, contradictory
+//! flags are refused, and operating-system errors are printed once.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn plinth() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_plinth"))
+}
+
+fn example() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/feng-hahn-1997.toml")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Runs the command, killing it (and failing the test) if it takes longer
+/// than `limit`.
+fn run_bounded(cmd: &mut Command, limit: Duration) -> Output {
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            let o = child.wait_with_output().unwrap();
+            panic!("blocked for more than {limit:?}: {}", text(&o));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn mkfifo(path: &Path) {
+    let _ = std::fs::remove_file(path);
+    let status = Command::new("mkfifo").arg(path).status().unwrap();
+    assert!(status.success(), "mkfifo {}", path.display());
+}
+
+fn simulate(out: &Path) {
+    let o = plinth()
+        .arg("simulate")
+        .arg(example())
+        .args(["--speeds", "5:60:5", "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+}
+
+/// Expects a prompt refusal naming `file` as not a regular file.
+fn refused_as_not_a_file(cmd: &mut Command, file: &str) {
+    let o = run_bounded(cmd, Duration::from_secs(30));
+    let msg = text(&o);
+    assert!(!o.status.success(), "{file}: {msg}");
+    assert!(
+        msg.contains(file) && msg.contains("not a regular file"),
+        "{file}: {msg}"
+    );
+    assert!(!msg.contains("panicked"), "{msg}");
+}
+
+#[test]
+fn fifos_where_files_are_expected_are_refused_without_blocking() {
+    let t = tempfile::tempdir().unwrap();
+    let run = t.path().join("run");
+    simulate(&run);
+
+    // truth.json and bearings.csv of a run directory.
+    for name in ["truth.json", "bearings.csv"] {
+        let copy = t.path().join(format!("run-{name}"));
+        std::fs::create_dir(&copy).unwrap();
+        for f in ["measurements.csv", "bearings.csv", "truth.json"] {
+            std::fs::copy(run.join(f), copy.join(f)).unwrap();
+        }
+        mkfifo(&copy.join(name));
+        refused_as_not_a_file(plinth().arg("identify").arg(&copy), name);
+    }
+
+    // A machine file, to simulate, signals and predict.
+    let machine = t.path().join("machine.toml");
+    mkfifo(&machine);
+    refused_as_not_a_file(
+        plinth()
+            .arg("simulate")
+            .arg(&machine)
+            .arg("--out")
+            .arg(t.path().join("o1")),
+        "machine.toml",
+    );
+    refused_as_not_a_file(
+        plinth()
+            .arg("signals")
+            .arg(&machine)
+            .arg("--out")
+            .arg(t.path().join("o2")),
+        "machine.toml",
+    );
+
+    // predict's identification JSON.
+    let ident = t.path().join("ident.json");
+    mkfifo(&ident);
+    refused_as_not_a_file(
+        plinth()
+            .arg("predict")
+            .arg(example())
+            .arg("--pedestals")
+            .arg(&ident)
+            .arg("--against")
+            .arg(&run),
+        "ident.json",
+    );
+
+    // stream's configuration (offline rebuild: no port needed).
+    let config = t.path().join("stream.toml");
+    mkfifo(&config);
+    refused_as_not_a_file(
+        plinth()
+            .args(["stream", "--offline", "--config"])
+            .arg(&config)
+            .arg("--out")
+            .arg(t.path().join("o3")),
+        "stream.toml",
+    );
+    for o in ["o1", "o2", "o3"] {
+        assert!(!t.path().join(o).exists(), "{o} was created");
+    }
+}
+
+/// A machine file with `elements` shaft elements (a slow simulation).
+fn long_machine(dir: &Path, elements: usize) -> PathBuf {
+    let text = std::fs::read_to_string(example()).unwrap();
+    let per = elements / 12;
+    let text = text
+        .replace("elements = 10\n", &format!("elements = {}\n", 10 * per))
+        .replace("elements = 1\n", &format!("elements = {per}\n"));
+    let path = dir.join("long.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Names beside `dir` that start with `.NAME.`.
+fn leftovers(dir: &Path) -> Vec<String> {
+    let name = dir.file_name().unwrap().to_string_lossy().into_owned();
+    let mut v: Vec<String> = std::fs::read_dir(dir.parent().unwrap())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(&format!(".{name}.")))
+        .collect();
+    v.sort();
+    v
+}
+
+/// The id of a process that has ended.
+fn dead_pid() -> u32 {
+    let mut c = Command::new("true").spawn().unwrap();
+    let pid = c.id();
+    c.wait().unwrap();
+    pid
+}
+
+#[test]
+fn leftovers_of_a_killed_simulate_are_cleared_by_the_next_command() {
+    let t = tempfile::tempdir().unwrap();
+    let run = t.path().join("run");
+    simulate(&run);
+    let machine = long_machine(t.path(), 12_000);
+    let mut child = plinth()
+        .arg("simulate")
+        .arg(&machine)
+        .args(["--speeds", "5:200:0.5", "--force", "--out"])
+        .arg(&run)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let killed = child.id();
+    // Wait until its staging directory exists, then SIGKILL it.
+    let staging = format!(".run.plinth-partial-{killed}");
+    let start = Instant::now();
+    while !t.path().join(&staging).exists() {
+        assert!(start.elapsed() < Duration::from_secs(20), "no staging dir");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(100));
+    assert!(child.try_wait().unwrap().is_none(), "ended before the kill");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(leftovers(&run), vec![staging.clone()]);
+
+    // Not Plinth's (no manifest mark) or of a running process: kept.
+    let foreign = t.path().join(format!(".run.plinth-partial-{}", dead_pid()));
+    std::fs::create_dir(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), "mine").unwrap();
+    let running = t
+        .path()
+        .join(format!(".run.plinth-partial-{}", std::process::id()));
+    std::fs::create_dir(&running).unwrap();
+    std::fs::write(running.join(".plinth-written"), "").unwrap();
+
+    let o = plinth()
+        .arg("simulate")
+        .arg(example())
+        .args(["--speeds", "5:60:5", "--force", "--out"])
+        .arg(&run)
+        .output()
+        .unwrap();
+    let msg = text(&o);
+    assert!(o.status.success(), "{msg}");
+    assert!(
+        msg.contains(&staging) && msg.contains("interrupted") && msg.contains(&killed.to_string()),
+        "{msg}"
+    );
+    assert!(!t.path().join(&staging).exists());
+    assert!(foreign.join("notes.txt").exists() && running.exists());
+}
+
+#[test]
+fn a_run_moved_aside_by_a_killed_commit_is_moved_back() {
+    let t = tempfile::tempdir().unwrap();
+    let run = t.path().join("run");
+    simulate(&run);
+    let before = std::fs::read(run.join("measurements.csv")).unwrap();
+    // As a commit killed between its two renames leaves it.
+    let aside = t.path().join(format!(".run.plinth-old-{}", dead_pid()));
+    std::fs::rename(&run, &aside).unwrap();
+    let o = plinth()
+        .arg("simulate")
+        .arg(example())
+        .args(["--speeds", "5:60:5", "--out"])
+        .arg(&run)
+        .output()
+        .unwrap();
+    let msg = text(&o);
+    // Restored, and then (no --force) not overwritten.
+    assert!(msg.contains("restored"), "{msg}");
+    assert!(!o.status.success() && msg.contains("--force"), "{msg}");
+    assert_eq!(std::fs::read(run.join("measurements.csv")).unwrap(), before);
+    assert!(!aside.exists());
+}
+
+#[test]
+fn signals_validates_numbers_and_memory_before_allocating() {
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("sig");
+    for (flag, value) in [
+        ("--rate", "-1"),
+        ("--rate", "nan"),
+        ("--grid-step", "0"),
+        ("--grid-step", "inf"),
+        ("--probe-gap", "nan"),
+        ("--probe-v-per-mm", "0"),
+        ("--probe-noise-mv", "-1"),
+        ("--seismic-noise-mv", "1e999"),
+        ("--seismic-sensitivity", "-3"),
+        ("--adc-bits", "20"),
+        ("--adc-range", "0"),
+    ] {
+        let o = plinth()
+            .arg("signals")
+            .arg(example())
+            .arg("--out")
+            .arg(&out)
+            .arg(format!("{flag}={value}"))
+            .output()
+            .unwrap();
+        let msg = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{flag}={value}: {msg}");
+        assert!(msg.contains(flag) && !msg.contains("panicked"), "{msg}");
+    }
+    // A grid step too fine to solve: refused at once with the step that works.
+    let o = run_bounded(
+        plinth()
+            .arg("signals")
+            .arg(example())
+            .args(["--grid-step", "1e-9", "--out"])
+            .arg(&out),
+        Duration::from_secs(20),
+    );
+    let msg = text(&o);
+    assert!(!o.status.success(), "{msg}");
+    assert!(
+        msg.contains("response solves") && msg.contains("use a step of at least"),
+        "{msg}"
+    );
+    // A grid step too coarse for the response: refused with the measured
+    // error, not written with a "largest error 0".
+    let o = run_bounded(
+        plinth()
+            .arg("signals")
+            .arg(example())
+            .args(["--grid-step", "100", "--rundown", "60:20:20", "--out"])
+            .arg(&out),
+        Duration::from_secs(60),
+    );
+    let msg = text(&o);
+    assert!(!o.status.success(), "{msg}");
+    assert!(msg.contains("cannot represent the response"), "{msg}");
+    // A run longer than the machine's memory: refused with the figure.
+    let o = run_bounded(
+        plinth()
+            .arg("signals")
+            .arg(example())
+            .args(["--rundown", "200:5:0.00001", "--out"])
+            .arg(&out),
+        Duration::from_secs(20),
+    );
+    let msg = text(&o);
+    assert!(!o.status.success(), "{msg}");
+    assert!(
+        msg.contains("MB of memory") && msg.contains("MB available"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn contradictory_flags_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let run = t.path().join("run");
+    simulate(&run);
+    // paper: --force says how to write into --plots, which is not given.
+    let o = plinth().args(["paper", "--force"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--plots"), "{}", text(&o));
+    // identify: --compare-ols compares ML with OLS.
+    let o = plinth()
+        .arg("identify")
+        .arg(&run)
+        .args(["--estimator", "ols", "--compare-ols"])
+        .output()
+        .unwrap();
+    let msg = text(&o);
+    assert!(!o.status.success(), "{msg}");
+    assert!(
+        msg.contains("--compare-ols") && msg.contains("--estimator ols"),
+        "{msg}"
+    );
+    // demo: --elf without --qemu; stream: --duration with --replay.
+    let o = plinth()
+        .args(["demo", "--elf", "x.elf", "--out"])
+        .arg(t.path().join("d"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    let o = plinth()
+        .args([
+            "stream",
+            "--replay",
+            "x",
+            "--duration",
+            "1",
+            "--config",
+            "c",
+            "--out",
+        ])
+        .arg(t.path().join("s"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(!t.path().join("d").exists() && !t.path().join("s").exists());
+}
+
+#[test]
+fn operating_system_errors_are_printed_once_by_every_reader() {
+    let t = tempfile::tempdir().unwrap();
+    let missing = t.path().join("missing.toml");
+    for args in [vec!["simulate".to_string()], vec!["signals".to_string()]] {
+        let o = plinth()
+            .args(&args)
+            .arg(&missing)
+            .arg("--out")
+            .arg(t.path().join("o"))
+            .output()
+            .unwrap();
+        let msg = text(&o);
+        assert!(!o.status.success(), "{msg}");
+        assert_eq!(
+            msg.matches("No such file or directory").count(),
+            1,
+            "{args:?}: {msg}"
+        );
+        assert!(msg.contains("missing.toml"), "{msg}");
+    }
+    let o = plinth()
+        .arg("predict")
+        .arg(example())
+        .arg("--pedestals")
+        .arg(t.path().join("none.json"))
+        .arg("--against")
+        .arg(t.path().join("none"))
+        .output()
+        .unwrap();
+    let msg = text(&o);
+    assert!(!o.status.success(), "{msg}");
+    assert_eq!(msg.matches("No such file or directory").count(), 1, "{msg}");
+}
