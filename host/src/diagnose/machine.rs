@@ -5,9 +5,7 @@
 //! The pedestals (k, m, c) replace the machine file's; pedestal effects are
 //! handed to the simulator in its own parametrisation (`crate::sim::inject`):
 //! cross-coupling as k_yz/√(k_y·k_z), mass anisotropy as m_z/m_y − 1 on
-//! m = m_y, the loss factor as is, a foundation coupling as k_c/√(k_a·k_b)
-//! (the simulator uses one size for both directions: the mean of the y and z
-//! values identified). Sensor effects (runout, delays) are applied to the
+//! m = m_y, the loss factor as is. Sensor effects (runout, delays) are applied to the
 //! simulated readings here, exactly as identified.
 
 use super::data::Prepared;
@@ -15,7 +13,7 @@ use super::model::{Nonlinear, Term};
 use super::workflow::State;
 use crate::effects::EffectKind;
 use crate::sim::{unbalance_response, EffectSet, Machine, PedestalParams};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use num_complex::Complex;
 
 /// Predicted readings (rel, ped) per bearing and speed index [m].
@@ -97,36 +95,6 @@ pub fn resimulate(machine: &Machine, prep: &Prepared, state: &State) -> Result<R
                     Some(state.params.nl[k]),
                 );
             }
-        }
-    }
-    for t in &state.model.terms {
-        if let Term::Coupling { a, b, dir: 0 } = *t {
-            let kc_y = value(*t).unwrap_or(0.0);
-            let kc_z = value(Term::Coupling { a, b, dir: 1 }).unwrap_or(0.0);
-            let k = |bb: usize, d: usize| {
-                value(Term::Stiffness {
-                    bearing: bb,
-                    dir: d,
-                })
-                .unwrap_or(0.0)
-            };
-            let size_y = kc_y / (k(a, 0) * k(b, 0)).sqrt();
-            let size_z = kc_z / (k(a, 1) * k(b, 1)).sqrt();
-            let names = machine.bearing_names();
-            let ia = machine.bearing_index(&prep.bearings[a])?;
-            let ib = machine.bearing_index(&prep.bearings[b])?;
-            if ib != ia + 1 || names.len() < 2 {
-                bail!(
-                    "foundation coupling between {} and {}: the machine file does not have them as neighbours",
-                    prep.bearings[a],
-                    prep.bearings[b]
-                );
-            }
-            effects = effects.with(
-                EffectKind::FoundationCoupling,
-                Some(&prep.bearings[a]),
-                Some(0.5 * (size_y + size_z)),
-            );
         }
     }
     let response = unbalance_response(&machine, &prep.speeds_hz, &effects)

@@ -13,6 +13,7 @@
 //! - [`criterion`]: the significance test and ranking of candidates;
 //! - [`locate`]: where the disagreement lives;
 //! - [`workflow`]: greedy forward selection;
+//! - [`trust`]: the verdict, and whether the numbers can be trusted;
 //! - [`report`]: the diagnosis as JSON and text;
 //! - [`machine`]: the machine-level re-simulation (`--machine`);
 //! - [`plots`]: measured-versus-predicted figures;
@@ -32,6 +33,7 @@ pub mod model;
 pub mod noise;
 pub mod plots;
 pub mod report;
+pub mod trust;
 pub mod workflow;
 
 pub use cli::{run, Args};

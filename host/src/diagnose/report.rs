@@ -25,12 +25,13 @@ pub struct CandidateSummary {
     pub effect: String,
     /// Bearing it acts on.
     pub bearing: String,
-    /// Other bearing of a foundation coupling.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub partner: Option<String>,
     /// Delayed channels of a sensor delay (`ped`, `ped_y`, `rel`, ...).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub channels: Option<String>,
+    /// The test that decided it ([`Evidence`]'s statistic): `"Wald, χ² with
+    /// Bonferroni over N candidates"` or `"likelihood-ratio, parametric
+    /// bootstrap (N)"`.
+    pub test: String,
     /// The evidence for it.
     pub evidence: Evidence,
     /// Its own parameters as fitted.
@@ -42,7 +43,8 @@ pub struct CandidateSummary {
 pub struct Step {
     /// Effect name (formats.md).
     pub effect: String,
-    /// Bearing it acts on (the first of the pair for foundation coupling).
+    /// Bearing it acts on (the first bearing of the first base group for
+    /// `foundation_coupling`: every bearing on a base is in `foundation`).
     pub bearing: String,
     /// Pedestal-level gap before adding it [-].
     pub gap_before: f64,
@@ -56,14 +58,13 @@ pub struct Step {
     /// Machine-level gap after the step, with `--machine`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub machine_gap_after: Option<f64>,
-    /// Other bearing of a foundation coupling.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub partner: Option<String>,
     /// Delayed channels of a sensor delay.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub channels: Option<String>,
     /// The effect's own parameters after the refit.
     pub parameters: Vec<Estimate>,
+    /// The test that decided it (as in [`CandidateSummary::test`]).
+    pub test: String,
     /// Evidence for the effect.
     pub evidence: Evidence,
     /// The next-best candidate of the step.
@@ -134,6 +135,13 @@ pub struct Diagnosis {
     pub significance_level: f64,
     /// One-paragraph conclusion.
     pub verdict: String,
+    /// False when the identified parameters are not to be trusted: the
+    /// final model leaves a gap well above its noise floor (the data hold
+    /// something no effect of the library explains), the gap rose, or a
+    /// pedestal is physically impossible; `trust_reasons` says which.
+    pub trusted: bool,
+    /// Why the parameters are not to be trusted (empty when trusted).
+    pub trust_reasons: Vec<String>,
     /// Convention mistakes the data most likely carry, per pedestal
     /// (`identify::convention`): with one, every other finding is suspect.
     pub suspected_convention_errors: Vec<crate::identify::convention::ConventionFinding>,
@@ -199,10 +207,7 @@ impl Diagnosis {
                     .iter()
                     .map(|p| format!("{} = {:.4e} ± {:.2e}", p.name, p.value, p.std_err))
                     .collect();
-                let mut where_ = st.bearing.clone();
-                if let Some(p) = &st.partner {
-                    where_ += &format!("+{p}");
-                }
+                let where_ = st.bearing.clone();
                 let mut effect = st.effect.clone();
                 if let Some(c) = &st.channels {
                     effect += &format!(" ({c})");
@@ -219,8 +224,8 @@ impl Diagnosis {
                 );
                 let e = &st.evidence;
                 let mut ev = format!(
-                    "     evidence: Wald {:.3e} (floor {:.3e}, robust {:.3e}), q = {}, ΔBIC {:.1}, p = {:.2e} (×{} candidates: {:.2e})",
-                    e.wald, e.wald_floor, e.wald_robust, e.extra_parameters, e.delta_bic, e.p_value, st.candidates_tried, e.p_adjusted
+                    "     evidence ({}): statistic {:.3e} (floor {:.3e}, robust {:.3e}), q = {}, ΔBIC {:.1}, p = {:.2e} (adjusted {:.2e})",
+                    st.test, e.wald, e.wald_floor, e.wald_robust, e.extra_parameters, e.delta_bic, e.p_value, e.p_adjusted
                 );
                 if let Some(r) = &st.runner_up {
                     ev += &format!(
@@ -252,6 +257,12 @@ impl Diagnosis {
             let _ = writeln!(s, "  {}: {}", b.bearing, parts.join(", "));
         }
         let _ = writeln!(s, "\n{}", self.verdict);
+        if !self.trusted {
+            let _ = writeln!(s, "The identified parameters are NOT to be trusted:");
+            for r in &self.trust_reasons {
+                let _ = writeln!(s, "  - {r}");
+            }
+        }
         s
     }
 }

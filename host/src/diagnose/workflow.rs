@@ -10,6 +10,7 @@ use super::gap::{Gap, Prediction};
 use super::locate::locate;
 use super::model::{Model, Params, Term};
 use super::noise::CHANNELS;
+use super::trust::conclude;
 use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
 use crate::rundir::RunDir;
 use anyhow::{anyhow, Result};
@@ -387,7 +388,10 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
         if !outcome.accepted {
-            best_rejected = outcome.ranked.first().map(|e| summary(&prep, e));
+            best_rejected = outcome
+                .ranked
+                .first()
+                .map(|e| summary(&prep, e, outcome.tried));
             break;
         }
         let win = &outcome.ranked[0];
@@ -403,11 +407,11 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             gap_floor_after: after.floor,
             machine_gap_before: None,
             machine_gap_after: None,
-            partner: win.candidate.partner.map(|b| prep.bearings[b].clone()),
             channels: win.candidate.variant.clone(),
             parameters,
+            test: wald_test(outcome.tried),
             evidence: win.evidence,
-            runner_up: outcome.ranked.get(1).map(|e| summary(&prep, e)),
+            runner_up: outcome.ranked.get(1).map(|e| summary(&prep, e, outcome.tried)),
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
         });
@@ -418,39 +422,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let where_after = locate(&prep, &state.model, &state.params, &pred1);
     let pedestals_after = pedestals(&prep, &state)?;
     let effects_added: Vec<String> = steps.iter().map(|s| s.effect.clone()).collect();
-    let verdict = if steps.is_empty() {
-        if gap0.gap <= 3.0 * gap0.floor {
-            format!(
-                "No significant missing effect: the base model agrees with the measurements to the noise floor (gap {:.4}, floor {:.4}).",
-                gap0.gap, gap0.floor
-            )
-        } else {
-            format!(
-                "No effect of the library explains the remaining disagreement significantly (gap {:.4}, floor {:.4}); nothing added.",
-                gap0.gap, gap0.floor
-            )
-        }
-    } else {
-        // The wording follows the numbers: a gap that grew is not said to fall.
-        let moved = if gap1.gap < gap0.gap {
-            "fell"
-        } else if gap1.gap > gap0.gap {
-            "ROSE (the added effect does not explain the data: check the data's conventions and units)"
-        } else {
-            "stayed"
-        };
-        format!(
-            "Added {}: the pedestal-level gap {moved} from {:.4} to {:.4} (noise floor {:.4}).",
-            steps
-                .iter()
-                .map(|s| format!("{} at {}", s.effect, s.bearing))
-                .collect::<Vec<_>>()
-                .join(", then "),
-            gap0.gap,
-            gap1.gap,
-            gap1.floor
-        )
-    };
+    let conclusion = conclude(&prep, gap0, gap1, &steps, &pedestals_after);
     let mut digits = BTreeMap::new();
     for (c, q) in prep.noise.columns.iter().enumerate() {
         digits.insert(CHANNELS[c].to_string(), q.digits);
@@ -481,7 +453,9 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         pedestals_after,
         best_rejected,
         significance_level: opts.alpha,
-        verdict,
+        verdict: conclusion.verdict,
+        trusted: conclusion.trusted,
+        trust_reasons: conclusion.reasons,
         suspected_convention_errors: crate::identify::convention::findings_for_run(run, &opts.base),
     };
     Ok(Outcome {
@@ -491,13 +465,18 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     })
 }
 
-/// The candidate as a report entry.
-fn summary(prep: &Prepared, e: &Evaluated) -> CandidateSummary {
+/// The name of the library's test, with the Bonferroni count.
+fn wald_test(tried: usize) -> String {
+    format!("Wald, χ² with Bonferroni over {tried} candidates")
+}
+
+/// The candidate as a report entry (`tried`: candidates of its step).
+fn summary(prep: &Prepared, e: &Evaluated, tried: usize) -> CandidateSummary {
     CandidateSummary {
         effect: e.candidate.effect.name().to_string(),
         bearing: prep.bearings[e.candidate.bearing].clone(),
-        partner: e.candidate.partner.map(|b| prep.bearings[b].clone()),
         channels: e.candidate.variant.clone(),
+        test: wald_test(tried),
         evidence: e.evidence,
         parameters: e
             .effect_parameters()
