@@ -7,6 +7,8 @@
 //! phasors, the known complex bearing stiffness and the noise variance of
 //! every real number that was measured.
 
+pub mod base;
+pub mod gauss_helmert;
 pub mod ml;
 pub mod noise;
 

@@ -1,0 +1,245 @@
+//! Maximum likelihood for equation systems linear in the measured numbers
+//! (the Gauss–Helmert model), for models with more than one pedestal or a
+//! measured base: per speed s an equation residual e_s(p) (real, length r)
+//! that is zero for the true measured numbers, linear in them with
+//! B_s(p) = ∂e_s/∂(measured), and independent noise of variance D_s per
+//! measured real number. Then e_s is zero-mean with covariance
+//! Σ_s(p) = B_s·D_s·B_sᵀ, and the ML estimate minimises
+//! J(p) = Σ_s e_sᵀ Σ_s(p)⁻¹ e_s (the same model as [`super::ml`], which
+//! is the one-pedestal rigid-ground case written out).
+//!
+//! [`fit`] minimises J by Levenberg–Marquardt on the whitened residuals
+//! (central-difference Jacobian, including Σ's dependence on p) or, with
+//! `frozen` weights, a fixed Σ (cheap, for profiling a grid);
+//! [`fisher`] is F = Σ Aᵀ Σ⁻¹ A with A = ∂e/∂p, whose inverse is the
+//! Cramér–Rao bound at p.
+
+use nalgebra::{DMatrix, DVector};
+
+/// A system of equations per speed, linear in the measured numbers.
+pub trait Equations {
+    /// Speeds (independent blocks of equations).
+    fn speeds(&self) -> usize;
+    /// Residual e_s(p) and B_s = ∂e_s/∂(measured numbers) at speed `s` for
+    /// parameters `p` (model units).
+    fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>);
+    /// Noise variance of each measured number of speed `s` (order of B's columns).
+    fn variance(&self, s: usize) -> &[f64];
+}
+
+/// Lower Cholesky factor of Σ_s(p) = B·D·Bᵀ, regularised by 1e-12 of its
+/// mean diagonal when singular; `None` when Σ has no noise at all.
+pub fn whitening<E: Equations + ?Sized>(eq: &E, s: usize, p: &[f64]) -> Option<DMatrix<f64>> {
+    let (_, b) = eq.residual(s, p);
+    let mut bd = b.clone();
+    for (c, v) in eq.variance(s).iter().enumerate() {
+        bd.column_mut(c).scale_mut(*v);
+    }
+    let sigma = bd * b.transpose();
+    let n = sigma.nrows();
+    let trace = sigma.trace();
+    if !(trace > 0.0 && trace.is_finite()) {
+        return None;
+    }
+    if let Some(c) = sigma.clone().cholesky() {
+        return Some(c.l());
+    }
+    let jitter = DMatrix::identity(n, n) * (1e-12 * trace / n as f64);
+    (sigma + jitter).cholesky().map(|c| c.l())
+}
+
+/// Whitened residuals L_s⁻¹e_s stacked over speeds, with Σ at `p` or the
+/// `frozen` factors; `None` when some Σ is singular or a number is not finite.
+pub fn whitened<E: Equations + ?Sized>(
+    eq: &E,
+    p: &[f64],
+    frozen: Option<&[DMatrix<f64>]>,
+) -> Option<DVector<f64>> {
+    let mut out = Vec::new();
+    for s in 0..eq.speeds() {
+        let (e, _) = eq.residual(s, p);
+        let l = match frozen {
+            Some(f) => f[s].clone(),
+            None => whitening(eq, s, p)?,
+        };
+        let w = l.solve_lower_triangular(&e)?;
+        out.extend(w.iter().copied());
+    }
+    out.iter()
+        .all(|v| v.is_finite())
+        .then(|| DVector::from_vec(out))
+}
+
+/// J(p) = Σ eᵀΣ⁻¹e [-] (`None` when it cannot be evaluated).
+pub fn cost<E: Equations + ?Sized>(eq: &E, p: &[f64]) -> Option<f64> {
+    whitened(eq, p, None).map(|w| w.norm_squared())
+}
+
+/// Fisher information Σ_s Aᵀ Σ_s⁻¹ A at `p` (model units), A = ∂e/∂p by
+/// central differences with steps `scale`·1e-6.
+pub fn fisher<E: Equations + ?Sized>(eq: &E, p: &[f64], scale: &[f64]) -> Option<DMatrix<f64>> {
+    let n = p.len();
+    let mut f = DMatrix::zeros(n, n);
+    for s in 0..eq.speeds() {
+        let l = whitening(eq, s, p)?;
+        let (e0, _) = eq.residual(s, p);
+        let mut a = DMatrix::zeros(e0.len(), n);
+        for k in 0..n {
+            let h = 1e-6 * scale[k];
+            let mut up = p.to_vec();
+            up[k] += h;
+            let mut dn = p.to_vec();
+            dn[k] -= h;
+            let d = (eq.residual(s, &up).0 - eq.residual(s, &dn).0) / (2.0 * h);
+            a.set_column(k, &d);
+        }
+        let w = l.solve_lower_triangular(&a)?;
+        f += w.transpose() * w;
+    }
+    Some(f)
+}
+
+/// Inverse of a symmetric positive semi-definite matrix through its
+/// unit-diagonal scaling; infinite diagonal where it is singular.
+pub fn inverse_psd(f: &DMatrix<f64>) -> DMatrix<f64> {
+    let p = f.nrows();
+    let d: Vec<f64> = (0..p).map(|i| f[(i, i)].max(0.0).sqrt()).collect();
+    let mut inf = DMatrix::zeros(p, p);
+    for i in 0..p {
+        inf[(i, i)] = f64::INFINITY;
+    }
+    if d.iter().any(|&x| !(x > 0.0 && x.is_finite())) {
+        return inf;
+    }
+    let scaled = DMatrix::from_fn(p, p, |r, c| f[(r, c)] / (d[r] * d[c]));
+    let eig = scaled.symmetric_eigen();
+    let hi = eig.eigenvalues.iter().fold(0.0f64, |a, &v| a.max(v));
+    let lo = eig.eigenvalues.iter().fold(f64::INFINITY, |a, &v| a.min(v));
+    if lo.is_nan() || lo <= hi * 1e-14 {
+        return inf;
+    }
+    let mut inv = eig.eigenvectors.clone();
+    for (k, &v) in eig.eigenvalues.iter().enumerate() {
+        inv.column_mut(k).scale_mut(1.0 / v);
+    }
+    let inv = inv * eig.eigenvectors.transpose();
+    DMatrix::from_fn(p, p, |r, c| inv[(r, c)] / (d[r] * d[c]))
+}
+
+/// Outcome of [`fit`].
+#[derive(Clone, Debug)]
+pub struct Minimum {
+    /// Parameters at the minimum (model units).
+    pub p: Vec<f64>,
+    /// J at the minimum [-].
+    pub cost: f64,
+    /// Iterations taken.
+    pub iterations: usize,
+    /// True when the convergence test was met.
+    pub converged: bool,
+}
+
+/// Levenberg–Marquardt minimisation of J over the parameters with
+/// `free[k]` true (the others stay at `start`), in units u = p/`scale`.
+/// With `frozen` whitening factors Σ is held fixed. `None` when J cannot be
+/// evaluated at the start.
+pub fn fit<E: Equations + ?Sized>(
+    eq: &E,
+    start: &[f64],
+    scale: &[f64],
+    free: &[bool],
+    frozen: Option<&[DMatrix<f64>]>,
+    max_iterations: usize,
+) -> Option<Minimum> {
+    let idx: Vec<usize> = (0..start.len()).filter(|&k| free[k]).collect();
+    let q = idx.len();
+    let p_of = |u: &DVector<f64>| -> Vec<f64> {
+        let mut p = start.to_vec();
+        for (j, &k) in idx.iter().enumerate() {
+            p[k] = u[j] * scale[k];
+        }
+        p
+    };
+    let mut u = DVector::from_fn(q, |j, _| start[idx[j]] / scale[idx[j]]);
+    let mut r = whitened(eq, &p_of(&u), frozen)?;
+    let mut cost_now = r.norm_squared();
+    let mut lambda = 1e-3;
+    let mut converged = false;
+    let mut iterations = 0;
+    while iterations < max_iterations && q > 0 {
+        iterations += 1;
+        let mut jac = DMatrix::zeros(r.len(), q);
+        for j in 0..q {
+            let h = 1e-6 * u[j].abs().max(1e-3);
+            let mut up = u.clone();
+            up[j] += h;
+            let mut dn = u.clone();
+            dn[j] -= h;
+            let (Some(a), Some(b)) = (
+                whitened(eq, &p_of(&up), frozen),
+                whitened(eq, &p_of(&dn), frozen),
+            ) else {
+                return Some(Minimum {
+                    p: p_of(&u),
+                    cost: cost_now,
+                    iterations,
+                    converged: false,
+                });
+            };
+            jac.set_column(j, &((a - b) / (2.0 * h)));
+        }
+        let g = jac.transpose() * &r;
+        let hess = jac.transpose() * &jac;
+        let mut accepted = false;
+        while lambda < 1e12 {
+            let mut damped = hess.clone();
+            for j in 0..q {
+                damped[(j, j)] += lambda * hess[(j, j)].max(1e-300);
+            }
+            let Some(delta) = damped.cholesky().map(|c| c.solve(&(-&g))) else {
+                lambda *= 4.0;
+                continue;
+            };
+            let u_new = &u + &delta;
+            let Some(r_new) = whitened(eq, &p_of(&u_new), frozen) else {
+                lambda *= 4.0;
+                continue;
+            };
+            let cost_new = r_new.norm_squared();
+            if cost_new <= cost_now {
+                let decrease = cost_now - cost_new;
+                // The step in its own standard errors (Hessian⁻¹).
+                let small = hess
+                    .clone()
+                    .cholesky()
+                    .map(|c| {
+                        let inv = c.inverse();
+                        (0..q).all(|j| delta[j].abs() <= 1e-6 * inv[(j, j)].sqrt())
+                    })
+                    .unwrap_or(false);
+                u = u_new;
+                r = r_new;
+                cost_now = cost_new;
+                lambda = (lambda / 3.0).max(1e-12);
+                accepted = true;
+                if decrease <= 1e-12 * cost_now.max(f64::MIN_POSITIVE) || small {
+                    converged = true;
+                }
+                break;
+            }
+            lambda *= 4.0;
+        }
+        if !accepted {
+            converged = true;
+        }
+        if converged {
+            break;
+        }
+    }
+    Some(Minimum {
+        p: p_of(&u),
+        cost: cost_now,
+        iterations,
+        converged: converged || q == 0,
+    })
+}
