@@ -9,7 +9,10 @@
 //! - [`fit`]: noise-weighted least squares (errors in variables propagated)
 //!   and the 1-D profile search;
 //! - [`gap`]: the disagreement measure (defined there) and its noise floor;
-//! - [`candidates`]: the library of effects (every formats.md name);
+//! - [`candidates`]: the library of effects (every formats.md name but
+//!   `foundation_coupling`);
+//! - [`foundation`]: `foundation_coupling`, pedestals on a shared unmeasured
+//!   base (`crate::estimate::base`), with its bootstrap likelihood-ratio test;
 //! - [`criterion`]: the significance test and ranking of candidates;
 //! - [`locate`]: where the disagreement lives;
 //! - [`workflow`]: greedy forward selection;
@@ -26,6 +29,7 @@ pub mod cli;
 pub mod criterion;
 pub mod data;
 pub mod fit;
+pub mod foundation;
 pub mod gap;
 pub mod locate;
 pub mod machine;

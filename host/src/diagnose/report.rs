@@ -65,6 +65,9 @@ pub struct Step {
     pub parameters: Vec<Estimate>,
     /// The test that decided it (as in [`CandidateSummary::test`]).
     pub test: String,
+    /// For `foundation_coupling`: the bases and the bootstrap test.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub foundation: Option<FoundationReport>,
     /// Evidence for the effect.
     pub evidence: Evidence,
     /// The next-best candidate of the step.
@@ -73,6 +76,93 @@ pub struct Step {
     pub candidates_tried: usize,
     /// Candidates that could not be fitted (not identifiable from these data).
     pub candidates_failed: usize,
+}
+
+/// The likelihood-ratio test of `foundation_coupling` (module docs of
+/// `super::foundation`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FoundationTest {
+    /// `"likelihood-ratio, parametric bootstrap (N)"`.
+    pub test: String,
+    /// J_rigid − J_base of the favoured grouping [-].
+    pub likelihood_ratio: f64,
+    /// The statistic: likelihood ratio − q·ln N [-].
+    pub statistic: f64,
+    /// Bootstrap replicates under the null (rigid ground).
+    pub replicates: usize,
+    /// Replicates whose statistic reached the observed one.
+    pub exceedances: usize,
+    /// 95 % point of the replicates (the critical value at 5 %) [-].
+    pub critical_value_95: f64,
+    /// (1 + exceedances)/(replicates + 1).
+    pub p_empirical: f64,
+    /// The p-value used: beyond every replicate, the tail of a scaled χ²
+    /// matched to the replicates; otherwise `p_empirical`.
+    pub p_calibrated: f64,
+}
+
+/// One identified base and the pedestals on it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BaseGroupReport {
+    /// Bearings whose pedestals stand on it.
+    pub bearings: Vec<String>,
+    /// What the data determine in y and z (`full`, `quasi_static` with the
+    /// compliance 1/K_B [m/N], `mass_line` with M_B [kg], `not_detected`).
+    pub identifiability: [crate::estimate::base::BaseIdentifiability; 2],
+    /// Its parameters (k [N/m], c [N·s/m], m [kg] per direction; meaningful
+    /// as far as `identifiability` says; null = not determined).
+    pub base: crate::estimate::base::BaseParams,
+    /// Their standard errors.
+    pub base_std_err: crate::estimate::base::BaseParams,
+    /// Base natural frequency sqrt(K_B/M_B)/2π (y, z) [Hz].
+    pub base_frequency_hz: [f64; 2],
+    /// Whether the joint fit converged.
+    pub converged: bool,
+    /// What the data determine, as named estimates (`base_k_y`, ...,
+    /// `base_compliance_y` [m/N] when only that is determined).
+    pub parameters: Vec<Estimate>,
+}
+
+/// The bases `foundation_coupling` identified, with its test.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FoundationReport {
+    /// The bases.
+    pub groups: Vec<BaseGroupReport>,
+    /// The test that decided it.
+    pub test: FoundationTest,
+}
+
+impl FoundationReport {
+    /// The bases and the test as text lines.
+    pub fn write_text(&self, s: &mut String) {
+        let t = &self.test;
+        let _ = writeln!(
+            s,
+            "     test: {}: LR {:.1}, statistic LR − q·ln N {:.1}, {} of {} replicates reached it (95 % point {:.1}), p = {:.2e}",
+            t.test, t.likelihood_ratio, t.statistic, t.exceedances, t.replicates, t.critical_value_95, t.p_calibrated
+        );
+        for g in &self.groups {
+            let what: Vec<&str> = g.identifiability.iter().map(|i| i.name()).collect();
+            let params: Vec<String> = g
+                .parameters
+                .iter()
+                .map(|p| format!("{} = {:.4e} ± {:.2e}", p.name, p.value, p.std_err))
+                .collect();
+            let _ = writeln!(
+                s,
+                "     base under {}: determined y {}, z {}{}; {}",
+                g.bearings.join(", "),
+                what[0],
+                what[1],
+                if g.converged { "" } else { " (fit NOT converged)" },
+                if params.is_empty() {
+                    "no base motion detected".to_string()
+                } else {
+                    params.join(", ")
+                }
+            );
+        }
+    }
 }
 
 /// Identified parameters of one pedestal.
@@ -131,6 +221,11 @@ pub struct Diagnosis {
     pub pedestals_after: Vec<Pedestal>,
     /// The best candidate left when the search stopped (not significant).
     pub best_rejected: Option<CandidateSummary>,
+    /// `foundation_coupling` as tried on the base model (its bases and
+    /// test), whether chosen or not; absent when not tried (one bearing,
+    /// or a reduced `--base`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub foundation: Option<FoundationReport>,
     /// Family-wise significance level per step.
     pub significance_level: f64,
     /// One-paragraph conclusion.
@@ -234,7 +329,21 @@ impl Diagnosis {
                     );
                 }
                 let _ = writeln!(s, "{ev}");
+                if let Some(f) = &st.foundation {
+                    f.write_text(&mut s);
+                }
             }
+        }
+        if let (Some(f), false) = (
+            &self.foundation,
+            self.steps.iter().any(|st| st.foundation.is_some()),
+        ) {
+            let t = &f.test;
+            let _ = writeln!(
+                s,
+                "foundation_coupling (pedestals on a shared base) not chosen: {}: LR {:.1}, statistic {:.1}, {} of {} replicates reached it, p = {:.2e}",
+                t.test, t.likelihood_ratio, t.statistic, t.exceedances, t.replicates, t.p_calibrated
+            );
         }
         if let Some(r) = &self.best_rejected {
             let _ = writeln!(

@@ -10,7 +10,9 @@ use super::gap::{Gap, Prediction};
 use super::locate::locate;
 use super::model::{Model, Params, Term};
 use super::noise::CHANNELS;
-use super::trust::conclude;
+use super::foundation::{self, FoundationFit};
+use super::trust::{conclude, AT_THE_FLOOR};
+use crate::effects::EffectKind;
 use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
 use crate::rundir::RunDir;
 use anyhow::{anyhow, Result};
@@ -29,6 +31,11 @@ pub struct Options {
     pub max_steps: usize,
     /// A progress line on stderr (only on a terminal, after a second).
     pub progress: bool,
+    /// Bootstrap replicates of the `foundation_coupling` test (0: the
+    /// candidate is not tried).
+    pub foundation_replicates: usize,
+    /// Seed of that bootstrap.
+    pub foundation_seed: u64,
 }
 
 impl Default for Options {
@@ -38,6 +45,8 @@ impl Default for Options {
             alpha: 1e-3,
             max_steps: 8,
             progress: false,
+            foundation_replicates: foundation::REPLICATES,
+            foundation_seed: foundation::SEED,
         }
     }
 }
@@ -367,9 +376,20 @@ pub struct Outcome {
     pub prep: Prepared,
     /// The base model's fit, then the fit after each step.
     pub states: Vec<State>,
+    /// `foundation_coupling` when chosen: the bases and pedestals on them
+    /// (the last state keeps the rigid fit of the bearings on no base).
+    pub foundation: Option<FoundationFit>,
 }
 
 /// Runs the whole workflow on a run directory at the pedestal level.
+///
+/// `foundation_coupling` (pedestals on a shared, unmeasured base,
+/// [`super::foundation`]) is tried on the base model in the first round,
+/// next to the library; it wins when its bootstrap test is significant, it
+/// brings the gap down, and its likelihood ratio (penalised by its
+/// parameters) beats the best library candidate's drop in the weighted sum
+/// of squares. Its model has no further effects on top, so the search ends
+/// there.
 pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let prep = Prepared::from_run(run)?;
     let mut state = State::base(&prep, &opts.base)?;
@@ -379,14 +399,61 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let mut states = vec![state.clone()];
     let mut steps = Vec::new();
     let mut best_rejected = None;
+    let foundation_tried = if opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0
+    {
+        // A base fit that cannot run is "not tried", not an error.
+        foundation::evaluate(&prep, &pred0, opts.foundation_replicates, opts.foundation_seed)
+            .ok()
+            .flatten()
+    } else {
+        None
+    };
+    let mut chosen_foundation = None;
     let mut ticker = crate::progress::Ticker::new(
         "diagnose: candidate-effect rounds",
         opts.max_steps,
         opts.progress,
     );
+    let n_total: usize = (0..prep.bearings.len())
+        .map(|b| 4 * prep.points[b].iter().flatten().count())
+        .sum();
+    let ln_n = (n_total.max(2) as f64).ln();
     for round in 0..opts.max_steps {
         ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
+        if round == 0 {
+            if let Some(f) = foundation_tried.as_ref().filter(|f| {
+                let library_score = outcome.ranked.first().filter(|_| outcome.accepted).map(|e| {
+                    e.evidence.wald_floor - e.evidence.extra_parameters as f64 * ln_n
+                });
+                f.test.significant(opts.alpha)
+                    && f.evidence.delta_bic > 0.0
+                    && gap0.gap > AT_THE_FLOOR * gap0.floor
+                    && f.gap.gap < gap0.gap
+                    && library_score.is_none_or(|l| f.evidence.delta_bic >= l)
+            }) {
+                let first = f.grouping.groups[0][0];
+                steps.push(Step {
+                    effect: EffectKind::FoundationCoupling.name().to_string(),
+                    bearing: prep.bearings[first].clone(),
+                    gap_before: gap0.gap,
+                    gap_after: f.gap.gap,
+                    gap_floor_after: f.gap.floor,
+                    machine_gap_before: None,
+                    machine_gap_after: None,
+                    channels: None,
+                    parameters: f.parameters(&prep),
+                    test: f.test.test.clone(),
+                    foundation: Some(f.report(&prep)),
+                    evidence: f.evidence,
+                    runner_up: outcome.ranked.first().map(|e| summary(&prep, e, outcome.tried)),
+                    candidates_tried: outcome.tried + 1,
+                    candidates_failed: outcome.failed.len(),
+                });
+                chosen_foundation = Some(f.clone());
+                break;
+            }
+        }
         if !outcome.accepted {
             best_rejected = outcome
                 .ranked
@@ -410,6 +477,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             channels: win.candidate.variant.clone(),
             parameters,
             test: wald_test(outcome.tried),
+            foundation: None,
             evidence: win.evidence,
             runner_up: outcome.ranked.get(1).map(|e| summary(&prep, e, outcome.tried)),
             candidates_tried: outcome.tried,
@@ -418,9 +486,22 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         state = next;
         states.push(state.clone());
     }
-    let (pred1, gap1) = state.gap(&prep);
+    let (pred1, gap1) = match &chosen_foundation {
+        Some(f) => (f.prediction.clone(), f.gap),
+        None => state.gap(&prep),
+    };
     let where_after = locate(&prep, &state.model, &state.params, &pred1);
-    let pedestals_after = pedestals(&prep, &state)?;
+    let mut pedestals_after = pedestals(&prep, &state)?;
+    if let Some(f) = &chosen_foundation {
+        for (b, p) in pedestals_after.iter_mut().enumerate() {
+            if let Some((theta, se)) = f.pedestal(b) {
+                for (k, q) in Parameter::ALL.iter().enumerate() {
+                    p.values.insert(q.name().to_string(), theta[k]);
+                    p.std_err.insert(q.name().to_string(), se[k]);
+                }
+            }
+        }
+    }
     let effects_added: Vec<String> = steps.iter().map(|s| s.effect.clone()).collect();
     let conclusion = conclude(&prep, gap0, gap1, &steps, &pedestals_after);
     let mut digits = BTreeMap::new();
@@ -452,6 +533,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         pedestals_before,
         pedestals_after,
         best_rejected,
+        foundation: foundation_tried.as_ref().map(|f| f.report(&prep)),
         significance_level: opts.alpha,
         verdict: conclusion.verdict,
         trusted: conclusion.trusted,
@@ -462,6 +544,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         diagnosis,
         prep,
         states,
+        foundation: chosen_foundation,
     })
 }
 
