@@ -62,12 +62,7 @@ pub fn library(model: &Model, n_bearings: usize) -> Vec<Candidate> {
                 .iter()
                 .map(|&d| Term::Damping { bearing: b, dir: d })
                 .collect();
-            out.push(add_terms(
-                model,
-                EffectKind::PedestalDamping,
-                b,
-                terms,
-            ));
+            out.push(add_terms(model, EffectKind::PedestalDamping, b, terms));
         }
         let has_stiffness = model
             .terms
@@ -164,12 +159,7 @@ pub fn library(model: &Model, n_bearings: usize) -> Vec<Candidate> {
     out
 }
 
-fn add_terms(
-    model: &Model,
-    effect: EffectKind,
-    bearing: usize,
-    terms: Vec<Term>,
-) -> Candidate {
+fn add_terms(model: &Model, effect: EffectKind, bearing: usize, terms: Vec<Term>) -> Candidate {
     let mut m = model.clone();
     let first = m.terms.len();
     m.terms.extend(terms);
@@ -191,12 +181,7 @@ fn add_terms(
     }
 }
 
-fn add_nonlinear(
-    model: &Model,
-    effect: EffectKind,
-    bearing: usize,
-    p: Nonlinear,
-) -> Candidate {
+fn add_nonlinear(model: &Model, effect: EffectKind, bearing: usize, p: Nonlinear) -> Candidate {
     let mut m = model.clone();
     let k = m.nonlinear.len();
     m.nonlinear.push(p);

@@ -26,11 +26,21 @@
 //! replicates, that of a scaled χ² a·χ²(ν) matched to the replicates' mean
 //! and variance; the effect is significant when T exceeds every replicate
 //! and the calibrated tail probability is below the significance level.
+//!
+//! Cost: each replicate refits the bases, so the bootstrap is run only when
+//! the candidate could be chosen at all (the rigid model's gap is above
+//! `AT_THE_FLOOR` times its noise floor, the penalised ratio is positive and
+//! the base model brings the gap down), and it stops at the first replicate
+//! that reaches T (the effect is then not significant; the p-value shown is
+//! that of the replicates run). The replicates refit the favoured grouping
+//! only; the search over groupings is allowed for by a Bonferroni factor
+//! (the number of groupings tried) on the calibrated p-value.
 
 use super::criterion::Evidence;
 use super::data::Prepared;
 use super::gap::{Gap, Prediction};
 use super::report::{BaseGroupReport, Estimate, FoundationReport, FoundationTest};
+use super::trust::AT_THE_FLOOR;
 use crate::estimate::base::{
     fit_on_unmeasured_base, predict, BaseFitResult, BaseGroup, BaseIdentifiability,
 };
@@ -226,11 +236,12 @@ fn null_replicate(
 
 /// Fits the foundation candidate on `prep` and tests it against rigid
 /// ground (module docs). `base_prediction` is the rigid model's prediction
-/// (kept for bearings on no base); `None` when there are fewer than two
-/// bearings or no grouping can be fitted.
+/// (kept for bearings on no base), `base_gap` its gap; `None` when there are
+/// fewer than two bearings or no grouping can be fitted.
 pub fn evaluate(
     prep: &Prepared,
     base_prediction: &Prediction,
+    base_gap: Gap,
     replicates: usize,
     seed: u64,
 ) -> Result<Option<FoundationFit>> {
@@ -247,16 +258,36 @@ pub fn evaluate(
     let Some(grouping) = best_grouping(&obs, &start, &candidates, n_eq) else {
         return Ok(None);
     };
+    let prediction = prediction(prep, &obs, base_prediction, &grouping)?;
+    let gap = prediction.gap(prep, None);
     let statistic = grouping.score;
-    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    let mut null = Vec::with_capacity(replicates);
-    for _ in 0..replicates {
-        let data = null_replicate(&obs, &start, &mut rng);
-        if let Some(g) = best_grouping(&data, &start, &candidates, n_eq) {
-            null.push(g.score);
+    let not_run = if base_gap.gap <= AT_THE_FLOOR * base_gap.floor {
+        Some("the rigid-ground model already fits to the noise floor")
+    } else if statistic <= 0.0 {
+        Some("the likelihood ratio does not pay for the base's parameters")
+    } else if gap.gap >= base_gap.gap {
+        Some("the base model does not bring the gap down")
+    } else {
+        None
+    };
+    let test = match not_run {
+        Some(reason) => FoundationTest::not_run(statistic, grouping.lr, reason),
+        None => {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+            let favoured = [grouping.groups.clone()];
+            let mut null = Vec::with_capacity(replicates);
+            for _ in 0..replicates {
+                let data = null_replicate(&obs, &start, &mut rng);
+                if let Some(g) = best_grouping(&data, &start, &favoured, n_eq) {
+                    null.push(g.score);
+                    if g.score >= statistic {
+                        break;
+                    }
+                }
+            }
+            FoundationTest::from_replicates(statistic, grouping.lr, &null, candidates.len())
         }
-    }
-    let test = FoundationTest::from_replicates(statistic, grouping.lr, &null);
+    };
     let ln_n = (n_eq.max(2) as f64).ln();
     let evidence = Evidence {
         wald_floor: grouping.lr,
@@ -264,11 +295,9 @@ pub fn evaluate(
         wald: grouping.lr,
         extra_parameters: grouping.q,
         delta_bic: grouping.lr - grouping.q as f64 * ln_n,
-        p_value: test.p_calibrated,
-        p_adjusted: test.p_calibrated.max(test.p_empirical_floor()),
+        p_value: test.p_value,
+        p_adjusted: test.p_calibrated,
     };
-    let prediction = prediction(prep, &obs, base_prediction, &grouping)?;
-    let gap = prediction.gap(prep, None);
     Ok(Some(FoundationFit {
         grouping,
         test,
@@ -279,9 +308,27 @@ pub fn evaluate(
 }
 
 impl FoundationTest {
-    /// The test from the observed statistic `t` (penalised LR), the LR and
-    /// the bootstrap replicates of `t` under the null.
-    pub fn from_replicates(t: f64, lr: f64, null: &[f64]) -> Self {
+    /// The test not run (module docs: it could not change the decision),
+    /// with the reason.
+    pub fn not_run(t: f64, lr: f64, reason: &str) -> Self {
+        Self {
+            test: format!("likelihood-ratio, parametric bootstrap (0): not run, {reason}"),
+            likelihood_ratio: lr,
+            statistic: t,
+            replicates: 0,
+            exceedances: 0,
+            critical_value_95: f64::NAN,
+            p_empirical: 1.0,
+            p_value: 1.0,
+            groupings: 0,
+            p_calibrated: 1.0,
+        }
+    }
+
+    /// The test from the observed statistic `t` (penalised LR), the LR, the
+    /// bootstrap replicates of `t` under the null and the number of
+    /// groupings searched (the Bonferroni factor).
+    pub fn from_replicates(t: f64, lr: f64, null: &[f64], groupings: usize) -> Self {
         let r = null.len();
         let exceed = null.iter().filter(|&&x| x >= t).count();
         let p_empirical = (1 + exceed) as f64 / (r + 1) as f64;
@@ -290,11 +337,8 @@ impl FoundationTest {
         let lo = null.iter().copied().fold(f64::INFINITY, f64::min).min(t);
         let shift = if lo.is_finite() { -lo } else { 0.0 };
         let mean = null.iter().map(|x| x + shift).sum::<f64>() / r.max(1) as f64;
-        let var = null
-            .iter()
-            .map(|x| (x + shift - mean).powi(2))
-            .sum::<f64>()
-            / (r.max(2) - 1) as f64;
+        let var =
+            null.iter().map(|x| (x + shift - mean).powi(2)).sum::<f64>() / (r.max(2) - 1) as f64;
         let p_tail = if r >= 2 && mean > 0.0 && var > 0.0 {
             let a = var / (2.0 * mean);
             let nu = 2.0 * mean * mean / var;
@@ -303,6 +347,13 @@ impl FoundationTest {
             f64::NAN
         };
         let critical = quantile(null, 0.95);
+        // Beyond every replicate the scaled-χ² tail; otherwise the
+        // replicates themselves.
+        let p_value = if exceed == 0 && p_tail.is_finite() {
+            p_tail.min(p_empirical)
+        } else {
+            p_empirical
+        };
         Self {
             test: format!("likelihood-ratio, parametric bootstrap ({r})"),
             likelihood_ratio: lr,
@@ -311,13 +362,9 @@ impl FoundationTest {
             exceedances: exceed,
             critical_value_95: critical,
             p_empirical,
-            // Beyond every replicate the scaled-χ² tail; otherwise the
-            // replicates themselves.
-            p_calibrated: if exceed == 0 && p_tail.is_finite() {
-                p_tail.min(p_empirical)
-            } else {
-                p_empirical
-            },
+            p_value,
+            groupings,
+            p_calibrated: (p_value * groupings.max(1) as f64).min(1.0),
         }
     }
 
@@ -393,8 +440,8 @@ fn prediction(
                             continue;
                         };
                         let a = p2[s].1[i][d] - x[i][d];
-                        *v += a.norm_sqr()
-                            * (pq.sigma[2 * c].powi(2) + pq.sigma[2 * c + 1].powi(2));
+                        *v +=
+                            a.norm_sqr() * (pq.sigma[2 * c].powi(2) + pq.sigma[2 * c + 1].powi(2));
                     }
                     *v += point.sigma[4 + 2 * d].powi(2) + point.sigma[5 + 2 * d].powi(2);
                 }
@@ -512,12 +559,12 @@ mod tests {
     #[test]
     fn bootstrap_p_values() {
         let null: Vec<f64> = (0..40).map(|i| i as f64 / 4.0).collect();
-        let t = FoundationTest::from_replicates(100.0, 120.0, &null);
+        let t = FoundationTest::from_replicates(100.0, 120.0, &null, 4);
         assert_eq!(t.exceedances, 0);
         assert!(t.p_calibrated < 1e-6, "{t:?}");
         assert!(t.significant(1e-3));
         assert_eq!(t.test, "likelihood-ratio, parametric bootstrap (40)");
-        let t = FoundationTest::from_replicates(5.0, 20.0, &null);
+        let t = FoundationTest::from_replicates(5.0, 20.0, &null, 1);
         assert_eq!(t.exceedances, 20);
         assert!((t.p_empirical - 21.0 / 41.0).abs() < 1e-12);
         assert!(!t.significant(1e-3));

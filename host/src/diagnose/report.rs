@@ -96,8 +96,12 @@ pub struct FoundationTest {
     pub critical_value_95: f64,
     /// (1 + exceedances)/(replicates + 1).
     pub p_empirical: f64,
-    /// The p-value used: beyond every replicate, the tail of a scaled χ²
-    /// matched to the replicates; otherwise `p_empirical`.
+    /// Beyond every replicate, the tail of a scaled χ² matched to the
+    /// replicates; otherwise `p_empirical`.
+    pub p_value: f64,
+    /// Groupings of pedestals into bases searched (the Bonferroni factor).
+    pub groupings: usize,
+    /// The p-value the decision uses: `p_value` × `groupings`, at most 1.
     pub p_calibrated: f64,
 }
 
@@ -154,7 +158,11 @@ impl FoundationReport {
                 g.bearings.join(", "),
                 what[0],
                 what[1],
-                if g.converged { "" } else { " (fit NOT converged)" },
+                if g.converged {
+                    ""
+                } else {
+                    " (fit NOT converged)"
+                },
                 if params.is_empty() {
                     "no base motion detected".to_string()
                 } else {

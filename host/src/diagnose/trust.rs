@@ -38,14 +38,9 @@ pub struct Conclusion {
 }
 
 /// Concludes a diagnosis from the base model's gap `before`, the final
-/// model's gap `after`, the effects added and the final pedestals.
-pub fn conclude(
-    prep: &Prepared,
-    before: Gap,
-    after: Gap,
-    steps: &[Step],
-    pedestals: &[Pedestal],
-) -> Conclusion {
+/// model's gap `after`, the effects added and the final pedestals (as
+/// [`as_pedestal_fit`] gives them).
+pub fn conclude(before: Gap, after: Gap, steps: &[Step], pedestals: &[PedestalFit]) -> Conclusion {
     let mut reasons = Vec::new();
     let mut verdict = if steps.is_empty() {
         if before.gap <= AT_THE_FLOOR * before.floor {
@@ -99,11 +94,9 @@ pub fn conclude(
             after.gap, after.floor
         ));
     }
-    for p in pedestals {
-        if let Some(fit) = as_pedestal_fit(prep, p) {
-            for w in physical::violations(&fit) {
-                reasons.push(format!("pedestal {}: {}", p.bearing, w.message));
-            }
+    for fit in pedestals {
+        for w in physical::violations(fit) {
+            reasons.push(format!("pedestal {}: {}", fit.bearing, w.message));
         }
     }
     if !reasons.is_empty() && after.gap <= AT_THE_FLOOR * after.floor {
@@ -118,7 +111,7 @@ pub fn conclude(
 
 /// A diagnosis pedestal in the form `identify::physical` checks; `None` when
 /// it lacks a stiffness (a reduced `--base` always keeps both).
-fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
+pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
     let value = |name: &str| p.values.get(name).copied();
     let se = |name: &str| p.std_err.get(name).copied().unwrap_or(0.0);
     // With mass anisotropy the check applies to each directional mass: the
@@ -169,4 +162,112 @@ fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
         ols: None,
         suspected_convention_error: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::criterion::Evidence;
+
+    fn step(before: f64, after: f64) -> Step {
+        Step {
+            effect: "structural_damping".into(),
+            bearing: "left".into(),
+            gap_before: before,
+            gap_after: after,
+            gap_floor_after: 0.01,
+            machine_gap_before: None,
+            machine_gap_after: None,
+            channels: None,
+            parameters: Vec::new(),
+            test: "Wald".into(),
+            foundation: None,
+            evidence: Evidence {
+                wald_floor: 100.0,
+                wald_robust: 100.0,
+                wald: 100.0,
+                extra_parameters: 1,
+                delta_bic: 90.0,
+                p_value: 1e-9,
+                p_adjusted: 1e-8,
+            },
+            runner_up: None,
+            candidates_tried: 20,
+            candidates_failed: 0,
+        }
+    }
+
+    fn gap(gap: f64, floor: f64) -> Gap {
+        Gap { gap, floor }
+    }
+
+    #[test]
+    fn a_gap_that_rose_is_said_to_rise_and_is_not_trusted() {
+        let c = conclude(gap(0.10, 0.01), gap(0.12, 0.01), &[step(0.10, 0.12)], &[]);
+        assert!(c.verdict.contains("ROSE"), "{}", c.verdict);
+        assert!(!c.verdict.contains("fell"), "{}", c.verdict);
+        assert!(c.verdict.contains("from 0.1000 to 0.1200"), "{}", c.verdict);
+        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert!(!c.trusted);
+        assert!(c.reasons.iter().any(|r| r.contains("rose")));
+    }
+
+    #[test]
+    fn a_fall_still_far_above_the_floor_is_unexplained() {
+        let c = conclude(gap(1.5, 0.1), gap(1.29, 0.09), &[step(1.5, 1.29)], &[]);
+        assert!(
+            c.verdict.contains("fell from 1.5000 to 1.2900"),
+            "{}",
+            c.verdict
+        );
+        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert!(!c.trusted);
+        // Nothing added, gap far above the floor: unexplained too.
+        let c = conclude(gap(1.48, 0.097), gap(1.48, 0.097), &[], &[]);
+        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert!(!c.trusted);
+    }
+
+    #[test]
+    fn a_fall_to_the_floor_is_trusted() {
+        let c = conclude(gap(1.5, 0.1), gap(0.11, 0.1), &[step(1.5, 0.11)], &[]);
+        assert!(c.verdict.contains("fell"), "{}", c.verdict);
+        assert!(!c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert!(c.trusted, "{:?}", c.reasons);
+        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[]);
+        assert!(c.verdict.starts_with("No significant missing effect"));
+        assert!(c.trusted);
+    }
+
+    #[test]
+    fn negative_mass_is_flagged_through_identify_physical() {
+        let fit = PedestalFit {
+            bearing: "left".into(),
+            k_y: 1e7,
+            k_z: 8e6,
+            m: -20.0,
+            c_y: 300.0,
+            c_z: 250.0,
+            std_err: StdErr {
+                k_y: 1e4,
+                k_z: 1e4,
+                m: 1.0,
+                c_y: 10.0,
+                c_z: 10.0,
+            },
+            residual_rms: 0.0,
+            condition_number: 1.0,
+            fixed: Vec::new(),
+            trusted: true,
+            speeds: 50,
+            equations: 200,
+            speed_range_hz: [5.0, 100.0],
+            warnings: Vec::new(),
+            ols: None,
+            suspected_convention_error: None,
+        };
+        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[fit]);
+        assert!(!c.trusted);
+        assert!(c.reasons[0].contains("negative mass"), "{:?}", c.reasons);
+    }
 }

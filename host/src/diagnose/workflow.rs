@@ -6,14 +6,14 @@ use super::candidates::{library, Candidate, ParamRef};
 use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
 use super::fit::{fit_group, jacobian, profile, search_interval, Weights};
+use super::foundation::{self, FoundationFit};
 use super::gap::{Gap, Prediction};
 use super::locate::locate;
 use super::model::{Model, Params, Term};
 use super::noise::CHANNELS;
-use super::foundation::{self, FoundationFit};
-use super::trust::{conclude, AT_THE_FLOOR};
-use crate::effects::EffectKind;
 use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
+use super::trust::{as_pedestal_fit, conclude, AT_THE_FLOOR};
+use crate::effects::EffectKind;
 use crate::rundir::RunDir;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
@@ -399,15 +399,21 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let mut states = vec![state.clone()];
     let mut steps = Vec::new();
     let mut best_rejected = None;
-    let foundation_tried = if opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0
-    {
-        // A base fit that cannot run is "not tried", not an error.
-        foundation::evaluate(&prep, &pred0, opts.foundation_replicates, opts.foundation_seed)
+    let foundation_tried =
+        if opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0 {
+            // A base fit that cannot run is "not tried", not an error.
+            foundation::evaluate(
+                &prep,
+                &pred0,
+                gap0,
+                opts.foundation_replicates,
+                opts.foundation_seed,
+            )
             .ok()
             .flatten()
-    } else {
-        None
-    };
+        } else {
+            None
+        };
     let mut chosen_foundation = None;
     let mut ticker = crate::progress::Ticker::new(
         "diagnose: candidate-effect rounds",
@@ -423,9 +429,11 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         let outcome = step(&prep, &state, opts.alpha);
         if round == 0 {
             if let Some(f) = foundation_tried.as_ref().filter(|f| {
-                let library_score = outcome.ranked.first().filter(|_| outcome.accepted).map(|e| {
-                    e.evidence.wald_floor - e.evidence.extra_parameters as f64 * ln_n
-                });
+                let library_score = outcome
+                    .ranked
+                    .first()
+                    .filter(|_| outcome.accepted)
+                    .map(|e| e.evidence.wald_floor - e.evidence.extra_parameters as f64 * ln_n);
                 f.test.significant(opts.alpha)
                     && f.evidence.delta_bic > 0.0
                     && gap0.gap > AT_THE_FLOOR * gap0.floor
@@ -446,7 +454,10 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                     test: f.test.test.clone(),
                     foundation: Some(f.report(&prep)),
                     evidence: f.evidence,
-                    runner_up: outcome.ranked.first().map(|e| summary(&prep, e, outcome.tried)),
+                    runner_up: outcome
+                        .ranked
+                        .first()
+                        .map(|e| summary(&prep, e, outcome.tried)),
                     candidates_tried: outcome.tried + 1,
                     candidates_failed: outcome.failed.len(),
                 });
@@ -479,7 +490,10 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             test: wald_test(outcome.tried),
             foundation: None,
             evidence: win.evidence,
-            runner_up: outcome.ranked.get(1).map(|e| summary(&prep, e, outcome.tried)),
+            runner_up: outcome
+                .ranked
+                .get(1)
+                .map(|e| summary(&prep, e, outcome.tried)),
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
         });
@@ -503,7 +517,11 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         }
     }
     let effects_added: Vec<String> = steps.iter().map(|s| s.effect.clone()).collect();
-    let conclusion = conclude(&prep, gap0, gap1, &steps, &pedestals_after);
+    let physical: Vec<_> = pedestals_after
+        .iter()
+        .filter_map(|p| as_pedestal_fit(&prep, p))
+        .collect();
+    let conclusion = conclude(gap0, gap1, &steps, &physical);
     let mut digits = BTreeMap::new();
     for (c, q) in prep.noise.columns.iter().enumerate() {
         digits.insert(CHANNELS[c].to_string(), q.digits);
