@@ -268,10 +268,6 @@ fn check_unexplained(run: &RunDir, label: &str) {
     let d = &out.diagnosis;
     let text = d.to_text();
     println!("{label}:\n{text}");
-    assert!(
-        d.gap_after > AT_THE_FLOOR * d.noise.gap_floor_after,
-        "{label}: the data were meant to be out of the library"
-    );
     assert!(text.contains(UNEXPLAINED), "{label}");
     assert!(!d.trusted, "{label}");
     assert!(

@@ -425,7 +425,13 @@ fn prediction(
             }
         }
         for (s, (speed, x)) in base_pred.iter().enumerate() {
-            let Some(j) = prep.speeds_hz.iter().position(|v| v == speed) else {
+            // The speed comes back through Ω = 2πf: match it to a relative
+            // 1e-9, not exactly.
+            let Some(j) = prep
+                .speeds_hz
+                .iter()
+                .position(|v| (v - speed).abs() <= 1e-9 * v.abs().max(speed.abs()))
+            else {
                 continue;
             };
             for (i, &b) in group.iter().enumerate() {

@@ -2,7 +2,8 @@
 //!
 //! Two things make identified parameters untrustworthy:
 //! - **an unexplained disagreement**: after the chosen effects the gap is
-//!   still well above its noise floor (more than [`AT_THE_FLOOR`] times it),
+//!   still well above its noise floor (more than [`AT_THE_FLOOR`] times the
+//!   smaller of the base and final models' floors), or it rose,
 //!   so the data hold something no effect of the library explains and every
 //!   parameter fitted to them absorbs part of it; the verdict says so
 //!   plainly, and it never reports a fall of the gap the numbers do not show
@@ -79,19 +80,24 @@ pub fn conclude(before: Gap, after: Gap, steps: &[Step], pedestals: &[PedestalFi
             after.floor
         )
     };
-    if after.gap > AT_THE_FLOOR * after.floor {
-        let times = if after.floor > 0.0 {
-            format!("{:.1}×", after.gap / after.floor)
+    // Judged against the smaller of the two floors: the noise does not
+    // change with the model, and a model that amplifies it (near-singular
+    // at some speed) must not talk its own gap down to "at the floor".
+    let floor = before.floor.min(after.floor);
+    let rose = !steps.is_empty() && after.gap > before.gap;
+    if after.gap > AT_THE_FLOOR * floor || rose {
+        let times = if floor > 0.0 {
+            format!("{:.1}×", after.gap / floor)
         } else {
             "infinitely many times".to_string()
         };
         verdict += &format!(
-            " But {UNEXPLAINED}: the gap {:.4} is {times} its noise floor {:.4}, so the identified parameters are not to be trusted.",
-            after.gap, after.floor
+            " But {UNEXPLAINED}: the gap {:.4} is {times} its noise floor {floor:.4}, so the identified parameters are not to be trusted.",
+            after.gap
         );
         reasons.push(format!(
-            "{UNEXPLAINED} (gap {:.4}, {times} the noise floor {:.4})",
-            after.gap, after.floor
+            "{UNEXPLAINED} (gap {:.4}, {times} the noise floor {floor:.4})",
+            after.gap
         ));
     }
     for fit in pedestals {
@@ -99,7 +105,7 @@ pub fn conclude(before: Gap, after: Gap, steps: &[Step], pedestals: &[PedestalFi
             reasons.push(format!("pedestal {}: {}", fit.bearing, w.message));
         }
     }
-    if !reasons.is_empty() && after.gap <= AT_THE_FLOOR * after.floor {
+    if !reasons.is_empty() && !verdict.contains(UNEXPLAINED) {
         verdict += " The identified parameters are not to be trusted (reasons below).";
     }
     Conclusion {
