@@ -5,7 +5,9 @@
 //! `speed_hz,base,bearings,y_re,y_im,z_re,z_im` — speed [Hz], base name, the
 //! bearings whose pedestals stand on it separated by `;`, and the base's
 //! absolute displacement phasors [m] (q(t) = Re{Q e^{iΩt}}, y vertical,
-//! z horizontal, as in `measurements.csv`).
+//! z horizontal, as in `measurements.csv`). Optional noise columns after
+//! them, `y_sd,z_sd`: the complex noise sd sqrt(E|n|²) [m] of each phasor, as
+//! formats.md's `*_sd` columns of `measurements.csv`.
 
 use crate::sim::Response;
 use num_complex::Complex;
@@ -19,6 +21,9 @@ pub const BASE_COLUMNS: [&str; 7] = [
     "speed_hz", "base", "bearings", "y_re", "y_im", "z_re", "z_im",
 ];
 
+/// The optional noise columns of `base.csv`.
+pub const BASE_NOISE_COLUMNS: [&str; 2] = ["y_sd", "z_sd"];
+
 /// One row of `base.csv`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BaseRow {
@@ -30,6 +35,8 @@ pub struct BaseRow {
     pub bearings: Vec<String>,
     /// Base displacement phasors (y, z) [m].
     pub motion: [Complex<f64>; 2],
+    /// Noise sd sqrt(E|n|²) of the y and z phasors [m] (`y_sd,z_sd`), when given.
+    pub noise_sd: Option<[f64; 2]>,
 }
 
 /// A problem reading `base.csv`, with file, line and column.
@@ -68,6 +75,7 @@ pub fn rows_of(response: &Response, bases: &[(String, Vec<String>)]) -> Vec<Base
                 base: name.clone(),
                 bearings: bearings.clone(),
                 motion: *m,
+                noise_sd: None,
             });
         }
     }
@@ -82,10 +90,15 @@ pub fn write(dir: &Path, rows: &[BaseRow]) -> Result<(), BaseCsvError> {
         source: std::io::Error::other(e),
     };
     let mut w = csv::Writer::from_path(&file).map_err(io)?;
-    w.write_record(BASE_COLUMNS).map_err(io)?;
+    let with_noise = !rows.is_empty() && rows.iter().all(|r| r.noise_sd.is_some());
+    let mut header: Vec<&str> = BASE_COLUMNS.to_vec();
+    if with_noise {
+        header.extend(BASE_NOISE_COLUMNS);
+    }
+    w.write_record(&header).map_err(io)?;
     for r in rows {
         let [y, z] = r.motion;
-        w.write_record([
+        let mut record = vec![
             r.speed_hz.to_string(),
             r.base.clone(),
             r.bearings.join(";"),
@@ -93,8 +106,11 @@ pub fn write(dir: &Path, rows: &[BaseRow]) -> Result<(), BaseCsvError> {
             y.im.to_string(),
             z.re.to_string(),
             z.im.to_string(),
-        ])
-        .map_err(io)?;
+        ];
+        if let (true, Some(sd)) = (with_noise, r.noise_sd) {
+            record.extend(sd.map(|v| v.to_string()));
+        }
+        w.write_record(&record).map_err(io)?;
     }
     w.flush().map_err(|source| BaseCsvError::Io {
         file: file.clone(),
@@ -135,6 +151,22 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
             ));
         }
     }
+    let with_noise = match header.len() {
+        7 => false,
+        9 if header.get(7) == Some("y_sd") && header.get(8) == Some("z_sd") => true,
+        n => {
+            return Err(field(
+                1,
+                n.min(8),
+                format!(
+                    "expected {} or {},{} (optional noise columns), got {n} columns",
+                    BASE_COLUMNS.join(","),
+                    BASE_COLUMNS.join(","),
+                    BASE_NOISE_COLUMNS.join(",")
+                ),
+            ))
+        }
+    };
     let mut rows = Vec::new();
     for rec in r.records() {
         let rec = rec.map_err(|e| {
@@ -171,6 +203,27 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
         if bearings.is_empty() {
             return Err(field(line, 3, "bearings: no bearing named".into()));
         }
+        let noise_sd = if with_noise {
+            let sd = |c: usize| -> Result<f64, BaseCsvError> {
+                let text = rec.get(c).unwrap_or("");
+                text.parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite() && *v >= 0.0)
+                    .ok_or_else(|| {
+                        field(
+                            line,
+                            c + 1,
+                            format!(
+                                "{}: {text:?} is not a finite noise sd >= 0 [m]",
+                                BASE_NOISE_COLUMNS[c - 7]
+                            ),
+                        )
+                    })
+            };
+            Some([sd(7)?, sd(8)?])
+        } else {
+            None
+        };
         rows.push(BaseRow {
             speed_hz,
             base,
@@ -179,6 +232,7 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
                 Complex::new(num(3)?, num(4)?),
                 Complex::new(num(5)?, num(6)?),
             ],
+            noise_sd,
         });
     }
     Ok(Some(rows))

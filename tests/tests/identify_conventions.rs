@@ -224,6 +224,7 @@ fn identify_exit_code(dir: &Path) -> u8 {
         compare_ols: false,
         truncated: false,
         slow_roll: None,
+        unmeasured_base: None,
     };
     match identify_cli(&args) {
         Ok(()) => 0,

@@ -146,6 +146,11 @@ pub struct BaseFitResult {
     /// J of the same pedestals on rigid ground (refitted) [-]: the
     /// likelihood ratio J_rigid − J tests for base motion.
     pub chi2_rigid: f64,
+    /// RMS of each pedestal's unweighted equation residual e_i [N] (group order).
+    pub pedestal_residual_rms: Vec<f64>,
+    /// Condition number of the unit-diagonal Fisher information of the
+    /// estimated parameters, square-rooted (as for the rigid fit) [-].
+    pub condition_number: f64,
     /// True when the final iteration met its convergence test.
     pub converged: bool,
     /// Levenberg–Marquardt iterations of the final fit.
@@ -185,6 +190,8 @@ pub enum BaseFitError {
 struct Speed {
     omega: f64,
     obs: Vec<Observation>,
+    /// Each member's bearing force F = K*·rel [N].
+    force: Vec<[C; 2]>,
     var: Vec<f64>,
 }
 
@@ -221,6 +228,32 @@ impl Equations for Unmeasured {
         &self.speeds[s].var
     }
 
+    fn error(&self, s: usize, p: &[f64]) -> DVector<f64> {
+        let sp = &self.speeds[s];
+        let n = sp.obs.len();
+        let w = sp.omega;
+        let w2 = w * w;
+        let mut e = DVector::zeros(4 * n);
+        for d in 0..2 {
+            let q = &p[base_at(n, d)..base_at(n, d) + 3];
+            let g = C::new(q[0], 0.0) / C::new(1.0 - w2 * q[1], w * q[2]);
+            let t: C = sp
+                .obs
+                .iter()
+                .enumerate()
+                .map(|(j, o)| sp.force[j][d] + w2 * p[5 * j + 2] * o.ped[d])
+                .sum();
+            for (i, o) in sp.obs.iter().enumerate() {
+                let th = &p[5 * i..5 * i + 5];
+                let di = spring(th, d, w);
+                let r = (di - w2 * th[2]) * o.ped[d] - sp.force[i][d] - di * g * t;
+                e[4 * i + 2 * d] = r.re;
+                e[4 * i + 2 * d + 1] = r.im;
+            }
+        }
+        e
+    }
+
     fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
         let sp = &self.speeds[s];
         let n = sp.obs.len();
@@ -235,13 +268,13 @@ impl Equations for Unmeasured {
                 .obs
                 .iter()
                 .enumerate()
-                .map(|(j, o)| o.force()[d] + w2 * p[5 * j + 2] * o.ped[d])
+                .map(|(j, o)| sp.force[j][d] + w2 * p[5 * j + 2] * o.ped[d])
                 .sum();
             for (i, o) in sp.obs.iter().enumerate() {
                 let th = &p[5 * i..5 * i + 5];
                 let di = spring(th, d, w);
                 let h = di - w2 * th[2];
-                let r = h * o.ped[d] - o.force()[d] - di * g * t;
+                let r = h * o.ped[d] - sp.force[i][d] - di * g * t;
                 e[4 * i + 2 * d] = r.re;
                 e[4 * i + 2 * d + 1] = r.im;
                 for (j, oj) in sp.obs.iter().enumerate() {
@@ -295,6 +328,7 @@ fn common_speeds(obs: &[Vec<Observation>], group: &BaseGroup) -> Result<Vec<Spee
             let var = members.iter().flat_map(|m| m.var).collect();
             speeds.push(Speed {
                 omega: o.omega(),
+                force: members.iter().map(Observation::force).collect(),
                 obs: members,
                 var,
             });
@@ -306,11 +340,12 @@ fn common_speeds(obs: &[Vec<Observation>], group: &BaseGroup) -> Result<Vec<Spee
 }
 
 /// Most iterations of a profiling fit and of the final fit.
-const GRID_ITERATIONS: usize = 40;
+const GRID_ITERATIONS: usize = 20;
 const FINAL_ITERATIONS: usize = 200;
-/// Base frequencies of the profile grid, and its damping ratios.
+/// Base frequencies of the profile grid, and the damping ratio each of its
+/// fits starts from.
 const GRID_FREQUENCIES: usize = 24;
-const GRID_DAMPING: [f64; 5] = [0.02, 0.05, 0.1, 0.2, 0.4];
+const GRID_DAMPING: f64 = 0.05;
 /// Likelihood-ratio threshold (J_rigid − J) for base motion in one
 /// direction: the 1e-3 upper point of χ²(3) (three base parameters).
 pub const DETECTION_THRESHOLD: f64 = 16.27;
@@ -367,8 +402,9 @@ pub fn fit_on_unmeasured_base(
     let rigid = gh::fit(&eq, &p0, &scale, &pedestal_free, None, FINAL_ITERATIONS)
         .ok_or(BaseFitError::NotEvaluable)?;
 
-    // Profile (f_B, ζ_B) per direction with frozen weights.
-    let mut best = rigid.p.clone();
+    // Profile the base frequency with frozen weights: every fit of the grid
+    // starts from the rigid pedestals with the base mode at f (both
+    // directions, then each direction alone) and frees everything.
     let (f_lo, f_hi) = (w_lo / TAU, w_hi / TAU);
     let grid: Vec<f64> = (0..GRID_FREQUENCIES)
         .map(|j| {
@@ -376,47 +412,53 @@ pub fn fit_on_unmeasured_base(
             (a + (b - a) * j as f64 / (GRID_FREQUENCIES - 1) as f64).exp()
         })
         .collect();
-    for d in 0..2 {
-        let mut free = pedestal_free.clone();
-        free[base_at(n, 0)] = true;
-        free[base_at(n, 1)] = true;
+    let all = vec![true; n_par];
+    let shaped = |from: &[f64], d: usize, f: f64, zeta: f64| -> Vec<f64> {
+        let mut p = from.to_vec();
+        let wb = TAU * f;
         let o = base_at(n, d);
-        let from = best.clone();
-        let mut best_cost =
-            gh::whitened(&eq, &from, Some(&frozen)).map_or(f64::INFINITY, |w| w.norm_squared());
-        let mut best_f = None;
-        // Fit from `p` with the base shape (f [Hz], ζ) in direction d held.
-        let profile = |mut p: Vec<f64>, f: f64, zeta: f64| {
-            let wb = TAU * f;
-            p[o + 1] = 1.0 / (wb * wb);
-            p[o + 2] = 2.0 * zeta / wb;
-            gh::fit(&eq, &p, &scale, &free, Some(&frozen), GRID_ITERATIONS)
+        // A base as compliant as the pedestals together, mode at f.
+        p[o] = scale[o];
+        p[o + 1] = 1.0 / (wb * wb);
+        p[o + 2] = 2.0 * zeta / wb;
+        p
+    };
+    let mut best = rigid.p.clone();
+    let mut best_cost =
+        gh::whitened(&eq, &best, Some(&frozen)).map_or(f64::INFINITY, |w| w.norm_squared());
+    let consider =
+        |p: Vec<f64>, frozen: &[DMatrix<f64>], best: &mut Vec<f64>, best_cost: &mut f64| {
+            if let Some(m) = gh::fit(&eq, &p, &scale, &all, Some(frozen), GRID_ITERATIONS) {
+                if m.cost < *best_cost {
+                    *best_cost = m.cost;
+                    *best = m.p;
+                }
+            }
         };
+    for &f in &grid {
+        let p = shaped(&shaped(&rigid.p, 0, f, GRID_DAMPING), 1, f, GRID_DAMPING);
+        consider(p, &frozen, &mut best, &mut best_cost);
+    }
+    // Weights at the best so far, then each direction's mode on its own.
+    let refrozen: Vec<DMatrix<f64>> = (0..eq.speeds())
+        .map(|s| gh::whitening(&eq, s, &best))
+        .collect::<Option<_>>()
+        .unwrap_or(frozen);
+    best_cost =
+        gh::whitened(&eq, &best, Some(&refrozen)).map_or(f64::INFINITY, |w| w.norm_squared());
+    for d in 0..2 {
+        let from = best.clone();
         for &f in &grid {
-            let mut p = from.clone();
-            p[o] = 0.0;
-            if let Some(m) = profile(p, f, 0.1) {
-                if m.cost < best_cost {
-                    best_cost = m.cost;
-                    best = m.p;
-                    best_f = Some(f);
-                }
-            }
-        }
-        if let Some(f) = best_f {
-            for &zeta in &GRID_DAMPING {
-                if let Some(m) = profile(best.clone(), f, zeta) {
-                    if m.cost < best_cost {
-                        best_cost = m.cost;
-                        best = m.p;
-                    }
-                }
-            }
+            consider(
+                shaped(&from, d, f, GRID_DAMPING),
+                &refrozen,
+                &mut best,
+                &mut best_cost,
+            );
         }
     }
 
     // Everything free, with the likelihood's own weights.
-    let all = vec![true; n_par];
     let full = gh::fit(&eq, &best, &scale, &all, None, FINAL_ITERATIONS)
         .ok_or(BaseFitError::NotEvaluable)?;
     let full = if full.cost <= rigid.cost {
@@ -542,6 +584,15 @@ pub fn fit_on_unmeasured_base(
         chi2: fin.cost,
         dof: n_eq - idx.len(),
         chi2_rigid: rigid.cost,
+        pedestal_residual_rms: (0..n)
+            .map(|i| {
+                let ss: f64 = (0..eq.speeds())
+                    .map(|s| eq.residual(s, &p).0.rows(4 * i, 4).norm_squared())
+                    .sum();
+                (ss / (4 * eq.speeds()) as f64).sqrt()
+            })
+            .collect(),
+        condition_number: gh::condition_number(&f),
         converged: fin.converged,
         iterations: fin.iterations,
         speeds_hz: eq.speeds.iter().map(|s| s.omega / TAU).collect(),
@@ -718,19 +769,7 @@ pub fn fit_on_measured_base(
         .ok_or(MeasuredBaseError::NotEvaluable)?;
     let f = gh::fisher(&eq, &m.p, &scale).ok_or(MeasuredBaseError::NotEvaluable)?;
     let inv = gh::inverse_psd(&f);
-    let condition_number = {
-        let d: Vec<f64> = (0..5).map(|i| f[(i, i)].sqrt()).collect();
-        let scaled = DMatrix::from_fn(5, 5, |r, c| f[(r, c)] / (d[r] * d[c]));
-        let ev = scaled.symmetric_eigenvalues();
-        let (lo, hi) = ev.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
-            (lo.min(v), hi.max(v))
-        });
-        if lo > 0.0 {
-            (hi / lo).sqrt()
-        } else {
-            f64::INFINITY
-        }
-    };
+    let condition_number = gh::condition_number(&f);
     let residual_rms = ((0..eq.speeds())
         .map(|s| eq.residual(s, &m.p).0.norm_squared())
         .sum::<f64>()

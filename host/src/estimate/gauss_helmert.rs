@@ -23,6 +23,10 @@ pub trait Equations {
     /// Residual e_s(p) and B_s = ∂e_s/∂(measured numbers) at speed `s` for
     /// parameters `p` (model units).
     fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>);
+    /// The residual e_s(p) alone (what frozen weights need).
+    fn error(&self, s: usize, p: &[f64]) -> DVector<f64> {
+        self.residual(s, p).0
+    }
     /// Noise variance of each measured number of speed `s` (order of B's columns).
     fn variance(&self, s: usize) -> &[f64];
 }
@@ -57,12 +61,11 @@ pub fn whitened<E: Equations + ?Sized>(
 ) -> Option<DVector<f64>> {
     let mut out = Vec::new();
     for s in 0..eq.speeds() {
-        let (e, _) = eq.residual(s, p);
-        let l = match frozen {
-            Some(f) => f[s].clone(),
-            None => whitening(eq, s, p)?,
+        let e = eq.error(s, p);
+        let w = match frozen {
+            Some(f) => f[s].solve_lower_triangular(&e)?,
+            None => whitening(eq, s, p)?.solve_lower_triangular(&e)?,
         };
-        let w = l.solve_lower_triangular(&e)?;
         out.extend(w.iter().copied());
     }
     out.iter()
@@ -82,7 +85,7 @@ pub fn fisher<E: Equations + ?Sized>(eq: &E, p: &[f64], scale: &[f64]) -> Option
     let mut f = DMatrix::zeros(n, n);
     for s in 0..eq.speeds() {
         let l = whitening(eq, s, p)?;
-        let (e0, _) = eq.residual(s, p);
+        let e0 = eq.error(s, p);
         let mut a = DMatrix::zeros(e0.len(), n);
         for k in 0..n {
             let h = 1e-6 * scale[k];
@@ -90,7 +93,7 @@ pub fn fisher<E: Equations + ?Sized>(eq: &E, p: &[f64], scale: &[f64]) -> Option
             up[k] += h;
             let mut dn = p.to_vec();
             dn[k] -= h;
-            let d = (eq.residual(s, &up).0 - eq.residual(s, &dn).0) / (2.0 * h);
+            let d = (eq.error(s, &up) - eq.error(s, &dn)) / (2.0 * h);
             a.set_column(k, &d);
         }
         let w = l.solve_lower_triangular(&a)?;
@@ -124,6 +127,27 @@ pub fn inverse_psd(f: &DMatrix<f64>) -> DMatrix<f64> {
     }
     let inv = inv * eig.eigenvectors.transpose();
     DMatrix::from_fn(p, p, |r, c| inv[(r, c)] / (d[r] * d[c]))
+}
+
+/// Square root of the condition number of the unit-diagonal scaling of a
+/// Fisher information (the condition number of the whitened,
+/// column-normalised regression) [-]; ∞ when singular.
+pub fn condition_number(f: &DMatrix<f64>) -> f64 {
+    let p = f.nrows();
+    let d: Vec<f64> = (0..p).map(|i| f[(i, i)].max(0.0).sqrt()).collect();
+    if p == 0 || d.iter().any(|&x| !(x > 0.0 && x.is_finite())) {
+        return f64::INFINITY;
+    }
+    let scaled = DMatrix::from_fn(p, p, |r, c| f[(r, c)] / (d[r] * d[c]));
+    let ev = scaled.symmetric_eigenvalues();
+    let (lo, hi) = ev.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
+    if lo > 0.0 {
+        (hi / lo).sqrt()
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// Outcome of [`fit`].

@@ -93,6 +93,13 @@ pub struct Args {
     /// slow-roll vector: probe runout) from every `rel` phasor before fitting.
     #[arg(long, value_name = "LO:HI")]
     pub slow_roll: Option<crate::field::slow_roll::SlowRollBand>,
+    /// Pedestals that stand on a base whose motion was not measured, fitted
+    /// together with the base's stiffness, damping and mass to ground
+    /// (bearing names separated by `,`, one group per base, groups separated
+    /// by `;`, e.g. `left,right;b3,b4`). A base.csv in DIR is used without
+    /// this flag (identification relative to the measured base).
+    #[arg(long, value_name = "B1,B2[;B3,B4]")]
+    pub unmeasured_base: Option<super::on_base::BaseGroups>,
 }
 
 impl Args {
@@ -123,6 +130,31 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             super::mode_name(equations)
         );
     }
+    let (run, identification) = identify_args(args)?;
+    for p in &identification.pedestals {
+        for w in &p.warnings {
+            eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
+        }
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&identification)?);
+    } else {
+        print!("{}", table(&identification, run.truth.as_ref()));
+        print!("{}", super::on_base::describe(&identification.bases));
+        print!("{}", untrusted_reasons(&identification));
+    }
+    // A physically impossible pedestal or a suspected convention mistake:
+    // everything is printed, then exit code 2 (`physical::EXIT_NOT_PHYSICAL`).
+    match super::physical::NotPhysical::of(&identification) {
+        Some(e) => Err(e.into()),
+        None => Ok(()),
+    }
+}
+
+/// What `plinth identify` computes for `args` (the run as read, after any
+/// slow-roll subtraction, and its identification, pedestals on bases
+/// included), without printing it.
+pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
     let mut run = RunDir::read(&args.dir)?;
     if let Some(band) = args.slow_roll {
         let removed = crate::field::slow_roll::subtract_slow_roll(&mut run.measurements, band)?;
@@ -136,25 +168,29 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             eprintln!("warning: {w}");
         }
     }
-    let identification = identify_run(&run, &args.options())
+    let mut identification = identify_run(&run, &args.options())
         .with_context(|| format!("identifying {}", args.dir.display()))?;
-    for p in &identification.pedestals {
-        for w in &p.warnings {
-            eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
-        }
+    on_bases(args, &run, &mut identification)?;
+    Ok((run, identification))
+}
+
+/// Pedestals on bases: refitted on the measured base of DIR/base.csv, then
+/// with the unmeasured bases of `--unmeasured-base` ([`super::on_base`]).
+fn on_bases(args: &Args, run: &RunDir, identification: &mut Identification) -> anyhow::Result<()> {
+    let options = args.options();
+    let context = || format!("identifying {} on its bases", args.dir.display());
+    if let Some(rows) = crate::base_csv::read(&args.dir)? {
+        let reports = super::on_base::apply_measured_base(run, &rows, identification, &options)
+            .with_context(context)?;
+        identification.bases.extend(reports);
     }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&identification)?);
-    } else {
-        print!("{}", table(&identification, run.truth.as_ref()));
-        print!("{}", untrusted_reasons(&identification));
+    if let Some(groups) = &args.unmeasured_base {
+        let reports =
+            super::on_base::apply_unmeasured_bases(run, &groups.0, identification, &options)
+                .with_context(context)?;
+        identification.bases.extend(reports);
     }
-    // A physically impossible pedestal or a suspected convention mistake:
-    // everything is printed, then exit code 2 (`physical::EXIT_NOT_PHYSICAL`).
-    match super::physical::NotPhysical::of(&identification) {
-        Some(e) => Err(e.into()),
-        None => Ok(()),
-    }
+    Ok(())
 }
 
 /// Under the table: why each UNTRUSTED pedestal is not trusted (the warnings

@@ -585,6 +585,8 @@ mod tests {
             speed_range_hz: [5.0, 200.0],
             warnings: Vec::new(),
             suspected_convention_error: None,
+            base: None,
+            base_measured: None,
             ols: None,
         };
         let conj = Some(Convention::Conjugated);

@@ -23,6 +23,7 @@ pub mod estimator;
 pub mod lsq;
 pub mod misfit;
 pub mod model;
+pub mod on_base;
 pub mod physical;
 pub mod synthetic;
 
@@ -260,6 +261,13 @@ pub struct PedestalFit {
     /// when undoing one makes the data a passive pedestal at the noise floor.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub suspected_convention_error: Option<convention::Convention>,
+    /// The base this pedestal was identified on (`base.csv`'s name, or
+    /// `groupN` of `--unmeasured-base`); absent: rigid ground.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<String>,
+    /// True when that base's motion was measured (`base.csv`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base_measured: Option<bool>,
 }
 
 impl PedestalFit {
@@ -301,6 +309,9 @@ pub struct Identification {
     /// The noise model of each bearing, by bearing name.
     #[serde(default)]
     pub noise: BTreeMap<String, NoiseReport>,
+    /// The bases pedestals were identified on ([`on_base`]); empty: rigid ground.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bases: Vec<on_base::BaseReport>,
 }
 
 fn ols_name() -> String {
@@ -345,6 +356,10 @@ pub enum IdentifyError {
     /// The run directory could not be read.
     #[error(transparent)]
     RunDir(#[from] RunDirError),
+    /// A problem with the bases pedestals stand on (`base.csv`,
+    /// `--unmeasured-base`), said in full.
+    #[error("{0}")]
+    Base(String),
     /// A fit's result is not a finite number (an overflow).
     #[error(transparent)]
     NonFinite(#[from] physical::NonFiniteResult),
@@ -457,6 +472,8 @@ pub(crate) fn ols_solution(
         warnings: Vec::new(),
         ols: None,
         suspected_convention_error: None,
+        base: None,
+        base_measured: None,
     };
     fit.warnings = checks::warnings(&fit, &used, skipped, &solution, &columns, options);
     physical::check_finite(&fit)?;
@@ -547,6 +564,7 @@ pub fn fit_run(run: &RunDir, options: &Options) -> Result<Identification, Identi
         estimator: estimator.name().to_string(),
         pedestals,
         noise: noise_reports,
+        bases: Vec::new(),
     })
 }
 

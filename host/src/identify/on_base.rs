@@ -1,0 +1,464 @@
+//! `identify` with pedestals on a base (README, "Bases"): with the base
+//! measured (`base.csv`), each pedestal on a listed base is fitted relative
+//! to the base's motion by maximum likelihood with the base phasor's noise
+//! ([`crate::estimate::base::fit_on_measured_base`]); with the base not
+//! measured (`--unmeasured-base B1,B2[;B3,B4]`), each group of pedestals is
+//! fitted together with its base ([`crate::estimate::base::fit_on_unmeasured_base`]).
+//! Both replace the rigid-ground fits of the pedestals concerned in an
+//! [`Identification`] and say so (`base`, `base_measured`).
+
+use super::estimator::{fit_ml, CHI2_P_THRESHOLD};
+use super::{
+    observations, physical, Identification, IdentifyError, Options, PedestalFit, StdErr, Warning,
+    WarningKind,
+};
+use crate::base_csv::BaseRow;
+use crate::estimate::base::{
+    fit_on_measured_base, fit_on_unmeasured_base, BaseFitResult, BaseGroup, BaseIdentifiability,
+    BaseObservation,
+};
+use crate::estimate::ml::chi2_two_sided_p;
+use crate::estimate::noise::{BearingNoise, ColumnDigits};
+use crate::estimate::Observation;
+use crate::rundir::{Measurement, RunDir};
+use serde::{Deserialize, Serialize};
+
+/// What `identify` reports about one base (`--json`: `"bases"`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BaseReport {
+    /// Base name (`base.csv`'s, or `group1`, `group2`… for `--unmeasured-base`).
+    pub name: String,
+    /// Bearings whose pedestals stand on it.
+    pub bearings: Vec<String>,
+    /// True when its motion was measured (`base.csv`).
+    pub measured: bool,
+    /// Unmeasured base: what the data determine, y then z.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y: Option<BaseDirection>,
+    /// Unmeasured base, horizontal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z: Option<BaseDirection>,
+    /// Unmeasured base: J = Σ eᵀΣ⁻¹e of the joint fit [-].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chi2: Option<f64>,
+    /// Its degrees of freedom.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dof: Option<usize>,
+    /// J of the same pedestals refitted on rigid ground [-].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chi2_rigid: Option<f64>,
+}
+
+/// One direction of an unmeasured base: only what the data determine is
+/// given (the others are `null`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BaseDirection {
+    /// `full`, `quasi_static`, `mass_line` or `not_detected`.
+    pub identifiable: String,
+    /// K_B [N/m] ± (full).
+    pub k: Option<[f64; 2]>,
+    /// C_B [N·s/m] ± (full).
+    pub c: Option<[f64; 2]>,
+    /// M_B [kg] ± (full, mass_line).
+    pub m: Option<[f64; 2]>,
+    /// Natural frequency sqrt(K_B/M_B)/2π [Hz] (full).
+    pub frequency_hz: Option<f64>,
+    /// Quasi-static compliance 1/K_B [m/N] ± (quasi_static).
+    pub compliance_m_per_n: Option<[f64; 2]>,
+}
+
+impl BaseDirection {
+    fn of(fit: &BaseFitResult, d: usize, scale: f64) -> Self {
+        let s = scale.sqrt();
+        let (b, e) = (&fit.base, &fit.base_std_err);
+        let mut out = BaseDirection {
+            identifiable: fit.identifiability[d].name().to_string(),
+            k: None,
+            c: None,
+            m: None,
+            frequency_hz: None,
+            compliance_m_per_n: None,
+        };
+        match fit.identifiability[d] {
+            BaseIdentifiability::Full => {
+                out.k = Some([b.k[d], s * e.k[d]]);
+                out.c = Some([b.c[d], s * e.c[d]]);
+                out.m = Some([b.m[d], s * e.m[d]]);
+                out.frequency_hz = Some(fit.base_frequency_hz[d]);
+            }
+            BaseIdentifiability::QuasiStatic {
+                compliance_m_per_n,
+                std_err,
+            } => out.compliance_m_per_n = Some([compliance_m_per_n, s * std_err]),
+            BaseIdentifiability::MassLine { mass_kg, std_err } => {
+                out.m = Some([mass_kg, s * std_err])
+            }
+            BaseIdentifiability::NotDetected => {}
+        }
+        out
+    }
+}
+
+/// The groups of `--unmeasured-base`: bearing names per group.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BaseGroups(pub Vec<Vec<String>>);
+
+impl std::str::FromStr for BaseGroups {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        parse_groups(s).map(BaseGroups)
+    }
+}
+
+/// Parses `--unmeasured-base`: bearing names separated by `,`, groups by `;`.
+pub fn parse_groups(text: &str) -> Result<Vec<Vec<String>>, String> {
+    let mut groups = Vec::new();
+    for g in text.split(';') {
+        let names: Vec<String> = g
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(String::from)
+            .collect();
+        if names.is_empty() {
+            return Err(format!("--unmeasured-base {text:?}: an empty group"));
+        }
+        for n in &names {
+            if groups
+                .iter()
+                .flatten()
+                .chain(&names)
+                .filter(|x| *x == n)
+                .count()
+                > 1
+            {
+                return Err(format!(
+                    "--unmeasured-base {text:?}: bearing `{n}` is named twice"
+                ));
+            }
+        }
+        groups.push(names);
+    }
+    Ok(groups)
+}
+
+/// One bearing's observations and the noise model they came from.
+fn bearing_data(
+    run: &RunDir,
+    bearing: &str,
+    options: &Options,
+) -> Result<(Vec<Observation>, BearingNoise), IdentifyError> {
+    let schedules = run.bearing_schedules();
+    let schedule = schedules
+        .get(bearing)
+        .ok_or_else(|| IdentifyError::UnknownBearing {
+            bearing: bearing.to_string(),
+        })?;
+    let rows: Vec<&Measurement> = run
+        .measurements
+        .iter()
+        .filter(|m| m.bearing == bearing)
+        .collect();
+    let columns = ColumnDigits::of_run(&run.measurements);
+    let noise = BearingNoise::estimate(&rows, &columns, options.quantisation);
+    let obs =
+        observations(&rows, schedule, &noise).map_err(|source| IdentifyError::BearingRange {
+            bearing: bearing.to_string(),
+            source,
+        })?;
+    Ok((obs, noise))
+}
+
+/// Observations with the variances of `noise` (row for row).
+fn with_noise(obs: &[Observation], noise: &BearingNoise) -> Vec<Observation> {
+    obs.iter()
+        .zip(&noise.var)
+        .map(|(o, var)| Observation { var: *var, ..*o })
+        .collect()
+}
+
+/// Replaces `fit`'s parameters by a base fit's (θ, standard errors, χ²
+/// facts) and redoes its warnings: input warnings kept, physical checks,
+/// damping resolution and convergence from the new fit.
+fn apply(
+    fit: &mut PedestalFit,
+    theta: &[f64; 5],
+    se: &[f64; 5],
+    converged: bool,
+    base: &str,
+    measured: bool,
+) {
+    [fit.k_y, fit.k_z, fit.m, fit.c_y, fit.c_z] = *theta;
+    fit.std_err = StdErr {
+        k_y: se[0],
+        k_z: se[1],
+        m: se[2],
+        c_y: se[3],
+        c_z: se[4],
+    };
+    fit.fixed.clear();
+    fit.ols = None;
+    // The rigid-ground misfit a convention mistake was sought for is gone.
+    fit.suspected_convention_error = None;
+    fit.warnings.retain(|w| {
+        matches!(
+            w.kind,
+            WarningKind::NonFiniteInput | WarningKind::TooFewSpeeds
+        )
+    });
+    for (name, v, s) in [("c_y", theta[3], se[3]), ("c_z", theta[4], se[4])] {
+        if v.abs() < 2.0 * s {
+            fit.warnings.push(Warning {
+                kind: WarningKind::DampingNotResolved,
+                message: format!(
+                    "{name} = {v:.3e} ± {s:.2e} N·s/m is within 2 standard errors of zero: the data do not resolve it"
+                ),
+            });
+        }
+    }
+    if !converged {
+        fit.warnings.push(Warning {
+            kind: WarningKind::MlFailed,
+            message: format!(
+                "the fit on base `{base}` stopped without meeting its convergence test"
+            ),
+        });
+    }
+    fit.warnings.extend(physical::violations(fit));
+    fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
+    fit.base = Some(base.to_string());
+    fit.base_measured = Some(measured);
+}
+
+/// The factor by which χ² says the noise variances are to be scaled: χ²/dof
+/// when the level is estimated (scatter) or the data scatter significantly
+/// more than the known noise, else 1.
+fn variance_scale(chi2: f64, dof: usize, estimated: bool) -> f64 {
+    let ratio = chi2 / dof.max(1) as f64;
+    if estimated || (chi2_two_sided_p(chi2, dof) < CHI2_P_THRESHOLD && ratio > 1.0) {
+        ratio
+    } else {
+        1.0
+    }
+}
+
+/// Refits every pedestal of `identification` that stands on a base of
+/// `base.csv` (`rows`) relative to that base's measured motion. The base
+/// phasors' noise: `y_sd,z_sd` when given, else their digits.
+pub fn apply_measured_base(
+    run: &RunDir,
+    rows: &[BaseRow],
+    identification: &mut Identification,
+    options: &Options,
+) -> Result<Vec<BaseReport>, IdentifyError> {
+    let mut reports: Vec<BaseReport> = Vec::new();
+    let digits: [ColumnDigits; 4] = std::array::from_fn(|c| {
+        ColumnDigits::of(rows.iter().map(|r| {
+            let z = r.motion[c / 2];
+            if c % 2 == 0 {
+                z.re
+            } else {
+                z.im
+            }
+        }))
+    });
+    let msu = options.quantisation.mean_square_ulps();
+    for fit in &mut identification.pedestals {
+        let Some(first) = rows.iter().find(|r| r.bearings.contains(&fit.bearing)) else {
+            continue;
+        };
+        let name = first.base.clone();
+        let base: Vec<BaseObservation> = rows
+            .iter()
+            .filter(|r| r.base == name)
+            .map(|r| BaseObservation {
+                speed_hz: r.speed_hz,
+                motion: r.motion,
+                var: std::array::from_fn(|c| {
+                    let z = r.motion[c / 2];
+                    let v = if c % 2 == 0 { z.re } else { z.im };
+                    let dv = msu * digits[c].ulp(v).powi(2);
+                    r.noise_sd
+                        .map_or(dv, |sd| (0.5 * sd[c / 2] * sd[c / 2]).max(dv))
+                }),
+            })
+            .collect();
+        let (obs, mut noise) = bearing_data(run, &fit.bearing, options)?;
+        let start = fit.params();
+        let failed = |e: crate::estimate::base::MeasuredBaseError| {
+            IdentifyError::Base(format!(
+                "base.csv: pedestal `{}` on base `{name}`: {e}",
+                fit.bearing
+            ))
+        };
+        let mut ml =
+            fit_on_measured_base(&with_noise(&obs, &noise), &base, &start).map_err(failed)?;
+        if chi2_two_sided_p(ml.chi2, ml.dof) < CHI2_P_THRESHOLD
+            && ml.chi2_per_dof() > 1.0
+            && noise.use_scatter()
+        {
+            ml = fit_on_measured_base(&with_noise(&obs, &noise), &base, &ml.theta)
+                .map_err(failed)?;
+        }
+        let scale = variance_scale(ml.chi2, ml.dof, noise.source.scale_estimated());
+        let se = ml.std_err(scale);
+        let bearing = fit.bearing.clone();
+        apply(fit, &ml.theta, &se, ml.converged, &name, true);
+        fit.residual_rms = ml.residual_rms;
+        fit.condition_number = ml.condition_number;
+        physical::check_finite(fit)?;
+        match reports.iter_mut().find(|r| r.name == name) {
+            Some(r) => r.bearings.push(bearing),
+            None => reports.push(BaseReport {
+                name,
+                bearings: vec![bearing],
+                measured: true,
+                y: None,
+                z: None,
+                chi2: None,
+                dof: None,
+                chi2_rigid: None,
+            }),
+        }
+    }
+    Ok(reports)
+}
+
+/// Refits each group of `groups` (bearing names) together with an
+/// unmeasured base it stands on, starting from the rigid-ground ML fits.
+/// Names that are not measured bearings are an error naming the flag.
+pub fn apply_unmeasured_bases(
+    run: &RunDir,
+    groups: &[Vec<String>],
+    identification: &mut Identification,
+    options: &Options,
+) -> Result<Vec<BaseReport>, IdentifyError> {
+    let measured = run.measured_bearings();
+    let mut reports = Vec::new();
+    for (g, names) in groups.iter().enumerate() {
+        for n in names {
+            if !measured.contains(&n.as_str()) {
+                return Err(IdentifyError::Base(format!(
+                    "--unmeasured-base: no bearing `{n}` in measurements.csv (it has {})",
+                    measured.join(", ")
+                )));
+            }
+        }
+        let name = format!("group{}", g + 1);
+        let mut obs = Vec::new();
+        let mut noises = Vec::new();
+        let mut starts = Vec::new();
+        for n in names {
+            let (o, noise) = bearing_data(run, n, options)?;
+            // The rigid-ground ML fit (its own noise copy: the rigid misfit
+            // must not set the noise level of the joint fit).
+            let mut rigid_noise = noise.clone();
+            let (rigid, _) = fit_ml(n, &o, &mut rigid_noise, options)?;
+            starts.push(rigid.params());
+            obs.push(with_noise(&o, &noise));
+            noises.push(noise);
+        }
+        let group = BaseGroup {
+            bearings: (0..names.len()).collect(),
+        };
+        let failed = |e: crate::estimate::base::BaseFitError| {
+            IdentifyError::Base(format!(
+                "--unmeasured-base: pedestals {} on one base: {e}",
+                names.join(",")
+            ))
+        };
+        let mut fit = fit_on_unmeasured_base(&obs, &group, &starts).map_err(failed)?;
+        let p = chi2_two_sided_p(fit.chi2, fit.dof);
+        if p < CHI2_P_THRESHOLD && fit.chi2 > fit.dof as f64 {
+            let mut switched = false;
+            for (k, noise) in noises.iter_mut().enumerate() {
+                if noise.use_scatter() {
+                    switched = true;
+                }
+                obs[k] = with_noise(&obs[k], noise);
+            }
+            if switched {
+                fit = fit_on_unmeasured_base(&obs, &group, &fit.pedestals).map_err(failed)?;
+            }
+        }
+        let estimated = noises.iter().any(|n| n.source.scale_estimated());
+        let scale = variance_scale(fit.chi2, fit.dof, estimated);
+        for (k, n) in names.iter().enumerate() {
+            let Some(pf) = identification
+                .pedestals
+                .iter_mut()
+                .find(|p| &p.bearing == n)
+            else {
+                continue;
+            };
+            let se: [f64; 5] = std::array::from_fn(|i| scale.sqrt() * fit.pedestal_std_err[k][i]);
+            apply(pf, &fit.pedestals[k], &se, fit.converged, &name, false);
+            pf.residual_rms = fit.pedestal_residual_rms[k];
+            pf.condition_number = fit.condition_number;
+            physical::check_finite(pf)?;
+        }
+        reports.push(BaseReport {
+            name,
+            bearings: names.clone(),
+            measured: false,
+            y: Some(BaseDirection::of(&fit, 0, scale)),
+            z: Some(BaseDirection::of(&fit, 1, scale)),
+            chi2: Some(fit.chi2),
+            dof: Some(fit.dof),
+            chi2_rigid: Some(fit.chi2_rigid),
+        });
+    }
+    Ok(reports)
+}
+
+/// The lines under `identify`'s table that describe the bases.
+pub fn describe(reports: &[BaseReport]) -> String {
+    let mut out = String::new();
+    for r in reports {
+        if r.measured {
+            out.push_str(&format!(
+                "\nbase `{}` measured (base.csv): {} identified relative to its motion\n",
+                r.name,
+                r.bearings.join(", ")
+            ));
+            continue;
+        }
+        out.push_str(&format!(
+            "\nbase `{}` (unmeasured) under {}: fitted jointly",
+            r.name,
+            r.bearings.join(", ")
+        ));
+        if let (Some(chi2), Some(dof), Some(rigid)) = (r.chi2, r.dof, r.chi2_rigid) {
+            out.push_str(&format!(
+                ", χ²/dof {:.3} (rigid ground {:.3})",
+                chi2 / dof.max(1) as f64,
+                rigid / dof.max(1) as f64
+            ));
+        }
+        out.push('\n');
+        for (axis, d) in [("y", &r.y), ("z", &r.z)] {
+            let Some(d) = d else { continue };
+            let pm = |v: [f64; 2]| format!("{:.4e} ± {:.2e}", v[0], v[1]);
+            let line = match d.identifiable.as_str() {
+                "full" => format!(
+                    "mode in the speed range: K_B = {} N/m, M_B = {} kg, C_B = {} N·s/m, f_B = {:.2} Hz",
+                    d.k.map_or("-".into(), pm),
+                    d.m.map_or("-".into(), pm),
+                    d.c.map_or("-".into(), pm),
+                    d.frequency_hz.unwrap_or(f64::NAN)
+                ),
+                "quasi_static" => format!(
+                    "mode above the speed range: only the quasi-static compliance 1/K_B = {} m/N is determined",
+                    d.compliance_m_per_n.map_or("-".into(), pm)
+                ),
+                "mass_line" => format!(
+                    "mode below the speed range: the base moves as a mass, M_B = {} kg",
+                    d.m.map_or("-".into(), pm)
+                ),
+                _ => "no base motion detectable (rigid ground as far as the data tell)".to_string(),
+            };
+            out.push_str(&format!("  {axis}: {line}\n"));
+        }
+    }
+    out
+}
