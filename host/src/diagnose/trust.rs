@@ -167,6 +167,8 @@ pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
         warnings: Vec::new(),
         ols: None,
         suspected_convention_error: None,
+        base: None,
+        base_measured: None,
     })
 }
 
@@ -271,6 +273,8 @@ mod tests {
             warnings: Vec::new(),
             ols: None,
             suspected_convention_error: None,
+            base: None,
+            base_measured: None,
         };
         let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[fit]);
         assert!(!c.trusted);
