@@ -276,18 +276,17 @@ fn check_unexplained(run: &RunDir, label: &str) {
         d.trust_reasons
     );
     if !d.steps.is_empty() {
-        let moved = if d.gap_after < d.gap_before {
-            "fell"
-        } else {
-            "ROSE"
-        };
+        // The verdict's numbers are the JSON's, and its verb follows them.
         assert!(
-            text.contains(&format!(
-                "{moved} from {:.4} to {:.4}",
-                d.gap_before, d.gap_after
-            )),
+            text.contains(&format!("from {:.4} to {:.4}", d.gap_before, d.gap_after)),
             "{label}"
         );
+        let moved = if d.gap_after < d.gap_before {
+            "gap fell"
+        } else {
+            "gap ROSE"
+        };
+        assert!(d.verdict.contains(moved), "{label}");
     }
     let json = serde_json::to_value(d).expect("json");
     assert_eq!(json["trusted"], serde_json::Value::Bool(false));

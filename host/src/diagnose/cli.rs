@@ -110,7 +110,9 @@ pub fn run(args: &Args) -> Result<()> {
                         )?;
                     }
                 }
-                Err(e) => eprintln!("warning: no machine-level check of the identified base: {e:#}"),
+                Err(e) => {
+                    eprintln!("warning: no machine-level check of the identified base: {e:#}")
+                }
             }
         }
         let d = &mut outcome.diagnosis;

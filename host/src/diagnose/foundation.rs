@@ -30,9 +30,12 @@
 //! Cost: each replicate refits the bases, so the bootstrap is run only when
 //! the candidate could be chosen at all (the rigid model's gap is above
 //! `AT_THE_FLOOR` times its noise floor, the penalised ratio is positive and
-//! the base model brings the gap down), and it stops at the first replicate
-//! that reaches T (the effect is then not significant; the p-value shown is
-//! that of the replicates run). The replicates refit the favoured grouping
+//! the base model brings the gap down), and it stops early when the decision
+//! can no longer change: at the first replicate that reaches T (the effect
+//! is then not significant; the p-value shown is that of the replicates
+//! run), or, after [`MIN_REPLICATES`], when T is beyond every replicate and
+//! the calibrated p-value is below 1/1000 of the significance level. The
+//! test's name gives the replicates actually run. The replicates refit the favoured grouping
 //! only; the search over groupings is allowed for by a Bonferroni factor
 //! (the number of groupings tried) on the calibrated p-value.
 
@@ -54,6 +57,10 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 /// Bootstrap replicates of the likelihood-ratio test (fixed: the test's
 /// resolution is 1/(R + 1) empirically, the scaled-χ² tail beyond).
 pub const REPLICATES: usize = 40;
+
+/// Replicates always run before the bootstrap may stop on an overwhelming
+/// statistic (module docs).
+pub const MIN_REPLICATES: usize = 10;
 
 /// Seed of the bootstrap's random numbers (same data, same answer).
 pub const SEED: u64 = 0x0f0_0da7;
@@ -242,6 +249,7 @@ pub fn evaluate(
     prep: &Prepared,
     base_prediction: &Prediction,
     base_gap: Gap,
+    alpha: f64,
     replicates: usize,
     seed: u64,
 ) -> Result<Option<FoundationFit>> {
@@ -281,6 +289,17 @@ pub fn evaluate(
                 if let Some(g) = best_grouping(&data, &start, &favoured, n_eq) {
                     null.push(g.score);
                     if g.score >= statistic {
+                        break;
+                    }
+                }
+                if null.len() >= MIN_REPLICATES {
+                    let so_far = FoundationTest::from_replicates(
+                        statistic,
+                        grouping.lr,
+                        &null,
+                        candidates.len(),
+                    );
+                    if so_far.exceedances == 0 && so_far.p_calibrated < 1e-3 * alpha {
                         break;
                     }
                 }

@@ -11,11 +11,11 @@
 //! simulated readings here, exactly as identified.
 
 use super::data::Prepared;
-use super::model::{Nonlinear, Term};
 use super::foundation::FoundationFit;
+use super::model::{Nonlinear, Term};
 use super::workflow::State;
-use crate::sim::base::Base;
 use crate::effects::EffectKind;
+use crate::sim::base::Base;
 use crate::sim::{unbalance_response, EffectSet, Machine, PedestalParams};
 use anyhow::{anyhow, Context, Result};
 use num_complex::Complex;

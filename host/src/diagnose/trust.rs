@@ -3,7 +3,7 @@
 //! Two things make identified parameters untrustworthy:
 //! - **an unexplained disagreement**: after the chosen effects the gap is
 //!   still well above its noise floor (more than [`AT_THE_FLOOR`] times the
-//!   smaller of the base and final models' floors), or it rose,
+//!   final model's floor), or it rose with the effects added,
 //!   so the data hold something no effect of the library explains and every
 //!   parameter fitted to them absorbs part of it; the verdict says so
 //!   plainly, and it never reports a fall of the gap the numbers do not show
@@ -80,10 +80,9 @@ pub fn conclude(before: Gap, after: Gap, steps: &[Step], pedestals: &[PedestalFi
             after.floor
         )
     };
-    // Judged against the smaller of the two floors: the noise does not
-    // change with the model, and a model that amplifies it (near-singular
-    // at some speed) must not talk its own gap down to "at the floor".
-    let floor = before.floor.min(after.floor);
+    // The final model's own floor: the noise propagated through a model
+    // with a resonance of its own (a base) is larger near it, legitimately.
+    let floor = after.floor;
     let rose = !steps.is_empty() && after.gap > before.gap;
     if after.gap > AT_THE_FLOOR * floor || rose {
         let times = if floor > 0.0 {

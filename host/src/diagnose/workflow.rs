@@ -406,6 +406,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                 &prep,
                 &pred0,
                 gap0,
+                opts.alpha,
                 opts.foundation_replicates,
                 opts.foundation_seed,
             )
