@@ -92,8 +92,8 @@ pub fn groupings(n: usize) -> Vec<Vec<Vec<usize>>> {
         out.push(vec![s.clone()]);
     }
     // Two disjoint bases of two or more each.
-    for (i, a) in subsets.iter().enumerate() {
-        for b in &subsets[i + 1..] {
+    for a in &subsets {
+        for b in &subsets {
             if a.iter().all(|x| !b.contains(x)) && a[0] < b[0] {
                 out.push(vec![a.clone(), b.clone()]);
             }
@@ -577,7 +577,9 @@ mod tests {
         // 3: all, three pairs.
         assert_eq!(groupings(3).len(), 4);
         // 4: all, 4 triples, 6 pairs, 3 pair-pairs.
-        assert_eq!(groupings(4).len(), 14);
+        let four = groupings(4);
+        assert_eq!(four.len(), 14);
+        assert!(four.contains(&vec![vec![0, 3], vec![1, 2]]));
         assert_eq!(groupings(5).len(), 1);
     }
 
