@@ -244,7 +244,8 @@ fn null_replicate(
 /// Fits the foundation candidate on `prep` and tests it against rigid
 /// ground (module docs). `base_prediction` is the rigid model's prediction
 /// (kept for bearings on no base), `base_gap` its gap; `None` when there are
-/// fewer than two bearings or no grouping can be fitted.
+/// fewer than two bearings, the rigid model already fits to the noise floor
+/// (nothing to explain), or no grouping can be fitted.
 pub fn evaluate(
     prep: &Prepared,
     base_prediction: &Prediction,
@@ -258,7 +259,9 @@ pub fn evaluate(
     let Some(start) = rigid_start(prep) else {
         return Ok(None);
     };
-    if candidates.is_empty() {
+    // Nothing to explain: the rigid model already fits to the noise floor,
+    // so the candidate could not be chosen (and its fits cost seconds).
+    if candidates.is_empty() || base_gap.gap <= AT_THE_FLOOR * base_gap.floor {
         return Ok(None);
     }
     let obs = observations(prep);
@@ -269,9 +272,7 @@ pub fn evaluate(
     let prediction = prediction(prep, &obs, base_prediction, &grouping)?;
     let gap = prediction.gap(prep, None);
     let statistic = grouping.score;
-    let not_run = if base_gap.gap <= AT_THE_FLOOR * base_gap.floor {
-        Some("the rigid-ground model already fits to the noise floor")
-    } else if statistic <= 0.0 {
+    let not_run = if statistic <= 0.0 {
         Some("the likelihood ratio does not pay for the base's parameters")
     } else if gap.gap >= base_gap.gap {
         Some("the base model does not bring the gap down")

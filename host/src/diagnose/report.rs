@@ -230,8 +230,8 @@ pub struct Diagnosis {
     /// The best candidate left when the search stopped (not significant).
     pub best_rejected: Option<CandidateSummary>,
     /// `foundation_coupling` as tried on the base model (its bases and
-    /// test), whether chosen or not; absent when not tried (one bearing,
-    /// or a reduced `--base`).
+    /// test), whether chosen or not; absent when not tried (one bearing, a
+    /// reduced `--base`, or a base model already at the noise floor).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub foundation: Option<FoundationReport>,
     /// Family-wise significance level per step.

@@ -386,9 +386,8 @@ pub struct Outcome {
 /// `foundation_coupling` (pedestals on a shared, unmeasured base,
 /// [`super::foundation`]) is tried on the base model in the first round,
 /// next to the library; it wins when its bootstrap test is significant, it
-/// brings the gap down, and its likelihood ratio (penalised by its
-/// parameters) beats the best library candidate's drop in the weighted sum
-/// of squares. Its model has no further effects on top, so the search ends
+/// brings the gap down, and further down than the best significant library
+/// candidate does. Its model has no further effects on top, so the search ends
 /// there.
 pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let prep = Prepared::from_run(run)?;
@@ -421,25 +420,28 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         opts.max_steps,
         opts.progress,
     );
-    let n_total: usize = (0..prep.bearings.len())
-        .map(|b| 4 * prep.points[b].iter().flatten().count())
-        .sum();
-    let ln_n = (n_total.max(2) as f64).ln();
     for round in 0..opts.max_steps {
         ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
         if round == 0 {
+            // The library's best significant candidate, refitted: the gap
+            // it leaves. The two tests' statistics are whitened differently,
+            // so the comparison is on what each explains: the gap.
+            let library_gap = outcome
+                .ranked
+                .first()
+                .filter(|_| outcome.accepted)
+                .map(|e| {
+                    Prediction::new(&prep, &e.candidate.model, &e.params)
+                        .gap(&prep, None)
+                        .gap
+                });
             if let Some(f) = foundation_tried.as_ref().filter(|f| {
-                let library_score = outcome
-                    .ranked
-                    .first()
-                    .filter(|_| outcome.accepted)
-                    .map(|e| e.evidence.wald_floor - e.evidence.extra_parameters as f64 * ln_n);
                 f.test.significant(opts.alpha)
                     && f.evidence.delta_bic > 0.0
                     && gap0.gap > AT_THE_FLOOR * gap0.floor
                     && f.gap.gap < gap0.gap
-                    && library_score.is_none_or(|l| f.evidence.delta_bic >= l)
+                    && library_gap.is_none_or(|l| f.gap.gap < l)
             }) {
                 let first = f.grouping.groups[0][0];
                 steps.push(Step {
