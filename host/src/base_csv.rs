@@ -237,3 +237,51 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
     }
     Ok(Some(rows))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(noise_sd: Option<[f64; 2]>) -> BaseRow {
+        BaseRow {
+            speed_hz: 12.5,
+            base: "skid".into(),
+            bearings: vec!["left".into(), "right".into()],
+            motion: [
+                Complex::new(1.5e-6, -2.0e-7),
+                Complex::new(-3.0e-7, 4.25e-6),
+            ],
+            noise_sd,
+        }
+    }
+
+    #[test]
+    fn noise_columns_round_trip_and_are_optional() {
+        for sd in [None, Some([1.0e-8, 2.5e-8])] {
+            let dir = tempfile::tempdir().unwrap();
+            write(dir.path(), &[row(sd), row(sd)]).unwrap();
+            let back = read(dir.path()).unwrap().unwrap();
+            assert_eq!(back, vec![row(sd), row(sd)]);
+        }
+    }
+
+    #[test]
+    fn bad_noise_columns_are_named_with_line_and_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join(BASE_FILE);
+        std::fs::write(
+            &file,
+            "speed_hz,base,bearings,y_re,y_im,z_re,z_im,y_sd,z_sd\n10,skid,left;right,1e-6,0,0,1e-6,1e-8,-1\n",
+        )
+        .unwrap();
+        let e = read(dir.path()).unwrap_err().to_string();
+        assert!(e.contains(":2:9:") && e.contains("z_sd"), "{e}");
+        std::fs::write(
+            &file,
+            "speed_hz,base,bearings,y_re,y_im,z_re,z_im,y_sd\n10,skid,left,1e-6,0,0,1e-6,1e-8\n",
+        )
+        .unwrap();
+        let e = read(dir.path()).unwrap_err().to_string();
+        assert!(e.contains(":1:") && e.contains("y_sd,z_sd"), "{e}");
+    }
+}

@@ -75,8 +75,8 @@ fn simulated(
             let sd = rms.map(|r| noise * r);
             for &i in &idx {
                 let m = &mut run.measurements[i];
-                for ch in 0..4 {
-                    let n = gauss(sd[ch]);
+                for (ch, &sd_ch) in sd.iter().enumerate() {
+                    let n = gauss(sd_ch);
                     if ch < 2 {
                         m.rel[ch] += n;
                     } else {
@@ -95,8 +95,8 @@ fn simulated(
                 .sqrt()
         });
         for r in &mut base_rows {
-            for d in 0..2 {
-                r.motion[d] += gauss(noise * rms[d]);
+            for (z, r_d) in r.motion.iter_mut().zip(rms) {
+                *z += gauss(noise * r_d);
             }
             r.noise_sd = Some(rms.map(|x| noise * x));
         }
@@ -230,6 +230,27 @@ fn three_pedestals_on_a_stiff_frame_give_its_quasi_static_compliance() {
         let (truth, id) = unmeasured(dir.path());
         assert_pedestals(&truth, &id, 0.02, what);
         assert_quasi_static(&truth, &id.bases[0], what);
+    }
+}
+
+#[test]
+fn skid_with_its_modes_below_the_range_gives_its_mass() {
+    let dir = simulated(SKID, &speeds(45, 200, 1), 0.01, 15, None);
+    let (truth, id) = unmeasured(dir.path());
+    assert_pedestals(&truth, &id, 0.02, "modes below the range");
+    let b = &truth.bases[0];
+    let r = &id.bases[0];
+    for (axis, d, m) in [
+        ("y", r.y.as_ref().unwrap(), b.m_y),
+        ("z", r.z.as_ref().unwrap(), b.m_z),
+    ] {
+        assert_eq!(d.identifiable, "mass_line", "{axis}: {d:?}");
+        let [got, se] = d.m.unwrap();
+        assert!(
+            rel_err(got, m) < 0.10,
+            "{axis}: M_B = {got:.4e} ± {se:.2e}, truth {m}"
+        );
+        assert!(d.k.is_none() && d.compliance_m_per_n.is_none());
     }
 }
 

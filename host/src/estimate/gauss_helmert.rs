@@ -192,17 +192,24 @@ pub fn fit<E: Equations + ?Sized>(
     let mut iterations = 0;
     while iterations < max_iterations && q > 0 {
         iterations += 1;
+        // Central differences; forward ones with frozen weights (the
+        // residual is then nearly linear in most parameters, and cheap).
         let mut jac = DMatrix::zeros(r.len(), q);
         for j in 0..q {
             let h = 1e-6 * u[j].abs().max(1e-3);
             let mut up = u.clone();
             up[j] += h;
-            let mut dn = u.clone();
-            dn[j] -= h;
-            let (Some(a), Some(b)) = (
-                whitened(eq, &p_of(&up), frozen),
-                whitened(eq, &p_of(&dn), frozen),
-            ) else {
+            let column = match frozen {
+                Some(_) => whitened(eq, &p_of(&up), frozen).map(|a| (a - &r) / h),
+                None => {
+                    let mut dn = u.clone();
+                    dn[j] -= h;
+                    whitened(eq, &p_of(&up), None)
+                        .zip(whitened(eq, &p_of(&dn), None))
+                        .map(|(a, b)| (a - b) / (2.0 * h))
+                }
+            };
+            let Some(column) = column else {
                 return Some(Minimum {
                     p: p_of(&u),
                     cost: cost_now,
@@ -210,7 +217,7 @@ pub fn fit<E: Equations + ?Sized>(
                     converged: false,
                 });
             };
-            jac.set_column(j, &((a - b) / (2.0 * h)));
+            jac.set_column(j, &column);
         }
         let g = jac.transpose() * &r;
         let hess = jac.transpose() * &jac;

@@ -57,6 +57,13 @@ a passive pedestal to the noise floor, decisively better than every other readin
 (`suspected_convention_error` in the JSON). Exit code 2 when any pedestal is physically \
 impossible or has a suspected convention error (everything is printed first); 1 on errors.
 
+Pedestals on a base (README, \"Bases\"): with DIR/base.csv (the base's measured 1X motion, \
+optional y_sd,z_sd noise columns) the pedestals on a listed base are fitted relative to its \
+motion (\"base_measured\": true in the JSON); --unmeasured-base left,right fits the named \
+pedestals together with an unmeasured base and reports its stiffness, damping and mass to \
+ground where its mode lies inside the speed range, only its quasi-static compliance 1/K_B \
+when the mode lies above, only its mass when below, or that no base motion is detectable.
+
 Default model: all five parameters for --equations r-and-i; k_y,k_z,m for real, imag and \
 r-plus-i, which the paper used on undamped pedestals only (with damping they are biased: use \
 r-and-i).")]

@@ -205,7 +205,13 @@ pub fn fit_ml(
     Ok((fit, report(noise, chi2, dof, variance_scale)))
 }
 
-fn report(noise: &BearingNoise, chi2: f64, dof: usize, variance_scale: f64) -> NoiseReport {
+/// The noise report of a fit with `chi2` on `dof` under `noise`, its variances scaled by `variance_scale`.
+pub(crate) fn report(
+    noise: &BearingNoise,
+    chi2: f64,
+    dof: usize,
+    variance_scale: f64,
+) -> NoiseReport {
     let sd = noise.sd();
     NoiseReport {
         source: noise.source,

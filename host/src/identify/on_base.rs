@@ -7,7 +7,7 @@
 //! Both replace the rigid-ground fits of the pedestals concerned in an
 //! [`Identification`] and say so (`base`, `base_measured`).
 
-use super::estimator::{fit_ml, CHI2_P_THRESHOLD};
+use super::estimator::{fit_ml, report, CHI2_P_THRESHOLD};
 use super::{
     observations, physical, Identification, IdentifyError, Options, PedestalFit, StdErr, Warning,
     WarningKind,
@@ -301,7 +301,13 @@ pub fn apply_measured_base(
                 .map_err(failed)?;
         }
         let scale = variance_scale(ml.chi2, ml.dof, noise.source.scale_estimated());
+        if noise.source.scale_estimated() {
+            noise.rescale(scale);
+        }
         let se = ml.std_err(scale);
+        identification
+            .noise
+            .insert(fit.bearing.clone(), report(&noise, ml.chi2, ml.dof, scale));
         let bearing = fit.bearing.clone();
         apply(fit, &ml.theta, &se, ml.converged, &name, true);
         fit.residual_rms = ml.residual_rms;
@@ -350,11 +356,14 @@ pub fn apply_unmeasured_bases(
         let mut starts = Vec::new();
         for n in names {
             let (o, noise) = bearing_data(run, n, options)?;
-            // The rigid-ground ML fit (its own noise copy: the rigid misfit
-            // must not set the noise level of the joint fit).
-            let mut rigid_noise = noise.clone();
-            let (rigid, _) = fit_ml(n, &o, &mut rigid_noise, options)?;
-            starts.push(rigid.params());
+            // The rigid-ground fit already made, else the ML fit (on its
+            // own noise copy: the rigid misfit must not set the noise level
+            // of the joint fit).
+            let start = match identification.pedestal(n) {
+                Some(p) if p.params().iter().all(|v| v.is_finite()) => p.params(),
+                _ => fit_ml(n, &o, &mut noise.clone(), options)?.0.params(),
+            };
+            starts.push(start);
             obs.push(with_noise(&o, &noise));
             noises.push(noise);
         }
@@ -384,6 +393,12 @@ pub fn apply_unmeasured_bases(
         let estimated = noises.iter().any(|n| n.source.scale_estimated());
         let scale = variance_scale(fit.chi2, fit.dof, estimated);
         for (k, n) in names.iter().enumerate() {
+            if noises[k].source.scale_estimated() {
+                noises[k].rescale(scale);
+            }
+            identification
+                .noise
+                .insert(n.clone(), report(&noises[k], fit.chi2, fit.dof, scale));
             let Some(pf) = identification
                 .pedestals
                 .iter_mut()

@@ -1,190 +1,14 @@
-//! Pedestals on a shared base: the one physical model, and its
-//! maximum-likelihood fits with the base measured or not.
-//!
-//! Per direction d (y or z, independent: the base translates, as in
-//! `sim/base.rs`), pedestal i of a group standing on one base obeys
-//!
-//! ```text
-//! −Ω²m_i·X_i + d_i·(X_i − X_B) = F_i,   d_i = k_i + iΩc_i,  F_i = K*_i·rel_i
-//! ```
-//!
-//! and the base, on its springs and dampers to ground,
-//!
-//! ```text
-//! S_g·X_B = Σ_i d_i·(X_i − X_B) = Σ_i (F_i + Ω²m_i·X_i) = T,   S_g = K_B + iΩC_B − Ω²M_B
-//! ```
-//!
-//! (T is the total force the pedestals pass to the base). With the base
-//! **measured** X_B is data and each pedestal's equation is linear in θ
-//! ([`fit_on_measured_base`]). With the base **unmeasured**, X_B = G·T with
-//! G = 1/S_g eliminates it: the residual of pedestal i,
-//!
-//! ```text
-//! e_i = (d_i − Ω²m_i)·X_i − F_i − d_i·G·Σ_j (F_j + Ω²m_j·X_j),
-//! ```
-//!
-//! couples every pedestal of the group through the speed-dependent,
-//! complex, rank-one term d·dᵀ-like G (the noise of every pedestal's rel and
-//! ped enters every pedestal's equation through T). The base is
-//! parametrised by G = κ/(1 − Ω²μ + iΩγ) with κ = 1/K_B (the quasi-static
-//! compliance), μ = M_B/K_B = 1/Ω_B², γ = C_B/K_B: rigid ground is κ = 0.
-//!
-//! Both fits are the errors-in-variables ML of [`super::gauss_helmert`]
-//! (the full per-speed covariance of all residuals of the group, whitened).
-//! The unmeasured fit starts from the rigid-base fits, profiles the base
-//! frequency f_B (log-spaced from a third of the lowest speed to three times
-//! the highest) and damping ratio ζ_B on a grid with the weights frozen, then
-//! frees everything. What the data determine is decided per direction
-//! ([`BaseIdentifiability`]) from the fitted f_B against the speed range,
-//! the Fisher information and a likelihood ratio against rigid ground.
+//! The joint fit of a group of pedestals with an unmeasured base (module
+//! docs of [`super`]): the equations with X_B eliminated, the profile of the
+//! base mode, the identifiability decision, and the model's prediction.
 
-use super::gauss_helmert::{self as gh, Equations};
-use super::Observation;
+use super::{
+    put, spring, BaseFitError, BaseFitResult, BaseGroup, BaseIdentifiability, BaseParams, C,
+};
+use crate::estimate::gauss_helmert::{self as gh, Equations};
+use crate::estimate::Observation;
 use nalgebra::{DMatrix, DVector};
-use num_complex::Complex;
-use serde::Serialize;
 use std::f64::consts::TAU;
-
-type C = Complex<f64>;
-
-/// One group of pedestals standing on one unmeasured base (y and z
-/// independent, translation only, as in `sim/base.rs`).
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct BaseGroup {
-    /// Indices into the observation slice given to the fits.
-    pub bearings: Vec<usize>,
-}
-
-/// Per-direction (y, z) base parameters: dynamic stiffness to ground
-/// S_g(Ω) = K_B + iΩC_B − Ω²M_B.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct BaseParams {
-    /// Stiffness to ground K_B [N/m] (∞ for rigid ground).
-    pub k: [f64; 2],
-    /// Damping to ground C_B [N·s/m].
-    pub c: [f64; 2],
-    /// Mass M_B [kg].
-    pub m: [f64; 2],
-}
-
-impl BaseParams {
-    /// Rigid ground: no base motion.
-    pub const RIGID: BaseParams = BaseParams {
-        k: [f64::INFINITY; 2],
-        c: [0.0; 2],
-        m: [0.0; 2],
-    };
-
-    /// Base receptance G = 1/S_g [m/N] in direction `d` at Ω [rad/s]
-    /// (0 for rigid ground).
-    pub fn receptance(&self, d: usize, omega: f64) -> C {
-        if !self.k[d].is_finite() {
-            return C::new(0.0, 0.0);
-        }
-        C::new(1.0, 0.0) / C::new(self.k[d] - omega * omega * self.m[d], omega * self.c[d])
-    }
-}
-
-/// What the data determine about the base in one direction.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum BaseIdentifiability {
-    /// The base mode lies inside the speed range: M_B, K_B and C_B.
-    Full,
-    /// The mode lies above the range: only the quasi-static compliance
-    /// 1/K_B [m/N] (± its standard error) is determined.
-    QuasiStatic {
-        /// 1/K_B [m/N].
-        compliance_m_per_n: f64,
-        /// Its standard error [m/N].
-        std_err: f64,
-    },
-    /// The mode lies below the range: the base moves as a mass, M_B [kg].
-    MassLine {
-        /// M_B [kg].
-        mass_kg: f64,
-        /// Its standard error [kg].
-        std_err: f64,
-    },
-    /// No base motion is detectable: the pedestals stand on rigid ground
-    /// as far as these data tell.
-    NotDetected,
-}
-
-impl BaseIdentifiability {
-    /// `full`, `quasi_static`, `mass_line` or `not_detected`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            BaseIdentifiability::Full => "full",
-            BaseIdentifiability::QuasiStatic { .. } => "quasi_static",
-            BaseIdentifiability::MassLine { .. } => "mass_line",
-            BaseIdentifiability::NotDetected => "not_detected",
-        }
-    }
-}
-
-/// The joint fit of a group of pedestals and their base.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct BaseFitResult {
-    /// θ = (k_y [N/m], k_z [N/m], m [kg], c_y, c_z [N·s/m]) per bearing of
-    /// the group, in the group's order.
-    pub pedestals: Vec<[f64; 5]>,
-    /// Standard errors of `pedestals`, same units.
-    pub pedestal_std_err: Vec<[f64; 5]>,
-    /// The base (meaningful as far as `identifiability` says).
-    pub base: BaseParams,
-    /// Standard errors of `base`, same units (∞ when not determined).
-    pub base_std_err: BaseParams,
-    /// Base natural frequency sqrt(K_B/M_B)/2π (y, z) [Hz] (NaN when M_B ≤ 0).
-    pub base_frequency_hz: [f64; 2],
-    /// What the data determine in y and z.
-    pub identifiability: [BaseIdentifiability; 2],
-    /// J = Σ eᵀΣ⁻¹e at the estimate [-].
-    pub chi2: f64,
-    /// Degrees of freedom (real equations − parameters).
-    pub dof: usize,
-    /// J of the same pedestals on rigid ground (refitted) [-]: the
-    /// likelihood ratio J_rigid − J tests for base motion.
-    pub chi2_rigid: f64,
-    /// RMS of each pedestal's unweighted equation residual e_i [N] (group order).
-    pub pedestal_residual_rms: Vec<f64>,
-    /// Condition number of the unit-diagonal Fisher information of the
-    /// estimated parameters, square-rooted (as for the rigid fit) [-].
-    pub condition_number: f64,
-    /// True when the final iteration met its convergence test.
-    pub converged: bool,
-    /// Levenberg–Marquardt iterations of the final fit.
-    pub iterations: usize,
-    /// Speeds used (those every pedestal of the group has) [Hz].
-    pub speeds_hz: Vec<f64>,
-}
-
-/// Why a base fit could not run.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum BaseFitError {
-    /// A group member that is not in the observations.
-    #[error("base group names observation {index}, but only {available} bearings were given")]
-    NoSuchBearing {
-        /// The index.
-        index: usize,
-        /// Bearings given.
-        available: usize,
-    },
-    /// An empty group, or one naming a bearing twice.
-    #[error("a base group needs distinct bearings (got {0:?})")]
-    BadGroup(Vec<usize>),
-    /// Too few common speeds for the parameters.
-    #[error("{equations} equations at the speeds all pedestals of the group share, for {parameters} parameters")]
-    TooFewEquations {
-        /// Real equations.
-        equations: usize,
-        /// Parameters.
-        parameters: usize,
-    },
-    /// The noise model gives no noise, or the data are not finite.
-    #[error("the likelihood cannot be evaluated (no noise at some speed, or non-finite data)")]
-    NotEvaluable,
-}
 
 /// One speed of a group: the observation of each group member.
 struct Speed {
@@ -204,19 +28,6 @@ struct Unmeasured {
 /// Offset of the base parameters of direction `d` in p for `n` pedestals.
 fn base_at(n: usize, d: usize) -> usize {
     5 * n + 3 * d
-}
-
-/// Real 2×2 block of complex factor `a` into `b` at (row, col).
-fn put(b: &mut DMatrix<f64>, row: usize, col: usize, a: C) {
-    b[(row, col)] += a.re;
-    b[(row, col + 1)] -= a.im;
-    b[(row + 1, col)] += a.im;
-    b[(row + 1, col + 1)] += a.re;
-}
-
-/// Pedestal spring-damper d = k + iΩc in direction `d` of θ [N/m].
-fn spring(theta: &[f64], d: usize, omega: f64) -> C {
-    C::new(theta[d], omega * theta[3 + d])
 }
 
 impl Equations for Unmeasured {
@@ -340,19 +151,21 @@ fn common_speeds(obs: &[Vec<Observation>], group: &BaseGroup) -> Result<Vec<Spee
 }
 
 /// Most iterations of a profiling fit and of the final fit.
-const GRID_ITERATIONS: usize = 20;
+const GRID_ITERATIONS: usize = 8;
 const FINAL_ITERATIONS: usize = 200;
 /// Base frequencies of the profile grid, and the damping ratio each of its
 /// fits starts from.
 const GRID_FREQUENCIES: usize = 24;
 const GRID_DAMPING: f64 = 0.05;
+/// Largest relative standard error of μ = 1/Ω_B² for a full identification.
+const MODE_REL_SE: f64 = 1.0 / 3.0;
 /// Likelihood-ratio threshold (J_rigid − J) for base motion in one
 /// direction: the 1e-3 upper point of χ²(3) (three base parameters).
 pub const DETECTION_THRESHOLD: f64 = 16.27;
 
 /// Joint ML fit of all pedestals of `group` and its base (module docs).
 /// `obs[b]` are bearing b's observations (with their noise variances, from
-/// [`super::noise`]); `start[b]` its rigid-ground fit θ (both indexed like
+/// [`crate::estimate::noise`]); `start[b]` its rigid-ground fit θ (both indexed like
 /// `obs`; only the group's entries are read).
 pub fn fit_on_unmeasured_base(
     obs: &[Vec<Observation>],
@@ -555,6 +368,23 @@ pub fn fit_on_unmeasured_base(
         if mu > 0.0 {
             base_frequency_hz[d] = 1.0 / (TAU * mu.sqrt());
         }
+        // A mode inside the range whose frequency the Fisher information
+        // does not pin down (μ = 1/Ω_B² uncertain by more than a third) is
+        // no full identification: say what is determined on its side.
+        let pinned = se(o + 1) < MODE_REL_SE * mu.abs();
+        if ident[d] == BaseIdentifiability::Full && !pinned {
+            ident[d] = if mu > 0.0 && mu.sqrt() * w_mid < 1.0 {
+                BaseIdentifiability::QuasiStatic {
+                    compliance_m_per_n: kappa,
+                    std_err: f64::NAN,
+                }
+            } else {
+                BaseIdentifiability::MassLine {
+                    mass_kg: mu / kappa,
+                    std_err: f64::NAN,
+                }
+            };
+        }
         match &mut ident[d] {
             BaseIdentifiability::QuasiStatic {
                 compliance_m_per_n,
@@ -599,17 +429,26 @@ pub fn fit_on_unmeasured_base(
     })
 }
 
-/// The model's prediction of every group member's pedestal motion (y, z)
-/// [m] at each common speed, given the measured bearing forces (from each
-/// observation's rel), the pedestals `theta` (group order) and `base`:
-/// the solution of the coupled equations of the module docs. Outer index:
-/// speed (as in [`BaseFitResult::speeds_hz`]), inner: group member.
+/// The model's pedestal motion of a group at one speed ([`predict`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// Rotor speed [Hz].
+    pub speed_hz: f64,
+    /// Pedestal motion (y, z) [m] of each group member (group order).
+    pub ped: Vec<[C; 2]>,
+}
+
+/// The model's prediction of every group member's pedestal motion at each
+/// speed all members share (as in [`BaseFitResult::speeds_hz`]), given the
+/// measured bearing forces (from each observation's rel), the pedestals
+/// `theta` (group order) and `base`: the solution of the coupled equations
+/// of the module docs. Compare with the measured `ped` for a gap.
 pub fn predict(
     obs: &[Vec<Observation>],
     group: &BaseGroup,
     theta: &[[f64; 5]],
     base: &BaseParams,
-) -> Result<Vec<(f64, Vec<[C; 2]>)>, BaseFitError> {
+) -> Result<Vec<Prediction>, BaseFitError> {
     let speeds = common_speeds(obs, group)?;
     let n = group.bearings.len();
     if theta.len() != n {
@@ -637,11 +476,14 @@ pub fn predict(
                 sp.obs[i].force()[d] + spring(&theta[i], d, w) * g * f_sum
             });
             let sol = a.lu().solve(&rhs).ok_or(BaseFitError::NotEvaluable)?;
-            for i in 0..n {
-                x[i][d] = sol[i];
+            for (xi, v) in x.iter_mut().zip(sol.iter()) {
+                xi[d] = *v;
             }
         }
-        out.push((w / TAU, x));
+        out.push(Prediction {
+            speed_hz: w / TAU,
+            ped: x,
+        });
     }
     Ok(out)
 }
@@ -675,134 +517,87 @@ pub fn chi2(
     gh::cost(&Unmeasured { speeds }, &p).ok_or(BaseFitError::NotEvaluable)
 }
 
-/// One speed of a measured base: its 1X motion and the noise of each real
-/// number.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BaseObservation {
-    /// Rotor speed [Hz].
-    pub speed_hz: f64,
-    /// Absolute base displacement (y, z) [m].
-    pub motion: [C; 2],
-    /// Noise variance [m²] of (y re, y im, z re, z im).
-    pub var: [f64; 4],
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use num_complex::Complex;
 
-/// One pedestal on a measured base: per speed its observation and the
-/// base's; p = θ.
-struct Measured {
-    speeds: Vec<(Observation, BaseObservation, Vec<f64>)>,
-}
-
-impl Equations for Measured {
-    fn speeds(&self) -> usize {
-        self.speeds.len()
+    /// Two bearings at 20 speeds with arbitrary rel and bearing stiffness;
+    /// ped left at zero (set by the caller).
+    fn observations() -> Vec<Vec<Observation>> {
+        (0..2)
+            .map(|b| {
+                (0..20)
+                    .map(|j| {
+                        let f = 10.0 + 5.0 * j as f64;
+                        let w = TAU * f;
+                        let s = 1.0 + 0.3 * b as f64;
+                        Observation {
+                            speed_hz: f,
+                            rel: [
+                                Complex::from_polar(1e-5 * s, 0.05 * f),
+                                Complex::from_polar(8e-6, 1.0 - 0.03 * f * s),
+                            ],
+                            ped: [Complex::new(0.0, 0.0); 2],
+                            kstar: [
+                                [Complex::new(3e7 * s, w * 2e3), Complex::new(8e6, w * 1e2)],
+                                [Complex::new(-6e6, -w * 1e2), Complex::new(2.5e7, w * 1.5e3)],
+                            ],
+                            var: [1e-20; 8],
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
     }
 
-    fn variance(&self, s: usize) -> &[f64] {
-        &self.speeds[s].2
-    }
-
-    fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
-        let (o, base, _) = &self.speeds[s];
-        let w = o.omega();
-        let mut e = DVector::zeros(4);
-        let mut b = DMatrix::zeros(4, 12);
-        for d in 0..2 {
-            let dd = spring(p, d, w);
-            let h = dd - w * w * p[2];
-            let r = h * o.ped[d] - dd * base.motion[d] - o.force()[d];
-            e[2 * d] = r.re;
-            e[2 * d + 1] = r.im;
-            put(&mut b, 2 * d, 4 + 2 * d, h);
-            put(&mut b, 2 * d, 8 + 2 * d, -dd);
-            for c in 0..2 {
-                put(&mut b, 2 * d, 2 * c, -o.kstar[d][c]);
+    #[test]
+    fn predicted_motion_satisfies_the_equations() {
+        let mut obs = observations();
+        let group = BaseGroup {
+            bearings: vec![0, 1],
+        };
+        let theta = [
+            [1e7, 8e6, 80.0, 300.0, 250.0],
+            [6e6, 9e6, 60.0, 200.0, 350.0],
+        ];
+        let base = BaseParams {
+            k: [1e7, 8e6],
+            c: [3e3, 2.5e3],
+            m: [300.0, 250.0],
+        };
+        let pred = predict(&obs, &group, &theta, &base).unwrap();
+        for (s, p) in pred.iter().enumerate() {
+            for (b, o) in obs.iter_mut().enumerate() {
+                o[s].ped = p.ped[b];
             }
         }
-        (e, b)
+        let j = chi2(&obs, &group, &theta, &base).unwrap();
+        let rigid = chi2(&obs, &group, &theta, &BaseParams::RIGID).unwrap();
+        assert!(j < 1e-12 * rigid, "χ² {j:e} (rigid ground {rigid:e})");
     }
-}
 
-/// ML fit of one pedestal on a measured base (module docs): its
-/// observations `obs`, the base motion `base` at the same speeds (matched
-/// exactly; a speed without base motion is an error), from `start`
-/// (e.g. the least-squares fit). Noise in rel, ped and the base motion all
-/// weigh in. The result's covariance is over all five parameters.
-pub fn fit_on_measured_base(
-    obs: &[Observation],
-    base: &[BaseObservation],
-    start: &[f64; 5],
-) -> Result<super::ml::MlFit, MeasuredBaseError> {
-    let mut speeds = Vec::new();
-    for o in obs.iter().filter(|o| o.is_finite()) {
-        let b = base.iter().find(|b| b.speed_hz == o.speed_hz).ok_or(
-            MeasuredBaseError::NoBaseMotion {
-                speed_hz: o.speed_hz,
-            },
-        )?;
-        let mut var = o.var.to_vec();
-        var.extend(b.var);
-        speeds.push((*o, *b, var));
+    #[test]
+    fn bad_groups_are_errors() {
+        let obs = observations();
+        let start = [[1e7, 1e7, 50.0, 0.0, 0.0]; 2];
+        let fit = |b: Vec<usize>| fit_on_unmeasured_base(&obs, &BaseGroup { bearings: b }, &start);
+        assert!(matches!(
+            fit(vec![0, 2]),
+            Err(BaseFitError::NoSuchBearing { index: 2, .. })
+        ));
+        assert!(matches!(fit(vec![0, 0]), Err(BaseFitError::BadGroup(_))));
+        assert!(matches!(fit(vec![]), Err(BaseFitError::BadGroup(_))));
+        let few: Vec<Vec<Observation>> = obs.iter().map(|o| o[..2].to_vec()).collect();
+        assert!(matches!(
+            fit_on_unmeasured_base(
+                &few,
+                &BaseGroup {
+                    bearings: vec![0, 1]
+                },
+                &start
+            ),
+            Err(BaseFitError::TooFewEquations { .. })
+        ));
     }
-    let n_eq = 4 * speeds.len();
-    if n_eq <= 5 {
-        return Err(MeasuredBaseError::TooFewEquations { equations: n_eq });
-    }
-    let w_mid = {
-        let lo = speeds
-            .iter()
-            .map(|s| s.0.omega())
-            .fold(f64::INFINITY, f64::min);
-        let hi = speeds.iter().map(|s| s.0.omega()).fold(0.0, f64::max);
-        (lo * hi).sqrt().max(f64::MIN_POSITIVE)
-    };
-    let k = start[0].abs().max(start[1].abs()).max(1.0);
-    let scale = [
-        start[0].abs().max(1e-3 * k),
-        start[1].abs().max(1e-3 * k),
-        start[2].abs().max(1e-3 * k / (w_mid * w_mid)),
-        start[3].abs().max(1e-3 * k / w_mid),
-        start[4].abs().max(1e-3 * k / w_mid),
-    ];
-    let eq = Measured { speeds };
-    let m = gh::fit(&eq, start, &scale, &[true; 5], None, FINAL_ITERATIONS)
-        .ok_or(MeasuredBaseError::NotEvaluable)?;
-    let f = gh::fisher(&eq, &m.p, &scale).ok_or(MeasuredBaseError::NotEvaluable)?;
-    let inv = gh::inverse_psd(&f);
-    let condition_number = gh::condition_number(&f);
-    let residual_rms = ((0..eq.speeds())
-        .map(|s| eq.residual(s, &m.p).0.norm_squared())
-        .sum::<f64>()
-        / n_eq as f64)
-        .sqrt();
-    Ok(super::ml::MlFit {
-        theta: std::array::from_fn(|i| m.p[i]),
-        covariance: std::array::from_fn(|r| std::array::from_fn(|c| inv[(r, c)])),
-        chi2: m.cost,
-        dof: n_eq - 5,
-        iterations: m.iterations,
-        converged: m.converged,
-        condition_number,
-        residual_rms,
-    })
-}
-
-/// Why a measured-base fit could not run.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum MeasuredBaseError {
-    /// A pedestal speed without base motion at exactly that speed.
-    #[error("no base motion at {speed_hz} Hz")]
-    NoBaseMotion {
-        /// The speed [Hz].
-        speed_hz: f64,
-    },
-    /// No more equations than parameters.
-    #[error("{equations} equations for 5 parameters")]
-    TooFewEquations {
-        /// Real equations.
-        equations: usize,
-    },
-    /// The noise model gives no noise, or the data are not finite.
-    #[error("the likelihood cannot be evaluated (no noise at some speed, or non-finite data)")]
-    NotEvaluable,
 }
