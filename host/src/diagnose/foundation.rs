@@ -444,7 +444,8 @@ fn prediction(
                 sens.push((qi, q, c, p2));
             }
         }
-        for (s, (speed, x)) in base_pred.iter().enumerate() {
+        for (s, pr) in base_pred.iter().enumerate() {
+            let (speed, x) = (&pr.speed_hz, &pr.ped);
             // The speed comes back through Ω = 2πf: match it to a relative
             // 1e-9, not exactly.
             let Some(j) = prep
@@ -465,7 +466,7 @@ fn prediction(
                         let Some(pq) = prep.points[*q][j].as_ref() else {
                             continue;
                         };
-                        let a = p2[s].1[i][d] - x[i][d];
+                        let a = p2[s].ped[i][d] - x[i][d];
                         *v +=
                             a.norm_sqr() * (pq.sigma[2 * c].powi(2) + pq.sigma[2 * c + 1].powi(2));
                     }
