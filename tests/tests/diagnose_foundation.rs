@@ -255,19 +255,19 @@ fn check_named(machine: &Machine, run: &RunDir, label: &str) {
     }
     // `--machine`: the machine re-simulated with the identified pedestals on
     // a base element with the identified parameters reproduces every
-    // channel (noise 0.5 %); with the rigid-ground fit it does not.
+    // channel (noise 0.5 %); with the rigid-ground fit it does not (when
+    // that fit is physical enough to simulate at all).
     let last = out.states.last().expect("state");
     let with_base = resimulate(machine, &out.prep, last, out.foundation.as_ref()).expect("resim");
-    let rigid = resimulate(machine, &out.prep, &out.states[0], None).expect("resim");
-    let (g_base, g_rigid) = (
-        machine_gap(&out.prep, &with_base),
-        machine_gap(&out.prep, &rigid),
-    );
-    println!("{label}: machine-level gap rigid {g_rigid:.4}, with the base {g_base:.4}");
-    assert!(
-        g_base < 0.02 && g_base < g_rigid / 5.0,
-        "{label}: {g_rigid} -> {g_base}"
-    );
+    let g_base = machine_gap(&out.prep, &with_base);
+    let g_rigid = resimulate(machine, &out.prep, &out.states[0], None)
+        .ok()
+        .map(|r| machine_gap(&out.prep, &r));
+    println!("{label}: machine-level gap rigid {g_rigid:?}, with the base {g_base:.4}");
+    assert!(g_base < 0.02, "{label}: machine-level gap {g_base}");
+    if let Some(g) = g_rigid {
+        assert!(g_base < g / 5.0, "{label}: {g} -> {g_base}");
+    }
     // The text says what the JSON says.
     assert!(text.contains(&format!("{:.4} to {:.4}", d.gap_before, d.gap_after)));
     let json = serde_json::to_value(d).expect("json");
