@@ -43,6 +43,10 @@ pub fn resimulate(
     };
     let mut effects = EffectSet::none();
     for (b, name) in prep.bearings.iter().enumerate() {
+        // A pedestal on an identified base is set with its base (`put_bases`).
+        if foundation.is_some_and(|f| f.pedestal(b).is_some()) {
+            continue;
+        }
         let k_y = value(Term::Stiffness { bearing: b, dir: 0 }).unwrap_or(0.0);
         let k_z = value(Term::Stiffness { bearing: b, dir: 1 }).unwrap_or(0.0);
         let (m_y, m_z) = match value(Term::Mass {
