@@ -29,12 +29,7 @@ fn check(
     assert!(!d.steps.is_empty(), "nothing named for {name}");
     let s = &d.steps[0];
     assert_eq!(s.effect, name, "wrong effect");
-    let bearings = [Some(s.bearing.as_str()), s.partner.as_deref()];
-    assert!(
-        bearings.contains(&Some(bearing)),
-        "wrong bearing {}",
-        s.bearing
-    );
+    assert_eq!(s.bearing, bearing, "wrong bearing {}", s.bearing);
     assert_eq!(
         d.effects_added.len(),
         1,
@@ -160,17 +155,10 @@ fn names_probe_runout() {
     );
 }
 
-#[test]
-fn names_foundation_coupling() {
-    let m = Machine::paper_like();
-    let k = 0.2 * m.pedestals[0].k_z;
-    check(
-        &m,
-        Effect::Foundation { a: 0, b: 1, k_c: k },
-        Options::default(),
-        ("foundation_coupling", "left", &[("k_c_y", k), ("k_c_z", k)]),
-    );
-}
+// `foundation_coupling` is no longer a constant spring between neighbouring
+// pedestals (the generator's `Effect::Foundation`) but pedestals on a shared,
+// unmeasured base: it is tested in `diagnose_foundation.rs` on data made with
+// the simulator's base element, not with the model under test.
 
 #[test]
 fn names_pedestal_damping_when_the_base_lacks_it() {

@@ -80,17 +80,40 @@ pub fn run(args: &Args) -> Result<()> {
         let machine = Machine::from_toml_path(path)?;
         let mut gaps = Vec::new();
         for (i, state) in outcome.states.iter().enumerate() {
-            let readings = resimulate(&machine, &outcome.prep, state)
+            let readings = resimulate(&machine, &outcome.prep, state, None)
                 .with_context(|| format!("--machine {}", path.display()))?;
             gaps.push(machine_gap(&outcome.prep, &readings));
             if let Some(dir) = plots.as_ref().map(|o| o.path()) {
-                if i == 0 || i + 1 == outcome.states.len() {
+                if i == 0 || (i + 1 == outcome.states.len() && outcome.foundation.is_none()) {
                     let (stem, label) = if i == 0 {
                         ("machine_before", "base model")
                     } else {
                         ("machine_after", "with the effects added")
                     };
                     write_machine_figure(&outcome.prep, &readings, dir, stem, label)?;
+                }
+            }
+        }
+        if let Some(f) = &outcome.foundation {
+            let last = outcome.states.last().context("no fitted state")?;
+            // A base the simulator cannot hold (negative stiffness: the
+            // diagnosis is then untrusted anyway) leaves the machine-level
+            // gap after the step unknown, with the reason on stderr.
+            match resimulate(&machine, &outcome.prep, last, Some(f)) {
+                Ok(readings) => {
+                    gaps.push(machine_gap(&outcome.prep, &readings));
+                    if let Some(dir) = plots.as_ref().map(|o| o.path()) {
+                        write_machine_figure(
+                            &outcome.prep,
+                            &readings,
+                            dir,
+                            "machine_after",
+                            "with the effects added",
+                        )?;
+                    }
+                }
+                Err(e) => {
+                    eprintln!("warning: no machine-level check of the identified base: {e:#}")
                 }
             }
         }

@@ -5,24 +5,32 @@
 //! The pedestals (k, m, c) replace the machine file's; pedestal effects are
 //! handed to the simulator in its own parametrisation (`crate::sim::inject`):
 //! cross-coupling as k_yz/√(k_y·k_z), mass anisotropy as m_z/m_y − 1 on
-//! m = m_y, the loss factor as is, a foundation coupling as k_c/√(k_a·k_b)
-//! (the simulator uses one size for both directions: the mean of the y and z
-//! values identified). Sensor effects (runout, delays) are applied to the
+//! m = m_y, the loss factor as is; `foundation_coupling` stands the
+//! pedestals on base elements of the simulator with the identified base
+//! parameters (`put_bases`). Sensor effects (runout, delays) are applied to the
 //! simulated readings here, exactly as identified.
 
 use super::data::Prepared;
+use super::foundation::FoundationFit;
 use super::model::{Nonlinear, Term};
 use super::workflow::State;
 use crate::effects::EffectKind;
+use crate::sim::base::Base;
 use crate::sim::{unbalance_response, EffectSet, Machine, PedestalParams};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, Context, Result};
 use num_complex::Complex;
 
 /// Predicted readings (rel, ped) per bearing and speed index [m].
 pub type Readings = Vec<Vec<Option<([Complex<f64>; 2], [Complex<f64>; 2])>>>;
 
-/// Re-simulates `machine` with the pedestals and effects of `state`.
-pub fn resimulate(machine: &Machine, prep: &Prepared, state: &State) -> Result<Readings> {
+/// Re-simulates `machine` with the pedestals and effects of `state`, and
+/// with the bases of `foundation` when given (module docs).
+pub fn resimulate(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    foundation: Option<&FoundationFit>,
+) -> Result<Readings> {
     let mut machine = machine.clone();
     let nb = prep.bearings.len();
     let value = |t: Term| -> Option<f64> {
@@ -35,6 +43,10 @@ pub fn resimulate(machine: &Machine, prep: &Prepared, state: &State) -> Result<R
     };
     let mut effects = EffectSet::none();
     for (b, name) in prep.bearings.iter().enumerate() {
+        // A pedestal on an identified base is set with its base (`put_bases`).
+        if foundation.is_some_and(|f| f.pedestal(b).is_some()) {
+            continue;
+        }
         let k_y = value(Term::Stiffness { bearing: b, dir: 0 }).unwrap_or(0.0);
         let k_z = value(Term::Stiffness { bearing: b, dir: 1 }).unwrap_or(0.0);
         let (m_y, m_z) = match value(Term::Mass {
@@ -99,35 +111,14 @@ pub fn resimulate(machine: &Machine, prep: &Prepared, state: &State) -> Result<R
             }
         }
     }
-    for t in &state.model.terms {
-        if let Term::Coupling { a, b, dir: 0 } = *t {
-            let kc_y = value(*t).unwrap_or(0.0);
-            let kc_z = value(Term::Coupling { a, b, dir: 1 }).unwrap_or(0.0);
-            let k = |bb: usize, d: usize| {
-                value(Term::Stiffness {
-                    bearing: bb,
-                    dir: d,
-                })
-                .unwrap_or(0.0)
-            };
-            let size_y = kc_y / (k(a, 0) * k(b, 0)).sqrt();
-            let size_z = kc_z / (k(a, 1) * k(b, 1)).sqrt();
-            let names = machine.bearing_names();
-            let ia = machine.bearing_index(&prep.bearings[a])?;
-            let ib = machine.bearing_index(&prep.bearings[b])?;
-            if ib != ia + 1 || names.len() < 2 {
-                bail!(
-                    "foundation coupling between {} and {}: the machine file does not have them as neighbours",
-                    prep.bearings[a],
-                    prep.bearings[b]
-                );
-            }
-            effects = effects.with(
-                EffectKind::FoundationCoupling,
-                Some(&prep.bearings[a]),
-                Some(0.5 * (size_y + size_z)),
-            );
-        }
+    // The identified model decides what each measured pedestal stands on:
+    // rigid ground, or an identified base.
+    for name in &prep.bearings {
+        let i = machine.bearing_index(name)?;
+        machine.bearings[i].base = None;
+    }
+    if let Some(f) = foundation {
+        put_bases(&mut machine, prep, f)?;
     }
     let response = unbalance_response(&machine, &prep.speeds_hz, &effects)
         .map_err(|e| anyhow!("re-simulating the machine: {e}"))?;
@@ -178,6 +169,82 @@ pub fn resimulate(machine: &Machine, prep: &Prepared, state: &State) -> Result<R
         }
     }
     Ok(out)
+}
+
+/// Stands the pedestals of each identified base on a base element of the
+/// simulator (`crate::sim::base`), with their pedestals as identified on it.
+/// A direction where no base motion was detected gets a base 10⁸ times
+/// stiffer than its pedestals (rigid to < 1e-6, README "Bases"); a base
+/// whose identified mass is not positive (only its compliance determined)
+/// gets 10⁻⁶ of its pedestals' mass; damping below zero is simulated as 0.
+fn put_bases(machine: &mut Machine, prep: &Prepared, f: &FoundationFit) -> Result<()> {
+    for (gi, (group, fit)) in f.grouping.groups.iter().zip(&f.grouping.fits).enumerate() {
+        let k_ped: f64 = fit
+            .pedestals
+            .iter()
+            .map(|t| t[0].abs().max(t[1].abs()))
+            .fold(0.0, f64::max);
+        let m_ped: f64 = fit.pedestals.iter().map(|t| t[2].abs()).sum();
+        let base = Base {
+            name: format!("identified_base_{}", gi + 1),
+            m: std::array::from_fn(|d| {
+                let m = fit.base.m[d];
+                if m.is_finite() && m > 0.0 {
+                    m
+                } else {
+                    1e-6 * m_ped.max(1.0)
+                }
+            }),
+            k: std::array::from_fn(|d| {
+                let k = fit.base.k[d];
+                if k.is_finite() {
+                    k
+                } else {
+                    1e8 * k_ped.max(1.0)
+                }
+            }),
+            c: std::array::from_fn(|d| {
+                let c = fit.base.c[d];
+                if c.is_finite() {
+                    c.max(0.0)
+                } else {
+                    0.0
+                }
+            }),
+            eta: 0.0,
+        };
+        base.check().map_err(|e| {
+            anyhow!(
+                "the identified base under {} cannot be simulated: {e}",
+                group
+                    .iter()
+                    .map(|&b| prep.bearings[b].as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })?;
+        let index = machine.bases.len();
+        machine.bases.push(base);
+        for (i, &b) in group.iter().enumerate() {
+            let name = &prep.bearings[b];
+            let t = fit.pedestals[i];
+            machine
+                .set_pedestal(
+                    name,
+                    Some(PedestalParams {
+                        m: t[2],
+                        k_y: t[0],
+                        k_z: t[1],
+                        c_y: t[3].max(0.0),
+                        c_z: t[4].max(0.0),
+                    }),
+                )
+                .with_context(|| format!("setting the identified pedestal of bearing {name}"))?;
+            let bi = machine.bearing_index(name)?;
+            machine.bearings[bi].base = Some(index);
+        }
+    }
+    Ok(())
 }
 
 /// The machine-level gap (the definition of `super::gap`, over the rel and

@@ -9,10 +9,14 @@
 //! - [`fit`]: noise-weighted least squares (errors in variables propagated)
 //!   and the 1-D profile search;
 //! - [`gap`]: the disagreement measure (defined there) and its noise floor;
-//! - [`candidates`]: the library of effects (every formats.md name);
+//! - [`candidates`]: the library of effects (every formats.md name but
+//!   `foundation_coupling`);
+//! - [`foundation`]: `foundation_coupling`, pedestals on a shared unmeasured
+//!   base (`crate::estimate::base`), with its bootstrap likelihood-ratio test;
 //! - [`criterion`]: the significance test and ranking of candidates;
 //! - [`locate`]: where the disagreement lives;
 //! - [`workflow`]: greedy forward selection;
+//! - [`trust`]: the verdict, and whether the numbers can be trusted;
 //! - [`report`]: the diagnosis as JSON and text;
 //! - [`machine`]: the machine-level re-simulation (`--machine`);
 //! - [`plots`]: measured-versus-predicted figures;
@@ -25,6 +29,7 @@ pub mod cli;
 pub mod criterion;
 pub mod data;
 pub mod fit;
+pub mod foundation;
 pub mod gap;
 pub mod locate;
 pub mod machine;
@@ -32,6 +37,7 @@ pub mod model;
 pub mod noise;
 pub mod plots;
 pub mod report;
+pub mod trust;
 pub mod workflow;
 
 pub use cli::{run, Args};

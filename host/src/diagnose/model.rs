@@ -1,8 +1,10 @@
 //! Augmented pedestal models: the paper's pedestal equation (eq. 3) with the
 //! extra terms of the effect library, in one linear-in-parameters form.
 //!
-//! At one speed, for a group of pedestals coupled to each other (a single
-//! pedestal unless `foundation_coupling` joins two), the model is
+//! At one speed, for a group of pedestals fitted together (each group is a
+//! single pedestal: the pedestals on a shared, unmeasured base are the
+//! nonlinear model of `crate::estimate::base`, tried by `super::foundation`),
+//! the model is
 //!
 //! ```text
 //! Σ_k β_k·(M_k·X + g_k) = F,     X = corrected pedestal displacement,
@@ -73,17 +75,6 @@ pub enum Term {
         /// Imaginary (true) or real (false) part.
         imag: bool,
     },
-    /// Coupling spring k_c [N/m] of a flexible base between two pedestals in
-    /// one direction: each pedestal's equation gains k_c·(X_own − X_other), so
-    /// the pedestals' own k stay their stiffness to ground.
-    Coupling {
-        /// First bearing index.
-        a: usize,
-        /// Second bearing index.
-        b: usize,
-        /// Direction.
-        dir: usize,
-    },
 }
 
 impl Term {
@@ -95,7 +86,6 @@ impl Term {
             | Term::Damping { bearing, .. }
             | Term::CrossStiffness { bearing }
             | Term::Runout { bearing, .. } => [Some(bearing), None],
-            Term::Coupling { a, b, .. } => [Some(a), Some(b)],
         }
     }
 
@@ -118,7 +108,6 @@ impl Term {
             Term::Runout { dir, imag, .. } => {
                 format!("r_{}_{}", DIR_NAMES[dir], if imag { "im" } else { "re" })
             }
-            Term::Coupling { dir, .. } => format!("k_c_{}", DIR_NAMES[dir]),
         }
     }
 
@@ -412,15 +401,6 @@ impl Model {
                     let p = pos(bearing)?;
                     entry(2 * p, 2 * p + 1, loss(p), &mut col);
                     entry(2 * p + 1, 2 * p, loss(p), &mut col);
-                }
-                Term::Coupling { a, b, dir } => {
-                    // A spring between the pedestals: k_c·(X_own − X_other).
-                    let (pa, pb) = (pos(a)?, pos(b)?);
-                    let (ea, eb) = (2 * pa + dir, 2 * pb + dir);
-                    entry(ea, ea, one, &mut col);
-                    entry(ea, eb, -one, &mut col);
-                    entry(eb, eb, one, &mut col);
-                    entry(eb, ea, -one, &mut col);
                 }
                 Term::Runout { bearing, dir, imag } => {
                     let p = pos(bearing)?;

@@ -25,12 +25,13 @@ pub struct CandidateSummary {
     pub effect: String,
     /// Bearing it acts on.
     pub bearing: String,
-    /// Other bearing of a foundation coupling.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub partner: Option<String>,
     /// Delayed channels of a sensor delay (`ped`, `ped_y`, `rel`, ...).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub channels: Option<String>,
+    /// The test that decided it ([`Evidence`]'s statistic): `"Wald, χ² with
+    /// Bonferroni over N candidates"` or `"likelihood-ratio, parametric
+    /// bootstrap (N)"`.
+    pub test: String,
     /// The evidence for it.
     pub evidence: Evidence,
     /// Its own parameters as fitted.
@@ -42,7 +43,8 @@ pub struct CandidateSummary {
 pub struct Step {
     /// Effect name (formats.md).
     pub effect: String,
-    /// Bearing it acts on (the first of the pair for foundation coupling).
+    /// Bearing it acts on (the first bearing of the first base group for
+    /// `foundation_coupling`: every bearing on a base is in `foundation`).
     pub bearing: String,
     /// Pedestal-level gap before adding it [-].
     pub gap_before: f64,
@@ -56,14 +58,16 @@ pub struct Step {
     /// Machine-level gap after the step, with `--machine`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub machine_gap_after: Option<f64>,
-    /// Other bearing of a foundation coupling.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub partner: Option<String>,
     /// Delayed channels of a sensor delay.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub channels: Option<String>,
     /// The effect's own parameters after the refit.
     pub parameters: Vec<Estimate>,
+    /// The test that decided it (as in [`CandidateSummary::test`]).
+    pub test: String,
+    /// For `foundation_coupling`: the bases and the bootstrap test.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub foundation: Option<FoundationReport>,
     /// Evidence for the effect.
     pub evidence: Evidence,
     /// The next-best candidate of the step.
@@ -72,6 +76,101 @@ pub struct Step {
     pub candidates_tried: usize,
     /// Candidates that could not be fitted (not identifiable from these data).
     pub candidates_failed: usize,
+}
+
+/// The likelihood-ratio test of `foundation_coupling` (module docs of
+/// `super::foundation`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FoundationTest {
+    /// `"likelihood-ratio, parametric bootstrap (N)"`.
+    pub test: String,
+    /// J_rigid − J_base of the favoured grouping [-].
+    pub likelihood_ratio: f64,
+    /// The statistic: likelihood ratio − q·ln N [-].
+    pub statistic: f64,
+    /// Bootstrap replicates under the null (rigid ground).
+    pub replicates: usize,
+    /// Replicates whose statistic reached the observed one.
+    pub exceedances: usize,
+    /// 95 % point of the replicates (the critical value at 5 %) [-].
+    pub critical_value_95: f64,
+    /// (1 + exceedances)/(replicates + 1).
+    pub p_empirical: f64,
+    /// Beyond every replicate, the tail of a scaled χ² matched to the
+    /// replicates; otherwise `p_empirical`.
+    pub p_value: f64,
+    /// Groupings of pedestals into bases searched (the Bonferroni factor).
+    pub groupings: usize,
+    /// The p-value the decision uses: `p_value` × `groupings`, at most 1.
+    pub p_calibrated: f64,
+}
+
+/// One identified base and the pedestals on it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BaseGroupReport {
+    /// Bearings whose pedestals stand on it.
+    pub bearings: Vec<String>,
+    /// What the data determine in y and z (`full`, `quasi_static` with the
+    /// compliance 1/K_B [m/N], `mass_line` with M_B [kg], `not_detected`).
+    pub identifiability: [crate::estimate::base::BaseIdentifiability; 2],
+    /// Its parameters (k [N/m], c [N·s/m], m [kg] per direction; meaningful
+    /// as far as `identifiability` says; null = not determined).
+    pub base: crate::estimate::base::BaseParams,
+    /// Their standard errors.
+    pub base_std_err: crate::estimate::base::BaseParams,
+    /// Base natural frequency sqrt(K_B/M_B)/2π (y, z) [Hz].
+    pub base_frequency_hz: [f64; 2],
+    /// Whether the joint fit converged.
+    pub converged: bool,
+    /// What the data determine, as named estimates (`base_k_y`, ...,
+    /// `base_compliance_y` [m/N] when only that is determined).
+    pub parameters: Vec<Estimate>,
+}
+
+/// The bases `foundation_coupling` identified, with its test.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FoundationReport {
+    /// The bases.
+    pub groups: Vec<BaseGroupReport>,
+    /// The test that decided it.
+    pub test: FoundationTest,
+}
+
+impl FoundationReport {
+    /// The bases and the test as text lines.
+    pub fn write_text(&self, s: &mut String) {
+        let t = &self.test;
+        let _ = writeln!(
+            s,
+            "     test: {}: LR {:.1}, statistic LR − q·ln N {:.1}, {} of {} replicates reached it (95 % point {:.1}), p = {:.2e}",
+            t.test, t.likelihood_ratio, t.statistic, t.exceedances, t.replicates, t.critical_value_95, t.p_calibrated
+        );
+        for g in &self.groups {
+            let what: Vec<&str> = g.identifiability.iter().map(|i| i.name()).collect();
+            let params: Vec<String> = g
+                .parameters
+                .iter()
+                .map(|p| format!("{} = {:.4e} ± {:.2e}", p.name, p.value, p.std_err))
+                .collect();
+            let _ = writeln!(
+                s,
+                "     base under {}: determined y {}, z {}{}; {}",
+                g.bearings.join(", "),
+                what[0],
+                what[1],
+                if g.converged {
+                    ""
+                } else {
+                    " (fit NOT converged)"
+                },
+                if params.is_empty() {
+                    "no base motion detected".to_string()
+                } else {
+                    params.join(", ")
+                }
+            );
+        }
+    }
 }
 
 /// Identified parameters of one pedestal.
@@ -130,10 +229,22 @@ pub struct Diagnosis {
     pub pedestals_after: Vec<Pedestal>,
     /// The best candidate left when the search stopped (not significant).
     pub best_rejected: Option<CandidateSummary>,
+    /// `foundation_coupling` as tried on the base model (its bases and
+    /// test), whether chosen or not; absent when not tried (one bearing, a
+    /// reduced `--base`, or a base model already at the noise floor).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub foundation: Option<FoundationReport>,
     /// Family-wise significance level per step.
     pub significance_level: f64,
     /// One-paragraph conclusion.
     pub verdict: String,
+    /// False when the identified parameters are not to be trusted: the
+    /// final model leaves a gap well above its noise floor (the data hold
+    /// something no effect of the library explains), the gap rose, or a
+    /// pedestal is physically impossible; `trust_reasons` says which.
+    pub trusted: bool,
+    /// Why the parameters are not to be trusted (empty when trusted).
+    pub trust_reasons: Vec<String>,
     /// Convention mistakes the data most likely carry, per pedestal
     /// (`identify::convention`): with one, every other finding is suspect.
     pub suspected_convention_errors: Vec<crate::identify::convention::ConventionFinding>,
@@ -199,10 +310,7 @@ impl Diagnosis {
                     .iter()
                     .map(|p| format!("{} = {:.4e} ± {:.2e}", p.name, p.value, p.std_err))
                     .collect();
-                let mut where_ = st.bearing.clone();
-                if let Some(p) = &st.partner {
-                    where_ += &format!("+{p}");
-                }
+                let where_ = st.bearing.clone();
                 let mut effect = st.effect.clone();
                 if let Some(c) = &st.channels {
                     effect += &format!(" ({c})");
@@ -219,8 +327,8 @@ impl Diagnosis {
                 );
                 let e = &st.evidence;
                 let mut ev = format!(
-                    "     evidence: Wald {:.3e} (floor {:.3e}, robust {:.3e}), q = {}, ΔBIC {:.1}, p = {:.2e} (×{} candidates: {:.2e})",
-                    e.wald, e.wald_floor, e.wald_robust, e.extra_parameters, e.delta_bic, e.p_value, st.candidates_tried, e.p_adjusted
+                    "     evidence ({}): statistic {:.3e} (floor {:.3e}, robust {:.3e}), q = {}, ΔBIC {:.1}, p = {:.2e} (adjusted {:.2e})",
+                    st.test, e.wald, e.wald_floor, e.wald_robust, e.extra_parameters, e.delta_bic, e.p_value, e.p_adjusted
                 );
                 if let Some(r) = &st.runner_up {
                     ev += &format!(
@@ -229,7 +337,21 @@ impl Diagnosis {
                     );
                 }
                 let _ = writeln!(s, "{ev}");
+                if let Some(f) = &st.foundation {
+                    f.write_text(&mut s);
+                }
             }
+        }
+        if let (Some(f), false) = (
+            &self.foundation,
+            self.steps.iter().any(|st| st.foundation.is_some()),
+        ) {
+            let t = &f.test;
+            let _ = writeln!(
+                s,
+                "foundation_coupling (pedestals on a shared base) not chosen: {}: LR {:.1}, statistic {:.1}, {} of {} replicates reached it, p = {:.2e}",
+                t.test, t.likelihood_ratio, t.statistic, t.exceedances, t.replicates, t.p_calibrated
+            );
         }
         if let Some(r) = &self.best_rejected {
             let _ = writeln!(
@@ -252,6 +374,12 @@ impl Diagnosis {
             let _ = writeln!(s, "  {}: {}", b.bearing, parts.join(", "));
         }
         let _ = writeln!(s, "\n{}", self.verdict);
+        if !self.trusted {
+            let _ = writeln!(s, "The identified parameters are NOT to be trusted:");
+            for r in &self.trust_reasons {
+                let _ = writeln!(s, "  - {r}");
+            }
+        }
         s
     }
 }

@@ -6,11 +6,14 @@ use super::candidates::{library, Candidate, ParamRef};
 use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
 use super::fit::{fit_group, jacobian, profile, search_interval, Weights};
+use super::foundation::{self, FoundationFit};
 use super::gap::{Gap, Prediction};
 use super::locate::locate;
 use super::model::{Model, Params, Term};
 use super::noise::CHANNELS;
 use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
+use super::trust::{as_pedestal_fit, conclude, AT_THE_FLOOR};
+use crate::effects::EffectKind;
 use crate::rundir::RunDir;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
@@ -28,6 +31,11 @@ pub struct Options {
     pub max_steps: usize,
     /// A progress line on stderr (only on a terminal, after a second).
     pub progress: bool,
+    /// Bootstrap replicates of the `foundation_coupling` test (0: the
+    /// candidate is not tried).
+    pub foundation_replicates: usize,
+    /// Seed of that bootstrap.
+    pub foundation_seed: u64,
 }
 
 impl Default for Options {
@@ -37,6 +45,8 @@ impl Default for Options {
             alpha: 1e-3,
             max_steps: 8,
             progress: false,
+            foundation_replicates: foundation::REPLICATES,
+            foundation_seed: foundation::SEED,
         }
     }
 }
@@ -366,9 +376,19 @@ pub struct Outcome {
     pub prep: Prepared,
     /// The base model's fit, then the fit after each step.
     pub states: Vec<State>,
+    /// `foundation_coupling` when chosen: the bases and pedestals on them
+    /// (the last state keeps the rigid fit of the bearings on no base).
+    pub foundation: Option<FoundationFit>,
 }
 
 /// Runs the whole workflow on a run directory at the pedestal level.
+///
+/// `foundation_coupling` (pedestals on a shared, unmeasured base,
+/// [`super::foundation`]) is tried on the base model in the first round,
+/// next to the library; it wins when its bootstrap test is significant, it
+/// brings the gap down, and further down than the best significant library
+/// candidate does. Its model has no further effects on top, so the search ends
+/// there.
 pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let prep = Prepared::from_run(run)?;
     let mut state = State::base(&prep, &opts.base)?;
@@ -378,6 +398,23 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let mut states = vec![state.clone()];
     let mut steps = Vec::new();
     let mut best_rejected = None;
+    let foundation_tried =
+        if opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0 {
+            // A base fit that cannot run is "not tried", not an error.
+            foundation::evaluate(
+                &prep,
+                &pred0,
+                gap0,
+                opts.alpha,
+                opts.foundation_replicates,
+                opts.foundation_seed,
+            )
+            .ok()
+            .flatten()
+        } else {
+            None
+        };
+    let mut chosen_foundation = None;
     let mut ticker = crate::progress::Ticker::new(
         "diagnose: candidate-effect rounds",
         opts.max_steps,
@@ -386,8 +423,56 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     for round in 0..opts.max_steps {
         ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
+        if round == 0 {
+            // The library's best significant candidate, refitted: the gap
+            // it leaves. The two tests' statistics are whitened differently,
+            // so the comparison is on what each explains: the gap.
+            let library_gap = outcome
+                .ranked
+                .first()
+                .filter(|_| outcome.accepted)
+                .map(|e| {
+                    Prediction::new(&prep, &e.candidate.model, &e.params)
+                        .gap(&prep, None)
+                        .gap
+                });
+            if let Some(f) = foundation_tried.as_ref().filter(|f| {
+                f.test.significant(opts.alpha)
+                    && f.evidence.delta_bic > 0.0
+                    && gap0.gap > AT_THE_FLOOR * gap0.floor
+                    && f.gap.gap < gap0.gap
+                    && library_gap.is_none_or(|l| f.gap.gap < l)
+            }) {
+                let first = f.grouping.groups[0][0];
+                steps.push(Step {
+                    effect: EffectKind::FoundationCoupling.name().to_string(),
+                    bearing: prep.bearings[first].clone(),
+                    gap_before: gap0.gap,
+                    gap_after: f.gap.gap,
+                    gap_floor_after: f.gap.floor,
+                    machine_gap_before: None,
+                    machine_gap_after: None,
+                    channels: None,
+                    parameters: f.parameters(&prep),
+                    test: f.test.test.clone(),
+                    foundation: Some(f.report(&prep)),
+                    evidence: f.evidence,
+                    runner_up: outcome
+                        .ranked
+                        .first()
+                        .map(|e| summary(&prep, e, outcome.tried)),
+                    candidates_tried: outcome.tried + 1,
+                    candidates_failed: outcome.failed.len(),
+                });
+                chosen_foundation = Some(f.clone());
+                break;
+            }
+        }
         if !outcome.accepted {
-            best_rejected = outcome.ranked.first().map(|e| summary(&prep, e));
+            best_rejected = outcome
+                .ranked
+                .first()
+                .map(|e| summary(&prep, e, outcome.tried));
             break;
         }
         let win = &outcome.ranked[0];
@@ -403,54 +488,43 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             gap_floor_after: after.floor,
             machine_gap_before: None,
             machine_gap_after: None,
-            partner: win.candidate.partner.map(|b| prep.bearings[b].clone()),
             channels: win.candidate.variant.clone(),
             parameters,
+            test: wald_test(outcome.tried),
+            foundation: None,
             evidence: win.evidence,
-            runner_up: outcome.ranked.get(1).map(|e| summary(&prep, e)),
+            runner_up: outcome
+                .ranked
+                .get(1)
+                .map(|e| summary(&prep, e, outcome.tried)),
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
         });
         state = next;
         states.push(state.clone());
     }
-    let (pred1, gap1) = state.gap(&prep);
-    let where_after = locate(&prep, &state.model, &state.params, &pred1);
-    let pedestals_after = pedestals(&prep, &state)?;
-    let effects_added: Vec<String> = steps.iter().map(|s| s.effect.clone()).collect();
-    let verdict = if steps.is_empty() {
-        if gap0.gap <= 3.0 * gap0.floor {
-            format!(
-                "No significant missing effect: the base model agrees with the measurements to the noise floor (gap {:.4}, floor {:.4}).",
-                gap0.gap, gap0.floor
-            )
-        } else {
-            format!(
-                "No effect of the library explains the remaining disagreement significantly (gap {:.4}, floor {:.4}); nothing added.",
-                gap0.gap, gap0.floor
-            )
-        }
-    } else {
-        // The wording follows the numbers: a gap that grew is not said to fall.
-        let moved = if gap1.gap < gap0.gap {
-            "fell"
-        } else if gap1.gap > gap0.gap {
-            "ROSE (the added effect does not explain the data: check the data's conventions and units)"
-        } else {
-            "stayed"
-        };
-        format!(
-            "Added {}: the pedestal-level gap {moved} from {:.4} to {:.4} (noise floor {:.4}).",
-            steps
-                .iter()
-                .map(|s| format!("{} at {}", s.effect, s.bearing))
-                .collect::<Vec<_>>()
-                .join(", then "),
-            gap0.gap,
-            gap1.gap,
-            gap1.floor
-        )
+    let (pred1, gap1) = match &chosen_foundation {
+        Some(f) => (f.prediction.clone(), f.gap),
+        None => state.gap(&prep),
     };
+    let where_after = locate(&prep, &state.model, &state.params, &pred1);
+    let mut pedestals_after = pedestals(&prep, &state)?;
+    if let Some(f) = &chosen_foundation {
+        for (b, p) in pedestals_after.iter_mut().enumerate() {
+            if let Some((theta, se)) = f.pedestal(b) {
+                for (k, q) in Parameter::ALL.iter().enumerate() {
+                    p.values.insert(q.name().to_string(), theta[k]);
+                    p.std_err.insert(q.name().to_string(), se[k]);
+                }
+            }
+        }
+    }
+    let effects_added: Vec<String> = steps.iter().map(|s| s.effect.clone()).collect();
+    let physical: Vec<_> = pedestals_after
+        .iter()
+        .filter_map(|p| as_pedestal_fit(&prep, p))
+        .collect();
+    let conclusion = conclude(gap0, gap1, &steps, &physical);
     let mut digits = BTreeMap::new();
     for (c, q) in prep.noise.columns.iter().enumerate() {
         digits.insert(CHANNELS[c].to_string(), q.digits);
@@ -480,24 +554,33 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         pedestals_before,
         pedestals_after,
         best_rejected,
+        foundation: foundation_tried.as_ref().map(|f| f.report(&prep)),
         significance_level: opts.alpha,
-        verdict,
+        verdict: conclusion.verdict,
+        trusted: conclusion.trusted,
+        trust_reasons: conclusion.reasons,
         suspected_convention_errors: crate::identify::convention::findings_for_run(run, &opts.base),
     };
     Ok(Outcome {
         diagnosis,
         prep,
         states,
+        foundation: chosen_foundation,
     })
 }
 
-/// The candidate as a report entry.
-fn summary(prep: &Prepared, e: &Evaluated) -> CandidateSummary {
+/// The name of the library's test, with the Bonferroni count.
+fn wald_test(tried: usize) -> String {
+    format!("Wald, χ² with Bonferroni over {tried} candidates")
+}
+
+/// The candidate as a report entry (`tried`: candidates of its step).
+fn summary(prep: &Prepared, e: &Evaluated, tried: usize) -> CandidateSummary {
     CandidateSummary {
         effect: e.candidate.effect.name().to_string(),
         bearing: prep.bearings[e.candidate.bearing].clone(),
-        partner: e.candidate.partner.map(|b| prep.bearings[b].clone()),
         channels: e.candidate.variant.clone(),
+        test: wald_test(tried),
         evidence: e.evidence,
         parameters: e
             .effect_parameters()

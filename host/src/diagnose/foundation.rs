@@ -1,0 +1,601 @@
+//! The `foundation_coupling` candidate: the pedestals stand on a shared,
+//! unmeasured base (`crate::estimate::base`, the one physical model and its
+//! maximum-likelihood fit, called here, never copied), tried on all
+//! bearings, with the test that is valid for it.
+//!
+//! **Which pedestals share a base.** Every measured pedestal on one base is
+//! tried; with up to [`MAX_SEARCH_BEARINGS`] bearings also every other
+//! grouping into bases of two or more pedestals (the rest on rigid ground).
+//! The grouping the data favour is the one with the largest penalised
+//! likelihood ratio LR − q·ln N (q = 6 base parameters per base, N real
+//! equations).
+//!
+//! **The test.** Under "rigid base" the base's frequency and damping are not
+//! identified (the base compliance κ = 0 leaves them undefined), so the
+//! likelihood ratio does not follow χ² and a Bonferroni correction over
+//! candidates has no basis. The statistic is the penalised likelihood ratio
+//! of the favoured grouping, LR = J_rigid − J_base (whitened residual sums of
+//! squares of `estimate::base`, the same equations with and without the
+//! base); its null distribution is calibrated by a **parametric bootstrap**:
+//! [`REPLICATES`] data sets simulated from the rigid-ground fit (each
+//! measured rel as the true rotor motion, the pedestal motion the rigid fit
+//! predicts from its force, plus Gaussian noise of each number's own standard
+//! deviation), each refitted with and without bases *including the search
+//! over groupings*, with a fixed seed ([`SEED`]). The p-value reported is
+//! the bootstrap's own (1 + #{T* ≥ T})/(R + 1) and, for the tail beyond the
+//! replicates, that of a scaled χ² a·χ²(ν) matched to the replicates' mean
+//! and variance; the effect is significant when T exceeds every replicate
+//! and the calibrated tail probability is below the significance level.
+//!
+//! Cost: each replicate refits the bases, so the bootstrap is run only when
+//! the candidate could be chosen at all (the rigid model's gap is above
+//! `AT_THE_FLOOR` times its noise floor, the penalised ratio is positive and
+//! the base model brings the gap down), and it stops early when the decision
+//! can no longer change: at the first replicate that reaches T (the effect
+//! is then not significant; the p-value shown is that of the replicates
+//! run), or, after [`MIN_REPLICATES`], when T is beyond every replicate and
+//! the calibrated p-value is below 1/1000 of the significance level. The
+//! test's name gives the replicates actually run. The replicates refit the favoured grouping
+//! only; the search over groupings is allowed for by a Bonferroni factor
+//! (the number of groupings tried) on the calibrated p-value.
+
+use super::criterion::Evidence;
+use super::data::Prepared;
+use super::gap::{Gap, Prediction};
+use super::report::{BaseGroupReport, Estimate, FoundationReport, FoundationTest};
+use super::trust::AT_THE_FLOOR;
+use crate::estimate::base::{
+    fit_on_unmeasured_base, predict, BaseFitResult, BaseGroup, BaseIdentifiability,
+};
+use crate::estimate::Observation;
+use anyhow::{anyhow, Result};
+use num_complex::Complex;
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+/// Bootstrap replicates of the likelihood-ratio test (fixed: the test's
+/// resolution is 1/(R + 1) empirically, the scaled-χ² tail beyond).
+pub const REPLICATES: usize = 40;
+
+/// Replicates always run before the bootstrap may stop on an overwhelming
+/// statistic (module docs).
+pub const MIN_REPLICATES: usize = 10;
+
+/// Seed of the bootstrap's random numbers (same data, same answer).
+pub const SEED: u64 = 0x0f0_0da7;
+
+/// Up to this many bearings every grouping into bases is tried; beyond it,
+/// every pedestal on one base only.
+pub const MAX_SEARCH_BEARINGS: usize = 4;
+
+/// Base parameters per base (k, c, m in y and z).
+const BASE_PARAMETERS: usize = 6;
+
+/// The groupings tried for `n` bearings: lists of bases, each a list of
+/// bearing indices (two or more); bearings in no base stand on rigid ground.
+pub fn groupings(n: usize) -> Vec<Vec<Vec<usize>>> {
+    if n < 2 {
+        return Vec::new();
+    }
+    let all: Vec<usize> = (0..n).collect();
+    let mut out = vec![vec![all]];
+    if n > MAX_SEARCH_BEARINGS {
+        return out;
+    }
+    // Every proper subset of two or more on one base.
+    let subsets: Vec<Vec<usize>> = (1u32..(1 << n) - 1)
+        .map(|mask| (0..n).filter(|b| mask & (1 << b) != 0).collect::<Vec<_>>())
+        .filter(|s| s.len() >= 2)
+        .collect();
+    for s in &subsets {
+        out.push(vec![s.clone()]);
+    }
+    // Two disjoint bases of two or more each.
+    for a in &subsets {
+        for b in &subsets {
+            if a.iter().all(|x| !b.contains(x)) && a[0] < b[0] {
+                out.push(vec![a.clone(), b.clone()]);
+            }
+        }
+    }
+    out
+}
+
+/// One grouping fitted: the bases and their joint fits.
+#[derive(Clone, Debug)]
+pub struct GroupingFit {
+    /// Bearing indices of each base.
+    pub groups: Vec<Vec<usize>>,
+    /// The joint fit of each base's pedestals and the base.
+    pub fits: Vec<BaseFitResult>,
+    /// Likelihood ratio Σ (J_rigid − J) over the bases [-].
+    pub lr: f64,
+    /// Base parameters added (q).
+    pub q: usize,
+    /// LR − q·ln N: what the grouping search maximises [-].
+    pub score: f64,
+}
+
+/// The foundation candidate fitted and tested.
+#[derive(Clone, Debug)]
+pub struct FoundationFit {
+    /// The favoured grouping.
+    pub grouping: GroupingFit,
+    /// The bootstrap test.
+    pub test: FoundationTest,
+    /// The evidence in the library's terms (statistic = LR).
+    pub evidence: Evidence,
+    /// The pedestal-level prediction of every bearing.
+    pub prediction: Prediction,
+    /// Its gap.
+    pub gap: Gap,
+}
+
+/// The measurements as the estimation core's observations, per bearing,
+/// with the variances the diagnosis uses (`Point::sigma`).
+pub fn observations(prep: &Prepared) -> Vec<Vec<Observation>> {
+    prep.points
+        .iter()
+        .map(|row| {
+            row.iter()
+                .flatten()
+                .map(|p| Observation {
+                    speed_hz: p.speed_hz,
+                    rel: p.rel,
+                    ped: p.ped,
+                    kstar: p.kstar,
+                    var: std::array::from_fn(|c| p.sigma[c] * p.sigma[c]),
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The rigid-ground fit θ of every bearing (`plinth identify`'s ML fit),
+/// when all are finite.
+fn rigid_start(prep: &Prepared) -> Option<Vec<[f64; 5]>> {
+    let start: Vec<[f64; 5]> = prep.base_fits.iter().map(|f| f.params()).collect();
+    (start.len() == prep.bearings.len() && start.iter().flatten().all(|v| v.is_finite()))
+        .then_some(start)
+}
+
+/// Fits every grouping and returns the favoured one (largest score); `None`
+/// when no grouping could be fitted.
+fn best_grouping(
+    obs: &[Vec<Observation>],
+    start: &[[f64; 5]],
+    groupings: &[Vec<Vec<usize>>],
+    n_eq: usize,
+) -> Option<GroupingFit> {
+    let ln_n = (n_eq.max(2) as f64).ln();
+    let mut best: Option<GroupingFit> = None;
+    for groups in groupings {
+        let fits: Option<Vec<BaseFitResult>> = groups
+            .iter()
+            .map(|g| {
+                fit_on_unmeasured_base(
+                    obs,
+                    &BaseGroup {
+                        bearings: g.clone(),
+                    },
+                    start,
+                )
+                .ok()
+            })
+            .collect();
+        let Some(fits) = fits else { continue };
+        let lr: f64 = fits.iter().map(|f| (f.chi2_rigid - f.chi2).max(0.0)).sum();
+        let q = BASE_PARAMETERS * groups.len();
+        let score = lr - q as f64 * ln_n;
+        if !score.is_finite() {
+            continue;
+        }
+        if best.as_ref().is_none_or(|b| score > b.score) {
+            best = Some(GroupingFit {
+                groups: groups.clone(),
+                fits,
+                lr,
+                q,
+                score,
+            });
+        }
+    }
+    best
+}
+
+/// Data simulated from the rigid-ground fit `theta` under the noise of each
+/// number (module docs).
+fn null_replicate(
+    obs: &[Vec<Observation>],
+    theta: &[[f64; 5]],
+    rng: &mut rand::rngs::StdRng,
+) -> Vec<Vec<Observation>> {
+    let mut normal = || -> f64 { StandardNormal.sample(rng) };
+    obs.iter()
+        .zip(theta)
+        .map(|(row, th)| {
+            row.iter()
+                .map(|o| {
+                    let w = o.omega();
+                    let f = o.force();
+                    let mut r = *o;
+                    for d in 0..2 {
+                        let h = Complex::new(th[d] - w * w * th[2], w * th[3 + d]);
+                        r.ped[d] = f[d] / h;
+                    }
+                    for d in 0..2 {
+                        r.rel[d] += Complex::new(
+                            o.var[2 * d].sqrt() * normal(),
+                            o.var[2 * d + 1].sqrt() * normal(),
+                        );
+                        r.ped[d] += Complex::new(
+                            o.var[4 + 2 * d].sqrt() * normal(),
+                            o.var[5 + 2 * d].sqrt() * normal(),
+                        );
+                    }
+                    r
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Fits the foundation candidate on `prep` and tests it against rigid
+/// ground (module docs). `base_prediction` is the rigid model's prediction
+/// (kept for bearings on no base), `base_gap` its gap; `None` when there are
+/// fewer than two bearings, the rigid model already fits to the noise floor
+/// (nothing to explain), or no grouping can be fitted.
+pub fn evaluate(
+    prep: &Prepared,
+    base_prediction: &Prediction,
+    base_gap: Gap,
+    alpha: f64,
+    replicates: usize,
+    seed: u64,
+) -> Result<Option<FoundationFit>> {
+    let nb = prep.bearings.len();
+    let candidates = groupings(nb);
+    let Some(start) = rigid_start(prep) else {
+        return Ok(None);
+    };
+    // Nothing to explain: the rigid model already fits to the noise floor,
+    // so the candidate could not be chosen (and its fits cost seconds).
+    if candidates.is_empty() || base_gap.gap <= AT_THE_FLOOR * base_gap.floor {
+        return Ok(None);
+    }
+    let obs = observations(prep);
+    let n_eq: usize = obs.iter().map(|o| 4 * o.len()).sum();
+    let Some(grouping) = best_grouping(&obs, &start, &candidates, n_eq) else {
+        return Ok(None);
+    };
+    let prediction = prediction(prep, &obs, base_prediction, &grouping)?;
+    let gap = prediction.gap(prep, None);
+    let statistic = grouping.score;
+    let not_run = if statistic <= 0.0 {
+        Some("the likelihood ratio does not pay for the base's parameters")
+    } else if gap.gap >= base_gap.gap {
+        Some("the base model does not bring the gap down")
+    } else {
+        None
+    };
+    let test = match not_run {
+        Some(reason) => FoundationTest::not_run(statistic, grouping.lr, reason),
+        None => {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+            let favoured = [grouping.groups.clone()];
+            let mut null = Vec::with_capacity(replicates);
+            for _ in 0..replicates {
+                let data = null_replicate(&obs, &start, &mut rng);
+                if let Some(g) = best_grouping(&data, &start, &favoured, n_eq) {
+                    null.push(g.score);
+                    if g.score >= statistic {
+                        break;
+                    }
+                }
+                if null.len() >= MIN_REPLICATES {
+                    let so_far = FoundationTest::from_replicates(
+                        statistic,
+                        grouping.lr,
+                        &null,
+                        candidates.len(),
+                    );
+                    if so_far.exceedances == 0 && so_far.p_calibrated < 1e-3 * alpha {
+                        break;
+                    }
+                }
+            }
+            FoundationTest::from_replicates(statistic, grouping.lr, &null, candidates.len())
+        }
+    };
+    let ln_n = (n_eq.max(2) as f64).ln();
+    let evidence = Evidence {
+        wald_floor: grouping.lr,
+        wald_robust: grouping.lr,
+        wald: grouping.lr,
+        extra_parameters: grouping.q,
+        delta_bic: grouping.lr - grouping.q as f64 * ln_n,
+        p_value: test.p_value,
+        p_adjusted: test.p_calibrated,
+    };
+    Ok(Some(FoundationFit {
+        grouping,
+        test,
+        evidence,
+        prediction,
+        gap,
+    }))
+}
+
+impl FoundationTest {
+    /// The test not run (module docs: it could not change the decision),
+    /// with the reason.
+    pub fn not_run(t: f64, lr: f64, reason: &str) -> Self {
+        Self {
+            test: format!("likelihood-ratio, parametric bootstrap (0): not run, {reason}"),
+            likelihood_ratio: lr,
+            statistic: t,
+            replicates: 0,
+            exceedances: 0,
+            critical_value_95: f64::NAN,
+            p_empirical: 1.0,
+            p_value: 1.0,
+            groupings: 0,
+            p_calibrated: 1.0,
+        }
+    }
+
+    /// The test from the observed statistic `t` (penalised LR), the LR, the
+    /// bootstrap replicates of `t` under the null and the number of
+    /// groupings searched (the Bonferroni factor).
+    pub fn from_replicates(t: f64, lr: f64, null: &[f64], groupings: usize) -> Self {
+        let r = null.len();
+        let exceed = null.iter().filter(|&&x| x >= t).count();
+        let p_empirical = (1 + exceed) as f64 / (r + 1) as f64;
+        // Scaled χ² a·χ²(ν) through the replicates' mean and variance, on the
+        // statistic shifted to be non-negative (the penalty is a constant).
+        let lo = null.iter().copied().fold(f64::INFINITY, f64::min).min(t);
+        let shift = if lo.is_finite() { -lo } else { 0.0 };
+        let mean = null.iter().map(|x| x + shift).sum::<f64>() / r.max(1) as f64;
+        let var =
+            null.iter().map(|x| (x + shift - mean).powi(2)).sum::<f64>() / (r.max(2) - 1) as f64;
+        let p_tail = if r >= 2 && mean > 0.0 && var > 0.0 {
+            let a = var / (2.0 * mean);
+            let nu = 2.0 * mean * mean / var;
+            ChiSquared::new(nu).map_or(f64::NAN, |d| d.sf((t + shift) / a))
+        } else {
+            f64::NAN
+        };
+        let critical = quantile(null, 0.95);
+        // Beyond every replicate the scaled-χ² tail; otherwise the
+        // replicates themselves.
+        let p_value = if exceed == 0 && p_tail.is_finite() {
+            p_tail.min(p_empirical)
+        } else {
+            p_empirical
+        };
+        Self {
+            test: format!("likelihood-ratio, parametric bootstrap ({r})"),
+            likelihood_ratio: lr,
+            statistic: t,
+            replicates: r,
+            exceedances: exceed,
+            critical_value_95: critical,
+            p_empirical,
+            p_value,
+            groupings,
+            p_calibrated: (p_value * groupings.max(1) as f64).min(1.0),
+        }
+    }
+
+    /// The smallest p-value the replicates can show, 1/(R + 1).
+    pub fn p_empirical_floor(&self) -> f64 {
+        1.0 / (self.replicates + 1) as f64
+    }
+
+    /// Significant at level `alpha`: beyond every replicate, and the
+    /// calibrated tail below `alpha`.
+    pub fn significant(&self, alpha: f64) -> bool {
+        self.replicates > 0 && self.exceedances == 0 && self.p_calibrated < alpha
+    }
+}
+
+/// The `q`-quantile of `x` (linear interpolation), NaN when empty.
+fn quantile(x: &[f64], q: f64) -> f64 {
+    if x.is_empty() {
+        return f64::NAN;
+    }
+    let mut v = x.to_vec();
+    v.sort_by(f64::total_cmp);
+    let pos = q * (v.len() - 1) as f64;
+    let (i, f) = (pos.floor() as usize, pos.fract());
+    let j = (i + 1).min(v.len() - 1);
+    v[i] + f * (v[j] - v[i])
+}
+
+/// The pedestal-level prediction with the bases of `grouping`: the rigid
+/// prediction for bearings on no base, `estimate::base::predict` for the
+/// others, with the noise variance of each prediction from its (linear)
+/// dependence on every rel reading of the base's pedestals.
+fn prediction(
+    prep: &Prepared,
+    obs: &[Vec<Observation>],
+    rigid: &Prediction,
+    grouping: &GroupingFit,
+) -> Result<Prediction> {
+    let mut out = rigid.clone();
+    for (group, fit) in grouping.groups.iter().zip(&grouping.fits) {
+        let g = BaseGroup {
+            bearings: group.clone(),
+        };
+        let base_pred = predict(obs, &g, &fit.pedestals, &fit.base)
+            .map_err(|e| anyhow!("predicting with the base: {e}"))?;
+        // Sensitivity to each rel channel: the prediction is linear in the
+        // forces, so a unit change of one rel phasor shows it exactly.
+        let mut sens = Vec::new();
+        for (qi, &q) in group.iter().enumerate() {
+            for c in 0..2 {
+                let mut o2 = obs.to_vec();
+                for o in &mut o2[q] {
+                    o.rel[c] += Complex::new(1.0, 0.0);
+                }
+                let p2 = predict(&o2, &g, &fit.pedestals, &fit.base)
+                    .map_err(|e| anyhow!("predicting with the base: {e}"))?;
+                sens.push((qi, q, c, p2));
+            }
+        }
+        for (s, pr) in base_pred.iter().enumerate() {
+            let (speed, x) = (&pr.speed_hz, &pr.ped);
+            // The speed comes back through Ω = 2πf: match it to a relative
+            // 1e-9, not exactly.
+            let Some(j) = prep
+                .speeds_hz
+                .iter()
+                .position(|v| (v - speed).abs() <= 1e-9 * v.abs().max(speed.abs()))
+            else {
+                continue;
+            };
+            for (i, &b) in group.iter().enumerate() {
+                let Some(point) = prep.points[b][j].as_ref() else {
+                    continue;
+                };
+                out.ped[b][j] = Some(x[i]);
+                let mut var = [0.0; 2];
+                for (d, v) in var.iter_mut().enumerate() {
+                    for (_, q, c, p2) in &sens {
+                        let Some(pq) = prep.points[*q][j].as_ref() else {
+                            continue;
+                        };
+                        let a = p2[s].ped[i][d] - x[i][d];
+                        *v +=
+                            a.norm_sqr() * (pq.sigma[2 * c].powi(2) + pq.sigma[2 * c + 1].powi(2));
+                    }
+                    *v += point.sigma[4 + 2 * d].powi(2) + point.sigma[5 + 2 * d].powi(2);
+                }
+                out.noise_var[b][j] = Some(var);
+            }
+        }
+    }
+    Ok(out)
+}
+
+impl FoundationFit {
+    /// The base's own parameters as report entries: k, c, m of y and z
+    /// (`base_k_y`, ...), then the quasi-static compliance or mass where
+    /// only that is determined.
+    pub fn parameters(&self, prep: &Prepared) -> Vec<Estimate> {
+        let mut out = Vec::new();
+        for r in self.report(prep).groups {
+            out.extend(r.parameters);
+        }
+        out
+    }
+
+    /// The report entry: the bases, what the data determine, and the test.
+    pub fn report(&self, prep: &Prepared) -> FoundationReport {
+        let groups = self
+            .grouping
+            .groups
+            .iter()
+            .zip(&self.grouping.fits)
+            .enumerate()
+            .map(|(gi, (g, f))| {
+                let prefix = if self.grouping.groups.len() > 1 {
+                    format!("base{}_", gi + 1)
+                } else {
+                    "base_".to_string()
+                };
+                let mut parameters = Vec::new();
+                for (d, dir) in ["y", "z"].iter().enumerate() {
+                    match f.identifiability[d] {
+                        BaseIdentifiability::Full => {
+                            for (name, v, se) in [
+                                ("k", f.base.k[d], f.base_std_err.k[d]),
+                                ("c", f.base.c[d], f.base_std_err.c[d]),
+                                ("m", f.base.m[d], f.base_std_err.m[d]),
+                            ] {
+                                parameters.push(Estimate {
+                                    name: format!("{prefix}{name}_{dir}"),
+                                    value: v,
+                                    std_err: se,
+                                });
+                            }
+                        }
+                        BaseIdentifiability::QuasiStatic {
+                            compliance_m_per_n,
+                            std_err,
+                        } => parameters.push(Estimate {
+                            name: format!("{prefix}compliance_{dir}"),
+                            value: compliance_m_per_n,
+                            std_err,
+                        }),
+                        BaseIdentifiability::MassLine { mass_kg, std_err } => {
+                            parameters.push(Estimate {
+                                name: format!("{prefix}m_{dir}"),
+                                value: mass_kg,
+                                std_err,
+                            })
+                        }
+                        BaseIdentifiability::NotDetected => {}
+                    }
+                }
+                BaseGroupReport {
+                    bearings: g.iter().map(|&b| prep.bearings[b].clone()).collect(),
+                    identifiability: f.identifiability,
+                    base: f.base,
+                    base_std_err: f.base_std_err,
+                    base_frequency_hz: f.base_frequency_hz,
+                    converged: f.converged,
+                    parameters,
+                }
+            })
+            .collect();
+        FoundationReport {
+            groups,
+            test: self.test.clone(),
+        }
+    }
+
+    /// The pedestal θ and its standard errors of bearing `b` when it stands
+    /// on one of the bases.
+    pub fn pedestal(&self, b: usize) -> Option<([f64; 5], [f64; 5])> {
+        for (g, f) in self.grouping.groups.iter().zip(&self.grouping.fits) {
+            if let Some(i) = g.iter().position(|&x| x == b) {
+                return Some((f.pedestals[i], f.pedestal_std_err[i]));
+            }
+        }
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn groupings_cover_all_on_one_and_subsets() {
+        assert!(groupings(1).is_empty());
+        assert_eq!(groupings(2), vec![vec![vec![0, 1]]]);
+        // 3: all, three pairs.
+        assert_eq!(groupings(3).len(), 4);
+        // 4: all, 4 triples, 6 pairs, 3 pair-pairs.
+        let four = groupings(4);
+        assert_eq!(four.len(), 14);
+        assert!(four.contains(&vec![vec![0, 3], vec![1, 2]]));
+        assert_eq!(groupings(5).len(), 1);
+    }
+
+    #[test]
+    fn bootstrap_p_values() {
+        let null: Vec<f64> = (0..40).map(|i| i as f64 / 4.0).collect();
+        let t = FoundationTest::from_replicates(100.0, 120.0, &null, 4);
+        assert_eq!(t.exceedances, 0);
+        assert!(t.p_calibrated < 1e-6, "{t:?}");
+        assert!(t.significant(1e-3));
+        assert_eq!(t.test, "likelihood-ratio, parametric bootstrap (40)");
+        let t = FoundationTest::from_replicates(5.0, 20.0, &null, 1);
+        assert_eq!(t.exceedances, 20);
+        assert!((t.p_empirical - 21.0 / 41.0).abs() < 1e-12);
+        assert!(!t.significant(1e-3));
+    }
+}

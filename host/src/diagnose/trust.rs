@@ -1,0 +1,282 @@
+//! The conclusion of a diagnosis and whether its numbers can be trusted.
+//!
+//! Two things make identified parameters untrustworthy:
+//! - **an unexplained disagreement**: after the chosen effects the gap is
+//!   still well above its noise floor (more than [`AT_THE_FLOOR`] times the
+//!   final model's floor), or it rose with the effects added,
+//!   so the data hold something no effect of the library explains and every
+//!   parameter fitted to them absorbs part of it; the verdict says so
+//!   plainly, and it never reports a fall of the gap the numbers do not show
+//!   (the wording follows `gap_before`/`gap_after` exactly);
+//! - **a physically impossible pedestal**: negative mass or stiffness, or
+//!   damping below zero beyond its error (`identify::physical`'s rule, called,
+//!   not copied).
+
+use super::data::Prepared;
+use super::gap::Gap;
+use super::report::{Pedestal, Step};
+use crate::identify::{physical, PedestalFit, StdErr};
+use plinth_shared::regression::Parameter;
+
+/// A gap within this factor of its noise floor is at the floor: the model
+/// explains the data as well as the noise allows [-].
+pub const AT_THE_FLOOR: f64 = 3.0;
+
+/// The sentence the report uses when the final model leaves a disagreement
+/// well above the noise floor.
+pub const UNEXPLAINED: &str =
+    "the remaining disagreement is not explained by any effect in the library";
+
+/// The verdict with its trust flag and reasons.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Conclusion {
+    /// One-paragraph conclusion.
+    pub verdict: String,
+    /// False when the identified parameters are not to be trusted.
+    pub trusted: bool,
+    /// Why not (empty when trusted).
+    pub reasons: Vec<String>,
+}
+
+/// Concludes a diagnosis from the base model's gap `before`, the final
+/// model's gap `after`, the effects added and the final pedestals (as
+/// [`as_pedestal_fit`] gives them).
+pub fn conclude(before: Gap, after: Gap, steps: &[Step], pedestals: &[PedestalFit]) -> Conclusion {
+    let mut reasons = Vec::new();
+    let mut verdict = if steps.is_empty() {
+        if before.gap <= AT_THE_FLOOR * before.floor {
+            format!(
+                "No significant missing effect: the base model agrees with the measurements to the noise floor (gap {:.4}, floor {:.4}).",
+                before.gap, before.floor
+            )
+        } else {
+            format!(
+                "No effect of the library explains the disagreement significantly; nothing added (gap {:.4}, floor {:.4}).",
+                before.gap, before.floor
+            )
+        }
+    } else {
+        // The wording follows the numbers: a gap that grew is not said to fall.
+        let moved = if after.gap < before.gap {
+            "fell"
+        } else if after.gap > before.gap {
+            reasons.push(format!(
+                "the gap rose from {:.4} to {:.4} with the effects added",
+                before.gap, after.gap
+            ));
+            "ROSE (the added effect does not explain the data: check the data's conventions and units)"
+        } else {
+            "stayed"
+        };
+        format!(
+            "Added {}: the pedestal-level gap {moved} from {:.4} to {:.4} (noise floor {:.4}).",
+            steps
+                .iter()
+                .map(|s| format!("{} at {}", s.effect, s.bearing))
+                .collect::<Vec<_>>()
+                .join(", then "),
+            before.gap,
+            after.gap,
+            after.floor
+        )
+    };
+    // The final model's own floor: the noise propagated through a model
+    // with a resonance of its own (a base) is larger near it, legitimately.
+    let floor = after.floor;
+    let rose = !steps.is_empty() && after.gap > before.gap;
+    if after.gap > AT_THE_FLOOR * floor || rose {
+        let times = if floor > 0.0 {
+            format!("{:.1}×", after.gap / floor)
+        } else {
+            "infinitely many times".to_string()
+        };
+        verdict += &format!(
+            " But {UNEXPLAINED}: the gap {:.4} is {times} its noise floor {floor:.4}, so the identified parameters are not to be trusted.",
+            after.gap
+        );
+        reasons.push(format!(
+            "{UNEXPLAINED} (gap {:.4}, {times} the noise floor {floor:.4})",
+            after.gap
+        ));
+    }
+    for fit in pedestals {
+        for w in physical::violations(fit) {
+            reasons.push(format!("pedestal {}: {}", fit.bearing, w.message));
+        }
+    }
+    if !reasons.is_empty() && !verdict.contains(UNEXPLAINED) {
+        verdict += " The identified parameters are not to be trusted (reasons below).";
+    }
+    Conclusion {
+        verdict,
+        trusted: reasons.is_empty(),
+        reasons,
+    }
+}
+
+/// A diagnosis pedestal in the form `identify::physical` checks; `None` when
+/// it lacks a stiffness (a reduced `--base` always keeps both).
+pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
+    let value = |name: &str| p.values.get(name).copied();
+    let se = |name: &str| p.std_err.get(name).copied().unwrap_or(0.0);
+    // With mass anisotropy the check applies to each directional mass: the
+    // smaller one decides.
+    let (m, m_se) = match value("m") {
+        Some(m) => (m, se("m")),
+        None => match (value("m_y"), value("m_z")) {
+            (Some(a), Some(b)) if a <= b => (a, se("m_y")),
+            (Some(_), Some(b)) => (b, se("m_z")),
+            _ => (0.0, 0.0),
+        },
+    };
+    let b = prep.bearing_index(&p.bearing)?;
+    let speeds: Vec<f64> = prep.points[b]
+        .iter()
+        .flatten()
+        .map(|q| q.speed_hz)
+        .collect();
+    let lo = speeds.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = speeds.iter().copied().fold(0.0, f64::max);
+    let fixed = Parameter::ALL
+        .iter()
+        .filter(|q| value(q.name()).is_none())
+        .map(|q| q.name().to_string())
+        .collect();
+    Some(PedestalFit {
+        bearing: p.bearing.clone(),
+        k_y: value("k_y")?,
+        k_z: value("k_z")?,
+        m,
+        c_y: value("c_y").unwrap_or(0.0),
+        c_z: value("c_z").unwrap_or(0.0),
+        std_err: StdErr {
+            k_y: se("k_y"),
+            k_z: se("k_z"),
+            m: m_se,
+            c_y: se("c_y"),
+            c_z: se("c_z"),
+        },
+        residual_rms: 0.0,
+        condition_number: 1.0,
+        fixed,
+        trusted: true,
+        speeds: speeds.len(),
+        equations: 4 * speeds.len(),
+        speed_range_hz: [lo, hi],
+        warnings: Vec::new(),
+        ols: None,
+        suspected_convention_error: None,
+        base: None,
+        base_measured: None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::criterion::Evidence;
+
+    fn step(before: f64, after: f64) -> Step {
+        Step {
+            effect: "structural_damping".into(),
+            bearing: "left".into(),
+            gap_before: before,
+            gap_after: after,
+            gap_floor_after: 0.01,
+            machine_gap_before: None,
+            machine_gap_after: None,
+            channels: None,
+            parameters: Vec::new(),
+            test: "Wald".into(),
+            foundation: None,
+            evidence: Evidence {
+                wald_floor: 100.0,
+                wald_robust: 100.0,
+                wald: 100.0,
+                extra_parameters: 1,
+                delta_bic: 90.0,
+                p_value: 1e-9,
+                p_adjusted: 1e-8,
+            },
+            runner_up: None,
+            candidates_tried: 20,
+            candidates_failed: 0,
+        }
+    }
+
+    fn gap(gap: f64, floor: f64) -> Gap {
+        Gap { gap, floor }
+    }
+
+    #[test]
+    fn a_gap_that_rose_is_said_to_rise_and_is_not_trusted() {
+        let c = conclude(gap(0.10, 0.01), gap(0.12, 0.01), &[step(0.10, 0.12)], &[]);
+        assert!(c.verdict.contains("ROSE"), "{}", c.verdict);
+        assert!(!c.verdict.contains("fell"), "{}", c.verdict);
+        assert!(c.verdict.contains("from 0.1000 to 0.1200"), "{}", c.verdict);
+        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert!(!c.trusted);
+        assert!(c.reasons.iter().any(|r| r.contains("rose")));
+    }
+
+    #[test]
+    fn a_fall_still_far_above_the_floor_is_unexplained() {
+        let c = conclude(gap(1.5, 0.1), gap(1.29, 0.09), &[step(1.5, 1.29)], &[]);
+        assert!(
+            c.verdict.contains("fell from 1.5000 to 1.2900"),
+            "{}",
+            c.verdict
+        );
+        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert!(!c.trusted);
+        // Nothing added, gap far above the floor: unexplained too.
+        let c = conclude(gap(1.48, 0.097), gap(1.48, 0.097), &[], &[]);
+        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert!(!c.trusted);
+    }
+
+    #[test]
+    fn a_fall_to_the_floor_is_trusted() {
+        let c = conclude(gap(1.5, 0.1), gap(0.11, 0.1), &[step(1.5, 0.11)], &[]);
+        assert!(c.verdict.contains("fell"), "{}", c.verdict);
+        assert!(!c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert!(c.trusted, "{:?}", c.reasons);
+        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[]);
+        assert!(c.verdict.starts_with("No significant missing effect"));
+        assert!(c.trusted);
+    }
+
+    #[test]
+    fn negative_mass_is_flagged_through_identify_physical() {
+        let fit = PedestalFit {
+            bearing: "left".into(),
+            k_y: 1e7,
+            k_z: 8e6,
+            m: -20.0,
+            c_y: 300.0,
+            c_z: 250.0,
+            std_err: StdErr {
+                k_y: 1e4,
+                k_z: 1e4,
+                m: 1.0,
+                c_y: 10.0,
+                c_z: 10.0,
+            },
+            residual_rms: 0.0,
+            condition_number: 1.0,
+            fixed: Vec::new(),
+            trusted: true,
+            speeds: 50,
+            equations: 200,
+            speed_range_hz: [5.0, 100.0],
+            warnings: Vec::new(),
+            ols: None,
+            suspected_convention_error: None,
+            base: None,
+            base_measured: None,
+        };
+        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[fit]);
+        assert!(!c.trusted);
+        assert!(c.reasons[0].contains("negative mass"), "{:?}", c.reasons);
+    }
+}
