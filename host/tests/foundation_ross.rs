@@ -209,20 +209,21 @@ fn check_named(json: &Value, name: &str) {
 
 #[test]
 fn diagnose_names_the_skid_and_its_parameters() {
-    let name = "fd-skid-two-noisy";
-    let json = diagnose(name);
-    check_named(&json, name);
-    let group = &json["steps"][0]["foundation"]["groups"][0];
-    let want = &truth(name)["bases"][0];
-    for (d, dir) in ["y", "z"].iter().enumerate() {
-        assert_eq!(group["identifiability"][d]["kind"], "full", "{group}");
-        for key in ["k", "m", "c"] {
-            let v = group["base"][key][d].as_f64().unwrap();
-            let w = want[format!("{key}_{dir}")].as_f64().unwrap();
-            assert!(
-                rel_err(v, w) < 0.10,
-                "{name} base {key}_{dir} = {v:.4e}, truth {w:.4e}"
-            );
+    for name in ["fd-skid-two-noisy", "fd-skid-two-3digits"] {
+        let json = diagnose(name);
+        check_named(&json, name);
+        let group = &json["steps"][0]["foundation"]["groups"][0];
+        let want = &truth(name)["bases"][0];
+        for (d, dir) in ["y", "z"].iter().enumerate() {
+            assert_eq!(group["identifiability"][d]["kind"], "full", "{group}");
+            for key in ["k", "m", "c"] {
+                let v = group["base"][key][d].as_f64().unwrap();
+                let w = want[format!("{key}_{dir}")].as_f64().unwrap();
+                assert!(
+                    rel_err(v, w) < 0.10,
+                    "{name} base {key}_{dir} = {v:.4e}, truth {w:.4e}"
+                );
+            }
         }
     }
 }
