@@ -12,7 +12,7 @@
 //! | `pedestal_mass_anisotropy` | M = diag(m_y, m_z), m_y ≠ m_z | `m_y`, `m_z` [kg] |
 //! | `probe_runout` | a constant (speed-independent) 1X vector r added to the `rel` readings of one bearing | `r_y_re`, `r_y_im`, `r_z_re`, `r_z_im` [m] |
 //! | `sensor_delay` | a time delay τ on the pedestal (seismic) channels of one bearing: ped_meas = ped·e^{−iΩτ} | `tau` [s] |
-//! | `foundation_coupling` | the pedestals stand on a flexible base: a coupling spring k_c between the named pedestal and its neighbour, in y and z | `k_c_y`, `k_c_z` [N/m] |
+//! | `foundation_coupling` | the pedestals stand on a flexible base (a body of mass M_B on springs K_B and dampers C_B to ground, per direction, `sim::base`); the pedestals' k, c act between pedestal and base, so one pedestal moves under the others' forces, through a speed-dependent complex coupling (`estimate::base`) | `base_k_y`, `base_k_z` [N/m], `base_m_y`, `base_m_z` [kg], `base_c_y`, `base_c_z` [N·s/m] |
 
 /// An effect the pedestal model may be missing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -72,7 +72,9 @@ impl EffectKind {
             EffectKind::PedestalMassAnisotropy => &["m_y", "m_z"],
             EffectKind::ProbeRunout => &["r_y_re", "r_y_im", "r_z_re", "r_z_im"],
             EffectKind::SensorDelay => &["tau"],
-            EffectKind::FoundationCoupling => &["k_c_y", "k_c_z"],
+            EffectKind::FoundationCoupling => &[
+                "base_k_y", "base_k_z", "base_m_y", "base_m_z", "base_c_y", "base_c_z",
+            ],
         }
     }
 }

@@ -12,7 +12,7 @@ use super::locate::locate;
 use super::model::{Model, Params, Term};
 use super::noise::CHANNELS;
 use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
-use super::trust::{as_pedestal_fit, conclude, AT_THE_FLOOR};
+use super::trust::{as_pedestal_fit, conclude};
 use crate::effects::EffectKind;
 use crate::rundir::RunDir;
 use anyhow::{anyhow, Result};
@@ -439,7 +439,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             if let Some(f) = foundation_tried.as_ref().filter(|f| {
                 f.test.significant(opts.alpha)
                     && f.evidence.delta_bic > 0.0
-                    && gap0.gap > AT_THE_FLOOR * gap0.floor
+                    && gap0.gap > super::foundation::TRY_ABOVE_FLOOR * gap0.floor
                     && f.gap.gap < gap0.gap
                     && library_gap.is_none_or(|l| f.gap.gap < l)
             }) {

@@ -79,7 +79,8 @@ pub struct PedestalTruth {
 pub struct EffectTruth {
     /// Effect name (formats.md table), e.g. `pedestal_cross_coupling`.
     pub name: String,
-    /// Bearing it acts on (for `foundation_coupling`, one of the coupled pair).
+    /// Bearing it acts on (for `foundation_coupling`, the first bearing on
+    /// the base; the base itself is under [`Truth::bases`]).
     pub bearing: String,
     /// The effect's own parameters by name, SI units (see `crate::effects`).
     pub parameters: std::collections::BTreeMap<String, f64>,

@@ -7,8 +7,6 @@
 //! The bearing couples shaft node and pedestal: the force on the pedestal is
 //! (K_b + iΩC_b)·(x_shaft − x_ped), the reaction on the shaft the opposite;
 //! the pedestal stands on the ground through its own M, K, C (and η).
-//! Springs between two pedestals (foundation coupling) would break the band:
-//! they are kept apart as a low-rank term and solved by Woodbury's identity.
 //! Bases (`super::base`) carry pedestals that may be far apart: their DOFs
 //! come after all others, outside the band, and the bordered system is
 //! solved by a Schur complement (one extra banded solve per base DOF).
@@ -22,17 +20,6 @@ use super::base::{BaseBorder, BaseLink};
 use super::machine::Machine;
 use super::pedestal::PedestalDynamics;
 use plinth_shared::bearing::BearingCoefficients;
-
-/// A spring [N/m] between two DOFs, outside the band.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CouplingSpring {
-    /// First DOF.
-    pub a: usize,
-    /// Second DOF.
-    pub b: usize,
-    /// Stiffness [N/m].
-    pub k: f64,
-}
 
 /// The assembled model of a machine with given pedestal dynamics.
 #[derive(Clone, Debug)]
@@ -55,8 +42,6 @@ pub struct Assembly {
     /// Storage index of the (shaft, shaft), (shaft, ped), (ped, shaft),
     /// (ped, ped) 2×2 blocks of each bearing (`usize::MAX` when absent).
     bearing_idx: Vec<[[[usize; 2]; 2]; 4]>,
-    /// Springs outside the band.
-    pub couplings: Vec<CouplingSpring>,
     /// Base DOFs (after the banded part) and their links to pedestals.
     pub bases: BaseBorder,
 }
@@ -129,13 +114,10 @@ enum Kind {
 
 impl Assembly {
     /// Assembles `machine` with the pedestal dynamics `pedestals` (one per
-    /// bearing, `None` for rigid ground; `None` must match the machine) and
-    /// the inter-pedestal springs `couplings` given as (bearing a, bearing b,
-    /// k_y [N/m], k_z [N/m]).
+    /// bearing, `None` for rigid ground; `None` must match the machine).
     pub fn new(
         machine: &Machine,
         pedestals: &[Option<PedestalDynamics>],
-        couplings: &[(usize, usize, f64, f64)],
     ) -> Result<Assembly, String> {
         machine.validate().map_err(|e| e.to_string())?;
         if pedestals.len() != machine.bearings.len() {
@@ -305,27 +287,6 @@ impl Assembly {
             };
             bearing_idx.push(blocks);
         }
-        let mut springs = Vec::new();
-        for &(a, b, ky, kz) in couplings {
-            let (pa, pb) = match (pedestal_dof.get(a).copied().flatten(), pedestal_dof.get(b).copied().flatten()) {
-                (Some(pa), Some(pb)) if a != b => (pa, pb),
-                _ => return Err(format!("foundation coupling needs two different bearings with pedestals (got {a}, {b})")),
-            };
-            for (d, k) in [(0, ky), (1, kz)] {
-                if !(k.is_finite() && k >= 0.0) {
-                    return Err(format!(
-                        "foundation coupling stiffness must be finite and >= 0 (got {k})"
-                    ));
-                }
-                if k > 0.0 {
-                    springs.push(CouplingSpring {
-                        a: pa + d,
-                        b: pb + d,
-                        k,
-                    });
-                }
-            }
-        }
         let mut links = Vec::new();
         for (b, brg) in machine.bearings.iter().enumerate() {
             if let (Some(base), Some(p), Some(pd)) = (brg.base, pedestals[b], pedestal_dof[b]) {
@@ -350,7 +311,6 @@ impl Assembly {
             kmg: columns,
             damping,
             bearing_idx,
-            couplings: springs,
             bases,
         })
     }
@@ -447,7 +407,7 @@ impl Assembly {
         next
     }
 
-    /// Dense real stiffness (structure, pedestals, couplings and the bearing
+    /// Dense real stiffness (structure, pedestals, bases and the bearing
     /// stiffness `bearings[b].k`) and mass matrices, for modal checks on
     /// small models (not the response path).
     pub fn dense_stiffness_and_mass(
@@ -482,17 +442,11 @@ impl Assembly {
             }
         }
         self.bases.add_dense(&mut k, &mut m);
-        for sp in &self.couplings {
-            k[(sp.a, sp.a)] += sp.k;
-            k[(sp.b, sp.b)] += sp.k;
-            k[(sp.a, sp.b)] -= sp.k;
-            k[(sp.b, sp.a)] -= sp.k;
-        }
         (k, m)
     }
 
     /// Solves A(Ω)·x = f at spin Ω [rad/s] (the speed `a` was filled at):
-    /// the factored banded part `a`, the coupling springs and the bases;
+    /// the factored banded part `a` and the bases;
     /// `f` (length `n_dof`) is overwritten by x.
     pub fn solve(&self, a: &BandMatrix, omega: f64, f: &mut [C64]) -> Result<(), BandError> {
         if f.len() != self.n_dof {
@@ -504,47 +458,8 @@ impl Assembly {
         self.bases.solve(
             omega,
             f,
-            |r| self.solve_band(a, r),
+            |r| a.solve_in_place(r),
             |column| BandError::Singular { column },
         )
-    }
-
-    /// Solves (banded part + coupling springs)·x = f on the DOFs before the
-    /// bases (Woodbury identity, one extra solve per spring).
-    fn solve_band(&self, a: &BandMatrix, f: &mut [C64]) -> Result<(), BandError> {
-        a.solve_in_place(f)?;
-        if self.couplings.is_empty() {
-            return Ok(());
-        }
-        // A = A0 + U·D·Uᵀ, u_i = e_a − e_b, D = diag(k_i).
-        let r = self.couplings.len();
-        let mut w = Vec::with_capacity(r); // A0⁻¹ u_i
-        for s in &self.couplings {
-            let mut u = vec![C64::new(0.0, 0.0); self.bases.first_dof];
-            u[s.a] = C64::new(1.0, 0.0);
-            u[s.b] = C64::new(-1.0, 0.0);
-            a.solve_in_place(&mut u)?;
-            w.push(u);
-        }
-        // S = D⁻¹ + Uᵀ A0⁻¹ U (r×r), rhs = Uᵀ x0.
-        let mut s_mat = nalgebra::DMatrix::<C64>::zeros(r, r);
-        let mut rhs = nalgebra::DVector::<C64>::zeros(r);
-        for (i, si) in self.couplings.iter().enumerate() {
-            for (j, wj) in w.iter().enumerate() {
-                s_mat[(i, j)] = wj[si.a] - wj[si.b];
-            }
-            s_mat[(i, i)] += C64::new(1.0 / si.k, 0.0);
-            rhs[i] = f[si.a] - f[si.b];
-        }
-        let y = s_mat
-            .lu()
-            .solve(&rhs)
-            .ok_or(BandError::Singular { column: usize::MAX })?;
-        for (j, wj) in w.iter().enumerate() {
-            for (fi, wi) in f.iter_mut().zip(wj) {
-                *fi -= *wi * y[j];
-            }
-        }
-        Ok(())
     }
 }

@@ -3,8 +3,7 @@
 //! the default sizes the tests use.
 //!
 //! An effect is requested as `NAME[:BEARING][=SIZE]` (the `--effect` option).
-//! Without a bearing it acts on every bearing (`foundation_coupling`: on the
-//! first bearing with a pedestal). SIZE and its default, per effect:
+//! Without a bearing it acts on every bearing. SIZE and its default, per effect:
 //!
 //! | name | SIZE means | default | resulting parameters |
 //! | --- | --- | --- | --- |
@@ -14,7 +13,7 @@
 //! | `pedestal_mass_anisotropy` | relative extra horizontal mass | 0.30 | m_y = m, m_z = (1 + SIZE)·m [kg] |
 //! | `probe_runout` | fraction of the median \|rel\| of that bearing | 0.25 | r = a·(e^{i30°}, e^{−i60°}), a = SIZE·median over speeds and y, z of \|rel\| [m] |
 //! | `sensor_delay` | delay τ [s] | 0.35e-3 | ped channels × e^{−iΩτ} |
-//! | `foundation_coupling` | fraction of the geometric mean of the two pedestals' stiffness | 0.20 | springs k_c_y = SIZE·sqrt(k_y,a·k_y,b), k_c_z likewise [N/m] between the named pedestal and its neighbour (the next bearing with a pedestal in file order, the previous one for the last) |
+//! | `foundation_coupling` | compliance of the base relative to the pedestals it carries (in parallel) | 0.20 | a base element (`super::base`) under every bearing with a pedestal (with a bearing: it and its neighbour, the next bearing with a pedestal in file order, the previous one for the last): K_B = Σk / SIZE per direction [N/m], M_B = 2·Σm [kg], C_B = 0.1·sqrt(K_B·M_B) [N·s/m] (5 % damping ratio); the pedestals' k, c then act between pedestal and base; not measured (no `base.csv`) |
 
 use crate::effects::EffectKind;
 use std::str::FromStr;

@@ -21,7 +21,7 @@ pub fn natural_frequencies_hz(
         .iter()
         .map(|b| b.pedestal.map(PedestalDynamics::from))
         .collect();
-    let assembly = Assembly::new(machine, &pedestals, &[]).map_err(SimError::Model)?;
+    let assembly = Assembly::new(machine, &pedestals).map_err(SimError::Model)?;
     let coefs = (0..machine.bearings.len())
         .map(|b| machine.bearing_coefficients(b, bearing_speed_hz))
         .collect::<Result<Vec<_>, _>>()?;

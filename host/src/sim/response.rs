@@ -127,6 +127,86 @@ fn effect_err(kind: EffectKind, message: impl Into<String>) -> SimError {
     }
 }
 
+/// The bearings `foundation_coupling` stands on one new base: with a named
+/// bearing `b`, it and its neighbour (the next bearing with a pedestal in
+/// file order, the previous one for the last); otherwise every bearing with
+/// a pedestal. None of them may already stand on a base.
+fn foundation_group(machine: &Machine, b: usize, named: bool) -> Result<Vec<usize>, SimError> {
+    let kind = EffectKind::FoundationCoupling;
+    let with_ped: Vec<usize> = (0..machine.bearings.len())
+        .filter(|&i| machine.bearings[i].pedestal.is_some())
+        .collect();
+    let group = if named {
+        let pos = with_ped.iter().position(|&i| i == b).unwrap_or(0);
+        let other = if pos + 1 < with_ped.len() {
+            with_ped[pos + 1]
+        } else if pos > 0 {
+            with_ped[pos - 1]
+        } else {
+            return Err(effect_err(kind, "needs two bearings with pedestals"));
+        };
+        vec![b.min(other), b.max(other)]
+    } else {
+        with_ped
+    };
+    if group.len() < 2 {
+        return Err(effect_err(kind, "needs two bearings with pedestals"));
+    }
+    for &g in &group {
+        if let Some(j) = machine.bearings[g].base {
+            return Err(effect_err(
+                kind,
+                format!(
+                    "bearing {:?} already stands on base {:?} of the machine file",
+                    machine.bearings[g].name, machine.bases[j].name
+                ),
+            ));
+        }
+    }
+    Ok(group)
+}
+
+/// The base of `foundation_coupling` of size `size` under `group` (see
+/// `inject`'s table): per direction d, K_B = Σ k_d / size [N/m] (size is the
+/// base's compliance relative to the pedestals in parallel), M_B = 2·Σ m_d
+/// [kg], damping ratio 5 % on its own springs, C_B = 0.1·sqrt(K_B·M_B)
+/// [N·s/m].
+fn foundation_base(
+    pedestals: &[Option<PedestalDynamics>],
+    group: &[usize],
+    size: f64,
+) -> Result<super::base::Base, SimError> {
+    let kind = EffectKind::FoundationCoupling;
+    if !(size.is_finite() && size > 0.0) {
+        return Err(effect_err(
+            kind,
+            format!("SIZE (base compliance relative to the pedestals) must be > 0 (got {size})"),
+        ));
+    }
+    let mut k = [0.0; 2];
+    let mut m = [0.0; 2];
+    for &g in group {
+        let p = pedestals[g]
+            .as_ref()
+            .ok_or_else(|| effect_err(kind, "a bearing of the group has no pedestal"))?;
+        for d in 0..2 {
+            k[d] += p.k[d][d];
+            m[d] += p.m[d];
+        }
+    }
+    let k = k.map(|v| v / size);
+    let m = m.map(|v| 2.0 * v);
+    let base = super::base::Base {
+        name: "foundation".to_string(),
+        m,
+        k,
+        c: std::array::from_fn(|d| 0.1 * (k[d] * m[d]).sqrt()),
+        eta: 0.0,
+    };
+    base.check().map_err(|e| effect_err(kind, e))?;
+    Ok(base)
+}
+
 /// A machine prepared for repeated solves: effects resolved into the model,
 /// matrices assembled once.
 #[derive(Clone, Debug)]
@@ -144,8 +224,10 @@ impl UnbalanceSolver {
     /// Resolves `effects` on `machine` and assembles the model.
     pub fn new(machine: &Machine, effects: &EffectSet) -> Result<Self, SimError> {
         machine.validate()?;
+        // `foundation_coupling` stands pedestals on a new base element: the
+        // machine actually simulated.
+        let mut effective = machine.clone();
         let mut pedestals = pedestal_dynamics_of(machine);
-        let mut couplings = Vec::new();
         let mut details = Vec::new();
         let mut sensor_requests = Vec::new();
         for req in &effects.requests {
@@ -204,24 +286,28 @@ impl UnbalanceSolver {
                         params.insert("m_z".into(), p.m[1]);
                     }
                     EffectKind::FoundationCoupling => {
-                        let with_ped: Vec<usize> = (0..machine.bearings.len())
-                            .filter(|&i| machine.bearings[i].pedestal.is_some())
-                            .collect();
-                        let pos = with_ped.iter().position(|&i| i == b).unwrap_or(0);
-                        let other = if pos + 1 < with_ped.len() {
-                            with_ped[pos + 1]
-                        } else if pos > 0 {
-                            with_ped[pos - 1]
-                        } else {
-                            return Err(effect_err(kind, "needs two bearings with pedestals"));
-                        };
-                        let (ka, kb) =
-                            (p.k, pedestals[other].map(|q| q.k).unwrap_or([[0.0; 2]; 2]));
-                        let kcy = size * (ka[0][0] * kb[0][0]).sqrt();
-                        let kcz = size * (ka[1][1] * kb[1][1]).sqrt();
-                        couplings.push((b, other, kcy, kcz));
-                        params.insert("k_c_y".into(), kcy);
-                        params.insert("k_c_z".into(), kcz);
+                        let group = foundation_group(machine, b, req.bearing.is_some())?;
+                        let mut base = foundation_base(&pedestals, &group, size)?;
+                        let mut n = 1;
+                        while effective.bases.iter().any(|x| x.name == base.name) {
+                            n += 1;
+                            base.name = format!("foundation{n}");
+                        }
+                        for (key, v) in [
+                            ("base_k_y", base.k[0]),
+                            ("base_k_z", base.k[1]),
+                            ("base_m_y", base.m[0]),
+                            ("base_m_z", base.m[1]),
+                            ("base_c_y", base.c[0]),
+                            ("base_c_z", base.c[1]),
+                        ] {
+                            params.insert(key.into(), v);
+                        }
+                        let index = effective.bases.len();
+                        effective.bases.push(base);
+                        for &g in &group {
+                            effective.bearings[g].base = Some(index);
+                        }
                     }
                     EffectKind::ProbeRunout | EffectKind::SensorDelay => {}
                 }
@@ -232,13 +318,14 @@ impl UnbalanceSolver {
                 });
             }
         }
-        let assembly = Assembly::new(machine, &pedestals, &couplings).map_err(SimError::Model)?;
+        effective.validate()?;
+        let assembly = Assembly::new(&effective, &pedestals).map_err(SimError::Model)?;
         let mut unbalance = vec![C64::new(0.0, 0.0); machine.node_positions.len()];
         for u in &machine.unbalances {
             unbalance[u.node] += C64::from_polar(u.magnitude, u.angle_deg.to_radians());
         }
         Ok(Self {
-            machine: machine.clone(),
+            machine: effective,
             assembly,
             unbalance,
             pedestals,
