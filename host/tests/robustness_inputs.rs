@@ -352,6 +352,29 @@ fn contradictory_flags_are_refused() {
         msg.contains("--compare-ols") && msg.contains("--estimator ols"),
         "{msg}"
     );
+    // diagnose: --force without --plots; simulate: --seed without --noise.
+    let o = plinth()
+        .arg("diagnose")
+        .arg(&run)
+        .arg("--force")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--plots"), "{}", text(&o));
+    let o = plinth()
+        .args([
+            "simulate",
+            example().to_str().unwrap(),
+            "--seed",
+            "3",
+            "--out",
+        ])
+        .arg(t.path().join("seeded"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--noise"), "{}", text(&o));
+    assert!(!t.path().join("seeded").exists());
     // demo: --elf without --qemu; stream: --duration with --replay.
     let o = plinth()
         .args(["demo", "--elf", "x.elf", "--out"])

@@ -29,7 +29,7 @@ pub struct Args {
     pub plots: Option<PathBuf>,
     /// Write into an existing --plots/--out directory that already holds
     /// files (files Plinth did not write there are kept, never replaced).
-    #[arg(long)]
+    #[arg(long, requires = "plots")]
     pub force: bool,
     /// Family-wise significance level of each step (Bonferroni over candidates).
     #[arg(long, default_value_t = 1e-3, value_parser = crate::args::probability)]

@@ -35,8 +35,8 @@ pub struct SimulateArgs {
     /// Complex Gaussian noise, RMS relative to each channel's RMS over speed.
     #[arg(long, value_parser = crate::args::non_negative)]
     pub noise: Option<f64>,
-    /// Seed of the noise.
-    #[arg(long, default_value_t = 1)]
+    /// Seed of the noise (needs --noise).
+    #[arg(long, default_value_t = 1, requires = "noise")]
     pub seed: u64,
     /// Effect to inject: NAME[:BEARING][=SIZE] (repeatable; see `plinth::sim::inject`).
     #[arg(long = "effect")]
