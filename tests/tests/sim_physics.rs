@@ -484,3 +484,33 @@ fn paper_machine_pedestals_resonate_inside_the_speed_range() {
         }
     }
 }
+
+/// A model large enough to be solved in several threads
+/// (`budget::solver_threads`) gives exactly the sequential speed-by-speed
+/// solution, in speed order.
+#[test]
+fn threaded_sweep_equals_the_sequential_solve() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/feng-hahn-1997-damped.toml"
+    ))
+    .unwrap()
+    .replace("elements = 10", "elements = 1200");
+    let m = Machine::from_toml_str(&text, "fine.toml").unwrap();
+    let solver = plinth::sim::UnbalanceSolver::new(&m, &EffectSet::none()).unwrap();
+    let n_dof = solver.assembly().n_dof;
+    assert!(n_dof >= 4000, "{n_dof} DOFs: too small to be threaded");
+    let speeds: Vec<f64> = (1..=12).map(|i| 17.0 * i as f64).collect();
+    let threaded = solver.run(&speeds).unwrap();
+    let mut work = solver.assembly().new_matrix();
+    let mut x = vec![C::new(0.0, 0.0); n_dof];
+    for (s, &hz) in speeds.iter().enumerate() {
+        solver.solve_speed(hz, &mut work, &mut x).unwrap();
+        for (b, got) in threaded.bearings[s].iter().enumerate() {
+            let node = solver.assembly().node_dof[solver.assembly().bearing_node[b]];
+            let p = solver.assembly().pedestal_dof[b].unwrap();
+            assert_eq!(got.ped, [x[p], x[p + 1]], "speed {hz} Hz bearing {b}");
+            assert_eq!(got.rel, [x[node] - x[p], x[node + 1] - x[p + 1]]);
+        }
+    }
+}

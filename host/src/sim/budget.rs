@@ -27,11 +27,28 @@ pub fn simulate_bytes(machine: &Machine, speeds: usize) -> u64 {
     let n_dof = 4 * nodes + 2 * pedestals;
     let half_band = 7 + 2 * most_at_a_node;
     let ldab = 3 * half_band + 1;
-    let band = n_dof * ldab * 8 * (5 + 2);
+    // Five real band arrays, plus one complex working matrix per solver
+    // thread.
+    let threads = solver_threads(n_dof as usize, speeds) as u64;
+    let band = n_dof * ldab * 8 * (5 + 2 * threads);
     let per_row = 640; // result, measurement and bearing row per speed and bearing
     let rows = speeds as u64 * machine.bearings.len() as u64 * per_row;
     let vectors = n_dof * 16 * 4 + nodes * 64;
     band + rows + vectors + (16 << 20)
+}
+
+/// Threads the unbalance response uses for a model of `n_dof` DOFs over
+/// `speeds` speeds: one for small models (a thread costs more than it
+/// saves), else up to the machine's cores (at most 4), never more than the
+/// speeds. Each thread holds its own complex working band matrix.
+pub fn solver_threads(n_dof: usize, speeds: usize) -> usize {
+    if n_dof < 4000 || speeds < 2 {
+        return 1;
+    }
+    std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .clamp(1, 4)
+        .min(speeds)
 }
 
 /// Estimated peak memory [bytes] of `signals` on `machine`: the model (as

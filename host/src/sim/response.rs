@@ -207,6 +207,14 @@ fn foundation_base(
     Ok(base)
 }
 
+/// What one speed's solve gives: bearing readings, base motion and, when
+/// kept, the shaft's node motion (see [`Response`]).
+struct SpeedSolution {
+    bearings: Vec<BearingResponse>,
+    bases: Vec<Phasor2<f64>>,
+    shaft: Option<Vec<Phasor2<f64>>>,
+}
+
 /// A machine prepared for repeated solves: effects resolved into the model,
 /// matrices assembled once.
 #[derive(Clone, Debug)]
@@ -383,6 +391,91 @@ impl UnbalanceSolver {
         Ok(coefs)
     }
 
+    /// Solves every speed of `speeds_hz` (checked finite and ≥ 0), in
+    /// [`super::budget::solver_threads`] threads for a large model (speeds
+    /// are independent; each thread has its own working matrix), reporting
+    /// the number of speeds done through `done` from the calling thread.
+    /// Results are in speed order and identical to a sequential solve.
+    fn solve_speeds(
+        &self,
+        speeds_hz: &[f64],
+        keep_shaft: bool,
+        done: &mut dyn FnMut(usize),
+    ) -> Result<Vec<SpeedSolution>, SimError> {
+        let threads = super::budget::solver_threads(self.assembly.n_dof, speeds_hz.len());
+        let chunk = speeds_hz.len().div_ceil(threads.max(1)).max(1);
+        let finished = std::sync::atomic::AtomicUsize::new(0);
+        let run_chunk = |speeds: &[f64], report: &mut dyn FnMut(usize)| {
+            let mut work = self.assembly.new_matrix();
+            let mut x = vec![C64::new(0.0, 0.0); self.assembly.n_dof];
+            let mut out = Vec::with_capacity(speeds.len());
+            for &s in speeds {
+                out.push(self.solve_one(s, keep_shaft, &mut work, &mut x)?);
+                let n = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                report(n);
+            }
+            Ok::<_, SimError>(out)
+        };
+        let mut chunks = speeds_hz.chunks(chunk);
+        let first = chunks.next().unwrap_or(&[]);
+        let results: Vec<Result<Vec<SpeedSolution>, SimError>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = chunks
+                .map(|c| scope.spawn(|| run_chunk(c, &mut |_| {})))
+                .collect();
+            let mut all = vec![run_chunk(first, done)];
+            for h in handles {
+                all.push(h.join().unwrap_or_else(|_| {
+                    Err(SimError::Model("a solver thread panicked".to_string()))
+                }));
+            }
+            all
+        });
+        let mut out = Vec::with_capacity(speeds_hz.len());
+        for r in results {
+            out.extend(r?);
+        }
+        done(out.len());
+        Ok(out)
+    }
+
+    /// One speed [Hz] solved into its bearing readings, base motion and
+    /// (with `keep_shaft`) shaft node motion.
+    fn solve_one(
+        &self,
+        speed_hz: f64,
+        keep_shaft: bool,
+        work: &mut super::banded::BandMatrix,
+        x: &mut [C64],
+    ) -> Result<SpeedSolution, SimError> {
+        let coefs = self.solve_speed(speed_hz, work, x)?;
+        let mut bearings = Vec::with_capacity(coefs.len());
+        for (b, coefficients) in coefs.into_iter().enumerate() {
+            let sd = self.assembly.node_dof[self.assembly.bearing_node[b]];
+            let ped = match self.assembly.pedestal_dof[b] {
+                Some(p) => [x[p], x[p + 1]],
+                None => [C64::new(0.0, 0.0); 2],
+            };
+            bearings.push(BearingResponse {
+                rel: [x[sd] - ped[0], x[sd + 1] - ped[1]],
+                ped,
+                coefficients,
+            });
+        }
+        let shaft = keep_shaft.then(|| {
+            (0..self.machine.node_positions.len())
+                .map(|n| {
+                    let d = self.assembly.node_dof[n];
+                    [x[d], x[d + 1]]
+                })
+                .collect()
+        });
+        Ok(SpeedSolution {
+            bearings,
+            bases: self.assembly.bases.motion(x),
+            shaft,
+        })
+    }
+
     /// The machine's bases for `truth.json`.
     fn base_truth(&self) -> Vec<crate::rundir::BaseTruth> {
         super::base::truth(&self.machine)
@@ -463,41 +556,16 @@ impl UnbalanceSolver {
             }
         }
         let nb = self.machine.bearings.len();
-        let nn = self.machine.node_positions.len();
-        let mut work = self.assembly.new_matrix();
-        let mut x = vec![C64::new(0.0, 0.0); self.assembly.n_dof];
+        let solved = self.solve_speeds(speeds_hz, keep_shaft, done)?;
         let mut bearings = Vec::with_capacity(speeds_hz.len());
         let mut bases = Vec::with_capacity(speeds_hz.len());
         let mut shaft = Vec::with_capacity(speeds_hz.len());
-        for &s in speeds_hz {
-            let coefs = self.solve_speed(s, &mut work, &mut x)?;
-            let mut row = Vec::with_capacity(nb);
-            for (b, coefficients) in coefs.into_iter().enumerate() {
-                let sd = self.assembly.node_dof[self.assembly.bearing_node[b]];
-                let ped = match self.assembly.pedestal_dof[b] {
-                    Some(p) => [x[p], x[p + 1]],
-                    None => [C64::new(0.0, 0.0); 2],
-                };
-                row.push(BearingResponse {
-                    rel: [x[sd] - ped[0], x[sd + 1] - ped[1]],
-                    ped,
-                    coefficients,
-                });
+        for one in solved {
+            bearings.push(one.bearings);
+            bases.push(one.bases);
+            if let Some(sh) = one.shaft {
+                shaft.push(sh);
             }
-            bearings.push(row);
-            bases.push(self.assembly.bases.motion(&x));
-            done(bearings.len());
-            if !keep_shaft {
-                continue;
-            }
-            shaft.push(
-                (0..nn)
-                    .map(|n| {
-                        let d = self.assembly.node_dof[n];
-                        [x[d], x[d + 1]]
-                    })
-                    .collect(),
-            );
         }
         // Sensor effects, now that the typical readings are known.
         let mut sensors = vec![SensorEffects::default(); nb];
