@@ -15,6 +15,9 @@
 //! | `sensor_delay` | delay τ [s] | 0.35e-3 | ped channels × e^{−iΩτ} |
 //! | `foundation_coupling` | compliance of the base relative to the pedestals it carries (in parallel) | 0.20 | a base element (`super::base`) under every bearing with a pedestal (with a bearing: it and its neighbour, the next bearing with a pedestal in file order, the previous one for the last): K_B = Σk / SIZE per direction [N/m], M_B = 2·Σm [kg], C_B = 0.1·sqrt(K_B·M_B) [N·s/m] (5 % damping ratio); the pedestals' k, c then act between pedestal and base; not measured (no `base.csv`) |
 
+use super::machine::Machine;
+use super::pedestal::PedestalDynamics;
+use super::SimError;
 use crate::effects::EffectKind;
 use std::str::FromStr;
 
@@ -99,6 +102,98 @@ impl FromStr for EffectRequest {
             size,
         })
     }
+}
+
+/// An error of effect `kind`.
+pub(crate) fn effect_err(kind: EffectKind, message: impl Into<String>) -> SimError {
+    SimError::Effect {
+        effect: kind.name().to_string(),
+        message: message.into(),
+    }
+}
+
+/// The bearings `foundation_coupling` stands on one new base: with a named
+/// bearing `b`, it and its neighbour (the next bearing with a pedestal in
+/// file order, the previous one for the last); otherwise every bearing with
+/// a pedestal. None of them may already stand on a base.
+pub(crate) fn foundation_group(
+    machine: &Machine,
+    b: usize,
+    named: bool,
+) -> Result<Vec<usize>, SimError> {
+    let kind = EffectKind::FoundationCoupling;
+    let with_ped: Vec<usize> = (0..machine.bearings.len())
+        .filter(|&i| machine.bearings[i].pedestal.is_some())
+        .collect();
+    let group = if named {
+        let pos = with_ped.iter().position(|&i| i == b).unwrap_or(0);
+        let other = if pos + 1 < with_ped.len() {
+            with_ped[pos + 1]
+        } else if pos > 0 {
+            with_ped[pos - 1]
+        } else {
+            return Err(effect_err(kind, "needs two bearings with pedestals"));
+        };
+        vec![b.min(other), b.max(other)]
+    } else {
+        with_ped
+    };
+    if group.len() < 2 {
+        return Err(effect_err(kind, "needs two bearings with pedestals"));
+    }
+    for &g in &group {
+        if let Some(j) = machine.bearings[g].base {
+            return Err(effect_err(
+                kind,
+                format!(
+                    "bearing {:?} already stands on base {:?} of the machine file",
+                    machine.bearings[g].name, machine.bases[j].name
+                ),
+            ));
+        }
+    }
+    Ok(group)
+}
+
+/// The base of `foundation_coupling` of size `size` under `group` (see
+/// `inject`'s table): per direction d, K_B = Σ k_d / size [N/m] (size is the
+/// base's compliance relative to the pedestals in parallel), M_B = 2·Σ m_d
+/// [kg], damping ratio 5 % on its own springs, C_B = 0.1·sqrt(K_B·M_B)
+/// [N·s/m].
+pub(crate) fn foundation_base(
+    pedestals: &[Option<PedestalDynamics>],
+    group: &[usize],
+    size: f64,
+) -> Result<super::base::Base, SimError> {
+    let kind = EffectKind::FoundationCoupling;
+    if !(size.is_finite() && size > 0.0) {
+        return Err(effect_err(
+            kind,
+            format!("SIZE (base compliance relative to the pedestals) must be > 0 (got {size})"),
+        ));
+    }
+    let mut k = [0.0; 2];
+    let mut m = [0.0; 2];
+    for &g in group {
+        let p = pedestals[g]
+            .as_ref()
+            .ok_or_else(|| effect_err(kind, "a bearing of the group has no pedestal"))?;
+        for d in 0..2 {
+            k[d] += p.k[d][d];
+            m[d] += p.m[d];
+        }
+    }
+    let k = k.map(|v| v / size);
+    let m = m.map(|v| 2.0 * v);
+    let base = super::base::Base {
+        name: "foundation".to_string(),
+        m,
+        k,
+        c: std::array::from_fn(|d| 0.1 * (k[d] * m[d]).sqrt()),
+        eta: 0.0,
+    };
+    base.check().map_err(|e| effect_err(kind, e))?;
+    Ok(base)
 }
 
 #[cfg(test)]

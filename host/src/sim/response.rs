@@ -8,7 +8,7 @@
 
 use super::assembly::Assembly;
 use super::banded::C64;
-use super::inject::{default_size, EffectSet};
+use super::inject::{default_size, effect_err, EffectSet};
 use super::machine::{BearingModel, Machine, MachineError};
 use super::pedestal::PedestalDynamics;
 use crate::effects::EffectKind;
@@ -120,93 +120,6 @@ fn pedestal_dynamics_of(machine: &Machine) -> Vec<Option<PedestalDynamics>> {
         .collect()
 }
 
-fn effect_err(kind: EffectKind, message: impl Into<String>) -> SimError {
-    SimError::Effect {
-        effect: kind.name().to_string(),
-        message: message.into(),
-    }
-}
-
-/// The bearings `foundation_coupling` stands on one new base: with a named
-/// bearing `b`, it and its neighbour (the next bearing with a pedestal in
-/// file order, the previous one for the last); otherwise every bearing with
-/// a pedestal. None of them may already stand on a base.
-fn foundation_group(machine: &Machine, b: usize, named: bool) -> Result<Vec<usize>, SimError> {
-    let kind = EffectKind::FoundationCoupling;
-    let with_ped: Vec<usize> = (0..machine.bearings.len())
-        .filter(|&i| machine.bearings[i].pedestal.is_some())
-        .collect();
-    let group = if named {
-        let pos = with_ped.iter().position(|&i| i == b).unwrap_or(0);
-        let other = if pos + 1 < with_ped.len() {
-            with_ped[pos + 1]
-        } else if pos > 0 {
-            with_ped[pos - 1]
-        } else {
-            return Err(effect_err(kind, "needs two bearings with pedestals"));
-        };
-        vec![b.min(other), b.max(other)]
-    } else {
-        with_ped
-    };
-    if group.len() < 2 {
-        return Err(effect_err(kind, "needs two bearings with pedestals"));
-    }
-    for &g in &group {
-        if let Some(j) = machine.bearings[g].base {
-            return Err(effect_err(
-                kind,
-                format!(
-                    "bearing {:?} already stands on base {:?} of the machine file",
-                    machine.bearings[g].name, machine.bases[j].name
-                ),
-            ));
-        }
-    }
-    Ok(group)
-}
-
-/// The base of `foundation_coupling` of size `size` under `group` (see
-/// `inject`'s table): per direction d, K_B = Σ k_d / size [N/m] (size is the
-/// base's compliance relative to the pedestals in parallel), M_B = 2·Σ m_d
-/// [kg], damping ratio 5 % on its own springs, C_B = 0.1·sqrt(K_B·M_B)
-/// [N·s/m].
-fn foundation_base(
-    pedestals: &[Option<PedestalDynamics>],
-    group: &[usize],
-    size: f64,
-) -> Result<super::base::Base, SimError> {
-    let kind = EffectKind::FoundationCoupling;
-    if !(size.is_finite() && size > 0.0) {
-        return Err(effect_err(
-            kind,
-            format!("SIZE (base compliance relative to the pedestals) must be > 0 (got {size})"),
-        ));
-    }
-    let mut k = [0.0; 2];
-    let mut m = [0.0; 2];
-    for &g in group {
-        let p = pedestals[g]
-            .as_ref()
-            .ok_or_else(|| effect_err(kind, "a bearing of the group has no pedestal"))?;
-        for d in 0..2 {
-            k[d] += p.k[d][d];
-            m[d] += p.m[d];
-        }
-    }
-    let k = k.map(|v| v / size);
-    let m = m.map(|v| 2.0 * v);
-    let base = super::base::Base {
-        name: "foundation".to_string(),
-        m,
-        k,
-        c: std::array::from_fn(|d| 0.1 * (k[d] * m[d]).sqrt()),
-        eta: 0.0,
-    };
-    base.check().map_err(|e| effect_err(kind, e))?;
-    Ok(base)
-}
-
 /// What one speed's solve gives: bearing readings, base motion and, when
 /// kept, the shaft's node motion (see [`Response`]).
 struct SpeedSolution {
@@ -294,8 +207,9 @@ impl UnbalanceSolver {
                         params.insert("m_z".into(), p.m[1]);
                     }
                     EffectKind::FoundationCoupling => {
-                        let group = foundation_group(machine, b, req.bearing.is_some())?;
-                        let mut base = foundation_base(&pedestals, &group, size)?;
+                        let group =
+                            super::inject::foundation_group(machine, b, req.bearing.is_some())?;
+                        let mut base = super::inject::foundation_base(&pedestals, &group, size)?;
                         let mut n = 1;
                         while effective.bases.iter().any(|x| x.name == base.name) {
                             n += 1;
