@@ -221,47 +221,13 @@ pub fn fit<E: Equations + ?Sized>(
         }
         let g = jac.transpose() * &r;
         let hess = jac.transpose() * &jac;
-        let mut accepted = false;
-        while lambda < 1e12 {
-            let mut damped = hess.clone();
-            for j in 0..q {
-                damped[(j, j)] += lambda * hess[(j, j)].max(1e-300);
+        let mut residual = |u_new: &DVector<f64>| whitened(eq, &p_of(u_new), frozen);
+        match super::levenberg::step(&u, cost_now, &g, &hess, lambda, 1e-6, 1e-12, &mut residual) {
+            Some(s) => {
+                (u, r, cost_now, lambda) = (s.u, s.r, s.cost, s.lambda);
+                converged = s.converged;
             }
-            let Some(delta) = damped.cholesky().map(|c| c.solve(&(-&g))) else {
-                lambda *= 4.0;
-                continue;
-            };
-            let u_new = &u + &delta;
-            let Some(r_new) = whitened(eq, &p_of(&u_new), frozen) else {
-                lambda *= 4.0;
-                continue;
-            };
-            let cost_new = r_new.norm_squared();
-            if cost_new <= cost_now {
-                let decrease = cost_now - cost_new;
-                // The step in its own standard errors (Hessian⁻¹).
-                let small = hess
-                    .clone()
-                    .cholesky()
-                    .map(|c| {
-                        let inv = c.inverse();
-                        (0..q).all(|j| delta[j].abs() <= 1e-6 * inv[(j, j)].sqrt())
-                    })
-                    .unwrap_or(false);
-                u = u_new;
-                r = r_new;
-                cost_now = cost_new;
-                lambda = (lambda / 3.0).max(1e-12);
-                accepted = true;
-                if decrease <= 1e-12 * cost_now.max(f64::MIN_POSITIVE) || small {
-                    converged = true;
-                }
-                break;
-            }
-            lambda *= 4.0;
-        }
-        if !accepted {
-            converged = true;
+            None => converged = true,
         }
         if converged {
             break;

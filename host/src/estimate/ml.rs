@@ -458,52 +458,19 @@ pub fn fit_with(
         }
         let g = jac.transpose() * &r;
         let hess = jac.transpose() * &jac;
-        let mut accepted = false;
-        while lambda < 1e12 {
-            let mut damped = hess.clone();
-            for k in 0..p {
-                damped[(k, k)] += lambda * hess[(k, k)].max(1e-300);
-            }
-            let Some(delta) = damped.cholesky().map(|c| c.solve(&(-&g))) else {
-                lambda *= 4.0;
-                continue;
+        let mut residual =
+            |u_new: &DVector<f64>| match whitened(obs, &theta_of(u_new), equation_var) {
+                Ok(r) if r.iter().all(|v| v.is_finite()) => Some(r),
+                _ => None,
             };
-            let u_new = &u + &delta;
-            let r_new = match whitened(obs, &theta_of(&u_new), equation_var) {
-                Ok(r) if r.iter().all(|v| v.is_finite()) => r,
-                _ => {
-                    lambda *= 4.0;
-                    continue;
-                }
-            };
-            let cost_new = r_new.norm_squared();
-            if cost_new <= cost_now {
-                let decrease = cost_now - cost_new;
-                // The step measured in its own standard errors (Hessian⁻¹).
-                let small_step = hess
-                    .clone()
-                    .cholesky()
-                    .map(|c| {
-                        let inv = c.inverse();
-                        (0..p).all(|k| delta[k].abs() <= 1e-7 * inv[(k, k)].sqrt())
-                    })
-                    .unwrap_or(false);
-                u = u_new;
-                r = r_new;
-                cost_now = cost_new;
-                lambda = (lambda / 3.0).max(1e-12);
-                accepted = true;
-                if decrease <= 1e-13 * cost_now.max(f64::MIN_POSITIVE) || small_step {
-                    converged = true;
-                }
-                break;
+        match super::levenberg::step(&u, cost_now, &g, &hess, lambda, 1e-7, 1e-13, &mut residual) {
+            Some(s) => {
+                (u, r, cost_now, lambda) = (s.u, s.r, s.cost, s.lambda);
+                converged = s.converged;
             }
-            lambda *= 4.0;
-        }
-        if !accepted {
             // No step lowers J: the start is already the minimum to
             // working precision.
-            converged = true;
+            None => converged = true,
         }
         if converged {
             break;

@@ -9,6 +9,7 @@
 
 pub mod base;
 pub mod gauss_helmert;
+pub mod levenberg;
 pub mod ml;
 pub mod noise;
 
