@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Plinth's whole test suite: the one command the README gives and CI runs.
-# Installs what it needs (the thumbv7em-none-eabihf target, qemu-system-arm).
+# Installs what it needs (the thumbv7em-none-eabihf target, qemu-system-arm,
+# chromium for the report test).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -16,6 +17,13 @@ if ! command -v qemu-system-arm >/dev/null 2>&1; then
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get update -qq
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm >/dev/null
+fi
+
+step "chromium (the report is checked in a real headless browser)"
+if ! command -v chromium >/dev/null 2>&1; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get update -qq
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
 fi
 
 step "format"
