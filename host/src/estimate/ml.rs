@@ -320,11 +320,7 @@ impl Rigid {
         let mut sum = 0.0;
         for (s, sp) in self.speeds.iter().enumerate() {
             let l = self.factor(s, theta)?;
-            let e = sp.a * theta_vector(theta) - sp.b;
-            let w = l.solve_lower_triangular(&e).ok_or(MlError::NoNoise {
-                speed_hz: sp.speed_hz,
-            })?;
-            sum += w.norm_squared();
+            sum += forward(&l, &(sp.a * theta_vector(theta) - sp.b)).norm_squared();
         }
         Ok(sum)
     }
@@ -380,21 +376,22 @@ impl Equations for Rigid {
         }
         for (s, sp) in self.speeds.iter().enumerate() {
             let l = self.factor(s, p).ok()?;
-            let w = l.solve_lower_triangular(&(sp.a * theta - sp.b))?;
-            r.fixed_rows_mut::<4>(4 * s).copy_from(&w);
+            let e = sp.a * theta - sp.b;
             let Some(j) = jacobian.as_mut() else {
+                r.fixed_rows_mut::<4>(4 * s).copy_from(&forward(&l, &e));
                 continue;
             };
+            let linv = lower_inverse(&l);
+            let w = linv * e;
+            r.fixed_rows_mut::<4>(4 * s).copy_from(&w);
             for (c, &k) in j.free.iter().enumerate() {
-                let linv_a = l.solve_lower_triangular(&sp.a.column(k).into_owned())?;
-                let x = l.solve_lower_triangular(&sp.d_sigma(p, k))?;
-                let m = l.solve_lower_triangular(&x.transpose())?;
+                let m = linv * sp.d_sigma(p, k) * linv.transpose();
                 let mut phi = m.lower_triangle();
                 for i in 0..4 {
                     phi[(i, i)] *= 0.5;
                 }
-                let column = linv_a - phi * w;
-                j.out.view_mut((4 * s, c), (4, 1)).copy_from(&column);
+                let column = linv * sp.a.column(k) - phi * w;
+                j.out.fixed_view_mut::<4, 1>(4 * s, c).copy_from(&column);
             }
         }
         r.iter().all(|v| v.is_finite()).then_some(r)
@@ -402,7 +399,7 @@ impl Equations for Rigid {
 
     fn information(&self, s: usize, p: &[f64], _scale: &[f64]) -> Option<DMatrix<f64>> {
         let l = self.factor(s, p).ok()?;
-        let w = l.solve_lower_triangular(&self.speeds[s].a)?;
+        let w = lower_inverse(&l) * self.speeds[s].a;
         let f = w.transpose() * w;
         Some(DMatrix::from_fn(PARAMETERS, PARAMETERS, |r, c| f[(r, c)]))
     }
@@ -445,14 +442,62 @@ fn cholesky(s: Matrix4<f64>, speed_hz: f64) -> Result<Matrix4<f64>, MlError> {
     if !(trace > 0.0 && trace.is_finite()) {
         return Err(MlError::NoNoise { speed_hz });
     }
-    if let Some(c) = s.cholesky() {
-        return Ok(c.l());
+    if let Some(l) = cholesky4(&s) {
+        return Ok(l);
     }
     let jitter = Matrix4::identity() * (1e-12 * trace / 4.0);
-    (s + jitter)
-        .cholesky()
-        .map(|c| c.l())
-        .ok_or(MlError::NoNoise { speed_hz })
+    cholesky4(&(s + jitter)).ok_or(MlError::NoNoise { speed_hz })
+}
+
+/// The lower Cholesky factor of a symmetric 4×4 matrix, written out (the
+/// innermost work of every iteration); `None` unless positive definite.
+#[inline]
+fn cholesky4(s: &Matrix4<f64>) -> Option<Matrix4<f64>> {
+    let mut l = Matrix4::zeros();
+    for j in 0..4 {
+        let mut d = s[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return None;
+        }
+        let djj = d.sqrt();
+        l[(j, j)] = djj;
+        for i in j + 1..4 {
+            let mut v = s[(i, j)];
+            for k in 0..j {
+                v -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = v / djj;
+        }
+    }
+    Some(l)
+}
+
+/// L⁻¹·b for a lower-triangular L with a positive diagonal.
+#[inline]
+fn forward(l: &Matrix4<f64>, b: &Vector4<f64>) -> Vector4<f64> {
+    let mut x = Vector4::zeros();
+    for i in 0..4 {
+        let mut v = b[i];
+        for k in 0..i {
+            v -= l[(i, k)] * x[k];
+        }
+        x[i] = v / l[(i, i)];
+    }
+    x
+}
+
+/// L⁻¹ of a lower-triangular L with a positive diagonal.
+#[inline]
+fn lower_inverse(l: &Matrix4<f64>) -> Matrix4<f64> {
+    let mut inv = Matrix4::zeros();
+    for c in 0..4 {
+        let x = forward(l, &Vector4::ith(c, 1.0));
+        inv.set_column(c, &x);
+    }
+    inv
 }
 
 /// J(θ) = Σ eᵀΣ(θ)⁻¹e over the speeds [-].

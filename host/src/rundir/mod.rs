@@ -38,6 +38,10 @@ pub struct Measurement {
     /// Noise of each phasor when the file carries formats.md's noise columns
     /// (`rel_y_sd, rel_z_sd, ped_y_sd, ped_z_sd`), else `None`.
     pub noise_sd: Option<NoiseSd>,
+    /// The digits the eight phasor numbers were written with, counted from
+    /// the text as it was read (`None`: made in memory; the noise model
+    /// then counts them from the values).
+    pub written: Option<WrittenDigits>,
 }
 
 /// Standard deviations of the complex noise of one row's four phasors [m]:
