@@ -225,30 +225,35 @@ impl Speed {
         s * self.scale
     }
 
-    /// ∂Σ/∂θ_k (Σ depends on θ only through the dynamic stiffness).
-    fn d_sigma(&self, theta: &[f64], k: usize) -> Matrix4<f64> {
+    /// ∂Σ/∂θ_k (Σ depends on θ only through the dynamic stiffness): its
+    /// non-zero 2×2 diagonal blocks, as (direction d, [∂Σ₀₀, ∂Σ₀₁, ∂Σ₁₁])
+    /// at rows and columns 2d, 2d+1 (one block, two for the mass).
+    fn d_sigma(&self, theta: &[f64], k: usize) -> [Option<(usize, [f64; 3])>; 2] {
         let w = self.omega;
         let h = self.stiffness(theta);
-        let mut out = Matrix4::zeros();
         // (direction, ∂Re h, ∂Im h) of parameter k.
-        let parts: &[(usize, f64, f64)] = match k {
-            0 => &[(0, 1.0, 0.0)],
-            1 => &[(1, 1.0, 0.0)],
-            2 => &[(0, -w * w, 0.0), (1, -w * w, 0.0)],
-            3 => &[(0, 0.0, w)],
-            _ => &[(1, 0.0, w)],
+        let parts: [Option<(usize, f64, f64)>; 2] = match k {
+            0 => [Some((0, 1.0, 0.0)), None],
+            1 => [Some((1, 1.0, 0.0)), None],
+            2 => [Some((0, -w * w, 0.0)), Some((1, -w * w, 0.0))],
+            3 => [Some((0, 0.0, w)), None],
+            _ => [Some((1, 0.0, w)), None],
         };
-        for &(d, da, db) in parts {
-            let (a, b) = h[d];
-            let (v1, v2) = (self.var_ped[2 * d], self.var_ped[2 * d + 1]);
-            let i = 2 * d;
-            out[(i, i)] = 2.0 * (a * da * v1 + b * db * v2);
-            out[(i + 1, i + 1)] = 2.0 * (b * db * v1 + a * da * v2);
-            let off = (da * b + a * db) * (v1 - v2);
-            out[(i, i + 1)] = off;
-            out[(i + 1, i)] = off;
-        }
-        out * self.scale
+        parts.map(|part| {
+            part.map(|(d, da, db)| {
+                let (a, b) = h[d];
+                let (v1, v2) = (self.var_ped[2 * d], self.var_ped[2 * d + 1]);
+                let c = self.scale;
+                (
+                    d,
+                    [
+                        2.0 * c * (a * da * v1 + b * db * v2),
+                        c * (da * b + a * db) * (v1 - v2),
+                        2.0 * c * (b * db * v1 + a * da * v2),
+                    ],
+                )
+            })
+        })
     }
 }
 
@@ -385,13 +390,30 @@ impl Equations for Rigid {
             let w = linv * e;
             r.fixed_rows_mut::<4>(4 * s).copy_from(&w);
             for (c, &k) in j.free.iter().enumerate() {
-                let m = linv * sp.d_sigma(p, k) * linv.transpose();
-                let mut phi = m.lower_triangle();
-                for i in 0..4 {
-                    phi[(i, i)] *= 0.5;
+                // ∂w/∂θ_k = L⁻¹A_k − Φ(M)·w, M = L⁻¹·∂Σ/∂θ_k·L⁻ᵀ (module docs),
+                // ∂Σ/∂θ_k being one or two 2×2 diagonal blocks.
+                let mut m = [[0.0f64; 4]; 4];
+                for (d, ds) in sp.d_sigma(p, k).into_iter().flatten() {
+                    let (p0, p1) = (2 * d, 2 * d + 1);
+                    for i in 0..4 {
+                        let gi = [linv[(i, p0)], linv[(i, p1)]];
+                        let t = [gi[0] * ds[0] + gi[1] * ds[1], gi[0] * ds[1] + gi[1] * ds[2]];
+                        for (jj, mij) in m[i].iter_mut().enumerate().take(i + 1) {
+                            *mij += t[0] * linv[(jj, p0)] + t[1] * linv[(jj, p1)];
+                        }
+                    }
                 }
-                let column = linv * sp.a.column(k) - phi * w;
-                j.out.fixed_view_mut::<4, 1>(4 * s, c).copy_from(&column);
+                for i in 0..4 {
+                    let mut la = 0.0;
+                    for q in 0..=i {
+                        la += linv[(i, q)] * sp.a[(q, k)];
+                    }
+                    let mut phi_w = 0.5 * m[i][i] * w[i];
+                    for q in 0..i {
+                        phi_w += m[i][q] * w[q];
+                    }
+                    j.out[(4 * s + i, c)] = la - phi_w;
+                }
             }
         }
         r.iter().all(|v| v.is_finite()).then_some(r)
