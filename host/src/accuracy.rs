@@ -12,6 +12,10 @@
 //!   with its unbalance turned and resized: the pedestal equations are
 //!   linear), which changes every rounding error.
 //!
+//! The draws run in parallel (rayon) and are gathered in draw order: the
+//! same seed gives the same numbers whatever the number of threads
+//! (`RAYON_NUM_THREADS`). A progress line shows on a terminal.
+//!
 //! Per parameter it reports the RMS error of OLS and ML, the bound (from the
 //! Fisher information at the truth with the true noise; for digits the mean
 //! over draws of the bound with the rounding variance ulp²/12 of each
@@ -22,13 +26,14 @@
 use crate::estimate::ml;
 use crate::estimate::noise::ColumnDigits;
 use crate::estimate::{complex_stiffness, Observation};
-use crate::identify::{identify_run, Identification, Options};
+use crate::identify::{fit_run, Identification, Options};
 use crate::rundir::{round_to_digits, DigitsMode, Measurement, RunDir};
 use crate::sim::{unbalance_response, EffectSet, Machine, Noise};
 use anyhow::{anyhow, bail, Context, Result};
 use plinth_shared::phasor::omega_from_hz;
 use plinth_shared::regression::{Parameter, PARAMETERS};
 use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -91,13 +96,27 @@ impl Accuracy {
     }
 }
 
-/// Runs the Monte-Carlo on `machine` at `speeds_hz` [Hz].
+/// Runs the Monte-Carlo on `machine` at `speeds_hz` [Hz], its draws in
+/// parallel (rayon); the result depends on `seed` only, not on the number
+/// of threads.
 pub fn monte_carlo(
     machine: &Machine,
     speeds_hz: &[f64],
     perturbation: Perturbation,
     draws: usize,
     seed: u64,
+) -> Result<Accuracy> {
+    monte_carlo_with_progress(machine, speeds_hz, perturbation, draws, seed, false)
+}
+
+/// [`monte_carlo`] with a progress line on a terminal when `show_progress`.
+pub fn monte_carlo_with_progress(
+    machine: &Machine,
+    speeds_hz: &[f64],
+    perturbation: Perturbation,
+    draws: usize,
+    seed: u64,
+    show_progress: bool,
 ) -> Result<Accuracy> {
     if draws < 2 {
         bail!("--draws {draws}: at least 2 draws are needed for a scatter");
@@ -133,12 +152,7 @@ pub fn monte_carlo(
         .map(|p| [p.k_y, p.k_z, p.m, p.c_y, p.c_z])
         .collect();
     let nb = bearings.len();
-    // [bearing][draw] estimates and reported standard errors.
-    let mut ml_est = vec![Vec::with_capacity(draws); nb];
-    let mut ols_est = vec![Vec::with_capacity(draws); nb];
     let mut crb_var = vec![[0.0; PARAMETERS]; nb];
-    let mut ml_failures = 0;
-    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     if let Perturbation::Noise(fraction) = perturbation {
         for (b, name) in bearings.iter().enumerate() {
             let rms: [f64; 4] = std::array::from_fn(|ch| channel_rms(&clean, name, ch));
@@ -147,7 +161,28 @@ pub fn monte_carlo(
             })?;
         }
     }
-    for draw in 0..draws {
+    // The digits' random turns, drawn in order from the seed before the
+    // draws run in parallel; the noise of draw k is seeded by (seed, k).
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let turns: Vec<num_complex::Complex<f64>> = match perturbation {
+        Perturbation::Digits(_) => (0..draws)
+            .map(|_| {
+                num_complex::Complex::from_polar(
+                    10f64.powf(rng.random::<f64>()),
+                    std::f64::consts::TAU * rng.random::<f64>(),
+                )
+            })
+            .collect(),
+        Perturbation::Noise(_) => Vec::new(),
+    };
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let ticker = std::sync::Mutex::new(crate::progress::Ticker::new(
+        "accuracy: draws",
+        draws,
+        show_progress,
+    ));
+    let one_draw = |draw: usize| -> Result<Draw> {
+        let mut bound_var = vec![[0.0; PARAMETERS]; nb];
         let run = match perturbation {
             Perturbation::Noise(fraction) => response
                 .to_run_dir(Some(Noise {
@@ -156,41 +191,73 @@ pub fn monte_carlo(
                 }))
                 .map_err(|e| anyhow!("{e}"))?,
             Perturbation::Digits(digits) => {
-                let turn = num_complex::Complex::from_polar(
-                    10f64.powf(rng.random::<f64>()),
-                    std::f64::consts::TAU * rng.random::<f64>(),
-                );
-                let turned = turn_run(&clean, turn);
+                let turned = turn_run(&clean, turns[draw]);
                 let quantum = ColumnDigits {
                     digits,
                     lowest_digit_exponent: -400,
                 };
                 for (b, name) in bearings.iter().enumerate() {
-                    let v = bound_with(&turned, name, &theta_true[b], &|m: &Measurement, c| {
-                        quantum
-                            .ulp(crate::estimate::noise::real_value(m, c))
-                            .powi(2)
-                            / 12.0
-                    })?;
-                    for (acc, x) in crb_var[b].iter_mut().zip(v) {
-                        *acc += x / draws as f64;
-                    }
+                    bound_var[b] =
+                        bound_with(&turned, name, &theta_true[b], &|m: &Measurement, c| {
+                            quantum
+                                .ulp(crate::estimate::noise::real_value(m, c))
+                                .powi(2)
+                                / 12.0
+                        })?;
                 }
                 rounded(&turned, digits)
             }
         };
-        let ml_id = identify_run(&run, &Options::default())
+        // The estimates alone: the convention check `identify` adds
+        // (refits of the run with mistakes undone) changes none of them.
+        let ml_id = fit_run(&run, &Options::default())
             .with_context(|| format!("draw {draw}: ML identification"))?;
-        let ols_id = identify_run(&run, &Options::default().ols())
+        let ols_id = fit_run(&run, &Options::default().ols())
             .with_context(|| format!("draw {draw}: OLS identification"))?;
-        for (b, name) in bearings.iter().enumerate() {
+        let mut out = Draw {
+            ml: Vec::with_capacity(nb),
+            ols: Vec::with_capacity(nb),
+            ml_failures: 0,
+            bound_var,
+        };
+        for name in &bearings {
             let ml_fit = pick(&ml_id, name)?;
             if ml_fit.has_warning(crate::identify::WarningKind::MlFailed) {
-                ml_failures += 1;
+                out.ml_failures += 1;
             }
-            ml_est[b].push((ml_fit.params(), ml_fit.std_errs()));
+            out.ml.push((ml_fit.params(), ml_fit.std_errs()));
             let o = pick(&ols_id, name)?;
-            ols_est[b].push((o.params(), o.std_errs()));
+            out.ols.push((o.params(), o.std_errs()));
+        }
+        let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        if let Ok(mut t) = ticker.lock() {
+            t.tick(finished);
+        }
+        Ok(out)
+    };
+    // Parallel over draws; collected in draw order, so that every sum below
+    // runs in the same order whatever the number of threads.
+    let results: Vec<Draw> = (0..draws)
+        .into_par_iter()
+        .map(one_draw)
+        .collect::<Result<Vec<Draw>>>()?;
+    if let Ok(mut t) = ticker.lock() {
+        t.finish();
+    }
+    // [bearing][draw] estimates and reported standard errors.
+    let mut ml_est = vec![Vec::with_capacity(draws); nb];
+    let mut ols_est = vec![Vec::with_capacity(draws); nb];
+    let mut ml_failures = 0;
+    for d in &results {
+        ml_failures += d.ml_failures;
+        for b in 0..nb {
+            ml_est[b].push(d.ml[b]);
+            ols_est[b].push(d.ols[b]);
+            if let Perturbation::Digits(_) = perturbation {
+                for (acc, x) in crb_var[b].iter_mut().zip(d.bound_var[b]) {
+                    *acc += x / draws as f64;
+                }
+            }
         }
     }
     let mut parameters = Vec::new();
@@ -222,6 +289,18 @@ pub fn monte_carlo(
         parameters,
     })
 }
+
+/// What one draw gives: per bearing the ML and OLS estimates with their
+/// standard errors, and (digits) the bound's variances at that draw.
+struct Draw {
+    ml: Vec<Estimate>,
+    ols: Vec<Estimate>,
+    ml_failures: usize,
+    bound_var: Vec<[f64; PARAMETERS]>,
+}
+
+/// An estimate θ and the standard errors reported with it.
+type Estimate = ([f64; PARAMETERS], [f64; PARAMETERS]);
 
 struct Stats {
     rms: f64,
@@ -352,7 +431,8 @@ pub fn run(args: &Args) -> Result<()> {
         (Some(f), None) => Perturbation::Noise(f),
         (None, None) => Perturbation::Noise(0.01),
     };
-    let acc = monte_carlo(&machine, &speeds, perturbation, args.draws, args.seed)?;
+    let acc =
+        monte_carlo_with_progress(&machine, &speeds, perturbation, args.draws, args.seed, true)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&acc)?);
     } else {
@@ -416,4 +496,38 @@ pub fn table(acc: &Accuracy) -> String {
         out.push('\n');
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn machine() -> Machine {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../examples/feng-hahn-1997-damped.toml");
+        Machine::from_toml_path(path).expect("machine file")
+    }
+
+    /// The same seed gives the same numbers on one thread and on two (the
+    /// draws run in parallel and are gathered in draw order), for noise and
+    /// for digits; another seed gives other numbers.
+    #[test]
+    fn same_numbers_on_one_and_two_threads() {
+        let machine = machine();
+        let speeds: Vec<f64> = (5..=120).map(f64::from).collect();
+        let on = |threads: usize, perturbation: Perturbation, seed: u64| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("thread pool")
+                .install(|| monte_carlo(&machine, &speeds, perturbation, 6, seed))
+                .expect("monte carlo")
+        };
+        for perturbation in [Perturbation::Noise(0.01), Perturbation::Digits(3)] {
+            let one = on(1, perturbation, 7);
+            let two = on(2, perturbation, 7);
+            assert_eq!(one, two, "{perturbation:?}");
+            assert_ne!(one, on(2, perturbation, 8), "{perturbation:?}");
+        }
+    }
 }

@@ -1,18 +1,20 @@
 //! Maximum likelihood for equation systems linear in the measured numbers
-//! (the Gauss–Helmert model), for models with more than one pedestal or a
-//! measured base: per speed s an equation residual e_s(p) (real, length r)
-//! that is zero for the true measured numbers, linear in them with
-//! B_s(p) = ∂e_s/∂(measured), and independent noise of variance D_s per
-//! measured real number. Then e_s is zero-mean with covariance
-//! Σ_s(p) = B_s·D_s·B_sᵀ, and the ML estimate minimises
-//! J(p) = Σ_s e_sᵀ Σ_s(p)⁻¹ e_s (the same model as [`super::ml`], which
-//! is the one-pedestal rigid-ground case written out).
+//! (the Gauss–Helmert model): the one estimation engine of Plinth. Per speed
+//! s an equation residual e_s(p) (real, length r) that is zero for the true
+//! measured numbers, linear in them with B_s(p) = ∂e_s/∂(measured), and
+//! independent noise of variance D_s per measured real number. Then e_s is
+//! zero-mean with covariance Σ_s(p) = B_s·D_s·B_sᵀ, and the ML estimate
+//! minimises J(p) = Σ_s e_sᵀ Σ_s(p)⁻¹ e_s.
 //!
-//! [`fit`] minimises J by Levenberg–Marquardt on the whitened residuals
-//! (central-difference Jacobian, including Σ's dependence on p) or, with
-//! `frozen` weights, a fixed Σ (cheap, for profiling a grid);
-//! [`fisher`] is F = Σ Aᵀ Σ⁻¹ A with A = ∂e/∂p, whose inverse is the
-//! Cramér–Rao bound at p.
+//! The models: one pedestal on rigid ground ([`super::ml`], analytic
+//! derivatives), on a measured base and a group on an unmeasured base
+//! ([`super::base`], central differences).
+//!
+//! [`minimise`] (and [`fit`]) minimises J by Levenberg–Marquardt on the
+//! whitened residuals ([`Equations::whiten`]: its Jacobian includes Σ's
+//! dependence on p) or, with `frozen` weights, a fixed Σ (cheap, for
+//! profiling a grid); [`fisher`] is F = Σ Aᵀ Σ⁻¹ A with A = ∂e/∂p, whose
+//! inverse ([`inverse_psd`]) is the Cramér–Rao bound at p.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -29,6 +31,61 @@ pub trait Equations {
     }
     /// Noise variance of each measured number of speed `s` (order of B's columns).
     fn variance(&self, s: usize) -> &[f64];
+    /// Whitened residuals L_s⁻¹e_s of every speed stacked (Σ at `p`), and,
+    /// when `jacobian` is given, their derivatives with respect to the
+    /// parameters it names (model units). `None` when some Σ is singular or
+    /// a number is not finite. The default works from [`Equations::residual`]
+    /// with central differences (they include Σ's dependence on p); a model
+    /// with analytic derivatives overrides it (and does its per-speed work
+    /// once, not per call).
+    fn whiten(&self, p: &[f64], jacobian: Option<JacobianRequest<'_>>) -> Option<DVector<f64>> {
+        let r = whitened_generic(self, p, None)?;
+        if let Some(j) = jacobian {
+            *j.out = DMatrix::zeros(r.len(), j.free.len());
+            for (c, (&k, &h)) in j.free.iter().zip(j.step).enumerate() {
+                let mut up = p.to_vec();
+                up[k] += h;
+                let mut dn = p.to_vec();
+                dn[k] -= h;
+                let d = (whitened_generic(self, &up, None)? - whitened_generic(self, &dn, None)?)
+                    / (2.0 * h);
+                j.out.set_column(c, &d);
+            }
+        }
+        Some(r)
+    }
+    /// Fisher information Aᵀ Σ_s⁻¹ A of speed `s` at `p` (model units),
+    /// A = ∂e_s/∂p; the default takes A by central differences with steps
+    /// `scale`·1e-6.
+    fn information(&self, s: usize, p: &[f64], scale: &[f64]) -> Option<DMatrix<f64>> {
+        let n = p.len();
+        let l = whitening(self, s, p)?;
+        let e0 = self.error(s, p);
+        let mut a = DMatrix::zeros(e0.len(), n);
+        for k in 0..n {
+            let h = 1e-6 * scale[k];
+            let mut up = p.to_vec();
+            up[k] += h;
+            let mut dn = p.to_vec();
+            dn[k] -= h;
+            let d = (self.error(s, &up) - self.error(s, &dn)) / (2.0 * h);
+            a.set_column(k, &d);
+        }
+        let w = l.solve_lower_triangular(&a)?;
+        Some(w.transpose() * w)
+    }
+}
+
+/// Where [`Equations::whiten`] writes the Jacobian of the whitened
+/// residuals: one column per parameter index in `free`.
+pub struct JacobianRequest<'a> {
+    /// Indices into p of the parameters to differentiate by.
+    pub free: &'a [usize],
+    /// Central-difference step per entry of `free` [p units] (used only
+    /// where the derivative is not analytic).
+    pub step: &'a [f64],
+    /// The Jacobian, resized to (residuals × `free.len()`).
+    pub out: &'a mut DMatrix<f64>,
 }
 
 /// Lower Cholesky factor of Σ_s(p) = B·D·Bᵀ, regularised by 1e-12 of its
@@ -59,6 +116,18 @@ pub fn whitened<E: Equations + ?Sized>(
     p: &[f64],
     frozen: Option<&[DMatrix<f64>]>,
 ) -> Option<DVector<f64>> {
+    match frozen {
+        Some(_) => whitened_generic(eq, p, frozen),
+        None => eq.whiten(p, None),
+    }
+}
+
+/// [`whitened`] from [`Equations::residual`] and [`Equations::variance`].
+fn whitened_generic<E: Equations + ?Sized>(
+    eq: &E,
+    p: &[f64],
+    frozen: Option<&[DMatrix<f64>]>,
+) -> Option<DVector<f64>> {
     let mut out = Vec::new();
     for s in 0..eq.speeds() {
         let e = eq.error(s, p);
@@ -78,26 +147,14 @@ pub fn cost<E: Equations + ?Sized>(eq: &E, p: &[f64]) -> Option<f64> {
     whitened(eq, p, None).map(|w| w.norm_squared())
 }
 
-/// Fisher information Σ_s Aᵀ Σ_s⁻¹ A at `p` (model units), A = ∂e/∂p by
-/// central differences with steps `scale`·1e-6.
+/// Fisher information Σ_s Aᵀ Σ_s⁻¹ A at `p` (model units), A = ∂e/∂p
+/// ([`Equations::information`]: analytic where the model has it, else
+/// central differences with steps `scale`·1e-6).
 pub fn fisher<E: Equations + ?Sized>(eq: &E, p: &[f64], scale: &[f64]) -> Option<DMatrix<f64>> {
     let n = p.len();
     let mut f = DMatrix::zeros(n, n);
     for s in 0..eq.speeds() {
-        let l = whitening(eq, s, p)?;
-        let e0 = eq.error(s, p);
-        let mut a = DMatrix::zeros(e0.len(), n);
-        for k in 0..n {
-            let h = 1e-6 * scale[k];
-            let mut up = p.to_vec();
-            up[k] += h;
-            let mut dn = p.to_vec();
-            dn[k] -= h;
-            let d = (eq.error(s, &up) - eq.error(s, &dn)) / (2.0 * h);
-            a.set_column(k, &d);
-        }
-        let w = l.solve_lower_triangular(&a)?;
-        f += w.transpose() * w;
+        f += eq.information(s, p, scale)?;
     }
     Some(f)
 }
@@ -163,6 +220,28 @@ pub struct Minimum {
     pub converged: bool,
 }
 
+/// When [`minimise`] stops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    /// Most Levenberg–Marquardt iterations.
+    pub max_iterations: usize,
+    /// A step below this many standard errors in every parameter has converged [-].
+    pub step_tol: f64,
+    /// A relative decrease of J below this has converged [-].
+    pub decrease_tol: f64,
+}
+
+impl Settings {
+    /// The default tolerances with at most `max_iterations` iterations.
+    pub fn iterations(max_iterations: usize) -> Self {
+        Self {
+            max_iterations,
+            step_tol: 1e-6,
+            decrease_tol: 1e-12,
+        }
+    }
+}
+
 /// Levenberg–Marquardt minimisation of J over the parameters with
 /// `free[k]` true (the others stay at `start`), in units u = p/`scale`.
 /// With `frozen` whitening factors Σ is held fixed. `None` when J cannot be
@@ -174,6 +253,26 @@ pub fn fit<E: Equations + ?Sized>(
     free: &[bool],
     frozen: Option<&[DMatrix<f64>]>,
     max_iterations: usize,
+) -> Option<Minimum> {
+    minimise(
+        eq,
+        start,
+        scale,
+        free,
+        frozen,
+        &Settings::iterations(max_iterations),
+    )
+}
+
+/// [`fit`] with explicit [`Settings`]: the one Levenberg–Marquardt loop of
+/// the estimation core (every ML fit, rigid ground or on a base, runs here).
+pub fn minimise<E: Equations + ?Sized>(
+    eq: &E,
+    start: &[f64],
+    scale: &[f64],
+    free: &[bool],
+    frozen: Option<&[DMatrix<f64>]>,
+    settings: &Settings,
 ) -> Option<Minimum> {
     let idx: Vec<usize> = (0..start.len()).filter(|&k| free[k]).collect();
     let q = idx.len();
@@ -190,43 +289,74 @@ pub fn fit<E: Equations + ?Sized>(
     let mut lambda = 1e-3;
     let mut converged = false;
     let mut iterations = 0;
-    while iterations < max_iterations && q > 0 {
+    let mut jac = DMatrix::zeros(0, 0);
+    while iterations < settings.max_iterations && q > 0 {
         iterations += 1;
-        // Central differences; forward ones with frozen weights (the
-        // residual is then nearly linear in most parameters, and cheap).
-        let mut jac = DMatrix::zeros(r.len(), q);
-        for j in 0..q {
-            let h = 1e-6 * u[j].abs().max(1e-3);
-            let mut up = u.clone();
-            up[j] += h;
-            let column = match frozen {
-                Some(_) => whitened(eq, &p_of(&up), frozen).map(|a| (a - &r) / h),
-                None => {
-                    let mut dn = u.clone();
-                    dn[j] -= h;
-                    whitened(eq, &p_of(&up), None)
-                        .zip(whitened(eq, &p_of(&dn), None))
-                        .map(|(a, b)| (a - b) / (2.0 * h))
+        let ok = match frozen {
+            // Forward differences with frozen weights (the residual is then
+            // nearly linear in most parameters, and cheap).
+            Some(_) => {
+                jac = DMatrix::zeros(r.len(), q);
+                (0..q).all(|j| {
+                    let h = 1e-6 * u[j].abs().max(1e-3);
+                    let mut up = u.clone();
+                    up[j] += h;
+                    match whitened(eq, &p_of(&up), frozen) {
+                        Some(a) => {
+                            jac.set_column(j, &((a - &r) / h));
+                            true
+                        }
+                        None => false,
+                    }
+                })
+            }
+            None => {
+                let step: Vec<f64> = (0..q)
+                    .map(|j| 1e-6 * u[j].abs().max(1e-3) * scale[idx[j]])
+                    .collect();
+                let request = JacobianRequest {
+                    free: &idx,
+                    step: &step,
+                    out: &mut jac,
+                };
+                match eq.whiten(&p_of(&u), Some(request)) {
+                    Some(_) => {
+                        for (j, &k) in idx.iter().enumerate() {
+                            jac.column_mut(j).scale_mut(scale[k]);
+                        }
+                        jac.iter().all(|v| v.is_finite())
+                    }
+                    None => false,
                 }
-            };
-            let Some(column) = column else {
-                return Some(Minimum {
-                    p: p_of(&u),
-                    cost: cost_now,
-                    iterations,
-                    converged: false,
-                });
-            };
-            jac.set_column(j, &column);
+            }
+        };
+        if !ok {
+            return Some(Minimum {
+                p: p_of(&u),
+                cost: cost_now,
+                iterations,
+                converged: false,
+            });
         }
-        let g = jac.transpose() * &r;
-        let hess = jac.transpose() * &jac;
+        let g = jac.tr_mul(&r);
+        let hess = jac.tr_mul(&jac);
         let mut residual = |u_new: &DVector<f64>| whitened(eq, &p_of(u_new), frozen);
-        match super::levenberg::step(&u, cost_now, &g, &hess, lambda, 1e-6, 1e-12, &mut residual) {
+        match super::levenberg::step(
+            &u,
+            cost_now,
+            &g,
+            &hess,
+            lambda,
+            settings.step_tol,
+            settings.decrease_tol,
+            &mut residual,
+        ) {
             Some(s) => {
                 (u, r, cost_now, lambda) = (s.u, s.r, s.cost, s.lambda);
                 converged = s.converged;
             }
+            // No step lowers J: the start is already the minimum to
+            // working precision.
             None => converged = true,
         }
         if converged {

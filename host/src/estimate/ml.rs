@@ -29,9 +29,15 @@
 //! J(θ) = Σ_speeds eᵀ Σ(θ)⁻¹ e
 //! ```
 //!
-//! found here by Levenberg–Marquardt on the whitened residuals L⁻¹e
-//! (Σ = L·Lᵀ), with the Jacobian by central differences (it includes the
-//! dependence of Σ on θ), from a given start (the OLS estimate). The Fisher
+//! found by the one Levenberg–Marquardt loop of [`super::gauss_helmert`]
+//! on the whitened residuals w = L⁻¹e (Σ = L·Lᵀ), this model being its
+//! [`Equations`] implementation [`Rigid`] with analytic derivatives: e is
+//! linear in θ (∂e/∂θ = A, the paper's regression rows) and Σ quadratic in
+//! it, so ∂w/∂θ_k = L⁻¹A_k − Φ(L⁻¹·∂Σ/∂θ_k·L⁻ᵀ)·w (Φ: the lower triangle
+//! with half the diagonal, the derivative of the Cholesky factor). The
+//! per-speed work that does not depend on θ (A, the right-hand side, the
+//! covariance of the `rel` noise through K*) is done once, from a given
+//! start (the OLS estimate). The Fisher
 //! information of θ in this model is F = Σ Aᵀ Σ(θ)⁻¹ A with A = ∂e/∂θ (the
 //! paper's regression rows); F⁻¹ is the Cramér–Rao bound, at the estimate the
 //! covariance reported, at the truth the bound `plinth accuracy` compares with.
@@ -54,6 +60,7 @@
 //! error dominates the fit tends to OLS, and its Fisher information, the
 //! covariance of the combined model, grows accordingly.
 
+use super::gauss_helmert::{self as gh, Equations, JacobianRequest};
 use super::Observation;
 use nalgebra::{DMatrix, DVector, Matrix4, SMatrix, Vector4};
 use num_complex::Complex;
@@ -120,6 +127,46 @@ impl MlFit {
     }
 }
 
+/// What a fit assumes beyond the observations' own noise: the equation
+/// error (module docs) and a factor on each observation's covariance (a
+/// robust reweighting layered on top sets it to 1/weight).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Weighting<'a> {
+    /// Variance τ² [N²] of an equation error on every real equation.
+    pub equation_var: f64,
+    /// Per observation (same order), the factor its covariance
+    /// Σ_i(θ) + τ²·I is multiplied by [-]; `None`: 1 for all.
+    pub cov_scale: Option<&'a [f64]>,
+}
+
+impl Weighting<'_> {
+    /// Only an equation error of variance `equation_var` [N²].
+    pub fn equation_error(equation_var: f64) -> Self {
+        Self {
+            equation_var,
+            cov_scale: None,
+        }
+    }
+}
+
+/// One speed of the rigid pedestal, prepared once and reused by every
+/// iteration: e = A·θ − b, Σ(θ) = c·(Σ_rel + B_ped(θ)·D_ped·B_ped(θ)ᵀ + τ²·I).
+#[derive(Clone, Copy, Debug)]
+struct Speed {
+    speed_hz: f64,
+    omega: f64,
+    a: SMatrix<f64, 4, PARAMETERS>,
+    b: Vector4<f64>,
+    /// ∂e/∂rel = −K* as a real 4×4 matrix.
+    b_rel: Matrix4<f64>,
+    /// Covariance of e from the `rel` noise through −K* (constant in θ) [N²].
+    sigma_rel: Matrix4<f64>,
+    /// Noise variances of ped (y re, y im, z re, z im) [m²].
+    var_ped: [f64; 4],
+    /// The covariance factor c of [`Weighting::cov_scale`] [-].
+    scale: f64,
+}
+
 /// Real 2×2 block of a complex factor `a` acting on (re, im).
 fn put(j: &mut SMatrix<f64, 4, 8>, row: usize, col: usize, a: Complex<f64>) {
     j[(row, col)] = a.re;
@@ -128,7 +175,260 @@ fn put(j: &mut SMatrix<f64, 4, 8>, row: usize, col: usize, a: Complex<f64>) {
     j[(row + 1, col + 1)] = a.re;
 }
 
+impl Speed {
+    fn new(o: &Observation, scale: f64) -> Self {
+        let (a, b) = rows(o);
+        let mut b_rel = SMatrix::<f64, 4, 4>::zeros();
+        for d in 0..2 {
+            for c in 0..2 {
+                let k = -o.kstar[d][c];
+                b_rel[(2 * d, 2 * c)] = k.re;
+                b_rel[(2 * d, 2 * c + 1)] = -k.im;
+                b_rel[(2 * d + 1, 2 * c)] = k.im;
+                b_rel[(2 * d + 1, 2 * c + 1)] = k.re;
+            }
+        }
+        let d_rel = Matrix4::from_diagonal(&Vector4::from_fn(|i, _| o.var[i]));
+        Self {
+            speed_hz: o.speed_hz,
+            omega: o.omega(),
+            a,
+            b,
+            b_rel,
+            sigma_rel: b_rel * d_rel * b_rel.transpose(),
+            var_ped: [o.var[4], o.var[5], o.var[6], o.var[7]],
+            scale,
+        }
+    }
+
+    /// (Re, Im) of the pedestal's dynamic stiffness k − Ω²m + iΩc in y and z.
+    fn stiffness(&self, theta: &[f64]) -> [(f64, f64); 2] {
+        let w = self.omega;
+        [
+            (theta[0] - w * w * theta[2], w * theta[3]),
+            (theta[1] - w * w * theta[2], w * theta[4]),
+        ]
+    }
+
+    /// Σ(θ) with an equation error of variance `tau2` [N²].
+    fn sigma(&self, theta: &[f64], tau2: f64) -> Matrix4<f64> {
+        let mut s = self.sigma_rel;
+        for (d, (re, im)) in self.stiffness(theta).into_iter().enumerate() {
+            let (v1, v2) = (self.var_ped[2 * d], self.var_ped[2 * d + 1]);
+            let i = 2 * d;
+            s[(i, i)] += re * re * v1 + im * im * v2 + tau2;
+            s[(i + 1, i + 1)] += im * im * v1 + re * re * v2 + tau2;
+            let off = re * im * (v1 - v2);
+            s[(i, i + 1)] += off;
+            s[(i + 1, i)] += off;
+        }
+        s * self.scale
+    }
+
+    /// ∂Σ/∂θ_k (Σ depends on θ only through the dynamic stiffness): its
+    /// non-zero 2×2 diagonal blocks, as (direction d, [∂Σ₀₀, ∂Σ₀₁, ∂Σ₁₁])
+    /// at rows and columns 2d, 2d+1 (one block, two for the mass).
+    fn d_sigma(&self, theta: &[f64], k: usize) -> [Option<(usize, [f64; 3])>; 2] {
+        let w = self.omega;
+        let h = self.stiffness(theta);
+        // (direction, ∂Re h, ∂Im h) of parameter k.
+        let parts: [Option<(usize, f64, f64)>; 2] = match k {
+            0 => [Some((0, 1.0, 0.0)), None],
+            1 => [Some((1, 1.0, 0.0)), None],
+            2 => [Some((0, -w * w, 0.0)), Some((1, -w * w, 0.0))],
+            3 => [Some((0, 0.0, w)), None],
+            _ => [Some((1, 0.0, w)), None],
+        };
+        parts.map(|part| {
+            part.map(|(d, da, db)| {
+                let (a, b) = h[d];
+                let (v1, v2) = (self.var_ped[2 * d], self.var_ped[2 * d + 1]);
+                let c = self.scale;
+                (
+                    d,
+                    [
+                        2.0 * c * (a * da * v1 + b * db * v2),
+                        c * (da * b + a * db) * (v1 - v2),
+                        2.0 * c * (b * db * v1 + a * da * v2),
+                    ],
+                )
+            })
+        })
+    }
+}
+
+/// The rigid pedestal as a Gauss–Helmert system (module docs): one pedestal
+/// on rigid ground, p = θ.
+pub struct Rigid {
+    speeds: Vec<Speed>,
+    /// τ² [N²] (module docs, "Equation error").
+    equation_var: f64,
+    /// Per speed, the variances of B's columns (rel, ped, equation error)
+    /// for the generic [`Equations`] methods.
+    var: Vec<[f64; 12]>,
+}
+
+impl Rigid {
+    /// The system of `obs` (any order) under `weighting`.
+    pub fn new(obs: &[Observation], weighting: &Weighting<'_>) -> Self {
+        let scale = |i: usize| {
+            weighting
+                .cov_scale
+                .and_then(|c| c.get(i))
+                .copied()
+                .unwrap_or(1.0)
+        };
+        let speeds: Vec<Speed> = obs
+            .iter()
+            .enumerate()
+            .map(|(i, o)| Speed::new(o, scale(i)))
+            .collect();
+        let var = obs
+            .iter()
+            .enumerate()
+            .map(|(i, o)| {
+                let c = scale(i);
+                std::array::from_fn(|k| {
+                    c * if k < 8 {
+                        o.var[k]
+                    } else {
+                        weighting.equation_var
+                    }
+                })
+            })
+            .collect();
+        Self {
+            speeds,
+            equation_var: weighting.equation_var,
+            var,
+        }
+    }
+
+    /// Sets τ² [N²].
+    fn set_equation_var(&mut self, equation_var: f64) {
+        self.equation_var = equation_var;
+        for (v, s) in self.var.iter_mut().zip(&self.speeds) {
+            for x in &mut v[8..] {
+                *x = s.scale * equation_var;
+            }
+        }
+    }
+
+    /// Cholesky factor of speed `s`'s Σ at θ.
+    fn factor(&self, s: usize, theta: &[f64]) -> Result<Matrix4<f64>, MlError> {
+        let sp = &self.speeds[s];
+        cholesky(sp.sigma(theta, self.equation_var), sp.speed_hz)
+    }
+
+    /// J(θ) = Σ eᵀΣ⁻¹e [-].
+    fn cost(&self, theta: &[f64]) -> Result<f64, MlError> {
+        let mut sum = 0.0;
+        for (s, sp) in self.speeds.iter().enumerate() {
+            let l = self.factor(s, theta)?;
+            sum += forward(&l, &(sp.a * theta_vector(theta) - sp.b)).norm_squared();
+        }
+        Ok(sum)
+    }
+
+    /// RMS of the unweighted equation residuals e [N].
+    fn residual_rms(&self, theta: &[f64]) -> f64 {
+        let sum: f64 = self
+            .speeds
+            .iter()
+            .map(|sp| (sp.a * theta_vector(theta) - sp.b).norm_squared())
+            .sum();
+        (sum / (4 * self.speeds.len()).max(1) as f64).sqrt()
+    }
+}
+
+fn theta_vector(theta: &[f64]) -> nalgebra::SVector<f64, PARAMETERS> {
+    nalgebra::SVector::from_fn(|i, _| theta[i])
+}
+
+impl Equations for Rigid {
+    fn speeds(&self) -> usize {
+        self.speeds.len()
+    }
+
+    fn variance(&self, s: usize) -> &[f64] {
+        &self.var[s]
+    }
+
+    fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        let sp = &self.speeds[s];
+        let e = sp.a * theta_vector(p) - sp.b;
+        let mut b = SMatrix::<f64, 4, 8>::zeros();
+        for (d, (re, im)) in sp.stiffness(p).into_iter().enumerate() {
+            put(&mut b, 2 * d, 4 + 2 * d, Complex::new(re, im));
+        }
+        let mut full = DMatrix::zeros(4, 12);
+        full.view_mut((0, 0), (4, 4)).copy_from(&sp.b_rel);
+        full.view_mut((0, 4), (4, 4))
+            .copy_from(&b.fixed_view::<4, 4>(0, 4));
+        for i in 0..4 {
+            full[(i, 8 + i)] = 1.0;
+        }
+        (DVector::from_column_slice(e.as_slice()), full)
+    }
+
+    fn whiten(&self, p: &[f64], jacobian: Option<JacobianRequest<'_>>) -> Option<DVector<f64>> {
+        let n = self.speeds.len();
+        let theta = theta_vector(p);
+        let mut r = DVector::zeros(4 * n);
+        let mut jacobian = jacobian;
+        if let Some(j) = jacobian.as_mut() {
+            *j.out = DMatrix::zeros(4 * n, j.free.len());
+        }
+        for (s, sp) in self.speeds.iter().enumerate() {
+            let l = self.factor(s, p).ok()?;
+            let e = sp.a * theta - sp.b;
+            let Some(j) = jacobian.as_mut() else {
+                r.fixed_rows_mut::<4>(4 * s).copy_from(&forward(&l, &e));
+                continue;
+            };
+            let linv = lower_inverse(&l);
+            let w = linv * e;
+            r.fixed_rows_mut::<4>(4 * s).copy_from(&w);
+            for (c, &k) in j.free.iter().enumerate() {
+                // ∂w/∂θ_k = L⁻¹A_k − Φ(M)·w, M = L⁻¹·∂Σ/∂θ_k·L⁻ᵀ (module docs),
+                // ∂Σ/∂θ_k being one or two 2×2 diagonal blocks.
+                let mut m = [[0.0f64; 4]; 4];
+                for (d, ds) in sp.d_sigma(p, k).into_iter().flatten() {
+                    let (p0, p1) = (2 * d, 2 * d + 1);
+                    for i in 0..4 {
+                        let gi = [linv[(i, p0)], linv[(i, p1)]];
+                        let t = [gi[0] * ds[0] + gi[1] * ds[1], gi[0] * ds[1] + gi[1] * ds[2]];
+                        for (jj, mij) in m[i].iter_mut().enumerate().take(i + 1) {
+                            *mij += t[0] * linv[(jj, p0)] + t[1] * linv[(jj, p1)];
+                        }
+                    }
+                }
+                for i in 0..4 {
+                    let mut la = 0.0;
+                    for q in 0..=i {
+                        la += linv[(i, q)] * sp.a[(q, k)];
+                    }
+                    let mut phi_w = 0.5 * m[i][i] * w[i];
+                    for q in 0..i {
+                        phi_w += m[i][q] * w[q];
+                    }
+                    j.out[(4 * s + i, c)] = la - phi_w;
+                }
+            }
+        }
+        r.iter().all(|v| v.is_finite()).then_some(r)
+    }
+
+    fn information(&self, s: usize, p: &[f64], _scale: &[f64]) -> Option<DMatrix<f64>> {
+        let l = self.factor(s, p).ok()?;
+        let w = lower_inverse(&l) * self.speeds[s].a;
+        let f = w.transpose() * w;
+        Some(DMatrix::from_fn(PARAMETERS, PARAMETERS, |r, c| f[(r, c)]))
+    }
+}
+
 /// The pedestal's dynamic stiffness (y, z) k − Ω²m + iΩc [N/m] at Ω [rad/s].
+#[cfg(test)]
 fn dynamic_stiffness(theta: &[f64; PARAMETERS], omega: f64) -> [Complex<f64>; 2] {
     let w2 = omega * omega;
     [
@@ -139,19 +439,7 @@ fn dynamic_stiffness(theta: &[f64; PARAMETERS], omega: f64) -> [Complex<f64>; 2]
 
 /// Σ(θ) of one speed (module docs) [N²].
 pub fn equation_covariance(o: &Observation, theta: &[f64; PARAMETERS]) -> Matrix4<f64> {
-    let h = dynamic_stiffness(theta, o.omega());
-    let mut b = SMatrix::<f64, 4, 8>::zeros();
-    for (d, &hd) in h.iter().enumerate() {
-        put(&mut b, 2 * d, 4 + 2 * d, hd);
-        for c in 0..2 {
-            put(&mut b, 2 * d, 2 * c, -o.kstar[d][c]);
-        }
-    }
-    let mut bd = b;
-    for (c, v) in o.var.iter().enumerate() {
-        bd.column_mut(c).scale_mut(*v);
-    }
-    bd * b.transpose()
+    Speed::new(o, 1.0).sigma(theta, 0.0)
 }
 
 /// The regression rows A (4×5, eq. 4 in (y re, y im, z re, z im) order) and
@@ -166,7 +454,7 @@ fn rows(o: &Observation) -> (SMatrix<f64, 4, PARAMETERS>, Vector4<f64>) {
 /// The residual e = A·θ − b of one speed [N].
 pub fn equation_residual(o: &Observation, theta: &[f64; PARAMETERS]) -> Vector4<f64> {
     let (a, rhs) = rows(o);
-    a * nalgebra::SVector::<f64, PARAMETERS>::from_column_slice(theta) - rhs
+    a * theta_vector(theta) - rhs
 }
 
 /// Lower Cholesky factor of Σ, regularised by 1e-12 of its mean diagonal
@@ -176,38 +464,62 @@ fn cholesky(s: Matrix4<f64>, speed_hz: f64) -> Result<Matrix4<f64>, MlError> {
     if !(trace > 0.0 && trace.is_finite()) {
         return Err(MlError::NoNoise { speed_hz });
     }
-    if let Some(c) = s.cholesky() {
-        return Ok(c.l());
+    if let Some(l) = cholesky4(&s) {
+        return Ok(l);
     }
     let jitter = Matrix4::identity() * (1e-12 * trace / 4.0);
-    (s + jitter)
-        .cholesky()
-        .map(|c| c.l())
-        .ok_or(MlError::NoNoise { speed_hz })
+    cholesky4(&(s + jitter)).ok_or(MlError::NoNoise { speed_hz })
 }
 
-/// Σ(θ) of one speed plus an equation error of variance `equation_var`
-/// [N²] on each of its four real equations ([`fit_with_equation_error`]).
-fn covariance_with(o: &Observation, theta: &[f64; PARAMETERS], equation_var: f64) -> Matrix4<f64> {
-    equation_covariance(o, theta) + Matrix4::identity() * equation_var
-}
-
-/// Whitened residuals L⁻¹e of every speed, stacked [-].
-fn whitened(
-    obs: &[Observation],
-    theta: &[f64; PARAMETERS],
-    equation_var: f64,
-) -> Result<DVector<f64>, MlError> {
-    let mut out = DVector::zeros(4 * obs.len());
-    for (j, o) in obs.iter().enumerate() {
-        let l = cholesky(covariance_with(o, theta, equation_var), o.speed_hz)?;
-        let e = equation_residual(o, theta);
-        let w = l.solve_lower_triangular(&e).ok_or(MlError::NoNoise {
-            speed_hz: o.speed_hz,
-        })?;
-        out.fixed_rows_mut::<4>(4 * j).copy_from(&w);
+/// The lower Cholesky factor of a symmetric 4×4 matrix, written out (the
+/// innermost work of every iteration); `None` unless positive definite.
+#[inline]
+fn cholesky4(s: &Matrix4<f64>) -> Option<Matrix4<f64>> {
+    let mut l = Matrix4::zeros();
+    for j in 0..4 {
+        let mut d = s[(j, j)];
+        for k in 0..j {
+            d -= l[(j, k)] * l[(j, k)];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return None;
+        }
+        let djj = d.sqrt();
+        l[(j, j)] = djj;
+        for i in j + 1..4 {
+            let mut v = s[(i, j)];
+            for k in 0..j {
+                v -= l[(i, k)] * l[(j, k)];
+            }
+            l[(i, j)] = v / djj;
+        }
     }
-    Ok(out)
+    Some(l)
+}
+
+/// L⁻¹·b for a lower-triangular L with a positive diagonal.
+#[inline]
+fn forward(l: &Matrix4<f64>, b: &Vector4<f64>) -> Vector4<f64> {
+    let mut x = Vector4::zeros();
+    for i in 0..4 {
+        let mut v = b[i];
+        for k in 0..i {
+            v -= l[(i, k)] * x[k];
+        }
+        x[i] = v / l[(i, i)];
+    }
+    x
+}
+
+/// L⁻¹ of a lower-triangular L with a positive diagonal.
+#[inline]
+fn lower_inverse(l: &Matrix4<f64>) -> Matrix4<f64> {
+    let mut inv = Matrix4::zeros();
+    for c in 0..4 {
+        let x = forward(l, &Vector4::ith(c, 1.0));
+        inv.set_column(c, &x);
+    }
+    inv
 }
 
 /// J(θ) = Σ eᵀΣ(θ)⁻¹e over the speeds [-].
@@ -222,7 +534,7 @@ pub fn cost_with(
     theta: &[f64; PARAMETERS],
     equation_var: f64,
 ) -> Result<f64, MlError> {
-    Ok(whitened(obs, theta, equation_var)?.norm_squared())
+    Rigid::new(obs, &Weighting::equation_error(equation_var)).cost(theta)
 }
 
 /// Fisher information Σ Aᵀ Σ(θ)⁻¹ A over `columns` (θ units) at `theta`:
@@ -233,72 +545,42 @@ pub fn fisher_information(
     columns: &[Parameter],
     theta: &[f64; PARAMETERS],
 ) -> Result<DMatrix<f64>, MlError> {
-    fisher_with(obs, columns, theta, 0.0)
+    fisher_of(&Rigid::new(obs, &Weighting::default()), columns, theta)
 }
 
-fn fisher_with(
-    obs: &[Observation],
+fn fisher_of(
+    eq: &Rigid,
     columns: &[Parameter],
     theta: &[f64; PARAMETERS],
-    equation_var: f64,
 ) -> Result<DMatrix<f64>, MlError> {
-    let p = columns.len();
-    let mut f = DMatrix::zeros(p, p);
-    for o in obs {
-        let (a, _) = rows(o);
-        let l = cholesky(covariance_with(o, theta, equation_var), o.speed_hz)?;
-        let sel = DMatrix::from_fn(4, p, |r, c| a[(r, columns[c] as usize)]);
-        let l_dyn = DMatrix::from_fn(4, 4, |r, c| l[(r, c)]);
-        let w = l_dyn.solve_lower_triangular(&sel).ok_or(MlError::NoNoise {
-            speed_hz: o.speed_hz,
-        })?;
-        f += w.transpose() * w;
-    }
-    Ok(f)
+    let full = match gh::fisher(eq, theta, &[1.0; PARAMETERS]) {
+        Some(f) => f,
+        None => return Err(first_failure(eq, theta)),
+    };
+    Ok(DMatrix::from_fn(columns.len(), columns.len(), |r, c| {
+        full[(columns[r] as usize, columns[c] as usize)]
+    }))
 }
 
-/// Inverse of a symmetric positive semi-definite matrix through its unit-
-/// diagonal scaling, with the condition number of the scaled matrix; the
-/// diagonal is infinite where the matrix is singular.
-fn inverse_psd(f: &DMatrix<f64>) -> (DMatrix<f64>, f64) {
-    let p = f.nrows();
-    let d: Vec<f64> = (0..p).map(|i| f[(i, i)].max(0.0).sqrt()).collect();
-    if d.iter().any(|&x| !(x > 0.0 && x.is_finite())) {
-        let mut inf = DMatrix::zeros(p, p);
-        for i in 0..p {
-            inf[(i, i)] = f64::INFINITY;
+/// The error of the first speed whose Σ cannot be factored at θ.
+fn first_failure(eq: &Rigid, theta: &[f64]) -> MlError {
+    (0..eq.speeds.len())
+        .find_map(|s| eq.factor(s, theta).err())
+        .unwrap_or(MlError::NonFinite)
+}
+
+/// F⁻¹ over all five parameters from the Fisher information `f` over
+/// `columns` (zero rows and columns for the others), with the condition
+/// number of the whitened column-normalised regression.
+fn spread(f: &DMatrix<f64>, columns: &[Parameter]) -> ([[f64; PARAMETERS]; PARAMETERS], f64) {
+    let inv = gh::inverse_psd(f);
+    let mut cov = [[0.0; PARAMETERS]; PARAMETERS];
+    for (r, &pr) in columns.iter().enumerate() {
+        for (c, &pc) in columns.iter().enumerate() {
+            cov[pr as usize][pc as usize] = inv[(r, c)];
         }
-        return (inf, f64::INFINITY);
     }
-    let scaled = DMatrix::from_fn(p, p, |r, c| f[(r, c)] / (d[r] * d[c]));
-    let eig = scaled.clone().symmetric_eigen();
-    let (lo, hi) = eig
-        .eigenvalues
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
-            (lo.min(v), hi.max(v))
-        });
-    let condition = if lo > 0.0 {
-        (hi / lo).sqrt()
-    } else {
-        f64::INFINITY
-    };
-    if lo.is_nan() || lo <= hi * 1e-14 {
-        let mut inf = DMatrix::zeros(p, p);
-        for i in 0..p {
-            inf[(i, i)] = f64::INFINITY;
-        }
-        return (inf, condition);
-    }
-    let mut inv = eig.eigenvectors.clone();
-    for (k, &v) in eig.eigenvalues.iter().enumerate() {
-        inv.column_mut(k).scale_mut(1.0 / v);
-    }
-    let inv = inv * eig.eigenvectors.transpose();
-    (
-        DMatrix::from_fn(p, p, |r, c| inv[(r, c)] / (d[r] * d[c])),
-        condition,
-    )
+    (cov, gh::condition_number(f))
 }
 
 /// The covariance F⁻¹ (θ units) over all five parameters at `theta`, and the
@@ -308,24 +590,7 @@ pub fn bound(
     columns: &[Parameter],
     theta: &[f64; PARAMETERS],
 ) -> Result<([[f64; PARAMETERS]; PARAMETERS], f64), MlError> {
-    bound_with(obs, columns, theta, 0.0)
-}
-
-fn bound_with(
-    obs: &[Observation],
-    columns: &[Parameter],
-    theta: &[f64; PARAMETERS],
-    equation_var: f64,
-) -> Result<([[f64; PARAMETERS]; PARAMETERS], f64), MlError> {
-    let f = fisher_with(obs, columns, theta, equation_var)?;
-    let (inv, condition) = inverse_psd(&f);
-    let mut cov = [[0.0; PARAMETERS]; PARAMETERS];
-    for (r, &pr) in columns.iter().enumerate() {
-        for (c, &pc) in columns.iter().enumerate() {
-            cov[pr as usize][pc as usize] = inv[(r, c)];
-        }
-    }
-    Ok((cov, condition))
+    Ok(spread(&fisher_information(obs, columns, theta)?, columns))
 }
 
 /// The true covariance of the paper's OLS estimate under the noise model
@@ -352,14 +617,14 @@ pub fn ols_covariance_with(
     let mut ata = DMatrix::zeros(p, p);
     let mut meat = DMatrix::zeros(p, p);
     for o in obs {
-        let (a, _) = rows(o);
-        let sel = DMatrix::from_fn(4, p, |r, c| a[(r, columns[c] as usize)]);
-        let s = covariance_with(o, theta, equation_var);
+        let sp = Speed::new(o, 1.0);
+        let sel = DMatrix::from_fn(4, p, |r, c| sp.a[(r, columns[c] as usize)]);
+        let s = sp.sigma(theta, equation_var);
         let s_dyn = DMatrix::from_fn(4, 4, |r, c| s[(r, c)]);
         ata += sel.transpose() * &sel;
         meat += sel.transpose() * s_dyn * &sel;
     }
-    let (inv, _) = inverse_psd(&ata);
+    let inv = gh::inverse_psd(&ata);
     let cov = &inv * meat * &inv;
     let mut out = [[0.0; PARAMETERS]; PARAMETERS];
     for (r, &pr) in columns.iter().enumerate() {
@@ -374,8 +639,13 @@ pub fn ols_covariance_with(
     out
 }
 
-/// Most Levenberg–Marquardt iterations.
-const MAX_ITERATIONS: usize = 200;
+/// When the ML iteration stops: at most 200 iterations, a step below 1e-7
+/// standard errors or a relative decrease of J below 1e-13.
+const SETTINGS: gh::Settings = gh::Settings {
+    max_iterations: 200,
+    step_tol: 1e-7,
+    decrease_tol: 1e-13,
+};
 
 /// The ML estimate (module docs) of the parameters in `columns` from `start`
 /// (the others held at their `start` values, normally 0).
@@ -384,7 +654,7 @@ pub fn fit(
     columns: &[Parameter],
     start: &[f64; PARAMETERS],
 ) -> Result<MlFit, MlError> {
-    fit_with(obs, columns, start, 0.0)
+    fit_weighted(obs, columns, start, &Weighting::default())
 }
 
 /// [`fit`] with an equation error of variance `equation_var` [N²] on every
@@ -395,105 +665,90 @@ pub fn fit_with(
     start: &[f64; PARAMETERS],
     equation_var: f64,
 ) -> Result<MlFit, MlError> {
+    fit_weighted(
+        obs,
+        columns,
+        start,
+        &Weighting::equation_error(equation_var),
+    )
+}
+
+/// The ML fit of one pedestal on rigid ground from its observations (each
+/// with the noise variance of every measured number) under `weighting`
+/// (equation error, per-observation covariance factors): the estimation
+/// core's entry point for one pedestal.
+pub fn fit_weighted(
+    obs: &[Observation],
+    columns: &[Parameter],
+    start: &[f64; PARAMETERS],
+    weighting: &Weighting<'_>,
+) -> Result<MlFit, MlError> {
+    let eq = Rigid::new(obs, weighting);
+    fit_system(&eq, obs.len(), columns, start)
+}
+
+fn fit_system(
+    eq: &Rigid,
+    n_obs: usize,
+    columns: &[Parameter],
+    start: &[f64; PARAMETERS],
+) -> Result<MlFit, MlError> {
     let p = columns.len();
-    let n_eq = 4 * obs.len();
+    let n_eq = 4 * n_obs;
     if n_eq <= p {
         return Err(MlError::TooFewEquations {
             equations: n_eq,
             parameters: p,
         });
     }
-    if !obs.iter().all(Observation::is_finite) || !start.iter().all(|v| v.is_finite()) {
+    let finite = |sp: &Speed| {
+        sp.a.iter()
+            .chain(sp.b.iter())
+            .chain(sp.sigma_rel.iter())
+            .all(|v| v.is_finite())
+            && sp.var_ped.iter().all(|v| v.is_finite() && *v >= 0.0)
+            && sp.scale.is_finite()
+            && sp.scale > 0.0
+    };
+    if !eq.speeds.iter().all(finite) || !start.iter().all(|v| v.is_finite()) {
         return Err(MlError::NonFinite);
     }
     // Unknowns in units where each explains the right-hand side: u_i = θ_i/s_i.
     let mut a_norm = [0.0f64; PARAMETERS];
     let mut b_norm = 0.0;
-    for o in obs {
-        let (a, rhs) = rows(o);
+    for sp in &eq.speeds {
         for (c, v) in a_norm.iter_mut().enumerate() {
-            *v += a.column(c).norm_squared();
+            *v += sp.a.column(c).norm_squared();
         }
-        b_norm += rhs.norm_squared();
+        b_norm += sp.b.norm_squared();
     }
     let b_norm = b_norm.sqrt().max(f64::MIN_POSITIVE);
-    let scale: Vec<f64> = columns
-        .iter()
-        .map(|&c| {
-            let s = b_norm / a_norm[c as usize].sqrt();
-            if s.is_finite() && s > 0.0 {
-                s
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let theta_of = |u: &DVector<f64>| -> [f64; PARAMETERS] {
-        let mut t = *start;
-        for (k, &c) in columns.iter().enumerate() {
-            t[c as usize] = u[k] * scale[k];
+    let scale: [f64; PARAMETERS] = std::array::from_fn(|c| {
+        let s = b_norm / a_norm[c].sqrt();
+        if s.is_finite() && s > 0.0 {
+            s
+        } else {
+            1.0
         }
-        t
-    };
-    let mut u = DVector::from_fn(p, |k, _| start[columns[k] as usize] / scale[k]);
-    let mut r = whitened(obs, &theta_of(&u), equation_var)?;
-    let mut cost_now = r.norm_squared();
-    let mut lambda = 1e-3;
-    let mut converged = false;
-    let mut iterations = 0;
-    const STEP: f64 = 1e-6;
-    while iterations < MAX_ITERATIONS {
-        iterations += 1;
-        let mut jac = DMatrix::zeros(n_eq, p);
-        for k in 0..p {
-            let h = STEP * u[k].abs().max(1e-3);
-            let mut up = u.clone();
-            up[k] += h;
-            let mut dn = u.clone();
-            dn[k] -= h;
-            let d = (whitened(obs, &theta_of(&up), equation_var)?
-                - whitened(obs, &theta_of(&dn), equation_var)?)
-                / (2.0 * h);
-            jac.set_column(k, &d);
-        }
-        let g = jac.transpose() * &r;
-        let hess = jac.transpose() * &jac;
-        let mut residual =
-            |u_new: &DVector<f64>| match whitened(obs, &theta_of(u_new), equation_var) {
-                Ok(r) if r.iter().all(|v| v.is_finite()) => Some(r),
-                _ => None,
-            };
-        match super::levenberg::step(&u, cost_now, &g, &hess, lambda, 1e-7, 1e-13, &mut residual) {
-            Some(s) => {
-                (u, r, cost_now, lambda) = (s.u, s.r, s.cost, s.lambda);
-                converged = s.converged;
-            }
-            // No step lowers J: the start is already the minimum to
-            // working precision.
-            None => converged = true,
-        }
-        if converged {
-            break;
-        }
-    }
-    let theta = theta_of(&u);
-    let (covariance, condition_number) = bound_with(obs, columns, &theta, equation_var)?;
-    let residual_rms = (obs
-        .iter()
-        .map(|o| equation_residual(o, &theta).norm_squared())
-        .sum::<f64>()
-        / n_eq as f64)
-        .sqrt();
+    });
+    let free: [bool; PARAMETERS] =
+        std::array::from_fn(|k| columns.iter().any(|&c| c as usize == k));
+    // J must be evaluable at the start: its failure names the speed.
+    eq.cost(start)?;
+    let m = gh::minimise(eq, start, &scale, &free, None, &SETTINGS)
+        .ok_or_else(|| first_failure(eq, start))?;
+    let theta: [f64; PARAMETERS] = std::array::from_fn(|i| m.p[i]);
+    let (covariance, condition_number) = spread(&fisher_of(eq, columns, &theta)?, columns);
     Ok(MlFit {
         theta,
         covariance,
-        equation_var,
-        chi2: cost_now,
+        equation_var: eq.equation_var,
+        chi2: m.cost,
         dof: n_eq - p,
-        iterations,
-        converged,
+        iterations: m.iterations,
+        converged: m.converged,
         condition_number,
-        residual_rms,
+        residual_rms: eq.residual_rms(&theta),
     })
 }
 
@@ -506,13 +761,20 @@ pub fn equation_var_for_chi2(
     theta: &[f64; PARAMETERS],
     dof: usize,
 ) -> Result<f64, MlError> {
+    let mut eq = Rigid::new(obs, &Weighting::default());
+    var_for_chi2(&mut eq, theta, dof)
+}
+
+fn var_for_chi2(eq: &mut Rigid, theta: &[f64; PARAMETERS], dof: usize) -> Result<f64, MlError> {
     let target = dof.max(1) as f64;
-    if cost_with(obs, theta, 0.0)? <= target {
+    eq.set_equation_var(0.0);
+    if eq.cost(theta)? <= target {
         return Ok(0.0);
     }
-    let sum_sq: f64 = obs
+    let sum_sq: f64 = eq
+        .speeds
         .iter()
-        .map(|o| equation_residual(o, theta).norm_squared())
+        .map(|sp| (sp.a * theta_vector(theta) - sp.b).norm_squared())
         .sum();
     let (mut lo, mut hi) = (0.0, sum_sq / target);
     if !(hi.is_finite() && hi > 0.0) {
@@ -520,7 +782,8 @@ pub fn equation_var_for_chi2(
     }
     for _ in 0..200 {
         let mid = if lo > 0.0 { (lo * hi).sqrt() } else { 0.5 * hi };
-        if cost_with(obs, theta, mid)? > target {
+        eq.set_equation_var(mid);
+        if eq.cost(theta)? > target {
             lo = mid;
         } else {
             hi = mid;
@@ -549,9 +812,10 @@ pub fn log_det(
     theta: &[f64; PARAMETERS],
     equation_var: f64,
 ) -> Result<f64, MlError> {
+    let eq = Rigid::new(obs, &Weighting::equation_error(equation_var));
     let mut sum = 0.0;
-    for o in obs {
-        let l = cholesky(covariance_with(o, theta, equation_var), o.speed_hz)?;
+    for s in 0..eq.speeds.len() {
+        let l = eq.factor(s, theta)?;
         sum += 2.0 * (0..4).map(|k| l[(k, k)].ln()).sum::<f64>();
     }
     Ok(sum)
@@ -567,13 +831,15 @@ pub fn fit_with_equation_error(
     columns: &[Parameter],
     start: &[f64; PARAMETERS],
 ) -> Result<(MlFit, bool), MlError> {
-    let mut fit = fit_with(obs, columns, start, 0.0)?;
+    let mut eq = Rigid::new(obs, &Weighting::default());
+    let mut fit = fit_system(&eq, obs.len(), columns, start)?;
     let dof = fit.dof;
     for _ in 0..MAX_EQUATION_ERROR_ITERATIONS {
-        let var = equation_var_for_chi2(obs, &fit.theta, dof)?;
+        let var = var_for_chi2(&mut eq, &fit.theta, dof)?;
         let settled =
             (var - fit.equation_var).abs() <= EQUATION_ERROR_TOLERANCE * var.max(fit.equation_var);
-        fit = fit_with(obs, columns, &fit.theta, var)?;
+        eq.set_equation_var(var);
+        fit = fit_system(&eq, obs.len(), columns, &fit.theta)?;
         if settled {
             return Ok((fit, true));
         }
@@ -649,6 +915,60 @@ mod tests {
             noisy.push(n);
         }
         (clean, noisy, theta)
+    }
+
+    /// The analytic whitened residuals and Jacobian (with Σ's dependence on
+    /// θ through the Cholesky factor) against the generic Gauss–Helmert
+    /// whitening of B·D·Bᵀ and central differences, with unequal real and
+    /// imaginary noise, an equation error and per-observation scales.
+    #[test]
+    fn analytic_derivatives_match_central_differences() {
+        let (_, mut obs, theta) = synthetic(0.01, 3);
+        for (i, o) in obs.iter_mut().enumerate() {
+            o.var[1] *= 2.0;
+            o.var[5] *= 3.0;
+            o.var[6] *= 0.5 + (i % 3) as f64;
+        }
+        let scales: Vec<f64> = (0..obs.len()).map(|i| 0.5 + (i % 4) as f64).collect();
+        let eq = Rigid::new(
+            &obs,
+            &Weighting {
+                equation_var: 10.0,
+                cov_scale: Some(&scales),
+            },
+        );
+        let p: Vec<f64> = theta.iter().map(|t| 1.02 * t).collect();
+        let free = [0, 1, 2, 3, 4];
+        let step: Vec<f64> = p.iter().map(|v| 1e-6 * v.abs()).collect();
+        let mut jac = DMatrix::zeros(0, 0);
+        let r = eq
+            .whiten(
+                &p,
+                Some(JacobianRequest {
+                    free: &free,
+                    step: &step,
+                    out: &mut jac,
+                }),
+            )
+            .unwrap();
+        for s in 0..eq.speeds() {
+            let l = gh::whitening(&eq, s, &p).unwrap();
+            let w = l.solve_lower_triangular(&eq.error(s, &p)).unwrap();
+            for i in 0..4 {
+                assert!((w[i] - r[4 * s + i]).abs() <= 1e-9 * (1.0 + w[i].abs()));
+            }
+        }
+        for (c, &k) in free.iter().enumerate() {
+            let mut up = p.clone();
+            up[k] += step[c];
+            let mut dn = p.clone();
+            dn[k] -= step[c];
+            let d =
+                (eq.whiten(&up, None).unwrap() - eq.whiten(&dn, None).unwrap()) / (2.0 * step[c]);
+            let scale = d.norm();
+            let err = (&d - jac.column(c)).norm();
+            assert!(err <= 1e-6 * scale, "parameter {k}: {err:e} of {scale:e}");
+        }
     }
 
     #[test]

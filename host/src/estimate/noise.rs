@@ -104,21 +104,7 @@ impl Quantisation {
     }
 }
 
-/// The fewest significant digits (1..=17) that reproduce `v` exactly when
-/// printed in scientific notation and parsed back, with the decimal exponent
-/// of that printing; `None` for zero and non-finite values.
-pub fn written_digits(v: f64) -> Option<(u32, i32)> {
-    if v == 0.0 || !v.is_finite() {
-        return None;
-    }
-    for d in 1..=17u32 {
-        let s = format!("{:.*e}", (d - 1) as usize, v);
-        if s.parse::<f64>() == Ok(v) {
-            return Some((d, exponent_of(&s)));
-        }
-    }
-    Some((17, exponent_of(&format!("{v:e}"))))
-}
+pub use crate::rundir::written_digits;
 
 /// Decimal exponent of a number printed by Rust's `{:e}`.
 fn exponent_of(s: &str) -> i32 {
@@ -126,6 +112,17 @@ fn exponent_of(s: &str) -> i32 {
         .next()
         .and_then(|e| e.parse().ok())
         .unwrap_or(0)
+}
+
+/// [`written_digits`] of real number `c` ([`REAL_CHANNELS`] order) of a
+/// row: from the digits counted in the text as it was read when the row was
+/// read from a file and the number is still the one read, else from the value.
+pub fn digits_of(m: &Measurement, c: usize) -> Option<(u32, i32)> {
+    let v = real_value(m, c);
+    match &m.written {
+        Some(w) => w.of(v),
+        None => written_digits(v),
+    }
 }
 
 /// How one column of `measurements.csv` is written.
@@ -140,13 +137,16 @@ pub struct ColumnDigits {
 impl ColumnDigits {
     /// The digits of one column from its values.
     pub fn of(values: impl IntoIterator<Item = f64>) -> Self {
+        Self::of_digits(values.into_iter().map(written_digits))
+    }
+
+    /// The digits of one column from the [`written_digits`] of its values.
+    fn of_digits(values: impl IntoIterator<Item = Option<(u32, i32)>>) -> Self {
         let mut digits = 1;
         let mut lowest = i32::MAX;
-        for v in values {
-            if let Some((d, e)) = written_digits(v) {
-                digits = digits.max(d);
-                lowest = lowest.min(e - d as i32 + 1);
-            }
+        for (d, e) in values.into_iter().flatten() {
+            digits = digits.max(d);
+            lowest = lowest.min(e - d as i32 + 1);
         }
         if lowest == i32::MAX {
             // An all-zero column: zeros are taken to be exact.
@@ -160,7 +160,22 @@ impl ColumnDigits {
 
     /// The digits of every real column ([`REAL_CHANNELS`] order) of a run.
     pub fn of_run(measurements: &[Measurement]) -> [ColumnDigits; 8] {
-        std::array::from_fn(|c| Self::of(measurements.iter().map(|m| real_value(m, c))))
+        std::array::from_fn(|c| Self::of_digits(measurements.iter().map(|m| digits_of(m, c))))
+    }
+
+    /// [`ColumnDigits::ulp`] of real number `c` of a row of this column,
+    /// from the number's own digits ([`digits_of`]): no formatting when
+    /// they were counted as the row was read.
+    pub fn ulp_of(&self, m: &Measurement, c: usize) -> f64 {
+        let absolute = 10f64.powi(self.lowest_digit_exponent);
+        match digits_of(m, c) {
+            // Written with d ≤ digits significant digits: printed with the
+            // column's digits it keeps its exponent.
+            Some((d, e)) if d <= self.digits => {
+                10f64.powi(e - self.digits as i32 + 1).max(absolute)
+            }
+            _ => self.ulp(real_value(m, c)),
+        }
     }
 
     /// Unit in the last digit [m] of a value `v` [m] written in this column.
@@ -251,7 +266,7 @@ impl BearingNoise {
         let msu = quantisation.mean_square_ulps();
         let digits_var: Vec<[f64; 8]> = rows
             .iter()
-            .map(|m| std::array::from_fn(|c| msu * columns[c].ulp(real_value(m, c)).powi(2)))
+            .map(|m| std::array::from_fn(|c| msu * columns[c].ulp_of(m, c).powi(2)))
             .collect();
         let with_columns = !rows.is_empty() && rows.iter().all(|m| m.noise_sd.is_some());
         if with_columns {
@@ -354,12 +369,14 @@ fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
-    v.sort_by(f64::total_cmp);
+    // Selection, not a sort: O(n) on the long series of fine sweeps.
     let n = v.len();
+    let (below, &mut upper, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
     if n % 2 == 1 {
-        v[n / 2]
+        upper
     } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+        let lower = below.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        0.5 * (lower + upper)
     }
 }
 
@@ -397,8 +414,10 @@ fn log_spread(u: &[f64]) -> f64 {
     if logs.len() < 4 {
         return f64::INFINITY;
     }
-    logs.sort_by(f64::total_cmp);
-    let q = |f: f64| logs[((logs.len() - 1) as f64 * f).round() as usize];
+    let mut q = |f: f64| {
+        let k = ((logs.len() - 1) as f64 * f).round() as usize;
+        *logs.select_nth_unstable_by(k, f64::total_cmp).1
+    };
     q(0.75) - q(0.25)
 }
 
@@ -419,22 +438,26 @@ pub fn local_residuals(series: &[(f64, Complex<f64>)]) -> Vec<(Complex<f64>, Com
         let window = &series[start..start + w];
         let f0 = series[j].0;
         let span = (window[w - 1].0 - window[0].0).abs().max(f64::MIN_POSITIVE);
-        let x = nalgebra::DMatrix::from_fn(w, DEGREE + 1, |r, c| {
-            ((window[r].0 - f0) / span).powi(c as i32)
-        });
-        let Some(xtx_inv) = (x.transpose() * &x).try_inverse() else {
+        // Powers (1, x, x², x³) of each window point's offset, and XᵀX.
+        let powers = |f: f64| {
+            let x = (f - f0) / span;
+            nalgebra::Vector4::new(1.0, x, x * x, x * x * x)
+        };
+        let mut xtx = nalgebra::Matrix4::<f64>::zeros();
+        for (f, _) in window {
+            let v = powers(*f);
+            xtx += v * v.transpose();
+        }
+        // The smooth value at f0 is e₀ᵀ(XᵀX)⁻¹Xᵀy = Σ (x_r·h) y_r with
+        // h = (XᵀX)⁻¹e₀, and its leverage is h₀.
+        let Some(h) = xtx.cholesky().map(|c| c.solve(&nalgebra::Vector4::x())) else {
             continue;
         };
-        let xj = nalgebra::DVector::from_fn(DEGREE + 1, |c, _| if c == 0 { 1.0 } else { 0.0 });
-        let leverage = (xj.transpose() * &xtx_inv * &xj)[(0, 0)];
+        let leverage = h[0];
         if leverage.is_nan() || leverage >= 1.0 - 1e-9 {
             continue;
         }
-        let coef = |part: fn(&Complex<f64>) -> f64| {
-            let y = nalgebra::DVector::from_fn(w, |r, _| part(&window[r].1));
-            (&xtx_inv * (x.transpose() * y))[0]
-        };
-        let smooth = Complex::new(coef(|z| z.re), coef(|z| z.im));
+        let smooth: Complex<f64> = window.iter().map(|(f, z)| z * powers(*f).dot(&h)).sum();
         let r = (series[j].1 - smooth) / (1.0 - leverage).sqrt();
         out.push((r, smooth));
     }

@@ -132,6 +132,7 @@ pub fn measurements(extraction: &Extraction, config: &Channels) -> Vec<Measureme
                 rel: [v[0], v[1]],
                 ped: [v[2], v[3]],
                 noise_sd: Some(var.map(|s| s.sqrt() / n)),
+                written: None,
             });
         }
     }

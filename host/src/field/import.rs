@@ -318,6 +318,7 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
                     rel: pick(rel),
                     ped: pick(ped),
                     noise_sd: None,
+                    written: None,
                 },
             });
         }

@@ -191,6 +191,7 @@ mod tests {
             rel: [rel, rel * 2.0],
             ped: [Complex::new(1.0, 0.0); 2],
             noise_sd: None,
+            written: None,
         }
     }
 

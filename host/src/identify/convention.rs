@@ -473,6 +473,7 @@ mod tests {
                 rel: [c(1.0, 2.0), c(3.0, -4.0)],
                 ped: [c(-5.0, 6.0), c(7.0, 8.0)],
                 noise_sd: Some([0.1, 0.2, 0.3, 0.4]),
+                written: None,
             }],
             bearings: vec![bearing(0.0), bearing(100.0)],
             truth: None,

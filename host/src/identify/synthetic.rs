@@ -215,6 +215,7 @@ impl SyntheticRun {
             rel,
             ped,
             noise_sd: None,
+            written: None,
         })
     }
 }

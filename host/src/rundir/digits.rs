@@ -98,3 +98,184 @@ pub fn round_to_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
     s.push_str(&exponent.to_string());
     s.parse().unwrap_or(x)
 }
+
+/// The significant digits and decimal exponent of the first significant
+/// digit of a number as written in `text` (e.g. `-1.230e-6` → (3, −6):
+/// trailing zeros carry no digit, as for the value), counted from the text;
+/// `None` for zero, text that is not a plain decimal number, or more than 15
+/// significant digits (beyond 15 two decimals may read as the same f64, so
+/// the value decides: [`written_digits`]). Up to 15 digits this is exactly
+/// [`written_digits`] of the parsed value: a decimal of at most 15 digits is
+/// the shortest text of its f64.
+pub fn text_digits(text: &str) -> Option<(u32, i32)> {
+    let t = text.trim();
+    let t = t.strip_prefix(['-', '+']).unwrap_or(t);
+    let (mantissa, exponent) = match t.find(['e', 'E']) {
+        Some(i) => (&t[..i], t[i + 1..].parse::<i32>().ok()?),
+        None => (t, 0),
+    };
+    let mut first: Option<i32> = None; // position of the first significant digit
+    let mut last = 0i32; // position of the last non-zero digit
+    let mut point: Option<i32> = None;
+    let mut n = 0i32; // digits seen
+    for b in mantissa.bytes() {
+        match b {
+            b'.' if point.is_none() => point = Some(n),
+            b'0'..=b'9' => {
+                if b != b'0' {
+                    first.get_or_insert(n);
+                    last = n;
+                }
+                n += 1;
+            }
+            _ => return None,
+        }
+    }
+    let first = first?;
+    let digits = last - first + 1;
+    if digits > 15 {
+        return None;
+    }
+    // Decimal exponent of the digit at position `first`.
+    let point = point.unwrap_or(n);
+    Some((digits as u32, exponent + point - first - 1))
+}
+
+/// The fewest significant digits (1..=17) that reproduce `v` exactly when
+/// printed in scientific notation and parsed back, with the decimal exponent
+/// of that printing; `None` for zero and non-finite values. Rust's `{:e}`
+/// prints the shortest text that reads back as `v` (the closest of the
+/// shortest), which is that printing: one formatting, on the stack.
+pub fn written_digits(v: f64) -> Option<(u32, i32)> {
+    use std::io::Write;
+    if v == 0.0 || !v.is_finite() {
+        return None;
+    }
+    let mut buf = [0u8; 40];
+    let len = {
+        let mut cursor = std::io::Cursor::new(&mut buf[..]);
+        write!(cursor, "{:e}", v.abs()).ok()?;
+        cursor.position() as usize
+    };
+    let text = std::str::from_utf8(&buf[..len]).ok()?;
+    let (mantissa, exponent) = text.split_once('e')?;
+    let digits = mantissa.bytes().filter(u8::is_ascii_digit).count() as u32;
+    Some((digits, exponent.parse().ok()?))
+}
+
+/// How the eight real numbers of a `measurements.csv` row (formats.md
+/// order: rel y re, rel y im, rel z re, rel z im, ped y re, …) were written:
+/// their digits counted once from the text as it was read. Each entry
+/// remembers the magnitude it describes, so a value changed since (a
+/// slow-roll subtraction) is not taken for its text, while a sign change or
+/// a swap of channels (convention corrections) still finds its digits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WrittenDigits {
+    abs_bits: [u64; 8],
+    digits: [u8; 8],
+    exponent: [i16; 8],
+}
+
+impl WrittenDigits {
+    /// The digits of `values` parsed from `texts` (same order).
+    pub fn from_text(texts: [&str; 8], values: [f64; 8]) -> Self {
+        let mut out = Self {
+            abs_bits: [0; 8],
+            digits: [0; 8],
+            exponent: [0; 8],
+        };
+        for k in 0..8 {
+            let (d, e) = text_digits(texts[k])
+                .or_else(|| written_digits(values[k]))
+                .unwrap_or((0, 0));
+            out.abs_bits[k] = values[k].abs().to_bits();
+            out.digits[k] = d as u8;
+            out.exponent[k] = e.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
+        }
+        out
+    }
+
+    /// [`written_digits`] of `v` from the text when `v` is (up to its sign)
+    /// one of the row's numbers as read, else from the value.
+    pub fn of(&self, v: f64) -> Option<(u32, i32)> {
+        if v == 0.0 || !v.is_finite() {
+            return None;
+        }
+        let bits = v.abs().to_bits();
+        match self.abs_bits.iter().position(|&b| b == bits) {
+            Some(k) if self.digits[k] > 0 => {
+                Some((u32::from(self.digits[k]), i32::from(self.exponent[k])))
+            }
+            _ => written_digits(v),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The digits counted from the text are the value's: every text a
+    /// writer may produce, and random values at every digit count.
+    #[test]
+    fn text_digits_agree_with_the_value() {
+        for text in [
+            "1.23e-6",
+            "-4.5e-9",
+            "1",
+            "1.0",
+            "0.00012",
+            "-0.000120",
+            "120",
+            "1.2E+3",
+            "+7.25e2",
+            "9.99999999999999e0",
+            "123456789012345",
+            "6.935303281509727e-9",
+            "0.5",
+            ".5",
+            "5.",
+        ] {
+            let v: f64 = text.parse().unwrap();
+            match text_digits(text) {
+                Some(d) => assert_eq!(Some(d), written_digits(v), "{text}"),
+                None => assert!(text.len() > 16, "{text}"),
+            }
+        }
+        assert_eq!(text_digits("0"), None);
+        assert_eq!(text_digits("0.000"), None);
+        assert_eq!(text_digits("1e5x"), None);
+        let mut x = 0.123_456_789_f64;
+        for d in 1..=17u32 {
+            for scale in [1e-12, 1e-3, 1.0, 7e5] {
+                let v = round_to_digits(x * scale, d, DigitsMode::Round);
+                let text = format!("{:.*e}", (d - 1) as usize, v);
+                let parsed: f64 = text.parse().unwrap();
+                if let Some(t) = text_digits(&text) {
+                    assert_eq!(Some(t), written_digits(parsed), "{text}");
+                }
+            }
+            x = x * 7.3 % 1.0 + 0.1;
+        }
+        assert_eq!(written_digits(1.23e-6), Some((3, -6)));
+        assert_eq!(written_digits(-4.5e-9), Some((2, -9)));
+        assert_eq!(written_digits(1.0), Some((1, 0)));
+        assert_eq!(written_digits(0.0), None);
+    }
+
+    #[test]
+    fn written_digits_follow_their_values() {
+        let texts = [
+            "1.5e-6", "-2.25e-7", "3", "0", "4.1e-9", "5e-9", "6.02e-8", "7.1e-9",
+        ];
+        let values = texts.map(|t| t.parse::<f64>().unwrap());
+        let w = WrittenDigits::from_text(texts, values);
+        assert_eq!(w.of(1.5e-6), Some((2, -6)));
+        // A sign change and a value moved to another channel still match.
+        assert_eq!(w.of(2.25e-7), Some((3, -7)));
+        assert_eq!(w.of(-4.1e-9), Some((2, -9)));
+        // A changed value is counted from its own shortest text.
+        assert_eq!(w.of(1.5e-6 + 1e-9), written_digits(1.5e-6 + 1e-9));
+        assert_eq!(w.of(0.0), None);
+    }
+}

@@ -25,7 +25,9 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 /// One row of `measurements.csv`: the 1X phasors at one bearing and speed.
-#[derive(Clone, Debug, PartialEq)]
+/// Two rows are equal when their data are (`written`, a record of how the
+/// file spelt them, is not compared: a run read back equals the run written).
+#[derive(Clone, Debug)]
 pub struct Measurement {
     /// Rotor speed [Hz].
     pub speed_hz: f64,
@@ -38,6 +40,20 @@ pub struct Measurement {
     /// Noise of each phasor when the file carries formats.md's noise columns
     /// (`rel_y_sd, rel_z_sd, ped_y_sd, ped_z_sd`), else `None`.
     pub noise_sd: Option<NoiseSd>,
+    /// The digits the eight phasor numbers were written with, counted from
+    /// the text as it was read (`None`: made in memory; the noise model
+    /// then counts them from the values).
+    pub written: Option<WrittenDigits>,
+}
+
+impl PartialEq for Measurement {
+    fn eq(&self, other: &Self) -> bool {
+        self.speed_hz == other.speed_hz
+            && self.bearing == other.bearing
+            && self.rel == other.rel
+            && self.ped == other.ped
+            && self.noise_sd == other.noise_sd
+    }
 }
 
 /// Standard deviations of the complex noise of one row's four phasors [m]:

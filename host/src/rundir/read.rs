@@ -56,6 +56,7 @@ impl RunDir {
                         rel: [Complex::new(v[0], v[1]), Complex::new(v[2], v[3])],
                         ped: [Complex::new(v[4], v[5]), Complex::new(v[6], v[7])],
                         noise_sd: r.noise_sd,
+                        written: Some(r.written),
                     }
                 })
                 .collect(),
@@ -125,6 +126,8 @@ struct TableRow {
     bearing: String,
     bearing_column: usize,
     values: [f64; 8],
+    /// The digits each of `values` was written with.
+    written: super::WrittenDigits,
     /// The optional noise columns, when the header has them.
     noise_sd: Option<NoiseSd>,
 }
@@ -345,6 +348,10 @@ fn read_table(
         for (k, v) in values.iter_mut().enumerate() {
             *v = number(k + 2)?;
         }
+        let written = super::WrittenDigits::from_text(
+            std::array::from_fn(|k| record.get(index[k + 2]).unwrap_or_default()),
+            values,
+        );
         let noise_sd = match (noise_index, optional) {
             (Some(cols), Some(names)) => {
                 let mut sd = [0.0; 4];
@@ -383,6 +390,7 @@ fn read_table(
             bearing: bearing.to_string(),
             bearing_column: index[1] + 1,
             values,
+            written,
             noise_sd,
         });
     }

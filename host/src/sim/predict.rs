@@ -366,6 +366,7 @@ mod tests {
             rel: [c, c],
             ped: [c, c],
             noise_sd: None,
+            written: None,
         }
     }
 

@@ -614,6 +614,7 @@ impl Response {
                     rel: [r.rel[0] + sen.runout[0], r.rel[1] + sen.runout[1]],
                     ped: [r.ped[0] * delay, r.ped[1] * delay],
                     noise_sd: None,
+                    written: None,
                 });
             }
         }

@@ -139,6 +139,7 @@ pub fn derive(raw: &[u8], config: &StreamConfig, tables: &BearingTables) -> Deri
                 rel: [rel[0] / *w, rel[1] / *w],
                 ped: [ped[0] / *w, ped[1] / *w],
                 noise_sd: noise.map(|v| v.map(|v| v.sqrt() / *w)),
+                written: None,
             },
         )
         .collect();

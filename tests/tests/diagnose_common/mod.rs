@@ -329,6 +329,7 @@ pub fn generate(machine: &Machine, effect: &Effect, writing: Writing) -> RunDir 
                 rel: [write(rel[0]), write(rel[1])],
                 ped: [write(ped[0]), write(ped[1])],
                 noise_sd: None,
+                written: None,
             });
             run.bearings.push(BearingRow {
                 speed_hz: f,
