@@ -8,7 +8,6 @@ use super::machine::Machine;
 /// matrix, LAPACK storage with fill-in rows), the per-speed results and the
 /// run directory's rows. Shaft node responses are not kept by `simulate`.
 pub fn simulate_bytes(machine: &Machine, speeds: usize) -> u64 {
-    let nodes = machine.node_positions.len() as u64;
     let pedestals = machine
         .bearings
         .iter()
@@ -24,17 +23,60 @@ pub fn simulate_bytes(machine: &Machine, speeds: usize) -> u64 {
         })
         .max()
         .unwrap_or(0) as u64;
-    let n_dof = 4 * nodes + 2 * pedestals;
+    model_bytes(
+        machine.node_positions.len() as u64,
+        pedestals,
+        most_at_a_node,
+        machine.bearings.len() as u64,
+        speeds,
+    )
+}
+
+/// [`simulate_bytes`] from the counts alone: `nodes` shaft nodes,
+/// `pedestals` pedestals (at most `most_at_a_node` at one node), `bearings`
+/// bearings, `speeds` speeds [bytes] (saturating: never overflows).
+pub fn model_bytes(
+    nodes: u64,
+    pedestals: u64,
+    most_at_a_node: u64,
+    bearings: u64,
+    speeds: usize,
+) -> u64 {
+    let n_dof = nodes.saturating_mul(4).saturating_add(2 * pedestals);
     let half_band = 7 + 2 * most_at_a_node;
     let ldab = 3 * half_band + 1;
     // Five real band arrays, plus one complex working matrix per solver
-    // thread.
-    let threads = solver_threads(n_dof as usize, speeds) as u64;
-    let band = n_dof * ldab * 8 * (5 + 2 * threads);
+    // thread, and the DOF scales.
+    let threads = solver_threads(usize::try_from(n_dof).unwrap_or(usize::MAX), speeds) as u64;
+    let band = n_dof
+        .saturating_mul(ldab * 8 * (5 + 2 * threads))
+        .saturating_add(n_dof.saturating_mul(8));
     let per_row = 640; // result, measurement and bearing row per speed and bearing
-    let rows = speeds as u64 * machine.bearings.len() as u64 * per_row;
-    let vectors = n_dof * 16 * 4 + nodes * 64;
-    band + rows + vectors + (16 << 20)
+    let rows = (speeds as u64)
+        .saturating_mul(bearings)
+        .saturating_mul(per_row);
+    let vectors = n_dof
+        .saturating_mul(16 * 4)
+        .saturating_add(nodes.saturating_mul(64));
+    band.saturating_add(rows)
+        .saturating_add(vectors)
+        .saturating_add(16 << 20)
+}
+
+/// Estimated peak memory [bytes] of reading a machine file of `elements`
+/// shaft elements with `bearings` bearings and solving its model at one
+/// speed: the elements and node positions (48 + 8 bytes each), the static
+/// bearing loads' band matrix (two DOFs per node, 10 complex rows) and
+/// [`model_bytes`] at one speed. Checked before the shaft is built.
+pub fn machine_bytes(elements: u64, bearings: u64) -> u64 {
+    let nodes = elements.saturating_add(1);
+    let shaft = elements
+        .saturating_mul(48)
+        .saturating_add(nodes.saturating_mul(8));
+    let static_load = nodes.saturating_mul(2 * 10 * 16 + 2 * 16 + 8);
+    shaft
+        .saturating_add(static_load)
+        .saturating_add(model_bytes(nodes, bearings, bearings, bearings, 1))
 }
 
 /// Threads the unbalance response uses for a model of `n_dof` DOFs over
