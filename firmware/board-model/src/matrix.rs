@@ -29,26 +29,26 @@ pub fn scenarios(path: RestartPath) -> Vec<Scenario> {
     // The faults land in the third half, at conversion `at` + phase.
     let at = |phase: u64| 2 * half + 5 * p + phase;
     let mut v = vec![base];
-    // Latency 0-25 µs (0.5 µs steps) at 48 phases of the period.
+    // Latency 0-25 µs (0.5 µs steps) at 64 phases of the period.
     for d in 0..=50u64 {
-        for k in 0..48 {
+        for k in 0..64 {
             v.push(Scenario {
                 name: "interrupt latency",
                 fault: Fault::Masked {
-                    at: at(k * p / 48),
+                    at: at(k * p / 64),
                     ticks: us(d as f64 * 0.5),
                 },
                 ..base
             });
         }
     }
-    // Masked 1-100 µs at 32 phases.
+    // Masked 1-100 µs at 40 phases.
     for d in 1..=100u64 {
-        for k in 0..32 {
+        for k in 0..40 {
             v.push(Scenario {
                 name: "interrupts masked",
                 fault: Fault::Masked {
-                    at: at(k * p / 32 + 7),
+                    at: at(k * p / 40 + 7),
                     ticks: us(d as f64),
                 },
                 ..base

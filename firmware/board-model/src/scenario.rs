@@ -208,12 +208,21 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
     let shared: &'static AdcShared = Box::leak(Box::new(AdcShared::new()));
     let queue: &'static mut Queue<u32, CAPTURE_SLOTS> = Box::leak(Box::new(Queue::new()));
     let (mut producer, consumer) = queue.split();
-    board.attach(
-        nvic::IRQ_EXTI0,
-        4,
-        "busy_fell",
-        Box::new(move |r| adc_dma::busy_fell(r, shared)),
-    );
+    if s.path == RestartPath::Legacy {
+        board.attach(
+            nvic::IRQ_EXTI0,
+            4,
+            "busy_fell",
+            Box::new(move |r| busy_fell_legacy(r, shared)),
+        );
+    } else {
+        board.attach(
+            nvic::IRQ_EXTI0,
+            4,
+            "busy_fell",
+            Box::new(move |r| adc_dma::busy_fell(r, shared)),
+        );
+    }
     board.attach(
         nvic::IRQ_SPI2,
         4,
@@ -297,4 +306,26 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
     let stats = board.stats();
     drop(source);
     (outcome, stats)
+}
+
+/// The BUSY handler before issue 18, for [`RestartPath::Legacy`] runs: its
+/// only check was "the transmit stream still runs"; no pending-bit check,
+/// no slip or partial-read detector. Kept here (not in the firmware) so
+/// that a test shows what the old restart path corrupts.
+pub fn busy_fell_legacy(r: &mut Port, s: &AdcShared) {
+    use plinth_firmware::acquisition::rm0090::{dma1, exti, gpiob};
+    use plinth_firmware::clock::Registers;
+    r.write(exti::PR, exti::LINE_BUSY);
+    if r.read(dma1::cr(adc_dma::TX_STREAM)) & dma1::CR_EN != 0 {
+        s.count_late_read();
+        return;
+    }
+    let (_, ifcr, shift) = dma1::flags(adc_dma::TX_STREAM);
+    r.write(ifcr, dma1::ALL_FLAGS << shift);
+    r.write(gpiob::BSRR, gpiob::CS);
+    let _ = r.read(gpiob::IDR);
+    r.write(gpiob::BSRR, gpiob::CS << 16);
+    r.write(dma1::ndtr(adc_dma::TX_STREAM), 8);
+    let cr = r.read(dma1::cr(adc_dma::TX_STREAM));
+    r.write(dma1::cr(adc_dma::TX_STREAM), cr | dma1::CR_EN);
 }

@@ -140,6 +140,11 @@ impl AdcShared {
         }
     }
 
+    /// Counts a late read (for a replacement BUSY handler in a model).
+    pub fn count_late_read(&self) {
+        bump(&self.late_reads);
+    }
+
     /// The fault counters.
     pub fn faults(&self) -> AdcFaults {
         let l = |a: &AtomicU32| a.load(Ordering::Relaxed);
