@@ -3,6 +3,7 @@
 //! captured, with their sub-sample position.
 
 use crate::ad7606::{Ad7606, ADC_CHANNELS};
+use plinth_shared::protocol::NackReason;
 use crate::source::{SampleBuffer, SampleSource, CHANNELS};
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::spi::SpiDevice;
@@ -113,7 +114,7 @@ where
     BUSY: InputPin<Error = P>,
     TIM: CaptureTimer,
 {
-    fn start(&mut self) {
+    fn start(&mut self) -> Result<(), NackReason> {
         self.next_due = self.timer.now();
         self.last_stamp = None;
         self.held_edge = None;
@@ -121,6 +122,7 @@ where
         // Edges captured while stopped are stale.
         while self.timer.take_edge().is_some() {}
         self.running = true;
+        Ok(())
     }
 
     fn stop(&mut self) {

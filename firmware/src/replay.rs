@@ -93,11 +93,12 @@ impl ReplaySource {
 }
 
 impl SampleSource for ReplaySource {
-    fn start(&mut self) {
+    fn start(&mut self) -> Result<(), NackReason> {
         self.pending.clear();
         self.carry = None;
         self.next_sample = 0;
         self.running = true;
+        Ok(())
     }
 
     fn stop(&mut self) {

@@ -38,6 +38,7 @@ use crate::clock::Registers;
 use crate::source::CHANNELS;
 use core::sync::atomic::{AtomicU32, Ordering};
 use heapless::spsc::{Consumer, Producer};
+use plinth_shared::protocol::BoxHealth;
 
 /// SPI2 receive stream (DMA1, channel 0).
 pub const RX_STREAM: usize = 3;
@@ -548,6 +549,16 @@ impl<R: Registers + Clone, const N: usize> AcquisitionHardware for AdcDma<R, N> 
 
     fn take_capture(&mut self) -> Option<u32> {
         self.captures.dequeue()
+    }
+
+    fn health(&self, health: &mut BoxHealth) {
+        let f = self.shared.faults();
+        health.slips = f.slips;
+        health.late_reads = f.late_reads;
+        health.stalls = f.stalls;
+        health.spi_errors = f.spi_errors;
+        health.dma_errors = f.dma_errors;
+        health.lost_captures = f.lost_captures;
     }
 
     fn sequence_faults(&self) -> u32 {

@@ -8,6 +8,7 @@ use super::timebase::CaptureTimebase;
 use crate::ad7606::Range;
 use crate::source::{SampleBuffer, SampleSource, BUFFER_VECTORS};
 use plinth_shared::extractor::KeyphasorEdge;
+use plinth_shared::protocol::{BoxHealth, NackReason};
 
 /// The acquisition hardware: CONVST timer, capture timer, SPI DMA.
 pub trait AcquisitionHardware: DoubleBuffer {
@@ -24,6 +25,10 @@ pub trait AcquisitionHardware: DoubleBuffer {
     /// hardware rather than deliver samples one conversion out of place.
     fn sequence_faults(&self) -> u32 {
         0
+    }
+    /// Adds the hardware's fault counters to `health` (nothing by default).
+    fn health(&self, health: &mut BoxHealth) {
+        let _ = health;
     }
 }
 
@@ -179,12 +184,18 @@ impl<H: AcquisitionHardware> DmaSource<H> {
 }
 
 impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
-    fn start(&mut self) {
+    fn start(&mut self) -> Result<(), NackReason> {
         self.lost = 0;
         self.counters = DmaSourceCounters::default();
         self.restart();
         self.lost_halves_before = 0;
         self.running = true;
+        Ok(())
+    }
+
+    fn health(&self, health: &mut BoxHealth) {
+        health.restarts = self.counters.resyncs;
+        self.hardware.health(health);
     }
 
     fn stop(&mut self) {
@@ -295,7 +306,7 @@ mod tests {
             faults: 0,
         };
         let mut s = DmaSource::new(fake, 4, 100, Range::PlusMinus10V);
-        s.start();
+        s.start().unwrap();
         s
     }
 
