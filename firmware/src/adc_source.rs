@@ -3,11 +3,11 @@
 //! captured, with their sub-sample position.
 
 use crate::ad7606::{Ad7606, ADC_CHANNELS};
-use plinth_shared::protocol::NackReason;
 use crate::source::{SampleBuffer, SampleSource, CHANNELS};
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::spi::SpiDevice;
 use plinth_shared::extractor::KeyphasorEdge;
+use plinth_shared::protocol::NackReason;
 
 const _: () = assert!(ADC_CHANNELS == CHANNELS);
 
@@ -262,7 +262,7 @@ mod tests {
             edges: [500, 700].into(),
         };
         let mut source = AdcSource::new(adc, timer, 100);
-        source.start();
+        source.start().unwrap();
         assert!(source.timer.edges.is_empty());
         // An edge 30 % into the first interval, one exactly on the third
         // sample (it belongs to the interval after it).
@@ -307,7 +307,7 @@ mod tests {
             edges: VecDeque::new(),
         };
         let mut source = AdcSource::new(adc, timer, 100);
-        source.start();
+        source.start().unwrap();
         let mut out = SampleBuffer::default();
         source.poll(&mut out);
         assert_eq!(out.samples.len(), 1);

@@ -30,9 +30,9 @@ use crate::link::ByteLink;
 use crate::pipeline::Pipeline;
 use crate::source::{SampleBuffer, SampleSource, CHANNELS};
 use plinth_shared::protocol::{
-    Ack, BoxHealth, Capabilities, DeviceCounters, DeviceMessage, DeviceState, FirmwareVersion, HelloAck,
-    HostMessage, LinkStats, Nack, NackReason, Receiver, StatusFrame, Transmitter, VersionMismatch,
-    MAX_BEARINGS, MAX_FRAME_SIZE, PROTOCOL_VERSION,
+    Ack, BoxHealth, Capabilities, DeviceCounters, DeviceMessage, DeviceState, FirmwareVersion,
+    HelloAck, HostMessage, LinkStats, Nack, NackReason, Receiver, StatusFrame, Transmitter,
+    VersionMismatch, MAX_BEARINGS, MAX_FRAME_SIZE, PROTOCOL_VERSION,
 };
 
 /// Bytes of encoded frames waiting for the transmitter.

@@ -224,7 +224,7 @@ mod tests {
 
     fn running() -> ReplaySource {
         let mut s = ReplaySource::new(1.0);
-        s.start();
+        s.start().unwrap();
         s
     }
 
@@ -336,7 +336,7 @@ mod tests {
             s.replay(&block(0, 10), &layout()),
             Err(NackReason::WrongState)
         );
-        s.start();
+        s.start().unwrap();
         let mut three = layout();
         three.adc_channel.push(2).unwrap();
         assert_eq!(s.replay(&block(0, 10), &three), Err(NackReason::BadBlock));

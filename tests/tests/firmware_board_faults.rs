@@ -21,7 +21,12 @@ fn the_matrix_finds_no_silent_corruption_and_no_uncounted_loss() {
     }
     assert!(sum.scenarios >= 250);
     assert!(sum.delivered > 50_000, "{} samples checked", sum.delivered);
-    assert_eq!((sum.corruptions, sum.uncounted), (0, 0), "{:?}", sum.failures.first());
+    assert_eq!(
+        (sum.corruptions, sum.uncounted),
+        (0, 0),
+        "{:?}",
+        sum.failures.first()
+    );
 }
 
 /// A stop and an immediate start while the AD7606 converts, in the

@@ -140,8 +140,9 @@ impl Checker {
                 // must be announced.
                 if lost == 0 {
                     self.out.uncounted += 1;
-                    self.out
-                        .problem(|| format!("run {run}: restart gap not announced (lost_before 0)"));
+                    self.out.problem(|| {
+                        format!("run {run}: restart gap not announced (lost_before 0)")
+                    });
                 }
             }
         }
@@ -174,7 +175,11 @@ impl Checker {
             return;
         };
         let pos_of = |tick: u64| (tick as f64 - t0 as f64) / self.p;
-        let lo = if lost > 0 { first as f64 } else { first as f64 - 1.0 };
+        let lo = if lost > 0 {
+            first as f64
+        } else {
+            first as f64 - 1.0
+        };
         let hi = (first + n) as f64 - 1.0;
         self.true_edges += self
             .pulses
@@ -251,7 +256,9 @@ impl Checker {
         if missing > counted {
             self.out.uncounted += missing - counted;
             self.out.problem(|| {
-                format!("{missing} keyphasor edges missing from delivered samples, {counted} counted")
+                format!(
+                    "{missing} keyphasor edges missing from delivered samples, {counted} counted"
+                )
             });
         }
         self.out

@@ -356,8 +356,7 @@ impl Hw {
         }
         // The SPI master starts the next frame as soon as its TX buffer
         // holds one.
-        if self.spi.shift.is_none() && self.spi.tx.is_some() && self.spi.cr1 & spi2::CR1_SPE != 0
-        {
+        if self.spi.shift.is_none() && self.spi.tx.is_some() && self.spi.cr1 & spi2::CR1_SPE != 0 {
             self.spi.tx = None;
             let end = self.now + 16 * self.bit_ticks();
             self.spi.shift = Some((self.now, end));
@@ -629,7 +628,12 @@ impl Hw {
         let v = match addr {
             a if (RAM_BASE..RAM_BASE + RAM_BYTES).contains(&a) => {
                 let i = a - RAM_BASE;
-                u32::from_le_bytes([self.ram[i], self.ram[i + 1], self.ram[i + 2], self.ram[i + 3]])
+                u32::from_le_bytes([
+                    self.ram[i],
+                    self.ram[i + 1],
+                    self.ram[i + 2],
+                    self.ram[i + 3],
+                ])
             }
             a if (tim::TIM3..tim::TIM3 + 0x400).contains(&a)
                 || (tim::TIM5..tim::TIM5 + 0x400).contains(&a) =>
@@ -653,7 +657,9 @@ impl Hw {
                     s.ovr = false;
                     s.ovr_dr_read = false;
                     // (this read still shows OVR)
-                    return u32::from(s.rxne) | (u32::from(s.tx.is_none()) << 1) | spi2::SR_OVR
+                    return u32::from(s.rxne)
+                        | (u32::from(s.tx.is_none()) << 1)
+                        | spi2::SR_OVR
                         | (u32::from(s.shift.is_some()) << 7);
                 }
                 u32::from(s.rxne)
@@ -809,9 +815,7 @@ impl Hw {
                     // Bits shifted by now: those of the frame in flight
                     // that have passed.
                     let bits = match self.spi.shift {
-                        Some((start, _)) => {
-                            self.adc.bits + (now - start) / self.bit_ticks().max(1)
-                        }
+                        Some((start, _)) => self.adc.bits + (now - start) / self.bit_ticks().max(1),
                         None => self.adc.bits,
                     };
                     push_recent(&mut self.adc.cs_falls, now);

@@ -103,7 +103,11 @@ pub fn scenarios(path: RestartPath) -> Vec<Scenario> {
     for high in [false, true] {
         for k in 0..64 {
             v.push(Scenario {
-                name: if high { "BUSY stuck high" } else { "BUSY stuck low" },
+                name: if high {
+                    "BUSY stuck high"
+                } else {
+                    "BUSY stuck low"
+                },
                 fault: Fault::BusyStuck {
                     at: at(k * p / 64),
                     high,

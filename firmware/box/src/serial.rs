@@ -4,8 +4,8 @@
 
 use core::cell::UnsafeCell;
 use core::sync::atomic::AtomicU32;
-use plinth_firmware::uart_dma::{DmaSerial, TX_CHUNK_BYTES};
 use plinth_firmware::stm32::Mmio;
+use plinth_firmware::uart_dma::{DmaSerial, TX_CHUNK_BYTES};
 
 /// Receive ring [bytes]: 44 ms at 115 200 bit/s; the idle loop reads it at
 /// least every millisecond.

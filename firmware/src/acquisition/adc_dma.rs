@@ -173,11 +173,8 @@ fn stream_flags(r: &mut impl Registers, n: usize) -> u32 {
 }
 
 /// SxCR of the transmit stream, without EN.
-const TX_CR: u32 = dma1::cr_chsel(0)
-    | dma1::cr_pl(2)
-    | dma1::CR_MSIZE_16
-    | dma1::CR_PSIZE_16
-    | dma1::CR_DIR_M2P;
+const TX_CR: u32 =
+    dma1::cr_chsel(0) | dma1::cr_pl(2) | dma1::CR_MSIZE_16 | dma1::CR_PSIZE_16 | dma1::CR_DIR_M2P;
 /// SxCR of the receive stream, without EN.
 const RX_CR: u32 = dma1::cr_chsel(0)
     | dma1::CR_DBM
@@ -227,8 +224,10 @@ pub fn busy_fell(r: &mut impl Registers, s: &AdcShared) {
     r.write(gpiob::BSRR, gpiob::CS << 16);
     r.write(dma1::ndtr(TX_STREAM), WORDS);
     r.write(dma1::cr(TX_STREAM), TX_CR | dma1::CR_EN);
-    s.next_fall
-        .store(s.next_fall.load(Ordering::Relaxed).wrapping_add(p), Ordering::Relaxed);
+    s.next_fall.store(
+        s.next_fall.load(Ordering::Relaxed).wrapping_add(p),
+        Ordering::Relaxed,
+    );
 }
 
 /// The receive DMA's interrupt (priority below [`busy_fell`]): a half
@@ -519,11 +518,7 @@ impl<R: Registers + Clone, const N: usize> AcquisitionHardware for AdcDma<R, N> 
         // (transmit stream done, SPI idle with nothing to send).
         self.wait(gpiob::IDR, gpiob::BUSY, 0);
         self.wait(dma1::cr(TX_STREAM), dma1::CR_EN, 0);
-        self.wait(
-            spi2::SR,
-            spi2::SR_TXE | spi2::SR_BSY,
-            spi2::SR_TXE,
-        );
+        self.wait(spi2::SR, spi2::SR_TXE | spi2::SR_BSY, spi2::SR_TXE);
         self.regs.write(spi2::CR2, 0);
         self.disable_stream(TX_STREAM);
         self.disable_stream(RX_STREAM);

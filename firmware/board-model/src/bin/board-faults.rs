@@ -1,6 +1,7 @@
 //! The fault matrix on the board model (`bash scripts/bench-board-faults.sh`).
 //!
-//! `board-faults [--stride N] [--legacy-restart]`: runs every N-th scenario
+//! `board-faults [--stride N] [--legacy-restart] [--only I] [--budget]`:
+//! runs every N-th scenario
 //! (default 1: all), prints each failing scenario by name, a table per
 //! fault class, and last `scenarios N, silent corruptions C, uncounted
 //! losses U`. Exit status 1 if C or U is not 0.
@@ -9,6 +10,38 @@ use plinth_board_model::matrix::{run_all, scenarios, Summary};
 use plinth_firmware::acquisition::adc_dma::RestartPath;
 use std::collections::BTreeMap;
 use std::process::ExitCode;
+
+/// Per-handler figures of a clean run with the box's 96-vector halves:
+/// `MODEL <handler> priority P calls N accesses_per_call A cycles_per_call C
+/// conversions K` (cycles: entry, exit and register accesses at the
+/// model's costs; scripts/bench-firmware.sh adds the compiled handlers'
+/// other instructions).
+fn budget() {
+    let s = plinth_board_model::scenario::Scenario {
+        vectors_per_half: 96,
+        halves: 10,
+        ..plinth_board_model::scenario::Scenario::clean("budget")
+    };
+    let conversions = 96 * 10;
+    for h in plinth_board_model::scenario::handler_stats(&s) {
+        let per = |x: u64| {
+            if h.calls == 0 {
+                0.0
+            } else {
+                x as f64 / h.calls as f64
+            }
+        };
+        println!(
+            "MODEL {} priority {} calls {} accesses_per_call {:.2} cycles_per_call {:.1} conversions {}",
+            h.name,
+            h.priority,
+            h.calls,
+            per(h.accesses),
+            per(h.cycles),
+            conversions
+        );
+    }
+}
 
 fn main() -> ExitCode {
     let mut stride = 1usize;
@@ -25,6 +58,10 @@ fn main() -> ExitCode {
                 }
             },
             "--legacy-restart" => path = RestartPath::Legacy,
+            "--budget" => {
+                budget();
+                return ExitCode::SUCCESS;
+            }
             "--only" => match args.next().and_then(|v| v.parse().ok()) {
                 Some(n) => only = Some(n),
                 None => {
@@ -66,7 +103,10 @@ fn main() -> ExitCode {
     }
     println!("{:<22} {:>9} {:>7}", "fault class", "scenarios", "failed");
     for (name, n) in &classes {
-        println!("{name:<22} {n:>9} {:>7}", failed.get(name).copied().unwrap_or(0));
+        println!(
+            "{name:<22} {n:>9} {:>7}",
+            failed.get(name).copied().unwrap_or(0)
+        );
     }
     println!(
         "{} samples checked in {:.1} s",
