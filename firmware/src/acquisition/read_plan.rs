@@ -121,12 +121,13 @@ mod tests {
 
     #[test]
     fn the_rc_fallback_is_refused_with_its_figures() {
-        // HSI 16 MHz, APB1 undivided: /2 = 8 MHz, 16 µs per read.
+        // HSI 16 MHz, APB1 undivided: /2 = 8 MHz, 16 µs per read; 313
+        // ticks per sample.
         assert_eq!(
             ReadPlan::new(16_000_000, 16_000_000, 51_200.0),
             Err(ReadPlanError::ReadDoesNotFit {
                 busy_ns: 4_150 + 16_000 + 1_000,
-                period_ns: 19_500
+                period_ns: 19_563
             })
         );
         // At a quarter of the rate it fits.
