@@ -42,12 +42,25 @@ sizes() {
 read -r flash ram < <(sizes "$out/plinth-firmware")
 read -r box_flash box_ram < <(sizes "$box_elf")
 
+# The board model's per-handler figures (a clean run, 96-vector halves).
+model=$(bash ../scripts/bench-board-faults.sh --budget)
+echo "$model"
+# Instructions of each compiled interrupt handler in the box image.
+objdump_tool="$(dirname "$size_tool")/llvm-objdump"
+handlers=$("$objdump_tool" -d --no-show-raw-insn "$box_elf" | awk '
+  /^[0-9a-f]+ <[A-Za-z0-9_]+>:$/ {name = substr($2, 2, length($2) - 3); next}
+  /^$/ {name = ""}
+  name != "" && /^ +[0-9a-f]+:/ {n[name]++}
+  END {for (k in n) if (k ~ /^(EXTI0|DMA1_STREAM3|TIM5|SPI2|DMA1_STREAM5|SysTick|USART1)$/) print k, n[k]}')
+echo "$handlers"
+
 python3 - "$flash" "$ram" \
   "$(get extractor_instr_per_channel_sample_between_edges)" \
   "$(get extractor_instr_per_channel_sample_with_edges)" \
   "$(get rls_instr_per_update)" "$(get rls_instr_per_estimate)" \
   "$(get receive_instr_per_frame)" "$(get frame_bytes)" \
-  "$box_flash" "$box_ram" "$(get acquisition_instr_per_half)" <<'PY'
+  "$box_flash" "$box_ram" "$(get acquisition_instr_per_half)" \
+  "$model" "$handlers" <<'PY'
 import sys
 flash, ram = int(sys.argv[1]), int(sys.argv[2])
 ex_steady, ex_all, rls, est, rx, frame_bytes = map(float, sys.argv[3:9])
@@ -78,36 +91,49 @@ print()
 print(f"plinth-box image: flash {box_flash} B = {box_flash/1024:.1f} KiB (STM32F401 class <= 128 KiB: "
       f"{ok(box_flash <= 131072)}), static RAM {box_ram} B = {box_ram/1024:.1f} KiB (<= 64 KiB: {ok(box_ram <= 65536)})")
 # ESTIMATE until the DWT figures of `plinth-box --features bench` exist
-# (firmware/README.md, "Cycle budget on the board"). Assumptions:
-#  - one instruction per cycle for the QEMU counts (flash wait states
-#    hidden by the ART accelerator; real CPI on an M4 is 1.0-1.3);
-#  - exception entry + exit 24 cycles (12 + 12; the ISRs use no FPU, so
-#    lazy stacking saves no FP context);
-#  - peripheral register access 4 cycles (DMA1/GPIO on AHB1: 2; EXTI on
-#    APB2 at 84 MHz: 2-3; rounded up);
-#  - the BUSY ISR: 12 instructions, 8 register accesses (EXTI PR, DMA CR
-#    read, HIFCR, BSRR x2, NDTR, CR read-modify-write) and a 10-cycle CS
-#    pulse, per conversion;
-#  - the SPI DMA moves 16 half-words per conversion (8 out, 8 in); each may
-#    stall the CPU for 2 cycles at the bus matrix (upper bound);
-#  - the half-complete ISR: 10 instructions, 4 register accesses, per 96
-#    conversions; keyphasor ISR (~60 cycles at <= 200 Hz) negligible;
-#  - every BUSY interrupt wakes the idle loop from WFI; it looks at the
-#    completion count, the receive DMA and the clock (4 loads, one of a DMA
-#    register) and sleeps again: 25 cycles;
-#  - the consumer's copy, scaling and edge placement: measured under QEMU
-#    (acquisition_instr_per_half, 96 conversions, one keyphasor edge).
-entry_exit, access = 24, 4
-busy_isr = entry_exit + 12 + 8 * access + 10
+# (firmware/README.md, "Cycle budget on the board"). No hand arithmetic:
+#  - each interrupt handler's cost per call = exception entry + exit (the
+#    board model's 12 + 12 cycles) + its register accesses as the board
+#    model counts them when it runs the handler (`board-faults --budget`,
+#    4 cycles each) + the compiled handler's other instructions (its
+#    instruction count in the plinth-box ELF, every branch taken: an upper
+#    bound, one cycle each);
+#  - the consumer's copy, scaling and edge placement and the extractor:
+#    measured under QEMU (one instruction per cycle);
+#  - the SPI DMA's 16 half-words per conversion may stall the CPU 2 cycles
+#    each at the bus matrix (upper bound).
+import subprocess
+model = {}
+for line in sys.argv[12].splitlines():
+    f = line.split()
+    if f and f[0] == "MODEL":
+        model[f[1]] = dict(prio=int(f[3]), calls=int(f[5]), acc=float(f[7]), cyc=float(f[9]), conv=int(f[11]))
+instr = {}
+for line in sys.argv[13].splitlines():
+    name, n = line.split()
+    instr[name] = int(n)
+vector = {"busy_fell": "EXTI0", "adc_half": "DMA1_STREAM3", "keyphasor": "TIM5", "spi_error": "SPI2"}
+print()
+print("| handler (priority) | calls per conversion | register accesses per call (model) | compiled instructions | cycles per call | cycles per conversion |")
+print("| --- | --- | --- | --- | --- | --- |")
+per_conv = 0.0
+for name in ["busy_fell", "adc_half", "keyphasor", "spi_error"]:
+    m = model.get(name)
+    if m is None:
+        continue
+    n = instr.get(vector[name], 0)
+    per_call = 24 + 4 * m["acc"] + max(0.0, n - m["acc"])
+    rate = m["calls"] / m["conv"]
+    per_conv += rate * per_call
+    print(f"| {name} ({vector[name]}, {m['prio']}) | {rate:.4f} | {m['acc']:.1f} | {n} | {per_call:.0f} | {rate*per_call:.1f} |")
 dma_stall = 16 * 2
-half_isr = (entry_exit + 10 + 4 * access) / 96
-idle_wake = 25
 consumer = acq_half / 96
 extractor = ex_all * ch
-per_conv = busy_isr + dma_stall + idle_wake + half_isr + consumer + extractor
-print(f"per conversion (8 channels) [cycles, estimate]: BUSY ISR {busy_isr} + SPI DMA bus stalls <= {dma_stall} "
-      f"+ idle wake-up {idle_wake} + half ISR {half_isr:.2f} + consumer copy/scale {consumer:.1f} (QEMU) "
-      f"+ extractor {extractor:.1f} (QEMU) = {per_conv:.0f}")
+print(f"| SPI DMA bus stalls (upper bound) | 1 | | | | {dma_stall} |")
+print(f"| consumer: copy, scaling, edges (QEMU) | 1 | | | | {consumer:.1f} |")
+print(f"| extractor, 8 channels (QEMU) | 1 | | | | {extractor:.1f} |")
+per_conv += dma_stall + consumer + extractor
+print(f"per conversion (8 channels) [cycles, estimate]: {per_conv:.0f}")
 acq_load = fs * per_conv
 print(f"box load at 51.2 kHz: {fs:.0f} x {per_conv:.0f} = {acq_load/1e6:.2f} M cycles/s = {100*acq_load/mips:.1f} % "
       f"of 168 MHz, + RLS {100*800*(rls+est)/mips:.1f} % (ESTIMATE, assumptions in scripts/bench-firmware.sh)")

@@ -7,6 +7,7 @@ use crate::source::{SampleBuffer, SampleSource, CHANNELS};
 use embedded_hal::digital::{InputPin, OutputPin};
 use embedded_hal::spi::SpiDevice;
 use plinth_shared::extractor::KeyphasorEdge;
+use plinth_shared::protocol::NackReason;
 
 const _: () = assert!(ADC_CHANNELS == CHANNELS);
 
@@ -113,7 +114,7 @@ where
     BUSY: InputPin<Error = P>,
     TIM: CaptureTimer,
 {
-    fn start(&mut self) {
+    fn start(&mut self) -> Result<(), NackReason> {
         self.next_due = self.timer.now();
         self.last_stamp = None;
         self.held_edge = None;
@@ -121,6 +122,7 @@ where
         // Edges captured while stopped are stale.
         while self.timer.take_edge().is_some() {}
         self.running = true;
+        Ok(())
     }
 
     fn stop(&mut self) {
@@ -260,7 +262,7 @@ mod tests {
             edges: [500, 700].into(),
         };
         let mut source = AdcSource::new(adc, timer, 100);
-        source.start();
+        source.start().unwrap();
         assert!(source.timer.edges.is_empty());
         // An edge 30 % into the first interval, one exactly on the third
         // sample (it belongs to the interval after it).
@@ -305,7 +307,7 @@ mod tests {
             edges: VecDeque::new(),
         };
         let mut source = AdcSource::new(adc, timer, 100);
-        source.start();
+        source.start().unwrap();
         let mut out = SampleBuffer::default();
         source.poll(&mut out);
         assert_eq!(out.samples.len(), 1);

@@ -33,6 +33,19 @@ pub enum ClockSource {
     Emulator,
 }
 
+impl ClockSource {
+    /// How the box reports this source to the host.
+    pub fn sample_clock(self) -> plinth_shared::protocol::SampleClock {
+        use plinth_shared::protocol::SampleClock;
+        match self {
+            ClockSource::PllFromHse => SampleClock::Crystal,
+            ClockSource::PllFromHsi => SampleClock::RcOscillator,
+            ClockSource::Hsi => SampleClock::RcOscillatorNoPll,
+            ClockSource::Emulator => SampleClock::Emulated,
+        }
+    }
+}
+
 /// The bus frequencies the box ends up with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(target_os = "none", derive(defmt::Format))]

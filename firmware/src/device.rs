@@ -30,9 +30,9 @@ use crate::link::ByteLink;
 use crate::pipeline::Pipeline;
 use crate::source::{SampleBuffer, SampleSource, CHANNELS};
 use plinth_shared::protocol::{
-    Ack, Capabilities, DeviceCounters, DeviceMessage, DeviceState, FirmwareVersion, HelloAck,
-    HostMessage, LinkStats, Nack, NackReason, Receiver, StatusFrame, Transmitter, VersionMismatch,
-    MAX_BEARINGS, MAX_FRAME_SIZE, PROTOCOL_VERSION,
+    Ack, BoxHealth, Capabilities, DeviceCounters, DeviceMessage, DeviceState, FirmwareVersion,
+    HelloAck, HostMessage, LinkStats, Nack, NackReason, Receiver, StatusFrame, Transmitter,
+    VersionMismatch, MAX_BEARINGS, MAX_FRAME_SIZE, PROTOCOL_VERSION,
 };
 
 /// Bytes of encoded frames waiting for the transmitter.
@@ -103,6 +103,8 @@ pub struct Device {
     capabilities: Capabilities,
     last_status_ms: u32,
     stopped: bool,
+    /// The platform's part of the health (clock, previous reset).
+    platform: BoxHealth,
 }
 
 impl Device {
@@ -127,7 +129,27 @@ impl Device {
             capabilities: capabilities_at(volts_per_code, sample_rate_hz),
             last_status_ms: 0,
             stopped: false,
+            platform: BoxHealth::default(),
         }
+    }
+
+    /// Sets what the box reports about its platform in `HelloAck` and
+    /// every `Status`: where the sample clock comes from and how the
+    /// previous boot ended (the fault counters come from the source).
+    pub fn set_platform(
+        &mut self,
+        sample_clock: plinth_shared::protocol::SampleClock,
+        previous_reset: plinth_shared::protocol::PreviousReset,
+    ) {
+        self.platform.sample_clock = sample_clock;
+        self.platform.previous_reset = previous_reset;
+    }
+
+    /// The health the box reports, with `source`'s fault counters.
+    pub fn health<S: SampleSource>(&self, source: &S) -> BoxHealth {
+        let mut h = self.platform;
+        source.health(&mut h);
+        h
     }
 
     /// Session state.
@@ -188,7 +210,7 @@ impl Device {
         if self.state != DeviceState::AwaitingHello
             && now_ms.wrapping_sub(self.last_status_ms) >= STATUS_PERIOD_MS
         {
-            self.send_status(now_ms);
+            self.send_status(source, now_ms);
         }
         while activity.sent < TX_BUDGET {
             let Some(&byte) = self.outbox.queue.front() else {
@@ -308,11 +330,13 @@ impl Device {
         self.outbox = Outbox::new();
         self.state = DeviceState::Idle;
         self.last_status_ms = now_ms;
+        let health = self.health(source);
         self.enqueue_reply(&DeviceMessage::HelloAck(HelloAck {
             protocol_version: PROTOCOL_VERSION,
             host_nonce: hello.host_nonce,
             firmware_version: firmware_version(),
             capabilities: self.capabilities,
+            health,
         }));
     }
 
@@ -323,8 +347,8 @@ impl Device {
         }
         let pipeline = Pipeline::new(&self.config, self.capabilities.sample_rate_hz)
             .map_err(|_| NackReason::BadValue)?;
+        source.start()?;
         self.pipeline = Some(pipeline);
-        source.start();
         self.state = DeviceState::Running;
         Ok(())
     }
@@ -341,18 +365,19 @@ impl Device {
             }
             self.state = DeviceState::Idle;
         }
-        self.send_status(now_ms);
+        self.send_status(source, now_ms);
         self.stopped = true;
     }
 
     /// Queues a status frame.
-    fn send_status(&mut self, now_ms: u32) {
+    fn send_status<S: SampleSource>(&mut self, source: &S, now_ms: u32) {
         self.last_status_ms = now_ms;
         let status = StatusFrame {
             state: self.state,
             uptime_ms: now_ms,
             counters: self.counters(),
             link: *self.rx.stats(),
+            health: self.health(source),
         };
         self.enqueue_data(&DeviceMessage::Status(status));
     }

@@ -82,6 +82,11 @@ mod image {
         let (Some(device), Some(source)) = (device, source) else {
             cortex_m::asm::udf()
         };
+        // Samples come from the host: no sample clock of its own.
+        device.set_platform(
+            plinth_shared::protocol::SampleClock::Emulated,
+            plinth_shared::protocol::PreviousReset::Normal,
+        );
         defmt::info!(
             "plinth-firmware {=str} up, clocks {}",
             env!("CARGO_PKG_VERSION"),

@@ -93,11 +93,12 @@ impl ReplaySource {
 }
 
 impl SampleSource for ReplaySource {
-    fn start(&mut self) {
+    fn start(&mut self) -> Result<(), NackReason> {
         self.pending.clear();
         self.carry = None;
         self.next_sample = 0;
         self.running = true;
+        Ok(())
     }
 
     fn stop(&mut self) {
@@ -223,7 +224,7 @@ mod tests {
 
     fn running() -> ReplaySource {
         let mut s = ReplaySource::new(1.0);
-        s.start();
+        s.start().unwrap();
         s
     }
 
@@ -335,7 +336,7 @@ mod tests {
             s.replay(&block(0, 10), &layout()),
             Err(NackReason::WrongState)
         );
-        s.start();
+        s.start().unwrap();
         let mut three = layout();
         three.adc_channel.push(2).unwrap();
         assert_eq!(s.replay(&block(0, 10), &three), Err(NackReason::BadBlock));

@@ -3,7 +3,7 @@
 //! [`SampleBuffer`] that the pipeline consumes.
 
 use plinth_shared::extractor::KeyphasorEdge;
-use plinth_shared::protocol::{NackReason, SampleBlock};
+use plinth_shared::protocol::{BoxHealth, NackReason, SampleBlock};
 
 /// ADC channels of the box (one AD7606: 8 simultaneously sampled inputs).
 pub const CHANNELS: usize = 8;
@@ -59,17 +59,53 @@ pub struct ChannelLayout {
 
 /// A producer of sample vectors and keyphasor edges.
 pub trait SampleSource {
-    /// Starts acquisition (a new sample count from zero).
-    fn start(&mut self);
+    /// Starts acquisition (a new sample count from zero), or says why it
+    /// cannot ([`NackReason::SamplingUnavailable`]).
+    fn start(&mut self) -> Result<(), NackReason>;
     /// Stops acquisition and drops anything not yet delivered.
     fn stop(&mut self);
     /// Moves what has been acquired into `out` (which the caller has emptied);
     /// does a bounded amount of work and never waits for new data.
     fn poll(&mut self, out: &mut SampleBuffer);
+    /// Adds the source's fault counters to `health` (nothing by default).
+    fn health(&self, health: &mut BoxHealth) {
+        let _ = health;
+    }
     /// Accepts a block the host replays instead of the ADC; only a replay
     /// source does ([`NackReason::WrongState`] otherwise).
     fn replay(&mut self, block: &SampleBlock, layout: &ChannelLayout) -> Result<(), NackReason> {
         let _ = (block, layout);
         Err(NackReason::WrongState)
+    }
+}
+
+/// A source that may be unavailable: the board's ADC when a read does not
+/// fit the sample period at the clock the box runs on (`Start` is then
+/// refused with [`NackReason::SamplingUnavailable`]).
+#[derive(Debug)]
+pub struct Refusable<S>(pub Option<S>);
+
+impl<S: SampleSource> SampleSource for Refusable<S> {
+    fn start(&mut self) -> Result<(), NackReason> {
+        match &mut self.0 {
+            Some(s) => s.start(),
+            None => Err(NackReason::SamplingUnavailable),
+        }
+    }
+    fn stop(&mut self) {
+        if let Some(s) = &mut self.0 {
+            s.stop();
+        }
+    }
+    fn poll(&mut self, out: &mut SampleBuffer) {
+        if let Some(s) = &mut self.0 {
+            s.poll(out);
+        }
+    }
+    fn health(&self, health: &mut BoxHealth) {
+        match &self.0 {
+            Some(s) => s.health(health),
+            None => health.sampling_refused = true,
+        }
     }
 }

@@ -70,8 +70,9 @@ fn set_bits(addr: usize, mask: u32, value: u32) {
     write(addr, (read(addr) & !mask) | value);
 }
 
-/// The memory-mapped registers themselves, for [`clock::configure`].
-#[derive(Debug)]
+/// The memory-mapped registers themselves (and RAM the DMA writes), for
+/// [`clock::configure`] and the acquisition code.
+#[derive(Clone, Copy, Debug)]
 pub struct Mmio;
 
 impl clock::Registers for Mmio {

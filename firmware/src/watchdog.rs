@@ -1,5 +1,6 @@
-//! The main loop's watchdog hook: every pass feeds it, so a pass that hangs
-//! resets the box.
+//! The main loop's watchdog hook: a pass that hangs resets the box; on the
+//! board, acquisition that stops making progress does too
+//! ([`ProgressWatch`]).
 
 /// Something that must be fed regularly or it resets the MCU.
 pub trait Watchdog {
@@ -13,4 +14,56 @@ pub struct NoWatchdog;
 
 impl Watchdog for NoWatchdog {
     fn feed(&mut self) {}
+}
+
+/// Decides whether the idle loop may feed the watchdog: always while
+/// acquisition is stopped on purpose; while it runs, only if the DMA
+/// completed a half within the last `limit_ms` [ms] (a BUSY line stuck,
+/// or restarts that never deliver, end in a watchdog reset that the next
+/// boot reports).
+#[derive(Clone, Copy, Debug)]
+pub struct ProgressWatch {
+    limit_ms: u32,
+    last: u32,
+    since_ms: u32,
+}
+
+impl ProgressWatch {
+    /// A watch that tolerates `limit_ms` [ms] without progress.
+    pub const fn new(limit_ms: u32) -> Self {
+        Self {
+            limit_ms,
+            last: 0,
+            since_ms: 0,
+        }
+    }
+
+    /// Whether to feed now (`now_ms` [ms], wrapping): `running` says
+    /// whether acquisition should run, `progress` is the half-completion
+    /// count.
+    pub fn should_feed(&mut self, running: bool, progress: u32, now_ms: u32) -> bool {
+        if !running || progress != self.last {
+            self.last = progress;
+            self.since_ms = now_ms;
+            return true;
+        }
+        now_ms.wrapping_sub(self.since_ms) < self.limit_ms
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fed_while_stopped_or_progressing_starved_by_a_stall() {
+        let mut w = ProgressWatch::new(100);
+        assert!(w.should_feed(false, 0, 0));
+        assert!(w.should_feed(false, 0, 10_000));
+        assert!(w.should_feed(true, 1, 10_001));
+        assert!(w.should_feed(true, 1, 10_100));
+        assert!(!w.should_feed(true, 1, 10_101));
+        assert!(w.should_feed(true, 2, 10_200));
+        assert!(w.should_feed(false, 2, 20_000));
+    }
 }

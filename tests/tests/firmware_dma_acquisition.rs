@@ -41,7 +41,7 @@ fn a_slow_consumer_loses_whole_counted_halves_and_never_a_torn_one() {
     let scenario = Scenario::standard();
     let board = Board::new(scenario, 0x1234_5678);
     let mut source = source(&board);
-    source.start();
+    source.start().unwrap();
     let p = board.0.borrow().p;
     let half_ticks = p * HALF as u64;
     let mut rng = StdRng::seed_from_u64(12);
@@ -114,7 +114,7 @@ fn keyphasor_edges_at_a_changing_speed_within_a_thousandth_of_a_sample() {
                                          // The capture count wraps ≈ 1.2 s into the run.
     let board = Board::new(scenario, u32::MAX - 100_000_000);
     let mut source = source(&board);
-    source.start();
+    source.start().unwrap();
     let p = board.0.borrow().p;
     let mut rng = StdRng::seed_from_u64(3);
     let mut positions = Vec::new();
@@ -163,7 +163,7 @@ fn a_missed_conversion_restarts_acquisition_instead_of_shifting_the_samples() {
     let board = Board::new(scenario, 0xFFFF_0000);
     board.0.borrow_mut().skip = Some(50_000);
     let mut source = source(&board);
-    source.start();
+    source.start().unwrap();
     let p = board.0.borrow().p;
     let mut rng = StdRng::seed_from_u64(5);
     let mut buf = SampleBuffer::default();

@@ -388,7 +388,7 @@ fn run(machine: &Machine, rundown: (f64, f64, f64), front: FrontEnd) -> Outcome 
     .unwrap();
     let mut source = AdcSource::new(adc, SimTimer(hw.clone()), TICKS_PER_SAMPLE);
     let mut pipeline = Pipeline::new(&config, h.sample_rate_hz as f32).unwrap();
-    source.start();
+    source.start().unwrap();
     let mut frames: Vec<PhasorFrame> = Vec::new();
     let mut buf = SampleBuffer::default();
     loop {

@@ -19,11 +19,22 @@
 //! | host TX / RX | PA2 / PA3 | USART2 (AF7) |
 //! | LEDs | PD12 green, PD14 red | GPIO |
 //!
-//! Real-time structure (RTIC 2, priorities high to low): BUSY interrupt
-//! (starts each 8-word SPI DMA read) 4; SPI receive DMA half complete and
-//! keyphasor capture 3; host-link receive DMA and the millisecond tick 2;
-//! the idle loop runs the protocol, the extractor and the pipeline on each
-//! full half ([`plinth_firmware::acquisition`]) and feeds the watchdog.
+//! Real-time structure (RTIC 2, priorities high to low; the handler bodies
+//! are the library's, `plinth_firmware::acquisition::adc_dma` and
+//! `plinth_firmware::uart_dma`, which the host's board model runs):
+//! - 4: `busy_fell` (EXTI0: starts each 8-word SPI DMA read, slip and
+//!   late-read detectors) and `spi_error` (SPI2 overrun);
+//! - 3: `adc_half` (SPI receive DMA: a half is complete) and `keyphasor`
+//!   (TIM5 capture);
+//! - 2: `host_rx_half` (host-link receive DMA) and `tick` (1 ms);
+//! - 1: `process` (pended by a half, received bytes and the tick): the
+//!   protocol, the extractor and the pipeline;
+//! - idle: the watchdog (fed only while acquisition progresses or is
+//!   stopped on purpose), the LEDs and the once-a-second log. defmt-rtt
+//!   masks interrupts while it writes a frame: the log lines are rare and
+//!   short, and a mask long enough to merge two BUSY edges is caught by the
+//!   slip detector and becomes a counted restart (the board model's fault
+//!   matrix covers masks up to 100 µs).
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
 
@@ -45,33 +56,51 @@ mod serial;
 #[cfg(target_os = "none")]
 use defmt_rtt as _;
 
-/// Logs, records and resets: the next boot reports the record.
+/// Records, logs and resets: the next boot reports the record. A panic
+/// while panicking resets at once.
 #[cfg(target_os = "none")]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    cortex_m::interrupt::disable();
-    panic_record::write(info);
-    defmt::error!(
-        "panic: {=str}",
-        info.message().as_str().unwrap_or("(formatted message)")
-    );
+    if panic_record::begin() {
+        panic_record::write_panic(info);
+        defmt::error!(
+            "panic: {=str}",
+            info.message().as_str().unwrap_or("(formatted message)")
+        );
+    }
+    cortex_m::peripheral::SCB::sys_reset()
+}
+
+/// A hard fault: records the faulting PC and resets.
+#[cfg(target_os = "none")]
+#[cortex_m_rt::exception]
+unsafe fn HardFault(frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    if panic_record::begin() {
+        panic_record::write(panic_record::Kind::HardFault, "", frame.pc(), "hard fault");
+    }
     cortex_m::peripheral::SCB::sys_reset()
 }
 
 #[cfg(target_os = "none")]
 #[rtic::app(device = stm32f4xx_hal::pac, peripherals = true)]
 mod app {
-    use crate::adc_dma::{self, AdcDma, CAPTURE_SLOTS, HALF_VECTORS};
-    use crate::serial::{self, DmaSerial};
+    use crate::adc_dma::{self, BoxAdc, CAPTURE_SLOTS, HALF_VECTORS, SHARED};
+    use crate::serial::{self, BoxSerial};
     use crate::{cycles, panic_record};
-    use core::sync::atomic::{AtomicU32, Ordering};
+    use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
     use heapless::spsc::{Producer, Queue};
+    use plinth_firmware::acquisition::adc_dma as acq;
     use plinth_firmware::acquisition::dma_source::DmaSource;
-    use plinth_firmware::acquisition::pacing::{apb_timer_clock_hz, ConvstTiming};
+    use plinth_firmware::acquisition::pacing::apb_timer_clock_hz;
+    use plinth_firmware::acquisition::read_plan::ReadPlan;
     use plinth_firmware::ad7606::Range;
     use plinth_firmware::device::{Device, SAMPLE_RATE_HZ};
-    use plinth_firmware::stm32::configure_clocks;
-    use stm32f4xx_hal::gpio::{Edge, ExtiPin, Input, Output, PushPull, PB0, PB12, PD12, PD14};
+    use plinth_firmware::source::Refusable;
+    use plinth_firmware::stm32::{configure_clocks, Mmio};
+    use plinth_firmware::uart_dma;
+    use plinth_firmware::watchdog::ProgressWatch;
+    use plinth_shared::protocol::PreviousReset;
+    use stm32f4xx_hal::gpio::{Edge, ExtiPin, Output, PushPull, Speed, PD12, PD14};
     use stm32f4xx_hal::pac;
     use stm32f4xx_hal::prelude::*;
     use stm32f4xx_hal::rcc::{Enable, Reset};
@@ -81,29 +110,32 @@ mod app {
     const HSE_HZ: u32 = 8_000_000;
     /// Host link speed [bit/s] (as `plinth stream --baud`).
     const BAUD: u32 = 115_200;
-    /// Watchdog timeout [ms]: far above one idle-loop pass.
+    /// Watchdog timeout [ms]: far above one pass of any task.
     const WATCHDOG_MS: u32 = 500;
+    /// Running acquisition may go this long without a completed half
+    /// before the watchdog is starved [ms] (a half is 1.9 ms; restarts
+    /// after a fault take ≤ 10 ms).
+    const NO_PROGRESS_MS: u32 = 200;
     /// The AD7606 module's RANGE jumper (±10 V).
     const RANGE: Range = Range::PlusMinus10V;
 
-    /// TIMx_SR: channel 2 overcapture (RM0090 18.4.5).
-    const TIM_SR_CC2OF: u32 = 1 << 10;
-
     /// Milliseconds since boot (the SysTick task).
     static UPTIME_MS: AtomicU32 = AtomicU32::new(0);
+    /// Whether acquisition runs (written by `process`).
+    static RUNNING: AtomicBool = AtomicBool::new(false);
+
+    /// The board's sample source.
+    type Source = Refusable<DmaSource<BoxAdc>>;
 
     #[shared]
     struct Shared {}
 
     #[local]
     struct Local {
-        busy: PB0<Input>,
-        cs: PB12<Output<PushPull>>,
-        tim5: pac::TIM5,
         captures: Producer<'static, u32, CAPTURE_SLOTS>,
         device: &'static mut Device,
-        source: DmaSource<AdcDma>,
-        link: DmaSerial,
+        source: Source,
+        link: BoxSerial,
         watchdog: IndependentWatchdog,
         green: PD12<Output<PushPull>>,
         red: PD14<Output<PushPull>>,
@@ -120,16 +152,24 @@ mod app {
         let reset_by_watchdog = dp.RCC.csr().read().wdgrstf().bit_is_set();
         dp.RCC.csr().modify(|_, w| w.rmvf().set_bit());
         let mut rcc = dp.RCC.constrain();
+        let mut previous = PreviousReset::Normal;
         if let Some(r) = panic_record::take() {
-            defmt::error!(
-                "the previous boot panicked at {=str}:{=u32}: {=str}",
-                r.file(),
-                r.line(),
-                r.message()
-            );
-        }
-        if reset_by_watchdog {
+            r.with_text(|file, message| {
+                defmt::error!(
+                    "the previous boot ended in a {}: {=str}:{=u32}: {=str}",
+                    r.kind(),
+                    file,
+                    r.line(),
+                    message
+                )
+            });
+            previous = match r.kind() {
+                panic_record::Kind::Panic => PreviousReset::Panic,
+                panic_record::Kind::HardFault => PreviousReset::HardFault,
+            };
+        } else if reset_by_watchdog {
             defmt::error!("the previous boot was reset by the watchdog");
+            previous = PreviousReset::Watchdog;
         }
         #[cfg(feature = "bench")]
         {
@@ -147,19 +187,21 @@ mod app {
         reset.set_high();
         cortex_m::asm::delay(100);
         reset.set_low();
-        let mut cs = gpiob.pb12.into_push_pull_output();
+        // SCK at up to 21 MHz and the 107 ns CONVST pulse need fast edges
+        // (the reset speed, Low, is specified to 2-8 MHz).
+        let mut cs = gpiob.pb12.into_push_pull_output().speed(Speed::VeryHigh);
         cs.set_high();
-        let _convst = gpioc.pc6.into_alternate::<2>();
-        let _sck = gpiob.pb13.into_alternate::<5>();
+        let _convst = gpioc.pc6.into_alternate::<2>().speed(Speed::VeryHigh);
+        let _sck = gpiob.pb13.into_alternate::<5>().speed(Speed::VeryHigh);
         let _miso = gpiob.pb14.into_alternate::<5>();
         let _mosi = gpiob.pb15.into_alternate::<5>();
         let _keyphasor = gpioa.pa1.into_alternate::<2>();
         let _host_tx = gpioa.pa2.into_alternate::<7>();
         let _host_rx = gpioa.pa3.into_alternate::<7>();
+        // BUSY on EXTI0, falling edge; `AdcDma` unmasks it in `start`.
         let mut busy = gpiob.pb0.into_pull_down_input();
         busy.make_interrupt_source(&mut syscfg);
         busy.trigger_on_edge(&mut dp.EXTI, Edge::Falling);
-        busy.enable_interrupt(&mut dp.EXTI);
 
         for enable in [
             <pac::TIM3 as Enable>::enable,
@@ -175,24 +217,36 @@ mod app {
         <pac::SPI2 as Reset>::reset(&mut rcc);
 
         let timer_hz = apb_timer_clock_hz(clocks.sysclk_hz, clocks.pclk1_hz);
-        let timing = match ConvstTiming::for_rate(timer_hz, f64::from(SAMPLE_RATE_HZ), 16) {
-            Ok(t) => t,
-            // 51.2 kHz fits any clock this board can run at (16-168 MHz).
-            Err(e) => defmt::panic!("no CONVST timing at {=u32} Hz: {}", timer_hz, e),
-        };
-        let rate = timing.achieved_rate_hz as f32;
         let (producer, consumer) = cx.local.queue.split();
-        // SAFETY: TIM5's capture registers belong to the keyphasor task from
-        // here on; `AdcDma` only starts and stops its counter.
-        let tim5_capture = unsafe { pac::TIM5::steal() };
-        let hardware = AdcDma::new(dp.TIM3, dp.TIM5, dp.SPI2, timing, consumer);
-        let source = DmaSource::new(hardware, HALF_VECTORS, timing.timer_ticks_per_sample, RANGE);
-        let link = DmaSerial::new(dp.USART2, clocks.pclk1_hz, BAUD);
+        let (source, rate) =
+            match ReadPlan::new(timer_hz, clocks.pclk1_hz, f64::from(SAMPLE_RATE_HZ)) {
+                Ok(plan) => {
+                    let p = plan.timing.timer_ticks_per_sample;
+                    let rate = plan.timing.achieved_rate_hz as f32;
+                    let hardware = adc_dma::new(plan, consumer);
+                    defmt::info!("acquisition: {}", plan);
+                    (
+                        Refusable(Some(DmaSource::new(hardware, HALF_VECTORS, p, RANGE))),
+                        rate,
+                    )
+                }
+                Err(e) => {
+                    defmt::error!(
+                        "cannot sample at {=u32} Hz on {}: {} (Start is refused)",
+                        SAMPLE_RATE_HZ as u32,
+                        clocks.source,
+                        e
+                    );
+                    (Refusable(None), SAMPLE_RATE_HZ)
+                }
+            };
+        let link = serial::new(clocks.pclk1_hz, BAUD);
         let Some(device) =
             cortex_m::singleton!(: Device = Device::with_sample_rate(RANGE.volts_per_code(), rate))
         else {
             defmt::panic!("device taken twice")
         };
+        device.set_platform(clocks.source.sample_clock(), previous);
 
         // 1 kHz tick.
         cp.SYST
@@ -209,18 +263,14 @@ mod app {
         watchdog.start(WATCHDOG_MS.millis());
 
         defmt::info!(
-            "plinth-box {=str} up: clocks {}, CONVST {} ({=f32} Hz)",
+            "plinth-box {=str} up: clocks {} ({=f32} Hz)",
             env!("CARGO_PKG_VERSION"),
             clocks,
-            timing,
             rate
         );
         (
             Shared {},
             Local {
-                busy,
-                cs,
-                tim5: tim5_capture,
                 captures: producer,
                 device,
                 source,
@@ -232,70 +282,61 @@ mod app {
         )
     }
 
-    /// The protocol, the extractor and the pipeline, on whatever the
-    /// interrupts handed over; sleeps when a pass did nothing (the
-    /// millisecond tick wakes it at the latest).
-    #[idle(local = [device, source, link, watchdog, green, red])]
+    /// The watchdog (fed only while acquisition progresses or is stopped
+    /// on purpose), the LEDs and the once-a-second fault log; sleeps
+    /// between interrupts.
+    #[idle(local = [watchdog, green, red])]
     fn idle(cx: idle::Context) -> ! {
-        let idle::LocalResources {
-            device,
-            source,
-            link,
-            watchdog,
-            green,
-            red,
-            ..
-        } = cx.local;
+        let mut watch = ProgressWatch::new(NO_PROGRESS_MS);
         let mut last_report_ms = 0u32;
-        let mut reported = (0u32, 0u32, 0u32, 0u32);
-        let mut last_look = serial::Look::default();
-        let mut busy = true;
+        let mut reported = acq::AdcFaults::default();
         loop {
-            watchdog.feed();
             let now = UPTIME_MS.load(Ordering::Relaxed);
-            // Every BUSY interrupt (51.2 kHz) wakes the core from WFI: when
-            // no half completed, no byte came in and no millisecond passed
-            // since an idle pass, go straight back to sleep.
-            let look = serial::Look::now(now);
-            if !busy && look == last_look {
-                cortex_m::asm::wfi();
-                continue;
+            let running = RUNNING.load(Ordering::Relaxed);
+            if watch.should_feed(running, SHARED.completions.count(), now) {
+                cx.local.watchdog.feed();
             }
-            last_look = look;
-            let activity = cycles::POLL.measure(|| device.poll(link, source, now));
-            link.kick();
             if now.wrapping_sub(last_report_ms) >= 1000 {
                 last_report_ms = now;
-                let faults = (
-                    source.counters().overrun_halves,
-                    adc_dma::LATE_READS.load(Ordering::Relaxed),
-                    adc_dma::DMA_ERRORS.load(Ordering::Relaxed),
-                    adc_dma::LOST_CAPTURES.load(Ordering::Relaxed),
-                );
+                let faults = SHARED.faults();
                 if faults != reported {
                     reported = faults;
-                    defmt::warn!(
-                        "overrun halves {=u32}, late reads {=u32}, DMA errors {=u32}, lost keyphasor captures {=u32}",
-                        faults.0,
-                        faults.1,
-                        faults.2,
-                        faults.3
-                    );
+                    defmt::warn!("acquisition faults: {}", faults);
                 }
-                red.set_state((faults.1 | faults.2 | faults.3 != 0).into());
-                if source.running() {
-                    green.toggle();
+                cx.local.red.set_state((faults.sequence() != 0).into());
+                if running {
+                    cx.local.green.toggle();
                 } else {
-                    green.set_low();
+                    cx.local.green.set_low();
                 }
                 #[cfg(feature = "bench")]
                 report_cycles(now);
             }
-            busy = activity.received != 0 || activity.sent != 0 || activity.samples != 0;
-            if !busy {
-                cortex_m::asm::wfi();
-            }
+            cortex_m::asm::wfi();
         }
+    }
+
+    /// The protocol, the extractor and the pipeline on whatever the
+    /// interrupts handed over (priority 1: above idle, below every
+    /// interrupt of the acquisition).
+    #[task(binds = USART1, priority = 1, local = [device, source, link])]
+    fn process(cx: process::Context) {
+        let process::LocalResources {
+            device,
+            source,
+            link,
+            ..
+        } = cx.local;
+        let now = UPTIME_MS.load(Ordering::Relaxed);
+        cycles::POLL.measure(|| device.poll(link, source, now));
+        link.kick();
+        let running = matches!(&source.0, Some(s) if s.running());
+        RUNNING.store(running, Ordering::Relaxed);
+    }
+
+    /// Runs `process` (after the pending interrupts above it).
+    fn pend_process() {
+        rtic::pend(pac::Interrupt::USART1);
     }
 
     /// One line per task and second: `BENCH <task> calls <n> cycles <sum>
@@ -316,81 +357,46 @@ mod app {
     }
 
     /// BUSY fell: the conversion is done; clock its 8 words out by DMA.
-    #[task(binds = EXTI0, priority = 4, local = [busy, cs])]
-    fn busy_fell(cx: busy_fell::Context) {
-        cycles::BUSY.measure(|| {
-            cx.local.busy.clear_interrupt_pending_bit();
-            let tx = adc_dma::dma1().st(adc_dma::TX_STREAM);
-            if tx.cr().read().en().is_enabled() {
-                // The previous read is still running: this conversion is
-                // lost and the buffer's time base with it.
-                adc_dma::bump(&adc_dma::LATE_READS);
-                return;
-            }
-            AdcDma::clear_stream_flags(adc_dma::TX_STREAM);
-            // A CS falling edge starts the AD7606's serial output (≥ 50 ns
-            // high before it).
-            cx.local.cs.set_high();
-            cortex_m::asm::delay(10);
-            cx.local.cs.set_low();
-            tx.ndtr()
-                .write(|w| w.ndt().set(plinth_firmware::source::CHANNELS as u16));
-            tx.cr().modify(|_, w| w.en().enabled());
-        });
+    #[task(binds = EXTI0, priority = 4)]
+    fn busy_fell(_: busy_fell::Context) {
+        cycles::BUSY.measure(|| acq::busy_fell(&mut Mmio, &SHARED));
     }
 
-    /// The SPI receive DMA filled a half.
+    /// SPI2 overran (or a mode fault).
+    #[task(binds = SPI2, priority = 4)]
+    fn spi_error(_: spi_error::Context) {
+        acq::spi_error(&mut Mmio, &SHARED);
+    }
+
+    /// The SPI receive DMA filled a half (or failed).
     #[task(binds = DMA1_STREAM3, priority = 3)]
     fn adc_half(_: adc_half::Context) {
-        cycles::HALF.measure(|| {
-            let isr = adc_dma::dma1().lisr().read();
-            if isr.teif3().bit_is_set() {
-                adc_dma::bump(&adc_dma::DMA_ERRORS);
-            }
-            AdcDma::clear_stream_flags(adc_dma::RX_STREAM);
-            if isr.tcif3().bit_is_set() {
-                adc_dma::COMPLETIONS.complete();
-            }
-        });
+        cycles::HALF.measure(|| acq::adc_half(&mut Mmio, &SHARED));
+        pend_process();
     }
 
     /// A keyphasor edge was captured.
-    #[task(binds = TIM5, priority = 3, local = [tim5, captures])]
+    #[task(binds = TIM5, priority = 3, local = [captures])]
     fn keyphasor(cx: keyphasor::Context) {
-        cycles::KEYPHASOR.measure(|| {
-            let sr = cx.local.tim5.sr().read();
-            if sr.cc2of().bit_is_set() {
-                // A second edge came before the first was read.
-                adc_dma::bump(&adc_dma::LOST_CAPTURES);
-                // SR's flags clear by writing 0 and ignore a 1: clear CC2OF
-                // alone (a read-modify-write could clear a capture flag
-                // raised meanwhile).
-                // SAFETY: writes 1 to every other flag, which changes nothing.
-                cx.local
-                    .tim5
-                    .sr()
-                    .write(|w| unsafe { w.bits(!TIM_SR_CC2OF) });
-            }
-            if sr.cc2if().bit_is_set() {
-                // Reading CCR2 clears CC2IF.
-                let count = cx.local.tim5.ccr2().read().bits();
-                if cx.local.captures.enqueue(count).is_err() {
-                    adc_dma::bump(&adc_dma::LOST_CAPTURES);
-                }
-            }
-        });
+        cycles::KEYPHASOR.measure(|| acq::keyphasor(&mut Mmio, &SHARED, cx.local.captures));
     }
 
     /// The host link's receive DMA passed half its ring.
     #[task(binds = DMA1_STREAM5, priority = 2)]
     fn host_rx_half(_: host_rx_half::Context) {
-        AdcDma::clear_stream_flags(serial::RX_STREAM);
-        adc_dma::bump(&serial::RX_HALVES);
+        uart_dma::host_rx_half(&mut Mmio, &serial::RX_HALVES);
+        pend_process();
     }
 
-    /// Milliseconds since boot.
+    /// Milliseconds since boot; the protocol's pass every millisecond.
     #[task(binds = SysTick, priority = 2)]
     fn tick(_: tick::Context) {
-        cycles::TICK.measure(|| adc_dma::bump(&UPTIME_MS));
+        cycles::TICK.measure(|| {
+            UPTIME_MS.store(
+                UPTIME_MS.load(Ordering::Relaxed).wrapping_add(1),
+                Ordering::Relaxed,
+            )
+        });
+        pend_process();
     }
 }

@@ -8,6 +8,7 @@ use super::timebase::CaptureTimebase;
 use crate::ad7606::Range;
 use crate::source::{SampleBuffer, SampleSource, BUFFER_VECTORS};
 use plinth_shared::extractor::KeyphasorEdge;
+use plinth_shared::protocol::{BoxHealth, NackReason};
 
 /// The acquisition hardware: CONVST timer, capture timer, SPI DMA.
 pub trait AcquisitionHardware: DoubleBuffer {
@@ -24,6 +25,10 @@ pub trait AcquisitionHardware: DoubleBuffer {
     /// hardware rather than deliver samples one conversion out of place.
     fn sequence_faults(&self) -> u32 {
         0
+    }
+    /// Adds the hardware's fault counters to `health` (nothing by default).
+    fn health(&self, health: &mut BoxHealth) {
+        let _ = health;
     }
 }
 
@@ -62,6 +67,8 @@ pub struct DmaSource<H> {
     lost_halves_before: u64,
     running: bool,
     counters: DmaSourceCounters,
+    /// Sample count since the (re)start of the last delivered half's first vector.
+    delivered_first: u64,
 }
 
 impl<H: AcquisitionHardware> DmaSource<H> {
@@ -81,6 +88,7 @@ impl<H: AcquisitionHardware> DmaSource<H> {
             lost_halves_before: 0,
             running: false,
             counters: DmaSourceCounters::default(),
+            delivered_first: 0,
         }
     }
 
@@ -98,9 +106,30 @@ impl<H: AcquisitionHardware> DmaSource<H> {
         self.timebase = CaptureTimebase::new(self.timebase.ticks_per_sample(), origin);
     }
 
+    /// A conversion went unread, two merged, the DMA or the SPI failed:
+    /// what follows in the buffer is out of place. Everything since the
+    /// last delivered half is lost; start again from a clean state.
+    fn resync(&mut self) {
+        let converted = self.handover.now_bound(&self.hardware);
+        // (Halves already counted lost all lie after `expected`.)
+        self.lost = self
+            .lost
+            .max(converted.saturating_sub(self.expected))
+            .max(1);
+        self.counters.resyncs = self.counters.resyncs.saturating_add(1);
+        self.restart();
+    }
+
     /// What was lost since start.
     pub fn counters(&self) -> DmaSourceCounters {
         self.counters
+    }
+
+    /// Where the last delivered buffer's first vector lies: its sample
+    /// count since the hardware's last (re)start (what a board model checks
+    /// against the conversions' own times).
+    pub fn delivered_first_sample(&self) -> u64 {
+        self.delivered_first
     }
 
     /// The hardware (for its own counters).
@@ -155,12 +184,18 @@ impl<H: AcquisitionHardware> DmaSource<H> {
 }
 
 impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
-    fn start(&mut self) {
+    fn start(&mut self) -> Result<(), NackReason> {
         self.lost = 0;
         self.counters = DmaSourceCounters::default();
         self.restart();
         self.lost_halves_before = 0;
         self.running = true;
+        Ok(())
+    }
+
+    fn health(&self, health: &mut BoxHealth) {
+        health.restarts = self.counters.resyncs;
+        self.hardware.health(health);
     }
 
     fn stop(&mut self) {
@@ -175,17 +210,7 @@ impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
         }
         out.clear();
         if self.hardware.sequence_faults() != self.faults_seen {
-            // A conversion went unread or the DMA failed: what follows in
-            // the buffer is out of place. Everything since the last
-            // delivered half is lost; start again from a clean state.
-            let converted = self.handover.now_bound(&self.hardware);
-            // (Halves already counted lost all lie after `expected`.)
-            self.lost = self
-                .lost
-                .max(converted.saturating_sub(self.expected))
-                .max(1);
-            self.counters.resyncs = self.counters.resyncs.saturating_add(1);
-            self.restart();
+            self.resync();
             return;
         }
         let range = self.range;
@@ -196,6 +221,13 @@ impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
                 .samples
                 .push(scaling::to_volts(range, &codes, &mut saturated));
         });
+        // A fault raised during the copy may lie in the half just copied
+        // (a late read completes its half after it was counted).
+        if self.hardware.sequence_faults() != self.faults_seen {
+            out.clear();
+            self.resync();
+            return;
+        }
         match taken {
             Taken::Nothing => {}
             Taken::Torn { lost } => {
@@ -215,6 +247,7 @@ impl<H: AcquisitionHardware> SampleSource for DmaSource<H> {
                 out.lost_before = u32::try_from(lost).unwrap_or(u32::MAX);
                 self.counters.overrun_halves =
                     (self.lost_halves_before + self.handover.lost_halves()) as u32;
+                self.delivered_first = first_sample;
                 let end = first_sample + out.samples.len() as u64;
                 self.expected = end;
                 self.attach_edges(out, first_sample, end);
@@ -273,7 +306,7 @@ mod tests {
             faults: 0,
         };
         let mut s = DmaSource::new(fake, 4, 100, Range::PlusMinus10V);
-        s.start();
+        s.start().unwrap();
         s
     }
 

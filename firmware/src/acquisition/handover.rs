@@ -152,6 +152,9 @@ impl HandOver {
             sink(v, dma.read(half, v));
         }
         let n = self.vectors_per_half as u64;
+        // The copy's reads complete before the count is read again (on the
+        // MCU a DMB: the DMA is another bus master).
+        core::sync::atomic::fence(Ordering::SeqCst);
         if self.completed(dma) != done {
             // A further half completed during the copy: the DMA is now
             // writing into the half that was being copied.

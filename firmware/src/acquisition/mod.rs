@@ -7,9 +7,14 @@
 //! - [`timebase`]: keyphasor capture counts to sample-fractional edges.
 //! - [`scaling`]: codes to volts, saturation counts.
 //! - [`dma_source`]: all of it as a [`crate::source::SampleSource`].
+//! - [`adc_dma`]: the reference board's registers and interrupt handlers
+//!   ([`rm0090`]: the register map), [`read_plan`]: whether a read fits.
 
+pub mod adc_dma;
 pub mod dma_source;
 pub mod handover;
 pub mod pacing;
+pub mod read_plan;
+pub mod rm0090;
 pub mod scaling;
 pub mod timebase;

@@ -290,7 +290,7 @@ mod image {
 
         // ---- the board's acquisition consumer: one DMA half taken ----
         let mut source = DmaSource::new(RamHalves::new(), HALF, 1641, Range::PlusMinus10V);
-        source.start();
+        source.start().unwrap();
         let mut out = SampleBuffer::default();
         let mut taken = 0.0f32;
         let halves = 20;

@@ -360,6 +360,12 @@ pub fn finish(
         pedestals,
         batch_error,
         ml_error,
+        box_health: outcome.and_then(|o| {
+            o.last_status
+                .as_ref()
+                .map(|s| s.health)
+                .or(o.device.map(|d| d.health))
+        }),
     };
     let path = out.join(REPORT_FILE);
     let text = serde_json::to_string_pretty(&report).context("cannot encode the stream report")?;
@@ -382,6 +388,10 @@ pub fn summary(report: &StreamReport) -> String {
     s.push('\n');
     if let Some(l) = &report.link_box {
         s.push_str(&report::render_link("link (box side, last status)", l));
+        s.push('\n');
+    }
+    if let Some(h) = &report.box_health {
+        s.push_str(&report::render_health(h));
         s.push('\n');
     }
     if let Some((done, total)) = report.replay_blocks {

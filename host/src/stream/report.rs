@@ -5,7 +5,7 @@
 //! record of the session (`stream-report.json`) for scripts and tests.
 
 use crate::identify::{Identification, WarningKind};
-use plinth_shared::protocol::{EstimateFrame, LinkStats};
+use plinth_shared::protocol::{BoxHealth, EstimateFrame, LinkStats, PreviousReset, SampleClock};
 use plinth_shared::regression::Parameter;
 use serde::Serialize;
 
@@ -307,6 +307,37 @@ pub struct StreamReport {
     pub batch_error: Option<String>,
     /// Why the host ML fit could not run, if it could not.
     pub ml_error: Option<String>,
+    /// The box's health as last reported (sample clock, previous reset,
+    /// acquisition faults).
+    pub box_health: Option<BoxHealth>,
+}
+
+/// One line of the box's health: sample clock, previous reset, and every
+/// acquisition fault counter.
+pub fn render_health(h: &BoxHealth) -> String {
+    let clock = match h.sample_clock {
+        SampleClock::Crystal => "crystal",
+        SampleClock::RcOscillator => "RC oscillator (crystal failed; rate ±1 %)",
+        SampleClock::RcOscillatorNoPll => "RC oscillator without PLL (cannot sample)",
+        SampleClock::Emulated => "emulated",
+    };
+    let reset = match h.previous_reset {
+        PreviousReset::Normal => "normal",
+        PreviousReset::Panic => "PANIC",
+        PreviousReset::HardFault => "HARD FAULT",
+        PreviousReset::Watchdog => "WATCHDOG",
+    };
+    format!(
+        "box health: sample clock {clock}; previous reset {reset}{}; restarts {}, slips {}, late reads {}, stalls {}, SPI errors {}, DMA errors {}, lost keyphasor captures {}",
+        if h.sampling_refused { "; SAMPLING REFUSED" } else { "" },
+        h.restarts,
+        h.slips,
+        h.late_reads,
+        h.stalls,
+        h.spi_errors,
+        h.dma_errors,
+        h.lost_captures
+    )
 }
 
 #[cfg(test)]

@@ -36,12 +36,15 @@ use crate::regression::{ParameterScale, PARAMETERS};
 use crate::rls::PedestalEstimate;
 use serde::{Deserialize, Serialize};
 
+use super::health::BoxHealth;
 use super::receiver::LinkStats;
 
 /// Version of this protocol; both ends must agree (see the compatibility rule
 /// in the module docs). 2: phasor frames carry each phasor's noise, estimate
-/// entries the reduced χ² and the guarded-equation counts.
-pub const PROTOCOL_VERSION: u16 = 2;
+/// entries the reduced χ² and the guarded-equation counts. 3: `HelloAck`
+/// and `Status` carry the box's health ([`BoxHealth`]: sample clock,
+/// previous reset, acquisition faults); `Nack(SamplingUnavailable)`.
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// Most ADC channels one [`HostMessage::ConfigureChannels`] can describe and
 /// [`DeviceCounters::adc_saturation`] can report.
@@ -169,6 +172,8 @@ pub struct HelloAck {
     pub firmware_version: FirmwareVersion,
     /// Limits of this box.
     pub capabilities: Capabilities,
+    /// Sample clock, previous reset, faults so far.
+    pub health: BoxHealth,
 }
 
 /// Box → host: the `Hello` spoke another protocol version; nothing but a new
@@ -505,6 +510,9 @@ pub enum NackReason {
     BadBlock,
     /// The processing queue is full; send the block again later.
     QueueFull,
+    /// `Start` refused: the box cannot sample at its clock (see
+    /// [`BoxHealth::sampling_refused`] and its `sample_clock`).
+    SamplingUnavailable,
 }
 
 /// A 1X phasor as a real/imaginary pair on the wire.
@@ -660,6 +668,8 @@ pub struct StatusFrame {
     pub counters: DeviceCounters,
     /// The box's receive-side link statistics (frames from the host).
     pub link: LinkStats,
+    /// Sample clock, previous reset, acquisition faults.
+    pub health: BoxHealth,
 }
 
 #[cfg(feature = "defmt")]
@@ -753,11 +763,12 @@ mod defmt_impls {
         fn format(&self, f: defmt::Formatter) {
             defmt::write!(
                 f,
-                "StatusFrame {{ state: {}, uptime_ms: {=u32}, counters: {}, link: {} }}",
+                "StatusFrame {{ state: {}, uptime_ms: {=u32}, counters: {}, link: {}, health: {} }}",
                 self.state,
                 self.uptime_ms,
                 self.counters,
-                self.link
+                self.link,
+                self.health
             )
         }
     }

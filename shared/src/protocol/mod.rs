@@ -54,6 +54,7 @@
 //! nothing is retransmitted at this layer.
 
 pub mod framing;
+pub mod health;
 pub mod messages;
 pub mod receiver;
 pub mod sequence;
@@ -65,6 +66,7 @@ pub use framing::{
     decode_frame, encode, max_wire_size, EncodeError, LinkError, Transmitter, CRC_LEN, DELIMITER,
     FRAME_CRC, MAX_BODY_SIZE, MAX_FRAME_SIZE, MAX_MESSAGE_SIZE,
 };
+pub use health::{BoxHealth, PreviousReset, SampleClock};
 pub use messages::*;
 pub use receiver::{Event, Events, LinkStats, Received, Receiver};
 pub use sequence::{

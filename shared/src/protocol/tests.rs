@@ -176,6 +176,18 @@ fn device_messages() -> Vec<DeviceMessage> {
                 sample_rate_hz: 25_600.0,
                 adc_volts_per_code: 10.0 / 32_768.0,
             },
+            health: BoxHealth {
+                sample_clock: SampleClock::RcOscillator,
+                previous_reset: PreviousReset::Watchdog,
+                sampling_refused: false,
+                restarts: 3,
+                slips: 2,
+                late_reads: 70_000,
+                stalls: 1,
+                spi_errors: 5,
+                dma_errors: 6,
+                lost_captures: 7,
+            },
         }),
         DeviceMessage::VersionMismatch(VersionMismatch {
             device_protocol_version: PROTOCOL_VERSION,
@@ -229,12 +241,17 @@ fn device_messages() -> Vec<DeviceMessage> {
                 duplicates: 1,
                 restarts: 2,
             },
+            health: BoxHealth {
+                previous_reset: PreviousReset::HardFault,
+                ..BoxHealth::default()
+            },
         }),
         DeviceMessage::Status(StatusFrame {
             state: DeviceState::AwaitingHello,
             uptime_ms: 0,
             counters: DeviceCounters::default(),
             link: LinkStats::default(),
+            health: BoxHealth::default(),
         }),
     ]
 }
@@ -425,6 +442,18 @@ fn largest_messages_fit() {
                 adc_saturation: vec_of(&[u32::MAX; MAX_CHANNELS]),
             },
             link: stats,
+            health: BoxHealth {
+                sample_clock: SampleClock::RcOscillatorNoPll,
+                previous_reset: PreviousReset::HardFault,
+                sampling_refused: true,
+                restarts: u32::MAX,
+                slips: u32::MAX,
+                late_reads: u32::MAX,
+                stalls: u32::MAX,
+                spi_errors: u32::MAX,
+                dma_errors: u32::MAX,
+                lost_captures: u32::MAX,
+            },
         }),
     ];
     let check = |size: usize, what: &str| {
@@ -504,6 +533,7 @@ fn probe_frames() -> Vec<(u32, DeviceMessage)> {
                 ..DeviceCounters::default()
             },
             link: LinkStats::default(),
+            health: BoxHealth::default(),
         }),
     ));
     out

@@ -50,6 +50,10 @@ impl<'a> Session<'a> {
                                     ack.capabilities.sample_rate_hz
                                 ));
                             }
+                            if ack.health.needs_attention() {
+                                self.progress
+                                    .note(&super::super::report::render_health(&ack.health));
+                            }
                             self.device = Some(ack);
                             self.replies.clear();
                             return Ok(ack);
@@ -128,6 +132,12 @@ impl<'a> Session<'a> {
             Ok(()) => {}
             // A resent Start after a lost Ack finds the box running.
             Err(NackReason::WrongState) if attempts > 1 => {}
+            Err(NackReason::SamplingUnavailable) => bail!(
+                "the box refused Start: it cannot sample at its clock ({})",
+                self.device
+                    .map(|d| super::super::report::render_health(&d.health))
+                    .unwrap_or_default()
+            ),
             Err(r) => bail!("the box refused Start: {r:?}"),
         }
         if let Some(j) = self.journal.as_mut() {

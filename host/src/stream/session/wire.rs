@@ -88,7 +88,15 @@ impl<'a> Session<'a> {
                 self.state.estimate_frames += 1;
                 self.last_estimates = Some(e);
             }
-            DeviceMessage::Status(s) => self.last_status = Some(s),
+            DeviceMessage::Status(s) => {
+                // A change in the box's health is shown when it happens.
+                let before = self.last_status.as_ref().map(|p| p.health);
+                if s.health.needs_attention() && before != Some(s.health) {
+                    self.progress
+                        .note(&super::super::report::render_health(&s.health));
+                }
+                self.last_status = Some(s);
+            }
         }
     }
 }

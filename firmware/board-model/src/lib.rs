@@ -1,0 +1,17 @@
+//! A tick-level model of the `plinth-box` board (STM32F407 + AD7606) that
+//! runs the firmware's own acquisition code on the host: the interrupt
+//! handlers and `AdcDma` of `plinth_firmware::acquisition::adc_dma`, and
+//! `DmaSource` above them, with interrupt latency and priorities.
+//!
+//! - [`hw`]: the peripherals, tick by tick, behind the register map.
+//! - [`sim`]: the NVIC, priorities, masking, the cost of code; [`sim::Port`]
+//!   is the firmware's `Registers`.
+//! - [`scenario`]: one acquisition with one injected fault.
+//! - [`check`]: every delivered sample and edge against the model's truth.
+//! - [`matrix`]: the fault matrix (`bash scripts/bench-board-faults.sh`).
+
+pub mod check;
+pub mod hw;
+pub mod matrix;
+pub mod scenario;
+pub mod sim;

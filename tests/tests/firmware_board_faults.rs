@@ -1,0 +1,88 @@
+//! The fault matrix on the tick-level board model (firmware/board-model):
+//! the box's own interrupt handlers and `AdcDma`/`DmaSource` on a model of
+//! TIM3, TIM5, EXTI0, SPI2, DMA1 and the AD7606, with latency and
+//! priorities. The full matrix (≥ 10 000 scenarios) is
+//! `bash scripts/bench-board-faults.sh`; this test runs every 40th scenario
+//! (every fault class) and shows that the restart path before issue 18
+//! corrupts samples on the same model.
+
+use plinth_board_model::matrix::{run_all, scenarios};
+use plinth_board_model::scenario::{handler_stats, run, Fault, Scenario};
+use plinth_firmware::acquisition::adc_dma::RestartPath;
+
+#[test]
+fn the_matrix_finds_no_silent_corruption_and_no_uncounted_loss() {
+    let all = scenarios(RestartPath::Clean);
+    assert!(all.len() >= 10_000, "{} scenarios", all.len());
+    let sum = run_all(&all, 40);
+    eprintln!("{}", sum.line());
+    for f in sum.failures.iter().take(5) {
+        eprintln!("FAIL {f:?}");
+    }
+    assert!(sum.scenarios >= 250);
+    assert!(sum.delivered > 50_000, "{} samples checked", sum.delivered);
+    assert_eq!(
+        (sum.corruptions, sum.uncounted),
+        (0, 0),
+        "{:?}",
+        sum.failures.first()
+    );
+}
+
+/// A stop and an immediate start while the AD7606 converts, in the
+/// middle of a half.
+fn restart_while_converting(path: RestartPath) -> Scenario {
+    let base = Scenario::clean("stop/restart while converting");
+    let p = base.ticks_per_sample();
+    let half = p * base.vectors_per_half as u64;
+    Scenario {
+        path,
+        fault: Fault::Restart {
+            at: 2 * half + 5 * p + 1_640,
+            pause: 0,
+        },
+        ..base
+    }
+}
+
+#[test]
+fn the_old_restart_path_shifts_every_sample_by_one_conversion() {
+    let old = run(&restart_while_converting(RestartPath::Legacy));
+    eprintln!("legacy: {old:?}");
+    assert!(old.corruptions > 100, "{old:?}");
+    let problem = old.first_problem.unwrap_or_default();
+    assert!(problem.contains("run 2 sample 0"), "{problem}");
+    let new = run(&restart_while_converting(RestartPath::Clean));
+    assert_eq!((new.corruptions, new.uncounted), (0, 0), "{new:?}");
+    assert!(new.delivered > 150);
+}
+
+#[test]
+fn masked_interrupts_become_counted_restarts_never_shifted_samples() {
+    let base = Scenario::clean("masked 30 µs");
+    let p = base.ticks_per_sample();
+    let s = Scenario {
+        fault: Fault::Masked {
+            at: 2 * p * base.vectors_per_half as u64 + 7 * p,
+            ticks: 30 * 84,
+        },
+        ..base
+    };
+    let o = run(&s);
+    assert_eq!((o.corruptions, o.uncounted), (0, 0), "{o:?}");
+    assert_eq!(o.resyncs, 1, "{o:?}");
+    assert!(o.faults.slips + o.faults.late_reads >= 1, "{o:?}");
+    assert!(o.reported_lost > 0);
+}
+
+#[test]
+fn the_rc_clock_is_refused_and_a_clean_run_costs_what_the_readme_says() {
+    let mut hsi = Scenario::clean("16 MHz");
+    hsi.clocks = plinth_board_model::scenario::ClockSetup::HSI;
+    assert!(run(&hsi).refused);
+    let stats = handler_stats(&Scenario::clean("clean"));
+    let busy = stats.iter().find(|h| h.name == "busy_fell").unwrap();
+    // One BUSY interrupt per conversion: 13 register accesses.
+    assert_eq!(busy.accesses, 13 * busy.calls);
+    assert!(busy.calls >= 256);
+}
