@@ -288,7 +288,9 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
             return Err(field(
                 line,
                 1,
-                format!("a second row for base `{base}` at {speed_hz} Hz (the first is line {first})"),
+                format!(
+                    "a second row for base `{base}` at {speed_hz} Hz (the first is line {first})"
+                ),
             ));
         }
         lines.push(line);
@@ -387,24 +389,53 @@ mod tests {
         let head = "speed_hz,base,bearings,y_re,y_im,z_re,z_im\n";
         let cases = [
             ("".to_string(), ":2:1:", "no data rows"),
-            ("10,skid,left,right,1e-6,0,0,1e-6\n".into(), ":2:", "separate the bearings"),
-            ("10,skid,../x,1e-6,0,0,1e-6\n".into(), ":2:3:", "path separator"),
-            ("10,skid,left;right,1e-6,0,0,1e-6\n10,skid,left;right,2e-6,0,0,1e-6\n".into(), ":3:1:", "first is line 2"),
-            ("10,skid,left,1e-6,0,0,1e-6\n20,skid,left;right,1e-6,0,0,1e-6\n".into(), ":3:3:", "same bearings"),
-            ("10,a,left,1e-6,0,0,1e-6\n10,b,left,1e-6,0,0,1e-6\n".into(), ":3:3:", "one base"),
+            (
+                "10,skid,left,right,1e-6,0,0,1e-6\n".into(),
+                ":2:",
+                "separate the bearings",
+            ),
+            (
+                "10,skid,../x,1e-6,0,0,1e-6\n".into(),
+                ":2:3:",
+                "path separator",
+            ),
+            (
+                "10,skid,left;right,1e-6,0,0,1e-6\n10,skid,left;right,2e-6,0,0,1e-6\n".into(),
+                ":3:1:",
+                "first is line 2",
+            ),
+            (
+                "10,skid,left,1e-6,0,0,1e-6\n20,skid,left;right,1e-6,0,0,1e-6\n".into(),
+                ":3:3:",
+                "same bearings",
+            ),
+            (
+                "10,a,left,1e-6,0,0,1e-6\n10,b,left,1e-6,0,0,1e-6\n".into(),
+                ":3:3:",
+                "one base",
+            ),
         ];
         for (rows, at, what) in cases {
             std::fs::write(&file, format!("{head}{rows}")).unwrap();
             let e = read(dir.path()).unwrap_err().to_string();
             assert!(e.contains(at) && e.contains(what), "{rows}: {e}");
         }
-        std::fs::write(&file, "speed_hz;base;bearings;y_re;y_im;z_re;z_im\n10;skid;left;1,5e-6;0;0;1e-6\n").unwrap();
+        std::fs::write(
+            &file,
+            "speed_hz;base;bearings;y_re;y_im;z_re;z_im\n10;skid;left;1,5e-6;0;0;1e-6\n",
+        )
+        .unwrap();
         let e = read(dir.path()).unwrap_err().to_string();
         assert!(e.contains("`;`") && e.contains("decimal commas"), "{e}");
         std::fs::write(&file, format!("{head}10,skid,left,1e-6,0,0,1e-6\n")).unwrap();
         let rows = read(dir.path()).unwrap().unwrap();
-        let e = check_bearings(dir.path(), &rows, &["DE", "NDE"]).unwrap_err().to_string();
-        assert!(e.contains("`left` is not in measurements.csv") && e.contains("DE, NDE"), "{e}");
+        let e = check_bearings(dir.path(), &rows, &["DE", "NDE"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`left` is not in measurements.csv") && e.contains("DE, NDE"),
+            "{e}"
+        );
         assert!(check_bearings(dir.path(), &rows, &["left"]).is_ok());
     }
 }

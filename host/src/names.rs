@@ -92,7 +92,8 @@ pub fn check(what: &str, name: &str) -> Result<(), String> {
 pub fn file_name(stem: &str) -> String {
     let mut out = String::with_capacity(stem.len());
     for (i, b) in stem.bytes().enumerate() {
-        let safe = b.is_ascii_alphanumeric() || matches!(b, b'_' | b'-' | b'+') || (b == b'.' && i > 0);
+        let safe =
+            b.is_ascii_alphanumeric() || matches!(b, b'_' | b'-' | b'+') || (b == b'.' && i > 0);
         if safe {
             out.push(b as char);
         } else {
@@ -120,9 +121,9 @@ pub fn is_file_name(name: &str) -> bool {
     !name.is_empty()
         && name.len() <= MAX_FILE_NAME_BYTES + 4
         && !name.starts_with('.')
-        && name
-            .bytes()
-            .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'-' | b'+' | b'.' | b'%' | b'~'))
+        && name.bytes().all(|b| {
+            b.is_ascii_alphanumeric() || matches!(b, b'_' | b'-' | b'+' | b'.' | b'%' | b'~')
+        })
 }
 
 /// `dir/` + [`file_name`]`(stem)`: a path directly inside `dir`, whatever
@@ -137,34 +138,70 @@ mod tests {
 
     #[test]
     fn hostile_names_are_refused_and_field_names_pass() {
-        for ok in ["DE", "NDE", "B1", "left", "pump DE", "Lager-2", "Brg.3", "Ø1", "x+y", "#4 (HP)"] {
+        for ok in [
+            "DE", "NDE", "B1", "left", "pump DE", "Lager-2", "Brg.3", "Ø1", "x+y", "#4 (HP)",
+        ] {
             assert_eq!(problem(ok), None, "{ok}");
         }
         for bad in [
-            "", ".", "..", "...", "../../../x", "DE/NDE", "a\\b", "a\nb", "a\u{0}b", " a", "a ",
-            "a,b", "a;b", "\"a\"", "C:x", &"x".repeat(65),
+            "",
+            ".",
+            "..",
+            "...",
+            "../../../x",
+            "DE/NDE",
+            "a\\b",
+            "a\nb",
+            "a\u{0}b",
+            " a",
+            "a ",
+            "a,b",
+            "a;b",
+            "\"a\"",
+            "C:x",
+            &"x".repeat(65),
         ] {
             assert!(problem(bad).is_some(), "{bad:?}");
         }
         let e = check("bearing", "DE/NDE").unwrap_err();
-        assert!(e.contains("bearing \"DE/NDE\"") && e.contains("path separator"), "{e}");
+        assert!(
+            e.contains("bearing \"DE/NDE\"") && e.contains("path separator"),
+            "{e}"
+        );
         let e = check("bearing", &"y".repeat(100_000)).unwrap_err();
-        assert!(e.len() < 400, "the message does not echo a long name: {}", e.len());
+        assert!(
+            e.len() < 400,
+            "the message does not echo a long name: {}",
+            e.len()
+        );
     }
 
     #[test]
     fn file_names_never_leave_their_directory_and_stay_distinct() {
         let dir = Path::new("/tmp/out/figures");
         let stems = [
-            "bode_../../../x_rel", "..", ".", "", "/etc/passwd", "a/b", "a b", "a_b", ".hidden",
-            "a%2Fb", "\u{0}", "bode_DE_rel",
+            "bode_../../../x_rel",
+            "..",
+            ".",
+            "",
+            "/etc/passwd",
+            "a/b",
+            "a b",
+            "a_b",
+            ".hidden",
+            "a%2Fb",
+            "\u{0}",
+            "bode_DE_rel",
         ];
         let mut seen = std::collections::BTreeSet::new();
         for s in stems {
             let p = file_in(dir, s);
             assert_eq!(p.parent(), Some(dir), "{s:?} -> {}", p.display());
             let n = p.file_name().unwrap().to_str().unwrap();
-            assert!(n != "." && n != ".." && !n.starts_with('.') && !n.contains('/'), "{n}");
+            assert!(
+                n != "." && n != ".." && !n.starts_with('.') && !n.contains('/'),
+                "{n}"
+            );
             assert!(seen.insert(n.to_string()), "{s:?} collides");
             assert!(is_file_name(n), "{n}");
         }

@@ -620,7 +620,9 @@ fn resolve(out: &Path) -> Result<PathBuf, OutputError> {
             out.to_path_buf()
         }
     } else if odd {
-        let name = out.file_name().ok_or_else(|| OutputError::NotADirectory(out.to_path_buf()))?;
+        let name = out
+            .file_name()
+            .ok_or_else(|| OutputError::NotADirectory(out.to_path_buf()))?;
         let parent = match out.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
@@ -660,9 +662,8 @@ fn remove_tree(dir: &Path) -> std::io::Result<()> {
 /// The first directory at or under `dir` (symbolic links not followed)
 /// whose entries the user cannot remove.
 fn read_only_dir(dir: &Path) -> Option<PathBuf> {
-    let writable = |d: &Path| {
-        std::fs::symlink_metadata(d).is_ok_and(|m| !m.permissions().readonly())
-    };
+    let writable =
+        |d: &Path| std::fs::symlink_metadata(d).is_ok_and(|m| !m.permissions().readonly());
     if !writable(dir) {
         return Some(dir.to_path_buf());
     }
@@ -1094,7 +1095,10 @@ mod tests {
         assert!(lock.exists());
         // flock locks belong to the open file: a second open is refused.
         let e = OutputDir::create(&out, false).unwrap_err().to_string();
-        assert!(e.contains("another Plinth command") && e.contains("process"), "{e}");
+        assert!(
+            e.contains("another Plinth command") && e.contains("process"),
+            "{e}"
+        );
         std::fs::write(first.path().join("a.csv"), "1").unwrap();
         first.commit().unwrap();
         assert!(!lock.exists(), "the lock file is removed");
@@ -1110,7 +1114,9 @@ mod tests {
         let cwd = std::env::current_dir().unwrap();
         let e = OutputDir::create(&cwd, true).unwrap_err().to_string();
         assert!(e.contains("current directory"), "{e}");
-        let e = OutputDir::create(Path::new("."), false).unwrap_err().to_string();
+        let e = OutputDir::create(Path::new("."), false)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("current directory"), "{e}");
         // `a/..` resolves to the parent, a real name.
         let sub = t.path().join("sub");
@@ -1127,8 +1133,10 @@ mod tests {
         let r = OutputDir::create(&ro, true);
         std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
         let root = std::fs::metadata("/proc/self").is_ok_and(|_| {
-            std::fs::read_to_string("/proc/self/status")
-                .is_ok_and(|s| s.lines().any(|l| l.starts_with("Uid:") && l.split_whitespace().nth(1) == Some("0")))
+            std::fs::read_to_string("/proc/self/status").is_ok_and(|s| {
+                s.lines()
+                    .any(|l| l.starts_with("Uid:") && l.split_whitespace().nth(1) == Some("0"))
+            })
         });
         if !root {
             let e = r.unwrap_err().to_string();

@@ -154,8 +154,16 @@ fn fifos_where_files_are_expected_are_refused_without_blocking() {
     mkfifo(&fifo_table);
     mkfifo(&fifo_layout);
     for (table, layout, name) in [
-        (fifo_table.clone(), tables.join("arbitrary_angles.toml"), "table.csv"),
-        (tables.join("arbitrary_angles.csv"), fifo_layout.clone(), "layout.toml"),
+        (
+            fifo_table.clone(),
+            tables.join("arbitrary_angles.toml"),
+            "table.csv",
+        ),
+        (
+            tables.join("arbitrary_angles.csv"),
+            fifo_layout.clone(),
+            "layout.toml",
+        ),
     ] {
         refused_as_not_a_file(
             plinth()
@@ -177,7 +185,11 @@ fn fifos_where_files_are_expected_are_refused_without_blocking() {
     let wav = field.join("wav");
     for (rec, channels, name) in [
         (fifo_rec.clone(), wav.join("channels.toml"), "rec.wav"),
-        (wav.join("rec_int16.wav"), fifo_channels.clone(), "channels.toml"),
+        (
+            wav.join("rec_int16.wav"),
+            fifo_channels.clone(),
+            "channels.toml",
+        ),
     ] {
         refused_as_not_a_file(
             plinth()
@@ -494,10 +506,7 @@ fn operating_system_errors_are_printed_once_by_every_reader() {
 fn flags_and_base_files_that_would_be_ignored_are_refused() {
     let t = tempfile::tempdir().unwrap();
     let run = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/field/sim");
-    for extra in [
-        &["--estimator", "ols"][..],
-        &["--model", "k_y,k_z,m"][..],
-    ] {
+    for extra in [&["--estimator", "ols"][..], &["--model", "k_y,k_z,m"][..]] {
         let o = plinth()
             .arg("identify")
             .arg(&run)
@@ -506,7 +515,10 @@ fn flags_and_base_files_that_would_be_ignored_are_refused() {
             .output()
             .unwrap();
         let msg = text(&o);
-        assert!(!o.status.success() && msg.contains("--unmeasured-base"), "{msg}");
+        assert!(
+            !o.status.success() && msg.contains("--unmeasured-base"),
+            "{msg}"
+        );
     }
     // A run with base.csv: --unmeasured-base refused; a base on a bearing
     // the run does not have, or a header without rows, refused.
@@ -516,22 +528,36 @@ fn flags_and_base_files_that_would_be_ignored_are_refused() {
         std::fs::copy(run.join(f), copy.join(f)).unwrap();
     }
     let head = "speed_hz,base,bearings,y_re,y_im,z_re,z_im\n";
-    std::fs::write(copy.join("base.csv"), format!("{head}5,skid,left;right,1e-7,0,0,1e-7\n")).unwrap();
+    std::fs::write(
+        copy.join("base.csv"),
+        format!("{head}5,skid,left;right,1e-7,0,0,1e-7\n"),
+    )
+    .unwrap();
     let o = plinth()
         .arg("identify")
         .arg(&copy)
         .args(["--unmeasured-base", "left,right"])
         .output()
         .unwrap();
-    assert!(!o.status.success() && text(&o).contains("base.csv holds the measured base"), "{}", text(&o));
+    assert!(
+        !o.status.success() && text(&o).contains("base.csv holds the measured base"),
+        "{}",
+        text(&o)
+    );
     for (rows, what) in [
         ("", "no data rows"),
-        ("5,skid,left;B9,1e-7,0,0,1e-7\n", "`B9` is not in measurements.csv"),
+        (
+            "5,skid,left;B9,1e-7,0,0,1e-7\n",
+            "`B9` is not in measurements.csv",
+        ),
         ("5,skid,left,right,1e-7,0,0,1e-7\n", "separate the bearings"),
     ] {
         std::fs::write(copy.join("base.csv"), format!("{head}{rows}")).unwrap();
         let o = plinth().arg("identify").arg(&copy).output().unwrap();
         let msg = text(&o);
-        assert!(!o.status.success() && msg.contains("base.csv") && msg.contains(what), "{msg}");
+        assert!(
+            !o.status.success() && msg.contains("base.csv") && msg.contains(what),
+            "{msg}"
+        );
     }
 }

@@ -57,7 +57,13 @@ fn hostile_bearing_names_in_a_run_are_refused_and_nothing_is_written() {
         let case = t.path().join(format!("c{i}"));
         let run = renamed_run(&case, name);
         let out = case.join("figs");
-        let o = plinth().arg("plot").arg(&run).arg("--out").arg(&out).output().unwrap();
+        let o = plinth()
+            .arg("plot")
+            .arg(&run)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
         let msg = text(&o);
         assert!(!o.status.success(), "{name}: {msg}");
         assert!(
@@ -66,9 +72,16 @@ fn hostile_bearing_names_in_a_run_are_refused_and_nothing_is_written() {
         );
         assert!(!msg.contains("panicked"), "{msg}");
         assert!(!out.exists(), "{name}: --out was written");
-        assert_eq!(tree(&case), ["run", "run/bearings.csv", "run/measurements.csv"]);
+        assert_eq!(
+            tree(&case),
+            ["run", "run/bearings.csv", "run/measurements.csv"]
+        );
         let o = plinth().arg("identify").arg(&run).output().unwrap();
-        assert!(!o.status.success() && text(&o).contains("bearing"), "{}", text(&o));
+        assert!(
+            !o.status.success() && text(&o).contains("bearing"),
+            "{}",
+            text(&o)
+        );
     }
 }
 
@@ -77,15 +90,29 @@ fn names_with_spaces_and_dots_give_figures_inside_out_only() {
     let t = tempfile::tempdir().unwrap();
     let run = renamed_run(t.path(), "Brg. 2 (DE)");
     let out = t.path().join("figs");
-    let o = plinth().arg("plot").arg(&run).arg("--out").arg(&out).output().unwrap();
+    let o = plinth()
+        .arg("plot")
+        .arg(&run)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", text(&o));
     let files = tree(&out);
     assert!(files.iter().all(|f| !f.contains('/')), "{files:?}");
     assert!(
-        files.iter().any(|f| f.starts_with("bode_Brg.%202%20%28DE%29_rel")),
+        files
+            .iter()
+            .any(|f| f.starts_with("bode_Brg.%202%20%28DE%29_rel")),
         "{files:?}"
     );
-    assert_eq!(tree(t.path()).iter().filter(|f| !f.starts_with("run") && !f.starts_with("figs")).count(), 0);
+    assert_eq!(
+        tree(t.path())
+            .iter()
+            .filter(|f| !f.starts_with("run") && !f.starts_with("figs"))
+            .count(),
+        0
+    );
 }
 
 #[test]
@@ -94,7 +121,11 @@ fn hostile_names_in_a_layout_or_transducers_csv_are_refused_with_their_key() {
     let tables = fixtures().join("tables");
     let layout = std::fs::read_to_string(tables.join("arbitrary_angles.toml")).unwrap();
     let bad = t.path().join("layout.toml");
-    std::fs::write(&bad, layout.replace("bearing = \"left\"", "bearing = \"../../left\"")).unwrap();
+    std::fs::write(
+        &bad,
+        layout.replace("bearing = \"left\"", "bearing = \"../../left\""),
+    )
+    .unwrap();
     let out = t.path().join("imported");
     let o = plinth()
         .arg("import")
@@ -110,7 +141,10 @@ fn hostile_names_in_a_layout_or_transducers_csv_are_refused_with_their_key() {
         .unwrap();
     let msg = text(&o);
     assert!(!o.status.success(), "{msg}");
-    assert!(msg.contains("transducer[0].bearing") && msg.contains("path separator"), "{msg}");
+    assert!(
+        msg.contains("transducer[0].bearing") && msg.contains("path separator"),
+        "{msg}"
+    );
     assert!(!out.exists());
 
     // transducers.csv of a run: read by `plot`.
@@ -121,7 +155,13 @@ fn hostile_names_in_a_layout_or_transducers_csv_are_refused_with_their_key() {
     )
     .unwrap();
     let figs = t.path().join("figs");
-    let o = plinth().arg("plot").arg(&run).arg("--out").arg(&figs).output().unwrap();
+    let o = plinth()
+        .arg("plot")
+        .arg(&run)
+        .arg("--out")
+        .arg(&figs)
+        .output()
+        .unwrap();
     let msg = text(&o);
     assert!(!o.status.success(), "{msg}");
     assert!(msg.contains("transducers.csv:3:1"), "{msg}");

@@ -170,7 +170,8 @@ fn kind_name(k: SensorKind) -> &'static str {
 impl Channels {
     /// Reads and checks CHANNELS.toml.
     pub fn read(path: &Path) -> Result<Channels> {
-        let text = crate::input_file::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+        let text = crate::input_file::read_to_string(path)
+            .with_context(|| format!("{}", path.display()))?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -353,9 +354,15 @@ sensitivity_unit = "mV/(mm/s)"
         assert!(Channels::parse(CHANNELS, "c.toml").is_ok());
         let wide = format!("speed_resolution_hz = 1000.0\n{CHANNELS}");
         let e = Channels::parse(&wide, "c.toml").unwrap_err().to_string();
-        assert!(e.contains("speed_resolution_hz") && e.contains("whole run-down"), "{e}");
+        assert!(
+            e.contains("speed_resolution_hz") && e.contains("whole run-down"),
+            "{e}"
+        );
         let hostile = CHANNELS.replacen("bearing = \"B1\"", "bearing = \"../B1\"", 1);
         let e = Channels::parse(&hostile, "c.toml").unwrap_err().to_string();
-        assert!(e.contains("channel[0].bearing") && e.contains("path separator"), "{e}");
+        assert!(
+            e.contains("channel[0].bearing") && e.contains("path separator"),
+            "{e}"
+        );
     }
 }

@@ -118,7 +118,8 @@ pub struct Transducer {
 impl Layout {
     /// Reads and checks LAYOUT.toml.
     pub fn read(path: &Path) -> Result<Layout> {
-        let text = crate::input_file::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+        let text = crate::input_file::read_to_string(path)
+            .with_context(|| format!("{}", path.display()))?;
         Self::parse(&text, &path.display().to_string())
     }
 
