@@ -356,9 +356,13 @@ mod tests {
     fn noise_columns_round_trip_and_are_optional() {
         for sd in [None, Some([1.0e-8, 2.5e-8])] {
             let dir = tempfile::tempdir().unwrap();
-            write(dir.path(), &[row(sd), row(sd)]).unwrap();
+            let second = BaseRow {
+                speed_hz: 13.0,
+                ..row(sd)
+            };
+            write(dir.path(), &[row(sd), second.clone()]).unwrap();
             let back = read(dir.path()).unwrap().unwrap();
-            assert_eq!(back, vec![row(sd), row(sd)]);
+            assert_eq!(back, vec![row(sd), second]);
         }
     }
 
