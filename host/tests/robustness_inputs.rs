@@ -269,7 +269,11 @@ fn leftovers_of_a_killed_simulate_are_cleared_by_the_next_command() {
     assert!(child.try_wait().unwrap().is_none(), "ended before the kill");
     child.kill().unwrap();
     child.wait().unwrap();
-    assert_eq!(leftovers(&run), vec![staging.clone()]);
+    // Its staging directory and its lock file (released by the kernel).
+    assert_eq!(
+        leftovers(&run),
+        vec![".run.plinth-lock".to_string(), staging.clone()]
+    );
 
     // Not Plinth's (no manifest mark) or of a running process: kept.
     let foreign = t.path().join(format!(".run.plinth-partial-{}", dead_pid()));
@@ -295,6 +299,7 @@ fn leftovers_of_a_killed_simulate_are_cleared_by_the_next_command() {
         "{msg}"
     );
     assert!(!t.path().join(&staging).exists());
+    assert!(!t.path().join(".run.plinth-lock").exists());
     assert!(foreign.join("notes.txt").exists() && running.exists());
 }
 
