@@ -121,7 +121,7 @@ pub fn write(dir: &Path, rows: &[BaseRow]) -> Result<(), BaseCsvError> {
 /// Reads `dir/base.csv`; `Ok(None)` when the run has no base channel.
 pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
     let file = dir.join(BASE_FILE);
-    if !file.exists() {
+    if file.symlink_metadata().is_err() {
         return Ok(None);
     }
     let field = |line: u64, column: usize, message: String| BaseCsvError::Field {
@@ -130,14 +130,31 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
         column,
         message,
     };
+    // Not a regular file (a FIFO would block), a spreadsheet's separator or
+    // encoding: named before the CSV reader runs.
+    let layout = crate::csv_layout::check(&file, &BASE_COLUMNS.join(",")).map_err(|e| match e {
+        crate::csv_layout::LayoutError::NotAFile(m) => BaseCsvError::Io {
+            file: file.clone(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, m),
+        },
+        crate::csv_layout::LayoutError::At(line, m) => field(line, 1, m),
+    })?;
+    let mut handle = std::fs::File::open(&file).map_err(|source| BaseCsvError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    std::io::Seek::seek(&mut handle, std::io::SeekFrom::Start(layout.skip)).map_err(|source| {
+        BaseCsvError::Io {
+            file: file.clone(),
+            source,
+        }
+    })?;
     let mut r = csv::ReaderBuilder::new()
         .has_headers(true)
+        .flexible(true)
+        .quoting(false)
         .trim(csv::Trim::All)
-        .from_path(&file)
-        .map_err(|e| BaseCsvError::Io {
-            file: file.clone(),
-            source: std::io::Error::other(e),
-        })?;
+        .from_reader(std::io::BufReader::new(handle));
     let header = r.headers().map_err(|e| field(1, 1, e.to_string()))?.clone();
     for (i, want) in BASE_COLUMNS.iter().enumerate() {
         if header.get(i) != Some(want) {
@@ -167,13 +184,25 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
             ))
         }
     };
-    let mut rows = Vec::new();
+    let mut rows: Vec<BaseRow> = Vec::new();
+    let mut lines: Vec<u64> = Vec::new();
     for rec in r.records() {
         let rec = rec.map_err(|e| {
             let line = e.position().map_or(0, |p| p.line());
             field(line, 1, e.to_string())
         })?;
         let line = rec.position().map_or(0, |p| p.line());
+        if rec.len() != header.len() {
+            return Err(field(
+                line,
+                rec.len().min(header.len()) + 1,
+                format!(
+                    "the row has {} fields, the header {}: separate the bearings of a base with `;` (left;right), and write numbers without thousands separators",
+                    rec.len(),
+                    header.len()
+                ),
+            ));
+        }
         let num = |c: usize| -> Result<f64, BaseCsvError> {
             let text = rec.get(c).unwrap_or("");
             text.parse::<f64>()
@@ -189,9 +218,7 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
         };
         let speed_hz = num(0)?;
         let base = rec.get(1).unwrap_or("").to_string();
-        if base.is_empty() {
-            return Err(field(line, 2, "base: empty name".into()));
-        }
+        crate::names::check("base", &base).map_err(|m| field(line, 2, m))?;
         let bearings: Vec<String> = rec
             .get(2)
             .unwrap_or("")
@@ -202,6 +229,35 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
             .collect();
         if bearings.is_empty() {
             return Err(field(line, 3, "bearings: no bearing named".into()));
+        }
+        for b in &bearings {
+            crate::names::check("bearing", b).map_err(|m| field(line, 3, m))?;
+        }
+        if let Some(first) = rows.iter().find(|r: &&BaseRow| r.base == base) {
+            if first.bearings != bearings {
+                return Err(field(
+                    line,
+                    3,
+                    format!(
+                        "base `{base}` lists the bearings {} here but {} on an earlier row: every row of a base lists the same bearings",
+                        bearings.join(";"),
+                        first.bearings.join(";")
+                    ),
+                ));
+            }
+        }
+        if let Some(other) = rows
+            .iter()
+            .find(|r| r.base != base && r.bearings.iter().any(|b| bearings.contains(b)))
+        {
+            return Err(field(
+                line,
+                3,
+                format!(
+                    "a bearing of base `{base}` is also on base `{}`: a pedestal stands on one base",
+                    other.base
+                ),
+            ));
         }
         let noise_sd = if with_noise {
             let sd = |c: usize| -> Result<f64, BaseCsvError> {
@@ -224,6 +280,20 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
         } else {
             None
         };
+        if let Some((first, _)) = lines
+            .iter()
+            .zip(&rows)
+            .find(|(_, r)| r.base == base && r.speed_hz == speed_hz)
+        {
+            return Err(field(
+                line,
+                1,
+                format!(
+                    "a second row for base `{base}` at {speed_hz} Hz (the first is line {first})"
+                ),
+            ));
+        }
+        lines.push(line);
         rows.push(BaseRow {
             speed_hz,
             base,
@@ -235,7 +305,34 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
             noise_sd,
         });
     }
+    if rows.is_empty() {
+        return Err(field(
+            2,
+            1,
+            "no data rows after the header: give the base motion (one row per speed and base) or remove base.csv".into(),
+        ));
+    }
     Ok(Some(rows))
+}
+
+/// Checks that every bearing `rows` names is a measured bearing of the run
+/// (`measured`): a base on bearings the run does not have would be ignored.
+pub fn check_bearings(dir: &Path, rows: &[BaseRow], measured: &[&str]) -> Result<(), BaseCsvError> {
+    for r in rows {
+        if let Some(b) = r.bearings.iter().find(|b| !measured.contains(&b.as_str())) {
+            return Err(BaseCsvError::Field {
+                file: dir.join(BASE_FILE),
+                line: 0,
+                column: 3,
+                message: format!(
+                    "base `{}`: bearing `{b}` is not in measurements.csv (it has: {})",
+                    r.base,
+                    measured.join(", ")
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -259,9 +356,13 @@ mod tests {
     fn noise_columns_round_trip_and_are_optional() {
         for sd in [None, Some([1.0e-8, 2.5e-8])] {
             let dir = tempfile::tempdir().unwrap();
-            write(dir.path(), &[row(sd), row(sd)]).unwrap();
+            let second = BaseRow {
+                speed_hz: 13.0,
+                ..row(sd)
+            };
+            write(dir.path(), &[row(sd), second.clone()]).unwrap();
             let back = read(dir.path()).unwrap().unwrap();
-            assert_eq!(back, vec![row(sd), row(sd)]);
+            assert_eq!(back, vec![row(sd), second]);
         }
     }
 
@@ -283,5 +384,62 @@ mod tests {
         .unwrap();
         let e = read(dir.path()).unwrap_err().to_string();
         assert!(e.contains(":1:") && e.contains("y_sd,z_sd"), "{e}");
+    }
+
+    #[test]
+    fn base_csv_that_would_be_ignored_is_refused_with_line_and_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join(BASE_FILE);
+        let head = "speed_hz,base,bearings,y_re,y_im,z_re,z_im\n";
+        let cases = [
+            ("".to_string(), ":2:1:", "no data rows"),
+            (
+                "10,skid,left,right,1e-6,0,0,1e-6\n".into(),
+                ":2:",
+                "separate the bearings",
+            ),
+            (
+                "10,skid,../x,1e-6,0,0,1e-6\n".into(),
+                ":2:3:",
+                "path separator",
+            ),
+            (
+                "10,skid,left;right,1e-6,0,0,1e-6\n10,skid,left;right,2e-6,0,0,1e-6\n".into(),
+                ":3:1:",
+                "first is line 2",
+            ),
+            (
+                "10,skid,left,1e-6,0,0,1e-6\n20,skid,left;right,1e-6,0,0,1e-6\n".into(),
+                ":3:3:",
+                "same bearings",
+            ),
+            (
+                "10,a,left,1e-6,0,0,1e-6\n10,b,left,1e-6,0,0,1e-6\n".into(),
+                ":3:3:",
+                "one base",
+            ),
+        ];
+        for (rows, at, what) in cases {
+            std::fs::write(&file, format!("{head}{rows}")).unwrap();
+            let e = read(dir.path()).unwrap_err().to_string();
+            assert!(e.contains(at) && e.contains(what), "{rows}: {e}");
+        }
+        std::fs::write(
+            &file,
+            "speed_hz;base;bearings;y_re;y_im;z_re;z_im\n10;skid;left;1,5e-6;0;0;1e-6\n",
+        )
+        .unwrap();
+        let e = read(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("`;`") && e.contains("decimal commas"), "{e}");
+        std::fs::write(&file, format!("{head}10,skid,left,1e-6,0,0,1e-6\n")).unwrap();
+        let rows = read(dir.path()).unwrap().unwrap();
+        let e = check_bearings(dir.path(), &rows, &["DE", "NDE"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`left` is not in measurements.csv") && e.contains("DE, NDE"),
+            "{e}"
+        );
+        assert!(check_bearings(dir.path(), &rows, &["left"]).is_ok());
     }
 }

@@ -27,8 +27,21 @@ pub fn ensure_regular(path: &Path) -> std::io::Result<()> {
 /// first, so a FIFO never blocks).
 pub fn read_to_string(path: &Path) -> std::io::Result<String> {
     ensure_regular(path)?;
+    let bytes = std::fs::metadata(path)?.len();
+    if bytes > MAX_TEXT_BYTES {
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            format!(
+                "is {bytes} bytes long; a configuration, machine or JSON file is at most {MAX_TEXT_BYTES} bytes: is it the right file?"
+            ),
+        ));
+    }
     std::fs::read_to_string(path)
 }
+
+/// The largest text file [`read_to_string`] reads whole [bytes]: 64 MiB
+/// (configuration, machine, layout and JSON files are kilobytes).
+pub const MAX_TEXT_BYTES: u64 = 64 << 20;
 
 #[cfg(test)]
 mod tests {

@@ -15,6 +15,7 @@ pub mod extract;
 pub mod field;
 pub mod identify;
 pub mod input_file;
+pub mod names;
 pub mod output;
 pub mod paper;
 pub mod plots;

@@ -82,6 +82,23 @@ pub enum OutputError {
         /// Why it is protected.
         why: String,
     },
+    /// Another Plinth command holds the lock of `--out`.
+    #[error("--out {}: another Plinth command is writing it ({}): wait for it to finish, or choose another directory; nothing was changed", .0.display(), .1)]
+    Busy(PathBuf, String),
+    /// Something appeared in `--out` while the command ran.
+    #[error("--out {}: {what} appeared in it while this command ran (not written by it): nothing was replaced; move it away or choose another directory and run again", .path.display())]
+    Appeared {
+        /// The directory.
+        path: PathBuf,
+        /// What appeared, e.g. "2 entries (notes.txt, run.csv)".
+        what: String,
+    },
+    /// `--out` is (or contains) the current directory.
+    #[error("--out {}: is the current directory or contains it ({}); Plinth moves a finished directory into place and cannot replace the one you are in: give a new directory name, e.g. --out run1", .0.display(), .1.display())]
+    HoldsCurrentDir(PathBuf, PathBuf),
+    /// `--out` (or a directory in it) cannot be written.
+    #[error("--out {}: {} is read-only: the previous directory could not be removed after the new one is moved into place; make it writable (chmod -R u+w) or choose another directory; nothing was changed", .0.display(), .1.display())]
+    ReadOnly(PathBuf, PathBuf),
     /// An operating-system error on a path.
     #[error("{what} {}: {source}", .path.display())]
     Io {
@@ -113,6 +130,8 @@ pub struct OutputDir {
     appends: BTreeSet<String>,
     keep_as: Option<PathBuf>,
     done: bool,
+    /// The lock of `--out`, held until the output is committed or dropped.
+    lock: Option<Lock>,
 }
 
 impl OutputDir {
@@ -120,6 +139,8 @@ impl OutputDir {
     /// `out` that already holds something (files Plinth did not write are
     /// still never deleted or replaced).
     pub fn create(out: &Path, force: bool) -> Result<OutputDir, OutputError> {
+        let out = &resolve(out)?;
+        let lock = Lock::take(out)?;
         for note in clean_leftovers(out) {
             eprintln!("{note}");
         }
@@ -140,6 +161,7 @@ impl OutputDir {
             appends: BTreeSet::new(),
             keep_as: None,
             done: false,
+            lock: Some(lock),
         })
     }
 
@@ -149,6 +171,8 @@ impl OutputDir {
     /// output is dropped uncommitted (it may hold a raw log): remove it
     /// with [`OutputDir::discard`].
     pub fn resume(out: &Path, staging: &Path, force: bool) -> Result<OutputDir, OutputError> {
+        let out = &resolve(out)?;
+        let lock = Lock::take(out)?;
         for note in clean_leftovers(out) {
             eprintln!("{note}");
         }
@@ -163,6 +187,7 @@ impl OutputDir {
             appends: BTreeSet::new(),
             keep_as: Some(staging.to_path_buf()),
             done: false,
+            lock: Some(lock),
         })
     }
 
@@ -209,30 +234,69 @@ impl OutputDir {
     fn commit_inner(&mut self) -> Result<(), OutputError> {
         let new_files = list_files(&self.staging)?;
         let exists = self.target.symlink_metadata().is_ok();
-        if exists && self.existing {
-            self.merge_old()?;
-        }
+        // What the old directory held when it was merged: anything else
+        // found at the swap appeared while this command ran.
+        let snapshot = if exists && self.existing {
+            Some(self.merge_old()?)
+        } else {
+            None
+        };
         // Append-only logs are records, not derived files: never listed.
         let derived: BTreeSet<String> = new_files.difference(&self.appends).cloned().collect();
         write_manifest(&self.staging, &derived)?;
-        if !exists {
-            return std::fs::rename(&self.staging, &self.target)
-                .map_err(io("cannot move the output into", &self.target));
-        }
+        let Some(snapshot) = snapshot else {
+            // A new or empty `--out`: it must still be absent or empty. A
+            // directory is renamed over an empty one only (the kernel
+            // refuses a non-empty one), so nothing that appears is replaced.
+            if exists {
+                self.refuse_if_appeared(&self.target, &BTreeSet::new())?;
+            }
+            return std::fs::rename(&self.staging, &self.target).map_err(|e| {
+                if self.target.is_dir() {
+                    self.refuse_if_appeared(&self.target, &BTreeSet::new())
+                        .err()
+                        .unwrap_or_else(|| io("cannot move the output into", &self.target)(e))
+                } else {
+                    io("cannot move the output into", &self.target)(e)
+                }
+            });
+        };
         // Swap: old -> backup, staging -> target, remove backup.
         let backup = sibling(&self.target, "plinth-old", std::process::id());
         std::fs::rename(&self.target, &backup)
             .map_err(io("cannot move the previous directory aside", &self.target))?;
+        if let Err(e) = self.refuse_if_appeared(&backup, &snapshot) {
+            let _ = std::fs::rename(&backup, &self.target);
+            return Err(e);
+        }
         if let Err(e) = std::fs::rename(&self.staging, &self.target) {
             let _ = std::fs::rename(&backup, &self.target);
             return Err(io("cannot move the output into", &self.target)(e));
         }
-        std::fs::remove_dir_all(&backup).map_err(io("cannot remove", &backup))
+        remove_tree(&backup).map_err(io("cannot remove", &backup))
+    }
+
+    /// `Err(Appeared)` when `dir` holds an entry that is not in `known`.
+    fn refuse_if_appeared(&self, dir: &Path, known: &BTreeSet<String>) -> Result<(), OutputError> {
+        let mut new: Vec<String> = list_entries(dir)?
+            .into_iter()
+            .map(|(r, _)| r)
+            .filter(|r| !known.contains(r))
+            .collect();
+        if new.is_empty() {
+            return Ok(());
+        }
+        new.sort();
+        Err(OutputError::Appeared {
+            path: self.target.clone(),
+            what: describe(&new),
+        })
     }
 
     /// Checks every collision and links the old files that are kept into the
     /// staging directory; the old directory is only read.
-    fn merge_old(&self) -> Result<(), OutputError> {
+    /// Returns every entry the old directory held.
+    fn merge_old(&self) -> Result<BTreeSet<String>, OutputError> {
         let old = &self.target;
         let manifest = read_manifest(old);
         let old_entries = list_entries(old)?;
@@ -314,12 +378,14 @@ impl OutputDir {
                 why: why.clone(),
             });
         }
-        Ok(())
+        Ok(old_entries.into_iter().map(|(r, _)| r).collect())
     }
 }
 
 impl Drop for OutputDir {
     fn drop(&mut self) {
+        // The lock goes last, after the staging directory is gone.
+        let _lock = self.lock.take();
         if self.done {
             return;
         }
@@ -356,7 +422,12 @@ fn process_is_running(pid: u32) -> bool {
 ///   output;
 /// - a backup `.NAME.plinth-old-PID` of an ended process while `NAME` itself
 ///   is missing (killed between the two renames of a commit) is the
-///   previous directory: it is moved back to `NAME`.
+///   previous directory: it is moved back to `NAME` (the commit is rolled
+///   back);
+/// - such a backup while `NAME` exists (killed after the second rename) is
+///   removed when everything in it is also in `NAME` or is a file Plinth
+///   wrote, unchanged (the commit is completed); otherwise it is left and
+///   what it alone holds is named.
 ///
 /// Anything else (another name, a running process, no mark) is left alone.
 /// Failures are reported as notes, never as errors: the command goes on.
@@ -401,6 +472,26 @@ pub fn clean_leftovers(out: &Path) -> Vec<String> {
                     )),
                 }
             }
+            "plinth-old" if out.is_dir() => match backup_is_merged(&path, out) {
+                Ok(()) => match remove_tree(&path) {
+                    Ok(()) => notes.push(format!(
+                        "note: removed {}, the previous {} that an interrupted Plinth command (process {pid}) had already merged into it",
+                        path.display(),
+                        out.display()
+                    )),
+                    Err(err) => notes.push(format!(
+                        "warning: cannot remove {}, the previous {} (already merged into it): {err}",
+                        path.display(),
+                        out.display()
+                    )),
+                },
+                Err(rel) => notes.push(format!(
+                    "warning: {} holds the previous {} (an interrupted Plinth command moved it), and its {rel} is not in {}: left as it is, move what you need back",
+                    path.display(),
+                    out.display(),
+                    out.display()
+                )),
+            },
             "plinth-old" if out.symlink_metadata().is_err() => {
                 match std::fs::rename(&path, out) {
                     Ok(()) => notes.push(format!(
@@ -419,6 +510,196 @@ pub fn clean_leftovers(out: &Path) -> Vec<String> {
         }
     }
     notes
+}
+
+/// The lock of an output directory: `.NAME.plinth-lock` beside it, locked
+/// (`flock`, released by the kernel when the process ends, even when it is
+/// killed) for as long as a command writes `NAME`; a second command on the
+/// same `--out` is refused at once. The file is removed when the lock is
+/// released.
+#[derive(Debug)]
+struct Lock {
+    path: PathBuf,
+    file: std::fs::File,
+}
+
+impl Lock {
+    fn take(out: &Path) -> Result<Lock, OutputError> {
+        use std::os::unix::fs::MetadataExt;
+        let path = lock_path(out);
+        for _ in 0..8 {
+            let file = std::fs::OpenOptions::new()
+                .create(true)
+                .truncate(false)
+                .read(true)
+                .write(true)
+                .open(&path)
+                .map_err(io("cannot create the lock", &path))?;
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    let holder = std::fs::read_to_string(&path).unwrap_or_default();
+                    let holder = match holder.trim().parse::<u32>() {
+                        Ok(pid) => format!("process {pid}, lock {}", path.display()),
+                        Err(_) => format!("lock {}", path.display()),
+                    };
+                    return Err(OutputError::Busy(out.to_path_buf(), holder));
+                }
+                Err(std::fs::TryLockError::Error(e)) => {
+                    return Err(io("cannot lock", &path)(e));
+                }
+            }
+            // The holder before us may have removed the file between our
+            // open and our lock: then the lock is on a deleted file, retry.
+            let same = match (file.metadata(), std::fs::metadata(&path)) {
+                (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+                _ => false,
+            };
+            if same {
+                let _ = file.set_len(0);
+                let _ = std::io::Write::write_all(
+                    &mut &file,
+                    format!("{}\n", std::process::id()).as_bytes(),
+                );
+                return Ok(Lock { path, file });
+            }
+        }
+        Err(OutputError::Busy(
+            out.to_path_buf(),
+            format!("lock {} keeps changing", path.display()),
+        ))
+    }
+}
+
+impl Drop for Lock {
+    fn drop(&mut self) {
+        // Removed while still locked; waiters on the old file see it gone.
+        let _ = std::fs::remove_file(&self.path);
+        let _ = self.file.unlock();
+    }
+}
+
+/// `.NAME.plinth-lock` beside `out`.
+fn lock_path(out: &Path) -> PathBuf {
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    parent.join(format!(".{name}.plinth-lock"))
+}
+
+/// `out` with a real last component (`.`, `..` and `a/..` resolved), and
+/// refused when it is, or contains, the current directory (it could not be
+/// moved into place).
+fn resolve(out: &Path) -> Result<PathBuf, OutputError> {
+    use std::path::Component;
+    let odd = out.file_name().is_none()
+        || out
+            .components()
+            .any(|c| matches!(c, Component::CurDir | Component::ParentDir));
+    let is_link = out
+        .symlink_metadata()
+        .is_ok_and(|m| m.file_type().is_symlink());
+    if is_link {
+        return Ok(out.to_path_buf()); // refused by check_target
+    }
+    let resolved = if out.exists() {
+        let canon = std::fs::canonicalize(out).map_err(io("cannot inspect", out))?;
+        if let Ok(cwd) = std::env::current_dir().and_then(std::fs::canonicalize) {
+            if cwd.starts_with(&canon) {
+                return Err(OutputError::HoldsCurrentDir(out.to_path_buf(), cwd));
+            }
+        }
+        if odd {
+            canon
+        } else {
+            out.to_path_buf()
+        }
+    } else if odd {
+        let name = out
+            .file_name()
+            .ok_or_else(|| OutputError::NotADirectory(out.to_path_buf()))?;
+        let parent = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent).map_err(io("cannot create", &parent))?;
+        std::fs::canonicalize(&parent)
+            .map_err(io("cannot inspect", &parent))?
+            .join(name)
+    } else {
+        out.to_path_buf()
+    };
+    Ok(resolved)
+}
+
+/// `remove_dir_all`, retried once with every directory made writable by its
+/// owner (a read-only directory inside a backup must not leave it behind).
+fn remove_tree(dir: &Path) -> std::io::Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    if std::fs::remove_dir_all(dir).is_ok() || !dir.exists() {
+        return Ok(());
+    }
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        if let Ok(m) = d.symlink_metadata() {
+            if m.is_dir() {
+                let mode = m.permissions().mode() | 0o700;
+                let _ = std::fs::set_permissions(&d, std::fs::Permissions::from_mode(mode));
+                if let Ok(rd) = std::fs::read_dir(&d) {
+                    stack.extend(rd.filter_map(Result::ok).map(|e| e.path()));
+                }
+            }
+        }
+    }
+    std::fs::remove_dir_all(dir)
+}
+
+/// The first directory at or under `dir` (symbolic links not followed)
+/// whose entries the user cannot remove.
+fn read_only_dir(dir: &Path) -> Option<PathBuf> {
+    let writable =
+        |d: &Path| std::fs::symlink_metadata(d).is_ok_and(|m| !m.permissions().readonly());
+    if !writable(dir) {
+        return Some(dir.to_path_buf());
+    }
+    let entries = list_entries(dir).ok()?;
+    entries
+        .into_iter()
+        .filter(|(_, k)| matches!(k, Entry::Dir))
+        .map(|(r, _)| dir.join(r))
+        .find(|d| !writable(d))
+}
+
+/// Whether every entry of `backup` (a previous directory moved aside by a
+/// commit) is also in `out`, or is a file Plinth wrote and nobody changed:
+/// then the commit had finished and `backup` can go. `Err` names what is
+/// only in `backup`.
+fn backup_is_merged(backup: &Path, out: &Path) -> Result<(), String> {
+    let manifest = read_manifest(backup);
+    let entries = list_entries(backup).map_err(|e| e.to_string())?;
+    for (rel, kind) in entries {
+        if rel == MANIFEST_FILE {
+            continue;
+        }
+        let (old, new) = (backup.join(&rel), out.join(&rel));
+        let ok = match kind {
+            Entry::File => {
+                let h = file_hash(&old).ok();
+                h.is_some()
+                    && (file_hash(&new).ok() == h || manifest.get(rel.as_str()).copied() == h)
+            }
+            _ => new.symlink_metadata().is_ok(),
+        };
+        if !ok {
+            return Err(rel);
+        }
+    }
+    Ok(())
 }
 
 /// `.NAME.TAG-N` beside `path`.
@@ -485,6 +766,9 @@ fn check_target(out: &Path, force: bool) -> Result<bool, OutputError> {
             path: out.to_path_buf(),
             what: describe(&names),
         });
+    }
+    if let Some(dir) = read_only_dir(out) {
+        return Err(OutputError::ReadOnly(out.to_path_buf(), dir));
     }
     Ok(true)
 }
@@ -766,5 +1050,134 @@ mod tests {
             .unwrap()
             .file_type()
             .is_symlink());
+    }
+
+    #[test]
+    fn a_file_that_appears_in_a_new_out_is_never_replaced() {
+        let t = tempfile::tempdir().unwrap();
+        let out = t.path().join("run");
+        std::fs::create_dir(&out).unwrap();
+        let o = OutputDir::create(&out, false).unwrap();
+        std::fs::write(o.path().join("measurements.csv"), "simulated").unwrap();
+        // Another writer puts a file into the empty --out meanwhile.
+        std::fs::write(out.join("imported.csv"), "theirs").unwrap();
+        let e = o.commit().unwrap_err().to_string();
+        assert!(e.contains("appeared") && e.contains("imported.csv"), "{e}");
+        assert_eq!(std::fs::read(out.join("imported.csv")).unwrap(), b"theirs");
+        assert!(!out.join("measurements.csv").exists());
+        let left: Vec<_> = std::fs::read_dir(t.path()).unwrap().collect();
+        assert_eq!(left.len(), 1, "no staging, backup or lock left");
+    }
+
+    #[test]
+    fn a_file_that_appears_in_a_forced_out_is_never_deleted() {
+        let t = tempfile::tempdir().unwrap();
+        let out = t.path().join("run");
+        let o = OutputDir::create(&out, false).unwrap();
+        std::fs::write(o.path().join("a.csv"), "1").unwrap();
+        o.commit().unwrap();
+        let o = OutputDir::create(&out, true).unwrap();
+        std::fs::write(o.path().join("a.csv"), "2").unwrap();
+        // Written after the merge's snapshot would be taken, before commit.
+        std::fs::write(out.join("late.txt"), "theirs").unwrap();
+        o.commit().unwrap();
+        // late.txt existed at the merge (it ran at commit): kept.
+        assert_eq!(std::fs::read(out.join("late.txt")).unwrap(), b"theirs");
+        assert_eq!(std::fs::read(out.join("a.csv")).unwrap(), b"2");
+    }
+
+    #[test]
+    fn a_second_command_on_the_same_out_is_refused_while_the_first_runs() {
+        let t = tempfile::tempdir().unwrap();
+        let out = t.path().join("run");
+        let first = OutputDir::create(&out, false).unwrap();
+        let lock = lock_path(&out);
+        assert!(lock.exists());
+        // flock locks belong to the open file: a second open is refused.
+        let e = OutputDir::create(&out, false).unwrap_err().to_string();
+        assert!(
+            e.contains("another Plinth command") && e.contains("process"),
+            "{e}"
+        );
+        std::fs::write(first.path().join("a.csv"), "1").unwrap();
+        first.commit().unwrap();
+        assert!(!lock.exists(), "the lock file is removed");
+        let second = OutputDir::create(&out, true).unwrap();
+        drop(second);
+        assert_eq!(std::fs::read_dir(t.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn out_dot_and_read_only_outputs_are_clear_errors_that_leave_nothing() {
+        use std::os::unix::fs::PermissionsExt;
+        let t = tempfile::tempdir().unwrap();
+        let cwd = std::env::current_dir().unwrap();
+        let e = OutputDir::create(&cwd, true).unwrap_err().to_string();
+        assert!(e.contains("current directory"), "{e}");
+        let e = OutputDir::create(Path::new("."), false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("current directory"), "{e}");
+        // `a/..` resolves to the parent, a real name.
+        let sub = t.path().join("sub");
+        std::fs::create_dir(&sub).unwrap();
+        let o = OutputDir::create(&sub.join("x/../y"), false).unwrap();
+        std::fs::write(o.path().join("a.csv"), "1").unwrap();
+        assert_eq!(o.commit().unwrap(), sub.canonicalize().unwrap().join("y"));
+        // Read-only --out with --force: refused before anything is written.
+        let ro = t.path().join("ro");
+        let o = OutputDir::create(&ro, false).unwrap();
+        std::fs::write(o.path().join("a.csv"), "1").unwrap();
+        o.commit().unwrap();
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+        let r = OutputDir::create(&ro, true);
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
+        let root = std::fs::metadata("/proc/self").is_ok_and(|_| {
+            std::fs::read_to_string("/proc/self/status").is_ok_and(|s| {
+                s.lines()
+                    .any(|l| l.starts_with("Uid:") && l.split_whitespace().nth(1) == Some("0"))
+            })
+        });
+        if !root {
+            let e = r.unwrap_err().to_string();
+            assert!(e.contains("read-only"), "{e}");
+        }
+        let names: BTreeSet<String> = std::fs::read_dir(t.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["ro", "sub"].map(String::from).into());
+    }
+
+    #[test]
+    fn a_commit_killed_after_its_swap_is_completed_by_the_next_command() {
+        let t = tempfile::tempdir().unwrap();
+        let out = t.path().join("run");
+        let o = OutputDir::create(&out, false).unwrap();
+        std::fs::write(o.path().join("a.csv"), "1").unwrap();
+        o.commit().unwrap();
+        std::fs::write(out.join("mine.txt"), "user").unwrap();
+        // What a kill after the second rename leaves: the merged new
+        // directory in place and the old one aside.
+        let dead = 4_000_000u32; // above pid_max: never running
+        let backup = sibling(&out, "plinth-old", dead);
+        let copy = |from: &Path, to: &Path| {
+            std::fs::create_dir(to).unwrap();
+            for e in std::fs::read_dir(from).unwrap() {
+                let e = e.unwrap();
+                std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+            }
+        };
+        copy(&out, &backup);
+        std::fs::write(out.join("a.csv"), "2").unwrap();
+        let notes = clean_leftovers(&out);
+        assert!(notes[0].contains("already merged"), "{notes:?}");
+        assert!(!backup.exists());
+        // A backup holding something the new directory lacks is kept.
+        copy(&out, &backup);
+        std::fs::write(backup.join("only-here.txt"), "x").unwrap();
+        let notes = clean_leftovers(&out);
+        assert!(notes[0].contains("only-here.txt"), "{notes:?}");
+        assert!(backup.join("only-here.txt").exists());
     }
 }

@@ -137,7 +137,74 @@ fn fifos_where_files_are_expected_are_refused_without_blocking() {
             .arg(t.path().join("o3")),
         "stream.toml",
     );
-    for o in ["o1", "o2", "o3"] {
+    // base.csv of a run directory (identify).
+    let copy = t.path().join("run-base");
+    std::fs::create_dir(&copy).unwrap();
+    for f in ["measurements.csv", "bearings.csv"] {
+        std::fs::copy(run.join(f), copy.join(f)).unwrap();
+    }
+    mkfifo(&copy.join("base.csv"));
+    refused_as_not_a_file(plinth().arg("identify").arg(&copy), "base.csv");
+
+    // import's table and layout, extract's recording and channels file.
+    let field = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/field");
+    let tables = field.join("tables");
+    let fifo_table = t.path().join("table.csv");
+    let fifo_layout = t.path().join("layout.toml");
+    mkfifo(&fifo_table);
+    mkfifo(&fifo_layout);
+    for (table, layout, name) in [
+        (
+            fifo_table.clone(),
+            tables.join("arbitrary_angles.toml"),
+            "table.csv",
+        ),
+        (
+            tables.join("arbitrary_angles.csv"),
+            fifo_layout.clone(),
+            "layout.toml",
+        ),
+    ] {
+        refused_as_not_a_file(
+            plinth()
+                .arg("import")
+                .arg(&table)
+                .arg("--layout")
+                .arg(&layout)
+                .arg("--bearings")
+                .arg(field.join("sim/bearings.csv"))
+                .arg("--out")
+                .arg(t.path().join("o4")),
+            name,
+        );
+    }
+    let fifo_rec = t.path().join("rec.wav");
+    let fifo_channels = t.path().join("channels.toml");
+    mkfifo(&fifo_rec);
+    mkfifo(&fifo_channels);
+    let wav = field.join("wav");
+    for (rec, channels, name) in [
+        (fifo_rec.clone(), wav.join("channels.toml"), "rec.wav"),
+        (
+            wav.join("rec_int16.wav"),
+            fifo_channels.clone(),
+            "channels.toml",
+        ),
+    ] {
+        refused_as_not_a_file(
+            plinth()
+                .arg("extract")
+                .arg(&rec)
+                .arg("--channels")
+                .arg(&channels)
+                .arg("--bearings")
+                .arg(wav.join("bearings.csv"))
+                .arg("--out")
+                .arg(t.path().join("o5")),
+            name,
+        );
+    }
+    for o in ["o1", "o2", "o3", "o4", "o5"] {
         assert!(!t.path().join(o).exists(), "{o} was created");
     }
 }
@@ -202,7 +269,11 @@ fn leftovers_of_a_killed_simulate_are_cleared_by_the_next_command() {
     assert!(child.try_wait().unwrap().is_none(), "ended before the kill");
     child.kill().unwrap();
     child.wait().unwrap();
-    assert_eq!(leftovers(&run), vec![staging.clone()]);
+    // Its staging directory and its lock file (released by the kernel).
+    assert_eq!(
+        leftovers(&run),
+        vec![".run.plinth-lock".to_string(), staging.clone()]
+    );
 
     // Not Plinth's (no manifest mark) or of a running process: kept.
     let foreign = t.path().join(format!(".run.plinth-partial-{}", dead_pid()));
@@ -228,6 +299,7 @@ fn leftovers_of_a_killed_simulate_are_cleared_by_the_next_command() {
         "{msg}"
     );
     assert!(!t.path().join(&staging).exists());
+    assert!(!t.path().join(".run.plinth-lock").exists());
     assert!(foreign.join("notes.txt").exists() && running.exists());
 }
 
@@ -433,4 +505,64 @@ fn operating_system_errors_are_printed_once_by_every_reader() {
     let msg = text(&o);
     assert!(!o.status.success(), "{msg}");
     assert_eq!(msg.matches("No such file or directory").count(), 1, "{msg}");
+}
+
+#[test]
+fn flags_and_base_files_that_would_be_ignored_are_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let run = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/field/sim");
+    for extra in [&["--estimator", "ols"][..], &["--model", "k_y,k_z,m"][..]] {
+        let o = plinth()
+            .arg("identify")
+            .arg(&run)
+            .args(["--unmeasured-base", "left,right"])
+            .args(extra)
+            .output()
+            .unwrap();
+        let msg = text(&o);
+        assert!(
+            !o.status.success() && msg.contains("--unmeasured-base"),
+            "{msg}"
+        );
+    }
+    // A run with base.csv: --unmeasured-base refused; a base on a bearing
+    // the run does not have, or a header without rows, refused.
+    let copy = t.path().join("run");
+    std::fs::create_dir(&copy).unwrap();
+    for f in ["measurements.csv", "bearings.csv"] {
+        std::fs::copy(run.join(f), copy.join(f)).unwrap();
+    }
+    let head = "speed_hz,base,bearings,y_re,y_im,z_re,z_im\n";
+    std::fs::write(
+        copy.join("base.csv"),
+        format!("{head}5,skid,left;right,1e-7,0,0,1e-7\n"),
+    )
+    .unwrap();
+    let o = plinth()
+        .arg("identify")
+        .arg(&copy)
+        .args(["--unmeasured-base", "left,right"])
+        .output()
+        .unwrap();
+    assert!(
+        !o.status.success() && text(&o).contains("base.csv holds the measured base"),
+        "{}",
+        text(&o)
+    );
+    for (rows, what) in [
+        ("", "no data rows"),
+        (
+            "5,skid,left;B9,1e-7,0,0,1e-7\n",
+            "`B9` is not in measurements.csv",
+        ),
+        ("5,skid,left,right,1e-7,0,0,1e-7\n", "separate the bearings"),
+    ] {
+        std::fs::write(copy.join("base.csv"), format!("{head}{rows}")).unwrap();
+        let o = plinth().arg("identify").arg(&copy).output().unwrap();
+        let msg = text(&o);
+        assert!(
+            !o.status.success() && msg.contains("base.csv") && msg.contains(what),
+            "{msg}"
+        );
+    }
 }

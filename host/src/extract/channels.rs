@@ -38,6 +38,9 @@ use std::path::Path;
 pub const DEFAULT_HYSTERESIS_V: f64 = 0.5;
 /// Default rounding of written speeds [Hz].
 pub const DEFAULT_SPEED_RESOLUTION_HZ: f64 = 0.001;
+/// The widest dwell `speed_resolution_hz` may give [Hz]: wider would merge
+/// the speeds of a run-down.
+pub const MAX_SPEED_RESOLUTION_HZ: f64 = 1.0;
 
 /// Keyphasor edge direction.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
@@ -167,7 +170,8 @@ fn kind_name(k: SensorKind) -> &'static str {
 impl Channels {
     /// Reads and checks CHANNELS.toml.
     pub fn read(path: &Path) -> Result<Channels> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+        let text = crate::input_file::read_to_string(path)
+            .with_context(|| format!("{}", path.display()))?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -195,6 +199,11 @@ impl Channels {
                 .unwrap_or(DEFAULT_SPEED_RESOLUTION_HZ),
         )?;
         let min_speed_hz = positive("min_speed_hz", raw.min_speed_hz.unwrap_or(1.0))?;
+        if speed_resolution_hz > MAX_SPEED_RESOLUTION_HZ {
+            bail!(
+                "{file}: speed_resolution_hz: {speed_resolution_hz} Hz would average phasors {speed_resolution_hz} Hz apart (a whole run-down) into one row; it is the width of a dwell: at most {MAX_SPEED_RESOLUTION_HZ} Hz (default {DEFAULT_SPEED_RESOLUTION_HZ})"
+            );
+        }
         let max_acceleration_hz_per_s = positive(
             "max_acceleration_hz_per_s",
             raw.max_acceleration_hz_per_s.unwrap_or(50.0),
@@ -293,5 +302,67 @@ impl Channels {
             channels,
             bearings,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CHANNELS: &str = r#"
+full_scale_v = 10.0
+[keyphasor]
+channel = 4
+threshold_v = -5.0
+edge = "falling"
+[[channel]]
+index = 0
+bearing = "B1"
+quantity = "rel"
+angle_deg = 45.0
+sensor = "proximity"
+sensitivity = 7.87
+sensitivity_unit = "V/mm"
+[[channel]]
+index = 1
+bearing = "B1"
+quantity = "rel"
+angle_deg = 135.0
+sensor = "proximity"
+sensitivity = 7.87
+sensitivity_unit = "V/mm"
+[[channel]]
+index = 2
+bearing = "B1"
+quantity = "ped"
+angle_deg = 0.0
+sensor = "velocity"
+sensitivity = 100
+sensitivity_unit = "mV/(mm/s)"
+[[channel]]
+index = 3
+bearing = "B1"
+quantity = "ped"
+angle_deg = 90.0
+sensor = "velocity"
+sensitivity = 100
+sensitivity_unit = "mV/(mm/s)"
+"#;
+
+    #[test]
+    fn a_dwell_wider_than_a_hertz_and_hostile_names_are_refused() {
+        assert!(Channels::parse(CHANNELS, "c.toml").is_ok());
+        let wide = format!("speed_resolution_hz = 1000.0\n{CHANNELS}");
+        let e = Channels::parse(&wide, "c.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("speed_resolution_hz") && e.contains("whole run-down"),
+            "{e}"
+        );
+        let hostile = CHANNELS.replacen("bearing = \"B1\"", "bearing = \"../B1\"", 1);
+        let e = Channels::parse(&hostile, "c.toml").unwrap_err().to_string();
+        assert!(
+            e.contains("channel[0].bearing") && e.contains("path separator"),
+            "{e}"
+        );
     }
 }

@@ -74,6 +74,7 @@ impl Recording {
     pub fn open(path: &Path, full_scale_v: Option<f64>) -> Result<Recording> {
         let file = path.display().to_string();
         let mut head = [0u8; 4];
+        crate::input_file::ensure_regular(path).with_context(|| file.clone())?;
         {
             use std::io::Read;
             let mut f = File::open(path).with_context(|| file.clone())?;

@@ -118,7 +118,8 @@ pub struct Transducer {
 impl Layout {
     /// Reads and checks LAYOUT.toml.
     pub fn read(path: &Path) -> Result<Layout> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+        let text = crate::input_file::read_to_string(path)
+            .with_context(|| format!("{}", path.display()))?;
         Self::parse(&text, &path.display().to_string())
     }
 
@@ -193,6 +194,7 @@ pub struct ImportedRow {
 /// displacement phasors [m], y and z resolved.
 pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec<ImportedRow>> {
     let file = path.display().to_string();
+    crate::input_file::ensure_regular(path).with_context(|| file.clone())?;
     let handle = std::fs::File::open(path).with_context(|| file.clone())?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)

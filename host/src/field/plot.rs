@@ -147,11 +147,14 @@ pub fn plot_run_with(
                     series,
                 }],
             };
-            written.extend(figure.write(&dir.join(format!("bode_{b}_{}", q.name())))?);
+            written.extend(figure.write(&crate::names::file_in(
+                dir,
+                &format!("bode_{b}_{}", q.name()),
+            ))?);
         }
     }
     for l in &all {
-        let stem = dir.join(format!("polar_{}", l.stem));
+        let stem = crate::names::file_in(dir, &format!("polar_{}", l.stem));
         written.extend(write_both(
             &stem,
             (700, 720),

@@ -68,12 +68,8 @@ pub fn group_by_bearing(
 ) -> Result<Vec<(String, [Vec<usize>; 2])>> {
     let mut groups: Vec<(String, [Vec<usize>; 2])> = Vec::new();
     for (i, p) in placements.iter().enumerate() {
-        if p.bearing.is_empty() || p.bearing.contains([',', '"', '\n', '\r']) {
-            bail!(
-                "{file}: {}.bearing: `{}` is not a bearing name (non-empty, no commas, quotes or line breaks)",
-                p.key,
-                p.bearing
-            );
+        if let Err(e) = crate::names::check("bearing", &p.bearing) {
+            bail!("{file}: {}.bearing: {e}", p.key);
         }
         let slot = match groups.iter().position(|(b, _)| *b == p.bearing) {
             Some(s) => s,

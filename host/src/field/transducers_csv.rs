@@ -77,6 +77,9 @@ pub fn read(dir: &Path) -> Result<Option<Vec<(String, Quantity, f64)>>> {
         if bearing.is_empty() {
             bail!("{name}:{line}:{}: empty bearing name", index[0] + 1);
         }
+        if let Err(e) = crate::names::check("bearing", bearing) {
+            bail!("{name}:{line}:{}: {e}", index[0] + 1);
+        }
         let quantity = match cell(1) {
             "rel" => Quantity::Rel,
             "ped" => Quantity::Ped,

@@ -131,6 +131,12 @@ impl Args {
 /// Runs `plinth identify`: the table (or JSON) on stdout, warnings on stderr.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let equations: EquationMode = args.equations.into();
+    if args.unmeasured_base.is_some() && (args.estimator == Estimator::Ols || args.model.is_some())
+    {
+        anyhow::bail!(
+            "--unmeasured-base fits all five parameters by maximum likelihood: --estimator ols and --model cannot be used with it"
+        );
+    }
     if args.compare_ols && args.estimator == Estimator::Ols {
         anyhow::bail!(
             "--compare-ols compares the ML fit with OLS: it cannot be used with --estimator ols"
@@ -192,7 +198,15 @@ pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
 fn on_bases(args: &Args, run: &RunDir, identification: &mut Identification) -> anyhow::Result<()> {
     let options = args.options();
     let context = || format!("identifying {} on its bases", args.dir.display());
-    if let Some(rows) = crate::base_csv::read(&args.dir)? {
+    let base_rows = crate::base_csv::read(&args.dir)?;
+    if base_rows.is_some() && args.unmeasured_base.is_some() {
+        anyhow::bail!(
+            "--unmeasured-base: {} holds the measured base motion: use it (drop --unmeasured-base) or move base.csv away",
+            args.dir.join(crate::base_csv::BASE_FILE).display()
+        );
+    }
+    if let Some(rows) = base_rows {
+        crate::base_csv::check_bearings(&args.dir, &rows, &run.measured_bearings())?;
         let reports = super::on_base::apply_measured_base(run, &rows, identification, &options)
             .with_context(context)?;
         identification.bases.extend(reports);

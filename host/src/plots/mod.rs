@@ -221,8 +221,17 @@ pub fn write_both(
     png: impl FnOnce(&DrawingArea<BitMapBackend<'_>, Shift>) -> Result<()>,
     svg: impl FnOnce(&DrawingArea<SVGBackend<'_>, Shift>) -> Result<()>,
 ) -> Result<[PathBuf; 2]> {
-    let png_path = stem.with_extension("png");
-    let svg_path = stem.with_extension("svg");
+    // Figure names come from crate::names::file_in: never a path, and the
+    // extension is appended (a `.` inside a name is not an extension).
+    let name = stem.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    if !crate::names::is_file_name(name) {
+        anyhow::bail!(
+            "figure name {:?} is not a safe file name (build it with crate::names::file_in)",
+            stem.display().to_string()
+        );
+    }
+    let png_path = stem.with_file_name(format!("{name}.png"));
+    let svg_path = stem.with_file_name(format!("{name}.svg"));
     if let Some(dir) = stem.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("creating figure directory {}", dir.display()))?;

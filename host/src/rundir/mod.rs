@@ -316,9 +316,11 @@ pub enum RunDirError {
         /// 1-based column.
         column: usize,
     },
-    /// The bearing name contains a quote, comma or line break (formats.md forbids them).
-    #[error("{}:{line}:{column}: bearing name `{name}` contains a quote, comma or line break", file.display())]
+    /// The bearing name is not a name (crate::names: no separators, quotes, commas, control characters).
+    #[error("{}:{line}:{column}: {reason}", file.display())]
     BadBearingName {
+        /// What is wrong with the name and what a name may hold.
+        reason: String,
         /// The file.
         file: PathBuf,
         /// Line of the row (0 when writing from memory).

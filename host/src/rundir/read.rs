@@ -336,8 +336,9 @@ fn read_table(
                 column: index[1] + 1,
             });
         }
-        if !bearing_name_ok(bearing) {
+        if let Err(reason) = crate::names::check("bearing", bearing) {
             return Err(RunDirError::BadBearingName {
+                reason,
                 file: file(),
                 line,
                 column: index[1] + 1,
@@ -405,9 +406,4 @@ fn unreachable_csv(file: PathBuf) -> RunDirError {
         line: 0,
         message: "unexpected CSV error".to_string(),
     }
-}
-
-/// A bearing name formats.md allows: no quotes, commas or line breaks.
-pub(super) fn bearing_name_ok(name: &str) -> bool {
-    !name.is_empty() && !name.contains(['"', '\'', ',', '\n', '\r']) && name.trim() == name
 }

@@ -1,7 +1,6 @@
 //! Writing run directories: numbers in full round-trip precision or reduced
 //! to significant digits.
 
-use super::read::bearing_name_ok;
 use super::*;
 
 impl RunDir {
@@ -95,8 +94,9 @@ fn write_table<'a>(
         .write_record(columns.iter().chain(extra))
         .map_err(csv_err)?;
     for (i, (speed_hz, bearing, values, noise)) in rows.enumerate() {
-        if !bearing_name_ok(bearing) {
+        if let Err(reason) = crate::names::check("bearing", bearing) {
             return Err(RunDirError::BadBearingName {
+                reason,
                 file: path.to_path_buf(),
                 line: 0,
                 column: 2,
