@@ -27,7 +27,7 @@ pub struct Args {
     /// The 1X vector table (CSV: a header row, one row per speed).
     pub table: PathBuf,
     /// Which columns are which transducer, units and phase convention (TOML,
-    /// formats.md "A 1X vector table").
+    /// docs/formats.md "A 1X vector table").
     #[arg(long)]
     pub layout: PathBuf,
     /// Bearing coefficients (`bearings.csv` layout).
