@@ -14,12 +14,14 @@ speed grid (measurements.csv, bearings.csv, truth.json). OUT_DIR receives:
   driver with the shaft turning CCW) and two velocity pick-ups at 0 and 90
   degrees (mm/s pk, 3 significant digits, lag in whole degrees), columns in
   an instrument's order with an extra column.
-- recording.wav + channels.toml: a 16-bit PCM recording of a run-down from
-  45 Hz to 20 Hz at 5 Hz/s, 4096 samples/s, nine channels: the four probes
-  (7.87 V/mm on a -9 V gap), the four velocity pick-ups (100 mV/(mm/s)) and a
-  notch keyphasor, with 2 mV of white noise on every channel.
-- bearings.csv: the known bearing coefficients (copied from SIM_DIR).
-- truth.json: the pedestals the data were made from (copied from SIM_DIR).
+- recording.wav + channels.toml: a 24-bit PCM recording of a run-down from
+  70 Hz to 20 Hz at 10 Hz/s, 5120 samples/s, nine channels: the four probes
+  (7.87 V/mm on a -9 V gap), four pedestal displacement transmitters
+  (7.87 V/mm, at 0 and 90 degrees) and a
+  notch keyphasor, with 0.5 mV of white noise on every channel.
+- bearings.csv: the known bearing coefficients (SIM_DIR's, every 0.25 Hz).
+- truth.json: the pedestals the data were made from (copied from SIM_DIR;
+  the unbalance scale does not change them).
 
 Conventions (docs/formats.md): a transducer at angle a (degrees from +y
 towards +z) reads cos(a)*Y + sin(a)*Z; q(t) = Re{Q exp(i theta(t))} with
@@ -36,6 +38,10 @@ import sys
 import wave
 
 TAU = 2.0 * math.pi
+# The response is linear in the unbalance: the example machine's unbalance
+# times SCALE gives amplitudes a field instrument shows (probes up to about
+# 13 um pp, pedestals up to about 40 mm/s pk at their resonances).
+SCALE = 5.0
 
 
 def read_run(path):
@@ -43,7 +49,7 @@ def read_run(path):
     out = {}
     with open(os.path.join(path, "measurements.csv")) as f:
         for r in csv.DictReader(f):
-            c = lambda k: complex(float(r[k + "_re"]), float(r[k + "_im"]))
+            c = lambda k: SCALE * complex(float(r[k + "_re"]), float(r[k + "_im"]))
             out.setdefault(r["bearing"], []).append(
                 (float(r["speed_hz"]), {"rel": (c("rel_y"), c("rel_z")), "ped": (c("ped_y"), c("ped_z"))}))
     for rows in out.values():
@@ -90,7 +96,7 @@ PICKUPS = [("0", 0.0), ("90", 90.0)]          # ped: velocity pick-ups
 
 def write_table(run, out):
     bearings = list(run)
-    speeds = [f for f, _ in run[bearings[0]] if abs(f - round(f)) < 1e-9 and 15.0 <= f <= 50.0]
+    speeds = [f for f, _ in run[bearings[0]] if abs(f - round(f)) < 1e-9 and 15.0 <= f <= 75.0]
     header = ["Sample", "Speed (rpm)"]
     for b in bearings:
         for name, _ in PROBES:
@@ -147,13 +153,20 @@ def write_table(run, out):
         fh.write("\n".join(lines))
 
 
-RATE = 4096          # samples per second per channel
-F_START, F_END, DECEL = 45.0, 20.0, 5.0   # Hz, Hz, Hz/s
+RATE = 5120          # samples per second per channel (73 per revolution at 70 Hz)
+F_START, F_END, DECEL = 70.0, 20.0, 10.0   # Hz, Hz, Hz/s
 FULL_SCALE_V = 10.0
 PROBE_V_PER_M = 7.87e3        # 7.87 V/mm
 GAP_V = -9.0
 PICKUP_V_PER_M_S = 100.0      # 100 mV/(mm/s)
-NOISE_V = 0.002
+# The pedestal pick-ups of the recording: displacement transmitters (a
+# seismic sensor with integrated displacement output, 7.87 V/mm here). A
+# velocity pick-up's conversion D = V/(iΩ) assumes a steady response, which a
+# 10 Hz/s sweep through these lightly damped (ζ ≈ 0.2 %) pedestal resonances
+# is not (dQ/dt is a third of ΩQ there): the table carries the velocity
+# pick-ups instead.
+PED_SENSOR = "proximity"
+NOISE_V = 0.0005
 KP_HIGH, KP_LOW, KP_WIDTH = -1.0, -9.0, math.radians(12.0)   # notch under the keyphasor probe
 KP_RAMP = math.radians(2.0)
 
@@ -166,7 +179,7 @@ def write_recording(run, out):
     channels = []   # (bearing, quantity, angle, kind)
     for b in bearings:
         channels += [(b, "rel", a, "proximity") for _, a in PROBES]
-        channels += [(b, "ped", a, "velocity") for _, a in PICKUPS]
+        channels += [(b, "ped", a, PED_SENSOR) for _, a in PICKUPS]
     # Keyphasor pulse k at theta = 2*pi*k; theta(0) set so that the first
     # pulse comes a quarter revolution after the start.
     theta0 = -0.25 * TAU
@@ -182,8 +195,10 @@ def write_recording(run, out):
             z, dz = at(run[b], f, quantity, 1)
             q = reading((y, z), angle)
             dq = reading((dy, dz), angle) * (-DECEL)          # dQ/dt along the run-down
-            if kind == "proximity":
+            if kind == "proximity" and quantity == "rel":
                 v = GAP_V + PROBE_V_PER_M * (q * cmath.exp(1j * theta)).real
+            elif kind == "proximity":
+                v = PROBE_V_PER_M * (q * cmath.exp(1j * theta)).real
             else:
                 v = PICKUP_V_PER_M_S * ((1j * omega * q + dq) * cmath.exp(1j * theta)).real
             sample.append(v + rng.gauss(0.0, NOISE_V))
@@ -199,17 +214,17 @@ def write_recording(run, out):
             kp = KP_HIGH
         sample.append(kp + rng.gauss(0.0, NOISE_V))
         for v in sample:
-            code = max(-32768, min(32767, round(v / FULL_SCALE_V * 32767.0)))
-            data += struct.pack("<h", code)
+            code = max(-(1 << 23), min((1 << 23) - 1, round(v / FULL_SCALE_V * ((1 << 23) - 1))))
+            data += struct.pack("<i", code)[:3]
     with wave.open(os.path.join(out, "recording.wav"), "wb") as w:
         w.setnchannels(len(channels) + 1)
-        w.setsampwidth(2)
+        w.setsampwidth(3)
         w.setframerate(RATE)
         w.writeframes(bytes(data))
     lines = [
         "# The channels of recording.wav (docs/formats.md, \"Recorded waveforms\").",
         "# Made by scripts/make-field-example.sh.",
-        f"full_scale_v = {FULL_SCALE_V}                # 16-bit PCM: volts at full scale",
+        f"full_scale_v = {FULL_SCALE_V}                # 24-bit PCM: volts at full scale",
         "revolutions = 4                    # revolutions per phasor",
         'view = "driver"',
         'rotation = "ccw"',
@@ -222,7 +237,10 @@ def write_recording(run, out):
     ]
     for i, (b, quantity, angle, kind) in enumerate(channels):
         lines += ["[[channel]]", f"index = {i}", f'bearing = "{b}"', f'quantity = "{quantity}"']
-        if kind == "proximity":
+        if kind == "proximity" and quantity == "ped":
+            lines += [f"angle_deg = {angle}", 'sensor = "proximity"             # displacement transmitter on the pedestal',
+                      "sensitivity = 7.87", 'sensitivity_unit = "V/mm"']
+        elif kind == "proximity":
             name = [p for p, a in PROBES if a == angle][0]
             lines += [f'angle = "{name}"', 'sensor = "proximity"', "sensitivity = 7.87",
                       'sensitivity_unit = "V/mm"']
@@ -242,7 +260,13 @@ def main():
     run = read_run(sim)
     write_table(run, out)
     write_recording(run, out)
-    shutil.copy(os.path.join(sim, "bearings.csv"), os.path.join(out, "bearings.csv"))
+    # The bearing table every 0.25 Hz (coefficients are interpolated
+    # linearly in speed between listed rows; they vary slowly).
+    with open(os.path.join(sim, "bearings.csv")) as src, open(os.path.join(out, "bearings.csv"), "w") as dst:
+        for i, line in enumerate(src):
+            speed = line.split(",", 1)[0]
+            if i == 0 or abs(float(speed) * 4.0 - round(float(speed) * 4.0)) < 1e-9:
+                dst.write(line)
     shutil.copy(os.path.join(sim, "truth.json"), os.path.join(out, "truth.json"))
 
 

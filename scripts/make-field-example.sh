@@ -12,6 +12,6 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 cargo build --release -q -p plinth
 plinth="${CARGO_TARGET_DIR:-target}/release/plinth"
-"$plinth" --quiet simulate examples/feng-hahn-1997-damped.toml --out "$tmp/sim" --speeds 15:50:0.05 >/dev/null
+"$plinth" --quiet simulate examples/feng-hahn-1997-damped.toml --out "$tmp/sim" --speeds 15:75:0.05 >/dev/null
 python3 scripts/make-field-example.py "$tmp/sim" "$out"
 ls -l "$out"

@@ -65,6 +65,29 @@ pub struct PedestalRow {
     pub modal_truth: Option<PedestalModal>,
 }
 
+impl PedestalRow {
+    /// A pedestal from parameters by name (SI values and standard errors,
+    /// as a model with effects reports them): the five pedestal parameters
+    /// in their columns (absent: not in the model), the others in `extra`.
+    pub fn from_named(
+        bearing: &str,
+        values: &std::collections::BTreeMap<String, f64>,
+        std_err: &std::collections::BTreeMap<String, f64>,
+    ) -> PedestalRow {
+        let se = |n: &str| std_err.get(n).copied().unwrap_or(f64::NAN);
+        PedestalRow {
+            bearing: bearing.to_string(),
+            parameters: PARAMETERS.map(|n| values.get(n).map(|&v| (v, se(n)))),
+            extra: values
+                .iter()
+                .filter(|(n, _)| !PARAMETERS.contains(&n.as_str()))
+                .map(|(n, &v)| (n.clone(), v, se(n)))
+                .collect(),
+            ..PedestalRow::default()
+        }
+    }
+}
+
 /// A line under a pedestal's row: a label and one cell per parameter.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SubRow {
