@@ -189,24 +189,8 @@ pub fn run(args: &Args) -> Result<()> {
     let config = Channels::read(&args.channels)?;
     let bearings = read_bearings(&args.bearings)?;
     let mut recording = Recording::open(&args.recording, config.full_scale_v)?;
-    let bar = if args.quiet {
-        indicatif::ProgressBar::hidden()
-    } else if let Some(frames) = recording.frames {
-        let bar = indicatif::ProgressBar::new(frames);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {percent}% {elapsed}<{eta}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar
-    } else {
-        // CSV: the frame count is not known in advance.
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} {msg} {pos} frames {elapsed}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-        );
-        bar
-    };
+    // A bar over the frames (WAV), a spinner over them (CSV: count unknown).
+    let bar = crate::progress::bar("", recording.frames, !args.quiet);
     bar.set_message(format!("extracting {}", args.recording.display()));
     let started = Instant::now();
     let csv = recording.frames.is_none();

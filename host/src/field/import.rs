@@ -333,7 +333,10 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
                     rel,
                     ped,
                     // A zero sd (exact readings) says nothing: leave the noise to identify.
-                    noise_sd: noise.iter().all(|s| s.is_finite() && *s > 0.0).then_some(noise),
+                    noise_sd: noise
+                        .iter()
+                        .all(|s| s.is_finite() && *s > 0.0)
+                        .then_some(noise),
                 },
             });
         }
@@ -443,7 +446,9 @@ pub fn write_run(
 pub fn run(args: &Args) -> Result<()> {
     let layout_file = args.layout.display().to_string();
     let layout = Layout::read(&args.layout)?;
+    let mut ticker = crate::progress::Ticker::new("import: read, check, write", 3, true);
     let imported = read_table(&args.table, &layout, &layout_file)?;
+    ticker.tick(1);
     let bearings = read_bearings(&args.bearings)?;
     check_against_bearings(
         &imported,
@@ -451,6 +456,7 @@ pub fn run(args: &Args) -> Result<()> {
         &args.table.display().to_string(),
         &args.bearings.display().to_string(),
     )?;
+    ticker.tick(2);
     let rows: Vec<Measurement> = imported.into_iter().map(|r| r.measurement).collect();
     let n = rows.len();
     let placements: Vec<Placement> = layout
@@ -467,6 +473,7 @@ pub fn run(args: &Args) -> Result<()> {
         args.plots,
         &placements,
     )?;
+    ticker.finish();
     println!(
         "{}: {} rows ({} bearings) -> {}",
         args.table.display(),
