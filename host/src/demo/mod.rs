@@ -157,7 +157,7 @@ pub struct Args {
     #[arg(long)]
     pub keep_signals: bool,
     /// No progress on stderr.
-    #[arg(long)]
+    #[arg(skip)]
     pub quiet: bool,
 }
 
@@ -478,7 +478,9 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
     // 5. Figures.
     note(
         opts.progress,
-        &format!("[4/5] figures into {}", figures_dir.display()),
+        // `out` is the hidden staging directory until the end: name the
+        // place the figures will be, not where they are being drawn.
+        "[4/5] figures (figures/ of the output directory)",
     );
     let t = Instant::now();
     let truth_in_range = RunDir {
@@ -524,7 +526,13 @@ pub fn demo(opts: &DemoOptions) -> Result<DemoOutcome> {
     };
     note(
         opts.progress,
-        &format!("[5/5] report {}", report_path.display()),
+        &format!(
+            "[5/5] report ({} of the output directory)",
+            report_path
+                .strip_prefix(out)
+                .unwrap_or(&report_path)
+                .display()
+        ),
     );
     let text = serde_json::to_string_pretty(&report).context("encoding the demo report")?;
     std::fs::write(&report_path, text + "\n")

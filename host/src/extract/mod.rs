@@ -38,7 +38,7 @@ use std::time::Instant;
 pub struct Args {
     /// The recording: WAV (16/24/32-bit integer PCM, 32-bit float) or CSV (`time_s`, then channels in volts).
     pub recording: PathBuf,
-    /// Channel map, sensitivities and keyphasor (TOML, formats.md "Recorded waveforms").
+    /// Channel map, sensitivities and keyphasor (TOML, docs/formats.md "Recorded waveforms").
     #[arg(long)]
     pub channels: PathBuf,
     /// Bearing coefficients (`bearings.csv` layout).
@@ -54,7 +54,7 @@ pub struct Args {
     #[arg(long)]
     pub plots: bool,
     /// No progress bar.
-    #[arg(long)]
+    #[arg(skip)]
     pub quiet: bool,
     /// Replace the files this command writes in an existing --out.
     #[arg(long)]
@@ -190,24 +190,8 @@ pub fn run(args: &Args) -> Result<()> {
     let config = Channels::read(&args.channels)?;
     let bearings = read_bearings(&args.bearings)?;
     let mut recording = Recording::open(&args.recording, config.full_scale_v)?;
-    let bar = if args.quiet {
-        indicatif::ProgressBar::hidden()
-    } else if let Some(frames) = recording.frames {
-        let bar = indicatif::ProgressBar::new(frames);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {percent}% {elapsed}<{eta}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar
-    } else {
-        // CSV: the frame count is not known in advance.
-        let bar = indicatif::ProgressBar::new_spinner();
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} {msg} {pos} frames {elapsed}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
-        );
-        bar
-    };
+    // A bar over the frames (WAV), a spinner over them (CSV: count unknown).
+    let bar = crate::progress::bar("", recording.frames, !args.quiet);
     bar.set_message(format!("extracting {}", args.recording.display()));
     let started = Instant::now();
     let csv = recording.frames.is_none();

@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 /// Command-line arguments of `plinth plot`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Run directory (formats.md).
+    /// Run directory (docs/formats.md).
     pub dir: PathBuf,
     /// Directory for the figures (PNG and SVG).
     #[arg(long)]

@@ -152,7 +152,11 @@ pub fn run(args: &Args) -> Result<()> {
         heavy_damping_ratio: args.heavy_damping_ratio,
         ..PaperOptions::default()
     };
+    let steps = if args.plots.is_some() { 2 } else { 1 };
+    let mut ticker =
+        crate::progress::Ticker::new("paper: simulate, identify, figures", steps, true);
     let paper = reproduce_with(&undamped, &damped, &opts)?;
+    ticker.tick(1);
     let mut text = if args.json {
         let report = JsonReport {
             tables: &paper.tables,
@@ -174,6 +178,7 @@ pub fn run(args: &Args) -> Result<()> {
         let staged = crate::output::OutputDir::create(dir, args.force)?;
         let files = write_figures(&paper, staged.path())?;
         staged.commit()?;
+        ticker.tick(2);
         if !args.json {
             text += &format!(
                 "{} figure files written to {}\n",
@@ -182,6 +187,7 @@ pub fn run(args: &Args) -> Result<()> {
             );
         }
     }
+    ticker.finish();
     let mut out = std::io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         // A closed pipe (`plinth paper | head`) is the reader's choice.

@@ -40,7 +40,7 @@ impl<'a> Session<'a> {
                             let v = ack.firmware_version;
                             if self.device.is_none() {
                                 self.progress.note(&format!(
-                                    "connected: firmware {}.{}.{}, protocol {}, {} channels, {} bearings, {} Hz",
+                                    "connected: firmware {}.{}.{}, protocol {}, room for {} channels and {} bearings, {} Hz",
                                     v.major,
                                     v.minor,
                                     v.patch,
