@@ -19,6 +19,7 @@ pub mod output;
 pub mod paper;
 pub mod plots;
 pub mod progress;
+pub mod report;
 pub mod rundir;
 pub mod sim;
 pub mod stream;
