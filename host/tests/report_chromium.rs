@@ -119,8 +119,9 @@ fn report_loads_in_headless_chromium_with_every_figure() {
         .unwrap();
     let dom = String::from_utf8_lossy(&dump.stdout);
     let log = String::from_utf8_lossy(&dump.stderr);
+    // The probe's own <pre> (the script's text holds the word too).
     let probe = dom
-        .find("PROBE ")
+        .find("id=\"plinth-probe\">")
         .map(|i| &dom[i..])
         .unwrap_or_else(|| panic!("the page did not finish loading in chromium; stderr:\n{log}"));
     assert_eq!(number_after(probe, "errors="), Some(0), "{probe}");

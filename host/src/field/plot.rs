@@ -310,10 +310,14 @@ pub fn loci(run: &RunDir, transducers: &[PlotTransducer]) -> Vec<Locus> {
 /// The Bode figure of one bearing and quantity: resolved y/z in one panel,
 /// the transducers' own readings in one panel per unit.
 fn bode_figure(bearing: &str, q: Quantity, loci: &[&Locus], style: Style) -> PhasorFigure {
+    // Series named by direction or angle only (the panel names the
+    // bearing): each its own colour.
+    let prefix = format!("{bearing} {} ", q.name());
+    let short = |l: &Locus| l.name.strip_prefix(&prefix).unwrap_or(&l.name).to_string();
     let resolved: Vec<PhasorSeries> = loci
         .iter()
         .filter(|l| !l.transducer)
-        .map(|l| PhasorSeries::line(l.name.clone(), l.signal()))
+        .map(|l| PhasorSeries::line(short(l), l.signal()))
         .collect();
     let mut panels = vec![PhasorPanel::new(
         format!("{bearing} {}: resolved y, z", q.name()),
@@ -329,7 +333,7 @@ fn bode_figure(bearing: &str, q: Quantity, loci: &[&Locus], style: Style) -> Pha
         let series: Vec<PhasorSeries> = loci
             .iter()
             .filter(|l| l.transducer && l.unit == u)
-            .map(|l| PhasorSeries::line(l.name.clone(), l.signal()))
+            .map(|l| PhasorSeries::line(short(l), l.signal()))
             .collect();
         panels.push(PhasorPanel {
             title: format!("{bearing} {}: transducers", q.name()),
