@@ -86,9 +86,80 @@ pub fn count(text: &str) -> Result<usize, String> {
     Ok(v)
 }
 
+/// A band of rotor speeds `LO:HI` [Hz] (`--speeds`): the fit uses only the
+/// measured speeds in it, ends included.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedBand {
+    /// Lowest speed kept [Hz].
+    pub lo_hz: f64,
+    /// Highest speed kept [Hz].
+    pub hi_hz: f64,
+}
+
+/// `LO:HI` in Hz, 0 <= LO < HI, both finite (e.g. `20:120`).
+pub fn speed_band(text: &str) -> Result<SpeedBand, String> {
+    let (lo, hi) = text
+        .split_once(':')
+        .ok_or_else(|| format!("{text:?}: give a speed band as LO:HI in Hz, e.g. 20:120"))?;
+    let lo = non_negative(lo).map_err(|e| format!("LO of {text:?}: {e}"))?;
+    let hi = positive(hi).map_err(|e| format!("HI of {text:?}: {e}"))?;
+    if lo >= hi {
+        return Err(format!(
+            "{text:?}: LO ({lo} Hz) must be below HI ({hi} Hz)"
+        ));
+    }
+    Ok(SpeedBand {
+        lo_hz: lo,
+        hi_hz: hi,
+    })
+}
+
+impl SpeedBand {
+    /// True when `speed_hz` lies in the band.
+    pub fn contains(&self, speed_hz: f64) -> bool {
+        (self.lo_hz..=self.hi_hz).contains(&speed_hz)
+    }
+
+    /// Keeps the measurements of `run` in the band; an error naming the
+    /// option and the run's speed range when none is left.
+    pub fn select(&self, run: &mut crate::rundir::RunDir) -> Result<(), String> {
+        let (lo, hi) = run
+            .measurements
+            .iter()
+            .map(|m| m.speed_hz)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+                (a.min(s), b.max(s))
+            });
+        run.measurements.retain(|m| self.contains(m.speed_hz));
+        if run.measurements.is_empty() {
+            return Err(format!(
+                "--speeds {}:{}: no measured speed in this band (the run has {lo}..{hi} Hz)",
+                self.lo_hz, self.hi_hz
+            ));
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn speed_bands_are_validated() {
+        assert_eq!(
+            speed_band("20:120").unwrap(),
+            SpeedBand {
+                lo_hz: 20.0,
+                hi_hz: 120.0
+            }
+        );
+        assert!(speed_band("0:1e3").is_ok());
+        for bad in ["120:20", "20", "-1:5", "5:5", "a:9", "1:inf", ":"] {
+            assert!(speed_band(bad).is_err(), "{bad}");
+        }
+        assert!(speed_band("20-120").unwrap_err().contains("LO:HI"));
+    }
 
     #[test]
     fn durations_are_validated_before_conversion() {

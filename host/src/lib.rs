@@ -17,6 +17,8 @@ pub mod identify;
 pub mod input_file;
 pub mod output;
 pub mod paper;
+pub mod pipe;
+pub mod present;
 pub mod plots;
 pub mod progress;
 pub mod report;

@@ -9,6 +9,9 @@ use std::process::ExitCode;
     about = "Identify bearing-pedestal mass, stiffness and damping from run-down vibration data (Feng & Hahn 1997)"
 )]
 struct Cli {
+    /// No progress display on stderr (warnings and errors are still printed).
+    #[arg(long, global = true)]
+    quiet: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -44,24 +47,38 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    plinth::pipe::exit_quietly_on_closed_stdout();
     let cli = Cli::parse();
+    plinth::progress::set_quiet(cli.quiet);
+    let quiet = cli.quiet;
     let result = match cli.command {
         Command::Identify(a) => plinth::identify::cli::run(&a),
         Command::Simulate(a) => plinth::sim::cli::simulate(&a),
         Command::Signals(a) => plinth::sim::cli::signals(a),
         Command::Predict(a) => plinth::sim::cli::predict(&a),
         Command::Paper(a) => plinth::paper::run(&a),
-        Command::Stream(a) => plinth::stream::run(&a),
-        Command::Demo(a) => plinth::demo::run(&a),
+        Command::Stream(mut a) => {
+            a.quiet |= quiet;
+            plinth::stream::run(&a)
+        }
+        Command::Demo(mut a) => {
+            a.quiet |= quiet;
+            plinth::demo::run(&a)
+        }
         Command::Diagnose(a) => plinth::diagnose::run(&a),
         Command::Import(a) => plinth::field::import::run(&a),
-        Command::Extract(a) => plinth::extract::run(&a),
+        Command::Extract(mut a) => {
+            a.quiet |= quiet;
+            plinth::extract::run(&a)
+        }
         Command::Plot(a) => plinth::field::plot::run(&a),
         Command::Accuracy(a) => plinth::accuracy::run(&a),
         Command::Report(a) => plinth::report::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // `plinth identify --json | head -1`: the reader has what it wanted.
+        Err(e) if plinth::pipe::is_closed_stdout(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", plinth::error_text(&e));
             ExitCode::from(plinth::identify::physical::exit_code(&e))

@@ -1,79 +1,149 @@
-//! A progress line on stderr for long batch commands (`simulate`,
-//! `diagnose`).
+//! Progress on stderr for commands that can run over a second (`simulate`,
+//! `diagnose`, `accuracy`, `paper`, `identify`, `import`, `extract`), drawn
+//! with `indicatif`.
 //!
-//! Shown only when stderr is a terminal and the work has run for more than a
-//! second, redrawn five times a second by a small thread (so a long single
-//! step still shows its elapsed time), and erased at the end, so that
-//! scripts, pipes and `--json` on stdout never see it.
+//! Shown only when stderr is a terminal and neither the command (`enabled`
+//! false) nor the global `--quiet` ([`set_quiet`]) silences it; it appears
+//! once the work has run for a second (so quick commands never flash a
+//! bar), redraws itself five times a second (a long single step still shows
+//! its elapsed time) and is erased at the end, so that scripts, pipes and
+//! `--json` on stdout never see it.
 
-use std::io::{IsTerminal, Write};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::Arc;
-use std::time::{Duration, Instant};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
-/// A `LABEL: DONE/TOTAL (PCT %), ELAPSED s` line on stderr.
+/// Set once by `plinth --quiet`: no progress anywhere in the process.
+static QUIET: AtomicBool = AtomicBool::new(false);
+
+/// Silences every progress display of the process (the global `--quiet`).
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, Ordering::Relaxed);
+}
+
+/// True when the global `--quiet` was given.
+pub fn quiet() -> bool {
+    QUIET.load(Ordering::Relaxed)
+}
+
+/// True when progress may be drawn: not `--quiet` and stderr is a terminal.
+pub fn visible() -> bool {
+    !quiet() && std::io::stderr().is_terminal()
+}
+
+/// Delay before a progress display appears.
+const SHOW_AFTER: Duration = Duration::from_secs(1);
+
+/// A `LABEL [bar] DONE/TOTAL (PCT %) ELAPSED<ETA` line on stderr.
 #[derive(Debug)]
 pub struct Ticker {
-    done: Arc<AtomicUsize>,
-    stop: Arc<AtomicBool>,
-    thread: Option<std::thread::JoinHandle<()>>,
+    bar: ProgressBar,
+    live: bool,
 }
 
 impl Ticker {
-    /// A ticker over `total` steps; `enabled` false never prints (e.g.
-    /// `--quiet`); stderr not being a terminal disables it too.
+    /// A ticker over `total` steps; `enabled` false never prints (a
+    /// command's own `quiet`); the global `--quiet` or stderr not being a
+    /// terminal disables it too.
     pub fn new(label: &str, total: usize, enabled: bool) -> Ticker {
-        let done = Arc::new(AtomicUsize::new(0));
-        let stop = Arc::new(AtomicBool::new(false));
-        let thread = (enabled && std::io::stderr().is_terminal()).then(|| {
-            let (done, stop, label) = (done.clone(), stop.clone(), label.to_string());
-            std::thread::spawn(move || draw(&label, total, &done, &stop))
-        });
-        Ticker { done, stop, thread }
+        let bar = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::hidden());
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{msg} [{bar:30}] {pos}/{len} ({percent} %) {elapsed_precise}<{eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        bar.set_message(label.to_string());
+        let live = enabled && visible();
+        if live {
+            // The steady tick redraws even when no step finishes; the bar
+            // stays hidden until a small thread shows it after [`SHOW_AFTER`].
+            bar.enable_steady_tick(Duration::from_millis(200));
+            let delayed = bar.downgrade();
+            std::thread::spawn(move || {
+                std::thread::sleep(SHOW_AFTER);
+                if let Some(bar) = delayed.upgrade() {
+                    if !bar.is_finished() {
+                        bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(5));
+                    }
+                }
+            });
+        }
+        Ticker { bar, live }
     }
 
     /// `done` of the total steps are finished.
     pub fn tick(&mut self, done: usize) {
-        self.done.store(done, Ordering::Relaxed);
+        self.bar.set_position(done as u64);
     }
 
     /// Stops and erases the line (if it was shown).
     pub fn finish(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
+        if !self.bar.is_finished() {
+            self.bar.finish_and_clear();
         }
     }
-}
 
-fn draw(label: &str, total: usize, done: &AtomicUsize, stop: &AtomicBool) {
-    let started = Instant::now();
-    let mut shown = false;
-    while !stop.load(Ordering::Relaxed) {
-        std::thread::sleep(Duration::from_millis(200));
-        if started.elapsed() < Duration::from_secs(1) || stop.load(Ordering::Relaxed) {
-            continue;
-        }
-        let d = done.load(Ordering::Relaxed);
-        let pct = 100.0 * d as f64 / total.max(1) as f64;
-        let mut err = std::io::stderr().lock();
-        let _ = write!(
-            err,
-            "\r{label}: {d}/{total} ({pct:.0} %), {:.1} s\x1b[K",
-            started.elapsed().as_secs_f64()
-        );
-        let _ = err.flush();
-        shown = true;
-    }
-    if shown {
-        let mut err = std::io::stderr().lock();
-        let _ = write!(err, "\r\x1b[K");
-        let _ = err.flush();
+    /// True when this ticker draws (enabled, not `--quiet`, a terminal).
+    pub fn is_live(&self) -> bool {
+        self.live
     }
 }
 
 impl Drop for Ticker {
     fn drop(&mut self) {
         self.finish();
+    }
+}
+
+/// A progress bar over `len` units (frames, rows) for commands that drive
+/// `indicatif` themselves, or a spinner when `len` is unknown; hidden
+/// under `--quiet`, with `enabled` false or off a terminal.
+pub fn bar(label: &str, len: Option<u64>, enabled: bool) -> ProgressBar {
+    if !(enabled && visible()) {
+        return ProgressBar::hidden();
+    }
+    let (bar, template) = match len {
+        Some(n) => (
+            ProgressBar::new(n),
+            "{msg} [{bar:40}] {percent}% {elapsed}<{eta}",
+        ),
+        None => (
+            ProgressBar::new_spinner(),
+            "{spinner} {msg} {pos} {elapsed}",
+        ),
+    };
+    bar.set_style(
+        ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message(label.to_string());
+    bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_disabled_ticker_never_draws_and_finishes_cleanly() {
+        let mut t = Ticker::new("test", 10, false);
+        assert!(!t.is_live());
+        for i in 0..=10 {
+            t.tick(i);
+        }
+        t.finish();
+        t.finish();
+        assert!(bar("x", Some(3), false).is_hidden());
+    }
+
+    #[test]
+    fn global_quiet_hides_everything() {
+        set_quiet(true);
+        let t = Ticker::new("test", 3, true);
+        assert!(!t.is_live());
+        assert!(bar("x", None, true).is_hidden());
+        set_quiet(false);
     }
 }

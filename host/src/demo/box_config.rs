@@ -38,7 +38,7 @@ pub fn write_box_config(
 pub fn config_text(set: &SignalSet, bearings_csv: &str, averaging: u32) -> String {
     let mut s = format!(
         "# Field box configuration written by `plinth demo` for {}.\n\
-         # Known bearing coefficients (formats.md), relative to this file.\n\
+         # Known bearing coefficients (docs/formats.md), relative to this file.\n\
          bearings = \"{bearings_csv}\"\n\n[averaging]\nrevolutions = {averaging}\n\n[rls]\nforgetting_factor = 1.0\n",
         set.header.machine
     );

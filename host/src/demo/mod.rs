@@ -157,7 +157,7 @@ pub struct Args {
     #[arg(long)]
     pub keep_signals: bool,
     /// No progress on stderr.
-    #[arg(long)]
+    #[arg(skip)]
     pub quiet: bool,
 }
 

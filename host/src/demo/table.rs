@@ -5,6 +5,7 @@
 //! against the truth in % and in its own standard errors.
 
 use crate::identify::Identification;
+use crate::present::table::{self, sig};
 use crate::rundir::Truth;
 use crate::stream::report::PedestalComparison;
 use serde::Serialize;
@@ -95,45 +96,16 @@ pub fn rows(comparisons: &[PedestalComparison], truth: &Truth) -> Vec<Comparison
     out
 }
 
-/// Display unit and factor from SI of a parameter's unit.
-fn display_unit(unit: &str) -> (&'static str, f64) {
-    match unit {
-        "N/m" => ("MN/m", 1e-6),
-        "kg" => ("kg", 1.0),
-        _ => ("N·s/m", 1.0),
-    }
-}
-
-/// `v ± s` in display units, the value to the decimal of the standard
-/// error's second significant digit (5 significant digits without one).
+/// `v ± s` in display units (the shared printer's notation,
+/// [`table::value_pm`]; 5 significant digits without a standard error).
 fn value_pm(v: Option<f64>, s: Option<f64>, k: f64) -> String {
     let Some(v) = v else {
         return "—".into();
     };
-    let v = v * k;
-    match s.map(|s| s * k) {
-        Some(s) if s.is_finite() && s > 0.0 => {
-            let decimals = (1 - s.log10().floor() as i32).clamp(0, 9) as usize;
-            format!("{v:.decimals$} ± {}", sig(s, 2))
-        }
-        _ => sig(v, 5),
+    match s {
+        Some(s) if s.is_finite() && s > 0.0 => table::value_pm(v * k, s * k),
+        _ => sig(v * k, 5),
     }
-}
-
-/// `x` with `digits` significant digits.
-fn sig(x: f64, digits: usize) -> String {
-    if !x.is_finite() {
-        return format!("{x}");
-    }
-    if x == 0.0 {
-        return "0".into();
-    }
-    let mag = x.abs().log10().floor() as i32;
-    if !(-4..9).contains(&mag) {
-        return format!("{:.*e}", digits.saturating_sub(1), x);
-    }
-    let decimals = (digits as i32 - 1 - mag).max(0) as usize;
-    format!("{x:.decimals$}")
 }
 
 fn pct_text(x: Option<f64>) -> String {
@@ -198,7 +170,7 @@ pub fn render(rows: &[ComparisonRow], ols: &Identification, ml: &Identification)
         }
         let mut table: Vec<Vec<String>> = vec![header];
         for r in &mine {
-            let (unit, k) = display_unit(&r.unit);
+            let (unit, k) = table::unit(&r.parameter);
             let mut line = vec![
                 r.parameter.clone(),
                 unit.into(),
@@ -241,6 +213,39 @@ pub fn render(rows: &[ComparisonRow], ols: &Identification, ml: &Identification)
             s.push('\n');
         }
         s.push('\n');
+    }
+    // The host ML fit's natural frequencies and damping ratios, with the
+    // truth's (the shared printer's modal view).
+    let modal_rows: Vec<table::PedestalRow> = ml
+        .pedestals
+        .iter()
+        .filter(|p| p.modal.is_some())
+        .map(|p| {
+            let truth: Vec<Option<f64>> = table::PARAMETERS
+                .iter()
+                .map(|name| {
+                    rows.iter()
+                        .find(|r| r.bearing == p.bearing && r.parameter == *name)
+                        .and_then(|r| r.truth)
+                })
+                .collect();
+            let modal_truth = truth.iter().all(Option::is_some).then(|| {
+                crate::present::modal::pedestal(
+                    &std::array::from_fn(|i| truth[i].unwrap_or(f64::NAN)),
+                    None,
+                )
+            });
+            table::PedestalRow {
+                bearing: p.bearing.clone(),
+                modal: p.modal,
+                modal_truth,
+                ..table::PedestalRow::default()
+            }
+        })
+        .collect();
+    if !modal_rows.is_empty() {
+        s.push_str("host ML, ");
+        s.push_str(&table::render_modal(&modal_rows));
     }
     s
 }

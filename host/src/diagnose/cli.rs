@@ -21,7 +21,7 @@ pub struct Args {
     /// Parameters of the base pedestal model, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "k_y,k_z,m,c_y,c_z")]
     pub base: Vec<String>,
-    /// Print the diagnosis as JSON (formats.md) instead of the text report.
+    /// Print the diagnosis as JSON (docs/formats.md) instead of the text report.
     #[arg(long)]
     pub json: bool,
     /// Write measured-vs-predicted figures (PNG and SVG) into this directory.

@@ -308,7 +308,7 @@ impl Diagnosis {
                 let params: Vec<String> = st
                     .parameters
                     .iter()
-                    .map(|p| format!("{} = {:.4e} ± {:.2e}", p.name, p.value, p.std_err))
+                    .map(|p| format!("{} = {}", p.name, crate::present::table::parameter_text(&p.name, p.value, p.std_err)))
                     .collect();
                 let where_ = st.bearing.clone();
                 let mut effect = st.effect.clone();
@@ -360,18 +360,10 @@ impl Diagnosis {
                 r.effect, r.bearing, r.evidence.delta_bic, r.evidence.p_adjusted, self.significance_level
             );
         }
-        let _ = writeln!(s, "\nPedestals (before → after):");
-        for (a, b) in self.pedestals_before.iter().zip(&self.pedestals_after) {
-            let mut parts = Vec::new();
-            for (k, v) in &b.values {
-                let before = a
-                    .values
-                    .get(k)
-                    .map_or("—".to_string(), |x| format!("{x:.4e}"));
-                let se = b.std_err.get(k).copied().unwrap_or(f64::NAN);
-                parts.push(format!("{k} {before} → {v:.4e} ± {se:.1e}"));
-            }
-            let _ = writeln!(s, "  {}: {}", b.bearing, parts.join(", "));
+        // The shared printer (present::table): base model, then final model.
+        for (title, list) in [("base model", &self.pedestals_before), ("final model", &self.pedestals_after)] {
+            let rows: Vec<_> = list.iter().map(|p| crate::present::table::PedestalRow::from_named(&p.bearing, &p.values, &p.std_err)).collect();
+            let _ = write!(s, "\nPedestals, {title}:\n{}", crate::present::table::render(&rows));
         }
         let _ = writeln!(s, "\n{}", self.verdict);
         if !self.trusted {

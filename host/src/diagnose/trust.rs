@@ -168,6 +168,8 @@ pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
         suspected_convention_error: None,
         base: None,
         base_measured: None,
+        covariance: None,
+        modal: None,
     })
 }
 
@@ -274,6 +276,8 @@ mod tests {
             suspected_convention_error: None,
             base: None,
             base_measured: None,
+            covariance: None,
+            modal: None,
         };
         let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[fit]);
         assert!(!c.trusted);

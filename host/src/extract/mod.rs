@@ -38,7 +38,7 @@ use std::time::Instant;
 pub struct Args {
     /// The recording: WAV (16/24/32-bit integer PCM, 32-bit float) or CSV (`time_s`, then channels in volts).
     pub recording: PathBuf,
-    /// Channel map, sensitivities and keyphasor (TOML, formats.md "Recorded waveforms").
+    /// Channel map, sensitivities and keyphasor (TOML, docs/formats.md "Recorded waveforms").
     #[arg(long)]
     pub channels: PathBuf,
     /// Bearing coefficients (`bearings.csv` layout).
@@ -54,7 +54,7 @@ pub struct Args {
     #[arg(long)]
     pub plots: bool,
     /// No progress bar.
-    #[arg(long)]
+    #[arg(skip)]
     pub quiet: bool,
     /// Replace the files this command writes in an existing --out.
     #[arg(long)]

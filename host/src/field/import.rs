@@ -27,7 +27,7 @@ pub struct Args {
     /// The 1X vector table (CSV: a header row, one row per speed).
     pub table: PathBuf,
     /// Which columns are which transducer, units and phase convention (TOML,
-    /// formats.md "A 1X vector table").
+    /// docs/formats.md "A 1X vector table").
     #[arg(long)]
     pub layout: PathBuf,
     /// Bearing coefficients (`bearings.csv` layout).
@@ -293,6 +293,8 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
         }
         let omega = std::f64::consts::TAU * speed_hz;
         let mut disp = Vec::with_capacity(cols.len());
+        // The noise of the table's own rounding per reading [m] (field::rounding).
+        let mut sd = Vec::with_capacity(cols.len());
         for (t, &(ac, pc)) in layout.transducers.iter().zip(&cols) {
             let amplitude = cell(ac, "amplitude")?;
             if amplitude < 0.0 {
@@ -305,22 +307,36 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
             let phase = cell(pc, "phase [deg]")?;
             let q = reading_phasor(amplitude * t.unit.to_si_zero_peak, phase, layout.phase);
             disp.push(to_displacement(t.unit.kind, q, omega));
+            let place = |c: usize| record.get(c).and_then(super::rounding::last_place);
+            sd.push(match (place(ac), place(pc)) {
+                (Some(ua), Some(up)) => {
+                    let scale = t.unit.to_si_zero_peak
+                        * to_displacement(t.unit.kind, Complex::new(1.0, 0.0), omega).norm();
+                    scale * super::rounding::reading_sd(amplitude, ua, up)
+                }
+                _ => f64::NAN,
+            });
         }
         for (bearing, [rel, ped]) in &groups {
-            let pick = |set: &[usize]| -> [Complex<f64>; 2] {
+            let pick = |set: &[usize]| -> ([Complex<f64>; 2], [f64; 2]) {
                 let angles: Vec<f64> = set.iter().map(|&i| placements[i].angle_deg).collect();
                 let q: Vec<Complex<f64>> = set.iter().map(|&i| disp[i]).collect();
-                resolve(&angles, &q, None).0
+                let s: Vec<f64> = set.iter().map(|&i| sd[i]).collect();
+                let (yz, noise) = resolve(&angles, &q, Some(&s));
+                (yz, noise.unwrap_or([f64::NAN; 2]))
             };
+            let ((rel, rel_sd), (ped, ped_sd)) = (pick(rel), pick(ped));
+            let noise = [rel_sd[0], rel_sd[1], ped_sd[0], ped_sd[1]];
             rows.push(ImportedRow {
                 line,
                 speed_column: speed_col + 1,
                 measurement: Measurement {
                     speed_hz,
                     bearing: bearing.clone(),
-                    rel: pick(rel),
-                    ped: pick(ped),
-                    noise_sd: None,
+                    rel,
+                    ped,
+                    // A zero sd (exact readings) says nothing: leave the noise to identify.
+                    noise_sd: noise.iter().all(|s| s.is_finite() && *s > 0.0).then_some(noise),
                 },
             });
         }

@@ -10,6 +10,7 @@
 pub mod angle;
 pub mod import;
 pub mod plot;
+pub mod rounding;
 pub mod slow_roll;
 pub mod transducer;
 pub mod transducers_csv;

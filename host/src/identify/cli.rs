@@ -5,6 +5,7 @@ use super::{
     PedestalFit, WarningKind, DEFAULT_MAX_CONDITION_NUMBER,
 };
 use crate::estimate::noise::Quantisation;
+use crate::present::table::{self, sig, PedestalRow, SubRow};
 use crate::rundir::{RunDir, Truth};
 use anyhow::Context;
 use std::path::PathBuf;
@@ -70,7 +71,7 @@ r-and-i).")]
 pub struct Args {
     /// Run directory (measurements.csv, bearings.csv, optional truth.json).
     pub dir: PathBuf,
-    /// Print the identification as JSON (formats.md) instead of a table.
+    /// Print the identification as JSON (docs/formats.md) instead of a table.
     #[arg(long)]
     pub json: bool,
     /// How the real and imaginary parts of eq. 4 are used.
@@ -115,6 +116,9 @@ pub struct Args {
     /// Speed unit of the figures.
     #[command(flatten)]
     pub figure_style: crate::plots::StyleArgs,
+    /// Fit only the speeds from LO to HI Hz (ends included), e.g. 20:120.
+    #[arg(long, value_name = "LO:HI", value_parser = crate::args::speed_band)]
+    pub speeds: Option<crate::args::SpeedBand>,
 }
 
 impl Args {
@@ -186,6 +190,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
     check_run_dir(&args.dir)?;
     let mut run = RunDir::read(&args.dir)?;
+    if let Some(band) = args.speeds {
+        band.select(&mut run)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", args.dir.display()))?;
+    }
     if let Some(band) = args.slow_roll {
         let removed = crate::field::slow_roll::subtract_slow_roll(&mut run.measurements, band)?;
         for v in &removed.vectors {
@@ -201,6 +209,7 @@ pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
     let mut identification =
         identify_run(&run, &args.options()).map_err(|e| located(&args.dir, e))?;
     on_bases(args, &run, &mut identification)?;
+    crate::present::modal::attach(&mut identification);
     Ok((run, identification))
 }
 
@@ -231,7 +240,7 @@ pub(crate) fn check_run_dir(dir: &std::path::Path) -> anyhow::Result<()> {
     match std::fs::metadata(dir) {
         Ok(m) if m.is_dir() => Ok(()),
         Ok(_) => anyhow::bail!(
-            "{}: not a directory: a run directory holds measurements.csv and bearings.csv (formats.md)",
+            "{}: not a directory: a run directory holds measurements.csv and bearings.csv (docs/formats.md)",
             dir.display()
         ),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -270,10 +279,11 @@ pub fn untrusted_reasons(identification: &Identification) -> String {
     out
 }
 
-/// The identification as an aligned text table: value ± standard error per
-/// parameter in MN/m, kg and N·s/m, residual RMS [N], condition number and
-/// whether the fit can be trusted; with `truth`, a row of the true values and
-/// one of the relative errors under each pedestal.
+/// The identification as text: the estimator and noise model, then the
+/// shared result table ([`crate::present::table`]: value ± standard error
+/// per parameter in MN/m, kg and N·s/m, residual RMS [N], condition number,
+/// whether the fit can be trusted, and f_n/ζ per direction); with `truth`, a
+/// row of the true values and one of the relative errors under each pedestal.
 pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
     let mode = super::parse_mode(&identification.equations).map_or("?", mode_label);
     let estimator = match identification.estimator.as_str() {
@@ -305,155 +315,59 @@ pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
         }
     }
     out.push('\n');
-    let units = |p: Parameter| match p {
-        Parameter::Ky | Parameter::Kz => ("MN/m", 1.0e6),
-        Parameter::M => ("kg", 1.0),
-        Parameter::Cy | Parameter::Cz => ("N·s/m", 1.0),
-    };
-    let mut rows: Vec<Vec<String>> = Vec::new();
-    let mut header = vec!["bearing".to_string()];
-    header.extend(
-        Parameter::ALL
-            .iter()
-            .map(|&p| format!("{} [{}]", p.name(), units(p).0)),
-    );
-    header.extend(["rms [N]", "cond", "fit"].map(String::from));
-    rows.push(header);
-    for fit in &identification.pedestals {
-        let mut row = vec![fit.bearing.clone()];
-        for p in Parameter::ALL {
-            let scale = units(p).1;
-            row.push(if is_fixed(fit, p) {
-                "0 (fixed)".to_string()
-            } else {
-                value_pm(fit.get(p) / scale, fit.std_errs()[p as usize] / scale)
-            });
-        }
-        row.push(sig(fit.residual_rms, 3));
-        row.push(if fit.condition_number.is_finite() {
-            format!("{:.1e}", fit.condition_number)
-        } else {
-            "∞".into()
-        });
-        row.push(if fit.trusted { "ok" } else { "UNTRUSTED" }.into());
-        rows.push(row);
-
-        if let Some(ols) = &fit.ols {
-            let mut ols_row = vec!["  ols".to_string()];
-            let mut eff_row = vec!["  ols eff.".to_string()];
-            for p in Parameter::ALL {
-                let scale = units(p).1;
-                match (ols.estimate.get(p.name()), ols.std_err.get(p.name())) {
-                    (Some(v), Some(se)) => ols_row.push(value_pm(v / scale, se / scale)),
-                    _ => ols_row.push("-".into()),
-                }
-                eff_row.push(
-                    ols.efficiency
-                        .get(p.name())
-                        .map_or("-".into(), |e| format!("{:.0}%", 100.0 * e)),
-                );
-            }
-            rows.push(ols_row);
-            rows.push(eff_row);
-        }
-
-        if let Some(t) = truth.and_then(|t| t.pedestals.iter().find(|t| t.bearing == fit.bearing)) {
-            let values = [t.k_y, t.k_z, t.m, t.c_y, t.c_z];
-            let mut truth_row = vec!["  truth".to_string()];
-            let mut error_row = vec!["  error".to_string()];
-            for p in Parameter::ALL {
-                let v = values[p as usize];
-                truth_row.push(sig(v / units(p).1, 6));
-                let e = fit.get(p) - v;
-                error_row.push(if v != 0.0 {
-                    format!("{:+.2}%", 100.0 * e / v.abs())
-                } else {
-                    format!("{:+} abs", sig(e / units(p).1, 2))
-                });
-            }
-            rows.push(truth_row);
-            rows.push(error_row);
-        }
-    }
-    let widths: Vec<usize> = (0..rows[0].len())
-        .map(|c| {
-            rows.iter()
-                .map(|r| r.get(c).map_or(0, |s| s.chars().count()))
-                .max()
-                .unwrap_or(0)
-        })
+    let rows: Vec<PedestalRow> = identification
+        .pedestals
+        .iter()
+        .map(|fit| result_row(fit, truth))
         .collect();
-    for r in &rows {
-        let mut line = String::new();
-        for (c, cell) in r.iter().enumerate() {
-            let pad = widths[c].saturating_sub(cell.chars().count());
-            line.push_str(cell);
-            line.push_str(&" ".repeat(pad + 2));
-        }
-        out.push_str(line.trim_end());
-        out.push('\n');
-    }
+    out.push_str(&table::render(&rows));
     out
+}
+
+/// One pedestal as the shared printer shows it ([`crate::present::table`]),
+/// with the paper's OLS beside it (`--compare-ols`) and the truth when known.
+pub fn result_row(fit: &PedestalFit, truth: Option<&Truth>) -> PedestalRow {
+    let se = fit.std_errs();
+    let mut below = Vec::new();
+    if let Some(ols) = &fit.ols {
+        let named = |map: &std::collections::BTreeMap<String, f64>, p: Parameter| {
+            map.get(p.name()).copied()
+        };
+        below.push(SubRow::values(
+            "ols",
+            Parameter::ALL.map(|p| {
+                named(&ols.estimate, p).map(|v| (v, named(&ols.std_err, p)))
+            }),
+        ));
+        below.push(SubRow::text(
+            "ols eff.",
+            Parameter::ALL.map(|p| {
+                named(&ols.efficiency, p).map_or("-".into(), |e| format!("{:.0}%", 100.0 * e))
+            }),
+        ));
+    }
+    let truth = truth.and_then(|t| t.pedestals.iter().find(|t| t.bearing == fit.bearing));
+    let mut modal_truth = None;
+    if let Some(t) = truth {
+        let values = [t.k_y, t.k_z, t.m, t.c_y, t.c_z];
+        below.push(SubRow::values("truth", values.map(|v| Some((v, None)))));
+        below.push(SubRow::errors("error", fit.params(), values));
+        modal_truth = Some(crate::present::modal::pedestal(&values, None));
+    }
+    PedestalRow {
+        bearing: fit.bearing.clone(),
+        parameters: Parameter::ALL
+            .map(|p| (!is_fixed(fit, p)).then(|| (fit.get(p), se[p as usize]))),
+        extra: Vec::new(),
+        residual_rms: Some(fit.residual_rms),
+        condition_number: Some(fit.condition_number),
+        trusted: Some(fit.trusted),
+        modal: fit.modal,
+        below,
+        modal_truth,
+    }
 }
 
 fn is_fixed(fit: &PedestalFit, p: Parameter) -> bool {
     fit.fixed.iter().any(|f| f == p.name())
-}
-
-/// `value ± std_err` with the value given to the decimal of the standard
-/// error's second significant digit (6 significant digits when the standard
-/// error is zero, tiny or not finite).
-fn value_pm(value: f64, std_err: f64) -> String {
-    if !std_err.is_finite() {
-        return format!("{} ± ∞", sig(value, 6));
-    }
-    let v_mag = if value != 0.0 {
-        value.abs().log10().floor() as i32
-    } else {
-        0
-    };
-    if std_err <= 0.0 || (std_err.log10().floor() as i32) < v_mag - 5 {
-        return format!("{} ± {}", sig(value, 6), sig(std_err, 2));
-    }
-    let decimals = (1 - std_err.log10().floor() as i32).max(0) as usize;
-    if (v_mag - decimals as i32).abs() > 12 || !(-4..9).contains(&v_mag) {
-        return format!("{} ± {}", sig(value, 3), sig(std_err, 2));
-    }
-    format!("{value:.decimals$} ± {}", sig(std_err, 2))
-}
-
-/// `x` with `digits` significant digits, in plain notation for moderate
-/// magnitudes.
-fn sig(x: f64, digits: usize) -> String {
-    if !x.is_finite() {
-        return format!("{x}");
-    }
-    if x == 0.0 {
-        return "0".into();
-    }
-    let magnitude = x.abs().log10().floor() as i32;
-    if !(-4..9).contains(&magnitude) {
-        return format!("{:.*e}", digits.saturating_sub(1), x);
-    }
-    let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
-    format!("{x:.decimals$}")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{sig, value_pm};
-
-    #[test]
-    fn significant_digit_formatting() {
-        assert_eq!(sig(10.00213, 6), "10.0021");
-        assert_eq!(sig(0.0031, 2), "0.0031");
-        assert_eq!(sig(150.0, 6), "150.000");
-        assert_eq!(sig(1.5e-7, 2), "1.5e-7");
-        assert_eq!(sig(-2.0, 3), "-2.00");
-        assert_eq!(value_pm(105.045, 106.0), "105 ± 106");
-        assert_eq!(value_pm(9.93343, 0.057), "9.933 ± 0.057");
-        assert_eq!(value_pm(149.542, 0.19), "149.54 ± 0.19");
-        assert_eq!(value_pm(10.0, 1.6e-15), "10.0000 ± 1.6e-15");
-        assert_eq!(value_pm(10.0, f64::INFINITY), "10.0000 ± ∞");
-    }
 }

@@ -103,13 +103,13 @@ impl Convention {
     pub fn describe(self) -> &'static str {
         match self {
             Convention::Conjugated => {
-                "the phasors are conjugated (phase lag read as lead: formats.md wants q(t) = Re{Q·e^{iΩt}})"
+                "the phasors are conjugated (phase lag read as lead: docs/formats.md wants q(t) = Re{Q·e^{iΩt}})"
             }
             Convention::SwappedYz => {
-                "the y and z readings are swapped (formats.md: y vertical, z horizontal)"
+                "the y and z readings are swapped (docs/formats.md: y vertical, z horizontal)"
             }
             Convention::RelNegated => {
-                "rel is pedestal minus rotor (formats.md: rel = rotor − pedestal)"
+                "rel is pedestal minus rotor (docs/formats.md: rel = rotor − pedestal)"
             }
             Convention::BearingTransposed => {
                 "the bearing matrices are transposed (kyz and kzy, cyz and czy exchanged)"
@@ -587,6 +587,8 @@ mod tests {
             suspected_convention_error: None,
             base: None,
             base_measured: None,
+            covariance: None,
+            modal: None,
             ols: None,
         };
         let conj = Some(Convention::Conjugated);

@@ -233,6 +233,7 @@ pub fn fit_ml(
     };
     fit.residual_rms = ml_fit.residual_rms;
     fit.condition_number = ml_fit.condition_number;
+    fit.covariance = scaled_covariance(&ml_fit.covariance, variance_scale);
     let mut view = solution.clone();
     for (k, &c) in columns.iter().enumerate() {
         view.theta[k] = ml_fit.theta[c as usize];
@@ -260,6 +261,17 @@ pub fn fit_ml(
         fit,
         report(noise, chi2, dof, variance_scale, ml_fit.equation_var.sqrt()),
     ))
+}
+
+/// `covariance` × `scale` when every entry is finite (the covariance a
+/// fit reports), else `None`.
+pub(crate) fn scaled_covariance(
+    covariance: &[[f64; PARAMETERS]; PARAMETERS],
+    scale: f64,
+) -> Option<[[f64; PARAMETERS]; PARAMETERS]> {
+    let c: [[f64; PARAMETERS]; PARAMETERS] =
+        std::array::from_fn(|i| std::array::from_fn(|j| scale * covariance[i][j]));
+    c.iter().flatten().all(|v| v.is_finite()).then_some(c)
 }
 
 /// The noise report of a fit with `chi2` on `dof` under `noise`, its

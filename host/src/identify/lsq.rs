@@ -11,6 +11,9 @@ pub struct LeastSquares {
     /// Standard errors sqrt(σ²·diag((AᵀA)⁻¹)) with σ² = RSS/(n − p);
     /// infinite when not estimable (rank deficient, or n ≤ p).
     pub std_err: Vec<f64>,
+    /// Covariance σ²·(AᵀA)⁻¹ of θ (row-major, p×p); empty when not
+    /// estimable (as `std_err` is infinite).
+    pub covariance: Vec<f64>,
     /// Residual sum of squares ‖A·θ − b‖² [b unit²].
     pub rss: f64,
     /// Number of equations n.
@@ -32,6 +35,26 @@ pub struct LeastSquares {
 }
 
 impl LeastSquares {
+    /// The covariance over all five pedestal parameters when `columns` are
+    /// the estimated ones, in θ order (zero for fixed parameters); `None`
+    /// when not estimable or not finite.
+    pub fn covariance_of(
+        &self,
+        columns: &[plinth_shared::regression::Parameter],
+    ) -> Option<[[f64; 5]; 5]> {
+        let p = columns.len();
+        if self.covariance.len() != p * p || !self.covariance.iter().all(|c| c.is_finite()) {
+            return None;
+        }
+        let mut out = [[0.0; 5]; 5];
+        for (a, &ca) in columns.iter().enumerate() {
+            for (b, &cb) in columns.iter().enumerate() {
+                out[ca as usize][cb as usize] = self.covariance[a * p + b];
+            }
+        }
+        Some(out)
+    }
+
     /// Root-mean-square residual sqrt(RSS/n) [b unit].
     pub fn residual_rms(&self) -> f64 {
         if self.equations == 0 {
@@ -123,6 +146,23 @@ pub fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> LeastSquares {
         })
         .collect();
 
+    let covariance = if rank == p && n > p {
+        let sigma2 = rss / (n - p) as f64;
+        let mut cov = vec![0.0; p * p];
+        for i in 0..p {
+            for k in 0..p {
+                let c: f64 = sv
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &s)| v_t[(j, i)] * v_t[(j, k)] / (s * s))
+                    .sum();
+                cov[i * p + k] = sigma2 * c / (norms[i] * norms[k]);
+            }
+        }
+        cov
+    } else {
+        Vec::new()
+    };
     let std_err = if rank == p && n > p {
         let sigma2 = rss / (n - p) as f64;
         (0..p)
@@ -142,6 +182,7 @@ pub fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> LeastSquares {
     LeastSquares {
         theta,
         std_err,
+        covariance,
         rss,
         equations: n,
         condition_number,
@@ -155,6 +196,7 @@ fn degenerate(n: usize, p: usize) -> LeastSquares {
     LeastSquares {
         theta: vec![f64::NAN; p],
         std_err: vec![f64::INFINITY; p],
+        covariance: Vec::new(),
         rss: f64::NAN,
         equations: n,
         condition_number: f64::INFINITY,

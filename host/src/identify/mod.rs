@@ -268,6 +268,14 @@ pub struct PedestalFit {
     /// True when that base's motion was measured (`base.csv`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub base_measured: Option<bool>,
+    /// Covariance of θ = (k_y, k_z, m, c_y, c_z) in θ units (zero rows for
+    /// fixed parameters); absent when the fit cannot give one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub covariance: Option<crate::present::modal::Covariance>,
+    /// Natural frequency and damping ratio per direction with ±
+    /// ([`crate::present::modal`], formats.md `modal`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub modal: Option<crate::present::modal::PedestalModal>,
 }
 
 impl PedestalFit {
@@ -474,6 +482,8 @@ pub(crate) fn ols_solution(
         suspected_convention_error: None,
         base: None,
         base_measured: None,
+        covariance: solution.covariance_of(&columns),
+        modal: None,
     };
     fit.warnings = checks::warnings(&fit, &used, skipped, &solution, &columns, options);
     physical::check_finite(&fit)?;
@@ -515,6 +525,7 @@ pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, I
     let mut identification = fit_run(run, options)?;
     let findings = convention::diagnose(run, &identification, &|r| fit_run(r, options));
     convention::mark(&mut identification, &findings);
+    crate::present::modal::attach(&mut identification);
     Ok(identification)
 }
 

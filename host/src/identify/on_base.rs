@@ -198,6 +198,7 @@ fn apply(
     };
     fit.fixed.clear();
     fit.ols = None;
+    fit.covariance = None;
     // The rigid-ground misfit a convention mistake was sought for is gone.
     fit.suspected_convention_error = None;
     fit.warnings.retain(|w| {
@@ -311,6 +312,7 @@ pub fn apply_measured_base(
         );
         let bearing = fit.bearing.clone();
         apply(fit, &ml.theta, &se, ml.converged, &name, true);
+        fit.covariance = super::estimator::scaled_covariance(&ml.covariance, scale);
         fit.residual_rms = ml.residual_rms;
         fit.condition_number = ml.condition_number;
         physical::check_finite(fit)?;

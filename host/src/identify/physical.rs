@@ -203,6 +203,8 @@ mod tests {
             suspected_convention_error: None,
             base: None,
             base_measured: None,
+            covariance: None,
+            modal: None,
             ols: None,
         }
     }

@@ -12,14 +12,18 @@ use crate::rundir::{Measurement, RunDir};
 use anyhow::{anyhow, Result};
 use std::path::{Path, PathBuf};
 
-/// The rigid pedestal of a fit: its parameters and their standard errors
-/// (the identification reports no correlations: the band says so).
+/// The rigid pedestal of a fit: its parameters and their covariance (the
+/// standard errors alone when the fit gives no covariance: the band says
+/// so).
 pub fn rigid_pedestal(fit: &PedestalFit) -> RigidPedestal {
     RigidPedestal {
         k: [fit.k_y, fit.k_z],
         m: fit.m,
         c: [fit.c_y, fit.c_z],
-        uncertainty: Uncertainty::StdErrors(fit.std_errs()),
+        uncertainty: match fit.covariance {
+            Some(c) => Uncertainty::Covariance(c),
+            None => Uncertainty::StdErrors(fit.std_errs()),
+        },
     }
 }
 

@@ -128,7 +128,7 @@ pub fn read_identified(path: &Path) -> anyhow::Result<Vec<IdentifiedPedestal>> {
         .with_context(|| format!("reading {}", path.display()))?;
     let file: IdentifiedFile = serde_json::from_str(&text).map_err(|e| {
         anyhow!(
-            "{}:{}:{}: not an identification file (formats.md): {e}",
+            "{}:{}:{}: not an identification file (docs/formats.md): {e}",
             path.display(),
             e.line(),
             e.column()

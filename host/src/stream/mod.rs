@@ -111,7 +111,7 @@ pub struct Args {
     #[arg(long, conflicts_with_all = ["port", "replay", "duration"])]
     pub offline: bool,
     /// No progress line.
-    #[arg(long)]
+    #[arg(skip)]
     pub quiet: bool,
 }
 

@@ -5,6 +5,7 @@
 //! record of the session (`stream-report.json`) for scripts and tests.
 
 use crate::identify::{Identification, WarningKind};
+use crate::present::{modal::PedestalModal, table};
 use plinth_shared::protocol::{EstimateFrame, LinkStats};
 use plinth_shared::regression::Parameter;
 use serde::Serialize;
@@ -74,6 +75,9 @@ pub struct PedestalComparison {
     /// The ML iteration failed (the values are then OLS's, as `plinth
     /// identify` reports them) or stopped before converging.
     pub ml_failed: Option<bool>,
+    /// The ML fit's natural frequencies and damping ratios (formats.md `modal`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modal: Option<PedestalModal>,
 }
 
 fn finite(x: f64) -> Option<f64> {
@@ -134,16 +138,10 @@ pub fn compare(
                 batch_trusted: fit.map(|f| f.trusted),
                 ml_trusted: ml_fit.map(|f| f.trusted),
                 ml_failed: ml_fit.map(|f| f.has_warning(WarningKind::MlFailed)),
+                modal: ml_fit.and_then(|f| f.modal),
             }
         })
         .collect()
-}
-
-fn num(x: Option<f64>) -> String {
-    match x {
-        Some(v) => format!("{v:.5e}"),
-        None => "—".to_string(),
-    }
 }
 
 /// The estimators shown side by side for one parameter, in column order:
@@ -191,23 +189,53 @@ pub fn render(comparisons: &[PedestalComparison]) -> String {
             .first()
             .map(|p| estimators(p).iter().map(|e| e.0).collect())
             .unwrap_or_default();
-        s.push_str(&format!("  {:<4}", ""));
-        for n in &names {
-            s.push_str(&format!(" {:>13} {:>11}", n, "± std err"));
-        }
-        s.push_str(&format!(" {:>13} {:>9}  unit\n", "box − OLS", "%"));
+        // Units, order and notation of the shared printer (present::table).
+        let mut rows: Vec<Vec<String>> = Vec::new();
+        let mut header = vec![String::new(), "unit".to_string()];
+        header.extend(names.iter().map(|n| format!("{n} ± σ")));
+        header.extend(["box − OLS".to_string(), "%".to_string()]);
+        rows.push(header);
         for p in &c.parameters {
-            s.push_str(&format!("  {:<4}", p.parameter));
+            let (unit, k) = table::unit(p.parameter);
+            let mut row = vec![p.parameter.to_string(), unit.to_string()];
             for (_, v, e) in estimators(p) {
-                s.push_str(&format!(" {:>13} {:>11}", num(v), num(e)));
+                row.push(match (v, e) {
+                    (Some(v), Some(e)) => table::value_pm(v * k, e * k),
+                    (Some(v), None) => table::sig(v * k, 6),
+                    _ => "—".into(),
+                });
             }
-            s.push_str(&format!(
-                " {:>13} {:>9}  {}\n",
-                num(p.difference),
+            row.push(p.difference.map_or("—".into(), |d| table::sig(d * k, 3)));
+            row.push(
                 p.difference_percent
                     .map_or("—".to_string(), |v| format!("{v:+.3}")),
-                p.unit
-            ));
+            );
+            rows.push(row);
+        }
+        let widths: Vec<usize> = (0..rows[0].len())
+            .map(|i| rows.iter().map(|r| r[i].chars().count()).max().unwrap_or(0))
+            .collect();
+        for r in &rows {
+            let mut line = String::from("  ");
+            for (i, cell) in r.iter().enumerate() {
+                let pad = " ".repeat(widths[i] - cell.chars().count());
+                if i < 2 {
+                    line.push_str(&format!("{cell}{pad}  "));
+                } else {
+                    line.push_str(&format!("{pad}{cell}  "));
+                }
+            }
+            s.push_str(line.trim_end());
+            s.push('\n');
+        }
+        if let Some(m) = c.modal {
+            let row = table::PedestalRow {
+                bearing: c.bearing.clone(),
+                modal: Some(m),
+                ..table::PedestalRow::default()
+            };
+            s.push_str("  host ML, ");
+            s.push_str(&table::render_modal(&[row]));
         }
     }
     s

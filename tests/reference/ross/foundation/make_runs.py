@@ -9,7 +9,7 @@ The machines (fd-*.toml, Plinth machine-file syntax read with tomllib) are
 built in ROSS by ../make_reference.py's `build` (Timoshenko shaft, disks,
 bearing -> pedestal point mass -> base point mass -> ground). This script
 then writes each run directory itself, following ../../../../../shared/
-formats.md (beside the repo) directly: `measurements.csv` with rel = rotor
+docs/formats.md directly: `measurements.csv` with rel = rotor
 minus pedestal and ped = absolute pedestal motion, q(t) = Re{Q e^{iWt}},
 y vertical, z horizontal; `bearings.csv`; `truth.json` with the pedestals,
 the bases and `effects: ["foundation_coupling"]` (none for the rigid

@@ -1,0 +1,236 @@
+//! What a person sees: the modal view in `identify`'s table and JSON, the
+//! speed band, a closed stdout, `--quiet`, `import`'s rounding noise, and
+//! documentation that stays inside the repository.
+
+use plinth::identify::synthetic::SyntheticRun;
+use plinth::rundir::{DigitsMode, RunDir, WriteOptions};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+fn plinth() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_plinth"))
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("host/ has a parent")
+        .to_path_buf()
+}
+
+/// A damped paper-like run with 4 significant digits and its truth.
+fn run_dir() -> (tempfile::TempDir, RunDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let run = SyntheticRun::paper_like(true, 80).build().unwrap();
+    run.write_with(
+        dir.path(),
+        &WriteOptions {
+            digits: Some(4),
+            digits_mode: DigitsMode::Round,
+        },
+    )
+    .unwrap();
+    (dir, run)
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let out = plinth().args(args).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// `identify --json` carries `modal` for every pedestal: f_n within 0.1 %
+/// of √(k/m)/2π of the truth and within 3 of its standard errors, ζ within
+/// 3 of its standard errors; the table shows the same numbers in Hz and rpm.
+#[test]
+fn identify_reports_natural_frequencies_and_damping_ratios() {
+    let (dir, run) = run_dir();
+    let d = dir.path().to_str().unwrap();
+    let v = json(&["identify", d, "--json"]);
+    let truth = run.truth.as_ref().unwrap();
+    for p in v["pedestals"].as_array().unwrap() {
+        let t = truth
+            .pedestals
+            .iter()
+            .find(|t| t.bearing == p["bearing"].as_str().unwrap())
+            .unwrap();
+        for (dir, k, c) in [("y", t.k_y, t.c_y), ("z", t.k_z, t.c_z)] {
+            let m = &p["modal"][dir];
+            let f_true = (k / t.m).sqrt() / std::f64::consts::TAU;
+            let zeta_true = c / (2.0 * (k * t.m).sqrt());
+            let f = m["f_n_hz"].as_f64().unwrap();
+            let f_se = m["f_n_std_err"].as_f64().unwrap();
+            let z = m["zeta"].as_f64().unwrap();
+            let z_se = m["zeta_std_err"].as_f64().unwrap();
+            assert!((f / f_true - 1.0).abs() < 1e-3, "{dir}: {f} vs {f_true}");
+            assert!((f - f_true).abs() < 3.0 * f_se, "{dir}: {f} ± {f_se} vs {f_true}");
+            assert!(f_se > 0.0 && z_se > 0.0);
+            assert!((z - zeta_true).abs() < 3.0 * z_se, "{dir}: ζ {z} ± {z_se} vs {zeta_true}");
+        }
+        assert_eq!(p["covariance"].as_array().map(Vec::len), Some(5));
+    }
+    let out = plinth().args(["identify", d]).output().unwrap();
+    let table = String::from_utf8(out.stdout).unwrap();
+    assert!(table.contains("f_n [rpm]") && table.contains("ζ [%]"), "{table}");
+    assert!(table.contains("left y") && table.contains("right z"), "{table}");
+}
+
+/// `--speeds LO:HI` fits only that band; a band with no speed, or a bad
+/// one, is an error naming the option.
+#[test]
+fn speed_band() {
+    let (dir, _) = run_dir();
+    let d = dir.path().to_str().unwrap();
+    let v = json(&["identify", d, "--json", "--speeds", "20:120"]);
+    for p in v["pedestals"].as_array().unwrap() {
+        let r = &p["speed_range_hz"];
+        assert!(r[0].as_f64().unwrap() >= 20.0 && r[1].as_f64().unwrap() <= 120.0, "{r}");
+    }
+    for (band, says) in [("900:1000", "no measured speed"), ("120:20", "LO")] {
+        let out = plinth()
+            .args(["identify", d, "--speeds", band])
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{band}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--speeds") && err.contains(says), "{err}");
+    }
+}
+
+/// A reader that closes the pipe early (`| head -1`) ends the command
+/// quietly with exit code 0, as ripgrep does; nothing on stderr.
+#[test]
+fn closed_stdout_ends_quietly() {
+    let (dir, _) = run_dir();
+    let mut child = plinth()
+        .args(["identify", dir.path().to_str().unwrap(), "--json"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Close our end of stdout before the child writes its JSON.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(!err.contains("panicked") && !err.contains("Broken pipe"), "{err}");
+}
+
+/// `--quiet` is global: accepted before and after the command.
+#[test]
+fn quiet_is_global() {
+    let (dir, _) = run_dir();
+    let d = dir.path().to_str().unwrap();
+    for args in [
+        vec!["--quiet", "identify", d],
+        vec!["identify", d, "--quiet"],
+    ] {
+        let out = plinth().args(&args).output().unwrap();
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+}
+
+/// `import` writes the noise of the table's own rounding as noise columns,
+/// and identify uses them (`"source": "columns"`).
+#[test]
+fn import_keeps_the_tables_precision() {
+    let field = repo().join("examples/field");
+    let out_dir = tempfile::tempdir().unwrap();
+    let run = out_dir.path().join("run");
+    let status = plinth()
+        .arg("import")
+        .arg(field.join("vector-table.csv"))
+        .arg("--layout")
+        .arg(field.join("layout.toml"))
+        .arg("--bearings")
+        .arg(field.join("bearings.csv"))
+        .arg("--out")
+        .arg(&run)
+        .output()
+        .unwrap();
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    let text = std::fs::read_to_string(run.join("measurements.csv")).unwrap();
+    assert!(text.lines().next().unwrap().contains("rel_y_sd"), "{text}");
+    let v = json(&["identify", run.to_str().unwrap(), "--json"]);
+    for (_, n) in v["noise"].as_object().unwrap() {
+        assert_eq!(n["source"], "columns", "{n}");
+    }
+}
+
+/// Every `--help` that names the data contract names the file in the
+/// repository (docs/formats.md), which exists.
+#[test]
+fn help_texts_point_inside_the_repository() {
+    assert!(repo().join("docs/formats.md").is_file());
+    let commands = [
+        "identify", "simulate", "signals", "predict", "paper", "stream", "demo", "diagnose",
+        "import", "extract", "plot", "accuracy",
+    ];
+    for c in commands {
+        let out = plinth().args([c, "--help"]).output().unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        for (i, _) in text.match_indices("formats.md") {
+            assert!(
+                text[..i].ends_with("docs/"),
+                "plinth {c} --help names formats.md outside docs/: {text}"
+            );
+        }
+        assert!(!text.contains(&["/work", "/shared"].concat()), "{c}");
+    }
+}
+
+/// Every relative link in README.md and docs/*.md resolves to a file in
+/// the repository, and no file of the repository refers to documents
+/// outside it.
+#[test]
+fn documentation_links_resolve_and_stay_inside() {
+    let root = repo();
+    let mut pages = vec![root.join("README.md"), root.join("examples/field/README.md")];
+    for e in std::fs::read_dir(root.join("docs")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "md") {
+            pages.push(p);
+        }
+    }
+    let mut broken = Vec::new();
+    for page in &pages {
+        let text = std::fs::read_to_string(page).unwrap();
+        let mut rest = text.as_str();
+        while let Some(i) = rest.find("](") {
+            rest = &rest[i + 2..];
+            let Some(end) = rest.find(')') else { break };
+            let target = &rest[..end];
+            rest = &rest[end..];
+            if target.starts_with("http") || target.starts_with('#') || target.starts_with("mailto:") {
+                continue;
+            }
+            let path = target.split('#').next().unwrap_or(target);
+            let resolved = page.parent().unwrap().join(path);
+            if !resolved.exists() {
+                broken.push(format!("{}: {target}", page.display()));
+            }
+        }
+    }
+    assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
+
+    let outside = ["/work", "/shared"].concat();
+    let mut mentions = Vec::new();
+    let mut stack = vec![root.clone()];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().to_string();
+            if name.starts_with('.') || name.starts_with("target") {
+                continue;
+            }
+            if p.is_dir() {
+                stack.push(p);
+            } else if let Ok(bytes) = std::fs::read(&p) {
+                if bytes.windows(outside.len()).any(|w| w == outside.as_bytes()) {
+                    mentions.push(p.display().to_string());
+                }
+            }
+        }
+    }
+    assert!(mentions.is_empty(), "files naming {outside}: {mentions:?}");
+}
