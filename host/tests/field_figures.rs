@@ -50,7 +50,9 @@ fn import_plots_follow_the_layout_rotation_and_units() {
         "--layout".as_ref(),
         t.join("mil_lead_cw.toml").as_os_str(),
         "--bearings".as_ref(),
-        repo().join("tests/fixtures/field/sim/bearings.csv").as_os_str(),
+        repo()
+            .join("tests/fixtures/field/sim/bearings.csv")
+            .as_os_str(),
         "--out".as_ref(),
         out.as_os_str(),
         "--plots".as_ref(),

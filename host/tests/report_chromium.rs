@@ -63,7 +63,10 @@ window.addEventListener('load',function(){
 
 fn number_after(text: &str, key: &str) -> Option<usize> {
     let at = text.find(key)? + key.len();
-    let digits: String = text[at..].chars().take_while(char::is_ascii_digit).collect();
+    let digits: String = text[at..]
+        .chars()
+        .take_while(char::is_ascii_digit)
+        .collect();
     digits.parse().ok()
 }
 
@@ -88,9 +91,22 @@ fn report_loads_in_headless_chromium_with_every_figure() {
     );
     let html = std::fs::read_to_string(&out).unwrap();
     // Self-contained: no script, nothing that a browser would fetch.
-    assert!(!html.contains("<script"), "the report must not carry a script");
-    for bad in ["src=\"http", "href=\"http", "src=\"//", "href=\"//", "url(http", "@import"] {
-        assert!(!html.contains(bad), "the report refers outside itself: {bad}");
+    assert!(
+        !html.contains("<script"),
+        "the report must not carry a script"
+    );
+    for bad in [
+        "src=\"http",
+        "href=\"http",
+        "src=\"//",
+        "href=\"//",
+        "url(http",
+        "@import",
+    ] {
+        assert!(
+            !html.contains(bad),
+            "the report refers outside itself: {bad}"
+        );
     }
     // Two stiffness figures, 4 Bode figures, 8 polar plots (2 bearings).
     let figures = html.matches("<figure id=").count();
@@ -110,7 +126,11 @@ fn report_loads_in_headless_chromium_with_every_figure() {
 
     // 1. Load with an error probe and dump the DOM after the load event.
     let probe_page = tmp.path().join("probe.html");
-    std::fs::write(&probe_page, html.replacen("<head>", &format!("<head>{PROBE}"), 1)).unwrap();
+    std::fs::write(
+        &probe_page,
+        html.replacen("<head>", &format!("<head>{PROBE}"), 1),
+    )
+    .unwrap();
     let dump = headless(&chrome, &tmp.path().join("profile-dom"))
         .arg("--virtual-time-budget=10000")
         .arg("--dump-dom")

@@ -342,7 +342,10 @@ fn bode_figure(bearing: &str, q: Quantity, loci: &[&Locus], style: Style) -> Pha
         });
     }
     PhasorFigure {
-        title: format!("Bode: bearing {bearing}, {} (1X amplitude and phase lag)", q.name()),
+        title: format!(
+            "Bode: bearing {bearing}, {} (1X amplitude and phase lag)",
+            q.name()
+        ),
         quantity: PlotQuantity::DisplacementMicrons,
         view: PhasorView::Engineer(PhaseStyle::Wrapped),
         rows: Rows::Both,
@@ -383,7 +386,11 @@ pub fn plot_run_with(
 
 /// The Bode figures and polar loci of a run, for a report: (Bode figures,
 /// loci).
-pub fn figures(run: &RunDir, transducers: &[PlotTransducer], style: Style) -> (Vec<PhasorFigure>, Vec<Locus>) {
+pub fn figures(
+    run: &RunDir,
+    transducers: &[PlotTransducer],
+    style: Style,
+) -> (Vec<PhasorFigure>, Vec<Locus>) {
     let all = loci(run, transducers);
     let mut bode = Vec::new();
     for b in run.measured_bearings() {
@@ -537,7 +544,9 @@ where
             .draw(&Text::new(
                 texts[p.index].clone(),
                 (b.x as i32, b.y as i32),
-                ("sans-serif", font).into_font().color(&RGBColor(40, 40, 40)),
+                ("sans-serif", font)
+                    .into_font()
+                    .color(&RGBColor(40, 40, 40)),
             ))
             .map_err(err)?;
     }
@@ -545,7 +554,10 @@ where
     if let (Some(first), Some(last)) = (pixels.first(), pixels.last()) {
         let (x, y) = (first.0 as i32, first.1 as i32);
         upper
-            .draw(&Rectangle::new([(x - 5, y - 5), (x + 5, y + 5)], dark.filled()))
+            .draw(&Rectangle::new(
+                [(x - 5, y - 5), (x + 5, y + 5)],
+                dark.filled(),
+            ))
             .map_err(err)?;
         upper
             .draw(&TriangleMarker::new(
@@ -668,10 +680,22 @@ mod tests {
     #[test]
     fn native_units_of_the_layout() {
         use plinth_shared::extractor::SensorKind as K;
-        assert_eq!(native_unit(K::Velocity, 0.0254), PlotQuantity::VelocityInchPerSecond);
-        assert_eq!(native_unit(K::Velocity, 1e-3), PlotQuantity::VelocityMmPerSecond);
-        assert_eq!(native_unit(K::Acceleration, 9.80665), PlotQuantity::AccelerationG);
-        assert_eq!(native_unit(K::Displacement, 25.4e-6), PlotQuantity::DisplacementMils);
+        assert_eq!(
+            native_unit(K::Velocity, 0.0254),
+            PlotQuantity::VelocityInchPerSecond
+        );
+        assert_eq!(
+            native_unit(K::Velocity, 1e-3),
+            PlotQuantity::VelocityMmPerSecond
+        );
+        assert_eq!(
+            native_unit(K::Acceleration, 9.80665),
+            PlotQuantity::AccelerationG
+        );
+        assert_eq!(
+            native_unit(K::Displacement, 25.4e-6),
+            PlotQuantity::DisplacementMils
+        );
         // A velocity pick-up reads iΩX: 1 µm 0-pk at 100 Hz is 0.628 mm/s pk,
         // leading the displacement by 90° (lag −90 ≡ 270).
         let v = PlotQuantity::VelocityMmPerSecond.from_displacement(Complex::new(1e-6, 0.0), 100.0);

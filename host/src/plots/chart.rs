@@ -497,7 +497,10 @@ impl PhasorFigure {
 }
 
 /// Segments with their x (speed [Hz]) in `unit`.
-pub(super) fn in_speed_unit(segments: Vec<Vec<(f64, f64)>>, unit: SpeedUnit) -> Vec<Vec<(f64, f64)>> {
+pub(super) fn in_speed_unit(
+    segments: Vec<Vec<(f64, f64)>>,
+    unit: SpeedUnit,
+) -> Vec<Vec<(f64, f64)>> {
     let f = unit.factor();
     segments
         .into_iter()

@@ -155,7 +155,9 @@ mod tests {
                 (350.0 + r * a.cos(), 350.0 + r * a.sin())
             })
             .collect();
-        let texts: Vec<String> = (0..300).map(|i| format!("{:.1} Hz", 10.0 + i as f64 * 0.3)).collect();
+        let texts: Vec<String> = (0..300)
+            .map(|i| format!("{:.1} Hz", 10.0 + i as f64 * 0.3))
+            .collect();
         let bounds = TextBox {
             x: 0.0,
             y: 0.0,

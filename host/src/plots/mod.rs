@@ -461,9 +461,21 @@ mod tests {
                 (3.0, Complex::from_polar(1.0, -15f64.to_radians())),
             ],
         );
-        let segs = view_rows(&s, PhasorView::Engineer(PhaseStyle::Wrapped), 1, 1.0);
+        let segs = view_rows(
+            &s,
+            PhasorView::Engineer(PhaseStyle::Wrapped),
+            1,
+            Quantity::DisplacementMicrons,
+            false,
+        );
         assert_eq!(segs.len(), 2);
-        let segs = view_rows(&s, PhasorView::Engineer(PhaseStyle::Unwrapped), 1, 1.0);
+        let segs = view_rows(
+            &s,
+            PhasorView::Engineer(PhaseStyle::Unwrapped),
+            1,
+            Quantity::DisplacementMicrons,
+            false,
+        );
         assert_eq!(segs.len(), 1);
         assert!((segs[0][1].1 - 365.0).abs() < 1e-9);
     }
@@ -490,7 +502,7 @@ mod tests {
                         PhasorSeries::line("Ly", a.clone()),
                         PhasorSeries::line("Lz", b.clone()),
                     ],
-            style: Default::default(),
+                    quantity: None,
                 },
                 PhasorPanel {
                     title: "Pedestal (absolute)".into(),
@@ -501,14 +513,19 @@ mod tests {
                         ),
                         PhasorSeries::line("Ly predicted", a.clone()),
                     ],
+                    quantity: None,
                 },
             ],
+            style: Style {
+                speed_unit: SpeedUnit::Rpm,
+                log_amplitude: true,
+            },
         };
         let [png, svg] = fig.write(&out.join("test_response")).unwrap();
         let bytes = std::fs::read(&png).unwrap();
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
         let text = std::fs::read_to_string(&svg).unwrap();
-        assert!(text.starts_with("<svg") && text.contains("Rotor speed [Hz]"));
+        assert!(text.starts_with("<svg") && text.contains("Rotor speed [rpm]"));
         let diff = ScalarFigure {
             title: "Phase difference".into(),
             y_label: "Lag of response behind force [deg]".into(),
@@ -522,6 +539,7 @@ mod tests {
                     .collect(),
                 mark: Mark::Line,
             }],
+            style: Style::default(),
         };
         diff.write(&out.join("test_phase_diff")).unwrap();
     }

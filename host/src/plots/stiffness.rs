@@ -25,8 +25,8 @@
 
 use super::legend::{beside, draw_legend, LegendEntry, Swatch};
 use super::{
-    colour, ensure_fonts, speed_range, svg_string, title_size, write_both, Axes, Band, Curve,
-    Mark, Style, FONT,
+    colour, ensure_fonts, speed_range, svg_string, title_size, write_both, Axes, Band, Curve, Mark,
+    Style, FONT,
 };
 use anyhow::{anyhow, Result};
 use num_complex::Complex;
@@ -422,8 +422,7 @@ impl StiffnessFigure {
                 };
                 let (chart, legend) = beside(&cells[row * cols + b], true);
                 let x_range = {
-                    let (lo, hi) =
-                        speed_range(input.measured.iter().flatten().map(|p| &p.0));
+                    let (lo, hi) = speed_range(input.measured.iter().flatten().map(|p| &p.0));
                     let f = self.style.speed_unit.factor();
                     (lo * f, hi * f)
                 };
@@ -451,7 +450,10 @@ impl StiffnessFigure {
 
     /// Pixel size: 760 px per bearing column, three rows.
     pub fn size(&self) -> (u32, u32) {
-        ((760 * self.bearings.len().max(1) as u32).max(900), 60 + 3 * 330)
+        (
+            (760 * self.bearings.len().max(1) as u32).max(900),
+            60 + 3 * 330,
+        )
     }
 
     /// Writes `<stem>.png` and `<stem>.svg`; returns both paths.
@@ -488,8 +490,8 @@ mod tests {
         // var Re D = var k + Ω⁴ var m − 2Ω² cov(k, m): with a perfect
         // positive correlation chosen so that k − Ω₀²m is exact at Ω₀, the
         // band vanishes there.
-        let (sk, sm) = (1e5, 2.0);
-        let w0: f64 = (sk / sm).sqrt();
+        let (sk, sm): (f64, f64) = (1e5, 2.0);
+        let w0 = (sk / sm).sqrt();
         let mut cov = [[0.0; 5]; 5];
         cov[0][0] = sk * sk;
         cov[2][2] = sm * sm;
@@ -534,7 +536,10 @@ mod tests {
         assert_eq!(ry.len(), 40);
         assert!(ry.iter().all(|r| r.1 < 1e-9));
         let rz = residuals(&input, 1);
-        let worst = rz.iter().copied().fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        let worst = rz
+            .iter()
+            .copied()
+            .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
         assert_eq!(worst.0, 20.0);
         assert!((worst.1 - 50.0).abs() < 1e-6);
         let fig = StiffnessFigure {

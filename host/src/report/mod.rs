@@ -93,7 +93,10 @@ pub fn command_line(args: impl IntoIterator<Item = String>) -> String {
 /// `out` without `force`.
 fn write_atomically(out: &Path, force: bool, text: &str) -> Result<()> {
     if out.is_dir() {
-        bail!("--out {}: is a directory; give the HTML file's name", out.display());
+        bail!(
+            "--out {}: is a directory; give the HTML file's name",
+            out.display()
+        );
     }
     if out.exists() && !force {
         bail!(

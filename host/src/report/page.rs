@@ -44,7 +44,11 @@ figcaption{font-size:.9em;color:#333;margin-top:.3em}
 /// A number with `digits` significant digits.
 fn sig(x: f64, digits: usize) -> String {
     if !x.is_finite() {
-        return if x.is_nan() { "–".into() } else { "∞".into() };
+        return if x.is_nan() {
+            "–".into()
+        } else {
+            "∞".into()
+        };
     }
     if x == 0.0 {
         return "0".into();
@@ -177,7 +181,9 @@ fn identified(c: &Contents<'_>, json: &Value, out: &mut String) {
         c.identification,
         c.run.truth.as_ref(),
     )));
-    out.push_str("</pre>\n<h3>Modal view (natural frequency and damping ratio per direction)</h3>\n");
+    out.push_str(
+        "</pre>\n<h3>Modal view (natural frequency and damping ratio per direction)</h3>\n",
+    );
     let pedestals = json["pedestals"].as_array().cloned().unwrap_or_default();
     if pedestals.iter().any(|p| p.get("modal").is_some()) {
         out.push_str("<table><tr><th class=\"l\">bearing</th><th class=\"l\">dir.</th><th>f_n [Hz]</th><th>f_n [rpm]</th><th>ζ [%]</th></tr>\n");
