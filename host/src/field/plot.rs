@@ -140,7 +140,12 @@ impl PlotTransducer {
 /// accelerations g pk.
 pub fn native_unit(kind: plinth_shared::extractor::SensorKind, to_si: f64) -> PlotQuantity {
     use plinth_shared::extractor::SensorKind as K;
-    let near = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b;
+    // `to_si` holds the measure too (pp ×½, rms ×√2): match any of them.
+    let near = |a: f64, b: f64| {
+        [0.5, 1.0, std::f64::consts::SQRT_2]
+            .iter()
+            .any(|f| (a - f * b).abs() <= 1e-9 * b)
+    };
     match kind {
         K::Displacement if near(to_si, super::units::MIL) => PlotQuantity::DisplacementMils,
         K::Displacement => PlotQuantity::DisplacementMicrons,
@@ -693,7 +698,7 @@ mod tests {
             PlotQuantity::AccelerationG
         );
         assert_eq!(
-            native_unit(K::Displacement, 25.4e-6),
+            native_unit(K::Displacement, 0.5 * 25.4e-6),
             PlotQuantity::DisplacementMils
         );
         // A velocity pick-up reads iΩX: 1 µm 0-pk at 100 Hz is 0.628 mm/s pk,
