@@ -104,7 +104,9 @@ pub fn speed_band(text: &str) -> Result<SpeedBand, String> {
     let lo = non_negative(lo).map_err(|e| format!("LO of {text:?}: {e}"))?;
     let hi = positive(hi).map_err(|e| format!("HI of {text:?}: {e}"))?;
     if lo >= hi {
-        return Err(format!("{text:?}: LO ({lo} Hz) must be below HI ({hi} Hz)"));
+        return Err(format!(
+            "{text:?}: LO ({lo} Hz) must be below HI ({hi} Hz)"
+        ));
     }
     Ok(SpeedBand {
         lo_hz: lo,

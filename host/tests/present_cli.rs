@@ -35,11 +35,7 @@ fn run_dir() -> (tempfile::TempDir, RunDir) {
 
 fn json(args: &[&str]) -> serde_json::Value {
     let out = plinth().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
@@ -67,28 +63,16 @@ fn identify_reports_natural_frequencies_and_damping_ratios() {
             let z = m["zeta"].as_f64().unwrap();
             let z_se = m["zeta_std_err"].as_f64().unwrap();
             assert!((f / f_true - 1.0).abs() < 1e-3, "{dir}: {f} vs {f_true}");
-            assert!(
-                (f - f_true).abs() < 3.0 * f_se,
-                "{dir}: {f} ± {f_se} vs {f_true}"
-            );
+            assert!((f - f_true).abs() < 3.0 * f_se, "{dir}: {f} ± {f_se} vs {f_true}");
             assert!(f_se > 0.0 && z_se > 0.0);
-            assert!(
-                (z - zeta_true).abs() < 3.0 * z_se,
-                "{dir}: ζ {z} ± {z_se} vs {zeta_true}"
-            );
+            assert!((z - zeta_true).abs() < 3.0 * z_se, "{dir}: ζ {z} ± {z_se} vs {zeta_true}");
         }
         assert_eq!(p["covariance"].as_array().map(Vec::len), Some(5));
     }
     let out = plinth().args(["identify", d]).output().unwrap();
     let table = String::from_utf8(out.stdout).unwrap();
-    assert!(
-        table.contains("f_n [rpm]") && table.contains("ζ [%]"),
-        "{table}"
-    );
-    assert!(
-        table.contains("left y") && table.contains("right z"),
-        "{table}"
-    );
+    assert!(table.contains("f_n [rpm]") && table.contains("ζ [%]"), "{table}");
+    assert!(table.contains("left y") && table.contains("right z"), "{table}");
 }
 
 /// `--speeds LO:HI` fits only that band; a band with no speed, or a bad
@@ -100,10 +84,7 @@ fn speed_band() {
     let v = json(&["identify", d, "--json", "--speeds", "20:120"]);
     for p in v["pedestals"].as_array().unwrap() {
         let r = &p["speed_range_hz"];
-        assert!(
-            r[0].as_f64().unwrap() >= 20.0 && r[1].as_f64().unwrap() <= 120.0,
-            "{r}"
-        );
+        assert!(r[0].as_f64().unwrap() >= 20.0 && r[1].as_f64().unwrap() <= 120.0, "{r}");
     }
     for (band, says) in [("900:1000", "no measured speed"), ("120:20", "LO")] {
         let out = plinth()
@@ -132,10 +113,7 @@ fn closed_stdout_ends_quietly() {
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
-    assert!(
-        !err.contains("panicked") && !err.contains("Broken pipe"),
-        "{err}"
-    );
+    assert!(!err.contains("panicked") && !err.contains("Broken pipe"), "{err}");
 }
 
 /// `--quiet` is global: accepted before and after the command.
@@ -148,11 +126,7 @@ fn quiet_is_global() {
         vec!["identify", d, "--quiet"],
     ] {
         let out = plinth().args(&args).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
     }
 }
 
@@ -174,11 +148,7 @@ fn import_keeps_the_tables_precision() {
         .arg(&run)
         .output()
         .unwrap();
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
     let text = std::fs::read_to_string(run.join("measurements.csv")).unwrap();
     assert!(text.lines().next().unwrap().contains("rel_y_sd"), "{text}");
     let v = json(&["identify", run.to_str().unwrap(), "--json"]);
@@ -215,10 +185,7 @@ fn help_texts_point_inside_the_repository() {
 #[test]
 fn documentation_links_resolve_and_stay_inside() {
     let root = repo();
-    let mut pages = vec![
-        root.join("README.md"),
-        root.join("examples/field/README.md"),
-    ];
+    let mut pages = vec![root.join("README.md"), root.join("examples/field/README.md")];
     for e in std::fs::read_dir(root.join("docs")).unwrap() {
         let p = e.unwrap().path();
         if p.extension().is_some_and(|x| x == "md") {
@@ -234,10 +201,7 @@ fn documentation_links_resolve_and_stay_inside() {
             let Some(end) = rest.find(')') else { break };
             let target = &rest[..end];
             rest = &rest[end..];
-            if target.starts_with("http")
-                || target.starts_with('#')
-                || target.starts_with("mailto:")
-            {
+            if target.starts_with("http") || target.starts_with('#') || target.starts_with("mailto:") {
                 continue;
             }
             let path = target.split('#').next().unwrap_or(target);
@@ -262,10 +226,7 @@ fn documentation_links_resolve_and_stay_inside() {
             if p.is_dir() {
                 stack.push(p);
             } else if let Ok(bytes) = std::fs::read(&p) {
-                if bytes
-                    .windows(outside.len())
-                    .any(|w| w == outside.as_bytes())
-                {
+                if bytes.windows(outside.len()).any(|w| w == outside.as_bytes()) {
                     mentions.push(p.display().to_string());
                 }
             }

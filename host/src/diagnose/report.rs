@@ -308,13 +308,7 @@ impl Diagnosis {
                 let params: Vec<String> = st
                     .parameters
                     .iter()
-                    .map(|p| {
-                        format!(
-                            "{} = {}",
-                            p.name,
-                            crate::present::table::parameter_text(&p.name, p.value, p.std_err)
-                        )
-                    })
+                    .map(|p| format!("{} = {}", p.name, crate::present::table::parameter_text(&p.name, p.value, p.std_err)))
                     .collect();
                 let where_ = st.bearing.clone();
                 let mut effect = st.effect.clone();
@@ -367,23 +361,9 @@ impl Diagnosis {
             );
         }
         // The shared printer (present::table): base model, then final model.
-        for (title, list) in [
-            ("base model", &self.pedestals_before),
-            ("final model", &self.pedestals_after),
-        ] {
-            let rows: Vec<_> = list
-                .iter()
-                .map(|p| {
-                    crate::present::table::PedestalRow::from_named(
-                        &p.bearing, &p.values, &p.std_err,
-                    )
-                })
-                .collect();
-            let _ = write!(
-                s,
-                "\nPedestals, {title}:\n{}",
-                crate::present::table::render(&rows)
-            );
+        for (title, list) in [("base model", &self.pedestals_before), ("final model", &self.pedestals_after)] {
+            let rows: Vec<_> = list.iter().map(|p| crate::present::table::PedestalRow::from_named(&p.bearing, &p.values, &p.std_err)).collect();
+            let _ = write!(s, "\nPedestals, {title}:\n{}", crate::present::table::render(&rows));
         }
         let _ = writeln!(s, "\n{}", self.verdict);
         if !self.trusted {

@@ -336,10 +336,7 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
                     rel,
                     ped,
                     // A zero sd (exact readings) says nothing: leave the noise to identify.
-                    noise_sd: noise
-                        .iter()
-                        .all(|s| s.is_finite() && *s > 0.0)
-                        .then_some(noise),
+                    noise_sd: noise.iter().all(|s| s.is_finite() && *s > 0.0).then_some(noise),
                 },
             });
         }

@@ -73,11 +73,6 @@ mod tests {
         // E over A uniform on 20..30 of A² is 633.3.
         let want = ((0.01 + 633.333 * 1f64.to_radians().powi(2)) / 12.0).sqrt();
         assert!((mc / want - 1.0).abs() < 0.01, "{mc} vs {want}");
-        assert!(
-            (reading_sd(25.0, 0.1, 1.0)
-                - ((0.01 + 625.0 * 1f64.to_radians().powi(2)) / 12.0).sqrt())
-            .abs()
-                < 1e-15
-        );
+        assert!((reading_sd(25.0, 0.1, 1.0) - ((0.01 + 625.0 * 1f64.to_radians().powi(2)) / 12.0).sqrt()).abs() < 1e-15);
     }
 }

@@ -335,7 +335,9 @@ pub fn result_row(fit: &PedestalFit, truth: Option<&Truth>) -> PedestalRow {
         };
         below.push(SubRow::values(
             "ols",
-            Parameter::ALL.map(|p| named(&ols.estimate, p).map(|v| (v, named(&ols.std_err, p)))),
+            Parameter::ALL.map(|p| {
+                named(&ols.estimate, p).map(|v| (v, named(&ols.std_err, p)))
+            }),
         ));
         below.push(SubRow::text(
             "ols eff.",

@@ -61,11 +61,7 @@ pub fn direction(k: f64, m: f64, c: f64, cov: Option<&[[f64; 3]; 3]>) -> Directi
     let zeta = c / (2.0 * (k * m).sqrt());
     // Gradients with respect to (k, m, c).
     let g_f = [f_n / (2.0 * k), -f_n / (2.0 * m), 0.0];
-    let g_z = [
-        -zeta / (2.0 * k),
-        -zeta / (2.0 * m),
-        1.0 / (2.0 * (k * m).sqrt()),
-    ];
+    let g_z = [-zeta / (2.0 * k), -zeta / (2.0 * m), 1.0 / (2.0 * (k * m).sqrt())];
     let quad = |g: &[f64; 3], s: &[[f64; 3]; 3]| -> f64 {
         let mut v = 0.0;
         for i in 0..3 {
@@ -151,13 +147,7 @@ mod tests {
         for (i, row) in corr.iter_mut().enumerate() {
             row[i] = 1.0;
         }
-        for (a, b, r) in [
-            (0, 2, 0.9),
-            (1, 2, 0.85),
-            (0, 1, 0.7),
-            (3, 0, 0.2),
-            (4, 1, -0.3),
-        ] {
+        for (a, b, r) in [(0, 2, 0.9), (1, 2, 0.85), (0, 1, 0.7), (3, 0, 0.2), (4, 1, -0.3)] {
             corr[a][b] = r;
             corr[b][a] = r;
         }

@@ -104,9 +104,7 @@ impl SubRow {
         SubRow {
             label: label.to_string(),
             cells: std::array::from_fn(|i| match values[i] {
-                Some((v, Some(s))) => {
-                    value_pm(v * unit(PARAMETERS[i]).1, s * unit(PARAMETERS[i]).1)
-                }
+                Some((v, Some(s))) => value_pm(v * unit(PARAMETERS[i]).1, s * unit(PARAMETERS[i]).1),
                 Some((v, None)) => sig(v * unit(PARAMETERS[i]).1, 6),
                 None => "-".into(),
             }),
@@ -210,11 +208,7 @@ pub fn render(rows: &[PedestalRow]) -> String {
                 .iter()
                 .map(|(n, v, s)| {
                     let (u, k) = unit(n);
-                    let u = if u.is_empty() {
-                        String::new()
-                    } else {
-                        format!(" {u}")
-                    };
+                    let u = if u.is_empty() { String::new() } else { format!(" {u}") };
                     format!("{n} = {}{u}", value_pm(v * k, s * k))
                 })
                 .collect();
@@ -222,16 +216,11 @@ pub fn render(rows: &[PedestalRow]) -> String {
         })
         .collect();
     out.extend(extra);
-    if rows
-        .iter()
-        .any(|r| r.below.iter().any(|b| b.label == "ols eff."))
-    {
+    if rows.iter().any(|r| r.below.iter().any(|b| b.label == "ols eff.")) {
         out.push_str("ols eff.: efficiency of the paper's least squares, Cramér–Rao variance / OLS variance under the noise model (100% = as good as maximum likelihood)\n");
     }
     if any_zero {
-        out.push_str(
-            "≈0: within 2 standard errors of zero: the data do not resolve this damping\n",
-        );
+        out.push_str("≈0: within 2 standard errors of zero: the data do not resolve this damping\n");
     }
     if rows.iter().any(|r| r.modal.is_some()) {
         out.push('\n');
