@@ -22,6 +22,7 @@ pub mod pipe;
 pub mod plots;
 pub mod present;
 pub mod progress;
+pub mod report;
 pub mod rundir;
 pub mod sim;
 pub mod stream;

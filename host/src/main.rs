@@ -42,6 +42,8 @@ enum Command {
     Plot(plinth::field::plot::Args),
     /// Monte-Carlo of OLS and ML against the Cramér–Rao bound on a simulated machine.
     Accuracy(plinth::accuracy::Args),
+    /// One self-contained HTML report of a run: data, identification, figures.
+    Report(plinth::report::Args),
 }
 
 fn main() -> ExitCode {
@@ -71,6 +73,7 @@ fn main() -> ExitCode {
         }
         Command::Plot(a) => plinth::field::plot::run(&a),
         Command::Accuracy(a) => plinth::accuracy::run(&a),
+        Command::Report(a) => plinth::report::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

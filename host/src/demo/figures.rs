@@ -95,6 +95,7 @@ fn panel(title: &str, measured: &RunDir, truth: &RunDir, ped: bool) -> PhasorPan
     PhasorPanel {
         title: title.into(),
         series,
+        quantity: None,
     }
 }
 
@@ -156,6 +157,7 @@ pub fn write_figures(measured: &RunDir, truth: &RunDir, dir: &Path) -> Result<Ve
         view: PhasorView::Engineer(PhaseStyle::Wrapped),
         rows: Rows::First,
         panels,
+        style: Default::default(),
     };
     files.extend(fig.write(&dir.join("amplitudes"))?);
     let fig = PhasorFigure {
@@ -187,6 +189,7 @@ pub fn write_figures(measured: &RunDir, truth: &RunDir, dir: &Path) -> Result<Ve
         y_range: Some((-30.0, 210.0)),
         y_tick_step: Some(30.0),
         series,
+        style: Default::default(),
     };
     files.extend(fig.write(&dir.join("phase_difference"))?);
     Ok(files)

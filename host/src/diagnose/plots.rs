@@ -1,13 +1,16 @@
-//! Measured-versus-predicted figures of the diagnosis, in the conventions of
-//! the paper's figures (peak-to-peak µm, phase lag in degrees, speed in Hz),
-//! drawn with the project's figure code (`crate::plots`), PNG and SVG.
+//! Measured-versus-predicted figures of the diagnosis, drawn with the
+//! project's figure code (`crate::plots`), PNG and SVG: at pedestal level
+//! the dynamic stiffness F/X as `identify --plots` draws it
+//! ([`crate::plots::stiffness`]), at machine level the 1X phasors in the
+//! paper's conventions (peak-to-peak µm, phase lag in degrees).
 
 use super::data::Prepared;
 use super::gap::Prediction;
 use super::machine::Readings;
 use super::workflow::Outcome;
+use crate::plots::stiffness::{StiffnessFigure, StiffnessInput, StiffnessModel};
 use crate::plots::{
-    PhaseStyle, PhasorFigure, PhasorPanel, PhasorSeries, PhasorView, Quantity, Rows,
+    PhaseStyle, PhasorFigure, PhasorPanel, PhasorSeries, PhasorView, Quantity, Rows, Style,
 };
 use anyhow::{Context, Result};
 use num_complex::Complex;
@@ -15,73 +18,72 @@ use std::path::{Path, PathBuf};
 
 const DIRS: [&str; 2] = ["y", "z"];
 
-fn measured_ped(prep: &Prepared, b: usize, d: usize) -> Vec<(f64, Complex<f64>)> {
-    prep.points[b]
-        .iter()
-        .flatten()
-        .map(|p| (p.speed_hz, p.ped[d]))
-        .collect()
+/// The stiffness figure's input of bearing `b`: measured (speed, F, X_ped)
+/// with F = K*·rel, and the model's dynamic stiffness F/X_predicted at each
+/// measured speed (the model with its effects maps the measured forces to
+/// the predicted pedestal motion).
+fn stiffness_input(prep: &Prepared, pred: &Prediction, b: usize, label: &str) -> StiffnessInput {
+    let mut measured: [Vec<(f64, Complex<f64>, Complex<f64>)>; 2] = [Vec::new(), Vec::new()];
+    let mut model: [Vec<(f64, Complex<f64>)>; 2] = [Vec::new(), Vec::new()];
+    for (j, p) in prep.points[b].iter().enumerate() {
+        let Some(p) = p else { continue };
+        let force = crate::estimate::mul(&p.kstar, &p.rel);
+        for d in 0..2 {
+            measured[d].push((p.speed_hz, force[d], p.ped[d]));
+            if let Some(Some(x)) = pred.ped[b].get(j) {
+                let dyn_stiffness = force[d] / x[d];
+                if dyn_stiffness.re.is_finite() && dyn_stiffness.im.is_finite() {
+                    model[d].push((p.speed_hz, dyn_stiffness));
+                }
+            }
+        }
+    }
+    StiffnessInput {
+        bearing: prep.bearings[b].clone(),
+        measured,
+        model: StiffnessModel::Points(model),
+        model_label: label.to_string(),
+        note: String::new(),
+    }
 }
 
-fn predicted_ped(
-    prep: &Prepared,
-    pred: &Prediction,
-    b: usize,
-    d: usize,
-) -> Vec<(f64, Complex<f64>)> {
-    pred.ped[b]
-        .iter()
-        .enumerate()
-        .filter_map(|(j, x)| x.map(|x| (prep.speeds_hz[j], x[d])))
-        .collect()
+/// The pedestal-level figures of a diagnosis, (stem, figure):
+/// `pedestal_before` and `pedestal_after`, each bearing's measured dynamic
+/// stiffness F/X_ped against the model's (F over the pedestal motion the
+/// model predicts from the measured forces) and the residual, one column per
+/// bearing, drawn as `identify --plots` draws it.
+pub fn pedestal_figures(outcome: &Outcome) -> Vec<(&'static str, StiffnessFigure)> {
+    let prep = &outcome.prep;
+    let (Some(first), Some(last)) = (outcome.states.first(), outcome.states.last()) else {
+        return Vec::new();
+    };
+    [
+        ("pedestal_before", first, "base model"),
+        ("pedestal_after", last, "with the effects"),
+    ]
+    .into_iter()
+    .map(|(stem, state, label)| {
+        let pred = Prediction::new(prep, &state.model, &state.params);
+        let bearings = (0..prep.bearings.len())
+            .map(|b| stiffness_input(prep, &pred, b, label))
+            .collect();
+        (
+            stem,
+            StiffnessFigure {
+                title: format!("Pedestal dynamic stiffness F/X: measured vs the {label}"),
+                bearings,
+                style: Style::default(),
+            },
+        )
+    })
+    .collect()
 }
 
-/// Writes `pedestal_before` and `pedestal_after` (pedestal level: measured
-/// pedestal response against the response predicted from the measured
-/// forces, one column per bearing) into `dir`; returns the files written.
+/// Writes [`pedestal_figures`] into `dir`; returns the files written.
 pub fn write_pedestal_figures(outcome: &Outcome, dir: &Path) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let prep = &outcome.prep;
     let mut files = Vec::new();
-    let (Some(first), Some(last)) = (outcome.states.first(), outcome.states.last()) else {
-        return Ok(files);
-    };
-    for (stem, state, label) in [
-        ("pedestal_before", first, "base model"),
-        ("pedestal_after", last, "with the effects added"),
-    ] {
-        let pred = Prediction::new(prep, &state.model, &state.params);
-        let panels = prep
-            .bearings
-            .iter()
-            .enumerate()
-            .map(|(b, name)| {
-                let mut series = Vec::new();
-                for (d, dir) in DIRS.iter().enumerate() {
-                    series.push(PhasorSeries::markers(
-                        format!("{name} {dir} measured"),
-                        measured_ped(prep, b, d),
-                    ));
-                    series.push(PhasorSeries::line(
-                        format!("{name} {dir} predicted"),
-                        predicted_ped(prep, &pred, b, d),
-                    ));
-                }
-                PhasorPanel {
-                    title: format!("Pedestal {name}"),
-                    series,
-                }
-            })
-            .collect();
-        let fig = PhasorFigure {
-            title: format!(
-                "Pedestal response: measured vs predicted from the measured forces ({label})"
-            ),
-            quantity: Quantity::DisplacementMicrons,
-            view: PhasorView::Engineer(PhaseStyle::Wrapped),
-            rows: Rows::Both,
-            panels,
-        };
+    for (stem, fig) in pedestal_figures(outcome) {
         files.extend(fig.write(&dir.join(stem))?);
     }
     Ok(files)
@@ -128,6 +130,7 @@ pub fn write_machine_figure(
             panels.push(PhasorPanel {
                 title: format!("{name}: {kind}"),
                 series,
+                quantity: None,
             });
         }
     }
@@ -137,6 +140,7 @@ pub fn write_machine_figure(
         view: PhasorView::Engineer(PhaseStyle::Wrapped),
         rows: Rows::Both,
         panels,
+        style: Default::default(),
     };
     Ok(fig.write(&dir.join(stem))?.to_vec())
 }

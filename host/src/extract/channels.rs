@@ -81,6 +81,8 @@ pub struct ChannelConfig {
 /// A checked CHANNELS.toml.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Channels {
+    /// Direction of rotation seen from the file's `view` (figures).
+    pub rotation: Option<Rotation>,
     /// Volts at integer full scale, when given.
     pub full_scale_v: Option<f64>,
     /// Revolutions per phasor, ≥ 1.
@@ -287,6 +289,7 @@ impl Channels {
         let placements: Vec<Placement> = channels.iter().map(|c| c.placement.clone()).collect();
         let bearings = group_by_bearing(file, &placements)?;
         Ok(Channels {
+            rotation: raw.rotation,
             full_scale_v,
             revolutions,
             speed_resolution_hz,

@@ -266,7 +266,8 @@ pub fn run(args: &Args) -> Result<()> {
         rows,
         bearings,
         args.slow_roll,
-        args.plots,
+        args.plots
+            .then(|| crate::field::plot::FieldFigures::from_channels(&config)),
         &placements,
     )?;
     let per_channel = extraction.frames as f64 / elapsed.max(1e-9);

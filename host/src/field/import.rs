@@ -100,6 +100,8 @@ pub struct Layout {
     pub speed_to_hz: f64,
     /// Transducers in layout order.
     pub transducers: Vec<Transducer>,
+    /// Direction of rotation seen from the layout's `view` (figures).
+    pub rotation: Option<Rotation>,
 }
 
 /// One transducer's columns and placement.
@@ -175,6 +177,7 @@ impl Layout {
             speed_column: raw.speed.column,
             speed_to_hz,
             transducers,
+            rotation,
         })
     }
 }
@@ -402,7 +405,7 @@ pub fn write_run(
     mut rows: Vec<Measurement>,
     bearings: Vec<BearingRow>,
     slow_roll: Option<SlowRollBand>,
-    plots: bool,
+    plots: Option<super::plot::FieldFigures>,
     transducers: &[Placement],
 ) -> Result<RunDir> {
     let slow_roll = match slow_roll {
@@ -428,17 +431,8 @@ pub fn write_run(
         if let Some(s) = slow_roll {
             s.write(dir)?;
         }
-        if plots {
-            let t: Vec<(String, Quantity, f64)> = transducers
-                .iter()
-                .map(|p| (p.bearing.clone(), p.quantity, p.angle_deg))
-                .collect();
-            super::plot::plot_run_with(
-                run_ref,
-                &dir.join("figures"),
-                &t,
-                super::angle::Rotation::Ccw,
-            )?;
+        if let Some(f) = &plots {
+            super::plot::plot_run_with(run_ref, &dir.join("figures"), &f.transducers, &f.options)?;
         }
         Ok(())
     })?;
@@ -473,7 +467,8 @@ pub fn run(args: &Args) -> Result<()> {
         rows,
         bearings,
         args.slow_roll,
-        args.plots,
+        args.plots
+            .then(|| super::plot::FieldFigures::from_layout(&layout)),
         &placements,
     )?;
     ticker.finish();

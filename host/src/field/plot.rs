@@ -2,21 +2,31 @@
 //! for every bearing's resolved y and z phasors and, for a run made by
 //! import/extract (its `transducers.csv`), every transducer's own reading:
 //!
-//! - **Bode**: amplitude [µm pk-pk] and phase lag [deg] against speed
-//!   (`bode_<bearing>_<rel|ped>.png/.svg`);
-//! - **polar** (Nyquist): the 1X vector's locus, speed-labelled, in the
-//!   Bently convention (`polar_<bearing>_<rel|ped>_<channel>.png/.svg`):
-//!   amplitude as radius [µm pk-pk], phase lag as angle from the top of the
-//!   plot (the transducer's position), measured **against** the direction of
-//!   rotation. With the shaft turning counter-clockwise as drawn
-//!   (`--rotation ccw`, the default) lag increases clockwise: a 90° lag plots
-//!   at three o'clock ([`polar_point`], checked by hand in the tests).
+//! - **Bode**: amplitude and phase lag against speed
+//!   (`bode_<bearing>_<rel|ped>.png/.svg`), the resolved y/z in one panel and
+//!   the transducers' own readings in another (one per unit);
+//! - **polar** (Nyquist): the 1X vector's locus in the Bently convention
+//!   (`polar_<bearing>_<rel|ped>_<channel>.png/.svg`): amplitude as radius,
+//!   phase lag as angle measured **against** the direction of rotation from
+//!   0° at the top of the plot or, with `--zero-at-transducer` (Bently/Hatch),
+//!   at the transducer's own position. The drawing is seen from the layout's
+//!   `view` with its `rotation` (import/extract), else `--rotation`. With the
+//!   shaft turning counter-clockwise as drawn lag increases clockwise: a 90°
+//!   lag plots at three o'clock ([`polar_point`], checked by hand in the
+//!   tests). Speed labels never overlap; the start (■) and end (▲) of the
+//!   run are marked.
+//!
+//! Displacements are drawn in µm pk-pk (mil pk-pk for a layout in mils);
+//! velocity and acceleration pick-ups, when the layout says so, in their own
+//! units (mm/s pk, in/s pk, g pk): the reading iΩX or −Ω²X of the resolved
+//! displacement along the transducer's axis.
 
 use super::angle::Rotation;
 use super::transducer::Quantity;
+use crate::plots::labels::{place, text_box, TextBox};
 use crate::plots::{
     colour, ensure_fonts, peak_to_peak_and_lag, write_both, PhaseStyle, PhasorFigure, PhasorPanel,
-    PhasorSeries, PhasorView, Quantity as PlotQuantity, Rows,
+    PhasorSeries, PhasorView, Quantity as PlotQuantity, Rows, Style, StyleArgs,
 };
 use crate::rundir::RunDir;
 use anyhow::{anyhow, Result};
@@ -33,9 +43,17 @@ pub struct Args {
     /// Directory for the figures (PNG and SVG).
     #[arg(long)]
     pub out: PathBuf,
-    /// Direction of rotation as drawn on the polar plots (lag runs against it).
+    /// Direction of rotation as drawn on the polar plots (lag runs against
+    /// it); import and extract take it from the layout's `rotation`.
     #[arg(long, value_enum, default_value = "ccw")]
     pub rotation: RotationArg,
+    /// Polar plots with 0° at each transducer's own position (Bently/Hatch)
+    /// instead of at the top.
+    #[arg(long)]
+    pub zero_at_transducer: bool,
+    #[command(flatten)]
+    /// Speed unit and amplitude scale.
+    pub style: StyleArgs,
     /// Replace the figures in an existing --out.
     #[arg(long)]
     pub force: bool,
@@ -59,15 +77,164 @@ impl From<RotationArg> for Rotation {
     }
 }
 
+/// How the field figures are drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlotOptions {
+    /// Direction of rotation as drawn on the polar plots.
+    pub rotation: Rotation,
+    /// 0° at the transducer's position on polar plots (else at the top).
+    pub zero_at_transducer: bool,
+    /// Speed unit and amplitude scale.
+    pub style: Style,
+}
+
+impl Default for PlotOptions {
+    fn default() -> Self {
+        Self {
+            rotation: Rotation::Ccw,
+            zero_at_transducer: false,
+            style: Style::default(),
+        }
+    }
+}
+
+impl PlotOptions {
+    /// The defaults with the rotation a layout gives (`None`: CCW).
+    pub fn with_rotation(rotation: Option<Rotation>) -> Self {
+        Self {
+            rotation: rotation.unwrap_or(Rotation::Ccw),
+            ..Self::default()
+        }
+    }
+}
+
+/// A transducer as the figures need it: where it sits and, for a velocity
+/// or acceleration pick-up, the unit its readings are shown in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlotTransducer {
+    /// Bearing name.
+    pub bearing: String,
+    /// `rel` or `ped`.
+    pub quantity: Quantity,
+    /// Axis [deg from +y towards +z].
+    pub angle_deg: f64,
+    /// Unit its readings are drawn in (displacement µm pk-pk by default).
+    pub unit: PlotQuantity,
+}
+
+impl PlotTransducer {
+    /// A displacement transducer (µm pk-pk).
+    pub fn displacement(bearing: &str, quantity: Quantity, angle_deg: f64) -> Self {
+        Self {
+            bearing: bearing.to_string(),
+            quantity,
+            angle_deg,
+            unit: PlotQuantity::DisplacementMicrons,
+        }
+    }
+}
+
+/// The unit a field instrument's reading of `kind` is drawn in, from the
+/// reading's SI factor (`to_si`: m, m/s or m/s² per unit): mils and in/s
+/// kept, other displacements µm pk-pk, other velocities mm/s pk,
+/// accelerations g pk.
+pub fn native_unit(kind: plinth_shared::extractor::SensorKind, to_si: f64) -> PlotQuantity {
+    use plinth_shared::extractor::SensorKind as K;
+    // `to_si` holds the measure too (pp ×½, rms ×√2): match any of them.
+    let near = |a: f64, b: f64| {
+        [0.5, 1.0, std::f64::consts::SQRT_2]
+            .iter()
+            .any(|f| (a - f * b).abs() <= 1e-9 * b)
+    };
+    match kind {
+        K::Displacement if near(to_si, super::units::MIL) => PlotQuantity::DisplacementMils,
+        K::Displacement => PlotQuantity::DisplacementMicrons,
+        K::Velocity if near(to_si, super::units::INCH) => PlotQuantity::VelocityInchPerSecond,
+        K::Velocity => PlotQuantity::VelocityMmPerSecond,
+        K::Acceleration => PlotQuantity::AccelerationG,
+    }
+}
+
+/// What `import --plots` and `extract --plots` draw: every transducer of
+/// the layout in its own unit, polar plots seen as the layout says.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FieldFigures {
+    /// The transducers with their units.
+    pub transducers: Vec<PlotTransducer>,
+    /// Rotation from the layout (CCW when it gives none).
+    pub options: PlotOptions,
+}
+
+impl FieldFigures {
+    /// From an import layout: its rotation and each transducer's unit.
+    pub fn from_layout(layout: &super::import::Layout) -> Self {
+        Self {
+            transducers: layout
+                .transducers
+                .iter()
+                .map(|t| PlotTransducer {
+                    unit: native_unit(t.unit.kind, t.unit.to_si_zero_peak),
+                    ..PlotTransducer::displacement(
+                        &t.placement.bearing,
+                        t.placement.quantity,
+                        t.placement.angle_deg,
+                    )
+                })
+                .collect(),
+            options: PlotOptions::with_rotation(layout.rotation),
+        }
+    }
+
+    /// From an extract channels file: its rotation and each sensor's kind
+    /// (velocity in mm/s pk, acceleration in g pk).
+    pub fn from_channels(channels: &crate::extract::channels::Channels) -> Self {
+        let si = |k: plinth_shared::extractor::SensorKind| match k {
+            plinth_shared::extractor::SensorKind::Displacement => 1e-6,
+            plinth_shared::extractor::SensorKind::Velocity => 1e-3,
+            plinth_shared::extractor::SensorKind::Acceleration => super::units::STANDARD_GRAVITY,
+        };
+        Self {
+            transducers: channels
+                .channels
+                .iter()
+                .map(|c| PlotTransducer {
+                    unit: native_unit(c.kind, si(c.kind)),
+                    ..PlotTransducer::displacement(
+                        &c.placement.bearing,
+                        c.placement.quantity,
+                        c.placement.angle_deg,
+                    )
+                })
+                .collect(),
+            options: PlotOptions::with_rotation(channels.rotation),
+        }
+    }
+}
+
 /// Where a displacement phasor `q` [m] plots on a Bently polar chart:
 /// (right, up) [µm pk-pk], lag measured from the top against `rotation`.
 pub fn polar_point(q: Complex<f64>, rotation: Rotation) -> (f64, f64) {
-    let (pp, lag) = peak_to_peak_and_lag(q * 1e6);
-    let (s, c) = lag.to_radians().sin_cos();
+    polar_point_at(q * 1e6, rotation, 0.0, true)
+}
+
+/// Where a phasor `q` (in the plotted unit) plots on a polar chart whose 0°
+/// lies `zero_deg` from the top in the direction of `rotation` (the
+/// transducer's angle, or 0 for the top): (right, up), radius peak-to-peak
+/// when `peak_to_peak`, else zero-to-peak.
+pub fn polar_point_at(
+    q: Complex<f64>,
+    rotation: Rotation,
+    zero_deg: f64,
+    peak_to_peak: bool,
+) -> (f64, f64) {
+    let (pp, lag) = peak_to_peak_and_lag(q);
+    let r = if peak_to_peak { pp } else { 0.5 * pp };
+    // Angle from the top, positive in the direction of rotation.
+    let (s, c) = (zero_deg - lag).to_radians().sin_cos();
     match rotation {
-        // Rotation counter-clockwise: lag grows clockwise (towards +right first).
-        Rotation::Ccw => (pp * s, pp * c),
-        Rotation::Cw => (-pp * s, pp * c),
+        // Counter-clockwise: the direction of rotation is to the left.
+        Rotation::Ccw => (-r * s, r * c),
+        Rotation::Cw => (r * s, r * c),
     }
 }
 
@@ -78,13 +245,30 @@ pub struct Locus {
     pub name: String,
     /// File-name stem.
     pub stem: String,
-    /// Points in speed order.
+    /// Points in speed order (displacement [m]).
     pub points: Vec<(f64, Complex<f64>)>,
+    /// The transducer's axis [deg from +y towards +z] (y: 0, z: 90).
+    pub angle_deg: f64,
+    /// Unit the locus is drawn in.
+    pub unit: PlotQuantity,
+    /// True for a transducer's own reading, false for a resolved y or z.
+    pub transducer: bool,
+}
+
+impl Locus {
+    /// The points in the drawn unit's SI signal (displacement, velocity or
+    /// acceleration).
+    pub fn signal(&self) -> Vec<(f64, Complex<f64>)> {
+        self.points
+            .iter()
+            .map(|&(f, x)| (f, self.unit.from_displacement(x, f)))
+            .collect()
+    }
 }
 
 /// The loci of a run: each bearing's y and z, and each extra transducer
-/// (bearing, quantity, angle [deg]) reconstructed as cos α·Y + sin α·Z.
-pub fn loci(run: &RunDir, transducers: &[(String, Quantity, f64)]) -> Vec<Locus> {
+/// reconstructed as cos α·Y + sin α·Z.
+pub fn loci(run: &RunDir, transducers: &[PlotTransducer]) -> Vec<Locus> {
     let mut out = Vec::new();
     for b in run.measured_bearings() {
         let mut rows: Vec<_> = run.measurements.iter().filter(|m| m.bearing == b).collect();
@@ -94,22 +278,33 @@ pub fn loci(run: &RunDir, transducers: &[(String, Quantity, f64)]) -> Vec<Locus>
                 Quantity::Rel => m.rel,
                 Quantity::Ped => m.ped,
             };
+            let file_b = crate::names::file_name(b);
             for (i, axis) in ["y", "z"].iter().enumerate() {
                 out.push(Locus {
                     name: format!("{b} {} {axis}", q.name()),
-                    stem: format!("{b}_{}_{axis}", q.name()),
+                    stem: format!("{file_b}_{}_{axis}", q.name()),
                     points: rows.iter().map(|m| (m.speed_hz, pick(m)[i])).collect(),
+                    angle_deg: 90.0 * i as f64,
+                    unit: PlotQuantity::DisplacementMicrons,
+                    transducer: false,
                 });
             }
-            for (tb, tq, a) in transducers.iter().filter(|t| t.0 == b && t.1 == q) {
+            for t in transducers
+                .iter()
+                .filter(|t| t.bearing == b && t.quantity == q)
+            {
+                let a = t.angle_deg;
                 let (s, c) = a.to_radians().sin_cos();
                 out.push(Locus {
-                    name: format!("{tb} {} {a}°", tq.name()),
-                    stem: format!("{tb}_{}_{}deg", tq.name(), a),
+                    name: format!("{} {} {a}°", t.bearing, q.name()),
+                    stem: format!("{file_b}_{}_{}deg", q.name(), a),
                     points: rows
                         .iter()
                         .map(|m| (m.speed_hz, pick(m)[0] * c + pick(m)[1] * s))
                         .collect(),
+                    angle_deg: a,
+                    unit: t.unit,
+                    transducer: true,
                 });
             }
         }
@@ -117,64 +312,120 @@ pub fn loci(run: &RunDir, transducers: &[(String, Quantity, f64)]) -> Vec<Locus>
     out
 }
 
+/// The Bode figure of one bearing and quantity: resolved y/z in one panel,
+/// the transducers' own readings in one panel per unit.
+fn bode_figure(bearing: &str, q: Quantity, loci: &[&Locus], style: Style) -> PhasorFigure {
+    // Series named by direction or angle only (the panel names the
+    // bearing): each its own colour.
+    let prefix = format!("{bearing} {} ", q.name());
+    let short = |l: &Locus| l.name.strip_prefix(&prefix).unwrap_or(&l.name).to_string();
+    let resolved: Vec<PhasorSeries> = loci
+        .iter()
+        .filter(|l| !l.transducer)
+        .map(|l| PhasorSeries::line(short(l), l.signal()))
+        .collect();
+    let mut panels = vec![PhasorPanel::new(
+        format!("{bearing} {}: resolved y, z", q.name()),
+        resolved,
+    )];
+    let mut units: Vec<PlotQuantity> = Vec::new();
+    for l in loci.iter().filter(|l| l.transducer) {
+        if !units.contains(&l.unit) {
+            units.push(l.unit);
+        }
+    }
+    for u in units {
+        let series: Vec<PhasorSeries> = loci
+            .iter()
+            .filter(|l| l.transducer && l.unit == u)
+            .map(|l| PhasorSeries::line(short(l), l.signal()))
+            .collect();
+        panels.push(PhasorPanel {
+            title: format!("{bearing} {}: transducers", q.name()),
+            series,
+            quantity: Some(u),
+        });
+    }
+    PhasorFigure {
+        title: format!(
+            "Bode: bearing {bearing}, {} (1X amplitude and phase lag)",
+            q.name()
+        ),
+        quantity: PlotQuantity::DisplacementMicrons,
+        view: PhasorView::Engineer(PhaseStyle::Wrapped),
+        rows: Rows::Both,
+        panels,
+        style,
+    }
+}
+
 /// Writes the Bode and polar figures of `run` into `dir`.
 pub fn plot_run_with(
     run: &RunDir,
     dir: &Path,
-    transducers: &[(String, Quantity, f64)],
-    rotation: Rotation,
+    transducers: &[PlotTransducer],
+    options: &PlotOptions,
 ) -> Result<Vec<PathBuf>> {
     let all = loci(run, transducers);
     let mut written = Vec::new();
     for b in run.measured_bearings() {
         for q in [Quantity::Rel, Quantity::Ped] {
             let prefix = format!("{b} {} ", q.name());
-            let series: Vec<PhasorSeries> = all
-                .iter()
-                .filter(|l| l.name.starts_with(&prefix))
-                .map(|l| PhasorSeries::line(l.name[prefix.len()..].to_string(), l.points.clone()))
-                .collect();
-            let figure = PhasorFigure {
-                title: format!(
-                    "Bode: bearing {b}, {} (1X, µm pk-pk and phase lag)",
-                    q.name()
-                ),
-                quantity: PlotQuantity::DisplacementMicrons,
-                view: PhasorView::Engineer(PhaseStyle::Wrapped),
-                rows: Rows::Both,
-                panels: vec![PhasorPanel {
-                    title: format!("{b} {}", q.name()),
-                    series,
-                }],
-            };
-            written.extend(figure.write(&crate::names::file_in(
-                dir,
-                &format!("bode_{b}_{}", q.name()),
-            ))?);
+            let mine: Vec<&Locus> = all.iter().filter(|l| l.name.starts_with(&prefix)).collect();
+            let figure = bode_figure(b, q, &mine, options.style);
+            let stem = format!("bode_{b}_{}", q.name());
+            written.extend(figure.write(&crate::names::file_in(dir, &stem))?);
         }
     }
     for l in &all {
         let stem = crate::names::file_in(dir, &format!("polar_{}", l.stem));
         written.extend(write_both(
             &stem,
-            (700, 720),
-            |root| draw_polar(root, l, rotation),
-            |root| draw_polar(root, l, rotation),
+            POLAR_SIZE,
+            |root| draw_polar(root, l, options),
+            |root| draw_polar(root, l, options),
         )?);
     }
     Ok(written)
 }
 
-/// [`plot_run_with`] for the resolved phasors only, counter-clockwise rotation.
-pub fn plot_run(run: &RunDir, dir: &Path) -> Result<Vec<PathBuf>> {
-    plot_run_with(run, dir, &[], Rotation::Ccw)
+/// The Bode figures and polar loci of a run, for a report: (Bode figures,
+/// loci).
+pub fn figures(
+    run: &RunDir,
+    transducers: &[PlotTransducer],
+    style: Style,
+) -> (Vec<PhasorFigure>, Vec<Locus>) {
+    let all = loci(run, transducers);
+    let mut bode = Vec::new();
+    for b in run.measured_bearings() {
+        for q in [Quantity::Rel, Quantity::Ped] {
+            let prefix = format!("{b} {} ", q.name());
+            let mine: Vec<&Locus> = all.iter().filter(|l| l.name.starts_with(&prefix)).collect();
+            bode.push(bode_figure(b, q, &mine, style));
+        }
+    }
+    (bode, all)
 }
+
+/// A polar figure as an SVG document in memory.
+pub fn polar_svg(locus: &Locus, options: &PlotOptions) -> Result<String> {
+    crate::plots::svg_string(POLAR_SIZE, |root| draw_polar(root, locus, options))
+}
+
+/// [`plot_run_with`] for the resolved phasors only, default options.
+pub fn plot_run(run: &RunDir, dir: &Path) -> Result<Vec<PathBuf>> {
+    plot_run_with(run, dir, &[], &PlotOptions::default())
+}
+
+/// Pixel size of a polar figure.
+const POLAR_SIZE: (u32, u32) = (720, 780);
 
 /// Draws one polar plot.
 fn draw_polar<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     locus: &Locus,
-    rotation: Rotation,
+    options: &PlotOptions,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
@@ -182,26 +433,43 @@ where
     ensure_fonts()?;
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("polar plot {}: {e:?}", locus.name);
     root.fill(&WHITE).map_err(err)?;
+    let rotation = options.rotation;
+    let unit = locus.unit;
+    let pp = unit.peak_to_peak();
+    let zero = if options.zero_at_transducer {
+        locus.angle_deg
+    } else {
+        0.0
+    };
     let pts: Vec<(f64, f64, f64)> = locus
-        .points
+        .signal()
         .iter()
+        .filter(|(f, q)| f.is_finite() && q.re.is_finite() && q.im.is_finite())
         .map(|(f, q)| {
-            let (x, y) = polar_point(*q, rotation);
+            let (x, y) = polar_point_at(*q * unit.scale(), rotation, zero, pp);
             (*f, x, y)
         })
         .collect();
     let max = pts.iter().map(|p| p.1.hypot(p.2)).fold(0.0, f64::max);
     let r = nice_radius(max);
     let title = format!(
-        "Polar: {} (µm pk-pk, lag against {} rotation)",
+        "Polar: {} ({} {}, lag against {} rotation{})",
         locus.name,
+        unit.unit(),
+        if pp { "pk-pk" } else { "pk" },
         match rotation {
             Rotation::Ccw => "CCW",
             Rotation::Cw => "CW",
+        },
+        if options.zero_at_transducer {
+            ", 0° at the transducer"
+        } else {
+            ""
         }
     );
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 18))
+    let (upper, footer) = root.split_vertically(POLAR_SIZE.1 - 50);
+    let mut chart = ChartBuilder::on(&upper)
+        .caption(title, ("sans-serif", 17))
         .margin(30)
         .build_cartesian_2d(-1.15 * r..1.15 * r, -1.15 * r..1.15 * r)
         .map_err(err)?;
@@ -229,9 +497,11 @@ where
     }
     for k in 0..12 {
         let lag = 30.0 * k as f64;
-        let (x, y) = polar_point(
-            Complex::from_polar(1e-6 * r / 2.0, -lag.to_radians()),
+        let (x, y) = polar_point_at(
+            Complex::from_polar(r / 2.0, -lag.to_radians()),
             rotation,
+            zero,
+            true,
         );
         chart
             .draw_series(LineSeries::new([(0.0, 0.0), (x, y)], grey))
@@ -254,15 +524,75 @@ where
     chart
         .draw_series(pts.iter().map(|p| Circle::new((p.1, p.2), 2, c.filled())))
         .map_err(err)?;
-    // Speed labels at about ten points spread along the locus.
-    let step = (pts.len() / 10).max(1);
-    for p in pts.iter().step_by(step) {
-        chart
-            .draw_series(std::iter::once(Text::new(
-                format!("{:.1} Hz", p.0),
-                (p.1 + 0.02 * r, p.2),
-                ("sans-serif", 11),
-            )))
+    // Speed labels: start and end first, then spread along the locus, never
+    // overlapping each other or the start/end marks.
+    let pixels: Vec<(f64, f64)> = pts
+        .iter()
+        .map(|p| {
+            let (x, y) = chart.backend_coord(&(p.1, p.2));
+            (f64::from(x), f64::from(y))
+        })
+        .collect();
+    let speed_unit = options.style.speed_unit;
+    let texts: Vec<String> = pts.iter().map(|p| speed_unit.label(p.0)).collect();
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    let bounds = TextBox {
+        x: f64::from(xr.start),
+        y: f64::from(yr.start),
+        w: f64::from(xr.end - xr.start),
+        h: f64::from(yr.end - yr.start),
+    };
+    let font = 11.0;
+    for p in place(&pixels, &texts, font, 6.0, 12, &[], bounds) {
+        let b = text_box(&texts[p.index], font, p.x, p.y);
+        upper
+            .draw(&Text::new(
+                texts[p.index].clone(),
+                (b.x as i32, b.y as i32),
+                ("sans-serif", font)
+                    .into_font()
+                    .color(&RGBColor(40, 40, 40)),
+            ))
+            .map_err(err)?;
+    }
+    let dark = RGBColor(40, 40, 40);
+    if let (Some(first), Some(last)) = (pixels.first(), pixels.last()) {
+        let (x, y) = (first.0 as i32, first.1 as i32);
+        upper
+            .draw(&Rectangle::new(
+                [(x - 5, y - 5), (x + 5, y + 5)],
+                dark.filled(),
+            ))
+            .map_err(err)?;
+        upper
+            .draw(&TriangleMarker::new(
+                (last.0 as i32, last.1 as i32),
+                7,
+                colour(1).filled(),
+            ))
+            .map_err(err)?;
+    }
+    // The key below the chart, outside the data.
+    if let (Some(first), Some(last)) = (pts.first(), pts.last()) {
+        footer
+            .draw(&Rectangle::new([(34, 12), (44, 22)], dark.filled()))
+            .map_err(err)?;
+        footer
+            .draw(&Text::new(
+                format!("start {}", speed_unit.label(first.0)),
+                (52, 9),
+                ("sans-serif", 14),
+            ))
+            .map_err(err)?;
+        footer
+            .draw(&TriangleMarker::new((250, 17), 7, colour(1).filled()))
+            .map_err(err)?;
+        footer
+            .draw(&Text::new(
+                format!("end {}", speed_unit.label(last.0)),
+                (262, 9),
+                ("sans-serif", 14),
+            ))
             .map_err(err)?;
     }
     Ok(())
@@ -291,10 +621,19 @@ pub fn run(args: &Args) -> Result<()> {
     let run = RunDir::read(&args.dir)?;
     // An imported or extracted run keeps where its transducers sat: draw
     // each one's reading too.
-    let transducers = super::transducers_csv::read(&args.dir)?.unwrap_or_default();
+    let transducers: Vec<PlotTransducer> = super::transducers_csv::read(&args.dir)?
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(b, q, a)| PlotTransducer::displacement(&b, q, a))
+        .collect();
+    let options = PlotOptions {
+        rotation: args.rotation.into(),
+        zero_at_transducer: args.zero_at_transducer,
+        style: args.style.style(),
+    };
     let mut n = 0;
     crate::output::write_dir(&args.out, args.force, |dir| {
-        n = plot_run_with(&run, dir, &transducers, args.rotation.into())?.len();
+        n = plot_run_with(&run, dir, &transducers, &options)?.len();
         Ok(())
     })?;
     println!("{n} figure files -> {}", args.out.display());
@@ -321,5 +660,51 @@ mod tests {
         // Lag 180°: the bottom either way.
         let p = polar_point(Complex::new(-10e-6, 0.0), Rotation::Cw);
         assert!(p.0.abs() < 1e-9 && (p.1 + 20.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn zero_at_the_transducer_hand_worked() {
+        // A probe at 45° (from +y towards +z). Seen with CCW rotation +z is
+        // on the left, so the probe sits at 10:30; lag 0 plots there.
+        let q = Complex::new(10.0, 0.0);
+        let p = polar_point_at(q, Rotation::Ccw, 45.0, true);
+        let h = 20.0 * std::f64::consts::FRAC_1_SQRT_2;
+        assert!((p.0 + h).abs() < 1e-9 && (p.1 - h).abs() < 1e-9, "{p:?}");
+        // Lag 45° runs against CCW rotation (clockwise) back to the top.
+        let q = Complex::from_polar(10.0, -45f64.to_radians());
+        let p = polar_point_at(q, Rotation::Ccw, 45.0, true);
+        assert!(p.0.abs() < 1e-9 && (p.1 - 20.0).abs() < 1e-9, "{p:?}");
+        // CW rotation: the probe at 45° sits at 1:30.
+        let p = polar_point_at(Complex::new(10.0, 0.0), Rotation::Cw, 45.0, true);
+        assert!((p.0 - h).abs() < 1e-9 && (p.1 - h).abs() < 1e-9, "{p:?}");
+        // Zero-to-peak radius for a velocity pick-up.
+        let p = polar_point_at(Complex::new(10.0, 0.0), Rotation::Cw, 0.0, false);
+        assert!((p.1 - 10.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn native_units_of_the_layout() {
+        use plinth_shared::extractor::SensorKind as K;
+        assert_eq!(
+            native_unit(K::Velocity, 0.0254),
+            PlotQuantity::VelocityInchPerSecond
+        );
+        assert_eq!(
+            native_unit(K::Velocity, 1e-3),
+            PlotQuantity::VelocityMmPerSecond
+        );
+        assert_eq!(
+            native_unit(K::Acceleration, 9.80665),
+            PlotQuantity::AccelerationG
+        );
+        assert_eq!(
+            native_unit(K::Displacement, 0.5 * 25.4e-6),
+            PlotQuantity::DisplacementMils
+        );
+        // A velocity pick-up reads iΩX: 1 µm 0-pk at 100 Hz is 0.628 mm/s pk,
+        // leading the displacement by 90° (lag −90 ≡ 270).
+        let v = PlotQuantity::VelocityMmPerSecond.from_displacement(Complex::new(1e-6, 0.0), 100.0);
+        assert!((v.norm() * 1e3 - 0.2 * std::f64::consts::PI).abs() < 1e-12);
+        assert!((peak_to_peak_and_lag(v).1 - 270.0).abs() < 1e-9);
     }
 }

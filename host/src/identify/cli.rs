@@ -108,6 +108,14 @@ pub struct Args {
     /// this flag (identification relative to the measured base).
     #[arg(long, value_name = "B1,B2[;B3,B4]")]
     pub unmeasured_base: Option<super::on_base::BaseGroups>,
+    /// Also draw each pedestal's measured dynamic stiffness F/X against the
+    /// fitted model, with its ±1σ band and the residual, into DIR
+    /// (`stiffness_<bearing>.png/.svg`; docs/figures.md).
+    #[arg(long, value_name = "DIR")]
+    pub plots: Option<PathBuf>,
+    /// Speed unit of the figures.
+    #[command(flatten)]
+    pub figure_style: crate::plots::StyleArgs,
     /// Fit only the speeds from LO to HI Hz (ends included), e.g. 20:120.
     #[arg(long, value_name = "LO:HI", value_parser = crate::args::speed_band)]
     pub speeds: Option<crate::args::SpeedBand>,
@@ -164,6 +172,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         print!("{}", table(&identification, run.truth.as_ref()));
         print!("{}", super::on_base::describe(&identification.bases));
         print!("{}", untrusted_reasons(&identification));
+    }
+    if let Some(dir) = &args.plots {
+        let files = crate::report::fitted::write_identify_plots(
+            dir,
+            &run,
+            &identification,
+            args.figure_style.style(),
+        )?;
+        eprintln!("{} figure files -> {}", files.len(), dir.display());
     }
     // A physically impossible pedestal or a suspected convention mistake:
     // everything is printed, then exit code 2 (`physical::EXIT_NOT_PHYSICAL`).

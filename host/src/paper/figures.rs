@@ -98,6 +98,7 @@ pub(super) fn response_panels(run: &RunDir) -> Vec<PhasorPanel> {
                 .into_iter()
                 .map(|(_, s)| s)
                 .collect(),
+            quantity: None,
         },
         PhasorPanel {
             title: "Pedestal (absolute)".into(),
@@ -105,6 +106,7 @@ pub(super) fn response_panels(run: &RunDir) -> Vec<PhasorPanel> {
                 .into_iter()
                 .map(|(_, s)| s)
                 .collect(),
+            quantity: None,
         },
     ]
 }
@@ -159,6 +161,7 @@ pub fn write_figures(paper: &Paper, dir: &Path) -> Result<Vec<PathBuf>> {
             view: PhasorView::Engineer(PhaseStyle::Wrapped),
             rows: Rows::First,
             panels: response_panels(run),
+            style: Default::default(),
         };
         files.extend(fig.write(&dir.join(format!("{amp}_amplitudes{suffix}")))?);
         let fig = PhasorFigure {
@@ -173,6 +176,7 @@ pub fn write_figures(paper: &Paper, dir: &Path) -> Result<Vec<PathBuf>> {
             y_range: Some((-30.0, 210.0)),
             y_tick_step: Some(30.0),
             series: phase_difference_series(run)?,
+            style: Default::default(),
         };
         files.extend(fig.write(&dir.join(format!("{diff}_phase_difference{suffix}")))?);
     }
@@ -206,7 +210,9 @@ pub fn write_figures(paper: &Paper, dir: &Path) -> Result<Vec<PathBuf>> {
         panels: vec![PhasorPanel {
             title: "Rotor relative to pedestal, y".into(),
             series,
+            quantity: None,
         }],
+        style: Default::default(),
     };
     files.extend(fig.write(&dir.join("fig6_measured_vs_predicted"))?);
     Ok(files)

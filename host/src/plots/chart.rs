@@ -10,12 +10,17 @@ use std::path::{Path, PathBuf};
 
 /// The (speed, value) rows of one view row of a series, split into segments
 /// where a wrapped angle jumps (so no vertical line is drawn across the wrap).
+/// Speeds stay in Hz; amplitudes are in the plotted unit (`scale` from SI,
+/// doubled for a peak-to-peak `quantity`) and, with `log`, their log10 (zero
+/// amplitudes left out).
 pub(super) fn view_rows(
     series: &PhasorSeries,
     view: PhasorView,
     row: usize,
-    scale: f64,
+    quantity: Quantity,
+    log: bool,
 ) -> Vec<Vec<(f64, f64)>> {
+    let scale = quantity.scale();
     let mut pts: Vec<(f64, Complex<f64>)> = series
         .points
         .iter()
@@ -23,10 +28,11 @@ pub(super) fn view_rows(
         .filter(|(s, q)| s.is_finite() && q.re.is_finite() && q.im.is_finite())
         .collect();
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let pp = if quantity.peak_to_peak() { 1.0 } else { 0.5 };
     let values: Vec<(f64, f64)> = match (view, row) {
         (PhasorView::Engineer(_), 0) => pts
             .iter()
-            .map(|&(s, q)| (s, peak_to_peak_and_lag(q).0 * scale))
+            .map(|&(s, q)| (s, peak_to_peak_and_lag(q).0 * scale * pp))
             .collect(),
         (PhasorView::Engineer(PhaseStyle::Wrapped), _) => pts
             .iter()
@@ -52,6 +58,15 @@ pub(super) fn view_rows(
             .map(|&(s, q)| (s, q.arg().to_degrees()))
             .collect(),
     };
+    let values = if log && row_from_zero(view, row) {
+        values
+            .into_iter()
+            .filter(|p| p.1 > 0.0)
+            .map(|(s, v)| (s, v.log10()))
+            .collect()
+    } else {
+        values
+    };
     let wrapped = row == 1
         && matches!(
             view,
@@ -63,8 +78,13 @@ pub(super) fn view_rows(
 /// Axis label of one row of a phasor figure.
 pub(super) fn row_label(view: PhasorView, row: usize, quantity: Quantity) -> String {
     let u = quantity.unit();
+    let measure = if quantity.peak_to_peak() {
+        "pk-pk"
+    } else {
+        "pk"
+    };
     match (view, row) {
-        (PhasorView::Engineer(_), 0) => format!("Amplitude [{u} p-p]"),
+        (PhasorView::Engineer(_), 0) => format!("Amplitude [{u} {measure}]"),
         (PhasorView::Engineer(PhaseStyle::Wrapped), _) => "Phase lag [deg]".into(),
         (PhasorView::Engineer(PhaseStyle::Unwrapped), _) => "Phase lag, unwrapped [deg]".into(),
         (PhasorView::ReIm, 0) => format!("Re Q [{u}]"),
@@ -157,28 +177,93 @@ pub(super) fn padded_range(
     (lo, hi + pad)
 }
 
-/// A line or marker series ready for one chart.
+/// A line or marker series ready for one chart (x in the plotted speed unit).
 pub(super) struct Curve {
-    name: String,
-    mark: Mark,
-    colour: RGBColor,
-    segments: Vec<Vec<(f64, f64)>>,
+    pub(super) name: String,
+    pub(super) mark: Mark,
+    pub(super) colour: RGBColor,
+    pub(super) segments: Vec<Vec<(f64, f64)>>,
 }
 
-/// Draws one chart with curves into `area`.
-#[allow(clippy::too_many_arguments)]
+impl Curve {
+    /// Its legend entry.
+    pub(super) fn entry(&self) -> LegendEntry {
+        LegendEntry {
+            name: self.name.clone(),
+            colour: self.colour,
+            swatch: match self.mark {
+                Mark::Line => Swatch::Line,
+                Mark::Markers => Swatch::Marker,
+            },
+        }
+    }
+
+    /// True when it has a point to draw.
+    pub(super) fn has_points(&self) -> bool {
+        self.segments.iter().any(|s| !s.is_empty())
+    }
+}
+
+/// A shaded band between `lower` and `upper` at the same x values (a
+/// fitted curve's ± uncertainty).
+pub(super) struct Band {
+    pub(super) colour: RGBColor,
+    /// (x, lower, upper) in the plotted units.
+    pub(super) points: Vec<(f64, f64, f64)>,
+}
+
+/// The axes of one chart.
+pub(super) struct Axes<'a> {
+    /// Caption above the chart ("" for none).
+    pub(super) caption: &'a str,
+    /// x range in the plotted speed unit.
+    pub(super) x_range: (f64, f64),
+    /// x-axis label.
+    pub(super) x_label: &'a str,
+    /// y range (log10 of the value when `log_y`).
+    pub(super) y_range: (f64, f64),
+    /// Fixed y tick spacing, or `None` for nice ticks.
+    pub(super) y_step: Option<f64>,
+    /// y-axis label.
+    pub(super) y_label: &'a str,
+    /// y values are log10 of the quantity: decade ticks labelled 10^v.
+    pub(super) log_y: bool,
+}
+
+/// Ticks of a log10 axis: bold at the decades (or at 1, 2, 5 when the range
+/// spans under two decades), light at 1..9 × 10^n.
+fn log_ticks(range: (f64, f64)) -> (Vec<f64>, Vec<f64>) {
+    let (lo, hi) = (range.0.floor() as i32, range.1.ceil() as i32);
+    let mut bold = Vec::new();
+    let mut light = Vec::new();
+    let few = range.1 - range.0 < 2.0;
+    for e in lo..=hi {
+        for m in 1..10 {
+            let v = f64::from(e) + f64::from(m).log10();
+            if v < range.0 - 1e-9 || v > range.1 + 1e-9 {
+                continue;
+            }
+            if m == 1 || (few && (m == 2 || m == 5)) {
+                bold.push(v);
+            }
+            light.push(v);
+        }
+    }
+    (bold, light)
+}
+
+/// Draws one chart with bands and curves into `area` (no legend: the
+/// figure draws it beside the data, [`draw_legend`]).
 pub(super) fn draw_chart<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    caption: &str,
-    x_range: (f64, f64),
-    y_range: (f64, f64),
-    y_step: Option<f64>,
-    y_label: &str,
+    axes: &Axes<'_>,
+    bands: &[Band],
     curves: &[Curve],
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
+    let caption = axes.caption;
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing chart '{caption}': {e:?}");
     let mut builder = ChartBuilder::on(area);
     builder
@@ -188,85 +273,78 @@ where
     if !caption.is_empty() {
         builder.caption(caption, (FONT, 20));
     }
-    let y_ticks = match y_step {
-        Some(step) if step > 0.0 => ticks_with_step(y_range, step),
-        _ => nice_ticks(y_range, 8),
+    let (y_ticks, y_light) = if axes.log_y {
+        log_ticks(axes.y_range)
+    } else {
+        let t = match axes.y_step {
+            Some(step) if step > 0.0 => ticks_with_step(axes.y_range, step),
+            _ => nice_ticks(axes.y_range, 8),
+        };
+        let l = light_ticks(&t, axes.y_range);
+        (t, l)
     };
-    let x_ticks = nice_ticks(x_range, 10);
-    let x_light = light_ticks(&x_ticks, x_range);
-    let y_light = light_ticks(&y_ticks, y_range);
+    let x_ticks = nice_ticks(axes.x_range, 10);
+    let x_light = light_ticks(&x_ticks, axes.x_range);
     let mut chart = builder
         .build_cartesian_2d(
             TickedAxis {
-                range: x_range,
+                range: axes.x_range,
                 bold: x_ticks,
                 light: x_light,
             },
             TickedAxis {
-                range: y_range,
+                range: axes.y_range,
                 bold: y_ticks,
                 light: y_light,
             },
         )
         .map_err(err)?;
+    let log_y = axes.log_y;
+    let y_format = move |v: &f64| {
+        if log_y {
+            format_tick(10f64.powf(*v))
+        } else {
+            format_tick(*v)
+        }
+    };
     chart
         .configure_mesh()
-        .x_desc("Rotor speed [Hz]")
-        .y_desc(y_label)
+        .x_desc(axes.x_label)
+        .y_desc(axes.y_label)
         .label_style((FONT, 15))
         .axis_desc_style((FONT, 16))
         .light_line_style(RGBColor(240, 240, 240))
         .bold_line_style(RGBColor(205, 205, 205))
-        .y_label_formatter(&|v| format_tick(*v))
+        .y_label_formatter(&y_format)
         .x_label_formatter(&|v| format_tick(*v))
         .draw()
         .map_err(err)?;
+    for b in bands.iter().filter(|b| b.points.len() > 1) {
+        let mut outline: Vec<(f64, f64)> = b.points.iter().map(|p| (p.0, p.2)).collect();
+        outline.extend(b.points.iter().rev().map(|p| (p.0, p.1)));
+        chart
+            .draw_series(std::iter::once(Polygon::new(outline, b.colour.mix(0.18))))
+            .map_err(err)?;
+    }
     for c in curves {
         let colour = c.colour;
-        let mut labelled = false;
         for seg in c.segments.iter().filter(|s| !s.is_empty()) {
-            let anno = match c.mark {
-                Mark::Line => chart
-                    .draw_series(LineSeries::new(seg.iter().copied(), colour.stroke_width(2)))
-                    .map_err(err)?,
-                Mark::Markers => chart
-                    .draw_series(
-                        seg.iter()
-                            .map(|&p| Circle::new(p, 3, colour.stroke_width(1))),
-                    )
-                    .map_err(err)?,
-            };
-            if !labelled {
-                labelled = true;
-                let mark = c.mark;
-                anno.label(c.name.clone()).legend(move |(x, y)| {
-                    let line_colour = match mark {
-                        Mark::Line => colour.to_rgba(),
-                        Mark::Markers => TRANSPARENT,
-                    };
-                    let circle_colour = match mark {
-                        Mark::Line => TRANSPARENT,
-                        Mark::Markers => colour.to_rgba(),
-                    };
-                    EmptyElement::at((x, y))
-                        + PathElement::new(vec![(0, 0), (20, 0)], line_colour.stroke_width(2))
-                        + Circle::new((10, 0), 3, circle_colour.stroke_width(1))
-                });
+            match c.mark {
+                Mark::Line => {
+                    chart
+                        .draw_series(LineSeries::new(seg.iter().copied(), colour.stroke_width(2)))
+                        .map_err(err)?;
+                }
+                Mark::Markers => {
+                    chart
+                        .draw_series(
+                            seg.iter()
+                                .map(|&p| Circle::new(p, 3, colour.stroke_width(1))),
+                        )
+                        .map_err(err)?;
+                }
             }
         }
-    }
-    if curves
-        .iter()
-        .any(|c| c.segments.iter().any(|s| !s.is_empty()))
-    {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font((FONT, 14))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(150, 150, 150))
-            .draw()
-            .map_err(err)?;
     }
     Ok(())
 }
@@ -326,15 +404,19 @@ impl PhasorFigure {
             Rows::Second => vec![1],
         };
         let cells = body.split_evenly((rows.len(), self.panels.len()));
-        let scale = self.quantity.scale();
+        let unit = self.style.speed_unit;
         let x_range = speed_range(
             self.panels
                 .iter()
                 .flat_map(|p| p.series.iter())
                 .flat_map(|s| s.points.iter().map(|(sp, _)| sp)),
         );
+        let x_range = (x_range.0 * unit.factor(), x_range.1 * unit.factor());
+        let x_label = unit.axis_label();
         for (ri, &row) in rows.iter().enumerate() {
             for (pi, panel) in self.panels.iter().enumerate() {
+                let quantity = panel.quantity.unwrap_or(self.quantity);
+                let log = self.style.log_amplitude && row_from_zero(self.view, row);
                 let names: Vec<&str> = panel.series.iter().map(|s| s.name.as_str()).collect();
                 let curves: Vec<Curve> = panel
                     .series
@@ -344,7 +426,7 @@ impl PhasorFigure {
                         name: s.name.clone(),
                         mark: s.mark,
                         colour: colour_for(&names, i),
-                        segments: view_rows(s, self.view, row, scale),
+                        segments: in_speed_unit(view_rows(s, self.view, row, quantity, log), unit),
                     })
                     .collect();
                 let (y_range, step) = match row_fixed_range(self.view, row) {
@@ -354,23 +436,38 @@ impl PhasorFigure {
                             curves
                                 .iter()
                                 .flat_map(|c| c.segments.iter().flatten().map(|p| p.1)),
-                            row_from_zero(self.view, row),
-                            // Room above the data for the legend.
-                            if row == 0 { 0.3 } else { 0.1 },
+                            row_from_zero(self.view, row) && !log,
+                            0.08,
                         ),
                         None,
                     ),
                 };
                 let caption = if ri == 0 { panel.title.as_str() } else { "" };
+                let entries: Vec<LegendEntry> = curves
+                    .iter()
+                    .filter(|c| c.has_points())
+                    .map(Curve::entry)
+                    .collect();
+                let (chart_area, legend_area) =
+                    beside(&cells[ri * self.panels.len() + pi], !entries.is_empty());
+                let y_label = row_label(self.view, row, quantity);
                 draw_chart(
-                    &cells[ri * self.panels.len() + pi],
-                    caption,
-                    x_range,
-                    y_range,
-                    step,
-                    &row_label(self.view, row, self.quantity),
+                    &chart_area,
+                    &Axes {
+                        caption,
+                        x_range,
+                        x_label: &x_label,
+                        y_range,
+                        y_step: step,
+                        y_label: &y_label,
+                        log_y: log,
+                    },
+                    &[],
                     &curves,
                 )?;
+                if let (Some(area), 0) = (legend_area, ri) {
+                    draw_legend(&area, &entries)?;
+                }
             }
         }
         Ok(())
@@ -380,7 +477,7 @@ impl PhasorFigure {
     fn size(&self) -> (u32, u32) {
         let rows = if self.rows == Rows::Both { 2 } else { 1 };
         let cols = self.panels.len().max(1) as u32;
-        ((560 * cols).max(900), 60 + 420 * rows)
+        ((700 * cols).max(1000), 60 + 420 * rows)
     }
 
     /// Writes `<stem>.png` and `<stem>.svg`; returns both paths.
@@ -392,6 +489,38 @@ impl PhasorFigure {
             |root| self.draw(root),
         )
     }
+
+    /// The figure as an SVG document in memory (for an HTML report).
+    pub fn to_svg(&self) -> Result<String> {
+        svg_string(self.size(), |root| self.draw(root))
+    }
+}
+
+/// Segments with their x (speed [Hz]) in `unit`.
+pub(super) fn in_speed_unit(
+    segments: Vec<Vec<(f64, f64)>>,
+    unit: SpeedUnit,
+) -> Vec<Vec<(f64, f64)>> {
+    let f = unit.factor();
+    segments
+        .into_iter()
+        .map(|s| s.into_iter().map(|(x, y)| (x * f, y)).collect())
+        .collect()
+}
+
+/// Renders a drawing of `size` pixels into an SVG document in memory.
+pub fn svg_string(
+    size: (u32, u32),
+    draw: impl FnOnce(&DrawingArea<SVGBackend<'_>, Shift>) -> Result<()>,
+) -> Result<String> {
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        draw(&root)?;
+        root.present()
+            .map_err(|e| anyhow!("rendering an SVG figure: {e:?}"))?;
+    }
+    Ok(text)
 }
 
 impl ScalarFigure {
@@ -411,6 +540,7 @@ impl ScalarFigure {
                 (FONT, title_size(&self.title, root.dim_in_pixel().0)),
             )
             .map_err(err)?;
+        let unit = self.style.speed_unit;
         let names: Vec<&str> = self.series.iter().map(|s| s.name.as_str()).collect();
         let curves: Vec<Curve> = self
             .series
@@ -428,7 +558,7 @@ impl ScalarFigure {
                     name: s.name.clone(),
                     mark: s.mark,
                     colour: colour_for(&names, i),
-                    segments: vec![pts],
+                    segments: in_speed_unit(vec![pts], unit),
                 }
             })
             .collect();
@@ -437,6 +567,7 @@ impl ScalarFigure {
                 .iter()
                 .flat_map(|s| s.points.iter().map(|(x, _)| x)),
         );
+        let x_range = (x_range.0 * unit.factor(), x_range.1 * unit.factor());
         let y_range = self.y_range.unwrap_or_else(|| {
             padded_range(
                 curves
@@ -446,22 +577,37 @@ impl ScalarFigure {
                 0.1,
             )
         });
+        let entries: Vec<LegendEntry> = curves
+            .iter()
+            .filter(|c| c.has_points())
+            .map(Curve::entry)
+            .collect();
+        let (chart_area, legend_area) = beside(&body, !entries.is_empty());
         draw_chart(
-            &body,
-            "",
-            x_range,
-            y_range,
-            self.y_tick_step,
-            &self.y_label,
+            &chart_area,
+            &Axes {
+                caption: "",
+                x_range,
+                x_label: &unit.axis_label(),
+                y_range,
+                y_step: self.y_tick_step,
+                y_label: &self.y_label,
+                log_y: false,
+            },
+            &[],
             &curves,
-        )
+        )?;
+        if let Some(area) = legend_area {
+            draw_legend(&area, &entries)?;
+        }
+        Ok(())
     }
 
     /// Writes `<stem>.png` and `<stem>.svg`; returns both paths.
     pub fn write(&self, stem: &Path) -> Result<[PathBuf; 2]> {
         write_both(
             stem,
-            (1000, 600),
+            (1100, 600),
             |root| self.draw(root),
             |root| self.draw(root),
         )

@@ -18,14 +18,21 @@
 //! wrapped to (−180, 180]).
 //!
 //! Files: this one (fonts, the figure types, writing both formats),
-//! `phase` (phase conventions), `chart` (drawing), `axis` (ticks).
+//! `phase` (phase conventions), `chart` (drawing), `axis` (ticks),
+//! `legend` (legends beside the data), `stiffness` (a pedestal's measured
+//! dynamic stiffness against its fitted model), `labels` (speed labels on a
+//! locus that never overlap).
 
 mod axis;
 mod chart;
+pub mod labels;
+mod legend;
 mod phase;
+pub mod stiffness;
 
 use axis::*;
 pub use chart::*;
+use legend::*;
 pub use phase::*;
 
 use anyhow::{anyhow, Context, Result};
@@ -61,10 +68,24 @@ pub fn ensure_fonts() -> Result<()> {
 }
 
 /// What a phasor's magnitude measures, for axis labels and scaling.
+///
+/// Displacements are shown peak-to-peak (the proximity-probe habit);
+/// velocities and accelerations zero-to-peak (`mm/s pk`, `in/s pk`, `g pk`,
+/// the pick-ups' own habit). The phasors of a velocity or acceleration
+/// series are the pick-up's own signal (iΩ·X or −Ω²·X, SI units), not a
+/// displacement.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quantity {
-    /// Displacement: phasors in m, plotted in µm.
+    /// Displacement: phasors in m, plotted in µm pk-pk.
     DisplacementMicrons,
+    /// Displacement: phasors in m, plotted in mil pk-pk (1 mil = 25.4 µm).
+    DisplacementMils,
+    /// Velocity: phasors in m/s, plotted in mm/s pk.
+    VelocityMmPerSecond,
+    /// Velocity: phasors in m/s, plotted in in/s pk.
+    VelocityInchPerSecond,
+    /// Acceleration: phasors in m/s², plotted in g pk (9.80665 m/s²).
+    AccelerationG,
     /// Force: phasors in N, plotted in N.
     ForceNewtons,
     /// Force: phasors in N, plotted in kN.
@@ -76,6 +97,10 @@ impl Quantity {
     pub fn scale(self) -> f64 {
         match self {
             Quantity::DisplacementMicrons => 1e6,
+            Quantity::DisplacementMils => 1.0 / 25.4e-6,
+            Quantity::VelocityMmPerSecond => 1e3,
+            Quantity::VelocityInchPerSecond => 1.0 / 0.0254,
+            Quantity::AccelerationG => 1.0 / 9.80665,
             Quantity::ForceNewtons => 1.0,
             Quantity::ForceKilonewtons => 1e-3,
         }
@@ -85,10 +110,96 @@ impl Quantity {
     pub fn unit(self) -> &'static str {
         match self {
             Quantity::DisplacementMicrons => "µm",
+            Quantity::DisplacementMils => "mil",
+            Quantity::VelocityMmPerSecond => "mm/s",
+            Quantity::VelocityInchPerSecond => "in/s",
+            Quantity::AccelerationG => "g",
             Quantity::ForceNewtons => "N",
             Quantity::ForceKilonewtons => "kN",
         }
     }
+
+    /// True when the engineer's amplitude is peak-to-peak (displacement),
+    /// false when zero-to-peak (velocity, acceleration, force).
+    pub fn peak_to_peak(self) -> bool {
+        matches!(
+            self,
+            Quantity::DisplacementMicrons | Quantity::DisplacementMils
+        )
+    }
+
+    /// How many times the signal is differentiated from displacement: 0, 1
+    /// (velocity) or 2 (acceleration); `None` for a force.
+    pub fn derivative_order(self) -> Option<u32> {
+        match self {
+            Quantity::DisplacementMicrons | Quantity::DisplacementMils => Some(0),
+            Quantity::VelocityMmPerSecond | Quantity::VelocityInchPerSecond => Some(1),
+            Quantity::AccelerationG => Some(2),
+            Quantity::ForceNewtons | Quantity::ForceKilonewtons => None,
+        }
+    }
+
+    /// The pick-up's own phasor of a displacement phasor `x` [m] at
+    /// `speed_hz`: x, iΩx [m/s] or −Ω²x [m/s²] (a force is returned as is).
+    pub fn from_displacement(self, x: Complex<f64>, speed_hz: f64) -> Complex<f64> {
+        let iw = Complex::new(0.0, std::f64::consts::TAU * speed_hz);
+        match self.derivative_order() {
+            Some(1) => iw * x,
+            Some(2) => iw * iw * x,
+            _ => x,
+        }
+    }
+}
+
+/// The unit of the speed axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum SpeedUnit {
+    /// Rotor speed in Hz (revolutions per second), the run directory's unit.
+    #[default]
+    Hz,
+    /// Rotor speed in rpm (revolutions per minute), the field's habit.
+    Rpm,
+}
+
+impl SpeedUnit {
+    /// Factor from Hz to this unit.
+    pub fn factor(self) -> f64 {
+        match self {
+            SpeedUnit::Hz => 1.0,
+            SpeedUnit::Rpm => 60.0,
+        }
+    }
+
+    /// Unit symbol: `Hz` or `rpm`.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            SpeedUnit::Hz => "Hz",
+            SpeedUnit::Rpm => "rpm",
+        }
+    }
+
+    /// The speed axis' label, e.g. `Rotor speed [rpm]`.
+    pub fn axis_label(self) -> String {
+        format!("Rotor speed [{}]", self.symbol())
+    }
+
+    /// A speed [Hz] as text in this unit, e.g. `1500 rpm` or `25.0 Hz`.
+    pub fn label(self, speed_hz: f64) -> String {
+        match self {
+            SpeedUnit::Hz => format!("{speed_hz:.1} Hz"),
+            SpeedUnit::Rpm => format!("{:.0} rpm", speed_hz * 60.0),
+        }
+    }
+}
+
+/// How every figure is drawn, whatever it shows: the field's reading
+/// options (`--speed-unit`, `--log-amplitude`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Style {
+    /// Unit of the speed axis and speed labels.
+    pub speed_unit: SpeedUnit,
+    /// Amplitude rows on a logarithmic axis (decades).
+    pub log_amplitude: bool,
 }
 
 /// How the phase of an engineer's plot is shown.
@@ -130,6 +241,28 @@ pub enum Mark {
     Line,
     /// Hollow circles at the points (measured data over a predicted line).
     Markers,
+}
+
+/// The figure options every command that draws takes (`--speed-unit`,
+/// `--log-amplitude`), flattened into its arguments.
+#[derive(clap::Args, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StyleArgs {
+    /// Unit of the figures' speed axes and speed labels.
+    #[arg(long, value_enum, default_value_t = SpeedUnit::Hz)]
+    pub speed_unit: SpeedUnit,
+    /// Amplitudes on a logarithmic axis (decades) in Bode figures.
+    #[arg(long)]
+    pub log_amplitude: bool,
+}
+
+impl StyleArgs {
+    /// The figure style these options ask for.
+    pub fn style(&self) -> Style {
+        Style {
+            speed_unit: self.speed_unit,
+            log_amplitude: self.log_amplitude,
+        }
+    }
 }
 
 /// One named curve of 1X phasors against rotor speed.
@@ -181,6 +314,20 @@ pub struct PhasorPanel {
     pub title: String,
     /// The curves in this panel.
     pub series: Vec<PhasorSeries>,
+    /// What this panel's phasors measure, when not the figure's quantity
+    /// (e.g. velocity pick-ups beside resolved displacements).
+    pub quantity: Option<Quantity>,
+}
+
+impl PhasorPanel {
+    /// A panel of the figure's quantity.
+    pub fn new(title: impl Into<String>, series: Vec<PhasorSeries>) -> Self {
+        Self {
+            title: title.into(),
+            series,
+            quantity: None,
+        }
+    }
 }
 
 /// A figure of 1X phasors against speed: one column per panel, one or two
@@ -197,6 +344,8 @@ pub struct PhasorFigure {
     pub rows: Rows,
     /// Columns of the figure.
     pub panels: Vec<PhasorPanel>,
+    /// Speed unit and amplitude scale.
+    pub style: Style,
 }
 
 /// A figure of real values against speed (e.g. phase differences).
@@ -212,6 +361,8 @@ pub struct ScalarFigure {
     pub y_tick_step: Option<f64>,
     /// The curves.
     pub series: Vec<ScalarSeries>,
+    /// Speed unit (the y axis is the figure's own).
+    pub style: Style,
 }
 
 /// Renders a figure once to PNG and once to SVG beside each other.
@@ -298,9 +449,21 @@ mod tests {
                 (3.0, Complex::from_polar(1.0, -15f64.to_radians())),
             ],
         );
-        let segs = view_rows(&s, PhasorView::Engineer(PhaseStyle::Wrapped), 1, 1.0);
+        let segs = view_rows(
+            &s,
+            PhasorView::Engineer(PhaseStyle::Wrapped),
+            1,
+            Quantity::DisplacementMicrons,
+            false,
+        );
         assert_eq!(segs.len(), 2);
-        let segs = view_rows(&s, PhasorView::Engineer(PhaseStyle::Unwrapped), 1, 1.0);
+        let segs = view_rows(
+            &s,
+            PhasorView::Engineer(PhaseStyle::Unwrapped),
+            1,
+            Quantity::DisplacementMicrons,
+            false,
+        );
         assert_eq!(segs.len(), 1);
         assert!((segs[0][1].1 - 365.0).abs() < 1e-9);
     }
@@ -327,6 +490,7 @@ mod tests {
                         PhasorSeries::line("Ly", a.clone()),
                         PhasorSeries::line("Lz", b.clone()),
                     ],
+                    quantity: None,
                 },
                 PhasorPanel {
                     title: "Pedestal (absolute)".into(),
@@ -337,14 +501,19 @@ mod tests {
                         ),
                         PhasorSeries::line("Ly predicted", a.clone()),
                     ],
+                    quantity: None,
                 },
             ],
+            style: Style {
+                speed_unit: SpeedUnit::Rpm,
+                log_amplitude: true,
+            },
         };
         let [png, svg] = fig.write(&out.join("test_response")).unwrap();
         let bytes = std::fs::read(&png).unwrap();
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
         let text = std::fs::read_to_string(&svg).unwrap();
-        assert!(text.starts_with("<svg") && text.contains("Rotor speed [Hz]"));
+        assert!(text.starts_with("<svg") && text.contains("Rotor speed [rpm]"));
         let diff = ScalarFigure {
             title: "Phase difference".into(),
             y_label: "Lag of response behind force [deg]".into(),
@@ -358,6 +527,7 @@ mod tests {
                     .collect(),
                 mark: Mark::Line,
             }],
+            style: Style::default(),
         };
         diff.write(&out.join("test_phase_diff")).unwrap();
     }

@@ -1,0 +1,191 @@
+//! `plinth report RUN --out REPORT.html` and the figures of an
+//! identification: one self-contained HTML page (inline SVG, no network
+//! access, no script, prints well) with what was measured, the identified
+//! pedestals with their modal view and trust, the measured-vs-fitted
+//! figures, Bode and polar figures and, with `--diagnose`, the diagnosis;
+//! and the exact command and version that made it.
+//!
+//! Files: this one (the command), `fitted` (measured-vs-fitted dynamic
+//! stiffness from an identification), `page` (the HTML).
+
+pub mod fitted;
+pub mod page;
+
+use crate::field::plot::{PlotOptions, PlotTransducer, RotationArg};
+use crate::identify::{identify_run, Identification, Options};
+use crate::plots::StyleArgs;
+use crate::rundir::RunDir;
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+
+/// Command-line arguments of `plinth report`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "\
+Identifies every pedestal of RUN (as `plinth identify RUN` does, default options) and writes \
+one HTML file: the run's files, transducers, speeds and noise; the identified table with the \
+modal view (f_n, ζ) and each pedestal's trust with its reasons; each bearing's measured \
+dynamic stiffness against the fitted model; Bode and polar figures; with --diagnose the \
+diagnosis (as `plinth diagnose RUN`); the command and version that made it. The page needs \
+no network and no script; figures are inline SVG. docs/figures.md.")]
+pub struct Args {
+    /// Run directory (measurements.csv, bearings.csv; transducers.csv,
+    /// truth.json when present).
+    pub dir: PathBuf,
+    /// The HTML file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also run the diagnosis (`plinth diagnose`) and include its verdict
+    /// and figures.
+    #[arg(long)]
+    pub diagnose: bool,
+    /// Direction of rotation as drawn on the polar plots.
+    #[arg(long, value_enum, default_value = "ccw")]
+    pub rotation: RotationArg,
+    /// Polar plots with 0° at each transducer (Bently/Hatch).
+    #[arg(long)]
+    pub zero_at_transducer: bool,
+    /// Speed unit and amplitude scale of the figures.
+    #[command(flatten)]
+    pub style: StyleArgs,
+    /// Replace an existing --out file.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// Everything the page shows, computed before it is written.
+pub struct Contents<'a> {
+    /// The run directory as given.
+    pub dir: &'a Path,
+    /// The run as read.
+    pub run: &'a RunDir,
+    /// Its identification.
+    pub identification: &'a Identification,
+    /// The transducers of `transducers.csv`, when the run has one.
+    pub transducers: &'a [PlotTransducer],
+    /// How the field figures are drawn.
+    pub options: PlotOptions,
+    /// With `--diagnose`: the outcome.
+    pub diagnosis: Option<&'a crate::diagnose::Outcome>,
+    /// The exact command line.
+    pub command: String,
+}
+
+/// The command line as a shell would read it back (arguments with spaces or
+/// quotes single-quoted).
+pub fn command_line(args: impl IntoIterator<Item = String>) -> String {
+    args.into_iter()
+        .map(|a| {
+            if !a.is_empty()
+                && a.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "-_./:=,+@%".contains(c))
+            {
+                a
+            } else {
+                format!("'{}'", a.replace('\'', r"'\''"))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Writes `text` to `out` through a sibling temporary file renamed into
+/// place (an interrupted run leaves no half page); refuses an existing
+/// `out` without `force`.
+fn write_atomically(out: &Path, force: bool, text: &str) -> Result<()> {
+    if out.is_dir() {
+        bail!(
+            "--out {}: is a directory; give the HTML file's name",
+            out.display()
+        );
+    }
+    if out.exists() && !force {
+        bail!(
+            "--out {}: already exists (add --force to replace it)",
+            out.display()
+        );
+    }
+    let name = out
+        .file_name()
+        .with_context(|| format!("--out {}: no file name", out.display()))?
+        .to_string_lossy()
+        .to_string();
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent)
+        .with_context(|| format!("--out: cannot create {}", parent.display()))?;
+    let tmp = parent.join(format!(".{name}.plinth-partial-{}", std::process::id()));
+    std::fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, out).with_context(|| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("moving the report into place at {}", out.display())
+    })
+}
+
+/// Runs `plinth report`.
+pub fn run(args: &Args) -> Result<()> {
+    if args.out.exists() && !args.force && !args.out.is_dir() {
+        bail!(
+            "--out {}: already exists (add --force to replace it)",
+            args.out.display()
+        );
+    }
+    crate::identify::cli::check_run_dir(&args.dir)?;
+    let run = RunDir::read(&args.dir)?;
+    let identification = identify_run(&run, &Options::default())
+        .with_context(|| format!("identifying {}", args.dir.display()))?;
+    let transducers: Vec<PlotTransducer> = crate::field::transducers_csv::read(&args.dir)?
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(b, q, a)| PlotTransducer::displacement(&b, q, a))
+        .collect();
+    let outcome = if args.diagnose {
+        let options = crate::diagnose::Options {
+            progress: false,
+            ..crate::diagnose::Options::default()
+        };
+        Some(
+            crate::diagnose::diagnose(&run, &options)
+                .with_context(|| format!("diagnosing {}", args.dir.display()))?,
+        )
+    } else {
+        None
+    };
+    let contents = Contents {
+        dir: &args.dir,
+        run: &run,
+        identification: &identification,
+        transducers: &transducers,
+        options: PlotOptions {
+            rotation: args.rotation.into(),
+            zero_at_transducer: args.zero_at_transducer,
+            style: args.style.style(),
+        },
+        diagnosis: outcome.as_ref(),
+        command: command_line(std::env::args()),
+    };
+    let html = page::render(&contents)?;
+    write_atomically(&args.out, args.force, &html)?;
+    println!(
+        "report of {} ({} pedestals, {} figures) -> {}",
+        args.dir.display(),
+        identification.pedestals.len(),
+        html.matches("<svg").count(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::command_line;
+
+    #[test]
+    fn command_is_quoted_for_a_shell() {
+        let c = command_line(
+            ["plinth", "report", "my run", "--out", "r.html", "it's"].map(String::from),
+        );
+        assert_eq!(c, r"plinth report 'my run' --out r.html 'it'\''s'");
+    }
+}
