@@ -9,6 +9,8 @@
 //! - [`fit`]: noise-weighted least squares (errors in variables propagated)
 //!   and the 1-D profile search;
 //! - [`gap`]: the disagreement measure (defined there) and its noise floor;
+//! - [`bearing_table`]: `bearing_coefficients`, an oil-film table written
+//!   for another clearance;
 //! - [`candidates`]: the library of effects (every formats.md name but
 //!   `foundation_coupling`);
 //! - [`foundation`]: `foundation_coupling`, pedestals on a shared unmeasured
@@ -24,6 +26,7 @@
 
 pub use workflow::{diagnose, Options, Outcome};
 
+pub mod bearing_table;
 pub mod candidates;
 pub mod cli;
 pub mod criterion;

@@ -245,6 +245,9 @@ pub struct Diagnosis {
     pub trusted: bool,
     /// Why the parameters are not to be trusted (empty when trusted).
     pub trust_reasons: Vec<String>,
+    /// When the final model leaves a disagreement above the floor: the
+    /// pedestal channels and speed bands that hold it (where to look).
+    pub unexplained: Vec<super::locate::Unexplained>,
     /// Convention mistakes the data most likely carry, per pedestal
     /// (`identify::convention`): with one, every other finding is suspect.
     pub suspected_convention_errors: Vec<crate::identify::convention::ConventionFinding>,
@@ -374,6 +377,12 @@ impl Diagnosis {
             let _ = writeln!(s, "  {}: {}", b.bearing, parts.join(", "));
         }
         let _ = writeln!(s, "\n{}", self.verdict);
+        if !self.unexplained.is_empty() {
+            let _ = writeln!(s, "The unexplained disagreement lies at:");
+            for u in &self.unexplained {
+                let _ = writeln!(s, "  {}", u.summary());
+            }
+        }
         if !self.trusted {
             let _ = writeln!(s, "The identified parameters are NOT to be trusted:");
             for r in &self.trust_reasons {
