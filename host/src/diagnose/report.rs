@@ -76,6 +76,10 @@ pub struct Step {
     pub candidates_tried: usize,
     /// Candidates that could not be fitted (not identifiable from these data).
     pub candidates_failed: usize,
+    /// Set when a later step's joint refit left this effect insignificant
+    /// (the backward check): the effect was removed again, with the reason.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dropped: Option<String>,
 }
 
 /// The likelihood-ratio test of `foundation_coupling` (module docs of
@@ -340,6 +344,9 @@ impl Diagnosis {
                     );
                 }
                 let _ = writeln!(s, "{ev}");
+                if let Some(why) = &st.dropped {
+                    let _ = writeln!(s, "     REMOVED again: {why}");
+                }
                 if let Some(f) = &st.foundation {
                     f.write_text(&mut s);
                 }

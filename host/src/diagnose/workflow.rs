@@ -1,6 +1,12 @@
 //! The discrepancy workflow: fit the base model, measure the gap, then add
-//! the best-supported missing effect, one at a time (greedy forward
-//! selection), while the evidence is significant relative to the noise floor.
+//! the best-supported missing effect, one at a time (forward selection over
+//! the whole library, the bases included), while the evidence is
+//! significant relative to the noise floor. After each effect added the
+//! whole model is refitted jointly, and every earlier effect must still be
+//! significant in that joint fit (backward check, Bonferroni over the
+//! effects checked); one that is not is removed again. The bases
+//! (`foundation_coupling`, `pedestal_sub_base`) are tried in every round on
+//! the data the chosen sensor and table effects correct.
 
 use super::bearing_table::WrittenTable;
 use super::candidates::{library, Candidate, ParamRef};
@@ -11,7 +17,6 @@ use super::foundation::{self, FoundationFit};
 use super::gap::{Gap, Prediction};
 use super::locate::locate;
 use super::model::{Model, Nonlinear, Params, Term};
-use num_complex::Complex;
 use super::noise::CHANNELS;
 use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
 use super::trust::{as_pedestal_fit, conclude};
@@ -20,6 +25,7 @@ use crate::rundir::RunDir;
 use crate::sim::oil_film::OilFilmBearing;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
+use num_complex::Complex;
 use plinth_shared::regression::Parameter;
 use std::collections::BTreeMap;
 
@@ -414,6 +420,8 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     // table effects correct.
     let mut foundation_tried = None;
     let mut chosen_foundation: Option<FoundationFit> = None;
+    // The library effects chosen so far (for the backward check).
+    let mut chosen: Vec<Chosen> = Vec::new();
     // The data the chosen base was fitted to (sensor and table effects
     // of the state applied).
     let mut base_prep: Option<Prepared> = None;
@@ -475,6 +483,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                         .map(|e| summary(&prep, e, outcome.tried)),
                     candidates_tried: outcome.tried + 2,
                     candidates_failed: outcome.failed.len(),
+                    dropped: None,
                 });
                 chosen_foundation = Some(f);
                 base_prep = Some(bases.prep);
@@ -511,8 +520,51 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                 .map(|e| summary(&prep, e, outcome.tried)),
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
+            dropped: None,
         });
+        chosen.push(Chosen::of(&win.candidate, steps.len() - 1));
         state = next;
+        // Backward check: every earlier effect must still be significant in
+        // the joint refit (Bonferroni over the effects checked).
+        if chosen.len() > 1 {
+            let n_total: usize = (0..prep.bearings.len())
+                .map(|b| 4 * prep.points[b].iter().flatten().count())
+                .sum();
+            let earlier = chosen.len() - 1;
+            let mut weakest: Option<(usize, Evidence)> = None;
+            for (i, c) in chosen[..earlier].iter().enumerate() {
+                let Some(ev) = c.evidence(&prep, &state, earlier, n_total) else {
+                    continue;
+                };
+                let still = ev.delta_bic > 0.0 && ev.p_adjusted < opts.alpha;
+                if !still && weakest.is_none_or(|(_, w)| ev.p_value > w.p_value) {
+                    weakest = Some((i, ev));
+                }
+            }
+            if let Some((i, ev)) = weakest {
+                let c = chosen.remove(i);
+                let model = c.removed_from(&state.model);
+                let nl = model
+                    .nonlinear
+                    .iter()
+                    .map(|p| {
+                        state
+                            .model
+                            .nonlinear
+                            .iter()
+                            .position(|q| q == p)
+                            .map_or(0.0, |k| state.params.nl[k])
+                    })
+                    .collect();
+                state = State::fit(&prep, model, nl)?;
+                steps[c.step].dropped = Some(format!(
+                    "not significant in the joint refit after step {} (ΔBIC {:.1}, adjusted p {:.2e})",
+                    steps.len(),
+                    ev.delta_bic,
+                    ev.p_adjusted
+                ));
+            }
+        }
         states.push(state.clone());
     }
     let (pred1, gap1) = match &chosen_foundation {
@@ -536,7 +588,11 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             }
         }
     }
-    let effects_added: Vec<String> = steps.iter().map(|s| s.effect.clone()).collect();
+    let effects_added: Vec<String> = steps
+        .iter()
+        .filter(|s| s.dropped.is_none())
+        .map(|s| s.effect.clone())
+        .collect();
     let physical: Vec<_> = pedestals_after
         .iter()
         .filter_map(|p| as_pedestal_fit(&prep, p))
@@ -592,6 +648,92 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     })
 }
 
+/// A parameter of a model by what it is (indices shift as models change).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Param {
+    Term(Term),
+    Nonlinear(Nonlinear),
+}
+
+/// A library effect chosen by a step: its null hypothesis over its own
+/// parameters, by identity.
+#[derive(Clone, Debug)]
+struct Chosen {
+    /// Index of its step.
+    step: usize,
+    /// Bearing index.
+    bearing: usize,
+    /// Its parameters.
+    params: Vec<Param>,
+    /// Null hypothesis: Σ coef·param = 0 per row.
+    null: Vec<Vec<(Param, f64)>>,
+}
+
+impl Chosen {
+    fn of(c: &Candidate, step: usize) -> Self {
+        let id = |r: &ParamRef| match *r {
+            ParamRef::Term(k) => Param::Term(c.model.terms[k]),
+            ParamRef::Nonlinear(k) => Param::Nonlinear(c.model.nonlinear[k]),
+        };
+        Self {
+            step,
+            bearing: c.bearing,
+            params: c.parameters.iter().map(|(_, r)| id(r)).collect(),
+            null: c
+                .null
+                .iter()
+                .map(|row| row.iter().map(|(r, v)| (id(r), *v)).collect())
+                .collect(),
+        }
+    }
+
+    /// The effect's evidence in the joint fit of `state` (`checked`: the
+    /// Bonferroni count); `None` when it cannot be tested.
+    fn evidence(
+        &self,
+        prep: &Prepared,
+        state: &State,
+        checked: usize,
+        n_total: usize,
+    ) -> Option<Evidence> {
+        let infs = state.inference(prep).ok()?;
+        let (_, inf, refs) = infs.iter().find(|(g, _, _)| g.contains(&self.bearing))?;
+        let position = |p: &Param| {
+            refs.iter().position(|r| match (*r, p) {
+                (ParamRef::Term(k), Param::Term(t)) => state.model.terms[k] == *t,
+                (ParamRef::Nonlinear(k), Param::Nonlinear(n)) => state.model.nonlinear[k] == *n,
+                _ => false,
+            })
+        };
+        let mut c = DMatrix::zeros(self.null.len(), refs.len());
+        for (row, constraint) in self.null.iter().enumerate() {
+            for (p, coef) in constraint {
+                c[(row, position(p)?)] = *coef;
+            }
+        }
+        inf.evidence(&c, checked, n_total).ok()
+    }
+
+    /// `model` without this effect (a split mass joined again).
+    fn removed_from(&self, model: &Model) -> Model {
+        let mut m = model.clone();
+        let split_mass = self
+            .params
+            .iter()
+            .any(|p| matches!(p, Param::Term(Term::Mass { dir: Some(_), .. })));
+        m.terms.retain(|t| !self.params.contains(&Param::Term(*t)));
+        m.nonlinear
+            .retain(|n| !self.params.contains(&Param::Nonlinear(*n)));
+        if split_mass {
+            m.terms.push(Term::Mass {
+                bearing: self.bearing,
+                dir: None,
+            });
+        }
+        m
+    }
+}
+
 /// Whether every effect of `model` beyond the pedestal's own parameters is
 /// a correction of the data (probe runout, sensor delay, a bearing table's
 /// clearance): then a base can be fitted to the corrected data.
@@ -599,7 +741,10 @@ fn corrections_only(model: &Model) -> bool {
     model
         .terms
         .iter()
-        .all(|t| t.is_pedestal() && !matches!(t, Term::Mass { dir: Some(_), .. }) || matches!(t, Term::Runout { .. }))
+        .all(|t| {
+            let split_mass = matches!(t, Term::Mass { dir: Some(_), .. });
+            (t.is_pedestal() && !split_mass) || matches!(t, Term::Runout { .. })
+        })
         && model
             .nonlinear
             .iter()
