@@ -13,6 +13,8 @@
 //! | `probe_runout` | a constant (speed-independent) 1X vector r added to the `rel` readings of one bearing | `r_y_re`, `r_y_im`, `r_z_re`, `r_z_im` [m] |
 //! | `sensor_delay` | a time delay τ on the pedestal (seismic) channels of one bearing: ped_meas = ped·e^{−iΩτ} | `tau` [s] |
 //! | `foundation_coupling` | the pedestals stand on a flexible base (a body of mass M_B on springs K_B and dampers C_B to ground, per direction, `sim::base`); the pedestals' k, c act between pedestal and base, so one pedestal moves under the others' forces, through a speed-dependent complex coupling (`estimate::base`) | `base_k_y`, `base_k_z` [N/m], `base_m_y`, `base_m_z` [kg], `base_c_y`, `base_c_z` [N·s/m] |
+//! | `pedestal_sub_base` | one pedestal stands on its own flexible sub-base (a body of mass M_S on springs K_S and dampers C_S to ground, per direction, `sim::base`): the pedestal's k, c act between pedestal and sub-base, a two-degree-of-freedom pedestal per direction; the sub-base is not measured | `sub_k_y`, `sub_k_z` [N/m], `sub_m_y`, `sub_m_z` [kg], `sub_c_y`, `sub_c_z` [N·s/m] |
+//! | `bearing_coefficients` | the bearing table in `bearings.csv` does not describe the bearing in the machine. For an oil-film bearing (geometry in the machine file) the table is computed for another radial clearance; otherwise the table's K and C are scaled. The correction takes the written table to the true one | `clearance_ratio` = c_true / c_written [-] (oil film, which also records `clearance_true`, `clearance_written` [m]); `k_scale` = K_true / K_written, `c_scale` = C_true / C_written [-] (tables; for oil films the same ratios at the first speed, for reference) |
 
 /// An effect the pedestal model may be missing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -31,11 +33,15 @@ pub enum EffectKind {
     SensorDelay,
     /// Pedestals coupled through a flexible base.
     FoundationCoupling,
+    /// One pedestal on its own flexible sub-base (a 2-DOF pedestal).
+    PedestalSubBase,
+    /// The bearing table does not describe the machine's bearing.
+    BearingCoefficients,
 }
 
 impl EffectKind {
     /// Every effect Plinth knows, in the order of formats.md's table.
-    pub const ALL: [EffectKind; 7] = [
+    pub const ALL: [EffectKind; 9] = [
         EffectKind::PedestalDamping,
         EffectKind::StructuralDamping,
         EffectKind::PedestalCrossCoupling,
@@ -43,6 +49,8 @@ impl EffectKind {
         EffectKind::ProbeRunout,
         EffectKind::SensorDelay,
         EffectKind::FoundationCoupling,
+        EffectKind::PedestalSubBase,
+        EffectKind::BearingCoefficients,
     ];
 
     /// The identifier used in files and on the command line (formats.md).
@@ -55,6 +63,8 @@ impl EffectKind {
             EffectKind::ProbeRunout => "probe_runout",
             EffectKind::SensorDelay => "sensor_delay",
             EffectKind::FoundationCoupling => "foundation_coupling",
+            EffectKind::PedestalSubBase => "pedestal_sub_base",
+            EffectKind::BearingCoefficients => "bearing_coefficients",
         }
     }
 
@@ -74,6 +84,16 @@ impl EffectKind {
             EffectKind::SensorDelay => &["tau"],
             EffectKind::FoundationCoupling => &[
                 "base_k_y", "base_k_z", "base_m_y", "base_m_z", "base_c_y", "base_c_z",
+            ],
+            EffectKind::PedestalSubBase => &[
+                "sub_k_y", "sub_k_z", "sub_m_y", "sub_m_z", "sub_c_y", "sub_c_z",
+            ],
+            EffectKind::BearingCoefficients => &[
+                "k_scale",
+                "c_scale",
+                "clearance_ratio",
+                "clearance_true",
+                "clearance_written",
             ],
         }
     }

@@ -7,8 +7,9 @@
 //! The bearing couples shaft node and pedestal: the force on the pedestal is
 //! (K_b + iΩC_b)·(x_shaft − x_ped), the reaction on the shaft the opposite;
 //! the pedestal stands on the ground through its own M, K, C (and η).
-//! Bases (`super::base`) carry pedestals that may be far apart: their DOFs
-//! come after all others, outside the band, and the bordered system is
+//! Bases (`super::base`) carry pedestals that may be far apart, sub-bases
+//! one pedestal each (the machine's bases first, then the sub-bases in
+//! bearing order): their DOFs come after all others, outside the band, and the bordered system is
 //! solved by a Schur complement (one extra banded solve per base DOF).
 //!
 //! Dynamic stiffness at spin Ω [rad/s] (synchronous, excitation at Ω):
@@ -287,18 +288,29 @@ impl Assembly {
             };
             bearing_idx.push(blocks);
         }
+        // The machine's bases, then each sub-base (a base carrying one pedestal).
+        let mut all_bases = machine.bases.clone();
         let mut links = Vec::new();
         for (b, brg) in machine.bearings.iter().enumerate() {
-            if let (Some(base), Some(p), Some(pd)) = (brg.base, pedestals[b], pedestal_dof[b]) {
-                links.push(BaseLink {
-                    pedestal_dof: pd,
-                    base,
-                    pedestal: p,
-                });
-            }
+            let (Some(p), Some(pd)) = (pedestals[b], pedestal_dof[b]) else {
+                continue;
+            };
+            let base = match (brg.base, &brg.sub_base) {
+                (Some(i), _) => i,
+                (None, Some(sb)) => {
+                    all_bases.push(sb.clone());
+                    all_bases.len() - 1
+                }
+                (None, None) => continue,
+            };
+            links.push(BaseLink {
+                pedestal_dof: pd,
+                base,
+                pedestal: p,
+            });
         }
         let bases = BaseBorder {
-            bases: machine.bases.clone(),
+            bases: all_bases,
             links,
             first_dof: n_dof,
         };

@@ -154,6 +154,9 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
     };
     run.write_with(out.path(), &options)
         .with_context(|| format!("writing {}", args.out.display()))?;
+    if response.table_differs() {
+        write_true_bearings(out.path(), &response.true_bearing_rows())?;
+    }
     if !machine.bases.is_empty() {
         let bases: Vec<(String, Vec<String>)> = super::base::truth(&machine)
             .into_iter()
@@ -169,6 +172,35 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
         machine.bearings.len(),
         args.out.display()
     );
+    Ok(())
+}
+
+/// File of the bearing coefficients as simulated, written beside
+/// `bearings.csv` when the effect `bearing_coefficients` makes them differ.
+pub const TRUE_BEARINGS_FILE: &str = "bearings_true.csv";
+
+/// Writes `rows` as `dir/bearings_true.csv` (the `bearings.csv` columns,
+/// full round-trip precision).
+fn write_true_bearings(
+    dir: &std::path::Path,
+    rows: &[crate::rundir::BearingRow],
+) -> anyhow::Result<()> {
+    let path = dir.join(TRUE_BEARINGS_FILE);
+    let mut w =
+        csv::Writer::from_path(&path).with_context(|| format!("writing {}", path.display()))?;
+    w.write_record(crate::rundir::BEARING_COLUMNS)?;
+    for r in rows {
+        let (k, c) = (r.coefficients.k, r.coefficients.c);
+        let mut record = vec![crate::rundir::format_number(r.speed_hz), r.bearing.clone()];
+        for v in [
+            k[0][0], k[0][1], k[1][0], k[1][1], c[0][0], c[0][1], c[1][0], c[1][1],
+        ] {
+            record.push(crate::rundir::format_number(v));
+        }
+        w.write_record(&record)?;
+    }
+    w.flush()
+        .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
 

@@ -41,6 +41,9 @@
 //! pedestal = { m = 200.0, k_y = 1e7, k_z = 8e6, c_y = 0.0, c_z = 0.0 }
 //! # Omit `pedestal` for a bearing on rigid ground.
 //! base = "skid"                    # optional: the pedestal stands on this base
+//! # ... or on its own flexible sub-base (not measured; a two-DOF pedestal):
+//! # sub_base = { m = 150.0, k_y = 2e7, k_z = 1.6e7, c_y = 2e3, c_z = 2e3 }
+//! #   (m or m_y and m_z [kg], k to ground [N/m], optional c [N·s/m], eta [-])
 //!
 //! [[base]]                         # optional rigid bases (skid, baseplate, frame)
 //! name = "skid"
@@ -138,6 +141,10 @@ pub struct Bearing {
     /// Index into [`Machine::bases`] of the base the pedestal stands on;
     /// `None` = the pedestal stands on rigid ground.
     pub base: Option<usize>,
+    /// The pedestal's own flexible sub-base (effect `pedestal_sub_base`):
+    /// the pedestal's k, c act between pedestal and sub-base, the sub-base
+    /// stands on the ground; `None` = no sub-base. Not with [`Bearing::base`].
+    pub sub_base: Option<Base>,
 }
 
 /// An unbalance m·e at a shaft node.
@@ -232,19 +239,7 @@ impl Machine {
             .bearings
             .get(index)
             .ok_or_else(|| MachineError::Request(format!("bearing index {index} out of range")))?;
-        match &b.model {
-            BearingModel::Table(rows) => table_at(rows, speed_hz).ok_or_else(|| {
-                let lo = rows.first().map_or(0.0, |r| r.0);
-                let hi = rows.last().map_or(0.0, |r| r.0);
-                MachineError::Request(format!(
-                    "bearing {:?}: speed {speed_hz} Hz is outside its coefficient table ({lo}..{hi} Hz; no extrapolation)",
-                    b.name
-                ))
-            }),
-            BearingModel::OilFilm(of) => of
-                .coefficients(speed_hz)
-                .map_err(|e| MachineError::Request(format!("bearing {:?}: {e}", b.name))),
-        }
+        b.model.coefficients_at(&b.name, speed_hz)
     }
 
     /// Total rotor mass (shaft and disks) [kg].
@@ -305,12 +300,48 @@ impl Machine {
                 }
             }
         }
+        for b in &self.bearings {
+            if let Some(sb) = &b.sub_base {
+                if b.pedestal.is_none() || b.base.is_some() {
+                    return bad(format!(
+                        "bearing {:?}: a sub-base needs a pedestal on it and no base",
+                        b.name
+                    ));
+                }
+                if let Err(m) = sb.check() {
+                    return bad(format!("bearing {:?}: sub-base: {m}", b.name));
+                }
+            }
+        }
         for u in &self.unbalances {
             if u.node >= nn {
                 return bad(format!("unbalance at node {} out of range", u.node));
             }
         }
         Ok(())
+    }
+}
+
+impl BearingModel {
+    /// Coefficients at `speed_hz` [Hz]: K [N/m], C [N·s/m]; errors name
+    /// the bearing `name`.
+    pub fn coefficients_at(
+        &self,
+        name: &str,
+        speed_hz: f64,
+    ) -> Result<BearingCoefficients<f64>, MachineError> {
+        match self {
+            BearingModel::Table(rows) => table_at(rows, speed_hz).ok_or_else(|| {
+                let lo = rows.first().map_or(0.0, |r| r.0);
+                let hi = rows.last().map_or(0.0, |r| r.0);
+                MachineError::Request(format!(
+                    "bearing {name:?}: speed {speed_hz} Hz is outside its coefficient table ({lo}..{hi} Hz; no extrapolation)"
+                ))
+            }),
+            BearingModel::OilFilm(of) => of
+                .coefficients(speed_hz)
+                .map_err(|e| MachineError::Request(format!("bearing {name:?}: {e}"))),
+        }
     }
 }
 

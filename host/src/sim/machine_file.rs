@@ -27,13 +27,15 @@ struct RawMachine {
     #[serde(default)]
     unbalance: Vec<RawUnbalance>,
     #[serde(default)]
-    base: Vec<RawBase>,
+    base: Vec<RawBody>,
 }
 
+/// A base body's name, mass, springs and dampers to ground: a `[[base]]`
+/// (named) or a bearing's `sub_base` (named after its bearing).
 #[derive(Deserialize, Debug, Clone)]
 #[serde(deny_unknown_fields)]
-struct RawBase {
-    name: String,
+struct RawBody {
+    name: Option<String>,
     m: Option<f64>,
     m_y: Option<f64>,
     m_z: Option<f64>,
@@ -153,6 +155,7 @@ struct RawBearing {
     oil_film: Option<RawOilFilm>,
     pedestal: Option<RawPedestal>,
     base: Option<String>,
+    sub_base: Option<RawBody>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -233,53 +236,62 @@ fn material(ctx: &Ctx, key: &str, m: &RawMaterial) -> Result<Material, MachineEr
 }
 
 /// The `[[base]]` tables, checked (names unique and CSV-safe).
-fn read_bases(ctx: &Ctx, raw: &[RawBase]) -> Result<Vec<Base>, MachineError> {
+fn read_bases(ctx: &Ctx, raw: &[RawBody]) -> Result<Vec<Base>, MachineError> {
     let mut bases: Vec<Base> = Vec::new();
     for (i, rb) in raw.iter().enumerate() {
         let key = format!("base[{i}]");
-        if !bearing_name_ok(&rb.name) {
+        let name = rb
+            .name
+            .as_deref()
+            .ok_or_else(|| ctx.err(format!("{key}.name"), "missing: a base needs a name"))?;
+        if !bearing_name_ok(name) {
             return Err(ctx.err(
                 format!("{key}.name"),
-                format!("{:?}: use letters, digits, '_', '-', '.' only", rb.name),
+                format!("{:?}: use letters, digits, '_', '-', '.' only", name),
             ));
         }
-        if let Some(other) = bases.iter().position(|b| b.name == rb.name) {
+        if let Some(other) = bases.iter().position(|b| b.name == name) {
             return Err(ctx.err(
                 format!("{key}.name"),
-                format!("{:?} is already the name of base[{other}]", rb.name),
+                format!("{:?} is already the name of base[{other}]", name),
             ));
         }
-        let m = match (rb.m, rb.m_y, rb.m_z) {
-            (Some(m), None, None) => {
-                let m = ctx.positive(&format!("{key}.m"), m)?;
-                [m, m]
-            }
-            (None, Some(my), Some(mz)) => [
-                ctx.positive(&format!("{key}.m_y"), my)?,
-                ctx.positive(&format!("{key}.m_z"), mz)?,
-            ],
-            _ => {
-                return Err(ctx.err(
-                    key,
-                    "give the mass as either m [kg] or both m_y and m_z [kg]",
-                ))
-            }
-        };
-        bases.push(Base {
-            name: rb.name.clone(),
-            m,
-            k: [
-                ctx.positive(&format!("{key}.k_y"), rb.k_y)?,
-                ctx.positive(&format!("{key}.k_z"), rb.k_z)?,
-            ],
-            c: [
-                ctx.non_negative(&format!("{key}.c_y"), rb.c_y)?,
-                ctx.non_negative(&format!("{key}.c_z"), rb.c_z)?,
-            ],
-            eta: ctx.non_negative(&format!("{key}.eta"), rb.eta)?,
-        });
+        bases.push(read_body(ctx, &key, name, rb)?);
     }
     Ok(bases)
+}
+
+/// A base body (`[[base]]` or `sub_base`) at TOML key `key`, checked.
+fn read_body(ctx: &Ctx, key: &str, name: &str, rb: &RawBody) -> Result<Base, MachineError> {
+    let m = match (rb.m, rb.m_y, rb.m_z) {
+        (Some(m), None, None) => {
+            let m = ctx.positive(&format!("{key}.m"), m)?;
+            [m, m]
+        }
+        (None, Some(my), Some(mz)) => [
+            ctx.positive(&format!("{key}.m_y"), my)?,
+            ctx.positive(&format!("{key}.m_z"), mz)?,
+        ],
+        _ => {
+            return Err(ctx.err(
+                key,
+                "give the mass as either m [kg] or both m_y and m_z [kg]",
+            ))
+        }
+    };
+    Ok(Base {
+        name: name.to_string(),
+        m,
+        k: [
+            ctx.positive(&format!("{key}.k_y"), rb.k_y)?,
+            ctx.positive(&format!("{key}.k_z"), rb.k_z)?,
+        ],
+        c: [
+            ctx.non_negative(&format!("{key}.c_y"), rb.c_y)?,
+            ctx.non_negative(&format!("{key}.c_z"), rb.c_z)?,
+        ],
+        eta: ctx.non_negative(&format!("{key}.eta"), rb.eta)?,
+    })
 }
 
 /// Index of the base `name` that bearing `key` stands on (it needs a pedestal).
@@ -674,12 +686,43 @@ impl Machine {
                 Some(name) => Some(base_of(&ctx, &key, name, pedestal.is_some(), &bases)?),
                 None => None,
             };
+            let sub_base = match &rb.sub_base {
+                Some(body) => {
+                    let sk = format!("{key}.sub_base");
+                    if pedestal.is_none() {
+                        return Err(ctx.err(
+                            sk,
+                            "a sub-base carries a pedestal: give the bearing a `pedestal`",
+                        ));
+                    }
+                    if rb.base.is_some() {
+                        return Err(ctx.err(
+                            sk,
+                            "a pedestal stands on either a `base` or a `sub_base`, not both",
+                        ));
+                    }
+                    if body.name.is_some() {
+                        return Err(ctx.err(
+                            format!("{sk}.name"),
+                            "a sub-base takes its bearing's name: remove `name`",
+                        ));
+                    }
+                    Some(read_body(
+                        &ctx,
+                        &sk,
+                        &format!("{}.sub_base", rb.name),
+                        body,
+                    )?)
+                }
+                None => None,
+            };
             bearings.push(Bearing {
                 name: rb.name.clone(),
                 node,
                 model,
                 pedestal,
                 base,
+                sub_base,
             });
         }
         let mut machine = Machine {

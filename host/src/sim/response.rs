@@ -8,7 +8,7 @@
 
 use super::assembly::Assembly;
 use super::banded::C64;
-use super::inject::{default_size, effect_err, EffectSet};
+use super::inject::{effect_err, EffectSet};
 use super::machine::{BearingModel, Machine, MachineError};
 use super::pedestal::PedestalDynamics;
 use crate::effects::EffectKind;
@@ -61,8 +61,12 @@ pub struct BearingResponse {
     pub rel: Phasor2<f64>,
     /// Absolute pedestal motion (y, z) [m] (zero on rigid ground).
     pub ped: Phasor2<f64>,
-    /// Bearing coefficients at this speed.
+    /// Bearing coefficients at this speed, as simulated.
     pub coefficients: BearingCoefficients<f64>,
+    /// The coefficients `bearings.csv` gives at this speed: the simulated
+    /// ones, unless the effect `bearing_coefficients` writes a table for
+    /// another bearing.
+    pub table: BearingCoefficients<f64>,
 }
 
 /// Sensor-side effects applied when the response is read as measurements.
@@ -112,14 +116,6 @@ pub struct Response {
     pub truth: Truth,
 }
 
-fn pedestal_dynamics_of(machine: &Machine) -> Vec<Option<PedestalDynamics>> {
-    machine
-        .bearings
-        .iter()
-        .map(|b| b.pedestal.map(PedestalDynamics::from))
-        .collect()
-}
-
 /// What one speed's solve gives: bearing readings, base motion and, when
 /// kept, the shaft's node motion (see [`Response`]).
 struct SpeedSolution {
@@ -139,107 +135,21 @@ pub struct UnbalanceSolver {
     pedestals: Vec<Option<PedestalDynamics>>,
     details: Vec<EffectTruth>,
     sensor_requests: Vec<(EffectKind, Vec<usize>, f64)>,
+    /// Per bearing, the model `bearings.csv` is written from when it is not
+    /// the machine's (effect `bearing_coefficients`).
+    written: Vec<Option<BearingModel>>,
 }
 
 impl UnbalanceSolver {
     /// Resolves `effects` on `machine` and assembles the model.
     pub fn new(machine: &Machine, effects: &EffectSet) -> Result<Self, SimError> {
-        machine.validate()?;
-        // `foundation_coupling` stands pedestals on a new base element: the
-        // machine actually simulated.
-        let mut effective = machine.clone();
-        let mut pedestals = pedestal_dynamics_of(machine);
-        let mut details = Vec::new();
-        let mut sensor_requests = Vec::new();
-        for req in &effects.requests {
-            let kind = req.kind;
-            let size = req.size.unwrap_or_else(|| default_size(kind));
-            let targets: Vec<usize> = match &req.bearing {
-                Some(name) => vec![machine.bearing_index(name)?],
-                None => match kind {
-                    EffectKind::FoundationCoupling => {
-                        vec![pedestals
-                            .iter()
-                            .position(Option::is_some)
-                            .ok_or_else(|| effect_err(kind, "the machine has no pedestals"))?]
-                    }
-                    EffectKind::ProbeRunout | EffectKind::SensorDelay => {
-                        (0..machine.bearings.len()).collect()
-                    }
-                    _ => (0..machine.bearings.len())
-                        .filter(|&b| pedestals[b].is_some())
-                        .collect(),
-                },
-            };
-            for b in targets {
-                let name = machine.bearings[b].name.clone();
-                let mut params = BTreeMap::new();
-                match kind {
-                    EffectKind::ProbeRunout | EffectKind::SensorDelay => {
-                        sensor_requests.push((kind, vec![b], size));
-                        continue; // recorded once the response is known
-                    }
-                    _ => {}
-                }
-                let p = pedestals[b]
-                    .as_mut()
-                    .ok_or_else(|| effect_err(kind, format!("bearing {name:?} has no pedestal")))?;
-                match kind {
-                    EffectKind::PedestalDamping => {
-                        p.c[0][0] = 2.0 * size * (p.k[0][0] * p.m[0]).sqrt();
-                        p.c[1][1] = 2.0 * size * (p.k[1][1] * p.m[1]).sqrt();
-                        params.insert("c_y".into(), p.c[0][0]);
-                        params.insert("c_z".into(), p.c[1][1]);
-                    }
-                    EffectKind::StructuralDamping => {
-                        p.eta = size;
-                        params.insert("eta".into(), size);
-                    }
-                    EffectKind::PedestalCrossCoupling => {
-                        let kyz = size * (p.k[0][0] * p.k[1][1]).sqrt();
-                        p.k[0][1] = kyz;
-                        p.k[1][0] = kyz;
-                        params.insert("k_yz".into(), kyz);
-                    }
-                    EffectKind::PedestalMassAnisotropy => {
-                        p.m[1] = (1.0 + size) * p.m[0];
-                        params.insert("m_y".into(), p.m[0]);
-                        params.insert("m_z".into(), p.m[1]);
-                    }
-                    EffectKind::FoundationCoupling => {
-                        let group =
-                            super::inject::foundation_group(machine, b, req.bearing.is_some())?;
-                        let mut base = super::inject::foundation_base(&pedestals, &group, size)?;
-                        let mut n = 1;
-                        while effective.bases.iter().any(|x| x.name == base.name) {
-                            n += 1;
-                            base.name = format!("foundation{n}");
-                        }
-                        for (key, v) in [
-                            ("base_k_y", base.k[0]),
-                            ("base_k_z", base.k[1]),
-                            ("base_m_y", base.m[0]),
-                            ("base_m_z", base.m[1]),
-                            ("base_c_y", base.c[0]),
-                            ("base_c_z", base.c[1]),
-                        ] {
-                            params.insert(key.into(), v);
-                        }
-                        let index = effective.bases.len();
-                        effective.bases.push(base);
-                        for &g in &group {
-                            effective.bearings[g].base = Some(index);
-                        }
-                    }
-                    EffectKind::ProbeRunout | EffectKind::SensorDelay => {}
-                }
-                details.push(EffectTruth {
-                    name: kind.name().into(),
-                    bearing: name,
-                    parameters: params,
-                });
-            }
-        }
+        let super::inject::Resolved {
+            machine: effective,
+            pedestals,
+            details,
+            sensor_requests,
+            written,
+        } = super::inject::resolve(machine, effects)?;
         effective.validate()?;
         let assembly = Assembly::new(&effective, &pedestals).map_err(SimError::Model)?;
         let mut unbalance = vec![C64::new(0.0, 0.0); machine.node_positions.len()];
@@ -253,6 +163,7 @@ impl UnbalanceSolver {
             pedestals,
             details,
             sensor_requests,
+            written,
         })
     }
 
@@ -369,10 +280,17 @@ impl UnbalanceSolver {
                 Some(p) => [x[p], x[p + 1]],
                 None => [C64::new(0.0, 0.0); 2],
             };
+            let table = match &self.written[b] {
+                Some(model) => {
+                    written_coefficients(&self.machine.bearings[b].name, model, speed_hz)?
+                }
+                None => coefficients,
+            };
             bearings.push(BearingResponse {
                 rel: [x[sd] - ped[0], x[sd + 1] - ped[1]],
                 ped,
                 coefficients,
+                table,
             });
         }
         let shaft = keep_shaft.then(|| {
@@ -401,7 +319,7 @@ impl UnbalanceSolver {
             return e.to_string();
         };
         if column >= self.assembly.bases.first_dof {
-            return "the bases with their pedestals are singular at this speed: check the [[base]] m, k_y, k_z".into();
+            return "the bases with their pedestals are singular at this speed: check the [[base]] and the bearings' sub_base m, k_y, k_z".into();
         }
         const DIRS: [&str; 4] = ["y", "z", "θ_y", "θ_z"];
         for (b, p) in self.assembly.pedestal_dof.iter().enumerate() {
@@ -589,6 +507,18 @@ fn coefficient_source(index: usize, model: &BearingModel, speed_hz: f64) -> Stri
     }
 }
 
+/// Coefficients of the written (not simulated) bearing `model` of bearing
+/// `name` at `speed_hz` [Hz] (effect `bearing_coefficients`).
+fn written_coefficients(
+    name: &str,
+    model: &BearingModel,
+    speed_hz: f64,
+) -> Result<BearingCoefficients<f64>, SimError> {
+    model
+        .coefficients_at(name, speed_hz)
+        .map_err(|e| effect_err(EffectKind::BearingCoefficients, e.to_string()))
+}
+
 /// Unbalance response of `machine` at `speeds_hz` [Hz] with `effects` injected.
 pub fn unbalance_response(
     machine: &Machine,
@@ -620,15 +550,37 @@ impl Response {
         out
     }
 
-    /// The bearing coefficients as `bearings.csv` rows.
+    /// The bearing coefficients as `bearings.csv` rows (the written table,
+    /// [`BearingResponse::table`]).
     pub fn bearing_rows(&self) -> Vec<BearingRow> {
+        self.rows_of(|r| r.table)
+    }
+
+    /// The coefficients as simulated, as `bearings.csv` rows; they differ
+    /// from [`Response::bearing_rows`] only under `bearing_coefficients`.
+    pub fn true_bearing_rows(&self) -> Vec<BearingRow> {
+        self.rows_of(|r| r.coefficients)
+    }
+
+    /// Whether `bearings.csv` differs from the simulated bearings.
+    pub fn table_differs(&self) -> bool {
+        self.bearings
+            .iter()
+            .flatten()
+            .any(|r| r.table != r.coefficients)
+    }
+
+    fn rows_of(
+        &self,
+        pick: impl Fn(&BearingResponse) -> BearingCoefficients<f64>,
+    ) -> Vec<BearingRow> {
         let mut out = Vec::new();
         for (s, row) in self.bearings.iter().enumerate() {
             for (b, r) in row.iter().enumerate() {
                 out.push(BearingRow {
                     speed_hz: self.speeds_hz[s],
                     bearing: self.bearing_names[b].clone(),
-                    coefficients: r.coefficients,
+                    coefficients: pick(r),
                 });
             }
         }

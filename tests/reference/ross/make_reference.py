@@ -10,7 +10,10 @@ shear, rotary inertia and gyroscopics; DiskElement; each bearing a
 BearingElement from the shaft node to a PointMass (n_link), and the pedestal
 a second BearingElement from the point mass to the ground, or, when the
 bearing names a `base` (machine-c.toml), to that base: each [[base]] is a
-PointMass (mx, my) with its own BearingElement to the ground.
+PointMass (mx, my) with its own BearingElement to the ground. A bearing's
+`sub_base` (machine-d.toml) is built the same way: a PointMass under that
+pedestal only, the pedestal's BearingElement from pedestal to sub-base and the
+sub-base's own BearingElement to the ground.
 
 Axes. Plinth: x along the rotor, y vertical, z horizontal, spin about +x,
 forward whirl y -> z, unbalance angle from +y towards +z. ROSS: z along the
@@ -195,6 +198,26 @@ def build(spec, speeds_hz):
                                             kxx=p["k_y"], kyy=p["k_z"],
                                             cxx=p.get("c_y", 0.0), cyy=p.get("c_z", 0.0),
                                             tag=f"pedbase_{b['name']}")
+    n_sub = 0
+    for i, b in enumerate(spec["bearings"]):
+        if "sub_base" in b:
+            sb = b["sub_base"]
+            sn = n_nodes + len(spec["bearings"]) + len(spec.get("base", [])) + n_sub
+            n_sub += 1
+            my_, mz_ = (sb["m"], sb["m"]) if "m" in sb else (sb["m_y"], sb["m_z"])
+            assert sb.get("eta", 0.0) == 0.0, "ROSS has no hysteretic damping here"
+            masses.append(rs.PointMass(n=sn, mx=my_, my=mz_, mz=0.5 * (my_ + mz_),
+                                       tag=f"sub_{b['name']}"))
+            bearings.append(rs.BearingElement(n=sn, kxx=sb["k_y"], kyy=sb["k_z"],
+                                              cxx=sb.get("c_y", 0.0), cyy=sb.get("c_z", 0.0),
+                                              tag=f"subgr_{b['name']}"))
+            el = [e for e in bearings if e.tag == f"ground_{b['name']}"][0]
+            k = bearings.index(el)
+            p = b["pedestal"]
+            bearings[k] = rs.BearingElement(n=n_nodes + i, n_link=sn,
+                                            kxx=p["k_y"], kyy=p["k_z"],
+                                            cxx=p.get("c_y", 0.0), cyy=p.get("c_z", 0.0),
+                                            tag=f"pedsub_{b['name']}")
     rotor = rs.Rotor(shaft, disk_elements, bearings, point_mass_elements=masses)
     return rotor, x, unb, coef_record
 
@@ -233,6 +256,14 @@ def run(name):
         out.setdefault("bases", {})[base["name"]] = {
             k: {"re": list(map(float, v.real)), "im": list(map(float, v.imag))}
             for k, v in (("y", by), ("z", bz))}
+    for b in spec["bearings"]:
+        if "sub_base" in b:
+            e = pm[f"sub_{b['name']}"]
+            gi = e.dof_global_index
+            sy = X[gi[f"x_{e.n}"]]; sz = X[gi[f"y_{e.n}"]]
+            out.setdefault("sub_bases", {})[b["name"]] = {
+                k: {"re": list(map(float, v.real)), "im": list(map(float, v.imag))}
+                for k, v in (("y", sy), ("z", sz))}
     return out, elapsed, len(speeds), rotor.ndof
 
 
@@ -252,7 +283,7 @@ def main():
         print(f"ROSS {rs_version()}: machine-a, {rotor.ndof} DOF (ROSS counts 6 per node), "
               f"1000 speeds: {el:.3f} s total, {el / 1000 * 1e3:.3f} ms per speed")
         return
-    names = [a for a in sys.argv[1:] if not a.startswith("-")] or ["machine-a", "machine-b", "machine-c"]
+    names = [a for a in sys.argv[1:] if not a.startswith("-")] or ["machine-a", "machine-b", "machine-c", "machine-d"]
     for name in names:
         out, el, n, ndof = run(name)
         with open(os.path.join(HERE, name + ".json"), "w") as f:
