@@ -182,7 +182,11 @@ fn two_effects_at_different_bearings_are_both_named() {
         .with(EffectKind::PedestalCrossCoupling, Some("left"), None)
         .with(EffectKind::SensorDelay, Some("right"), None);
     let run = run_dir(&rigid(), &effects, NOISE, None, 53);
-    let n = named(&run, &Options::default(), "cross-coupling left + delay right");
+    let n = named(
+        &run,
+        &Options::default(),
+        "cross-coupling left + delay right",
+    );
     assert!(has(&n, "pedestal_cross_coupling", Some("left")), "{n:?}");
     assert!(has(&n, "sensor_delay", Some("right")), "{n:?}");
     assert_eq!(n.len(), 2, "{n:?}");
@@ -215,7 +219,10 @@ fn a_pedestal_on_its_own_sub_base_is_named() {
         }
     }
     let params = &d.steps[0].parameters;
-    assert!(params.iter().all(|e| e.name.starts_with("sub_")), "{params:?}");
+    assert!(
+        params.iter().all(|e| e.name.starts_with("sub_")),
+        "{params:?}"
+    );
     assert!(d.trusted, "{:?}", d.trust_reasons);
 }
 
@@ -293,14 +300,18 @@ fn the_unexplained_residual_is_located() {
     // bearing holds most of it.
     let effects = EffectSet::none().with(EffectKind::ProbeRunout, Some("right"), None);
     let run = run_dir(&skid(), &effects, NOISE, None, 51);
-    let d = diagnose(&run, &Options::default()).expect("diagnose").diagnosis;
+    let d = diagnose(&run, &Options::default())
+        .expect("diagnose")
+        .diagnosis;
     println!("{}", d.to_text());
     assert!(!d.trusted);
     assert!(d.verdict.contains(plinth::diagnose::trust::UNEXPLAINED));
     assert!(!d.unexplained.is_empty());
     assert_eq!(d.unexplained[0].bearing, "right", "{:?}", d.unexplained);
     assert!(!d.unexplained[0].bands_hz.is_empty());
-    assert!(d.to_text().contains("The unexplained disagreement lies at:"));
+    assert!(d
+        .to_text()
+        .contains("The unexplained disagreement lies at:"));
     let json = serde_json::to_value(&d).expect("json");
     assert_eq!(json["unexplained"][0]["bearing"], "right");
 }
@@ -331,7 +342,10 @@ fn bench_rates() {
             let d = diagnose(&run, &geometry).expect("diagnose").diagnosis;
             if !d.effects_added.is_empty() {
                 alarms += 1;
-                println!("false alarm (seed {seed}, noise {noise}): {:?}", d.effects_added);
+                println!(
+                    "false alarm (seed {seed}, noise {noise}): {:?}",
+                    d.effects_added
+                );
             }
         }
     }
@@ -340,15 +354,71 @@ fn bench_rates() {
         "BENCH diagnose false-alarm rate: {alarms}/{clean} clean runs = {:.1} % (level 1e-3 per step, Bonferroni within a step)",
         100.0 * alarms as f64 / clean as f64
     );
-    type Case = (&'static str, Machine, EffectSet, Option<f64>, &'static str, &'static str);
+    type Case = (
+        &'static str,
+        Machine,
+        EffectSet,
+        Option<f64>,
+        &'static str,
+        &'static str,
+    );
     let cases: Vec<Case> = vec![
-        ("probe_runout", rigid(), EffectSet::none().with(EffectKind::ProbeRunout, Some("left"), None), None, "probe_runout", "left"),
-        ("sensor_delay", rigid(), EffectSet::none().with(EffectKind::SensorDelay, Some("right"), None), None, "sensor_delay", "right"),
-        ("pedestal_cross_coupling", rigid(), EffectSet::none().with(EffectKind::PedestalCrossCoupling, Some("right"), None), None, "pedestal_cross_coupling", "right"),
-        ("foundation_coupling (skid)", skid(), EffectSet::none(), None, "foundation_coupling", ""),
-        ("skid + probe_runout", skid(), EffectSet::none().with(EffectKind::ProbeRunout, Some("right"), None), None, "probe_runout", "right"),
-        ("pedestal_sub_base", sub_base(), EffectSet::none(), None, "pedestal_sub_base", "right"),
-        ("bearing_coefficients (clearance -15 %)", rigid(), EffectSet::none(), Some(0.85), "bearing_coefficients", ""),
+        (
+            "probe_runout",
+            rigid(),
+            EffectSet::none().with(EffectKind::ProbeRunout, Some("left"), None),
+            None,
+            "probe_runout",
+            "left",
+        ),
+        (
+            "sensor_delay",
+            rigid(),
+            EffectSet::none().with(EffectKind::SensorDelay, Some("right"), None),
+            None,
+            "sensor_delay",
+            "right",
+        ),
+        (
+            "pedestal_cross_coupling",
+            rigid(),
+            EffectSet::none().with(EffectKind::PedestalCrossCoupling, Some("right"), None),
+            None,
+            "pedestal_cross_coupling",
+            "right",
+        ),
+        (
+            "foundation_coupling (skid)",
+            skid(),
+            EffectSet::none(),
+            None,
+            "foundation_coupling",
+            "",
+        ),
+        (
+            "skid + probe_runout",
+            skid(),
+            EffectSet::none().with(EffectKind::ProbeRunout, Some("right"), None),
+            None,
+            "probe_runout",
+            "right",
+        ),
+        (
+            "pedestal_sub_base",
+            sub_base(),
+            EffectSet::none(),
+            None,
+            "pedestal_sub_base",
+            "right",
+        ),
+        (
+            "bearing_coefficients (clearance -15 %)",
+            rigid(),
+            EffectSet::none(),
+            Some(0.85),
+            "bearing_coefficients",
+            "",
+        ),
     ];
     for (label, machine, effects, table, effect, bearing) in cases {
         let mut hits = 0;
@@ -366,7 +436,9 @@ fn bench_rates() {
                 .collect();
             if has(&n, effect, (!bearing.is_empty()).then_some(bearing)) {
                 hits += 1;
-                if n.iter().all(|(e, _)| e == effect || (label.starts_with("skid +") && e == "foundation_coupling")) {
+                if n.iter().all(|(e, _)| {
+                    e == effect || (label.starts_with("skid +") && e == "foundation_coupling")
+                }) {
                     only += 1;
                 }
             }
@@ -375,5 +447,8 @@ fn bench_rates() {
             "BENCH diagnose detection {label}: {hits}/{runs} named ({only}/{runs} with nothing else named)"
         );
     }
-    println!("BENCH diagnose wall time {:.1} s", started.elapsed().as_secs_f64());
+    println!(
+        "BENCH diagnose wall time {:.1} s",
+        started.elapsed().as_secs_f64()
+    );
 }

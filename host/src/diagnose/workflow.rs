@@ -738,17 +738,13 @@ impl Chosen {
 /// a correction of the data (probe runout, sensor delay, a bearing table's
 /// clearance): then a base can be fitted to the corrected data.
 fn corrections_only(model: &Model) -> bool {
-    model
-        .terms
+    model.terms.iter().all(|t| {
+        let split_mass = matches!(t, Term::Mass { dir: Some(_), .. });
+        (t.is_pedestal() && !split_mass) || matches!(t, Term::Runout { .. })
+    }) && model
+        .nonlinear
         .iter()
-        .all(|t| {
-            let split_mass = matches!(t, Term::Mass { dir: Some(_), .. });
-            (t.is_pedestal() && !split_mass) || matches!(t, Term::Runout { .. })
-        })
-        && model
-            .nonlinear
-            .iter()
-            .all(|p| !matches!(p, Nonlinear::LossFactor { .. }))
+        .all(|p| !matches!(p, Nonlinear::LossFactor { .. }))
 }
 
 /// The measurements as `state` corrects them: runout removed from `rel`,
@@ -970,7 +966,12 @@ pub fn written_tables(
 /// An effect's estimates as reported: the clearance scalar δ of
 /// `bearing_coefficients` as `clearance_ratio` = 1 + δ, with the written
 /// and the true clearance [m].
-fn as_reported(model: &Model, bearing: usize, effect: EffectKind, raw: Vec<Estimate>) -> Vec<Estimate> {
+fn as_reported(
+    model: &Model,
+    bearing: usize,
+    effect: EffectKind,
+    raw: Vec<Estimate>,
+) -> Vec<Estimate> {
     if effect.name() != super::candidates::BEARING_COEFFICIENTS {
         return raw;
     }
