@@ -227,7 +227,6 @@ fn a_pedestal_on_its_own_sub_base_is_named() {
 }
 
 #[test]
-#[ignore = "needs the effect name bearing_coefficients (branch sim); not yet run with it"]
 fn a_table_for_a_smaller_clearance_is_named_bearing_coefficients() {
     let m = rigid();
     let mut run = run_dir(&m, &EffectSet::none(), NOISE, None, 55);
