@@ -409,6 +409,8 @@ fn plot_later_draws_every_transducer() {
         dir: out.clone(),
         out: figures.clone(),
         rotation: plinth::field::plot::RotationArg::Ccw,
+        zero_at_transducer: false,
+        style: plinth::plots::StyleArgs::default(),
         force: false,
     })
     .unwrap();

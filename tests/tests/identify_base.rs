@@ -125,6 +125,9 @@ fn identify(dir: &Path, groups: Option<&str>) -> anyhow::Result<(RunDir, Identif
         truncated: false,
         slow_roll: None,
         unmeasured_base: groups.map(|g| g.parse::<BaseGroups>().expect("groups")),
+        plots: None,
+        figure_style: plinth::plots::StyleArgs::default(),
+        speeds: None,
     };
     identify_args(&args)
 }

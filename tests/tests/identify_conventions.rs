@@ -225,6 +225,9 @@ fn identify_exit_code(dir: &Path) -> u8 {
         truncated: false,
         slow_roll: None,
         unmeasured_base: None,
+        plots: None,
+        figure_style: plinth::plots::StyleArgs::default(),
+        speeds: None,
     };
     match identify_cli(&args) {
         Ok(()) => 0,
