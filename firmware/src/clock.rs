@@ -203,7 +203,7 @@ impl PllPlan {
     /// [Hz]; `None` unless the input is a whole number of MHz in 4..=26
     /// (the HSE crystal range; the HSI is 16).
     pub fn for_input(input_hz: u32) -> Option<Self> {
-        if input_hz % 1_000_000 != 0 || !(4_000_000..=26_000_000).contains(&input_hz) {
+        if !input_hz.is_multiple_of(1_000_000) || !(4_000_000..=26_000_000).contains(&input_hz) {
             return None;
         }
         // VCO 336 MHz: /2 = 168 MHz, /7 = 48 MHz.

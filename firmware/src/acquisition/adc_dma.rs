@@ -207,7 +207,7 @@ pub fn busy_fell(r: &mut impl Registers, s: &AdcShared) {
     // number of conversions and the transmit stream has stopped.
     let remaining = r.read(dma1::ndtr(RX_STREAM));
     let tx_running = r.read(dma1::cr(TX_STREAM)) & dma1::CR_EN != 0;
-    if remaining % WORDS != 0 || tx_running {
+    if !remaining.is_multiple_of(WORDS) || tx_running {
         bump(&s.late_reads);
         return;
     }

@@ -45,7 +45,7 @@ impl Point {
         } else {
             self.ped[(c - 4) / 2]
         };
-        if c % 2 == 0 {
+        if c.is_multiple_of(2) {
             z.re
         } else {
             z.im

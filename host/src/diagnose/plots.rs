@@ -23,7 +23,7 @@ const DIRS: [&str; 2] = ["y", "z"];
 /// measured speed (the model with its effects maps the measured forces to
 /// the predicted pedestal motion).
 fn stiffness_input(prep: &Prepared, pred: &Prediction, b: usize, label: &str) -> StiffnessInput {
-    let mut measured: [Vec<(f64, Complex<f64>, Complex<f64>)>; 2] = [Vec::new(), Vec::new()];
+    let mut measured: [crate::plots::stiffness::MeasuredStiffness; 2] = [Vec::new(), Vec::new()];
     let mut model: [Vec<(f64, Complex<f64>)>; 2] = [Vec::new(), Vec::new()];
     for (j, p) in prep.points[b].iter().enumerate() {
         let Some(p) = p else { continue };

@@ -798,9 +798,9 @@ pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
                             .flatten()
                             .and_then(|t| t.correction(p.speed_hz, v));
                         if let Some(corr) = corr {
-                            for r in 0..2 {
-                                for c in 0..2 {
-                                    p.kstar[r][c] += corr[r][c];
+                            for (row, add) in p.kstar.iter_mut().zip(corr.iter()) {
+                                for (k, a) in row.iter_mut().zip(add.iter()) {
+                                    *k += *a;
                                 }
                             }
                         }
@@ -808,8 +808,8 @@ pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
                     _ => {}
                 }
             }
-            for d in 0..2 {
-                p.rel[d] -= runout[d];
+            for (rel, off) in p.rel.iter_mut().zip(runout.iter()) {
+                *rel -= *off;
             }
         }
     }

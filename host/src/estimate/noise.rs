@@ -193,7 +193,7 @@ impl ColumnDigits {
 /// Real number `c` ([`REAL_CHANNELS`] order) of a measurement row [m].
 pub fn real_value(m: &Measurement, c: usize) -> f64 {
     let z = complex_value(m, c / 2);
-    if c % 2 == 0 {
+    if c.is_multiple_of(2) {
         z.re
     } else {
         z.im

@@ -249,7 +249,7 @@ impl Recording {
                         out.push((f64::from(code) * *scale) as f32);
                     }
                 }
-                if out.len() % n != 0 {
+                if !out.len().is_multiple_of(n) {
                     bail!(
                         "{}: the file ends inside a frame (after {} samples of {} channels)",
                         self.file,

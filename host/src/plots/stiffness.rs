@@ -125,6 +125,10 @@ impl StiffnessModel {
     }
 }
 
+/// One direction's measured points: (speed [Hz], force transmitted to the
+/// pedestal F [N], absolute pedestal displacement X_ped [m]).
+pub type MeasuredStiffness = Vec<(f64, Complex<f64>, Complex<f64>)>;
+
 /// One bearing's data for the figure: plain numbers, independent of the
 /// estimator's types.
 #[derive(Clone, Debug, PartialEq)]
@@ -133,7 +137,7 @@ pub struct StiffnessInput {
     pub bearing: String,
     /// Per direction (y, z): (speed [Hz], force transmitted to the pedestal
     /// F [N], absolute pedestal displacement X_ped [m]).
-    pub measured: [Vec<(f64, Complex<f64>, Complex<f64>)>; 2],
+    pub measured: [MeasuredStiffness; 2],
     /// The model drawn against them.
     pub model: StiffnessModel,
     /// The model's legend text, e.g. `fit` or `base model`.
@@ -344,32 +348,32 @@ impl StiffnessFigure {
     /// The legend entries of a bearing's rows.
     fn legend(&self, input: &StiffnessInput, row: usize) -> Vec<LegendEntry> {
         let mut out = Vec::new();
-        for d in 0..2 {
+        for (d, direction) in DIRECTIONS.iter().enumerate() {
             let c = direction_colour(d);
             if row == 2 {
                 out.push(LegendEntry {
-                    name: format!("{} |F − D_fit·X|", DIRECTIONS[d]),
+                    name: format!("{direction} |F − D_fit·X|"),
                     colour: c,
                     swatch: Swatch::Line,
                 });
                 continue;
             }
             out.push(LegendEntry {
-                name: format!("{} measured F/X", DIRECTIONS[d]),
+                name: format!("{} measured F/X", direction),
                 colour: c,
                 swatch: Swatch::Marker,
             });
             out.push(LegendEntry {
-                name: format!("{} {}", DIRECTIONS[d], input.model_label),
+                name: format!("{} {}", direction, input.model_label),
                 colour: c,
                 swatch: Swatch::Line,
             });
             if let StiffnessModel::Rigid(p) = &input.model {
                 out.push(LegendEntry {
                     name: match p.uncertainty {
-                        Uncertainty::Covariance(_) => format!("{} ±1σ", DIRECTIONS[d]),
+                        Uncertainty::Covariance(_) => format!("{} ±1σ", direction),
                         Uncertainty::StdErrors(_) => {
-                            format!("{} ±1σ (θ indep.)", DIRECTIONS[d])
+                            format!("{} ±1σ (θ indep.)", direction)
                         }
                     },
                     colour: c,

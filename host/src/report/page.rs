@@ -74,9 +74,9 @@ struct Figures {
 impl Figures {
     fn figure(&mut self, out: &mut String, svg: &str, caption: &str) {
         self.n += 1;
-        let _ = write!(
+        let _ = writeln!(
             out,
-            "<figure id=\"fig-{}\" class=\"plot\">{svg}<figcaption>Figure {}. {}</figcaption></figure>\n",
+            "<figure id=\"fig-{}\" class=\"plot\">{svg}<figcaption>Figure {}. {}</figcaption></figure>",
             self.n,
             self.n,
             esc(caption)

@@ -53,7 +53,7 @@ impl Signals {
         if n == 0 {
             bail!("replay signals: no channels");
         }
-        if volts.len() % n != 0 {
+        if !volts.len().is_multiple_of(n) {
             bail!(
                 "replay signals: {} values are not a whole number of {n}-channel sample vectors",
                 volts.len()

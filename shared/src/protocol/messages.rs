@@ -449,7 +449,7 @@ impl SampleBlock {
             return Err(SampleBlockError::NoChannels);
         }
         let len = self.samples.len();
-        if len % n != 0 {
+        if !len.is_multiple_of(n) {
             return Err(SampleBlockError::Ragged);
         }
         let k = len / n;
