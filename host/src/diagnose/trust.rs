@@ -203,7 +203,6 @@ mod tests {
             runner_up: None,
             candidates_tried: 20,
             candidates_failed: 0,
-            dropped: None,
         }
     }
 
