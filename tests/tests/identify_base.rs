@@ -295,6 +295,15 @@ fn measured_base_through_the_cli() {
 #[test]
 fn unmeasured_base_flag_names_unknown_bearings() {
     let dir = simulated(SKID, &speeds(5, 200, 5), 0.0, 1, Some(4));
+    // A run whose base is measured (base.csv) is not fitted as unmeasured
+    // too: the two stories are refused, not printed side by side (issue 20).
+    let err = identify(dir.path(), Some("left,right")).unwrap_err();
+    let text = format!("{err:#}");
+    assert!(
+        text.contains("--unmeasured-base") && text.contains("base.csv"),
+        "{text}"
+    );
+    std::fs::remove_file(dir.path().join("base.csv")).unwrap();
     let err = identify(dir.path(), Some("left,rihgt")).unwrap_err();
     let text = format!("{err:#}");
     assert!(
@@ -304,11 +313,7 @@ fn unmeasured_base_flag_names_unknown_bearings() {
     assert!("left,right;left".parse::<BaseGroups>().is_err());
     assert!("left,;".parse::<BaseGroups>().is_err());
     let (_, id) = identify(dir.path(), Some("left,right")).expect("identify");
-    assert_eq!(
-        id.bases.len(),
-        2,
-        "the measured base.csv and the unmeasured group"
-    );
+    assert_eq!(id.bases.len(), 1, "the unmeasured group");
 }
 
 /// Reported standard errors against the scatter over noise draws.

@@ -226,11 +226,17 @@ mod tests {
             .retain(|t| !matches!(t, Term::Damping { .. }));
         let lib = library(&undamped, 2);
         // foundation_coupling is the base model of `super::foundation`, not
-        // a linear augmentation of this library.
-        for e in EffectKind::ALL
-            .into_iter()
-            .filter(|e| *e != EffectKind::FoundationCoupling)
-        {
+        // a linear augmentation of this library. pedestal_sub_base and
+        // bearing_coefficients are simulator effects that diagnose does not
+        // model yet (issue 17, branch work not landed): not in the library.
+        for e in EffectKind::ALL.into_iter().filter(|e| {
+            !matches!(
+                e,
+                EffectKind::FoundationCoupling
+                    | EffectKind::PedestalSubBase
+                    | EffectKind::BearingCoefficients
+            )
+        }) {
             assert!(lib.iter().any(|c| c.effect == e), "{}", e.name());
         }
         // With damping in the base, pedestal damping is not a candidate.
