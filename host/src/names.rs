@@ -76,9 +76,19 @@ pub fn check(what: &str, name: &str) -> Result<(), String> {
             } else {
                 ""
             };
+            // Control characters escaped, everything else as written.
+            let shown: String = shown
+                .chars()
+                .map(|c| {
+                    if c.is_control() {
+                        c.escape_debug().to_string()
+                    } else {
+                        c.to_string()
+                    }
+                })
+                .collect();
             Err(format!(
-                "{what} {:?}: {p}; a name uses {NAME_CHARACTERS}",
-                format!("{shown}{more}")
+                "{what} `{shown}{more}`: {p}; a name uses {NAME_CHARACTERS}"
             ))
         }
     }
@@ -165,7 +175,7 @@ mod tests {
         }
         let e = check("bearing", "DE/NDE").unwrap_err();
         assert!(
-            e.contains("bearing \"DE/NDE\"") && e.contains("path separator"),
+            e.contains("bearing `DE/NDE`") && e.contains("path separator"),
             "{e}"
         );
         let e = check("bearing", &"y".repeat(100_000)).unwrap_err();
