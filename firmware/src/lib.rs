@@ -11,6 +11,7 @@
 //! - [`acquisition`]: the board's DMA-paced ADC and keyphasor capture
 //!   (`plinth-box`), target independent.
 //! - [`uart_dma`]: the board's DMA-fed UART receive ring (`plinth-box`).
+//! - [`revert`]: test-only knobs that switch one fix of issue 18 off.
 //! - [`clock`]: the STM32F4 clock tree the box programs (PLL to 168 MHz).
 //! - `stm32` (MCU only): the one module with register access.
 #![no_std]
@@ -26,6 +27,7 @@ pub mod device;
 pub mod link;
 pub mod pipeline;
 pub mod replay;
+pub mod revert;
 pub mod source;
 #[cfg(target_os = "none")]
 pub mod stm32;

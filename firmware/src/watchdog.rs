@@ -2,6 +2,8 @@
 //! board, acquisition that stops making progress does too
 //! ([`ProgressWatch`]).
 
+use crate::revert::Revert;
+
 /// Something that must be fed regularly or it resets the MCU.
 pub trait Watchdog {
     /// Restarts the watchdog's countdown.
@@ -24,6 +26,8 @@ impl Watchdog for NoWatchdog {
 #[derive(Clone, Copy, Debug)]
 pub struct ProgressWatch {
     limit_ms: u32,
+    /// Feeds on every pass (the policy before issue 18; tests only).
+    every_pass: bool,
     last: u32,
     since_ms: u32,
 }
@@ -33,16 +37,25 @@ impl ProgressWatch {
     pub const fn new(limit_ms: u32) -> Self {
         Self {
             limit_ms,
+            every_pass: false,
             last: 0,
             since_ms: 0,
         }
+    }
+
+    /// The same watch with `revert` applied: [`Revert::WatchdogFeeding`]
+    /// feeds on every pass (tests only: the board model shows what that
+    /// misses).
+    pub const fn with_revert(mut self, revert: Revert) -> Self {
+        self.every_pass = matches!(revert, Revert::WatchdogFeeding);
+        self
     }
 
     /// Whether to feed now (`now_ms` [ms], wrapping): `running` says
     /// whether acquisition should run, `progress` is the half-completion
     /// count.
     pub fn should_feed(&mut self, running: bool, progress: u32, now_ms: u32) -> bool {
-        if !running || progress != self.last {
+        if self.every_pass || !running || progress != self.last {
             self.last = progress;
             self.since_ms = now_ms;
             return true;
@@ -65,5 +78,8 @@ mod tests {
         assert!(!w.should_feed(true, 1, 10_101));
         assert!(w.should_feed(true, 2, 10_200));
         assert!(w.should_feed(false, 2, 20_000));
+        let mut old = ProgressWatch::new(100).with_revert(Revert::WatchdogFeeding);
+        assert!(old.should_feed(true, 1, 0));
+        assert!(old.should_feed(true, 1, 10_000));
     }
 }

@@ -3,12 +3,14 @@
 //! TIM3, TIM5, EXTI0, SPI2, DMA1 and the AD7606, with latency and
 //! priorities. The full matrix (≥ 10 000 scenarios) is
 //! `bash scripts/bench-board-faults.sh`; this test runs every 40th scenario
-//! (every fault class) and shows that the restart path before issue 18
-//! corrupts samples on the same model.
+//! (every fault class), shows that the restart path before issue 18
+//! corrupts samples on the same model, and that each fix switched off
+//! alone (`plinth_firmware::revert::Revert`) fails its fault class.
 
-use plinth_board_model::matrix::{run_all, scenarios};
+use plinth_board_model::matrix::{run_all, run_class, scenarios, scenarios_reverted};
 use plinth_board_model::scenario::{handler_stats, run, Fault, Scenario};
 use plinth_firmware::acquisition::adc_dma::RestartPath;
+use plinth_firmware::revert::Revert;
 
 #[test]
 fn the_matrix_finds_no_silent_corruption_and_no_uncounted_loss() {
@@ -27,6 +29,7 @@ fn the_matrix_finds_no_silent_corruption_and_no_uncounted_loss() {
         "{:?}",
         sum.failures.first()
     );
+    assert!(sum.passed(), "{:?}", sum.failures.first());
 }
 
 /// A stop and an immediate start while the AD7606 converts, in the
@@ -85,4 +88,59 @@ fn the_rc_clock_is_refused_and_a_clean_run_costs_what_the_readme_says() {
     // One BUSY interrupt per conversion: 13 register accesses.
     assert_eq!(busy.accesses, 13 * busy.calls);
     assert!(busy.calls >= 256);
+}
+
+/// Runs every `stride`-th scenario of fault class `class` with `revert`
+/// applied: the box's code passes that slice, the reverted code fails it,
+/// and the failures name the class.
+fn reverted_fix_fails(revert: Revert, class: &str, stride: usize) {
+    let fixed = run_class(&scenarios(RestartPath::Clean), class, stride);
+    assert!(fixed.scenarios > 0, "no scenario of class {class}");
+    assert!(
+        fixed.passed(),
+        "{class} fails with every fix: {:?}",
+        fixed.failures.first()
+    );
+    let old = run_class(&scenarios_reverted(revert), class, stride);
+    eprintln!("{}: {}; {}", revert.name(), old.recovery_line(), old.line());
+    let Some((index, name, fault, problem)) = old.failures.first() else {
+        panic!(
+            "reverting {} is not caught by the {class} scenarios",
+            revert.name()
+        );
+    };
+    eprintln!("FAIL scenario {index} ({name}, {fault}): {problem}");
+    assert_eq!(*name, class);
+}
+
+#[test]
+fn without_the_slip_detector_masked_interrupts_shift_samples() {
+    let old = run_class(
+        &scenarios_reverted(Revert::SlipDetector),
+        "interrupts masked",
+        25,
+    );
+    assert!(old.corruptions > 0, "{}", old.line());
+    reverted_fix_fails(Revert::SlipDetector, "interrupts masked", 25);
+}
+
+#[test]
+fn without_the_spi_error_interrupt_overruns_go_unreported() {
+    reverted_fix_fails(Revert::SpiErrorInterrupt, "SPI overrun", 7);
+}
+
+#[test]
+fn without_the_stop_sequence_a_commanded_restart_is_not_clean() {
+    reverted_fix_fails(Revert::StopDrain, "stop/restart", 12);
+}
+
+#[test]
+fn without_progress_feeding_a_stuck_busy_line_never_resets_the_box() {
+    reverted_fix_fails(Revert::WatchdogFeeding, "BUSY stuck low", 8);
+    reverted_fix_fails(Revert::WatchdogFeeding, "BUSY stuck high", 8);
+}
+
+#[test]
+fn without_the_prescaler_refusal_the_rc_clock_restarts_forever() {
+    reverted_fix_fails(Revert::PrescalerRefusal, "16 MHz clock", 1);
 }

@@ -40,6 +40,18 @@ pub struct Outcome {
     pub resyncs: u32,
     /// The hardware fault counters.
     pub faults: AdcFaults,
+    /// Hardware faults the model saw that no counter shows (an SPI
+    /// overrun with `spi_errors` 0).
+    pub unreported: u64,
+    /// Faults the box did not recover from as it should: a passing fault
+    /// that needed the watchdog, or a permanent one with no sample and no
+    /// watchdog reset.
+    pub unrecovered: u64,
+    /// Sequence faults a commanded stop/restart caused (a clean restart
+    /// causes none).
+    pub unclean: u64,
+    /// The model's watchdog reset the box (the scenario ended there).
+    pub watchdog_reset: bool,
     /// The first problem found, described.
     pub first_problem: Option<String>,
 }
@@ -53,7 +65,14 @@ impl Outcome {
         }
     }
 
-    fn problem(&mut self, text: impl FnOnce() -> String) {
+    /// Whether anything is wrong (a corruption, an uncounted loss, an
+    /// unreported fault, a failed recovery).
+    pub fn failed(&self) -> bool {
+        self.corruptions + self.uncounted + self.unreported + self.unrecovered + self.unclean > 0
+    }
+
+    /// Records `text` as the first problem unless one is already there.
+    pub fn problem(&mut self, text: impl FnOnce() -> String) {
         if self.first_problem.is_none() {
             self.first_problem = Some(text());
         }
@@ -227,24 +246,33 @@ impl Checker {
         });
     }
 
-    /// The end: silent stalls and missing edges. `allowance` [ticks] is
-    /// how far behind the source may legitimately be.
+    /// The end: silent stalls, missing edges, unreported overruns.
+    /// `allowance` [ticks] is how far behind the source may legitimately
+    /// be; after a watchdog `reset` (which the next boot reports) the
+    /// samples since the last delivery are not a silent stall.
     pub fn finish(
         mut self,
         hw: &Hw,
         c: DmaSourceCounters,
         faults: AdcFaults,
         allowance: u64,
+        reset: bool,
     ) -> Outcome {
         self.counters(c);
         self.out.faults = faults;
+        if hw.spi_overruns > 0 && faults.spi_errors == 0 {
+            self.out.unreported += u64::from(hw.spi_overruns);
+            let n = hw.spi_overruns;
+            self.out
+                .problem(|| format!("{n} SPI overruns in the hardware, spi_errors 0 (unreported)"));
+        }
         let run = hw.runs;
         let delivered_to = match self.last {
             Some((r, end)) if r == run => end,
             _ => 0,
         };
         let due = hw.tim3.edges.saturating_sub(allowance / self.p as u64);
-        if due > delivered_to {
+        if due > delivered_to && !reset {
             let n = due - delivered_to;
             self.out.uncounted += n;
             self.out.problem(|| {

@@ -267,6 +267,8 @@ pub struct Hw {
     next_rx: usize,
     /// Bytes lost in the USART (overrun: the DMA came too late).
     pub rx_overruns: u32,
+    /// Times SPI2's OVR was set (an overrun began).
+    pub spi_overruns: u32,
     pub faults: HwFaults,
     ram: Vec<u8>,
 }
@@ -301,6 +303,7 @@ impl Hw {
             rx_bytes: Vec::new(),
             next_rx: 0,
             rx_overruns: 0,
+            spi_overruns: 0,
             faults: HwFaults::default(),
             ram: vec![0; RAM_BYTES],
         }
@@ -516,8 +519,12 @@ impl Hw {
             word = word << 1 | self.douta(at, self.adc.bits + i);
         }
         self.adc.bits += 16;
-        if self.spi.rxne {
+        if self.spi.ovr {
+            // RM0090 28.4.8: while OVR is set, every received frame is
+            // lost (DR keeps the old one).
+        } else if self.spi.rxne {
             self.spi.ovr = true; // the new frame is lost
+            self.spi_overruns += 1;
         } else {
             self.spi.rx = word;
             self.spi.rxne = true;

@@ -8,6 +8,7 @@
 use crate::check::Outcome;
 use crate::scenario::{run, ClockSetup, Fault, Scenario};
 use plinth_firmware::acquisition::adc_dma::RestartPath;
+use plinth_firmware::revert::Revert;
 
 /// A small deterministic generator (SplitMix64) for conversion times.
 fn mix(mut x: u64) -> u64 {
@@ -72,6 +73,21 @@ pub fn scenarios(path: RestartPath) -> Vec<Scenario> {
             }
         }
     }
+    // Stop/restart while the DMA is held off the bus (1-6 µs) at every
+    // 16th tick of a period: the word it did not take must not start the
+    // next run.
+    for phase in (0..p).step_by(16) {
+        for stall in [us(1.0), us(3.0), us(6.0), us(60.0)] {
+            v.push(Scenario {
+                name: "stop/restart in a DMA stall",
+                fault: Fault::RestartInDmaStall {
+                    at: 2 * half + 5 * p + phase,
+                    stall,
+                },
+                ..base
+            });
+        }
+    }
     // The 16 MHz RC clock: the box refuses (checked as refused).
     v.push(Scenario {
         name: "16 MHz clock",
@@ -99,7 +115,8 @@ pub fn scenarios(path: RestartPath) -> Vec<Scenario> {
             ..base
         });
     }
-    // BUSY stuck high or low at 64 phases.
+    // BUSY stuck high or low at 64 phases: the box must end in a
+    // watchdog reset.
     for high in [false, true] {
         for k in 0..64 {
             v.push(Scenario {
@@ -112,6 +129,9 @@ pub fn scenarios(path: RestartPath) -> Vec<Scenario> {
                     at: at(k * p / 64),
                     high,
                 },
+                // Long enough for the watchdog to bite (scenario.rs:
+                // NO_PROGRESS_US + WATCHDOG_US after the last restart).
+                halves: 14,
                 ..base
             });
         }
@@ -150,6 +170,15 @@ pub fn scenarios(path: RestartPath) -> Vec<Scenario> {
     v
 }
 
+/// Every scenario of the matrix with one fix switched off.
+pub fn scenarios_reverted(revert: Revert) -> Vec<Scenario> {
+    let mut v = scenarios(RestartPath::Clean);
+    for s in &mut v {
+        s.revert = revert;
+    }
+    v
+}
+
 /// The matrix's totals.
 #[derive(Clone, Debug, Default)]
 pub struct Summary {
@@ -161,6 +190,12 @@ pub struct Summary {
     pub uncounted: u64,
     /// Samples checked.
     pub delivered: u64,
+    /// Hardware faults no counter shows, over all scenarios.
+    pub unreported: u64,
+    /// Scenarios the box did not recover from as it should.
+    pub unrecovered: u64,
+    /// Sequence faults caused by commanded stop/restarts.
+    pub unclean: u64,
     /// Scenarios with a problem: (index, name, fault, first problem).
     pub failures: Vec<(usize, &'static str, String, String)>,
 }
@@ -172,7 +207,10 @@ impl Summary {
         self.corruptions += o.corruptions;
         self.uncounted += o.uncounted;
         self.delivered += o.delivered;
-        if o.corruptions + o.uncounted > 0 {
+        self.unreported += o.unreported;
+        self.unrecovered += o.unrecovered;
+        self.unclean += o.unclean;
+        if o.failed() {
             self.failures.push((
                 s.index,
                 s.name,
@@ -182,6 +220,19 @@ impl Summary {
         }
     }
 
+    /// Whether every scenario passed.
+    pub fn passed(&self) -> bool {
+        self.failures.is_empty()
+    }
+
+    /// The line before the last: the faults beyond corruption and loss.
+    pub fn recovery_line(&self) -> String {
+        format!(
+            "unreported hardware faults {}, unrecovered scenarios {}, unclean restarts {}",
+            self.unreported, self.unrecovered, self.unclean
+        )
+    }
+
     /// The bench script's last line.
     pub fn line(&self) -> String {
         format!(
@@ -189,6 +240,16 @@ impl Summary {
             self.scenarios, self.corruptions, self.uncounted
         )
     }
+}
+
+/// Runs every `stride`-th scenario of fault class `name` and sums them up.
+pub fn run_class(scenarios: &[Scenario], name: &str, stride: usize) -> Summary {
+    let class: Vec<Scenario> = scenarios
+        .iter()
+        .filter(|s| s.name == name)
+        .copied()
+        .collect();
+    run_all(&class, stride)
 }
 
 /// Runs `scenarios` (every `stride`-th one) and sums them up.

@@ -16,7 +16,9 @@ use plinth_firmware::acquisition::dma_source::DmaSource;
 use plinth_firmware::acquisition::read_plan::ReadPlan;
 use plinth_firmware::acquisition::rm0090::nvic;
 use plinth_firmware::ad7606::Range;
+use plinth_firmware::revert::Revert;
 use plinth_firmware::source::{SampleBuffer, SampleSource};
+use plinth_firmware::watchdog::ProgressWatch;
 
 /// Capture queue slots (as on the box).
 pub const CAPTURE_SLOTS: usize = 32;
@@ -28,6 +30,13 @@ const ADC_MEMORY: usize = RAM_BASE + 0x100;
 /// scaling (QEMU-measured consumer 146.4 less the modelled reads) and the
 /// extractor (77.7), firmware/README.md's budget.
 pub const IDLE_CYCLES_PER_VECTOR: u64 = 220;
+/// The idle loop's progress limit in the model [µs]: the box's 200 ms
+/// scaled to the model's short halves (2.4 halves of 32 vectors; the
+/// box's is 100 halves of 96).
+pub const NO_PROGRESS_US: u32 = 1_500;
+/// The model's independent watchdog timeout [µs] (the box's 500 ms,
+/// scaled alike).
+pub const WATCHDOG_US: u64 = 1_000;
 
 /// The board's clocks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,6 +77,10 @@ pub enum Fault {
     Restart { at: u64, pause: u64 },
     /// DMA requests not served for `ticks` from `at` (SPI overrun).
     DmaStall { at: u64, ticks: u64 },
+    /// The host stops and starts acquisition 8 ticks into a DMA stall of
+    /// `stall` ticks from `at` (a word the DMA did not take is in SPI2's
+    /// DR when `stop` disables the requests).
+    RestartInDmaStall { at: u64, stall: u64 },
     /// A transfer error on the receive stream at `at`.
     TransferError { at: u64 },
     /// BUSY stuck at `high` from `at`.
@@ -101,6 +114,8 @@ pub struct Scenario {
     pub fault: Fault,
     /// The restart path of `AdcDma`.
     pub path: RestartPath,
+    /// The fix switched off (tests that show the matrix catches it).
+    pub revert: Revert,
 }
 
 impl Scenario {
@@ -116,7 +131,14 @@ impl Scenario {
             keyphasor_hz: 2_000.0,
             fault: Fault::None,
             path: RestartPath::Clean,
+            revert: Revert::None,
         }
+    }
+
+    /// Whether the fault leaves the board unable to sample for good (only
+    /// a watchdog reset gets it out).
+    pub fn permanent(&self) -> bool {
+        matches!(self.fault, Fault::BusyStuck { .. })
     }
 
     /// Ticks per sample at these clocks.
@@ -176,7 +198,7 @@ pub fn run(s: &Scenario) -> Outcome {
 
 fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
     let timer_hz = s.clocks.timer_hz();
-    let plan = match ReadPlan::new(timer_hz, s.clocks.pclk1_hz, 51_200.0) {
+    let plan = match ReadPlan::with_revert(timer_hz, s.clocks.pclk1_hz, 51_200.0, s.revert) {
         Ok(p) => p,
         // The box refuses to sample (and says so): nothing delivered,
         // nothing lost unseen.
@@ -197,6 +219,7 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
         );
         match s.fault {
             Fault::DmaStall { at, ticks } => hw.faults.dma_stall = Some((at, at + ticks)),
+            Fault::RestartInDmaStall { at, stall } => hw.faults.dma_stall = Some((at, at + stall)),
             Fault::TransferError { at } => hw.faults.transfer_error = Some(at),
             Fault::BusyStuck { at, high } => hw.faults.busy_stuck = Some((at, high)),
             _ => {}
@@ -241,7 +264,7 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
         "keyphasor",
         Box::new(move |r| adc_dma::keyphasor(r, shared, &mut producer)),
     );
-    let dma = AdcDma::new(
+    let mut dma = AdcDma::new(
         Port(board.clone()),
         shared,
         plan,
@@ -251,6 +274,7 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
         consumer,
         s.path,
     );
+    dma.revert(s.revert);
     let mut source = DmaSource::new(dma, s.vectors_per_half, p as u32, Range::PlusMinus10V);
     let mut checker = Checker::new(p as f64, pulses);
     let mut buf = SampleBuffer::default();
@@ -259,11 +283,25 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
     let t0 = board.now();
     let mut restart = match s.fault {
         Fault::Restart { at, pause } => Some((t0 + at, pause)),
+        Fault::RestartInDmaStall { at, .. } => Some((at + 8, 0)),
         _ => None,
     };
     let mut seen = shared.completions.count();
     let step = p / 2;
+    // The idle loop's watchdog (model time in µs) and the model's IWDG.
+    let us = |tick: u64| (tick as u128 * 1_000_000 / u128::from(timer_hz)) as u64;
+    let mut watch = ProgressWatch::new(NO_PROGRESS_US).with_revert(s.revert);
+    let mut fed = board.now();
+    let mut last_delivery = board.now();
+    let mut watchdog_reset = false;
     while board.now() < t0 + end {
+        if watch.should_feed(true, shared.completions.count(), us(board.now()) as u32) {
+            fed = board.now();
+        }
+        if us(board.now() - fed) > WATCHDOG_US {
+            watchdog_reset = true;
+            break;
+        }
         if let Some((at, pause)) = restart {
             if board.now() + step >= at {
                 board.run_until(at);
@@ -272,6 +310,7 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
                 let _ = source.start();
                 checker.started(board.hw.borrow().runs);
                 restart = None;
+                last_delivery = board.now();
                 seen = shared.completions.count();
                 continue;
             }
@@ -284,6 +323,7 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
         source.poll(&mut buf);
         let counters = source.counters();
         if !buf.is_empty() {
+            last_delivery = board.now();
             let hw = board.hw.borrow();
             checker.delivered(&hw, &buf, source.delivered_first_sample(), counters);
             drop(hw);
@@ -296,13 +336,41 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
         }
     }
     let hw = board.hw.borrow();
-    let outcome = checker.finish(
+    let mut outcome = checker.finish(
         &hw,
         source.counters(),
         shared.faults(),
         p * (3 * s.vectors_per_half as u64 + 2),
+        watchdog_reset,
     );
     drop(hw);
+    // Recovery: a passing fault must not need the watchdog; a permanent
+    // one must get it (the next boot reports it), never leave the box
+    // running without samples.
+    let silent_us = us(board.now() - last_delivery);
+    if watchdog_reset && !s.permanent() {
+        outcome.unrecovered += 1;
+        outcome.problem(|| {
+            format!(
+                "reset by the watchdog after {silent_us} µs without a sample: the box neither recovered nor refused"
+            )
+        });
+    } else if !watchdog_reset && silent_us > u64::from(NO_PROGRESS_US) + WATCHDOG_US {
+        outcome.unrecovered += 1;
+        outcome.problem(|| {
+            format!("no sample for {silent_us} µs while acquiring, and no watchdog reset")
+        });
+    }
+    outcome.watchdog_reset = watchdog_reset;
+    if let Fault::Restart { .. } = s.fault {
+        let n = shared.faults().sequence();
+        if n > 0 {
+            outcome.unclean += u64::from(n);
+            outcome.problem(|| {
+                format!("the commanded stop/restart was not clean: {n} sequence faults counted")
+            });
+        }
+    }
     let stats = board.stats();
     drop(source);
     (outcome, stats)

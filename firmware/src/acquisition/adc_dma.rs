@@ -35,8 +35,9 @@ use super::handover::{DoubleBuffer, HalfCompletions};
 use super::read_plan::ReadPlan;
 use super::rm0090::{dma1, exti, gpiob, nvic, spi2, tim};
 use crate::clock::Registers;
+use crate::revert::Revert;
 use crate::source::CHANNELS;
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use heapless::spsc::{Consumer, Producer};
 use plinth_shared::protocol::BoxHealth;
 
@@ -72,7 +73,7 @@ pub const STOP_POLLS: u32 = 2_048;
 /// What the interrupt handlers share with the idle task (a `static` on
 /// the board): counters written by one handler each, and the set-up of
 /// the running acquisition, written by the idle task while EXTI0 is masked.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct AdcShared {
     /// Halves the receive DMA completed ([`adc_half`]).
     pub completions: HalfCompletions,
@@ -86,6 +87,15 @@ pub struct AdcShared {
     next_fall: AtomicU32,
     /// TIM5 ticks per sample.
     ticks_per_sample: AtomicU32,
+    /// Whether [`busy_fell`] checks for slips (off only when a test
+    /// reverts the slip detector).
+    slip_check: AtomicBool,
+}
+
+impl Default for AdcShared {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 /// Adds one to a counter with a single writer (load and store).
@@ -138,6 +148,7 @@ impl AdcShared {
             stalls: AtomicU32::new(0),
             next_fall: AtomicU32::new(0),
             ticks_per_sample: AtomicU32::new(1),
+            slip_check: AtomicBool::new(true),
         }
     }
 
@@ -199,7 +210,7 @@ pub fn busy_fell(r: &mut impl Registers, s: &AdcShared) {
     let now = r.read(tim::TIM5 + tim::CNT);
     let late_by = now.wrapping_sub(s.next_fall.load(Ordering::Relaxed)) as i32;
     let p = s.ticks_per_sample.load(Ordering::Relaxed);
-    if late_by < 0 || late_by >= p as i32 {
+    if (late_by < 0 || late_by >= p as i32) && s.slip_check.load(Ordering::Relaxed) {
         bump(&s.slips);
         return;
     }
@@ -305,6 +316,7 @@ pub struct AdcDma<R: 'static, const N: usize> {
     vectors_per_half: usize,
     captures: Consumer<'static, u32, N>,
     path: RestartPath,
+    revert: Revert,
 }
 
 impl<R: Registers + Clone, const N: usize> AdcDma<R, N> {
@@ -384,7 +396,17 @@ impl<R: Registers + Clone, const N: usize> AdcDma<R, N> {
             vectors_per_half: vectors_per_half.max(1),
             captures,
             path,
+            revert: Revert::None,
         }
+    }
+
+    /// Switches one fix off (tests only: the board model shows what the
+    /// fault matrix finds without it; the box never calls this).
+    pub fn revert(&mut self, revert: Revert) {
+        self.revert = revert;
+        self.shared
+            .slip_check
+            .store(revert != Revert::SlipDetector, Ordering::Relaxed);
     }
 
     /// The plan in use.
@@ -483,7 +505,8 @@ impl<R: Registers + Clone, const N: usize> AcquisitionHardware for AdcDma<R, N> 
         }
         r.modify(dma1::cr(RX_STREAM), dma1::CR_EN, dma1::CR_EN);
         let cr2 = spi2::CR2_RXDMAEN | spi2::CR2_TXDMAEN;
-        r.write(spi2::CR2, if legacy { cr2 } else { cr2 | spi2::CR2_ERRIE });
+        let errie = !legacy && self.revert != Revert::SpiErrorInterrupt;
+        r.write(spi2::CR2, if errie { cr2 | spi2::CR2_ERRIE } else { cr2 });
         r.write(tim::TIM5 + tim::CNT, 0);
         r.write(tim::TIM5 + tim::SR, 0);
         r.write(tim::TIM3 + tim::CNT, 0);
@@ -516,21 +539,25 @@ impl<R: Registers + Clone, const N: usize> AcquisitionHardware for AdcDma<R, N> 
         self.regs.modify(tim::TIM3 + tim::CR1, tim::CR1_CEN, 0);
         // A conversion in flight ends (BUSY low), the read in flight ends
         // (transmit stream done, SPI idle with nothing to send).
-        self.wait(gpiob::IDR, gpiob::BUSY, 0);
-        self.wait(dma1::cr(TX_STREAM), dma1::CR_EN, 0);
-        self.wait(spi2::SR, spi2::SR_TXE | spi2::SR_BSY, spi2::SR_TXE);
+        if self.revert != Revert::StopDrain {
+            self.wait(gpiob::IDR, gpiob::BUSY, 0);
+            self.wait(dma1::cr(TX_STREAM), dma1::CR_EN, 0);
+            self.wait(spi2::SR, spi2::SR_TXE | spi2::SR_BSY, spi2::SR_TXE);
+        }
         self.regs.write(spi2::CR2, 0);
         self.disable_stream(TX_STREAM);
         self.disable_stream(RX_STREAM);
         self.regs.modify(tim::TIM5 + tim::CR1, tim::CR1_CEN, 0);
         // Words the DMA did not take, and OVR (read DR, then SR).
-        for _ in 0..4 {
-            if self.regs.read(spi2::SR) & spi2::SR_RXNE == 0 {
-                break;
+        if self.revert != Revert::StopDrain {
+            for _ in 0..4 {
+                if self.regs.read(spi2::SR) & spi2::SR_RXNE == 0 {
+                    break;
+                }
+                let _ = self.regs.read(spi2::DR);
             }
-            let _ = self.regs.read(spi2::DR);
+            let _ = self.regs.read(spi2::SR);
         }
-        let _ = self.regs.read(spi2::SR);
         let r = &mut self.regs;
         r.write(exti::PR, exti::LINE_BUSY);
         clear_stream_flags(r, RX_STREAM);
