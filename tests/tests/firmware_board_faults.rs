@@ -144,3 +144,26 @@ fn without_progress_feeding_a_stuck_busy_line_never_resets_the_box() {
 fn without_the_prescaler_refusal_the_rc_clock_restarts_forever() {
     reverted_fix_fails(Revert::PrescalerRefusal, "16 MHz clock", 1);
 }
+
+#[test]
+fn the_host_link_delivers_every_command_or_counts_its_loss() {
+    use plinth_board_model::matrix::{run_uart, Summary};
+    use plinth_board_model::uart::{self, UartFault};
+    let all = uart::scenarios();
+    let clean = uart::run(&all[0]);
+    assert_eq!(
+        (clean.commands, clean.delivered),
+        (40, clean.sent),
+        "{clean:?}"
+    );
+    let mut sum = Summary::default();
+    run_uart(&mut sum, &all, 5);
+    assert!(sum.passed(), "{:?}", sum.failures.first());
+    let lapped = all
+        .iter()
+        .find(|s| matches!(s.fault, UartFault::ReaderAway { us: 20_000, .. }))
+        .unwrap();
+    let o = uart::run(lapped);
+    assert!(o.delivered < o.sent && o.receive_errors > 0, "{o:?}");
+    assert!(o.commands < 40 && o.commands > 0, "{o:?}");
+}

@@ -582,13 +582,17 @@ impl Hw {
             return;
         }
         if self.usart.rxne {
-            self.usart.errors |= 1 << 3; // ORE: this byte is lost
+            // ORE: this byte is lost; the flag clears by a read of SR
+            // that sees it, then of DR.
+            self.usart.errors |= 1 << 3;
+            self.usart.sr_read = false;
             self.rx_overruns += 1;
             return;
         }
         self.usart.rx = byte;
         self.usart.rxne = true;
         if noisy {
+            self.usart.sr_read = false;
             self.usart.errors |= 1 << 2 | 1 << 1; // NF, FE
         }
     }

@@ -8,6 +8,7 @@
 //!   is the firmware's `Registers`.
 //! - [`scenario`]: one acquisition with one injected fault.
 //! - [`check`]: every delivered sample and edge against the model's truth.
+//! - [`uart`]: the host link's receive path under line noise and overflow.
 //! - [`matrix`]: the fault matrix (`bash scripts/bench-board-faults.sh`).
 
 pub mod check;
@@ -15,3 +16,4 @@ pub mod hw;
 pub mod matrix;
 pub mod scenario;
 pub mod sim;
+pub mod uart;

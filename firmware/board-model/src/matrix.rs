@@ -7,6 +7,7 @@
 
 use crate::check::Outcome;
 use crate::scenario::{run, ClockSetup, Fault, Scenario};
+use crate::uart::{UartOutcome, UartScenario};
 use plinth_firmware::acquisition::adc_dma::RestartPath;
 use plinth_firmware::revert::Revert;
 
@@ -220,6 +221,21 @@ impl Summary {
         }
     }
 
+    /// Adds one host-link scenario's outcome.
+    pub fn add_uart(&mut self, s: &UartScenario, o: &UartOutcome) {
+        self.scenarios += 1;
+        self.corruptions += o.corruptions;
+        self.uncounted += o.uncounted;
+        if o.corruptions + o.uncounted > 0 {
+            self.failures.push((
+                s.index,
+                s.name,
+                format!("{:?}", s.fault),
+                o.first_problem.clone().unwrap_or_default(),
+            ));
+        }
+    }
+
     /// Whether every scenario passed.
     pub fn passed(&self) -> bool {
         self.failures.is_empty()
@@ -239,6 +255,14 @@ impl Summary {
             "scenarios {}, silent corruptions {}, uncounted losses {}",
             self.scenarios, self.corruptions, self.uncounted
         )
+    }
+}
+
+/// Runs every `stride`-th host-link scenario and adds it to `sum`.
+pub fn run_uart(sum: &mut Summary, scenarios: &[UartScenario], stride: usize) {
+    for s in scenarios.iter().step_by(stride.max(1)) {
+        let o = crate::uart::run(s);
+        sum.add_uart(s, &o);
     }
 }
 
