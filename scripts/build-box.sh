@@ -2,7 +2,9 @@
 # Builds plinth-box, the field box image for the reference board
 # (STM32F407G-DISC1 + AD7606 module; firmware/README.md), release, for
 # thumbv7em-none-eabihf, and prints the ELF's path on its last line.
-# Extra arguments go to cargo (e.g. `--features bench`).
+# Extra arguments go to cargo (e.g. `--features log` for the defmt log over
+# RTT with a probe, `--features bench` for the cycle counts). The default
+# is the field image: no logging (nothing can mask BUSY's interrupt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 

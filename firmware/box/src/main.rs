@@ -30,11 +30,14 @@
 //! - 1: `process` (pended by a half, received bytes and the tick): the
 //!   protocol, the extractor and the pipeline;
 //! - idle: the watchdog (fed only while acquisition progresses or is
-//!   stopped on purpose), the LEDs and the once-a-second log. defmt-rtt
-//!   masks interrupts while it writes a frame: the log lines are rare and
-//!   short, and a mask long enough to merge two BUSY edges is caught by the
-//!   slip detector and becomes a counted restart (the board model's fault
-//!   matrix covers masks up to 100 µs).
+//!   stopped on purpose), the LEDs and the once-a-second log.
+//!
+//! Logging: the field image (default features) has a logger that writes
+//! nowhere and masks nothing. The `log` feature (and `bench`) logs over
+//! defmt-rtt, which masks interrupts while it writes a frame: a mask long
+//! enough to merge two BUSY edges is caught by the slip detector and
+//! becomes a counted restart (the board model's fault matrix covers masks
+//! up to 100 µs), never a shifted sample.
 #![cfg_attr(target_os = "none", no_std)]
 #![cfg_attr(target_os = "none", no_main)]
 
@@ -53,8 +56,24 @@ mod panic_record;
 #[cfg(target_os = "none")]
 mod serial;
 
-#[cfg(target_os = "none")]
+#[cfg(all(target_os = "none", feature = "log"))]
 use defmt_rtt as _;
+
+/// The field image's logger (no `log` feature): takes no critical section
+/// and writes nowhere, so logging can never hold BUSY's interrupt off.
+#[cfg(all(target_os = "none", not(feature = "log")))]
+mod silent_log {
+    #[defmt::global_logger]
+    struct Silent;
+
+    // SAFETY: nothing is shared: every method does nothing.
+    unsafe impl defmt::Logger for Silent {
+        fn acquire() {}
+        unsafe fn flush() {}
+        unsafe fn release() {}
+        unsafe fn write(_bytes: &[u8]) {}
+    }
+}
 
 /// Records, logs and resets: the next boot reports the record. A panic
 /// while panicking resets at once.
