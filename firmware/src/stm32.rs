@@ -75,10 +75,15 @@ fn set_bits(addr: usize, mask: u32, value: u32) {
 #[derive(Clone, Copy, Debug)]
 pub struct Mmio;
 
+// Inlined: the interrupt handlers call these once per register access
+// (an out-of-line call would cost a branch, a return and the spills
+// around it at every access).
 impl clock::Registers for Mmio {
+    #[inline(always)]
     fn read(&mut self, addr: usize) -> u32 {
         read(addr)
     }
+    #[inline(always)]
     fn write(&mut self, addr: usize, value: u32) {
         write(addr, value)
     }

@@ -99,6 +99,7 @@ impl Default for AdcShared {
 }
 
 /// Adds one to a counter with a single writer (load and store).
+#[inline]
 fn bump(counter: &AtomicU32) {
     counter.store(
         counter.load(Ordering::Relaxed).wrapping_add(1),

@@ -35,6 +35,7 @@ impl HalfCompletions {
     }
 
     /// One more half is full; returns the new count (wrapping).
+    #[inline]
     pub fn complete(&self) -> u32 {
         // Only the one interrupt writes: a load and a store are enough
         // (Cortex-M has no atomic read-modify-write on every target).

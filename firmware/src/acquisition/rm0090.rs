@@ -16,31 +16,38 @@ pub mod dma1 {
     /// High interrupt flag clear register (write 1 to clear).
     pub const HIFCR: usize = BASE + 0x0C;
     /// Stream `n`'s configuration register.
+    #[inline]
     pub const fn cr(n: usize) -> usize {
         BASE + 0x10 + 0x18 * n
     }
     /// Stream `n`'s number of data items (remaining) register.
+    #[inline]
     pub const fn ndtr(n: usize) -> usize {
         cr(n) + 0x04
     }
     /// Stream `n`'s peripheral address register.
+    #[inline]
     pub const fn par(n: usize) -> usize {
         cr(n) + 0x08
     }
     /// Stream `n`'s memory 0 address register.
+    #[inline]
     pub const fn m0ar(n: usize) -> usize {
         cr(n) + 0x0C
     }
     /// Stream `n`'s memory 1 address register (double-buffer mode).
+    #[inline]
     pub const fn m1ar(n: usize) -> usize {
         cr(n) + 0x10
     }
     /// Stream `n`'s FIFO control register.
+    #[inline]
     pub const fn fcr(n: usize) -> usize {
         cr(n) + 0x14
     }
     /// The status (and clear) register of stream `n`, and the shift of its
     /// flags in it.
+    #[inline]
     pub const fn flags(n: usize) -> (usize, usize, u32) {
         let shift = [0, 6, 16, 22][n % 4];
         if n < 4 {
@@ -82,6 +89,7 @@ pub mod dma1 {
     /// SxCR: memory data size 16 bit (MSIZE = 01).
     pub const CR_MSIZE_16: u32 = 0b01 << 13;
     /// SxCR: priority level (PL, 2 bits).
+    #[inline]
     pub const fn cr_pl(level: u32) -> u32 {
         (level & 0b11) << 16
     }
@@ -90,6 +98,7 @@ pub mod dma1 {
     /// SxCR: current target (memory 1 when set).
     pub const CR_CT: u32 = 1 << 19;
     /// SxCR: channel selection (CHSEL, 3 bits).
+    #[inline]
     pub const fn cr_chsel(channel: u32) -> u32 {
         (channel & 0b111) << 25
     }
@@ -114,6 +123,7 @@ pub mod spi2 {
     /// CR1: master.
     pub const CR1_MSTR: u32 = 1 << 2;
     /// CR1: baud rate divider f_PCLK / 2^(BR+1) (BR, 3 bits).
+    #[inline]
     pub const fn cr1_br(br: u32) -> u32 {
         (br & 0b111) << 3
     }
@@ -201,6 +211,7 @@ pub mod tim {
     /// CCMR1: channel 2 input on TI2 (CC2S = 01).
     pub const CCMR1_CC2S_TI2: u32 = 0b01 << 8;
     /// CCMR1: channel 2 input filter (IC2F, 4 bits).
+    #[inline]
     pub const fn ccmr1_ic2f(filter: u32) -> u32 {
         (filter & 0xF) << 12
     }
