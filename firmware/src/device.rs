@@ -225,6 +225,15 @@ impl Device {
         activity
     }
 
+    /// The extraction step alone: runs whatever the source has through
+    /// the pipeline (phasor and estimate frames go to the outbox) and
+    /// returns the sample vectors taken. [`Device::poll`] does this too;
+    /// `plinth-box` also runs it in its own task, pended by each completed
+    /// DMA half, above the protocol's.
+    pub fn extract<S: SampleSource>(&mut self, source: &mut S) -> usize {
+        self.drain_source(source)
+    }
+
     /// Runs whatever the source has through the pipeline.
     fn drain_source<S: SampleSource>(&mut self, source: &mut S) -> usize {
         if self.state != DeviceState::Running {

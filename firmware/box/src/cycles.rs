@@ -85,11 +85,14 @@ pub static BUSY: Meter = Meter::new("busy_exti");
 pub static HALF: Meter = Meter::new("adc_half_dma");
 /// The keyphasor capture interrupt.
 pub static KEYPHASOR: Meter = Meter::new("keyphasor_capture");
-/// One `Device::poll` of the idle loop (extractor, pipeline, protocol);
-/// the loop skips it when nothing can have changed (see `idle`).
+/// One `Device::extract` of the `extract` task (a DMA half through the
+/// extractor and the pipeline).
+pub static EXTRACT: Meter = Meter::new("extract");
+/// One `Device::poll` of the `process` task (protocol, status, and any
+/// samples `extract` has not taken yet).
 pub static POLL: Meter = Meter::new("device_poll");
 /// The millisecond tick.
 pub static TICK: Meter = Meter::new("systick");
 
 /// Every meter, in report order.
-pub static ALL: [&Meter; 5] = [&BUSY, &HALF, &KEYPHASOR, &POLL, &TICK];
+pub static ALL: [&Meter; 6] = [&BUSY, &HALF, &KEYPHASOR, &EXTRACT, &POLL, &TICK];

@@ -24,11 +24,15 @@
 //! `plinth_firmware::uart_dma`, which the host's board model runs):
 //! - 4: `busy_fell` (EXTI0: starts each 8-word SPI DMA read, slip and
 //!   late-read detectors) and `spi_error` (SPI2 overrun);
-//! - 3: `adc_half` (SPI receive DMA: a half is complete) and `keyphasor`
-//!   (TIM5 capture);
-//! - 2: `host_rx_half` (host-link receive DMA) and `tick` (1 ms);
-//! - 1: `process` (pended by a half, received bytes and the tick): the
-//!   protocol, the extractor and the pipeline;
+//! - 3: `adc_half` (SPI receive DMA: a half is complete), `keyphasor`
+//!   (TIM5 capture), `host_rx_half` (host-link receive DMA) and `tick`
+//!   (1 ms): each a few dozen cycles, above the device's lock so that a
+//!   long protocol pass never delays the millisecond count;
+//! - 2: `extract` (pended by each completed half: the phasor extractor
+//!   and the pipeline);
+//! - 1: `process` (pended by received bytes and the tick): the protocol,
+//!   status frames and the link (it locks the device and the source, so
+//!   `extract` waits for its pass);
 //! - idle: the watchdog (fed only while acquisition progresses or is
 //!   stopped on purpose), the LEDs and the once-a-second log.
 //!
@@ -147,13 +151,14 @@ mod app {
     type Source = Refusable<DmaSource<BoxAdc>>;
 
     #[shared]
-    struct Shared {}
+    struct Shared {
+        device: &'static mut Device,
+        source: Source,
+    }
 
     #[local]
     struct Local {
         captures: Producer<'static, u32, CAPTURE_SLOTS>,
-        device: &'static mut Device,
-        source: Source,
         link: BoxSerial,
         watchdog: IndependentWatchdog,
         green: PD12<Output<PushPull>>,
@@ -288,11 +293,9 @@ mod app {
             rate
         );
         (
-            Shared {},
+            Shared { device, source },
             Local {
                 captures: producer,
-                device,
-                source,
                 link,
                 watchdog,
                 green: gpiod.pd12.into_push_pull_output(),
@@ -335,27 +338,39 @@ mod app {
         }
     }
 
-    /// The protocol, the extractor and the pipeline on whatever the
-    /// interrupts handed over (priority 1: above idle, below every
-    /// interrupt of the acquisition).
-    #[task(binds = USART1, priority = 1, local = [device, source, link])]
+    /// The extraction: each completed DMA half through the phasor
+    /// extractor and the pipeline (priority 2: above the protocol and idle,
+    /// below every acquisition interrupt; pended by `adc_half`).
+    #[task(binds = USART3, priority = 2, shared = [device, source])]
+    fn extract(cx: extract::Context) {
+        (cx.shared.device, cx.shared.source).lock(|device, source| {
+            cycles::EXTRACT.measure(|| device.extract(source));
+        });
+    }
+
+    /// The protocol (commands, status frames, the link) on whatever the
+    /// interrupts handed over (priority 1: above idle, below the
+    /// extraction and every acquisition interrupt).
+    #[task(binds = USART1, priority = 1, shared = [device, source], local = [link])]
     fn process(cx: process::Context) {
-        let process::LocalResources {
-            device,
-            source,
-            link,
-            ..
-        } = cx.local;
+        let link = cx.local.link;
         let now = UPTIME_MS.load(Ordering::Relaxed);
-        cycles::POLL.measure(|| device.poll(link, source, now));
+        (cx.shared.device, cx.shared.source).lock(|device, source| {
+            cycles::POLL.measure(|| device.poll(link, source, now));
+            let running = matches!(&source.0, Some(s) if s.running());
+            RUNNING.store(running, Ordering::Relaxed);
+        });
         link.kick();
-        let running = matches!(&source.0, Some(s) if s.running());
-        RUNNING.store(running, Ordering::Relaxed);
     }
 
     /// Runs `process` (after the pending interrupts above it).
     fn pend_process() {
         rtic::pend(pac::Interrupt::USART1);
+    }
+
+    /// Runs `extract` (after the pending interrupts above it).
+    fn pend_extract() {
+        rtic::pend(pac::Interrupt::USART3);
     }
 
     /// One line per task and second: `BENCH <task> calls <n> cycles <sum>
@@ -391,7 +406,7 @@ mod app {
     #[task(binds = DMA1_STREAM3, priority = 3)]
     fn adc_half(_: adc_half::Context) {
         cycles::HALF.measure(|| acq::adc_half(&mut Mmio, &SHARED));
-        pend_process();
+        pend_extract();
     }
 
     /// A keyphasor edge was captured.
@@ -401,14 +416,14 @@ mod app {
     }
 
     /// The host link's receive DMA passed half its ring.
-    #[task(binds = DMA1_STREAM5, priority = 2)]
+    #[task(binds = DMA1_STREAM5, priority = 3)]
     fn host_rx_half(_: host_rx_half::Context) {
         uart_dma::host_rx_half(&mut Mmio, &serial::RX_HALVES);
         pend_process();
     }
 
     /// Milliseconds since boot; the protocol's pass every millisecond.
-    #[task(binds = SysTick, priority = 2)]
+    #[task(binds = SysTick, priority = 3)]
     fn tick(_: tick::Context) {
         cycles::TICK.measure(|| {
             UPTIME_MS.store(
