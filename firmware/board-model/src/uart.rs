@@ -135,6 +135,7 @@ pub fn run(s: &UartScenario) -> UartOutcome {
     }
     let t0 = board.now() + us(100);
     let mut line = Vec::with_capacity(host.len());
+    let mut flagged = Vec::with_capacity(host.len());
     let mut away: Option<(u64, u64)> = None;
     {
         let mut hw = board.hw.borrow_mut();
@@ -149,6 +150,7 @@ pub fn run(s: &UartScenario) -> UartOutcome {
                 _ => (b, false),
             };
             line.push(v);
+            flagged.push(flag);
             hw.rx_bytes.push((t, v, flag));
         }
         match s.fault {
@@ -167,13 +169,19 @@ pub fn run(s: &UartScenario) -> UartOutcome {
     let back = away.map_or(0, |(_, b)| b + us(1_000));
     let end = (t0 + (host.len() as u64 + 20) * byte_ticks).max(back);
     // The idle loop: every 300 µs it reads what came and feeds the frame
-    // receiver; per pass, (bytes delivered so far, counters after it).
+    // receiver; per pass, (bytes delivered so far, the UART's counters
+    // after it (line errors + ring overruns), the frame receiver's
+    // failures after it).
     let mut receiver: Receiver<HostMessage> = Receiver::new();
     let mut got: Vec<u8> = Vec::new();
-    let mut passes: Vec<(usize, u64)> = Vec::new();
+    let mut passes: Vec<(usize, [u64; 2])> = Vec::new();
+    let mut pass_ticks: Vec<u64> = Vec::new();
     let mut decoded: Vec<(u32, HostMessage)> = Vec::new();
     let counted = |serial: &DmaSerial<Port>, rx: &Receiver<HostMessage>| {
-        u64::from(serial.receive_errors()) + u64::from(rx.stats().failures())
+        [
+            u64::from(serial.receive_errors()),
+            u64::from(rx.stats().failures()),
+        ]
     };
     while board.now() < end {
         board.spend(2 * us(300));
@@ -187,6 +195,7 @@ pub fn run(s: &UartScenario) -> UartOutcome {
             }
         }
         passes.push((got.len(), counted(&serial, &receiver)));
+        pass_ticks.push(board.now());
     }
     let mut out = UartOutcome {
         sent: host.len() as u64,
@@ -204,37 +213,57 @@ pub fn run(s: &UartScenario) -> UartOutcome {
     }
     // Bytes: align what came with what was on the line (deletions only);
     // a stretch of host bytes lost or altered before delivered byte j must
-    // see a counter move between the pass that delivered byte j - 1 and
-    // the pass after the one that delivered byte j.
+    // see a counter move between the last pass before its first byte
+    // arrived and the pass after the one that delivered the frame end
+    // following it: the UART's own
+    // counters when the UART could see it (a byte lost, or flagged noisy),
+    // else (a bit flip the UART cannot see) the frame receiver's.
     let pass_of = |j: usize| {
         passes
             .iter()
             .position(|p| p.0 > j)
             .unwrap_or(passes.len() - 1)
     };
-    let counter_after = |q: usize| passes.get(q).map_or(0, |p| p.1);
-    let final_count = passes.last().map_or(0, |p| p.1);
+    let counter_after = |q: usize, k: usize| passes.get(q).map_or(0, |p| p.1[k]);
+    let final_count = |k: usize| passes.last().map_or(0, |p| p.1[k]);
+    // The last pass that ended before host byte `i` arrived.
+    let last_pass_before = |i: usize| {
+        let arrival = t0 + i as u64 * byte_ticks;
+        pass_ticks.iter().rposition(|&t| t < arrival)
+    };
     let (mut i, mut j) = (0usize, 0usize);
     let mut bad_since: Option<usize> = None;
+    // Whether the UART could see the stretch (0: its counters, 1: frames').
+    let mut which = 1usize;
+    // Bytes the USART dropped (overrun) are known to the model: taken out
+    // of the alignment as lost, so that equal byte values cannot shift it.
+    let usart_lost: std::collections::BTreeSet<usize> =
+        board.hw.borrow().rx_lost.iter().copied().collect();
     while i < line.len() {
         let altered = line[i] != host[i];
-        if j < got.len() && got[j] == line[i] && !altered {
+        if usart_lost.contains(&i) {
+            which = 0;
+            bad_since.get_or_insert(i);
+        } else if j < got.len() && got[j] == line[i] && !altered {
             if let Some(first) = bad_since.take() {
-                let before = match j {
-                    0 => 0,
-                    _ => pass_of(j - 1).checked_sub(1).map_or(0, counter_after),
-                };
+                let k = which;
+                which = 1;
+                let before = last_pass_before(first).map_or(0, |q| counter_after(q, k));
                 // (The frame receiver counts a broken frame at its
                 // delimiter: the window runs to the next one delivered.)
                 let delim = got[j..]
                     .iter()
                     .position(|&b| b == 0)
                     .map_or(got.len() - 1, |k| j + k);
-                let after = counter_after(pass_of(delim) + 1).max(counter_after(pass_of(delim)));
+                let after =
+                    counter_after(pass_of(delim) + 1, k).max(counter_after(pass_of(delim), k));
                 if after <= before {
                     out.uncounted += 1;
                     out.problem(|| {
-                        format!("host bytes {first}..{i} lost or altered, no counter moved")
+                        format!(
+                            "host bytes {first}..{i} lost or altered, no {} counter moved",
+                            ["UART", "frame"][k]
+                        )
                     });
                 }
             }
@@ -242,18 +271,19 @@ pub fn run(s: &UartScenario) -> UartOutcome {
         } else {
             if j < got.len() && got[j] == line[i] {
                 j += 1; // delivered, altered on the line
+                if flagged[i] {
+                    which = 0;
+                }
+            } else {
+                which = 0; // lost: the USART or the ring must count it
             }
             bad_since.get_or_insert(i);
         }
         i += 1;
     }
     if let Some(first) = bad_since {
-        let before = if j == 0 {
-            0
-        } else {
-            counter_after(pass_of(j - 1))
-        };
-        if final_count <= before {
+        let before = last_pass_before(first).map_or(0, |q| counter_after(q, which));
+        if final_count(which) <= before {
             out.uncounted += 1;
             out.problem(|| {
                 format!("host bytes {first}.. lost or altered at the end, no counter moved")

@@ -82,6 +82,8 @@ pub struct Hw {
     next_rx: usize,
     /// Bytes lost in the USART (overrun: the DMA came too late).
     pub rx_overruns: u32,
+    /// Indices (in `rx_bytes`) of the bytes lost to those overruns.
+    pub rx_lost: Vec<usize>,
     /// Times SPI2's OVR was set (an overrun began).
     pub spi_overruns: u32,
     pub faults: HwFaults,
@@ -118,6 +120,7 @@ impl Hw {
             rx_bytes: Vec::new(),
             next_rx: 0,
             rx_overruns: 0,
+            rx_lost: Vec::new(),
             spi_overruns: 0,
             faults: HwFaults::default(),
             ram: vec![0; RAM_BYTES],

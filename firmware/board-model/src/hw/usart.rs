@@ -36,6 +36,7 @@ impl Hw {
             self.usart.errors |= 1 << 3;
             self.usart.sr_read = false;
             self.rx_overruns += 1;
+            self.rx_lost.push(self.next_rx - 1);
             return;
         }
         self.usart.rx = byte;
