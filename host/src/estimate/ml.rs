@@ -62,7 +62,7 @@
 
 use super::gauss_helmert::{self as gh, Equations, JacobianRequest};
 use super::Observation;
-use nalgebra::{DMatrix, DVector, Matrix4, SMatrix, Vector4};
+use nalgebra::{DMatrix, DVector, Matrix4, SMatrix, SVector, Vector4};
 use num_complex::Complex;
 use plinth_shared::regression::{equations, Parameter, PARAMETERS};
 
@@ -225,35 +225,57 @@ impl Speed {
         s * self.scale
     }
 
-    /// ∂Σ/∂θ_k (Σ depends on θ only through the dynamic stiffness): its
-    /// non-zero 2×2 diagonal blocks, as (direction d, [∂Σ₀₀, ∂Σ₀₁, ∂Σ₁₁])
-    /// at rows and columns 2d, 2d+1 (one block, two for the mass).
-    fn d_sigma(&self, theta: &[f64], k: usize) -> [Option<(usize, [f64; 3])>; 2] {
-        let w = self.omega;
-        let h = self.stiffness(theta);
-        // (direction, ∂Re h, ∂Im h) of parameter k.
-        let parts: [Option<(usize, f64, f64)>; 2] = match k {
-            0 => [Some((0, 1.0, 0.0)), None],
-            1 => [Some((1, 1.0, 0.0)), None],
-            2 => [Some((0, -w * w, 0.0)), Some((1, -w * w, 0.0))],
-            3 => [Some((0, 0.0, w)), None],
-            _ => [Some((1, 0.0, w)), None],
+    /// Lower Cholesky factor of Σ(θ) with an equation error of variance `tau2` [N²].
+    fn factor(&self, theta: &[f64], tau2: f64) -> Result<Matrix4<f64>, MlError> {
+        cholesky(self.sigma(theta, tau2), self.speed_hz)
+    }
+
+    /// ∂w/∂θ (4×5) of the whitened residual w = L⁻¹e at θ, given L⁻¹ and w
+    /// (module docs): L⁻¹A_k − Φ(L⁻¹·∂Σ/∂θ_k·L⁻ᵀ)·w. ∂Σ/∂θ_k is a combination
+    /// of three fixed 2×2 patterns per direction, so Φ(·)·w is formed once per
+    /// pattern and combined per parameter: fixed-size, no allocation.
+    fn whitened_jacobian(
+        &self,
+        theta: &[f64],
+        linv: &Matrix4<f64>,
+        w: &Vector4<f64>,
+    ) -> SMatrix<f64, 4, PARAMETERS> {
+        let mut j = linv * self.a;
+        // Φ(x·yᵀ)·w: x_i·(Σ_{q<i} y_q·w_q + ½·y_i·w_i).
+        let phi = |x: &Vector4<f64>, y: &Vector4<f64>| -> Vector4<f64> {
+            let mut out = Vector4::zeros();
+            let mut acc = 0.0;
+            for i in 0..4 {
+                let yw = y[i] * w[i];
+                out[i] = x[i] * (acc + 0.5 * yw);
+                acc += yw;
+            }
+            out
         };
-        parts.map(|part| {
-            part.map(|(d, da, db)| {
-                let (a, b) = h[d];
-                let (v1, v2) = (self.var_ped[2 * d], self.var_ped[2 * d + 1]);
-                let c = self.scale;
-                (
-                    d,
-                    [
-                        2.0 * c * (a * da * v1 + b * db * v2),
-                        c * (da * b + a * db) * (v1 - v2),
-                        2.0 * c * (b * db * v1 + a * da * v2),
-                    ],
-                )
-            })
-        })
+        let om = self.omega;
+        let c = self.scale;
+        for (d, (a, b)) in self.stiffness(theta).into_iter().enumerate() {
+            let g0: Vector4<f64> = linv.column(2 * d).into_owned();
+            let g1: Vector4<f64> = linv.column(2 * d + 1).into_owned();
+            let p00 = phi(&g0, &g0);
+            let p01 = phi(&g0, &g1) + phi(&g1, &g0);
+            let p11 = phi(&g1, &g1);
+            let (v1, v2) = (self.var_ped[2 * d], self.var_ped[2 * d + 1]);
+            // ∂Σ's block [[s0, s1], [s1, s2]] for ∂(Re h, Im h) = (1, 0)
+            // (the stiffness; the mass is −Ω² times it) and (0, Ω) (the damping).
+            let stiffness =
+                p00 * (2.0 * c * a * v1) + p01 * (c * b * (v1 - v2)) + p11 * (2.0 * c * a * v2);
+            let damping = p00 * (2.0 * c * b * om * v2)
+                + p01 * (c * a * om * (v1 - v2))
+                + p11 * (2.0 * c * b * om * v1);
+            let mut col = j.column_mut(d);
+            col -= &stiffness;
+            let mut col = j.column_mut(2);
+            col += stiffness * (om * om);
+            let mut col = j.column_mut(3 + d);
+            col -= &damping;
+        }
+        j
     }
 }
 
@@ -316,18 +338,32 @@ impl Rigid {
 
     /// Cholesky factor of speed `s`'s Σ at θ.
     fn factor(&self, s: usize, theta: &[f64]) -> Result<Matrix4<f64>, MlError> {
-        let sp = &self.speeds[s];
-        cholesky(sp.sigma(theta, self.equation_var), sp.speed_hz)
+        self.speeds[s].factor(theta, self.equation_var)
     }
 
     /// J(θ) = Σ eᵀΣ⁻¹e [-].
     fn cost(&self, theta: &[f64]) -> Result<f64, MlError> {
+        let t = theta_vector(theta);
         let mut sum = 0.0;
-        for (s, sp) in self.speeds.iter().enumerate() {
-            let l = self.factor(s, theta)?;
-            sum += forward(&l, &(sp.a * theta_vector(theta) - sp.b)).norm_squared();
+        for sp in &self.speeds {
+            let l = sp.factor(theta, self.equation_var)?;
+            sum += forward(&l, &(sp.a * t - sp.b)).norm_squared();
         }
         Ok(sum)
+    }
+
+    /// J(θ) and its slope dJ/dτ² [1/N²] at the current τ²: ∂Σ/∂τ² = c·I,
+    /// so dJ/dτ² = −Σ c·|Σ⁻¹e|² with Σ⁻¹e = L⁻ᵀw.
+    fn cost_and_slope(&self, theta: &[f64]) -> Result<(f64, f64), MlError> {
+        let t = theta_vector(theta);
+        let (mut cost, mut slope) = (0.0, 0.0);
+        for sp in &self.speeds {
+            let l = sp.factor(theta, self.equation_var)?;
+            let w = forward(&l, &(sp.a * t - sp.b));
+            cost += w.norm_squared();
+            slope -= sp.scale * backward(&l, &w).norm_squared();
+        }
+        Ok((cost, slope))
     }
 
     /// RMS of the unweighted equation residuals e [N].
@@ -380,7 +416,7 @@ impl Equations for Rigid {
             *j.out = DMatrix::zeros(4 * n, j.free.len());
         }
         for (s, sp) in self.speeds.iter().enumerate() {
-            let l = self.factor(s, p).ok()?;
+            let l = sp.factor(p, self.equation_var).ok()?;
             let e = sp.a * theta - sp.b;
             let Some(j) = jacobian.as_mut() else {
                 r.fixed_rows_mut::<4>(4 * s).copy_from(&forward(&l, &e));
@@ -389,34 +425,47 @@ impl Equations for Rigid {
             let linv = lower_inverse(&l);
             let w = linv * e;
             r.fixed_rows_mut::<4>(4 * s).copy_from(&w);
+            let dw = sp.whitened_jacobian(p, &linv, &w);
             for (c, &k) in j.free.iter().enumerate() {
-                // ∂w/∂θ_k = L⁻¹A_k − Φ(M)·w, M = L⁻¹·∂Σ/∂θ_k·L⁻ᵀ (module docs),
-                // ∂Σ/∂θ_k being one or two 2×2 diagonal blocks.
-                let mut m = [[0.0f64; 4]; 4];
-                for (d, ds) in sp.d_sigma(p, k).into_iter().flatten() {
-                    let (p0, p1) = (2 * d, 2 * d + 1);
-                    for i in 0..4 {
-                        let gi = [linv[(i, p0)], linv[(i, p1)]];
-                        let t = [gi[0] * ds[0] + gi[1] * ds[1], gi[0] * ds[1] + gi[1] * ds[2]];
-                        for (jj, mij) in m[i].iter_mut().enumerate().take(i + 1) {
-                            *mij += t[0] * linv[(jj, p0)] + t[1] * linv[(jj, p1)];
-                        }
-                    }
-                }
                 for i in 0..4 {
-                    let mut la = 0.0;
-                    for q in 0..=i {
-                        la += linv[(i, q)] * sp.a[(q, k)];
-                    }
-                    let mut phi_w = 0.5 * m[i][i] * w[i];
-                    for q in 0..i {
-                        phi_w += m[i][q] * w[q];
-                    }
-                    j.out[(4 * s + i, c)] = la - phi_w;
+                    j.out[(4 * s + i, c)] = dw[(i, k)];
                 }
             }
         }
         r.iter().all(|v| v.is_finite()).then_some(r)
+    }
+
+    fn objective(&self, p: &[f64]) -> Option<f64> {
+        self.cost(p).ok().filter(|c| c.is_finite())
+    }
+
+    fn normal_equations(&self, p: &[f64], free: &[usize], _step: &[f64]) -> Option<gh::Normal> {
+        let theta = theta_vector(p);
+        let mut hess = SMatrix::<f64, PARAMETERS, PARAMETERS>::zeros();
+        let mut grad = SVector::<f64, PARAMETERS>::zeros();
+        let mut cost = 0.0;
+        for sp in &self.speeds {
+            let l = sp.factor(p, self.equation_var).ok()?;
+            let linv = lower_inverse(&l);
+            let w = linv * (sp.a * theta - sp.b);
+            let dw = sp.whitened_jacobian(p, &linv, &w);
+            hess += dw.tr_mul(&dw);
+            grad += dw.tr_mul(&w);
+            cost += w.norm_squared();
+        }
+        let q = free.len();
+        let normal = gh::Normal {
+            hess: DMatrix::from_fn(q, q, |a, b| hess[(free[a], free[b])]),
+            grad: DVector::from_fn(q, |a, _| grad[free[a]]),
+            cost,
+        };
+        (cost.is_finite()
+            && normal
+                .hess
+                .iter()
+                .chain(normal.grad.iter())
+                .all(|v| v.is_finite()))
+        .then_some(normal)
     }
 
     fn information(&self, s: usize, p: &[f64], _scale: &[f64]) -> Option<DMatrix<f64>> {
@@ -505,6 +554,20 @@ fn forward(l: &Matrix4<f64>, b: &Vector4<f64>) -> Vector4<f64> {
         let mut v = b[i];
         for k in 0..i {
             v -= l[(i, k)] * x[k];
+        }
+        x[i] = v / l[(i, i)];
+    }
+    x
+}
+
+/// L⁻ᵀ·b for a lower-triangular L with a positive diagonal.
+#[inline]
+fn backward(l: &Matrix4<f64>, b: &Vector4<f64>) -> Vector4<f64> {
+    let mut x = Vector4::zeros();
+    for i in (0..4).rev() {
+        let mut v = b[i];
+        for k in i + 1..4 {
+            v -= l[(k, i)] * x[k];
         }
         x[i] = v / l[(i, i)];
     }
@@ -765,10 +828,14 @@ pub fn equation_var_for_chi2(
     var_for_chi2(&mut eq, theta, dof)
 }
 
+/// τ² with J(θ; τ²) = `dof` (see [`equation_var_for_chi2`]) by safeguarded
+/// Newton steps on 1/J, nearly linear in τ² (exactly so when the equation
+/// error dominates), inside a bracket that bisects when a step leaves it.
 fn var_for_chi2(eq: &mut Rigid, theta: &[f64; PARAMETERS], dof: usize) -> Result<f64, MlError> {
     let target = dof.max(1) as f64;
     eq.set_equation_var(0.0);
-    if eq.cost(theta)? <= target {
+    let (mut cost, mut slope) = eq.cost_and_slope(theta)?;
+    if cost <= target {
         return Ok(0.0);
     }
     let sum_sq: f64 = eq
@@ -780,19 +847,30 @@ fn var_for_chi2(eq: &mut Rigid, theta: &[f64; PARAMETERS], dof: usize) -> Result
     if !(hi.is_finite() && hi > 0.0) {
         return Err(MlError::NonFinite);
     }
+    let mut x = 0.0;
     for _ in 0..200 {
-        let mid = if lo > 0.0 { (lo * hi).sqrt() } else { 0.5 * hi };
-        eq.set_equation_var(mid);
-        if eq.cost(theta)? > target {
-            lo = mid;
+        if cost > target {
+            lo = x;
         } else {
-            hi = mid;
+            hi = x;
         }
-        if hi - lo <= 1e-6 * hi {
-            break;
+        // Newton on 1/J − 1/target: x + (J/J')·(1 − J/target).
+        let newton = x + (cost / slope) * (1.0 - cost / target);
+        let next = if newton.is_finite() && newton > lo && newton < hi {
+            newton
+        } else if lo > 0.0 {
+            (lo * hi).sqrt()
+        } else {
+            0.5 * hi
+        };
+        if (next - x).abs() <= 1e-9 * next || hi - lo <= 1e-6 * hi {
+            return Ok(next);
         }
+        x = next;
+        eq.set_equation_var(x);
+        (cost, slope) = eq.cost_and_slope(theta)?;
     }
-    Ok(hi)
+    Ok(x)
 }
 
 /// Most outer iterations of [`fit_with_equation_error`] (θ, then τ²).
