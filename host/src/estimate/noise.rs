@@ -249,6 +249,11 @@ pub struct BearingNoise {
     pub variance_scale: f64,
 }
 
+/// Variance ratio of the scatter to the digits above which
+/// [`BearingNoise::digits_negligible`] rules the digits out without a fit
+/// (a thousand in standard deviation) [-].
+pub const DIGITS_NEGLIGIBLE: f64 = 1e6;
+
 /// Most points a local smooth fit uses.
 const WINDOW: usize = 7;
 /// Degree of the local smooth fit.
@@ -335,6 +340,27 @@ impl BearingNoise {
             }
             _ => false,
         }
+    }
+
+    /// True while the source is the digits and, on every real channel, the
+    /// scatter between neighbouring speeds exceeds the digits' variance (summed
+    /// over the rows) by more than [`DIGITS_NEGLIGIBLE`]: numbers written with
+    /// far more digits than their noise (full-precision output). No fit can
+    /// then find the digits enough, so the caller switches to the scatter
+    /// ([`BearingNoise::use_scatter`]) before fitting instead of after a
+    /// fit under the digits (a long one: its noise is wrong by that factor).
+    pub fn digits_negligible(&self) -> bool {
+        let Some(scatter) = self.scatter_var.as_ref() else {
+            return false;
+        };
+        if self.source != NoiseSource::Digits || scatter.is_empty() {
+            return false;
+        }
+        (0..8).all(|c| {
+            let digits: f64 = self.var.iter().map(|v| v[c]).sum();
+            let spread: f64 = scatter.iter().map(|v| v[c]).sum();
+            spread > DIGITS_NEGLIGIBLE * digits
+        })
     }
 
     /// Multiplies every variance by `factor` (> 0, finite): the absolute
