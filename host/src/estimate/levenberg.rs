@@ -5,6 +5,10 @@
 
 use nalgebra::{DMatrix, DVector};
 
+/// J and the whitened residuals (or J alone with an empty vector) at a
+/// trial point, `None` where they cannot be evaluated.
+pub type Evaluate<'a> = dyn FnMut(&DVector<f64>) -> Option<(f64, DVector<f64>)> + 'a;
+
 /// The outcome of [`step`].
 pub struct Step {
     /// New (scaled) parameters, whitened residuals and cost J.
@@ -35,7 +39,7 @@ pub fn step(
     mut lambda: f64,
     step_tol: f64,
     decrease_tol: f64,
-    residual: &mut dyn FnMut(&DVector<f64>) -> Option<(f64, DVector<f64>)>,
+    residual: &mut Evaluate<'_>,
 ) -> Option<Step> {
     let q = u.len();
     while lambda < 1e12 {
