@@ -54,6 +54,33 @@ pub trait Equations {
         }
         Some(r)
     }
+    /// J(p) = Σ eᵀΣ⁻¹e [-] (`None` when some Σ is singular or a number is
+    /// not finite). The default sums [`Equations::whiten`]; a model with
+    /// fixed-size per-speed work overrides it to allocate nothing.
+    fn objective(&self, p: &[f64]) -> Option<f64> {
+        self.whiten(p, None).map(|w| w.norm_squared())
+    }
+    /// The Gauss–Newton normal equations of the whitened residuals at `p`
+    /// over the parameters `free` (model units, steps as in
+    /// [`JacobianRequest`]): JᵀJ, Jᵀr and J = |r|². The default forms them
+    /// from [`Equations::whiten`]; a model with analytic derivatives
+    /// accumulates them speed by speed without the stacked Jacobian.
+    fn normal_equations(&self, p: &[f64], free: &[usize], step: &[f64]) -> Option<Normal> {
+        let mut jac = DMatrix::zeros(0, 0);
+        let r = self.whiten(
+            p,
+            Some(JacobianRequest {
+                free,
+                step,
+                out: &mut jac,
+            }),
+        )?;
+        Some(Normal {
+            hess: jac.tr_mul(&jac),
+            grad: jac.tr_mul(&r),
+            cost: r.norm_squared(),
+        })
+    }
     /// Fisher information Aᵀ Σ_s⁻¹ A of speed `s` at `p` (model units),
     /// A = ∂e_s/∂p; the default takes A by central differences with steps
     /// `scale`·1e-6.
@@ -86,6 +113,17 @@ pub struct JacobianRequest<'a> {
     pub step: &'a [f64],
     /// The Jacobian, resized to (residuals × `free.len()`).
     pub out: &'a mut DMatrix<f64>,
+}
+
+/// The Gauss–Newton normal equations of [`Equations::normal_equations`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Normal {
+    /// JᵀJ over the free parameters (model units).
+    pub hess: DMatrix<f64>,
+    /// Jᵀr over the free parameters (model units).
+    pub grad: DVector<f64>,
+    /// J = |r|² [-].
+    pub cost: f64,
 }
 
 /// Lower Cholesky factor of Σ_s(p) = B·D·Bᵀ, regularised by 1e-12 of its
@@ -144,7 +182,7 @@ fn whitened_generic<E: Equations + ?Sized>(
 
 /// J(p) = Σ eᵀΣ⁻¹e [-] (`None` when it cannot be evaluated).
 pub fn cost<E: Equations + ?Sized>(eq: &E, p: &[f64]) -> Option<f64> {
-    whitened(eq, p, None).map(|w| w.norm_squared())
+    eq.objective(p)
 }
 
 /// Fisher information Σ_s Aᵀ Σ_s⁻¹ A at `p` (model units), A = ∂e/∂p
@@ -284,20 +322,28 @@ pub fn minimise<E: Equations + ?Sized>(
         p
     };
     let mut u = DVector::from_fn(q, |j, _| start[idx[j]] / scale[idx[j]]);
-    let mut r = whitened(eq, &p_of(&u), frozen)?;
-    let mut cost_now = r.norm_squared();
+    // With frozen weights the residuals themselves are kept (their forward
+    // differences are the Jacobian); otherwise J and the normal equations
+    // come from the model, speed by speed.
+    let mut r = match frozen {
+        Some(_) => whitened(eq, &p_of(&u), frozen)?,
+        None => DVector::zeros(0),
+    };
+    let mut cost_now = match frozen {
+        Some(_) => r.norm_squared(),
+        None => eq.objective(&p_of(&u))?,
+    };
     let mut lambda = 1e-3;
     let mut converged = false;
     let mut iterations = 0;
-    let mut jac = DMatrix::zeros(0, 0);
     while iterations < settings.max_iterations && q > 0 {
         iterations += 1;
-        let ok = match frozen {
+        let normal = match frozen {
             // Forward differences with frozen weights (the residual is then
             // nearly linear in most parameters, and cheap).
             Some(_) => {
-                jac = DMatrix::zeros(r.len(), q);
-                (0..q).all(|j| {
+                let mut jac = DMatrix::zeros(r.len(), q);
+                let ok = (0..q).all(|j| {
                     let h = 1e-6 * u[j].abs().max(1e-3);
                     let mut up = u.clone();
                     up[j] += h;
@@ -308,39 +354,36 @@ pub fn minimise<E: Equations + ?Sized>(
                         }
                         None => false,
                     }
-                })
+                });
+                ok.then(|| (jac.tr_mul(&r), jac.tr_mul(&jac)))
             }
             None => {
                 let step: Vec<f64> = (0..q)
                     .map(|j| 1e-6 * u[j].abs().max(1e-3) * scale[idx[j]])
                     .collect();
-                let request = JacobianRequest {
-                    free: &idx,
-                    step: &step,
-                    out: &mut jac,
-                };
-                match eq.whiten(&p_of(&u), Some(request)) {
-                    Some(_) => {
-                        for (j, &k) in idx.iter().enumerate() {
-                            jac.column_mut(j).scale_mut(scale[k]);
-                        }
-                        jac.iter().all(|v| v.is_finite())
-                    }
-                    None => false,
-                }
+                eq.normal_equations(&p_of(&u), &idx, &step).and_then(|n| {
+                    // To the units u = p/scale.
+                    let s = DVector::from_fn(q, |j, _| scale[idx[j]]);
+                    let g = n.grad.component_mul(&s);
+                    let hess = DMatrix::from_fn(q, q, |a, b| n.hess[(a, b)] * s[a] * s[b]);
+                    (g.iter().chain(hess.iter()).all(|v| v.is_finite())).then_some((g, hess))
+                })
             }
         };
-        if !ok {
+        let Some((g, hess)) = normal else {
             return Some(Minimum {
                 p: p_of(&u),
                 cost: cost_now,
                 iterations,
                 converged: false,
             });
-        }
-        let g = jac.tr_mul(&r);
-        let hess = jac.tr_mul(&jac);
-        let mut residual = |u_new: &DVector<f64>| whitened(eq, &p_of(u_new), frozen);
+        };
+        let mut evaluate = |u_new: &DVector<f64>| -> Option<(f64, DVector<f64>)> {
+            match frozen {
+                Some(_) => whitened(eq, &p_of(u_new), frozen).map(|r| (r.norm_squared(), r)),
+                None => eq.objective(&p_of(u_new)).map(|c| (c, DVector::zeros(0))),
+            }
+        };
         match super::levenberg::step(
             &u,
             cost_now,
@@ -349,7 +392,7 @@ pub fn minimise<E: Equations + ?Sized>(
             lambda,
             settings.step_tol,
             settings.decrease_tol,
-            &mut residual,
+            &mut evaluate,
         ) {
             Some(s) => {
                 (u, r, cost_now, lambda) = (s.u, s.r, s.cost, s.lambda);

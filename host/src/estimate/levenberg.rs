@@ -5,11 +5,16 @@
 
 use nalgebra::{DMatrix, DVector};
 
+/// J and the whitened residuals (or J alone with an empty vector) at a
+/// trial point, `None` where they cannot be evaluated.
+pub type Evaluate<'a> = dyn FnMut(&DVector<f64>) -> Option<(f64, DVector<f64>)> + 'a;
+
 /// The outcome of [`step`].
 pub struct Step {
     /// New (scaled) parameters, whitened residuals and cost J.
     pub u: DVector<f64>,
-    /// Whitened residuals at `u`.
+    /// Whitened residuals at `u` (what `residual` returned with J; empty
+    /// when the caller keeps only J).
     pub r: DVector<f64>,
     /// J = |r|² at `u`.
     pub cost: f64,
@@ -23,7 +28,8 @@ pub struct Step {
 
 /// From `u` with cost `cost_now`, gradient `g` = Jᵀr and Gauss–Newton
 /// Hessian `hess` = JᵀJ, tries damped steps (λ raised ×4 on failure, eased
-/// ÷3 on success) until `residual(u_new)` exists and does not raise J.
+/// ÷3 on success) until `residual(u_new)` (J and the whitened residuals,
+/// or J alone with an empty vector) exists and does not raise J.
 #[allow(clippy::too_many_arguments)]
 pub fn step(
     u: &DVector<f64>,
@@ -33,7 +39,7 @@ pub fn step(
     mut lambda: f64,
     step_tol: f64,
     decrease_tol: f64,
-    residual: &mut dyn FnMut(&DVector<f64>) -> Option<DVector<f64>>,
+    residual: &mut Evaluate<'_>,
 ) -> Option<Step> {
     let q = u.len();
     while lambda < 1e12 {
@@ -46,11 +52,10 @@ pub fn step(
             continue;
         };
         let u_new = u + &delta;
-        let Some(r_new) = residual(&u_new) else {
+        let Some((cost_new, r_new)) = residual(&u_new) else {
             lambda *= 4.0;
             continue;
         };
-        let cost_new = r_new.norm_squared();
         if cost_new <= cost_now {
             let decrease = cost_now - cost_new;
             // The step measured in its own standard errors (Hessian⁻¹).

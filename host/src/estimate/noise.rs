@@ -249,6 +249,11 @@ pub struct BearingNoise {
     pub variance_scale: f64,
 }
 
+/// Variance ratio of the scatter to the digits above which
+/// [`BearingNoise::digits_negligible`] rules the digits out without a fit
+/// (a thousand in standard deviation) [-].
+pub const DIGITS_NEGLIGIBLE: f64 = 1e6;
+
 /// Most points a local smooth fit uses.
 const WINDOW: usize = 7;
 /// Degree of the local smooth fit.
@@ -289,13 +294,14 @@ impl BearingNoise {
         }
         let mut order: Vec<usize> = (0..rows.len()).collect();
         order.sort_by(|&a, &b| rows[a].speed_hz.total_cmp(&rows[b].speed_hz));
+        // The local fits depend on the speeds only: made once, used by every channel.
+        let speeds: Vec<f64> = order.iter().map(|&i| rows[i].speed_hz).collect();
+        let fits = local_fits(&speeds);
         let mut scatter = [None; 4];
         for (ch, slot) in scatter.iter_mut().enumerate() {
-            let series: Vec<(f64, Complex<f64>)> = order
-                .iter()
-                .map(|&i| (rows[i].speed_hz, complex_value(rows[i], ch)))
-                .collect();
-            *slot = scatter_law(&series);
+            let values: Vec<Complex<f64>> =
+                order.iter().map(|&i| complex_value(rows[i], ch)).collect();
+            *slot = scatter_law_of(&fits, &values);
         }
         let scatter_var = rows
             .iter()
@@ -334,6 +340,27 @@ impl BearingNoise {
             }
             _ => false,
         }
+    }
+
+    /// True while the source is the digits and, on every real channel, the
+    /// scatter between neighbouring speeds exceeds the digits' variance (summed
+    /// over the rows) by more than [`DIGITS_NEGLIGIBLE`]: numbers written with
+    /// far more digits than their noise (full-precision output). No fit can
+    /// then find the digits enough, so the caller switches to the scatter
+    /// ([`BearingNoise::use_scatter`]) before fitting instead of after a
+    /// fit under the digits (a long one: its noise is wrong by that factor).
+    pub fn digits_negligible(&self) -> bool {
+        let Some(scatter) = self.scatter_var.as_ref() else {
+            return false;
+        };
+        if self.source != NoiseSource::Digits || scatter.is_empty() {
+            return false;
+        }
+        (0..8).all(|c| {
+            let digits: f64 = self.var.iter().map(|v| v[c]).sum();
+            let spread: f64 = scatter.iter().map(|v| v[c]).sum();
+            spread > DIGITS_NEGLIGIBLE * digits
+        })
     }
 
     /// Multiplies every variance by `factor` (> 0, finite): the absolute
@@ -392,12 +419,15 @@ const TRUNCATED_SD: f64 = 0.996_940;
 fn robust_sd(abs: &mut [f64]) -> f64 {
     let mut sd = median(abs) / MEDIAN_ABS_NORMAL;
     for _ in 0..10 {
-        let kept: Vec<f64> = abs.iter().copied().filter(|&x| x <= REJECT * sd).collect();
-        if kept.len() < 4 {
+        let (mut kept, mut sum_sq) = (0usize, 0.0);
+        for &x in abs.iter().filter(|&&x| x <= REJECT * sd) {
+            kept += 1;
+            sum_sq += x * x;
+        }
+        if kept < 4 {
             break;
         }
-        let next =
-            (kept.iter().map(|x| x * x).sum::<f64>() / kept.len() as f64).sqrt() / TRUNCATED_SD;
+        let next = (sum_sq / kept as f64).sqrt() / TRUNCATED_SD;
         if (next - sd).abs() <= 1e-9 * sd {
             sd = next;
             break;
@@ -421,57 +451,108 @@ fn log_spread(u: &[f64]) -> f64 {
     q(0.75) - q(0.25)
 }
 
+/// The local cubic fit (module docs) at one point of a series, as weights:
+/// the smooth value there is Σ weights[r]·y[start + r] over its window.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LocalFit {
+    /// Index of the window's first point.
+    pub start: usize,
+    /// Points in the window.
+    pub len: usize,
+    /// Weight of each window point in the smooth value [-].
+    pub weights: [f64; WINDOW],
+    /// The point's leverage h₀ in its own fit [-].
+    pub leverage: f64,
+}
+
+/// The local cubic fits of a series sampled at increasing `speeds` [Hz], one
+/// per point (`None` where the fit is singular or the point determines it):
+/// they depend on the speeds only, so one set serves every channel. Empty
+/// with fewer than `DEGREE + 3` points.
+pub fn local_fits(speeds: &[f64]) -> Vec<Option<LocalFit>> {
+    let n = speeds.len();
+    let w = WINDOW.min(n);
+    if w < DEGREE + 3 {
+        return Vec::new();
+    }
+    (0..n)
+        .map(|j| {
+            let start = j.saturating_sub(w / 2).min(n - w);
+            let window = &speeds[start..start + w];
+            let f0 = speeds[j];
+            let span = (window[w - 1] - window[0]).abs().max(f64::MIN_POSITIVE);
+            // Powers (1, x, x², x³) of each window point's offset, and XᵀX.
+            let powers = |f: f64| {
+                let x = (f - f0) / span;
+                nalgebra::Vector4::new(1.0, x, x * x, x * x * x)
+            };
+            let mut xtx = nalgebra::Matrix4::<f64>::zeros();
+            for f in window {
+                let v = powers(*f);
+                xtx += v * v.transpose();
+            }
+            // The smooth value at f0 is e₀ᵀ(XᵀX)⁻¹Xᵀy = Σ (x_r·h) y_r with
+            // h = (XᵀX)⁻¹e₀, and its leverage is h₀.
+            let h = xtx.cholesky().map(|c| c.solve(&nalgebra::Vector4::x()))?;
+            let leverage = h[0];
+            if leverage.is_nan() || leverage >= 1.0 - 1e-9 {
+                return None;
+            }
+            let mut weights = [0.0; WINDOW];
+            for (wr, f) in weights.iter_mut().zip(window) {
+                *wr = powers(*f).dot(&h);
+            }
+            Some(LocalFit {
+                start,
+                len: w,
+                weights,
+                leverage,
+            })
+        })
+        .collect()
+}
+
 /// Standardised residuals of a local cubic fit (module docs) of a complex
 /// series sampled at increasing speeds [Hz]: per point (residual, smooth
 /// value), the residual divided by sqrt(1 − leverage) so that its real and
 /// imaginary parts have the sd of that point's noise. Empty with fewer than
 /// `DEGREE + 3` points.
 pub fn local_residuals(series: &[(f64, Complex<f64>)]) -> Vec<(Complex<f64>, Complex<f64>)> {
-    let n = series.len();
-    let w = WINDOW.min(n);
-    if w < DEGREE + 3 {
-        return Vec::new();
-    }
-    let mut out = Vec::with_capacity(n);
-    for j in 0..n {
-        let start = j.saturating_sub(w / 2).min(n - w);
-        let window = &series[start..start + w];
-        let f0 = series[j].0;
-        let span = (window[w - 1].0 - window[0].0).abs().max(f64::MIN_POSITIVE);
-        // Powers (1, x, x², x³) of each window point's offset, and XᵀX.
-        let powers = |f: f64| {
-            let x = (f - f0) / span;
-            nalgebra::Vector4::new(1.0, x, x * x, x * x * x)
-        };
-        let mut xtx = nalgebra::Matrix4::<f64>::zeros();
-        for (f, _) in window {
-            let v = powers(*f);
-            xtx += v * v.transpose();
-        }
-        // The smooth value at f0 is e₀ᵀ(XᵀX)⁻¹Xᵀy = Σ (x_r·h) y_r with
-        // h = (XᵀX)⁻¹e₀, and its leverage is h₀.
-        let Some(h) = xtx.cholesky().map(|c| c.solve(&nalgebra::Vector4::x())) else {
-            continue;
-        };
-        let leverage = h[0];
-        if leverage.is_nan() || leverage >= 1.0 - 1e-9 {
-            continue;
-        }
-        let smooth: Complex<f64> = window.iter().map(|(f, z)| z * powers(*f).dot(&h)).sum();
-        let r = (series[j].1 - smooth) / (1.0 - leverage).sqrt();
-        out.push((r, smooth));
-    }
-    out
+    let speeds: Vec<f64> = series.iter().map(|s| s.0).collect();
+    let values: Vec<Complex<f64>> = series.iter().map(|s| s.1).collect();
+    residuals_of(&local_fits(&speeds), &values).collect()
+}
+
+/// [`local_residuals`] of `values` with their series' [`local_fits`].
+fn residuals_of<'a>(
+    fits: &'a [Option<LocalFit>],
+    values: &'a [Complex<f64>],
+) -> impl Iterator<Item = (Complex<f64>, Complex<f64>)> + 'a {
+    fits.iter().enumerate().filter_map(move |(j, fit)| {
+        let fit = fit.as_ref()?;
+        let window = &values[fit.start..fit.start + fit.len];
+        let smooth: Complex<f64> = window.iter().zip(&fit.weights).map(|(z, wr)| z * *wr).sum();
+        Some(((values[j] - smooth) / (1.0 - fit.leverage).sqrt(), smooth))
+    })
 }
 
 /// The robust scatter law (module docs) of a complex series at increasing
 /// speeds [Hz]; `None` with too few points or no signal.
 pub fn scatter_law(series: &[(f64, Complex<f64>)]) -> Option<Scatter> {
+    let speeds: Vec<f64> = series.iter().map(|s| s.0).collect();
+    let values: Vec<Complex<f64>> = series.iter().map(|s| s.1).collect();
+    scatter_law_of(&local_fits(&speeds), &values)
+}
+
+/// [`scatter_law`] of `values` with their series' [`local_fits`].
+fn scatter_law_of(fits: &[Option<LocalFit>], values: &[Complex<f64>]) -> Option<Scatter> {
     // (|component of the standardised residual|, local magnitude)
-    let samples: Vec<(f64, f64)> = local_residuals(series)
-        .into_iter()
+    let samples: Vec<(f64, f64)> = residuals_of(fits, values)
         .filter(|(_, s)| s.norm() > 0.0 && s.norm().is_finite())
-        .flat_map(|(r, s)| [(r.re.abs(), s.norm()), (r.im.abs(), s.norm())])
+        .flat_map(|(r, s)| {
+            let m = s.norm();
+            [(r.re.abs(), m), (r.im.abs(), m)]
+        })
         .collect();
     if samples.len() < 4 {
         return None;

@@ -114,6 +114,9 @@ pub fn fit_ml(
         obs.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
         obs
     };
+    if noise.digits_negligible() {
+        noise.use_scatter();
+    }
     let mut obs = with_noise(noise);
     let start = ols_fit.params();
     let mut attempt = ml::fit(&obs, &columns, &start);
