@@ -274,10 +274,13 @@ fn documentation_links_resolve_and_stay_inside() {
     assert!(mentions.is_empty(), "files naming {outside}: {mentions:?}");
 }
 
+/// One row of a modal table (see [`modal_blocks`]).
+type ModalRow = (String, f64, f64, f64, f64);
+
 /// The rows of the modal table: (pedestal and direction, f_n [Hz], its
 /// standard error, ζ [%], its standard error), for each `natural frequency`
 /// block of `text` in order.
-fn modal_blocks(text: &str) -> Vec<Vec<(String, f64, f64, f64, f64)>> {
+fn modal_blocks(text: &str) -> Vec<Vec<ModalRow>> {
     let mut blocks = Vec::new();
     let mut lines = text.lines();
     while let Some(l) = lines.next() {
