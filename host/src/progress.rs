@@ -8,10 +8,17 @@
 //! bar), redraws itself five times a second (a long single step still shows
 //! its elapsed time) and is erased at the end, so that scripts, pipes and
 //! `--json` on stdout never see it.
+//!
+//! Every display of the process draws through one `MultiProgress`, so a
+//! command's own line (`diagnose`) and a step's line under it (the
+//! candidate rounds) stack instead of overwriting each other.
+//! `PLINTH_PROGRESS_AFTER_MS` sets the delay before a display appears
+//! (default 1000; the tests use 0).
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::OnceLock;
 use std::time::Duration;
 
 /// Set once by `plinth --quiet`: no progress anywhere in the process.
@@ -32,8 +39,20 @@ pub fn visible() -> bool {
     !quiet() && std::io::stderr().is_terminal()
 }
 
-/// Delay before a progress display appears.
-const SHOW_AFTER: Duration = Duration::from_secs(1);
+/// Delay before a progress display appears: 1 s, or
+/// `PLINTH_PROGRESS_AFTER_MS` milliseconds.
+fn show_after() -> Duration {
+    std::env::var("PLINTH_PROGRESS_AFTER_MS")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .map_or(Duration::from_secs(1), Duration::from_millis)
+}
+
+/// The one stderr display every progress line of the process joins.
+fn multi() -> &'static MultiProgress {
+    static MULTI: OnceLock<MultiProgress> = OnceLock::new();
+    MULTI.get_or_init(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr_with_hz(5)))
+}
 
 /// A `LABEL [bar] DONE/TOTAL (PCT %) ELAPSED<ETA` line on stderr.
 #[derive(Debug)]
@@ -47,26 +66,41 @@ impl Ticker {
     /// command's own `quiet`); the global `--quiet` or stderr not being a
     /// terminal disables it too.
     pub fn new(label: &str, total: usize, enabled: bool) -> Ticker {
-        let bar = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::hidden());
+        Ticker::with_template(
+            label,
+            Some(total as u64),
+            "{msg} [{bar:30}] {pos}/{len} ({percent} %) {elapsed_precise}<{eta}",
+            enabled,
+        )
+    }
+
+    /// A ticker for work of unknown length (`LABEL ELAPSED` with a
+    /// spinner), e.g. a whole command around steps that show their own.
+    pub fn activity(label: &str, enabled: bool) -> Ticker {
+        Ticker::with_template(label, None, "{spinner} {msg} {elapsed_precise}", enabled)
+    }
+
+    fn with_template(label: &str, total: Option<u64>, template: &str, enabled: bool) -> Ticker {
+        let bar = ProgressBar::with_draw_target(total, ProgressDrawTarget::hidden());
         bar.set_style(
-            ProgressStyle::with_template(
-                "{msg} [{bar:30}] {pos}/{len} ({percent} %) {elapsed_precise}<{eta}",
-            )
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
+            ProgressStyle::with_template(template)
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
         );
         bar.set_message(label.to_string());
         let live = enabled && visible();
         if live {
             // The steady tick redraws even when no step finishes; the bar
-            // stays hidden until a small thread shows it after [`SHOW_AFTER`].
+            // stays hidden until a small thread shows it after
+            // [`show_after`], in the process's one display.
             bar.enable_steady_tick(Duration::from_millis(200));
             let delayed = bar.downgrade();
+            let after = show_after();
             std::thread::spawn(move || {
-                std::thread::sleep(SHOW_AFTER);
+                std::thread::sleep(after);
                 if let Some(bar) = delayed.upgrade() {
                     if !bar.is_finished() {
-                        bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(5));
+                        multi().add(bar);
                     }
                 }
             });
@@ -83,6 +117,9 @@ impl Ticker {
     pub fn finish(&mut self) {
         if !self.bar.is_finished() {
             self.bar.finish_and_clear();
+            if self.live {
+                multi().remove(&self.bar);
+            }
         }
     }
 
@@ -119,7 +156,7 @@ pub fn bar(label: &str, len: Option<u64>, enabled: bool) -> ProgressBar {
         ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_message(label.to_string());
-    bar
+    multi().add(bar)
 }
 
 #[cfg(test)]

@@ -116,3 +116,168 @@ fn plot_options_and_identify_plots() {
         assert!(plots.join(format!("stiffness_{b}.png")).is_file());
     }
 }
+
+/// Runs `plinth ARGS` expecting a failure; returns stderr.
+fn plinth_fails(args: &[&std::ffi::OsStr]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_plinth"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(!out.status.success(), "plinth {args:?} succeeded");
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+/// `plot` on a run directory: `transducers.csv` says where each transducer
+/// sat but not its unit, so the pick-ups are drawn in µm pk-pk; with the
+/// layout the run was imported with they are drawn in its units (the
+/// bundled example's velocity pick-ups in mm/s pk) and the polar plots with
+/// its rotation (`--rotation` still wins); a layout of another machine is
+/// refused, naming the transducer and the file.
+#[test]
+fn plot_takes_units_and_rotation_from_the_layout() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ex = repo().join("examples/field");
+    let run = tmp.path().join("run");
+    plinth(&[
+        "import".as_ref(),
+        ex.join("vector-table.csv").as_os_str(),
+        "--layout".as_ref(),
+        ex.join("layout.toml").as_os_str(),
+        "--bearings".as_ref(),
+        ex.join("bearings.csv").as_os_str(),
+        "--out".as_ref(),
+        run.as_os_str(),
+    ]);
+    let bode_ped = |figs: &Path| std::fs::read_to_string(figs.join("bode_left_ped.svg")).unwrap();
+    let plain = tmp.path().join("plain");
+    plinth(&[
+        "plot".as_ref(),
+        run.as_os_str(),
+        "--out".as_ref(),
+        plain.as_os_str(),
+    ]);
+    assert!(!bode_ped(&plain).contains("mm/s pk"));
+    let native = tmp.path().join("native");
+    let layout = ex.join("layout.toml");
+    plinth(&[
+        "plot".as_ref(),
+        run.as_os_str(),
+        "--out".as_ref(),
+        native.as_os_str(),
+        "--layout".as_ref(),
+        layout.as_os_str(),
+    ]);
+    assert!(
+        bode_ped(&native).contains("[mm/s pk]"),
+        "velocity pick-ups in mm/s pk"
+    );
+    let polar = std::fs::read_to_string(native.join("polar_left_ped_0deg.svg")).unwrap();
+    assert!(
+        polar.contains("mm/s pk"),
+        "polar of a velocity pick-up in its unit"
+    );
+
+    // Rotation: the mil/lead fixture's layout says cw.
+    let t = repo().join("tests/fixtures/field/tables");
+    let cw_run = tmp.path().join("cw-run");
+    plinth(&[
+        "import".as_ref(),
+        t.join("mil_lead_cw.csv").as_os_str(),
+        "--layout".as_ref(),
+        t.join("mil_lead_cw.toml").as_os_str(),
+        "--bearings".as_ref(),
+        repo()
+            .join("tests/fixtures/field/sim/bearings.csv")
+            .as_os_str(),
+        "--out".as_ref(),
+        cw_run.as_os_str(),
+    ]);
+    let cw_layout = t.join("mil_lead_cw.toml");
+    for (extra, says) in [
+        (vec![], "lag against CW rotation"),
+        (vec!["--rotation", "ccw"], "lag against CCW rotation"),
+    ] {
+        let figs = tmp.path().join(format!("cw{}", extra.len()));
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "plot".as_ref(),
+            cw_run.as_os_str(),
+            "--out".as_ref(),
+            figs.as_os_str(),
+            "--layout".as_ref(),
+            cw_layout.as_os_str(),
+        ];
+        args.extend(extra.iter().map(|a| std::ffi::OsStr::new(*a)));
+        plinth(&args);
+        for (name, text) in svgs(&figs, "polar_") {
+            assert!(text.contains(says), "{name}: {extra:?}");
+        }
+        let rel = std::fs::read_to_string(figs.join("bode_left_rel.svg")).unwrap();
+        assert!(
+            rel.contains("mil pk-pk"),
+            "probes in mils as the layout says"
+        );
+    }
+
+    // Another machine's layout does not describe this run.
+    let err = plinth_fails(&[
+        "plot".as_ref(),
+        run.as_os_str(),
+        "--out".as_ref(),
+        tmp.path().join("wrong").as_os_str(),
+        "--layout".as_ref(),
+        t.join("mil_lead_cw.toml").as_os_str(),
+    ]);
+    assert!(
+        err.contains("transducers.csv") && err.contains("--layout") && err.contains("left"),
+        "{err}"
+    );
+    assert!(
+        !tmp.path().join("wrong").exists(),
+        "nothing written on an error"
+    );
+}
+
+/// `report --speeds --unmeasured-base` identifies as `plinth identify` does
+/// with them: the speeds table holds the band only, the base fitted under
+/// the pedestals is described, and the "how this report was made" section
+/// names the identify command with both options.
+#[test]
+fn report_passes_speeds_and_unmeasured_base_to_identify() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = repo().join("examples/run-paper-2digits");
+    let out = tmp.path().join("r.html");
+    plinth(&[
+        "report".as_ref(),
+        run.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+        "--speeds".as_ref(),
+        "10:150".as_ref(),
+        "--unmeasured-base".as_ref(),
+        "left,right".as_ref(),
+    ]);
+    let html = std::fs::read_to_string(&out).unwrap();
+    assert!(
+        html.contains("identify") && html.contains("--speeds 10:150 --unmeasured-base left,right"),
+        "the identify command in the report"
+    );
+    assert!(
+        html.contains("(unmeasured) under left, right"),
+        "the base is described"
+    );
+    // Bearings and speeds: within 10-150 Hz (the run has 5-200 Hz).
+    let speeds = html.split("<h3>Bearings and speeds</h3>").nth(1).unwrap();
+    let speeds = speeds.split("</table>").next().unwrap();
+    for row in speeds.lines().filter(|l| l.contains("<td class=\"l\">")) {
+        let cells: Vec<f64> = row
+            .split("<td>")
+            .skip(1)
+            .map(|c| c.split('<').next().unwrap().parse().unwrap())
+            .collect();
+        let (lo, hi) = (cells[1], cells[2]);
+        assert!(
+            (10.0..12.0).contains(&lo) && (140.0..=150.0).contains(&hi),
+            "{row}"
+        );
+    }
+}

@@ -408,9 +408,11 @@ fn plot_later_draws_every_transducer() {
     plinth::field::plot::run(&plinth::field::plot::Args {
         dir: out.clone(),
         out: figures.clone(),
-        rotation: plinth::field::plot::RotationArg::Ccw,
-        zero_at_transducer: false,
-        style: plinth::plots::StyleArgs::default(),
+        polar: plinth::field::plot::PolarArgs {
+            rotation: Some(plinth::field::plot::RotationArg::Ccw),
+            ..Default::default()
+        },
+        source: Default::default(),
         force: false,
     })
     .unwrap();

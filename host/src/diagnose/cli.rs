@@ -34,6 +34,9 @@ pub struct Args {
     /// Family-wise significance level of each step (Bonferroni over candidates).
     #[arg(long, default_value_t = 1e-3, value_parser = crate::args::probability)]
     pub alpha: f64,
+    /// Diagnose only the speeds from LO to HI Hz (ends included), e.g. 20:120.
+    #[arg(long, value_name = "LO:HI", value_parser = crate::args::speed_band)]
+    pub speeds: Option<crate::args::SpeedBand>,
 }
 
 /// Parses the `--base` list: known names (formats.md), no repeats, and
@@ -74,7 +77,13 @@ pub fn run(args: &Args) -> Result<()> {
         .transpose()?;
     // Reader errors name their file, line and column already.
     crate::identify::cli::check_run_dir(&args.dir)?;
-    let run = RunDir::read(&args.dir)?;
+    // The whole command's line; the candidate rounds show theirs under it.
+    let mut ticker = crate::progress::Ticker::activity("diagnose: fits, bootstrap, effects", true);
+    let mut run = RunDir::read(&args.dir)?;
+    if let Some(band) = args.speeds {
+        band.select(&mut run)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", args.dir.display()))?;
+    }
     let mut outcome = diagnose(&run, &options).with_context(|| args.dir.display().to_string())?;
     if let Some(path) = &args.machine {
         let machine = Machine::from_toml_path(path)?;
@@ -129,10 +138,86 @@ pub fn run(args: &Args) -> Result<()> {
         write_pedestal_figures(&outcome, plots.path())?;
         plots.commit()?;
     }
+    ticker.finish();
     if args.json {
         println!("{}", serde_json::to_string_pretty(&outcome.diagnosis)?);
     } else {
-        print!("{}", outcome.diagnosis.to_text());
+        print!("{}", outcome.diagnosis.to_text_with(&modal_views(&outcome)));
     }
     Ok(())
+}
+
+/// The modal view (f_n, ζ with ± by the delta method through each fit's
+/// own covariance, [`super::criterion::Inference::std_err_of`]) of the
+/// pedestals of the base model (first state) and of the final model (last
+/// state; values only, ± unknown, when `foundation_coupling` refitted them).
+pub fn modal_views(outcome: &super::Outcome) -> super::report::ModalViews {
+    let last = outcome
+        .states
+        .last()
+        .filter(|_| outcome.foundation.is_none());
+    let d = &outcome.diagnosis;
+    super::report::ModalViews {
+        before: modal_view(outcome, outcome.states.first(), &d.pedestals_before),
+        after: modal_view(outcome, last, &d.pedestals_after),
+    }
+}
+
+/// [`modal_views`] of one list of pedestals fitted as `state`.
+fn modal_view(
+    outcome: &super::Outcome,
+    state: Option<&super::workflow::State>,
+    list: &[super::report::Pedestal],
+) -> std::collections::BTreeMap<String, crate::present::modal::PedestalModal> {
+    use super::candidates::ParamRef;
+    let infs = state.and_then(|s| Some((s, s.inference(&outcome.prep).ok()?)));
+    let mut out = std::collections::BTreeMap::new();
+    for (b, p) in list.iter().enumerate() {
+        let direction = |d: &str| {
+            // (k, m, c) of the direction; one mass unless it is split.
+            let m_d = format!("m_{d}");
+            let m = if p.values.contains_key(&m_d) {
+                m_d
+            } else {
+                "m".into()
+            };
+            let names = [format!("k_{d}"), m, format!("c_{d}")];
+            let v = |i: usize| p.values.get(&names[i]).copied().unwrap_or(0.0);
+            // Where each sits in its group's inference (absent: fixed at 0).
+            let found = infs.as_ref().and_then(|(s, infs)| {
+                infs.iter().find_map(|(_, inf, refs)| {
+                    let at = |n: &String| {
+                        refs.iter().position(|r| {
+                            matches!(r, ParamRef::Term(k)
+                                if s.model.terms[*k].bearings() == [Some(b), None]
+                                    && s.model.terms[*k].name() == *n)
+                        })
+                    };
+                    Some((inf, at(&names[0])?, names.each_ref().map(at)))
+                })
+            });
+            crate::present::modal::direction_by_gradient(v(0), v(1), v(2), |g| {
+                let Some((inf, _, at)) = found else {
+                    return f64::NAN;
+                };
+                let mut c = vec![0.0; inf.estimate.len()];
+                for (gi, a) in g.iter().zip(at) {
+                    if let Some(a) = a {
+                        c[a] = *gi;
+                    }
+                }
+                inf.std_err_of(&c)
+            })
+        };
+        if p.values.contains_key("k_y") && p.values.contains_key("k_z") {
+            out.insert(
+                p.bearing.clone(),
+                crate::present::modal::PedestalModal {
+                    y: direction("y"),
+                    z: direction("z"),
+                },
+            );
+        }
+    }
+    out
 }

@@ -250,9 +250,24 @@ pub struct Diagnosis {
     pub suspected_convention_errors: Vec<crate::identify::convention::ConventionFinding>,
 }
 
+/// The modal view of the pedestals by bearing, of the base and the final
+/// model (`diagnose::cli::modal_views`), shown under their tables.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ModalViews {
+    /// Base model.
+    pub before: BTreeMap<String, crate::present::modal::PedestalModal>,
+    /// Final model.
+    pub after: BTreeMap<String, crate::present::modal::PedestalModal>,
+}
+
 impl Diagnosis {
     /// The text report.
     pub fn to_text(&self) -> String {
+        self.to_text_with(&ModalViews::default())
+    }
+
+    /// The text report with the pedestals' modal view (f_n, ζ with ±).
+    pub fn to_text_with(&self, modal: &ModalViews) -> String {
         let mut s = String::new();
         for c in &self.suspected_convention_errors {
             let _ = writeln!(
@@ -367,14 +382,15 @@ impl Diagnosis {
             );
         }
         // The shared printer (present::table): base model, then final model.
-        for (title, list) in [
-            ("base model", &self.pedestals_before),
-            ("final model", &self.pedestals_after),
+        for (title, list, modal) in [
+            ("base model", &self.pedestals_before, &modal.before),
+            ("final model", &self.pedestals_after, &modal.after),
         ] {
             let rows: Vec<_> = list
                 .iter()
-                .map(|p| {
-                    crate::present::table::PedestalRow::from_named(
+                .map(|p| crate::present::table::PedestalRow {
+                    modal: modal.get(&p.bearing).copied(),
+                    ..crate::present::table::PedestalRow::from_named(
                         &p.bearing, &p.values, &p.std_err,
                     )
                 })

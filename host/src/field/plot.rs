@@ -43,20 +43,48 @@ pub struct Args {
     /// Directory for the figures (PNG and SVG).
     #[arg(long)]
     pub out: PathBuf,
+    /// Rotation, 0° placement and style of the figures.
+    #[command(flatten)]
+    pub polar: PolarArgs,
+    /// Where the transducers' units and the rotation come from.
+    #[command(flatten)]
+    pub source: SourceArgs,
+    /// Replace the figures in an existing --out.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// The figure options `plot` and `report` share: rotation and 0° of the
+/// polar plots, speed unit and amplitude scale.
+#[derive(clap::Args, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PolarArgs {
     /// Direction of rotation as drawn on the polar plots (lag runs against
-    /// it); import and extract take it from the layout's `rotation`.
-    #[arg(long, value_enum, default_value = "ccw")]
-    pub rotation: RotationArg,
+    /// it) [default: the `rotation` of --layout or --channels, else ccw].
+    #[arg(long, value_enum)]
+    pub rotation: Option<RotationArg>,
     /// Polar plots with 0° at each transducer's own position (Bently/Hatch)
     /// instead of at the top.
     #[arg(long)]
     pub zero_at_transducer: bool,
-    #[command(flatten)]
     /// Speed unit and amplitude scale.
+    #[command(flatten)]
     pub style: StyleArgs,
-    /// Replace the figures in an existing --out.
-    #[arg(long)]
-    pub force: bool,
+}
+
+/// The file a run was made from, for what its `transducers.csv` does not
+/// hold: each transducer's unit (and the rotation as seen from its `view`).
+#[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
+pub struct SourceArgs {
+    /// The layout the run was imported with (`plinth import --layout`):
+    /// pick-ups drawn in its units (mil pp, mm/s pk, in/s pk, g), polar
+    /// plots with its `rotation`.
+    #[arg(long, value_name = "LAYOUT.toml", conflicts_with = "channels")]
+    pub layout: Option<PathBuf>,
+    /// The channels file the run was extracted with (`plinth extract
+    /// --channels`): velocity pick-ups in mm/s pk, accelerometers in g pk,
+    /// polar plots with its `rotation`.
+    #[arg(long, value_name = "CHANNELS.toml")]
+    pub channels: Option<PathBuf>,
 }
 
 /// `--rotation` values.
@@ -616,21 +644,82 @@ fn trim(v: f64) -> String {
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
+/// The transducers of the run in `dir` (its `transducers.csv`) in the
+/// units `source` gives, and the figure options of `polar` (the rotation of
+/// `source` unless `--rotation` is given).
+///
+/// Without `source` the transducers are drawn as displacements (µm pk-pk):
+/// `transducers.csv` holds where each sat, not its unit (docs/formats.md).
+/// With it, every transducer of `transducers.csv` must be in the file, at
+/// the same bearing, quantity and angle; a run without `transducers.csv`
+/// takes the file's transducers.
+pub fn run_figures(
+    dir: &Path,
+    polar: &PolarArgs,
+    source: &SourceArgs,
+) -> Result<(Vec<PlotTransducer>, PlotOptions)> {
+    let (named, rotation, file) = if let Some(path) = &source.layout {
+        let layout = super::import::Layout::read(path)?;
+        let f = FieldFigures::from_layout(&layout);
+        (
+            Some(f.transducers),
+            layout.rotation,
+            format!("--layout {}", path.display()),
+        )
+    } else if let Some(path) = &source.channels {
+        let channels = crate::extract::channels::Channels::read(path)?;
+        let f = FieldFigures::from_channels(&channels);
+        (
+            Some(f.transducers),
+            channels.rotation,
+            format!("--channels {}", path.display()),
+        )
+    } else {
+        (None, None, String::new())
+    };
+    let placed = super::transducers_csv::read(dir)?;
+    let transducers = match (placed, named) {
+        (Some(placed), Some(named)) => placed
+            .into_iter()
+            .map(|(b, q, a)| {
+                named
+                    .iter()
+                    .find(|t| t.bearing == b && t.quantity == q && (t.angle_deg - a).abs() < 1e-6)
+                    .cloned()
+                    .ok_or_else(|| {
+                        anyhow!(
+                            "{}: transducer `{}` {} at {a}° is not in {file}: give the file the run was made with",
+                            dir.join(super::transducers_csv::TRANSDUCERS_FILE).display(),
+                            b,
+                            q.name()
+                        )
+                    })
+            })
+            .collect::<Result<Vec<_>>>()?,
+        (Some(placed), None) => placed
+            .into_iter()
+            .map(|(b, q, a)| PlotTransducer::displacement(&b, q, a))
+            .collect(),
+        (None, named) => named.unwrap_or_default(),
+    };
+    let options = PlotOptions {
+        rotation: polar
+            .rotation
+            .map(Rotation::from)
+            .or(rotation)
+            .unwrap_or(Rotation::Ccw),
+        zero_at_transducer: polar.zero_at_transducer,
+        style: polar.style.style(),
+    };
+    Ok((transducers, options))
+}
+
 /// Runs `plinth plot`.
 pub fn run(args: &Args) -> Result<()> {
     let run = RunDir::read(&args.dir)?;
     // An imported or extracted run keeps where its transducers sat: draw
     // each one's reading too.
-    let transducers: Vec<PlotTransducer> = super::transducers_csv::read(&args.dir)?
-        .unwrap_or_default()
-        .into_iter()
-        .map(|(b, q, a)| PlotTransducer::displacement(&b, q, a))
-        .collect();
-    let options = PlotOptions {
-        rotation: args.rotation.into(),
-        zero_at_transducer: args.zero_at_transducer,
-        style: args.style.style(),
-    };
+    let (transducers, options) = run_figures(&args.dir, &args.polar, &args.source)?;
     let mut n = 0;
     crate::output::write_dir(&args.out, args.force, |dir| {
         n = plot_run_with(&run, dir, &transducers, &options)?.len();

@@ -195,7 +195,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
 /// included), without printing it.
 pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
     check_run_dir(&args.dir)?;
+    let mut ticker = crate::progress::Ticker::new("identify: read, fit, bases", 3, true);
     let mut run = RunDir::read(&args.dir)?;
+    ticker.tick(1);
     if let Some(band) = args.speeds {
         band.select(&mut run)
             .map_err(|e| anyhow::anyhow!("{}: {e}", args.dir.display()))?;
@@ -214,7 +216,9 @@ pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
     }
     let mut identification =
         identify_run(&run, &args.options()).map_err(|e| located(&args.dir, e))?;
+    ticker.tick(2);
     on_bases(args, &run, &mut identification)?;
+    ticker.finish();
     crate::present::modal::attach(&mut identification);
     Ok((run, identification))
 }

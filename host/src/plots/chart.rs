@@ -212,6 +212,61 @@ pub(super) struct Band {
     pub(super) points: Vec<(f64, f64, f64)>,
 }
 
+impl Band {
+    /// Its legend entry, named `name`.
+    pub(super) fn entry(&self, name: String) -> LegendEntry {
+        LegendEntry {
+            name,
+            colour: self.colour,
+            swatch: Swatch::Band,
+        }
+    }
+}
+
+/// The figure's white page with its title on top: the area left for the
+/// charts.
+pub(super) fn titled_page<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+) -> Result<DrawingArea<DB, Shift>>
+where
+    DB::ErrorType: 'static,
+{
+    ensure_fonts()?;
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing figure '{title}': {e:?}");
+    root.fill(&WHITE).map_err(err)?;
+    root.titled(title, (FONT, title_size(title, root.dim_in_pixel().0)))
+        .map_err(err)
+}
+
+/// The speed axis over `speeds` [Hz], in `unit`.
+pub(super) fn speed_axis<'a>(speeds: impl Iterator<Item = &'a f64>, unit: SpeedUnit) -> (f64, f64) {
+    let (lo, hi) = speed_range(speeds);
+    (lo * unit.factor(), hi * unit.factor())
+}
+
+/// One chart in `cell` with the legend column beside it when `entries`
+/// has any: drawn there when `show_legend` (else left empty, so that the
+/// charts of a column line up).
+pub(super) fn draw_cell<DB: DrawingBackend>(
+    cell: &DrawingArea<DB, Shift>,
+    axes: &Axes<'_>,
+    bands: &[Band],
+    curves: &[Curve],
+    entries: &[LegendEntry],
+    show_legend: bool,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (chart, legend) = beside(cell, !entries.is_empty());
+    draw_chart(&chart, axes, bands, curves)?;
+    match legend {
+        Some(area) if show_legend => draw_legend(&area, entries),
+        _ => Ok(()),
+    }
+}
+
 /// The axes of one chart.
 pub(super) struct Axes<'a> {
     /// Caption above the chart ("" for none).
@@ -386,18 +441,8 @@ impl PhasorFigure {
     where
         DB::ErrorType: 'static,
     {
-        ensure_fonts()?;
         self.check()?;
-        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| {
-            anyhow!("drawing figure '{}': {e:?}", self.title)
-        };
-        root.fill(&WHITE).map_err(err)?;
-        let body = root
-            .titled(
-                &self.title,
-                (FONT, title_size(&self.title, root.dim_in_pixel().0)),
-            )
-            .map_err(err)?;
+        let body = titled_page(root, &self.title)?;
         let rows: Vec<usize> = match self.rows {
             Rows::Both => vec![0, 1],
             Rows::First => vec![0],
@@ -405,13 +450,13 @@ impl PhasorFigure {
         };
         let cells = body.split_evenly((rows.len(), self.panels.len()));
         let unit = self.style.speed_unit;
-        let x_range = speed_range(
+        let x_range = speed_axis(
             self.panels
                 .iter()
                 .flat_map(|p| p.series.iter())
                 .flat_map(|s| s.points.iter().map(|(sp, _)| sp)),
+            unit,
         );
-        let x_range = (x_range.0 * unit.factor(), x_range.1 * unit.factor());
         let x_label = unit.axis_label();
         for (ri, &row) in rows.iter().enumerate() {
             for (pi, panel) in self.panels.iter().enumerate() {
@@ -448,11 +493,9 @@ impl PhasorFigure {
                     .filter(|c| c.has_points())
                     .map(Curve::entry)
                     .collect();
-                let (chart_area, legend_area) =
-                    beside(&cells[ri * self.panels.len() + pi], !entries.is_empty());
                 let y_label = row_label(self.view, row, quantity);
-                draw_chart(
-                    &chart_area,
+                draw_cell(
+                    &cells[ri * self.panels.len() + pi],
                     &Axes {
                         caption,
                         x_range,
@@ -464,10 +507,9 @@ impl PhasorFigure {
                     },
                     &[],
                     &curves,
+                    &entries,
+                    ri == 0,
                 )?;
-                if let (Some(area), 0) = (legend_area, ri) {
-                    draw_legend(&area, &entries)?;
-                }
             }
         }
         Ok(())
@@ -529,17 +571,7 @@ impl ScalarFigure {
     where
         DB::ErrorType: 'static,
     {
-        ensure_fonts()?;
-        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| {
-            anyhow!("drawing figure '{}': {e:?}", self.title)
-        };
-        root.fill(&WHITE).map_err(err)?;
-        let body = root
-            .titled(
-                &self.title,
-                (FONT, title_size(&self.title, root.dim_in_pixel().0)),
-            )
-            .map_err(err)?;
+        let body = titled_page(root, &self.title)?;
         let unit = self.style.speed_unit;
         let names: Vec<&str> = self.series.iter().map(|s| s.name.as_str()).collect();
         let curves: Vec<Curve> = self
@@ -562,12 +594,12 @@ impl ScalarFigure {
                 }
             })
             .collect();
-        let x_range = speed_range(
+        let x_range = speed_axis(
             self.series
                 .iter()
                 .flat_map(|s| s.points.iter().map(|(x, _)| x)),
+            unit,
         );
-        let x_range = (x_range.0 * unit.factor(), x_range.1 * unit.factor());
         let y_range = self.y_range.unwrap_or_else(|| {
             padded_range(
                 curves
@@ -582,9 +614,8 @@ impl ScalarFigure {
             .filter(|c| c.has_points())
             .map(Curve::entry)
             .collect();
-        let (chart_area, legend_area) = beside(&body, !entries.is_empty());
-        draw_chart(
-            &chart_area,
+        draw_cell(
+            &body,
             &Axes {
                 caption: "",
                 x_range,
@@ -596,11 +627,9 @@ impl ScalarFigure {
             },
             &[],
             &curves,
-        )?;
-        if let Some(area) = legend_area {
-            draw_legend(&area, &entries)?;
-        }
-        Ok(())
+            &entries,
+            true,
+        )
     }
 
     /// Writes `<stem>.png` and `<stem>.svg`; returns both paths.

@@ -23,10 +23,10 @@
 //! The input ([`StiffnessInput`]) is plain numbers, independent of how the
 //! fit was made.
 
-use super::legend::{beside, draw_legend, LegendEntry, Swatch};
+use super::legend::LegendEntry;
 use super::{
-    colour, ensure_fonts, speed_range, svg_string, title_size, write_both, Axes, Band, Curve, Mark,
-    Style, FONT,
+    colour, draw_cell, speed_axis, speed_range, svg_string, titled_page, write_both, Axes, Band,
+    Curve, Mark, Style,
 };
 use anyhow::{anyhow, Result};
 use num_complex::Complex;
@@ -163,10 +163,12 @@ fn direction_colour(d: usize) -> RGBColor {
     colour(d)
 }
 
-/// One row's curves, bands and how many points were off scale.
+/// One row's curves, bands, legend and how many points were off scale.
 struct RowData {
     curves: Vec<Curve>,
     bands: Vec<Band>,
+    /// Per direction: its curves', then its band's entries.
+    legend: Vec<LegendEntry>,
     y_range: (f64, f64),
     off_scale: usize,
 }
@@ -245,6 +247,7 @@ impl StiffnessFigure {
         let part = |z: Complex<f64>| if row == 0 { z.re } else { z.im };
         let mut curves = Vec::new();
         let mut bands = Vec::new();
+        let mut legend = Vec::new();
         let mut model_values = Vec::new();
         let mut measured_values = Vec::new();
         let speeds = input.measured.iter().flatten().map(|p| &p.0);
@@ -254,12 +257,14 @@ impl StiffnessFigure {
             if row == 2 {
                 let r = residuals(input, d);
                 measured_values.extend(r.iter().map(|p| p.1));
-                curves.push(Curve {
+                let line = Curve {
                     name: format!("{} |F − D_fit·X|", DIRECTIONS[d]),
                     mark: Mark::Line,
                     colour: c,
                     segments: vec![r.iter().map(|&(s, v)| (s * unit, v)).collect()],
-                });
+                };
+                legend.push(line.entry());
+                curves.push(line);
                 curves.push(Curve {
                     name: String::new(),
                     mark: Mark::Markers,
@@ -317,6 +322,14 @@ impl StiffnessFigure {
                 colour: c,
                 segments: vec![model],
             });
+            legend.extend(curves[curves.len() - 2..].iter().map(Curve::entry));
+            if let StiffnessModel::Rigid(p) = &input.model {
+                let name = match p.uncertainty {
+                    Uncertainty::Covariance(_) => format!("{} ±1σ", DIRECTIONS[d]),
+                    Uncertainty::StdErrors(_) => format!("{} ±1σ (θ indep.)", DIRECTIONS[d]),
+                };
+                legend.extend(bands.last().map(|b| b.entry(name)));
+            }
         }
         let y_range = if row == 2 {
             let hi = measured_values
@@ -340,48 +353,10 @@ impl StiffnessFigure {
         RowData {
             curves,
             bands,
+            legend,
             y_range,
             off_scale,
         }
-    }
-
-    /// The legend entries of a bearing's rows.
-    fn legend(&self, input: &StiffnessInput, row: usize) -> Vec<LegendEntry> {
-        let mut out = Vec::new();
-        for (d, direction) in DIRECTIONS.iter().enumerate() {
-            let c = direction_colour(d);
-            if row == 2 {
-                out.push(LegendEntry {
-                    name: format!("{direction} |F − D_fit·X|"),
-                    colour: c,
-                    swatch: Swatch::Line,
-                });
-                continue;
-            }
-            out.push(LegendEntry {
-                name: format!("{} measured F/X", direction),
-                colour: c,
-                swatch: Swatch::Marker,
-            });
-            out.push(LegendEntry {
-                name: format!("{} {}", direction, input.model_label),
-                colour: c,
-                swatch: Swatch::Line,
-            });
-            if let StiffnessModel::Rigid(p) = &input.model {
-                out.push(LegendEntry {
-                    name: match p.uncertainty {
-                        Uncertainty::Covariance(_) => format!("{} ±1σ", direction),
-                        Uncertainty::StdErrors(_) => {
-                            format!("{} ±1σ (θ indep.)", direction)
-                        }
-                    },
-                    colour: c,
-                    swatch: Swatch::Band,
-                });
-            }
-        }
-        out
     }
 
     /// Draws the figure into a drawing area of any plotters backend.
@@ -389,20 +364,10 @@ impl StiffnessFigure {
     where
         DB::ErrorType: 'static,
     {
-        ensure_fonts()?;
         if self.bearings.is_empty() {
             return Err(anyhow!("figure '{}' has no bearings", self.title));
         }
-        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| {
-            anyhow!("drawing figure '{}': {e:?}", self.title)
-        };
-        root.fill(&WHITE).map_err(err)?;
-        let body = root
-            .titled(
-                &self.title,
-                (FONT, title_size(&self.title, root.dim_in_pixel().0)),
-            )
-            .map_err(err)?;
+        let body = titled_page(root, &self.title)?;
         let cols = self.bearings.len();
         let cells = body.split_evenly((3, cols));
         let x_label = self.style.speed_unit.axis_label();
@@ -424,14 +389,12 @@ impl StiffnessFigure {
                 } else {
                     y_label
                 };
-                let (chart, legend) = beside(&cells[row * cols + b], true);
-                let x_range = {
-                    let (lo, hi) = speed_range(input.measured.iter().flatten().map(|p| &p.0));
-                    let f = self.style.speed_unit.factor();
-                    (lo * f, hi * f)
-                };
-                super::draw_chart(
-                    &chart,
+                let x_range = speed_axis(
+                    input.measured.iter().flatten().map(|p| &p.0),
+                    self.style.speed_unit,
+                );
+                draw_cell(
+                    &cells[row * cols + b],
                     &Axes {
                         caption: &caption,
                         x_range,
@@ -443,10 +406,9 @@ impl StiffnessFigure {
                     },
                     &data.bands,
                     &data.curves,
+                    &data.legend,
+                    true,
                 )?;
-                if let Some(area) = legend {
-                    draw_legend(&area, &self.legend(input, row))?;
-                }
             }
         }
         Ok(())

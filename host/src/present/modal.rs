@@ -49,6 +49,30 @@ pub type Covariance = [[f64; 5]; 5];
 /// f_n and ζ of one direction from k [N/m], m [kg], c [N·s/m] and the 3×3
 /// covariance of (k, m, c) (`None`: standard errors unknown, NaN).
 pub fn direction(k: f64, m: f64, c: f64, cov: Option<&[[f64; 3]; 3]>) -> DirectionModal {
+    direction_by_gradient(k, m, c, |g| match cov {
+        Some(s) => {
+            let mut v = 0.0;
+            for i in 0..3 {
+                for j in 0..3 {
+                    v += g[i] * s[i][j] * g[j];
+                }
+            }
+            v.max(0.0).sqrt()
+        }
+        None => f64::NAN,
+    })
+}
+
+/// f_n and ζ of one direction from k [N/m], m [kg], c [N·s/m], with the
+/// standard errors of the delta method from `std_err_of(g)`: the standard
+/// error of the linear combination g·(k, m, c) under the fit's covariance,
+/// in whatever form the fit holds it (a matrix, diagnose's sandwich).
+pub fn direction_by_gradient(
+    k: f64,
+    m: f64,
+    c: f64,
+    std_err_of: impl Fn(&[f64; 3]) -> f64,
+) -> DirectionModal {
     if !(k > 0.0 && m > 0.0 && k.is_finite() && m.is_finite() && c.is_finite()) {
         return DirectionModal {
             f_n_hz: f64::NAN,
@@ -66,24 +90,11 @@ pub fn direction(k: f64, m: f64, c: f64, cov: Option<&[[f64; 3]; 3]>) -> Directi
         -zeta / (2.0 * m),
         1.0 / (2.0 * (k * m).sqrt()),
     ];
-    let quad = |g: &[f64; 3], s: &[[f64; 3]; 3]| -> f64 {
-        let mut v = 0.0;
-        for i in 0..3 {
-            for j in 0..3 {
-                v += g[i] * s[i][j] * g[j];
-            }
-        }
-        v.max(0.0).sqrt()
-    };
-    let (f_se, z_se) = match cov {
-        Some(s) => (quad(&g_f, s), quad(&g_z, s)),
-        None => (f64::NAN, f64::NAN),
-    };
     DirectionModal {
         f_n_hz: f_n,
-        f_n_std_err: f_se,
+        f_n_std_err: std_err_of(&g_f),
         zeta,
-        zeta_std_err: z_se,
+        zeta_std_err: std_err_of(&g_z),
     }
 }
 

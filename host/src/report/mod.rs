@@ -11,9 +11,8 @@
 pub mod fitted;
 pub mod page;
 
-use crate::field::plot::{PlotOptions, PlotTransducer, RotationArg};
-use crate::identify::{identify_run, Identification, Options};
-use crate::plots::StyleArgs;
+use crate::field::plot::{PlotOptions, PlotTransducer, PolarArgs, SourceArgs};
+use crate::identify::Identification;
 use crate::rundir::RunDir;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
@@ -21,7 +20,8 @@ use std::path::{Path, PathBuf};
 /// Command-line arguments of `plinth report`.
 #[derive(clap::Args, Debug)]
 #[command(after_help = "\
-Identifies every pedestal of RUN (as `plinth identify RUN` does, default options) and writes \
+Identifies every pedestal of RUN (as `plinth identify RUN` does, default options, with \
+--speeds and --unmeasured-base passed on) and writes \
 one HTML file: the run's files, transducers, speeds and noise; the identified table with the \
 modal view (f_n, ζ) and each pedestal's trust with its reasons; each bearing's measured \
 dynamic stiffness against the fitted model; Bode and polar figures; with --diagnose the \
@@ -38,15 +38,20 @@ pub struct Args {
     /// and figures.
     #[arg(long)]
     pub diagnose: bool,
-    /// Direction of rotation as drawn on the polar plots.
-    #[arg(long, value_enum, default_value = "ccw")]
-    pub rotation: RotationArg,
-    /// Polar plots with 0° at each transducer (Bently/Hatch).
-    #[arg(long)]
-    pub zero_at_transducer: bool,
-    /// Speed unit and amplitude scale of the figures.
+    /// Identify (and diagnose) only the speeds from LO to HI Hz (ends
+    /// included), as `plinth identify --speeds`.
+    #[arg(long, value_name = "LO:HI", value_parser = crate::args::speed_band)]
+    pub speeds: Option<crate::args::SpeedBand>,
+    /// Pedestals on a base whose motion was not measured, as `plinth
+    /// identify --unmeasured-base` (e.g. `left,right`).
+    #[arg(long, value_name = "B1,B2[;B3,B4]")]
+    pub unmeasured_base: Option<crate::identify::on_base::BaseGroups>,
+    /// Rotation, 0° placement and style of the figures.
     #[command(flatten)]
-    pub style: StyleArgs,
+    pub polar: PolarArgs,
+    /// Where the transducers' units and the rotation come from.
+    #[command(flatten)]
+    pub source: SourceArgs,
     /// Replace an existing --out file.
     #[arg(long)]
     pub force: bool,
@@ -68,6 +73,43 @@ pub struct Contents<'a> {
     pub diagnosis: Option<&'a crate::diagnose::Outcome>,
     /// The exact command line.
     pub command: String,
+    /// The `plinth identify` command whose results the page shows.
+    pub identify_command: String,
+}
+
+/// The `plinth identify` arguments of `args`: identify's defaults (as clap
+/// parses `plinth identify RUN`) with the report's `--speeds` and
+/// `--unmeasured-base`.
+pub fn identify_args(args: &Args) -> Result<crate::identify::cli::Args> {
+    use clap::{Args as _, FromArgMatches};
+    let command = crate::identify::cli::Args::augment_args(clap::Command::new("identify"));
+    let argv = [
+        std::ffi::OsString::from("identify"),
+        "--".into(),
+        args.dir.clone().into_os_string(),
+    ];
+    let matches = command.try_get_matches_from(argv)?;
+    let mut identify = crate::identify::cli::Args::from_arg_matches(&matches)?;
+    identify.speeds = args.speeds;
+    identify.unmeasured_base = args.unmeasured_base.clone();
+    Ok(identify)
+}
+
+/// The `plinth identify` command line [`identify_args`] stands for.
+pub fn identify_command(args: &Args) -> String {
+    let mut argv = vec![
+        "plinth".to_string(),
+        "identify".into(),
+        args.dir.display().to_string(),
+    ];
+    if let Some(b) = args.speeds {
+        argv.extend(["--speeds".into(), format!("{}:{}", b.lo_hz, b.hi_hz)]);
+    }
+    if let Some(g) = &args.unmeasured_base {
+        let groups: Vec<String> = g.0.iter().map(|names| names.join(",")).collect();
+        argv.extend(["--unmeasured-base".into(), groups.join(";")]);
+    }
+    command_line(argv)
 }
 
 /// The command line as a shell would read it back (arguments with spaces or
@@ -131,15 +173,11 @@ pub fn run(args: &Args) -> Result<()> {
             args.out.display()
         );
     }
-    crate::identify::cli::check_run_dir(&args.dir)?;
-    let run = RunDir::read(&args.dir)?;
-    let identification = identify_run(&run, &Options::default())
+    let (transducers, options) =
+        crate::field::plot::run_figures(&args.dir, &args.polar, &args.source)?;
+    // What `plinth identify` shows: the band, the bases, the modal view.
+    let (run, identification) = crate::identify::cli::identify_args(&identify_args(args)?)
         .with_context(|| format!("identifying {}", args.dir.display()))?;
-    let transducers: Vec<PlotTransducer> = crate::field::transducers_csv::read(&args.dir)?
-        .unwrap_or_default()
-        .into_iter()
-        .map(|(b, q, a)| PlotTransducer::displacement(&b, q, a))
-        .collect();
     let outcome = if args.diagnose {
         let options = crate::diagnose::Options {
             progress: false,
@@ -157,13 +195,10 @@ pub fn run(args: &Args) -> Result<()> {
         run: &run,
         identification: &identification,
         transducers: &transducers,
-        options: PlotOptions {
-            rotation: args.rotation.into(),
-            zero_at_transducer: args.zero_at_transducer,
-            style: args.style.style(),
-        },
+        options,
         diagnosis: outcome.as_ref(),
         command: command_line(std::env::args()),
+        identify_command: identify_command(args),
     };
     let html = page::render(&contents)?;
     write_atomically(&args.out, args.force, &html)?;

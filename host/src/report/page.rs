@@ -181,6 +181,9 @@ fn identified(c: &Contents<'_>, json: &Value, out: &mut String) {
         c.identification,
         c.run.truth.as_ref(),
     )));
+    out.push_str(&esc(&crate::identify::on_base::describe(
+        &c.identification.bases,
+    )));
     out.push_str(
         "</pre>\n<h3>Modal view (natural frequency and damping ratio per direction)</h3>\n",
     );
@@ -305,7 +308,8 @@ pub fn render(c: &Contents<'_>) -> Result<String> {
 
     if let Some(outcome) = c.diagnosis {
         out.push_str("<h2 id=\"diagnosis\">Diagnosis</h2>\n<pre>");
-        out.push_str(&esc(&outcome.diagnosis.to_text()));
+        let modal = crate::diagnose::cli::modal_views(outcome);
+        out.push_str(&esc(&outcome.diagnosis.to_text_with(&modal)));
         out.push_str("</pre>\n");
         for (stem, fig) in crate::diagnose::plots::pedestal_figures(outcome) {
             let svg = fig.to_svg()?;
@@ -315,10 +319,10 @@ pub fn render(c: &Contents<'_>) -> Result<String> {
 
     let _ = write!(
         out,
-        "<h2 id=\"made\">How this report was made</h2>\n<table><tr><th class=\"l\">command</th><td class=\"l\"><code>{}</code></td></tr>\n<tr><th class=\"l\">version</th><td class=\"l\">plinth {}</td></tr>\n<tr><th class=\"l\">identification</th><td class=\"l\">as <code>plinth identify {}</code> (estimator {}, equations {}, model {})</td></tr>\n<tr><th class=\"l\">speed unit</th><td class=\"l\">{}</td></tr>\n<tr><th class=\"l\">figures</th><td class=\"l\">{}</td></tr></table>\n</body>\n</html>\n",
+        "<h2 id=\"made\">How this report was made</h2>\n<table><tr><th class=\"l\">command</th><td class=\"l\"><code>{}</code></td></tr>\n<tr><th class=\"l\">version</th><td class=\"l\">plinth {}</td></tr>\n<tr><th class=\"l\">identification</th><td class=\"l\">as <code>{}</code> (estimator {}, equations {}, model {})</td></tr>\n<tr><th class=\"l\">speed unit</th><td class=\"l\">{}</td></tr>\n<tr><th class=\"l\">figures</th><td class=\"l\">{}</td></tr></table>\n</body>\n</html>\n",
         esc(&c.command),
         env!("CARGO_PKG_VERSION"),
-        esc(&c.dir.display().to_string()),
+        esc(&c.identify_command),
         esc(&c.identification.estimator),
         esc(&c.identification.equations),
         esc(&c.identification.model.join(",")),
