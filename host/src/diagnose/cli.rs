@@ -75,6 +75,9 @@ pub fn run(args: &Args) -> Result<()> {
     // Reader errors name their file, line and column already.
     crate::identify::cli::check_run_dir(&args.dir)?;
     let run = RunDir::read(&args.dir)?;
+    if let Some(path) = &args.machine {
+        crate::rundir::matches::check_machine(&run, &Machine::from_toml_path(path)?, path)?;
+    }
     let mut outcome = diagnose(&run, &options).with_context(|| args.dir.display().to_string())?;
     if let Some(path) = &args.machine {
         let machine = Machine::from_toml_path(path)?;

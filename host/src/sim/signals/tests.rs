@@ -58,3 +58,52 @@ fn rundown_parses_and_rejects() {
     assert!(RunDown::parse("200:5:-1").is_err());
     assert!(RunDown::parse("5:5:1").is_err());
 }
+
+/// A resonance's displacement x(f) = 1/(f₀² − f² + i·f·c) [m] and its
+/// closed-form first and second derivatives in f.
+fn resonance(f: f64) -> [C64; 3] {
+    let (f0, c) = (50.0, 2.0);
+    let d = C64::new(f0 * f0 - f * f, f * c);
+    let dd = C64::new(-2.0 * f, c);
+    let x = 1.0 / d;
+    let x1 = -dd / (d * d);
+    let x2 = 2.0 * dd * dd / (d * d * d) - C64::new(-2.0, 0.0) / (d * d);
+    [x, x1, x2]
+}
+
+#[test]
+fn the_error_of_a_derivative_channel_is_measured_against_closed_form_derivatives() {
+    // A grid of 1 Hz over a resonance 2 Hz wide, a run-down of 5 Hz/s.
+    let grid: Vec<f64> = (30..=70).map(f64::from).collect();
+    let s = ComplexSpline::new(grid.clone(), grid.iter().map(|&f| resonance(f)[0]).collect()).unwrap();
+    let omega_dot = TAU * 5.0;
+    let checks: Vec<f64> = (0..400).map(|k| 31.0 + 38.0 * k as f64 / 400.0).collect();
+    let d = 0.01;
+    let points = || {
+        checks
+            .iter()
+            .map(move |&f| (f, [resonance(f - d)[0], resonance(f)[0], resonance(f + d)[0]]))
+    };
+    // Exact: closed-form derivatives.
+    let exact = |kind| {
+        let (mut err, mut peak) = (0.0f64, 0.0f64);
+        for &f in &checks {
+            let [x, x1, x2] = resonance(f);
+            let w = TAU * f;
+            let truth = sensed_phasor(kind, x, x1, x2, w, omega_dot);
+            let (v, dv, d2v) = s.eval(f);
+            err = err.max((sensed_phasor(kind, v, dv, d2v, w, omega_dot) - truth).norm());
+            peak = peak.max(truth.norm());
+        }
+        err / peak
+    };
+    let run = (30.0, 70.0);
+    let disp = written_error(SensorKind::Displacement, Some(&s), points(), d, omega_dot, run);
+    for kind in [SensorKind::Velocity, SensorKind::Acceleration] {
+        let measured = written_error(kind, Some(&s), points(), d, omega_dot, run);
+        let truth = exact(kind);
+        assert!((measured / truth - 1.0).abs() < 0.01, "{kind:?}: {measured} vs {truth}");
+        // Not the displacement's figure reported again.
+        assert!((measured / disp - 1.0).abs() > 1e-3, "{kind:?}: {measured} vs displacement {disp}");
+    }
+}
