@@ -45,14 +45,12 @@ pub fn open(
     expected: &str,
 ) -> Result<std::io::BufReader<crate::input_file::BoundedLines<std::fs::File>>, LayoutError> {
     let layout = check(path, expected)?;
-    let mut handle =
-        std::fs::File::open(path).map_err(|e| LayoutError::NotAFile(e.to_string()))?;
+    let mut handle = std::fs::File::open(path).map_err(|e| LayoutError::NotAFile(e.to_string()))?;
     std::io::Seek::seek(&mut handle, std::io::SeekFrom::Start(layout.skip))
         .map_err(|e| LayoutError::NotAFile(e.to_string()))?;
-    Ok(std::io::BufReader::new(crate::input_file::BoundedLines::new(
-        handle,
-        crate::input_file::MAX_LINE_BYTES,
-    )))
+    Ok(std::io::BufReader::new(
+        crate::input_file::BoundedLines::new(handle, crate::input_file::MAX_LINE_BYTES),
+    ))
 }
 
 /// [`check`] on the first bytes of a file.

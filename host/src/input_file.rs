@@ -146,7 +146,11 @@ mod tests {
         let missing = read_to_string(&t.path().join("none")).unwrap_err();
         assert_eq!(missing.kind(), ErrorKind::NotFound);
         let long = t.path().join("long.toml");
-        std::fs::write(&long, format!("a = 1\nb = \"{}\"\n", "x".repeat(MAX_LINE_BYTES))).unwrap();
+        std::fs::write(
+            &long,
+            format!("a = 1\nb = \"{}\"\n", "x".repeat(MAX_LINE_BYTES)),
+        )
+        .unwrap();
         let e = read_to_string(&long).unwrap_err().to_string();
         assert!(e.contains("line 2 is") && !e.contains("xxx"), "{e}");
     }
@@ -162,7 +166,10 @@ mod tests {
         assert_eq!(read_all(b"ab\ncd\n", 2).unwrap(), b"ab\ncd\n");
         let e = read_all(b"ab\ncde\n", 2).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::InvalidData);
-        assert!(e.to_string().contains("line 2 is longer than 2 bytes"), "{e}");
+        assert!(
+            e.to_string().contains("line 2 is longer than 2 bytes"),
+            "{e}"
+        );
         let e = read_all(b"a\nb\nc\0", 10).unwrap_err().to_string();
         assert!(e.contains("line 3, byte 2: a NUL byte"), "{e}");
     }

@@ -129,7 +129,8 @@ mod tests {
     fn health(n: usize, revs: usize, a: f64, clip: f64, q: f64) -> Result<(), String> {
         let mut h = ChannelHealth::default();
         for k in 0..n * revs {
-            let v = (a * (std::f64::consts::TAU * k as f64 / n as f64 + 0.3).sin()).clamp(-clip, clip);
+            let v =
+                (a * (std::f64::consts::TAU * k as f64 / n as f64 + 0.3).sin()).clamp(-clip, clip);
             let v = (v / q).round() * q;
             h.push(k as u64, v as f32, Some(n as f64));
         }
@@ -139,7 +140,10 @@ mod tests {
     #[test]
     fn a_sine_flat_topped_at_80_percent_is_clipped_and_a_quantised_one_is_not() {
         let e = health(1000, 20, 1.0, 0.8, 1e-6).unwrap_err();
-        assert!(e.contains("channel 1 is clipped: 40 flat runs") && e.contains("at 0.8 V"), "{e}");
+        assert!(
+            e.contains("channel 1 is clipped: 40 flat runs") && e.contains("at 0.8 V"),
+            "{e}"
+        );
         // 16-bit codes of a sine of 10 000 codes, 1000 samples a revolution.
         assert!(health(1000, 20, 10_000.0, 1e9, 1.0).is_ok());
         // Small ones: 300 and 30 codes, 4000 samples a revolution.
@@ -157,7 +161,10 @@ mod tests {
             h.push(k, 0.0, Some(500.0));
         }
         let e = h.finish("channel 2", 1000.0, Some(500.0)).unwrap_err();
-        assert!(e.contains("channel 2 is dead") && e.contains("5000 samples"), "{e}");
+        assert!(
+            e.contains("channel 2 is dead") && e.contains("5000 samples"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -213,7 +213,9 @@ pub fn run(args: &Args) -> Result<()> {
     }
     report_faults(&extraction);
     if let Some((first, last)) = extraction.keyphasor_span {
-        if let Some(w) = health::keyphasor_coverage(first, last, extraction.frames, extraction.sample_rate_hz) {
+        if let Some(w) =
+            health::keyphasor_coverage(first, last, extraction.frames, extraction.sample_rate_hz)
+        {
             eprintln!("warning: {}: {w}", args.recording.display());
         }
     }

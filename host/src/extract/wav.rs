@@ -102,22 +102,34 @@ pub fn read_header<R: Read + Seek>(r: &mut R, len: u64) -> Result<WavFormat, Str
         match &id {
             b"fmt " => {
                 if !(16..=1024).contains(&size) {
-                    return Err(format!("byte {pos}: a `fmt ` chunk of {size} bytes (16 to 40 expected)"));
+                    return Err(format!(
+                        "byte {pos}: a `fmt ` chunk of {size} bytes (16 to 40 expected)"
+                    ));
                 }
                 let mut b = vec![0u8; size as usize];
-                r.read_exact(&mut b).map_err(|_| format!("byte {pos}: the `fmt ` chunk is cut short"))?;
+                r.read_exact(&mut b)
+                    .map_err(|_| format!("byte {pos}: the `fmt ` chunk is cut short"))?;
                 let mut tag = u16_at(&b, 0);
                 if tag == EXTENSIBLE {
                     if b.len() < 26 {
-                        return Err(format!("byte {pos}: WAVE_FORMAT_EXTENSIBLE without its sub-format"));
+                        return Err(format!(
+                            "byte {pos}: WAVE_FORMAT_EXTENSIBLE without its sub-format"
+                        ));
                     }
                     tag = u16_at(&b, 24);
                 }
-                fmt = Some((tag, u16_at(&b, 2), u32_at(&b, 4), u16_at(&b, 12), u16_at(&b, 14)));
+                fmt = Some((
+                    tag,
+                    u16_at(&b, 2),
+                    u32_at(&b, 4),
+                    u16_at(&b, 12),
+                    u16_at(&b, 14),
+                ));
             }
             b"ds64" => {
                 let mut b = [0u8; 16];
-                r.read_exact(&mut b).map_err(|_| format!("byte {pos}: the RF64 `ds64` chunk is cut short"))?;
+                r.read_exact(&mut b)
+                    .map_err(|_| format!("byte {pos}: the RF64 `ds64` chunk is cut short"))?;
                 ds64_data = Some(u64_at(&b, 8));
             }
             b"data" => {
@@ -211,7 +223,14 @@ mod tests {
 
     /// A WAV file: `fmt ` (tag, bits), an optional `LIST` chunk of `extra`
     /// bytes (padded when `pad`), and `data` of `body` with size field `size`.
-    fn wav(tag: u16, channels: u16, bits: u16, extra: Option<(usize, bool)>, size: Option<u32>, body: &[u8]) -> Vec<u8> {
+    fn wav(
+        tag: u16,
+        channels: u16,
+        bits: u16,
+        extra: Option<(usize, bool)>,
+        size: Option<u32>,
+        body: &[u8],
+    ) -> Vec<u8> {
         let mut b = b"RIFF\0\0\0\0WAVEfmt ".to_vec();
         b.extend_from_slice(&16u32.to_le_bytes());
         b.extend_from_slice(&tag.to_le_bytes());
@@ -240,11 +259,18 @@ mod tests {
 
     #[test]
     fn float64_streaming_sizes_and_odd_chunks_are_read() {
-        let body: Vec<u8> = [0.5f64, -0.25, 1.0, 2.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let body: Vec<u8> = [0.5f64, -0.25, 1.0, 2.0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
         for size in [None, Some(0xFFFF_FFFF), Some(0)] {
             for extra in [None, Some((3, true)), Some((3, false)), Some((4, true))] {
                 let f = header(&wav(3, 2, 64, extra, size, &body)).unwrap();
-                assert_eq!((f.frames, f.float, f.bits, f.channels), (2, true, 64, 2), "{size:?} {extra:?}");
+                assert_eq!(
+                    (f.frames, f.float, f.bits, f.channels),
+                    (2, true, 64, 2),
+                    "{size:?} {extra:?}"
+                );
                 let bytes = wav(3, 2, 64, extra, size, &body);
                 let mut got = Vec::new();
                 decode(&f, &bytes[f.data_start as usize..], |v, _| got.push(v));

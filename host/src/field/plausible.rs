@@ -88,7 +88,10 @@ mod tests {
             stuck.push(1.5, 30.0);
             live.push(1.0 + k as f64, 30.0);
         }
-        assert!(zero.check("a").unwrap_err().contains("reads 0 at every one of the 5"));
+        assert!(zero
+            .check("a")
+            .unwrap_err()
+            .contains("reads 0 at every one of the 5"));
         assert!(stuck.check("b").unwrap_err().contains("same 1.5 at 30°"));
         assert!(live.check("c").is_ok());
         // Two equal rows are not yet a stuck channel.

@@ -56,25 +56,33 @@ mod tests {
     #[test]
     fn another_machines_file_is_refused_naming_the_bearings() {
         let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/");
-        let paper = Machine::from_toml_path(Path::new(&format!("{root}feng-hahn-1997.toml"))).unwrap();
-        let run = crate::sim::unbalance_response(
-            &paper,
-            &[10.0, 20.0],
-            &crate::sim::EffectSet::none(),
-        )
-        .unwrap()
-        .to_run_dir(None)
-        .unwrap();
+        let paper =
+            Machine::from_toml_path(Path::new(&format!("{root}feng-hahn-1997.toml"))).unwrap();
+        let run =
+            crate::sim::unbalance_response(&paper, &[10.0, 20.0], &crate::sim::EffectSet::none())
+                .unwrap()
+                .to_run_dir(None)
+                .unwrap();
         check_machine(&run, &paper, Path::new("m.toml")).unwrap();
         let mut extra = paper.clone();
         let mut third = extra.bearings[0].clone();
         third.name = "third".into();
         extra.bearings.push(third);
-        let e = check_machine(&run, &extra, Path::new("m.toml")).unwrap_err().to_string();
-        assert!(e.contains("`third` not in the run") && e.contains("(3)"), "{e}");
+        let e = check_machine(&run, &extra, Path::new("m.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`third` not in the run") && e.contains("(3)"),
+            "{e}"
+        );
         let mut renamed = paper.clone();
         renamed.bearings[1].name = "NDE".into();
-        let e = check_machine(&run, &renamed, Path::new("m.toml")).unwrap_err().to_string();
-        assert!(e.contains("`NDE` not in the run") && e.contains("the run's `right` not in the file"), "{e}");
+        let e = check_machine(&run, &renamed, Path::new("m.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`NDE` not in the run") && e.contains("the run's `right` not in the file"),
+            "{e}"
+        );
     }
 }

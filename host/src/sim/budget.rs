@@ -187,9 +187,15 @@ mod tests {
         let needed = super::accuracy_bytes(2, 116, 1_000_000_000);
         assert!(needed > 600_000_000_000, "{needed}");
         let e = super::check_count("--draws", 1_000_000_000, needed, Some(16 << 30)).unwrap_err();
-        assert!(e.starts_with("--draws 1000000000: needs about") && e.contains("16384 MB"), "{e}");
+        assert!(
+            e.starts_with("--draws 1000000000: needs about") && e.contains("16384 MB"),
+            "{e}"
+        );
         let small = super::accuracy_bytes(2, 116, 200);
-        assert!(super::check_count("--draws", 200, small, Some(1 << 30)).is_ok(), "{small}");
+        assert!(
+            super::check_count("--draws", 200, small, Some(1 << 30)).is_ok(),
+            "{small}"
+        );
     }
     use super::*;
 

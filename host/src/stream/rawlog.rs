@@ -146,8 +146,13 @@ mod tests {
 
     #[test]
     fn a_log_without_frames_rebuilds_nothing() {
-        let e = require_frames(Path::new("x/raw.bin"), 17, 0).unwrap_err().to_string();
-        assert!(e.contains("x/raw.bin (17 bytes) holds no valid phasor frame"), "{e}");
+        let e = require_frames(Path::new("x/raw.bin"), 17, 0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("x/raw.bin (17 bytes) holds no valid phasor frame"),
+            "{e}"
+        );
         assert!(require_frames(Path::new("x/raw.bin"), 17, 1).is_ok());
         assert!(require_frames(Path::new("x/raw.bin"), 0, 0).is_ok());
     }

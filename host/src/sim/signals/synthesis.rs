@@ -197,8 +197,12 @@ pub fn synthesise(
     } else {
         let d = DERIVATIVE_STEP * step;
         let shifted = |by: f64| -> Vec<f64> { checks.iter().map(|f| f + by).collect() };
-        let below = solver.run_with(&shifted(-d), false, &mut |_| {})?.measurements();
-        let above = solver.run_with(&shifted(d), false, &mut |_| {})?.measurements();
+        let below = solver
+            .run_with(&shifted(-d), false, &mut |_| {})?
+            .measurements();
+        let above = solver
+            .run_with(&shifted(d), false, &mut |_| {})?
+            .measurements();
         Some((d, below, above))
     };
 
@@ -383,7 +387,14 @@ const DERIVATIVE_STEP: f64 = 0.01;
 /// angular speed `omega` [rad/s] changing at `omega_dot` [rad/s²]: the
 /// displacement itself, its time derivative (velocity, m/s) or second time
 /// derivative (acceleration, m/s²) along the run-down.
-pub fn sensed_phasor(kind: SensorKind, x: C64, dxdf: C64, d2xdf2: C64, omega: f64, omega_dot: f64) -> C64 {
+pub fn sensed_phasor(
+    kind: SensorKind,
+    x: C64,
+    dxdf: C64,
+    d2xdf2: C64,
+    omega: f64,
+    omega_dot: f64,
+) -> C64 {
     // Derivatives with respect to Ω = 2πf.
     let dx = dxdf / TAU;
     let d2x = d2xdf2 / (TAU * TAU);
@@ -418,7 +429,14 @@ pub(super) fn written_error(
     let (mut err, mut peak) = (0.0f64, 0.0f64);
     for (f, [l, x, h]) in points {
         let omega = TAU * f;
-        let truth = sensed_phasor(kind, x, (h - l) / (2.0 * d), (h - 2.0 * x + l) / (d * d), omega, omega_dot);
+        let truth = sensed_phasor(
+            kind,
+            x,
+            (h - l) / (2.0 * d),
+            (h - 2.0 * x + l) / (d * d),
+            omega,
+            omega_dot,
+        );
         let (v, dv, d2v) = spline.eval(f);
         err = err.max((sensed_phasor(kind, v, dv, d2v, omega, omega_dot) - truth).norm());
         if f >= run.0 && f <= run.1 {

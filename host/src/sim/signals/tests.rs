@@ -75,14 +75,21 @@ fn resonance(f: f64) -> [C64; 3] {
 fn the_error_of_a_derivative_channel_is_measured_against_closed_form_derivatives() {
     // A grid of 1 Hz over a resonance 2 Hz wide, a run-down of 5 Hz/s.
     let grid: Vec<f64> = (30..=70).map(f64::from).collect();
-    let s = ComplexSpline::new(grid.clone(), grid.iter().map(|&f| resonance(f)[0]).collect()).unwrap();
+    let s = ComplexSpline::new(
+        grid.clone(),
+        grid.iter().map(|&f| resonance(f)[0]).collect(),
+    )
+    .unwrap();
     let omega_dot = TAU * 5.0;
     let checks: Vec<f64> = (0..400).map(|k| 31.0 + 38.0 * k as f64 / 400.0).collect();
     let d = 0.01;
     let points = || {
-        checks
-            .iter()
-            .map(move |&f| (f, [resonance(f - d)[0], resonance(f)[0], resonance(f + d)[0]]))
+        checks.iter().map(move |&f| {
+            (
+                f,
+                [resonance(f - d)[0], resonance(f)[0], resonance(f + d)[0]],
+            )
+        })
     };
     // Exact: closed-form derivatives.
     let exact = |kind| {
@@ -98,12 +105,25 @@ fn the_error_of_a_derivative_channel_is_measured_against_closed_form_derivatives
         err / peak
     };
     let run = (30.0, 70.0);
-    let disp = written_error(SensorKind::Displacement, Some(&s), points(), d, omega_dot, run);
+    let disp = written_error(
+        SensorKind::Displacement,
+        Some(&s),
+        points(),
+        d,
+        omega_dot,
+        run,
+    );
     for kind in [SensorKind::Velocity, SensorKind::Acceleration] {
         let measured = written_error(kind, Some(&s), points(), d, omega_dot, run);
         let truth = exact(kind);
-        assert!((measured / truth - 1.0).abs() < 0.01, "{kind:?}: {measured} vs {truth}");
+        assert!(
+            (measured / truth - 1.0).abs() < 0.01,
+            "{kind:?}: {measured} vs {truth}"
+        );
         // Not the displacement's figure reported again.
-        assert!((measured / disp - 1.0).abs() > 1e-3, "{kind:?}: {measured} vs displacement {disp}");
+        assert!(
+            (measured / disp - 1.0).abs() > 1e-3,
+            "{kind:?}: {measured} vs displacement {disp}"
+        );
     }
 }
