@@ -187,24 +187,6 @@ pub fn synthesise(
     checks.sort_by(f64::total_cmp);
     checks.dedup();
     let check_rows = solver.run_with(&checks, false, &mut |_| {})?.measurements();
-    // Velocity and acceleration channels are written from the spline's
-    // derivatives too: their error is measured against the model's own
-    // derivatives (central differences of solves at ±DERIVATIVE_STEP of
-    // the grid step about every check speed).
-    let omega_dot = TAU * r.slope();
-    let derivatives = if opts.seismic_kind == SensorKind::Displacement {
-        None
-    } else {
-        let d = DERIVATIVE_STEP * step;
-        let shifted = |by: f64| -> Vec<f64> { checks.iter().map(|f| f + by).collect() };
-        let below = solver
-            .run_with(&shifted(-d), false, &mut |_| {})?
-            .measurements();
-        let above = solver
-            .run_with(&shifted(d), false, &mut |_| {})?
-            .measurements();
-        Some((d, below, above))
-    };
 
     // Channels: per bearing rel_y, rel_z (probes), ped_y, ped_z (seismic).
     let mut channels = Vec::new();
@@ -228,34 +210,16 @@ pub fn synthesise(
                     err = err.max((v - q.of(m)).norm());
                 }
             }
-            let kind = if probe {
-                SensorKind::Displacement
-            } else {
-                opts.seismic_kind
-            };
-            let mut rel = if max_x > 0.0 { err / max_x } else { 0.0 };
-            if let (Some((d, below, above)), false) = (&derivatives, probe) {
-                let written = written_error(
-                    kind,
-                    spline.get(&b.name, q),
-                    check_rows
-                        .iter()
-                        .zip(below)
-                        .zip(above)
-                        .filter(|((m, _), _)| m.bearing == b.name)
-                        .map(|((m, l), h)| (m.speed_hz, [q.of(l), q.of(m), q.of(h)])),
-                    *d,
-                    omega_dot,
-                    (lo, hi),
-                );
-                rel = rel.max(written);
-            }
             channels.push(Channel {
                 name: format!("{}_{}", b.name, q.name()),
                 bearing: b.name.clone(),
                 bearing_index: bi,
                 quantity: q,
-                kind,
+                kind: if probe {
+                    SensorKind::Displacement
+                } else {
+                    opts.seismic_kind
+                },
                 sensitivity: if probe {
                     opts.probe_sensitivity
                 } else {
@@ -269,7 +233,7 @@ pub fn synthesise(
                 },
                 clipped_samples: 0,
                 interpolation_error_m: err,
-                interpolation_error_rel: rel,
+                interpolation_error_rel: if max_x > 0.0 { err / max_x } else { 0.0 },
             });
         }
     }
@@ -297,6 +261,7 @@ pub fn synthesise(
     let normal = Normal::new(0.0, 1.0)
         .map_err(|e| SignalsError::Request(format!("noise distribution: {e}")))?;
     let mut codes = vec![0i16; samples as usize * n];
+    let omega_dot = TAU * r.slope();
     for k in 0..samples as usize {
         let t = (k as f64 - opts.t0_sample_position) / fs;
         let f = r.speed_hz(t);
@@ -304,7 +269,19 @@ pub fn synthesise(
         let rot = C64::from_polar(1.0, r.angle_rad(t));
         for (ci, c) in channels.iter_mut().enumerate() {
             let (x, dxdf, d2xdf2) = chan_splines[ci].eval(f);
-            let phasor = sensed_phasor(c.kind, x, dxdf, d2xdf2, omega, omega_dot);
+            // Derivatives with respect to Ω = 2πf.
+            let dx = dxdf / TAU;
+            let d2x = d2xdf2 / (TAU * TAU);
+            let i = C64::i();
+            let phasor = match c.kind {
+                SensorKind::Displacement => x,
+                SensorKind::Velocity => i * omega * x + dx * omega_dot,
+                SensorKind::Acceleration => {
+                    i * omega_dot * x - x * (omega * omega)
+                        + i * (2.0 * omega * omega_dot) * dx
+                        + d2x * (omega_dot * omega_dot)
+                }
+            };
             let value = (phasor * rot).re;
             let noise = if c.noise_v_rms > 0.0 {
                 c.noise_v_rms * normal.sample(&mut rng)
@@ -376,76 +353,4 @@ pub fn synthesise_to(
     set.write(dir)?;
     write_truth(dir, &truth)?;
     Ok(set)
-}
-
-/// Step of the central differences that give the model's own derivatives
-/// in speed, as a fraction of the grid step [-].
-const DERIVATIVE_STEP: f64 = 0.01;
-
-/// The phasor a transducer of `kind` senses from the displacement phasor
-/// `x` [m] and its derivatives in speed `dxdf` [m/Hz], `d2xdf2` [m/Hz²] at
-/// angular speed `omega` [rad/s] changing at `omega_dot` [rad/s²]: the
-/// displacement itself, its time derivative (velocity, m/s) or second time
-/// derivative (acceleration, m/s²) along the run-down.
-pub fn sensed_phasor(
-    kind: SensorKind,
-    x: C64,
-    dxdf: C64,
-    d2xdf2: C64,
-    omega: f64,
-    omega_dot: f64,
-) -> C64 {
-    // Derivatives with respect to Ω = 2πf.
-    let dx = dxdf / TAU;
-    let d2x = d2xdf2 / (TAU * TAU);
-    let i = C64::i();
-    match kind {
-        SensorKind::Displacement => x,
-        SensorKind::Velocity => i * omega * x + dx * omega_dot,
-        SensorKind::Acceleration => {
-            i * omega_dot * x - x * (omega * omega)
-                + i * (2.0 * omega * omega_dot) * dx
-                + d2x * (omega_dot * omega_dot)
-        }
-    }
-}
-
-/// Largest error of the sensed phasor a channel of `kind` is written from
-/// (spline value and derivatives) against the model's, relative to the
-/// channel's largest |sensed phasor| over the run's speeds `run` [Hz];
-/// `points` are (speed [Hz], displacement phasors at speed − d, speed,
-/// speed + d [m]).
-pub(super) fn written_error(
-    kind: SensorKind,
-    spline: Option<&ComplexSpline>,
-    points: impl Iterator<Item = (f64, [C64; 3])>,
-    d: f64,
-    omega_dot: f64,
-    run: (f64, f64),
-) -> f64 {
-    let Some(spline) = spline else {
-        return f64::NAN;
-    };
-    let (mut err, mut peak) = (0.0f64, 0.0f64);
-    for (f, [l, x, h]) in points {
-        let omega = TAU * f;
-        let truth = sensed_phasor(
-            kind,
-            x,
-            (h - l) / (2.0 * d),
-            (h - 2.0 * x + l) / (d * d),
-            omega,
-            omega_dot,
-        );
-        let (v, dv, d2v) = spline.eval(f);
-        err = err.max((sensed_phasor(kind, v, dv, d2v, omega, omega_dot) - truth).norm());
-        if f >= run.0 && f <= run.1 {
-            peak = peak.max(truth.norm());
-        }
-    }
-    if peak > 0.0 {
-        err / peak
-    } else {
-        0.0
-    }
 }
