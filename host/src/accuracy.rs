@@ -152,6 +152,15 @@ pub fn monte_carlo_with_progress(
         .map(|p| [p.k_y, p.k_z, p.m, p.c_y, p.c_z])
         .collect();
     let nb = bearings.len();
+    let needed =
+        crate::sim::budget::accuracy_bytes(nb as u64, speeds_hz.len() as u64, draws as u64);
+    crate::sim::budget::check_count(
+        "--draws",
+        draws as u64,
+        needed,
+        crate::sim::budget::available_bytes(),
+    )
+    .map_err(|e| anyhow!(e))?;
     let mut crb_var = vec![[0.0; PARAMETERS]; nb];
     if let Perturbation::Noise(fraction) = perturbation {
         for (b, name) in bearings.iter().enumerate() {

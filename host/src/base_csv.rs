@@ -132,29 +132,19 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
     };
     // Not a regular file (a FIFO would block), a spreadsheet's separator or
     // encoding: named before the CSV reader runs.
-    let layout = crate::csv_layout::check(&file, &BASE_COLUMNS.join(",")).map_err(|e| match e {
+    let handle = crate::csv_layout::open(&file, &BASE_COLUMNS.join(",")).map_err(|e| match e {
         crate::csv_layout::LayoutError::NotAFile(m) => BaseCsvError::Io {
             file: file.clone(),
             source: std::io::Error::new(std::io::ErrorKind::InvalidInput, m),
         },
         crate::csv_layout::LayoutError::At(line, m) => field(line, 1, m),
     })?;
-    let mut handle = std::fs::File::open(&file).map_err(|source| BaseCsvError::Io {
-        file: file.clone(),
-        source,
-    })?;
-    std::io::Seek::seek(&mut handle, std::io::SeekFrom::Start(layout.skip)).map_err(|source| {
-        BaseCsvError::Io {
-            file: file.clone(),
-            source,
-        }
-    })?;
     let mut r = csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(true)
         .quoting(false)
         .trim(csv::Trim::All)
-        .from_reader(std::io::BufReader::new(handle));
+        .from_reader(handle);
     let header = r.headers().map_err(|e| field(1, 1, e.to_string()))?.clone();
     for (i, want) in BASE_COLUMNS.iter().enumerate() {
         if header.get(i) != Some(want) {

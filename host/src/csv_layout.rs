@@ -36,6 +36,23 @@ pub fn check(path: &Path, expected: &str) -> Result<Layout, LayoutError> {
     describe(&head, expected)
 }
 
+/// [`check`], then the file opened past its byte-order mark behind a
+/// [`crate::input_file::BoundedLines`] reader (lines of at most
+/// [`crate::input_file::MAX_LINE_BYTES`], no NUL bytes): what every CSV
+/// reader of an input file reads from.
+pub fn open(
+    path: &Path,
+    expected: &str,
+) -> Result<std::io::BufReader<crate::input_file::BoundedLines<std::fs::File>>, LayoutError> {
+    let layout = check(path, expected)?;
+    let mut handle = std::fs::File::open(path).map_err(|e| LayoutError::NotAFile(e.to_string()))?;
+    std::io::Seek::seek(&mut handle, std::io::SeekFrom::Start(layout.skip))
+        .map_err(|e| LayoutError::NotAFile(e.to_string()))?;
+    Ok(std::io::BufReader::new(
+        crate::input_file::BoundedLines::new(handle, crate::input_file::MAX_LINE_BYTES),
+    ))
+}
+
 /// [`check`] on the first bytes of a file.
 pub fn describe(head: &[u8], expected: &str) -> Result<Layout, LayoutError> {
     let at1 = |m: String| Err(LayoutError::At(1, m));

@@ -2,7 +2,7 @@
 //! where a table, machine file, configuration or JSON file is expected is
 //! refused at once (reading a FIFO with no writer would block forever).
 
-use std::io::{Error, ErrorKind};
+use std::io::{Error, ErrorKind, Read};
 use std::path::Path;
 
 /// Checks that `path` is a regular file (symbolic links followed); the
@@ -36,12 +36,100 @@ pub fn read_to_string(path: &Path) -> std::io::Result<String> {
             ),
         ));
     }
-    std::fs::read_to_string(path)
+    let text = std::fs::read_to_string(path)?;
+    check_line_lengths(&text)?;
+    Ok(text)
 }
 
 /// The largest text file [`read_to_string`] reads whole [bytes]: 64 MiB
 /// (configuration, machine, layout and JSON files are kilobytes).
 pub const MAX_TEXT_BYTES: u64 = 64 << 20;
+
+/// The longest line any text input may have [bytes]: 1 MiB. A table,
+/// recording or configuration line is at most a few kilobytes; a longer one
+/// is a binary file or a file with no line ends, refused before it is held
+/// in memory whole.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// A text reader that refuses, as an I/O error of kind `InvalidData`, a line
+/// longer than a bound [bytes] and any NUL byte (never text), naming the
+/// line [1-based] and never echoing its content. Memory stays bounded by the
+/// reader above it holding at most one line.
+pub struct BoundedLines<R> {
+    inner: R,
+    /// The current line [1-based].
+    line: u64,
+    /// Bytes of the current line so far.
+    run: usize,
+    max: usize,
+}
+
+impl<R: Read> BoundedLines<R> {
+    /// Wraps `inner` with lines of at most `max` bytes.
+    pub fn new(inner: R, max: usize) -> Self {
+        BoundedLines {
+            inner,
+            line: 1,
+            run: 0,
+            max,
+        }
+    }
+}
+
+impl<R: Read> Read for BoundedLines<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for &b in &buf[..n] {
+            match b {
+                b'\n' => {
+                    self.line += 1;
+                    self.run = 0;
+                }
+                0 => {
+                    return Err(Error::new(
+                        ErrorKind::InvalidData,
+                        format!(
+                            "line {}, byte {}: a NUL byte: this is not UTF-8 text (a binary file, or UTF-16: convert it with iconv -f UTF-16 -t UTF-8)",
+                            self.line,
+                            self.run + 1
+                        ),
+                    ));
+                }
+                _ => {
+                    self.run += 1;
+                    if self.run > self.max {
+                        return Err(Error::new(
+                            ErrorKind::InvalidData,
+                            format!(
+                                "line {} is longer than {} bytes (a text line here is at most a few kilobytes): is it the right file, with line ends?",
+                                self.line, self.max
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(n)
+    }
+}
+
+/// Checks that no line of `text` is longer than [`MAX_LINE_BYTES`]; the
+/// error names the line [1-based] and its length, not its content.
+pub fn check_line_lengths(text: &str) -> std::io::Result<()> {
+    for (i, line) in text.split('\n').enumerate() {
+        if line.len() > MAX_LINE_BYTES {
+            return Err(Error::new(
+                ErrorKind::InvalidData,
+                format!(
+                    "line {} is {} bytes long (at most {MAX_LINE_BYTES}): is it the right file, with line ends?",
+                    i + 1,
+                    line.len()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
 
 #[cfg(test)]
 mod tests {
@@ -57,5 +145,49 @@ mod tests {
         assert_eq!(read_to_string(&f).unwrap(), "x = 1\n");
         let missing = read_to_string(&t.path().join("none")).unwrap_err();
         assert_eq!(missing.kind(), ErrorKind::NotFound);
+        let long = t.path().join("long.toml");
+        std::fs::write(
+            &long,
+            format!("a = 1\nb = \"{}\"\n", "x".repeat(MAX_LINE_BYTES)),
+        )
+        .unwrap();
+        let e = read_to_string(&long).unwrap_err().to_string();
+        assert!(e.contains("line 2 is") && !e.contains("xxx"), "{e}");
+    }
+
+    fn read_all(bytes: &[u8], max: usize) -> std::io::Result<Vec<u8>> {
+        let mut out = Vec::new();
+        BoundedLines::new(bytes, max).read_to_end(&mut out)?;
+        Ok(out)
+    }
+
+    #[test]
+    fn long_lines_and_nul_bytes_are_refused_by_line() {
+        assert_eq!(read_all(b"ab\ncd\n", 2).unwrap(), b"ab\ncd\n");
+        let e = read_all(b"ab\ncde\n", 2).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::InvalidData);
+        assert!(
+            e.to_string().contains("line 2 is longer than 2 bytes"),
+            "{e}"
+        );
+        let e = read_all(b"a\nb\nc\0", 10).unwrap_err().to_string();
+        assert!(e.contains("line 3, byte 2: a NUL byte"), "{e}");
+    }
+
+    #[test]
+    fn a_long_run_of_nul_bytes_fails_at_the_first_with_bounded_memory() {
+        // 64 MiB of zeros, read through a CSV reader: fails at byte 1.
+        let zeros = std::io::repeat(0).take(64 << 20);
+        let mut r = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(BoundedLines::new(zeros, MAX_LINE_BYTES));
+        let e = r.records().next().unwrap().unwrap_err().to_string();
+        assert!(e.contains("line 1, byte 1: a NUL byte"), "{e}");
+        let ones = std::io::repeat(b'1').take(64 << 20);
+        let mut r = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .from_reader(BoundedLines::new(ones, MAX_LINE_BYTES));
+        let e = r.records().next().unwrap().unwrap_err().to_string();
+        assert!(e.contains("line 1 is longer than 1048576 bytes"), "{e}");
     }
 }

@@ -80,6 +80,9 @@ pub fn run(args: &Args) -> Result<()> {
     // The whole command's line; the candidate rounds show theirs under it.
     let mut ticker = crate::progress::Ticker::activity("diagnose: fits, bootstrap, effects", true);
     let mut run = RunDir::read(&args.dir)?;
+    if let Some(path) = &args.machine {
+        crate::rundir::matches::check_machine(&run, &Machine::from_toml_path(path)?, path)?;
+    }
     if let Some(band) = args.speeds {
         band.select(&mut run)
             .map_err(|e| anyhow::anyhow!("{}: {e}", args.dir.display()))?;

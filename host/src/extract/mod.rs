@@ -16,9 +16,11 @@
 //! counts them.
 
 pub mod channels;
+pub mod health;
 pub mod keyphasor;
 pub mod phasors;
 pub mod recording;
+pub mod wav;
 
 use crate::field::angle::resolve;
 use crate::field::import::write_run;
@@ -36,7 +38,7 @@ use std::time::Instant;
 /// Command-line arguments of `plinth extract`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The recording: WAV (16/24/32-bit integer PCM, 32-bit float) or CSV (`time_s`, then channels in volts).
+    /// The recording: WAV (8- to 32-bit integer PCM, 32- or 64-bit float) or CSV (`time_s`, then channels in volts).
     pub recording: PathBuf,
     /// Channel map, sensitivities and keyphasor (TOML, docs/formats.md "Recorded waveforms").
     #[arg(long)]
@@ -210,6 +212,13 @@ pub fn run(args: &Args) -> Result<()> {
         }
     }
     report_faults(&extraction);
+    if let Some((first, last)) = extraction.keyphasor_span {
+        if let Some(w) =
+            health::keyphasor_coverage(first, last, extraction.frames, extraction.sample_rate_hz)
+        {
+            eprintln!("warning: {}: {w}", args.recording.display());
+        }
+    }
     if extraction.outputs.is_empty() {
         bail!(
             "{}: {} keyphasor edges but no phasor: the extractor needs 3 edges to lock and {} revolutions per phasor, with no fault in between",

@@ -53,6 +53,8 @@ pub struct Extraction {
     pub frames: u64,
     /// Sample rate [Hz].
     pub sample_rate_hz: f64,
+    /// Frames of the first and the last keyphasor edge.
+    pub keyphasor_span: Option<(f64, f64)>,
 }
 
 /// Runs the extraction over the whole recording; `progress` is told the
@@ -126,6 +128,10 @@ pub fn extract(
     let mut events: Vec<Vec<Event<GROUP>>> = vec![Vec::new(); groups];
     let mut last_edge: Option<f64> = None;
     let mut short_periods = 0u32;
+    let mut first_edge: Option<f64> = None;
+    // The last revolution's length [samples], for the flat-top check.
+    let mut revolution: Option<f64> = None;
+    let mut health = vec![super::health::ChannelHealth::default(); config.channels.len()];
     loop {
         let frames = recording.read(&mut buf, BLOCK_FRAMES)?;
         if frames == 0 {
@@ -151,7 +157,9 @@ pub fn extract(
             if let Some(fraction) = detector.push(f64::from(buf[k * n + kp])) {
                 edges.push(KeyphasorEdge { index: k, fraction });
                 let at = (first_frame + k as u64) as f64 - 1.0 + f64::from(fraction);
+                first_edge.get_or_insert(at);
                 if let Some(prev) = last_edge.replace(at) {
+                    revolution = Some(at - prev);
                     if at - prev < MIN_SAMPLES_PER_REVOLUTION {
                         short_periods += 1;
                         if short_periods >= 3 {
@@ -167,6 +175,11 @@ pub fn extract(
                         short_periods = 0;
                     }
                 }
+            }
+        }
+        for (h, c) in health.iter_mut().zip(&config.channels) {
+            for k in 0..frames {
+                h.push(first_frame + k as u64, buf[k * n + c.index], revolution);
             }
         }
         for (g, block) in blocks.iter_mut().enumerate() {
@@ -199,6 +212,7 @@ pub fn extract(
         progress(result.frames);
     }
     result.edges = detector.edges;
+    result.keyphasor_span = first_edge.zip(last_edge);
     if detector.edges == 0 {
         let k = &config.keyphasor;
         bail!(
@@ -215,6 +229,17 @@ pub fn extract(
                 ""
             }
         );
+    }
+    for (i, (h, c)) in health.iter_mut().zip(&config.channels).enumerate() {
+        let what = format!(
+            "channel {} (channel[{i}]: bearing `{}`, {} at {}°)",
+            c.index,
+            c.placement.bearing,
+            c.placement.quantity.name(),
+            c.placement.angle_deg
+        );
+        h.finish(&what, fs, revolution)
+            .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
     }
     Ok(result)
 }

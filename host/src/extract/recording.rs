@@ -1,7 +1,7 @@
 //! Recordings read as a stream of sample frames in volts, a block at a time
-//! (memory independent of the file's length): WAV (16-, 24-, 32-bit integer
-//! PCM and 32-bit float, via `hound`; integer codes scaled so that full
-//! scale is `full_scale_v`) and CSV (a header row, `time_s`, then one column
+//! (memory independent of the file's length): WAV (8- to 32-bit integer PCM,
+//! 32- and 64-bit float, read by [`super::wav`]; integer codes scaled so
+//! that full scale is `full_scale_v`) and CSV (a header row, `time_s`, then one column
 //! per channel in channel order, in volts; the sample rate from the time
 //! column).
 //!
@@ -29,15 +29,19 @@ pub struct Clipping {
 
 enum Source {
     Wav {
-        reader: hound::WavReader<BufReader<File>>,
-        float: bool,
+        reader: BufReader<File>,
+        header: super::wav::WavFormat,
+        /// Frames not yet read.
+        left: u64,
+        /// Bytes of the current block.
+        bytes: Vec<u8>,
         /// Volts per integer code.
         scale: f64,
         /// Integer rails.
         rails: (i32, i32),
     },
     Csv {
-        records: csv::StringRecordsIntoIter<BufReader<File>>,
+        records: csv::StringRecordsIntoIter<BufReader<crate::input_file::BoundedLines<File>>>,
         /// Rows read ahead (interleaved volts), consumed first.
         ahead: std::collections::VecDeque<f32>,
         /// Time of the previous row and of row 0 [s].
@@ -97,23 +101,16 @@ impl Recording {
         bytes: u64,
         full_scale_v: Option<f64>,
     ) -> Result<Recording> {
-        let reader = hound::WavReader::open(path)
-            .map_err(|e| anyhow::anyhow!("{file}: not a readable WAV file: {e}"))?;
-        let spec = reader.spec();
-        let channels = usize::from(spec.channels);
-        if channels == 0 || spec.sample_rate == 0 {
-            bail!(
-                "{file}: WAV header: {} channels at {} Hz",
-                spec.channels,
-                spec.sample_rate
-            );
-        }
-        let (float, format) = match (spec.sample_format, spec.bits_per_sample) {
-            (hound::SampleFormat::Float, 32) => (true, "32-bit float WAV".to_string()),
-            (hound::SampleFormat::Int, b @ (16 | 24 | 32)) => (false, format!("{b}-bit integer PCM WAV")),
-            (f, b) => bail!("{file}: WAV with {b}-bit {f:?} samples: Plinth reads 16-, 24- or 32-bit integer PCM and 32-bit float"),
-        };
-        let bits = u32::from(spec.bits_per_sample);
+        let mut handle = File::open(path).with_context(|| file.clone())?;
+        let header = super::wav::read_header(&mut handle, bytes)
+            .map_err(|e| anyhow::anyhow!("{file}: WAV: {e}"))?;
+        std::io::Seek::seek(&mut handle, std::io::SeekFrom::Start(header.data_start))
+            .with_context(|| file.clone())?;
+        let reader = BufReader::new(handle);
+        let channels = usize::from(header.channels);
+        let float = header.float;
+        let format = header.describe();
+        let bits = u32::from(header.bits);
         let scale = if float {
             1.0
         } else {
@@ -125,9 +122,9 @@ impl Recording {
         let half = 1i64 << (bits - 1);
         let rails = ((-half) as i32, (half - 1) as i32);
         Ok(Recording {
-            sample_rate_hz: f64::from(spec.sample_rate),
+            sample_rate_hz: f64::from(header.sample_rate),
             channels,
-            frames: Some(u64::from(reader.duration())),
+            frames: Some(header.frames),
             bytes,
             format,
             position: 0,
@@ -135,7 +132,9 @@ impl Recording {
             float_rail: if float { full_scale_v } else { None },
             source: Source::Wav {
                 reader,
-                float,
+                header,
+                left: header.frames,
+                bytes: Vec::new(),
                 scale,
                 rails,
             },
@@ -149,11 +148,14 @@ impl Recording {
         bytes: u64,
         full_scale_v: Option<f64>,
     ) -> Result<Recording> {
-        let handle = File::open(path).with_context(|| file.clone())?;
+        let handle = crate::csv_layout::open(path, "time_s").map_err(|e| match e {
+            crate::csv_layout::LayoutError::NotAFile(m) => anyhow::anyhow!("{file}: {m}"),
+            crate::csv_layout::LayoutError::At(line, m) => anyhow::anyhow!("{file}:{line}: {m}"),
+        })?;
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(false)
             .trim(csv::Trim::All)
-            .from_reader(BufReader::new(handle));
+            .from_reader(handle);
         let mut header = csv::StringRecord::new();
         if !reader
             .read_record(&mut header)
@@ -217,46 +219,36 @@ impl Recording {
         match &mut self.source {
             Source::Wav {
                 reader,
-                float,
+                header,
+                left,
+                bytes,
                 scale,
                 rails,
             } => {
-                let want = max_frames * n;
-                if *float {
-                    for s in reader.samples::<f32>().take(want) {
-                        out.push(s.map_err(|e| {
-                            anyhow::anyhow!(
-                                "{}: frame {}: {e}",
-                                self.file,
-                                self.position + (out.len() / n) as u64
-                            )
-                        })?);
-                    }
-                } else {
-                    for (i, s) in reader.samples::<i32>().take(want).enumerate() {
-                        let code = s.map_err(|e| {
-                            anyhow::anyhow!(
-                                "{}: frame {}: {e}",
-                                self.file,
-                                self.position + (i / n) as u64
-                            )
-                        })?;
+                use std::io::Read;
+                let frames = (*left).min(max_frames as u64) as usize;
+                bytes.resize(frames * header.frame_bytes(), 0);
+                reader.read_exact(bytes).map_err(|e| {
+                    anyhow::anyhow!(
+                        "{}: frame {}: {e} (the file is shorter than its header says)",
+                        self.file,
+                        self.position
+                    )
+                })?;
+                *left -= frames as u64;
+                let position = self.position;
+                let clipping = &mut self.clipping;
+                super::wav::decode(header, bytes, |sample, i| match sample {
+                    super::wav::Sample::Code(code) => {
                         if code <= rails.0 || code >= rails.1 {
-                            let c = &mut self.clipping[i % n];
-                            c.first_frame.get_or_insert(self.position + (i / n) as u64);
+                            let c = &mut clipping[i % n];
+                            c.first_frame.get_or_insert(position + (i / n) as u64);
                             c.count += 1;
                         }
                         out.push((f64::from(code) * *scale) as f32);
                     }
-                }
-                if !out.len().is_multiple_of(n) {
-                    bail!(
-                        "{}: the file ends inside a frame (after {} samples of {} channels)",
-                        self.file,
-                        out.len(),
-                        n
-                    );
-                }
+                    super::wav::Sample::Float(v) => out.push(v as f32),
+                });
             }
             Source::Csv {
                 records,

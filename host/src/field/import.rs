@@ -197,13 +197,15 @@ pub struct ImportedRow {
 /// displacement phasors [m], y and z resolved.
 pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec<ImportedRow>> {
     let file = path.display().to_string();
-    crate::input_file::ensure_regular(path).with_context(|| file.clone())?;
-    let handle = std::fs::File::open(path).with_context(|| file.clone())?;
+    let handle = crate::csv_layout::open(path, &layout.speed_column).map_err(|e| match e {
+        crate::csv_layout::LayoutError::NotAFile(m) => anyhow::anyhow!("{file}: {m}"),
+        crate::csv_layout::LayoutError::At(line, m) => anyhow::anyhow!("{file}:{line}: {m}"),
+    })?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
         .trim(csv::Trim::All)
-        .from_reader(std::io::BufReader::new(handle));
+        .from_reader(handle);
     let mut records = reader.records();
     let header = match records.next() {
         Some(r) => r.with_context(|| format!("{file}:1"))?,
@@ -248,6 +250,7 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
 
     let mut rows = Vec::new();
     let mut seen: BTreeMap<u64, u64> = BTreeMap::new();
+    let mut watches = vec![super::plausible::ReadingsWatch::default(); layout.transducers.len()];
     for record in records {
         let record = record.with_context(|| file.to_string())?;
         let line = record.position().map_or(0, |p| p.line());
@@ -297,7 +300,7 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
         let mut disp = Vec::with_capacity(cols.len());
         // The noise of the table's own rounding per reading [m] (field::rounding).
         let mut sd = Vec::with_capacity(cols.len());
-        for (t, &(ac, pc)) in layout.transducers.iter().zip(&cols) {
+        for ((t, &(ac, pc)), watch) in layout.transducers.iter().zip(&cols).zip(&mut watches) {
             let amplitude = cell(ac, "amplitude")?;
             if amplitude < 0.0 {
                 bail!(
@@ -307,7 +310,19 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
                 );
             }
             let phase = cell(pc, "phase [deg]")?;
-            let q = reading_phasor(amplitude * t.unit.to_si_zero_peak, phase, layout.phase);
+            let si = amplitude * t.unit.to_si_zero_peak;
+            let most = super::plausible::max_amplitude_si(t.unit.kind);
+            if si > most {
+                bail!(
+                    "{file}:{line}:{}: column `{}`: amplitude {amplitude:e} ({si:.3e} {} 0-pk) is beyond any machine's vibration (at most {most:e} {}): a typo, or the wrong unit in the layout?",
+                    ac + 1,
+                    names[ac],
+                    super::plausible::si_unit(t.unit.kind),
+                    super::plausible::si_unit(t.unit.kind)
+                );
+            }
+            watch.push(amplitude, phase);
+            let q = reading_phasor(si, phase, layout.phase);
             disp.push(to_displacement(t.unit.kind, q, omega));
             let place = |c: usize| record.get(c).and_then(super::rounding::last_place);
             sd.push(match (place(ac), place(pc)) {
@@ -349,6 +364,16 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
     }
     if rows.is_empty() {
         bail!("{file}: no data rows after the header");
+    }
+    for ((t, &(ac, _)), watch) in layout.transducers.iter().zip(&cols).zip(&watches) {
+        let what = format!(
+            "{file}: column {} `{}` ({layout_file}: {}, bearing `{}`)",
+            ac + 1,
+            names[ac],
+            t.placement.key,
+            t.placement.bearing
+        );
+        watch.check(&what).map_err(anyhow::Error::msg)?;
     }
     Ok(rows)
 }

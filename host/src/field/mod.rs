@@ -9,6 +9,7 @@
 
 pub mod angle;
 pub mod import;
+pub mod plausible;
 pub mod plot;
 pub mod rounding;
 pub mod slow_roll;

@@ -52,11 +52,14 @@ pub fn read(dir: &Path) -> Result<Option<Vec<(String, Quantity, f64)>>> {
             "{name}: not a regular file (expected {TRANSDUCERS_FILE}: bearing,quantity,angle_deg)"
         );
     }
+    let handle = crate::csv_layout::open(&file, &COLUMNS.join(",")).map_err(|e| match e {
+        crate::csv_layout::LayoutError::NotAFile(m) => anyhow!("{name}: {m}"),
+        crate::csv_layout::LayoutError::At(line, m) => anyhow!("{name}:{line}: {m}"),
+    })?;
     let mut r = csv::ReaderBuilder::new()
         .has_headers(true)
         .trim(csv::Trim::All)
-        .from_path(&file)
-        .with_context(|| format!("{name}: cannot open"))?;
+        .from_reader(handle);
     let header = r.headers().map_err(|e| anyhow!("{name}:1: {e}"))?.clone();
     let mut index = [0usize; 3];
     for (k, want) in COLUMNS.iter().enumerate() {

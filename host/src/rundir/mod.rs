@@ -10,6 +10,7 @@
 //! (bearing coefficients over speed). Everything is re-exported here.
 
 pub mod digits;
+pub mod matches;
 pub mod read;
 pub mod schedule;
 pub mod write;

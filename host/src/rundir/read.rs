@@ -144,7 +144,7 @@ fn read_table(
     let file = || path.to_path_buf();
     let expected = columns.join(",");
     // Spreadsheet exports and non-files are named before the CSV reader runs.
-    let layout = crate::csv_layout::check(path, &expected).map_err(|e| match e {
+    let handle = crate::csv_layout::open(path, &expected).map_err(|e| match e {
         crate::csv_layout::LayoutError::NotAFile(m) => RunDirError::Io {
             file: file(),
             source: std::io::Error::new(std::io::ErrorKind::InvalidInput, m),
@@ -155,22 +155,12 @@ fn read_table(
             message,
         },
     })?;
-    let mut handle = std::fs::File::open(path).map_err(|source| RunDirError::Io {
-        file: file(),
-        source,
-    })?;
-    std::io::Seek::seek(&mut handle, std::io::SeekFrom::Start(layout.skip)).map_err(|source| {
-        RunDirError::Io {
-            file: file(),
-            source,
-        }
-    })?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
         .flexible(true)
         .quoting(false)
         .trim(csv::Trim::All)
-        .from_reader(std::io::BufReader::new(handle));
+        .from_reader(handle);
     let csv_error = |e: csv::Error| match e.kind() {
         csv::ErrorKind::Io(_) => match e.into_kind() {
             csv::ErrorKind::Io(source) => RunDirError::Io {

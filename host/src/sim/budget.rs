@@ -111,6 +111,40 @@ pub fn signals_bytes(
     model.saturating_add(splines).saturating_add(codes)
 }
 
+/// Estimated peak memory [bytes] of `accuracy`: `draws` draws on a machine
+/// with `bearings` pedestals over `speeds` speeds. Every draw keeps its
+/// estimates and standard errors for ML and OLS (5 + 5 numbers each), the
+/// bound's variances and a turn (digits), gathered once more per bearing;
+/// each worker thread holds one perturbed run directory at a time.
+pub fn accuracy_bytes(bearings: u64, speeds: u64, draws: u64) -> u64 {
+    let per_draw = 96 + 16 + bearings.saturating_mul(2 * 80 + 40 + 2 * 80);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()) as u64;
+    let run = speeds.saturating_mul(bearings).saturating_mul(640 * 3);
+    draws
+        .saturating_mul(per_draw)
+        .saturating_add(run.saturating_mul(threads))
+        .saturating_add(16 << 20)
+}
+
+/// Refuses a count `option` (a command-line option or a file's key) whose
+/// estimated memory `needed` [bytes] is beyond `available`, naming the
+/// option, its value and both figures.
+pub fn check_count(
+    option: &str,
+    value: u64,
+    needed: u64,
+    available: Option<u64>,
+) -> Result<(), String> {
+    match available {
+        Some(a) if needed > a => Err(format!(
+            "{option} {value}: needs about {} MB of memory and this machine has {} MB available: give a smaller {option}",
+            needed >> 20,
+            a >> 20
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Memory the operating system can still give this process [bytes]
 /// (`MemAvailable` of /proc/meminfo), `None` where that is unknown.
 pub fn available_bytes() -> Option<u64> {
@@ -148,6 +182,21 @@ pub fn check_signals(what: &str, needed: u64, available: Option<u64>) -> Result<
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_billion_draws_are_refused_naming_the_option() {
+        let needed = super::accuracy_bytes(2, 116, 1_000_000_000);
+        assert!(needed > 600_000_000_000, "{needed}");
+        let e = super::check_count("--draws", 1_000_000_000, needed, Some(16 << 30)).unwrap_err();
+        assert!(
+            e.starts_with("--draws 1000000000: needs about") && e.contains("16384 MB"),
+            "{e}"
+        );
+        let small = super::accuracy_bytes(2, 116, 200);
+        assert!(
+            super::check_count("--draws", 200, small, Some(1 << 30)).is_ok(),
+            "{small}"
+        );
+    }
     use super::*;
 
     #[test]

@@ -316,6 +316,9 @@ pub fn finish(
     let raw_path = out.join(RAW_LOG_FILE);
     let raw = RawLog::read_all(&raw_path)?;
     let derived = derive::derive(&raw, config, tables);
+    if outcome.is_none() {
+        rawlog::require_frames(&raw_path, raw.len(), derived.phasor_frames)?;
+    }
     derived
         .run
         .write(out)

@@ -105,6 +105,21 @@ impl RawLog {
     }
 }
 
+/// Refuses to rebuild a run (`stream --offline`) from a raw log of `bytes`
+/// bytes at `path` in which no valid phasor frame was found (`frames` = 0):
+/// a truncated or foreign file gives an error, not an empty run. An empty
+/// log (0 bytes: a stream that received nothing) still rebuilds its empty
+/// run, as a stream that received nothing ends.
+pub fn require_frames(path: &Path, bytes: usize, frames: usize) -> Result<()> {
+    if frames == 0 && bytes > 0 {
+        anyhow::bail!(
+            "--offline: the raw log {} ({bytes} bytes) holds no valid phasor frame (cut short, or not a Plinth box's log): there is no run to rebuild",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -127,6 +142,19 @@ mod tests {
         log.sync().unwrap();
         assert_eq!(log.len(), 5);
         assert_eq!(RawLog::read_all(&path).unwrap(), b"\x01\x02\x00\x05\x00");
+    }
+
+    #[test]
+    fn a_log_without_frames_rebuilds_nothing() {
+        let e = require_frames(Path::new("x/raw.bin"), 17, 0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("x/raw.bin (17 bytes) holds no valid phasor frame"),
+            "{e}"
+        );
+        assert!(require_frames(Path::new("x/raw.bin"), 17, 1).is_ok());
+        assert!(require_frames(Path::new("x/raw.bin"), 0, 0).is_ok());
     }
 
     #[test]
