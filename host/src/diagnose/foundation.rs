@@ -109,6 +109,65 @@ pub fn groupings(n: usize) -> Vec<Vec<Vec<usize>>> {
     out
 }
 
+/// Which base model: a base shared by two or more pedestals
+/// (`foundation_coupling`, every grouping of [`groupings`]) or one
+/// pedestal on its own sub-base (`pedestal_sub_base`: the same physical
+/// model, `crate::estimate::base`, on a group of one, a two-degree-of-freedom
+/// pedestal per direction), tried on every bearing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Pedestals on a shared base.
+    Shared,
+    /// One pedestal on its own sub-base.
+    SubBase,
+}
+
+impl Kind {
+    /// The effect name (`crate::effects`).
+    pub fn effect(self) -> &'static str {
+        match self {
+            Kind::Shared => crate::effects::EffectKind::FoundationCoupling.name(),
+            Kind::SubBase => super::candidates::PEDESTAL_SUB_BASE,
+        }
+    }
+
+    /// The groupings tried for `n` bearings.
+    pub fn groupings(self, n: usize) -> Vec<Vec<Vec<usize>>> {
+        match self {
+            Kind::Shared => groupings(n),
+            Kind::SubBase => (0..n).map(|b| vec![vec![b]]).collect(),
+        }
+    }
+
+    /// Prefix of the base parameters' names in the report.
+    fn prefix(self) -> &'static str {
+        match self {
+            Kind::Shared => "base",
+            Kind::SubBase => "sub",
+        }
+    }
+}
+
+/// Whether a joint fit is physical: every pedestal's k and m positive, and
+/// whatever the data determine of the base (its stiffness and mass, its
+/// quasi-static compliance or its mass) positive. A fit that ends with a
+/// negative base stiffness or mass is rejected, not kept.
+pub fn physical(fit: &BaseFitResult) -> bool {
+    let pedestals = fit
+        .pedestals
+        .iter()
+        .all(|t| t[0] > 0.0 && t[1] > 0.0 && t[2] > 0.0);
+    let base = (0..2).all(|d| match fit.identifiability[d] {
+        BaseIdentifiability::Full => fit.base.k[d] > 0.0 && fit.base.m[d] > 0.0,
+        BaseIdentifiability::QuasiStatic {
+            compliance_m_per_n, ..
+        } => compliance_m_per_n > 0.0,
+        BaseIdentifiability::MassLine { mass_kg, .. } => mass_kg > 0.0,
+        BaseIdentifiability::NotDetected => true,
+    });
+    pedestals && base
+}
+
 /// One grouping fitted: the bases and their joint fits.
 #[derive(Clone, Debug)]
 pub struct GroupingFit {
@@ -127,6 +186,8 @@ pub struct GroupingFit {
 /// The foundation candidate fitted and tested.
 #[derive(Clone, Debug)]
 pub struct FoundationFit {
+    /// Shared base or sub-base.
+    pub kind: Kind,
     /// The favoured grouping.
     pub grouping: GroupingFit,
     /// The bootstrap test.
@@ -161,7 +222,7 @@ pub fn observations(prep: &Prepared) -> Vec<Vec<Observation>> {
 
 /// The rigid-ground fit θ of every bearing (`plinth identify`'s ML fit),
 /// when all are finite.
-fn rigid_start(prep: &Prepared) -> Option<Vec<[f64; 5]>> {
+pub fn rigid_start(prep: &Prepared) -> Option<Vec<[f64; 5]>> {
     let start: Vec<[f64; 5]> = prep.base_fits.iter().map(|f| f.params()).collect();
     (start.len() == prep.bearings.len() && start.iter().flatten().all(|v| v.is_finite()))
         .then_some(start)
@@ -192,6 +253,9 @@ fn best_grouping(
             })
             .collect();
         let Some(fits) = fits else { continue };
+        if !fits.iter().all(physical) {
+            continue;
+        }
         let lr: f64 = fits.iter().map(|f| (f.chi2_rigid - f.chi2).max(0.0)).sum();
         let q = BASE_PARAMETERS * groups.len();
         let score = lr - q as f64 * ln_n;
@@ -253,6 +317,12 @@ fn null_replicate(
 /// (kept for bearings on no base), `base_gap` its gap; `None` when there are
 /// fewer than two bearings, the rigid model already fits to the noise floor
 /// (nothing to explain), or no grouping can be fitted.
+///
+/// `kind` chooses shared bases or sub-bases; `start` is the rigid-ground
+/// fit θ of every bearing the base fits start from and the bootstrap
+/// simulates from (`None`: `plinth identify`'s fits, [`rigid_start`]).
+/// Groupings whose fit ends non-physical ([`physical`]) are rejected.
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     prep: &Prepared,
     base_prediction: &Prediction,
@@ -260,10 +330,12 @@ pub fn evaluate(
     alpha: f64,
     replicates: usize,
     seed: u64,
+    kind: Kind,
+    start: Option<Vec<[f64; 5]>>,
 ) -> Result<Option<FoundationFit>> {
     let nb = prep.bearings.len();
-    let candidates = groupings(nb);
-    let Some(start) = rigid_start(prep) else {
+    let candidates = kind.groupings(nb);
+    let Some(start) = start.or_else(|| rigid_start(prep)) else {
         return Ok(None);
     };
     // Nothing to explain: the rigid model already fits to the noise floor,
@@ -326,6 +398,7 @@ pub fn evaluate(
         p_adjusted: test.p_calibrated,
     };
     Ok(Some(FoundationFit {
+        kind,
         grouping,
         test,
         evidence,
@@ -507,10 +580,11 @@ impl FoundationFit {
             .zip(&self.grouping.fits)
             .enumerate()
             .map(|(gi, (g, f))| {
+                let stem = self.kind.prefix();
                 let prefix = if self.grouping.groups.len() > 1 {
-                    format!("base{}_", gi + 1)
+                    format!("{stem}{}_", gi + 1)
                 } else {
-                    "base_".to_string()
+                    format!("{stem}_")
                 };
                 let mut parameters = Vec::new();
                 for (d, dir) in ["y", "z"].iter().enumerate() {
@@ -590,6 +664,16 @@ mod tests {
         assert_eq!(four.len(), 14);
         assert!(four.contains(&vec![vec![0, 3], vec![1, 2]]));
         assert_eq!(groupings(5).len(), 1);
+    }
+
+    #[test]
+    fn sub_bases_are_single_pedestals() {
+        assert_eq!(
+            Kind::SubBase.groupings(3),
+            vec![vec![vec![0]], vec![vec![1]], vec![vec![2]]]
+        );
+        assert_eq!(Kind::SubBase.effect(), "pedestal_sub_base");
+        assert_eq!(Kind::Shared.groupings(3), groupings(3));
     }
 
     #[test]

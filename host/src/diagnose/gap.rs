@@ -90,7 +90,7 @@ impl Prediction {
                             for dc in 0..2 {
                                 let mut a_ec = Complex::new(0.0, 0.0);
                                 for r in 0..2 {
-                                    a_ec += m_inv[(e, 2 * qb + r)] * pq.kstar[r][dc];
+                                    a_ec += m_inv[(e, 2 * qb + r)] * a.kstar[qb][r][dc];
                                 }
                                 a_ec = a_ec * a.rel_phase[2 * qb + dc] / a.ped_phase[e];
                                 *v += a_ec.norm_sqr()
