@@ -152,7 +152,17 @@ impl Kind {
 /// whatever the data determine of the base (its stiffness and mass, its
 /// quasi-static compliance or its mass) positive. A fit that ends with a
 /// negative base stiffness or mass is rejected, not kept.
-pub fn physical(fit: &BaseFitResult) -> bool {
+///
+/// A sub-base ([`Kind::SubBase`]) must moreover be one the data constrain:
+/// a pedestal on its own sub-base is a two-degree-of-freedom pedestal, and
+/// a sub-base whose mode lies outside the speed range (quasi-static or
+/// mass line) is indistinguishable from a changed pedestal stiffness or
+/// mass (it would "explain" a mass anisotropy with a pedestal of 10⁹ N/m on
+/// a spring). So every direction the data detect must be fully determined
+/// (its mode inside the speed range, `BaseIdentifiability::Full`) with
+/// stiffness and mass each known to better than [`SUB_BASE_REL_SE`] (the
+/// ± excludes both zero and infinity), and at least one direction detected.
+pub fn physical(fit: &BaseFitResult, kind: Kind) -> bool {
     let pedestals = fit
         .pedestals
         .iter()
@@ -161,12 +171,26 @@ pub fn physical(fit: &BaseFitResult) -> bool {
         BaseIdentifiability::Full => fit.base.k[d] > 0.0 && fit.base.m[d] > 0.0,
         BaseIdentifiability::QuasiStatic {
             compliance_m_per_n, ..
-        } => compliance_m_per_n > 0.0,
-        BaseIdentifiability::MassLine { mass_kg, .. } => mass_kg > 0.0,
+        } => kind == Kind::Shared && compliance_m_per_n > 0.0,
+        BaseIdentifiability::MassLine { mass_kg, .. } => kind == Kind::Shared && mass_kg > 0.0,
         BaseIdentifiability::NotDetected => true,
     });
-    pedestals && base
+    let constrained = |d: usize| {
+        fit.base_std_err.k[d] < SUB_BASE_REL_SE * fit.base.k[d]
+            && fit.base_std_err.m[d] < SUB_BASE_REL_SE * fit.base.m[d]
+    };
+    let sub_base = kind == Kind::Shared
+        || ((0..2).any(|d| fit.identifiability[d] == BaseIdentifiability::Full)
+            && (0..2).all(|d| {
+                fit.identifiability[d] != BaseIdentifiability::Full || constrained(d)
+            }));
+    pedestals && base && sub_base
 }
+
+/// Largest relative standard error of a sub-base's stiffness and mass for
+/// the sub-base to count as determined: 2σ then excludes zero, and the
+/// reciprocal (compliance, 1/mass) excludes zero too (no infinite value).
+pub const SUB_BASE_REL_SE: f64 = 0.5;
 
 /// One grouping fitted: the bases and their joint fits.
 #[derive(Clone, Debug)]
@@ -229,12 +253,16 @@ pub fn rigid_start(prep: &Prepared) -> Option<Vec<[f64; 5]>> {
 }
 
 /// Fits every grouping and returns the favoured one (largest score); `None`
-/// when no grouping could be fitted.
+/// when no grouping could be fitted. With `kind`, only groupings whose fits
+/// are [`physical`] for that kind count; the bootstrap's null replicates
+/// pass `None` (the unrestricted statistic, which is larger than the
+/// restricted one: a conservative null).
 fn best_grouping(
     obs: &[Vec<Observation>],
     start: &[[f64; 5]],
     groupings: &[Vec<Vec<usize>>],
     n_eq: usize,
+    kind: Option<Kind>,
 ) -> Option<GroupingFit> {
     let ln_n = (n_eq.max(2) as f64).ln();
     let mut best: Option<GroupingFit> = None;
@@ -253,7 +281,7 @@ fn best_grouping(
             })
             .collect();
         let Some(fits) = fits else { continue };
-        if !fits.iter().all(physical) {
+        if kind.is_some_and(|k| !fits.iter().all(|f| physical(f, k))) {
             continue;
         }
         let lr: f64 = fits.iter().map(|f| (f.chi2_rigid - f.chi2).max(0.0)).sum();
@@ -345,7 +373,7 @@ pub fn evaluate(
     }
     let obs = observations(prep);
     let n_eq: usize = obs.iter().map(|o| 4 * o.len()).sum();
-    let Some(grouping) = best_grouping(&obs, &start, &candidates, n_eq) else {
+    let Some(grouping) = best_grouping(&obs, &start, &candidates, n_eq, Some(kind)) else {
         return Ok(None);
     };
     let prediction = prediction(prep, &obs, base_prediction, &grouping)?;
@@ -366,7 +394,7 @@ pub fn evaluate(
             let mut null = Vec::with_capacity(replicates);
             for _ in 0..replicates {
                 let data = null_replicate(&obs, &start, &mut rng);
-                if let Some(g) = best_grouping(&data, &start, &favoured, n_eq) {
+                if let Some(g) = best_grouping(&data, &start, &favoured, n_eq, None) {
                     null.push(g.score);
                     if g.score >= statistic {
                         break;

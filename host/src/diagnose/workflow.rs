@@ -434,18 +434,28 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
         let (_, before) = state.gap(&prep);
-        // The library's best significant candidate, refitted: the gap it
-        // leaves. The tests' statistics are whitened differently, so the
-        // comparison with a base is on what each explains: the gap.
-        let library_gap = outcome
-            .ranked
-            .first()
-            .filter(|_| outcome.accepted)
-            .map(|e| {
-                Prediction::new(&prep, &e.candidate.model, &e.params)
-                    .gap(&prep, None)
-                    .gap
-            });
+        // What a base must beat: the library's best significant candidate
+        // (refitted), or the current state when none is significant. The
+        // tests' statistics are whitened differently, so the comparison is
+        // on one yardstick, the pedestal-level χ² ([`Prediction::chi2`]),
+        // with the Schwarz penalty ln N per parameter added (a base has 6
+        // per base, a library effect its own few).
+        let criterion = |pred: &Prediction, data: &Prepared, q: usize| {
+            let (chi2, n) = pred.chi2(data);
+            chi2 + q as f64 * (n.max(2) as f64).ln()
+        };
+        let to_beat = match outcome.ranked.first().filter(|_| outcome.accepted) {
+            Some(e) => criterion(
+                &Prediction::new(&prep, &e.candidate.model, &e.params),
+                &prep,
+                e.candidate.null.len(),
+            ),
+            None => criterion(
+                &Prediction::new(&prep, &state.model, &state.params),
+                &prep,
+                0,
+            ),
+        };
         if try_bases && corrections_only(&state.model) {
             let bases = try_bases_on(&prep, &state, opts, round == 0)?;
             if round == 0 {
@@ -454,14 +464,19 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             let best_base = [bases.shared, bases.sub_base]
                 .into_iter()
                 .flatten()
-                .filter(|f| {
+                .map(|f| {
+                    let c = criterion(&f.prediction, &bases.prep, f.grouping.q);
+                    (f, c)
+                })
+                .filter(|(f, c)| {
                     f.test.significant(opts.alpha)
                         && f.evidence.delta_bic > 0.0
                         && before.gap > super::foundation::TRY_ABOVE_FLOOR * before.floor
                         && f.gap.gap < before.gap
-                        && library_gap.is_none_or(|l| f.gap.gap < l)
+                        && *c < to_beat
                 })
-                .min_by(|a, b| a.gap.gap.total_cmp(&b.gap.gap));
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(f, _)| f);
             if let Some(f) = best_base {
                 let first = f.grouping.groups[0][0];
                 steps.push(Step {
