@@ -181,9 +181,8 @@ pub fn physical(fit: &BaseFitResult, kind: Kind) -> bool {
     };
     let sub_base = kind == Kind::Shared
         || ((0..2).any(|d| fit.identifiability[d] == BaseIdentifiability::Full)
-            && (0..2).all(|d| {
-                fit.identifiability[d] != BaseIdentifiability::Full || constrained(d)
-            }));
+            && (0..2)
+                .all(|d| fit.identifiability[d] != BaseIdentifiability::Full || constrained(d)));
     pedestals && base && sub_base
 }
 
