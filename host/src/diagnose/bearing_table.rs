@@ -90,7 +90,7 @@ impl WrittenTable {
     /// machine file's clearance, then golden-section refinement); `None`
     /// when no clearance reproduces the table within [`MATCH_TOLERANCE`].
     pub fn matched(film: &OilFilmBearing, table: &[(f64, Complex2x2)]) -> Option<Self> {
-        if table.is_empty() || !(film.clearance > 0.0) {
+        if table.is_empty() || film.clearance.is_nan() || film.clearance <= 0.0 {
             return None;
         }
         let at = |ln_c: f64| {

@@ -703,6 +703,70 @@ mod tests {
         assert_eq!(Kind::Shared.groupings(3), groupings(3));
     }
 
+    /// A sub-base fit with the given per-direction identifiability, base
+    /// k, m and their standard errors (pedestal: 8 MN/m, 80 kg).
+    fn fit_with(
+        ident: [BaseIdentifiability; 2],
+        k: [f64; 2],
+        m: [f64; 2],
+        se: f64,
+    ) -> BaseFitResult {
+        BaseFitResult {
+            pedestals: vec![[8e6, 8e6, 80.0, 300.0, 250.0]],
+            pedestal_std_err: vec![[1e3, 1e3, 0.1, 1.0, 1.0]],
+            base: crate::estimate::base::BaseParams { k, c: [1e3; 2], m },
+            base_std_err: crate::estimate::base::BaseParams {
+                k: [se * k[0].abs(), se * k[1].abs()],
+                c: [10.0; 2],
+                m: [se * m[0].abs(), se * m[1].abs()],
+            },
+            base_frequency_hz: [40.0; 2],
+            identifiability: ident,
+            chi2: 100.0,
+            dof: 90,
+            chi2_rigid: 1e4,
+            pedestal_residual_rms: vec![1.0],
+            condition_number: 10.0,
+            converged: true,
+            iterations: 5,
+            speeds_hz: vec![],
+        }
+    }
+
+    #[test]
+    fn non_physical_and_undetermined_bases_are_rejected() {
+        use BaseIdentifiability::*;
+        let full = [Full, NotDetected];
+        let good = fit_with(full, [8e6, 8e6], [120.0, 120.0], 0.01);
+        assert!(physical(&good, Kind::SubBase));
+        assert!(physical(&good, Kind::Shared));
+        // Negative base stiffness or mass: rejected for either kind.
+        let neg = fit_with(full, [-8e6, 8e6], [120.0, 120.0], 0.01);
+        assert!(!physical(&neg, Kind::Shared) && !physical(&neg, Kind::SubBase));
+        let neg = fit_with(full, [8e6, 8e6], [-120.0, 120.0], 0.01);
+        assert!(!physical(&neg, Kind::Shared) && !physical(&neg, Kind::SubBase));
+        // A negative pedestal mass: rejected.
+        let mut neg = good.clone();
+        neg.pedestals[0][2] = -1.0;
+        assert!(!physical(&neg, Kind::Shared));
+        // A sub-base seen only as a compliance or a mass line is not
+        // determined (it mimics a pedestal stiffness or mass change).
+        let qs = QuasiStatic {
+            compliance_m_per_n: 1e-7,
+            std_err: 1e-10,
+        };
+        let quasi = fit_with([qs, NotDetected], [1e7, 8e6], [1.0, 1.0], 0.01);
+        assert!(physical(&quasi, Kind::Shared));
+        assert!(!physical(&quasi, Kind::SubBase));
+        // A mode in range whose k, m the data leave open (±60 %): rejected.
+        let loose = fit_with(full, [8e6, 8e6], [120.0, 120.0], 0.6);
+        assert!(physical(&loose, Kind::Shared));
+        assert!(!physical(&loose, Kind::SubBase));
+        // Nothing detected: no sub-base to offer.
+        let none = fit_with([NotDetected; 2], [8e6, 8e6], [120.0, 120.0], 0.01);
+        assert!(!physical(&none, Kind::SubBase));
+    }
+
     #[test]
     fn bootstrap_p_values() {
         let null: Vec<f64> = (0..40).map(|i| i as f64 / 4.0).collect();

@@ -813,9 +813,9 @@ pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
                             .flatten()
                             .and_then(|t| t.correction(p.speed_hz, v));
                         if let Some(corr) = corr {
-                            for r in 0..2 {
-                                for c in 0..2 {
-                                    p.kstar[r][c] += corr[r][c];
+                            for (k_row, c_row) in p.kstar.iter_mut().zip(corr) {
+                                for (k, c) in k_row.iter_mut().zip(c_row) {
+                                    *k += c;
                                 }
                             }
                         }
@@ -823,8 +823,8 @@ pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
                     _ => {}
                 }
             }
-            for d in 0..2 {
-                p.rel[d] -= runout[d];
+            for (rel, r) in p.rel.iter_mut().zip(runout) {
+                *rel -= r;
             }
         }
     }
