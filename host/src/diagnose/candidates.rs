@@ -10,6 +10,7 @@
 //! | `pedestal_mass_anisotropy` | m split into m_y, m_z | m_y − m_z (= 0) |
 //! | `probe_runout` | F = K*·(rel − r), r constant | r_y, r_z complex, 4 real (= 0) |
 //! | `sensor_delay` | a delayed channel reads q·e^{−iΩτ}: on both pedestal channels (the simulator's definition), one of them, both rel probes or one | τ (= 0), profiled; six variants per bearing, each counted as a candidate |
+//! | `bearing_coefficients` | K* → K*_table + K*_film(ρ·c_w) − K*_film(c_w) (`super::bearing_table`; only for oil-film bearings whose geometry the machine file gives) | δ = ρ − 1 (= 0), profiled |
 //!
 //! `foundation_coupling` is not a linear augmentation of one pedestal: the
 //! pedestals stand on a shared, unmeasured base whose motion couples them
@@ -20,6 +21,11 @@
 
 use super::model::{DelayChannels, Model, Nonlinear, Term};
 use crate::effects::EffectKind;
+
+/// Name of the table-correction effect (`crate::effects`).
+pub const BEARING_COEFFICIENTS: &str = "bearing_coefficients";
+/// Name of the one-pedestal base effect (`crate::effects`).
+pub const PEDESTAL_SUB_BASE: &str = "pedestal_sub_base";
 
 /// A parameter of a model: a linear term or a nonlinear scalar, by index.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -136,6 +142,22 @@ pub fn library(model: &Model, n_bearings: usize) -> Vec<Candidate> {
                 .collect();
             out.push(add_terms(model, EffectKind::ProbeRunout, b, terms));
         }
+        let has_clearance = model
+            .nonlinear
+            .iter()
+            .any(|p| matches!(p, Nonlinear::Clearance { bearing } if *bearing == b));
+        if let (false, true, Some(effect)) = (
+            has_clearance,
+            model.tables.get(b).is_some_and(Option::is_some),
+            EffectKind::from_name(BEARING_COEFFICIENTS),
+        ) {
+            out.push(add_nonlinear(
+                model,
+                effect,
+                b,
+                Nonlinear::Clearance { bearing: b },
+            ));
+        }
         let has_delay = model
             .nonlinear
             .iter()
@@ -215,6 +237,7 @@ mod tests {
         Model {
             terms,
             nonlinear: vec![],
+            tables: vec![],
         }
     }
 
@@ -226,9 +249,9 @@ mod tests {
             .retain(|t| !matches!(t, Term::Damping { .. }));
         let lib = library(&undamped, 2);
         // foundation_coupling is the base model of `super::foundation`, not
-        // a linear augmentation of this library. pedestal_sub_base and
-        // bearing_coefficients are simulator effects that diagnose does not
-        // model yet (issue 17, branch work not landed): not in the library.
+        // a linear augmentation of this library; pedestal_sub_base is the
+        // same model on one pedestal; a table correction needs the bearing's
+        // oil-film geometry.
         for e in EffectKind::ALL.into_iter().filter(|e| {
             !matches!(
                 e,
@@ -255,6 +278,33 @@ mod tests {
         for c in library(&undamped, 2) {
             let names: Vec<&str> = c.parameters.iter().map(|(n, _)| n.as_str()).collect();
             assert_eq!(names, c.effect.parameter_names(), "{}", c.effect.name());
+        }
+        // The clearance scalar is reported under its effects-module name.
+        let film = crate::sim::oil_film::OilFilmBearing {
+            diameter: 0.1,
+            length: 0.04,
+            clearance: 1e-4,
+            viscosity: 0.02,
+            load: 5e3,
+        };
+        let mut with_table = undamped.clone();
+        with_table.tables = vec![
+            None,
+            Some(crate::diagnose::bearing_table::WrittenTable {
+                film,
+                file_clearance: 1e-4,
+                misfit: 0.0,
+            }),
+        ];
+        let lib = library(&with_table, 2);
+        let c: Vec<&Candidate> = lib
+            .iter()
+            .filter(|c| c.effect.name() == BEARING_COEFFICIENTS)
+            .collect();
+        if let Some(e) = EffectKind::from_name(BEARING_COEFFICIENTS) {
+            assert_eq!(c.len(), 1);
+            assert_eq!(c[0].bearing, 1);
+            assert!(e.parameter_names().contains(&c[0].parameters[0].0.as_str()));
         }
     }
 }

@@ -4,6 +4,8 @@ use super::machine::{machine_gap, resimulate};
 use super::plots::{write_machine_figure, write_pedestal_figures};
 use super::workflow::{diagnose, Options};
 use crate::rundir::RunDir;
+use crate::sim::machine::BearingModel;
+use crate::sim::oil_film::OilFilmBearing;
 use crate::sim::Machine;
 use anyhow::{bail, Context, Result};
 use plinth_shared::regression::Parameter;
@@ -58,6 +60,19 @@ pub fn parse_base(names: &[String]) -> Result<Vec<Parameter>> {
     Ok(out)
 }
 
+/// The oil-film bearings of `machine` by name (their geometry lets
+/// `bearing_coefficients` correct a table written for another clearance).
+pub fn oil_films(machine: &Machine) -> Vec<(String, OilFilmBearing)> {
+    machine
+        .bearings
+        .iter()
+        .filter_map(|b| match &b.model {
+            BearingModel::OilFilm(f) => Some((b.name.clone(), *f)),
+            BearingModel::Table(_) => None,
+        })
+        .collect()
+}
+
 /// Runs `plinth diagnose`.
 pub fn run(args: &Args) -> Result<()> {
     if !(args.alpha > 0.0 && args.alpha < 1.0) {
@@ -66,10 +81,16 @@ pub fn run(args: &Args) -> Result<()> {
             args.alpha
         );
     }
+    let machine = args
+        .machine
+        .as_deref()
+        .map(Machine::from_toml_path)
+        .transpose()?;
     let options = Options {
         base: parse_base(&args.base)?,
         alpha: args.alpha,
         progress: true,
+        oil_films: machine.as_ref().map(oil_films).unwrap_or_default(),
         ..Options::default()
     };
     let plots = (args.plots.as_deref())
@@ -88,8 +109,7 @@ pub fn run(args: &Args) -> Result<()> {
             .map_err(|e| anyhow::anyhow!("{}: {e}", args.dir.display()))?;
     }
     let mut outcome = diagnose(&run, &options).with_context(|| args.dir.display().to_string())?;
-    if let Some(path) = &args.machine {
-        let machine = Machine::from_toml_path(path)?;
+    if let (Some(path), Some(machine)) = (&args.machine, machine) {
         let mut gaps = Vec::new();
         for (i, state) in outcome.states.iter().enumerate() {
             let readings = resimulate(&machine, &outcome.prep, state, None)

@@ -59,7 +59,7 @@ impl Weights {
                             }
                         }
                         for dc in 0..2 {
-                            let coef = -point.kstar[d][dc] * a.rel_phase[2 * pb + dc];
+                            let coef = -a.kstar[pb][d][dc] * a.rel_phase[2 * pb + dc];
                             add(coef, point.sigma[2 * dc], point.sigma[2 * dc + 1]);
                         }
                         out[2 * d] = var_re.sqrt().max(f64::MIN_POSITIVE);
@@ -214,6 +214,9 @@ pub fn fit_group(
 pub fn search_interval(prep: &Prepared, model: &Model, k: usize, group: &[usize]) -> (f64, f64) {
     match model.nonlinear[k] {
         super::model::Nonlinear::LossFactor { .. } => (0.0, 1.0),
+        super::model::Nonlinear::Clearance { .. } => {
+            (super::bearing_table::LOWEST, super::bearing_table::HIGHEST)
+        }
         super::model::Nonlinear::Delay { .. } => {
             let f_max = Model::group_speeds(prep, group)
                 .iter()

@@ -109,6 +109,88 @@ pub fn groupings(n: usize) -> Vec<Vec<Vec<usize>>> {
     out
 }
 
+/// Which base model: a base shared by two or more pedestals
+/// (`foundation_coupling`, every grouping of [`groupings`]) or one
+/// pedestal on its own sub-base (`pedestal_sub_base`: the same physical
+/// model, `crate::estimate::base`, on a group of one, a two-degree-of-freedom
+/// pedestal per direction), tried on every bearing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Pedestals on a shared base.
+    Shared,
+    /// One pedestal on its own sub-base.
+    SubBase,
+}
+
+impl Kind {
+    /// The effect name (`crate::effects`).
+    pub fn effect(self) -> &'static str {
+        match self {
+            Kind::Shared => crate::effects::EffectKind::FoundationCoupling.name(),
+            Kind::SubBase => super::candidates::PEDESTAL_SUB_BASE,
+        }
+    }
+
+    /// The groupings tried for `n` bearings.
+    pub fn groupings(self, n: usize) -> Vec<Vec<Vec<usize>>> {
+        match self {
+            Kind::Shared => groupings(n),
+            Kind::SubBase => (0..n).map(|b| vec![vec![b]]).collect(),
+        }
+    }
+
+    /// Prefix of the base parameters' names in the report.
+    fn prefix(self) -> &'static str {
+        match self {
+            Kind::Shared => "base",
+            Kind::SubBase => "sub",
+        }
+    }
+}
+
+/// Whether a joint fit is physical: every pedestal's k and m positive, and
+/// whatever the data determine of the base (its stiffness and mass, its
+/// quasi-static compliance or its mass) positive. A fit that ends with a
+/// negative base stiffness or mass is rejected, not kept.
+///
+/// A sub-base ([`Kind::SubBase`]) must moreover be one the data constrain:
+/// a pedestal on its own sub-base is a two-degree-of-freedom pedestal, and
+/// a sub-base whose mode lies outside the speed range (quasi-static or
+/// mass line) is indistinguishable from a changed pedestal stiffness or
+/// mass (it would "explain" a mass anisotropy with a pedestal of 10⁹ N/m on
+/// a spring). So every direction the data detect must be fully determined
+/// (its mode inside the speed range, `BaseIdentifiability::Full`) with
+/// stiffness and mass each known to better than [`SUB_BASE_REL_SE`] (the
+/// ± excludes both zero and infinity), and at least one direction detected.
+pub fn physical(fit: &BaseFitResult, kind: Kind) -> bool {
+    let pedestals = fit
+        .pedestals
+        .iter()
+        .all(|t| t[0] > 0.0 && t[1] > 0.0 && t[2] > 0.0);
+    let base = (0..2).all(|d| match fit.identifiability[d] {
+        BaseIdentifiability::Full => fit.base.k[d] > 0.0 && fit.base.m[d] > 0.0,
+        BaseIdentifiability::QuasiStatic {
+            compliance_m_per_n, ..
+        } => kind == Kind::Shared && compliance_m_per_n > 0.0,
+        BaseIdentifiability::MassLine { mass_kg, .. } => kind == Kind::Shared && mass_kg > 0.0,
+        BaseIdentifiability::NotDetected => true,
+    });
+    let constrained = |d: usize| {
+        fit.base_std_err.k[d] < SUB_BASE_REL_SE * fit.base.k[d]
+            && fit.base_std_err.m[d] < SUB_BASE_REL_SE * fit.base.m[d]
+    };
+    let sub_base = kind == Kind::Shared
+        || ((0..2).any(|d| fit.identifiability[d] == BaseIdentifiability::Full)
+            && (0..2)
+                .all(|d| fit.identifiability[d] != BaseIdentifiability::Full || constrained(d)));
+    pedestals && base && sub_base
+}
+
+/// Largest relative standard error of a sub-base's stiffness and mass for
+/// the sub-base to count as determined: 2σ then excludes zero, and the
+/// reciprocal (compliance, 1/mass) excludes zero too (no infinite value).
+pub const SUB_BASE_REL_SE: f64 = 0.5;
+
 /// One grouping fitted: the bases and their joint fits.
 #[derive(Clone, Debug)]
 pub struct GroupingFit {
@@ -127,6 +209,8 @@ pub struct GroupingFit {
 /// The foundation candidate fitted and tested.
 #[derive(Clone, Debug)]
 pub struct FoundationFit {
+    /// Shared base or sub-base.
+    pub kind: Kind,
     /// The favoured grouping.
     pub grouping: GroupingFit,
     /// The bootstrap test.
@@ -161,19 +245,23 @@ pub fn observations(prep: &Prepared) -> Vec<Vec<Observation>> {
 
 /// The rigid-ground fit θ of every bearing (`plinth identify`'s ML fit),
 /// when all are finite.
-fn rigid_start(prep: &Prepared) -> Option<Vec<[f64; 5]>> {
+pub fn rigid_start(prep: &Prepared) -> Option<Vec<[f64; 5]>> {
     let start: Vec<[f64; 5]> = prep.base_fits.iter().map(|f| f.params()).collect();
     (start.len() == prep.bearings.len() && start.iter().flatten().all(|v| v.is_finite()))
         .then_some(start)
 }
 
 /// Fits every grouping and returns the favoured one (largest score); `None`
-/// when no grouping could be fitted.
+/// when no grouping could be fitted. With `kind`, only groupings whose fits
+/// are [`physical`] for that kind count; the bootstrap's null replicates
+/// pass `None` (the unrestricted statistic, which is larger than the
+/// restricted one: a conservative null).
 fn best_grouping(
     obs: &[Vec<Observation>],
     start: &[[f64; 5]],
     groupings: &[Vec<Vec<usize>>],
     n_eq: usize,
+    kind: Option<Kind>,
 ) -> Option<GroupingFit> {
     let ln_n = (n_eq.max(2) as f64).ln();
     let mut best: Option<GroupingFit> = None;
@@ -192,6 +280,9 @@ fn best_grouping(
             })
             .collect();
         let Some(fits) = fits else { continue };
+        if kind.is_some_and(|k| !fits.iter().all(|f| physical(f, k))) {
+            continue;
+        }
         let lr: f64 = fits.iter().map(|f| (f.chi2_rigid - f.chi2).max(0.0)).sum();
         let q = BASE_PARAMETERS * groups.len();
         let score = lr - q as f64 * ln_n;
@@ -253,6 +344,12 @@ fn null_replicate(
 /// (kept for bearings on no base), `base_gap` its gap; `None` when there are
 /// fewer than two bearings, the rigid model already fits to the noise floor
 /// (nothing to explain), or no grouping can be fitted.
+///
+/// `kind` chooses shared bases or sub-bases; `start` is the rigid-ground
+/// fit θ of every bearing the base fits start from and the bootstrap
+/// simulates from (`None`: `plinth identify`'s fits, [`rigid_start`]).
+/// Groupings whose fit ends non-physical ([`physical`]) are rejected.
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     prep: &Prepared,
     base_prediction: &Prediction,
@@ -260,10 +357,12 @@ pub fn evaluate(
     alpha: f64,
     replicates: usize,
     seed: u64,
+    kind: Kind,
+    start: Option<Vec<[f64; 5]>>,
 ) -> Result<Option<FoundationFit>> {
     let nb = prep.bearings.len();
-    let candidates = groupings(nb);
-    let Some(start) = rigid_start(prep) else {
+    let candidates = kind.groupings(nb);
+    let Some(start) = start.or_else(|| rigid_start(prep)) else {
         return Ok(None);
     };
     // Nothing to explain: the rigid model already fits to the noise floor,
@@ -273,7 +372,7 @@ pub fn evaluate(
     }
     let obs = observations(prep);
     let n_eq: usize = obs.iter().map(|o| 4 * o.len()).sum();
-    let Some(grouping) = best_grouping(&obs, &start, &candidates, n_eq) else {
+    let Some(grouping) = best_grouping(&obs, &start, &candidates, n_eq, Some(kind)) else {
         return Ok(None);
     };
     let prediction = prediction(prep, &obs, base_prediction, &grouping)?;
@@ -294,7 +393,7 @@ pub fn evaluate(
             let mut null = Vec::with_capacity(replicates);
             for _ in 0..replicates {
                 let data = null_replicate(&obs, &start, &mut rng);
-                if let Some(g) = best_grouping(&data, &start, &favoured, n_eq) {
+                if let Some(g) = best_grouping(&data, &start, &favoured, n_eq, None) {
                     null.push(g.score);
                     if g.score >= statistic {
                         break;
@@ -326,6 +425,7 @@ pub fn evaluate(
         p_adjusted: test.p_calibrated,
     };
     Ok(Some(FoundationFit {
+        kind,
         grouping,
         test,
         evidence,
@@ -507,10 +607,11 @@ impl FoundationFit {
             .zip(&self.grouping.fits)
             .enumerate()
             .map(|(gi, (g, f))| {
+                let stem = self.kind.prefix();
                 let prefix = if self.grouping.groups.len() > 1 {
-                    format!("base{}_", gi + 1)
+                    format!("{stem}{}_", gi + 1)
                 } else {
-                    "base_".to_string()
+                    format!("{stem}_")
                 };
                 let mut parameters = Vec::new();
                 for (d, dir) in ["y", "z"].iter().enumerate() {
@@ -590,6 +691,80 @@ mod tests {
         assert_eq!(four.len(), 14);
         assert!(four.contains(&vec![vec![0, 3], vec![1, 2]]));
         assert_eq!(groupings(5).len(), 1);
+    }
+
+    #[test]
+    fn sub_bases_are_single_pedestals() {
+        assert_eq!(
+            Kind::SubBase.groupings(3),
+            vec![vec![vec![0]], vec![vec![1]], vec![vec![2]]]
+        );
+        assert_eq!(Kind::SubBase.effect(), "pedestal_sub_base");
+        assert_eq!(Kind::Shared.groupings(3), groupings(3));
+    }
+
+    /// A sub-base fit with the given per-direction identifiability, base
+    /// k, m and their standard errors (pedestal: 8 MN/m, 80 kg).
+    fn fit_with(
+        ident: [BaseIdentifiability; 2],
+        k: [f64; 2],
+        m: [f64; 2],
+        se: f64,
+    ) -> BaseFitResult {
+        BaseFitResult {
+            pedestals: vec![[8e6, 8e6, 80.0, 300.0, 250.0]],
+            pedestal_std_err: vec![[1e3, 1e3, 0.1, 1.0, 1.0]],
+            base: crate::estimate::base::BaseParams { k, c: [1e3; 2], m },
+            base_std_err: crate::estimate::base::BaseParams {
+                k: [se * k[0].abs(), se * k[1].abs()],
+                c: [10.0; 2],
+                m: [se * m[0].abs(), se * m[1].abs()],
+            },
+            base_frequency_hz: [40.0; 2],
+            identifiability: ident,
+            chi2: 100.0,
+            dof: 90,
+            chi2_rigid: 1e4,
+            pedestal_residual_rms: vec![1.0],
+            condition_number: 10.0,
+            converged: true,
+            iterations: 5,
+            speeds_hz: vec![],
+        }
+    }
+
+    #[test]
+    fn non_physical_and_undetermined_bases_are_rejected() {
+        use BaseIdentifiability::*;
+        let full = [Full, NotDetected];
+        let good = fit_with(full, [8e6, 8e6], [120.0, 120.0], 0.01);
+        assert!(physical(&good, Kind::SubBase));
+        assert!(physical(&good, Kind::Shared));
+        // Negative base stiffness or mass: rejected for either kind.
+        let neg = fit_with(full, [-8e6, 8e6], [120.0, 120.0], 0.01);
+        assert!(!physical(&neg, Kind::Shared) && !physical(&neg, Kind::SubBase));
+        let neg = fit_with(full, [8e6, 8e6], [-120.0, 120.0], 0.01);
+        assert!(!physical(&neg, Kind::Shared) && !physical(&neg, Kind::SubBase));
+        // A negative pedestal mass: rejected.
+        let mut neg = good.clone();
+        neg.pedestals[0][2] = -1.0;
+        assert!(!physical(&neg, Kind::Shared));
+        // A sub-base seen only as a compliance or a mass line is not
+        // determined (it mimics a pedestal stiffness or mass change).
+        let qs = QuasiStatic {
+            compliance_m_per_n: 1e-7,
+            std_err: 1e-10,
+        };
+        let quasi = fit_with([qs, NotDetected], [1e7, 8e6], [1.0, 1.0], 0.01);
+        assert!(physical(&quasi, Kind::Shared));
+        assert!(!physical(&quasi, Kind::SubBase));
+        // A mode in range whose k, m the data leave open (±60 %): rejected.
+        let loose = fit_with(full, [8e6, 8e6], [120.0, 120.0], 0.6);
+        assert!(physical(&loose, Kind::Shared));
+        assert!(!physical(&loose, Kind::SubBase));
+        // Nothing detected: no sub-base to offer.
+        let none = fit_with([NotDetected; 2], [8e6, 8e6], [120.0, 120.0], 0.01);
+        assert!(!physical(&none, Kind::SubBase));
     }
 
     #[test]

@@ -90,7 +90,7 @@ impl Prediction {
                             for dc in 0..2 {
                                 let mut a_ec = Complex::new(0.0, 0.0);
                                 for r in 0..2 {
-                                    a_ec += m_inv[(e, 2 * qb + r)] * pq.kstar[r][dc];
+                                    a_ec += m_inv[(e, 2 * qb + r)] * a.kstar[qb][r][dc];
                                 }
                                 a_ec = a_ec * a.rel_phase[2 * qb + dc] / a.ped_phase[e];
                                 *v += a_ec.norm_sqr()
@@ -108,6 +108,37 @@ impl Prediction {
             noise_var,
             singular,
         }
+    }
+
+    /// The pedestal-level residual whitened by its own noise, the one
+    /// yardstick on which models of different kinds (library augmentations,
+    /// bases) are compared: χ² = Σ 2·|X̂ − X_meas|²/E|X̂ − X_meas|² over every
+    /// pedestal reading (y, z of every bearing and speed; a reading the
+    /// model cannot predict counts whole, against the reading's own noise),
+    /// and the number of real numbers it sums (2 per complex reading) [-].
+    pub fn chi2(&self, prep: &Prepared) -> (f64, usize) {
+        let (mut chi2, mut n) = (0.0, 0);
+        for (b, row) in prep.points.iter().enumerate() {
+            for (j, p) in row.iter().enumerate() {
+                let Some(p) = p else { continue };
+                for d in 0..2 {
+                    n += 2;
+                    let (miss, var) = match (self.ped[b][j], self.noise_var[b][j]) {
+                        (Some(x), Some(v)) => ((x[d] - p.ped[d]).norm_sqr(), v[d]),
+                        _ => (
+                            p.ped[d].norm_sqr(),
+                            p.sigma[4 + 2 * d].powi(2) + p.sigma[5 + 2 * d].powi(2),
+                        ),
+                    };
+                    if var > 0.0 && var.is_finite() {
+                        chi2 += 2.0 * miss / var;
+                    } else if miss > 0.0 {
+                        chi2 = f64::INFINITY;
+                    }
+                }
+            }
+        }
+        (chi2, n)
     }
 
     /// The pedestal-level gap and its noise floor over all bearings, or over

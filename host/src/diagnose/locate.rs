@@ -208,3 +208,118 @@ fn describe(l: &Location, band_width: f64) -> String {
     }
     s
 }
+
+/// Where an unexplained disagreement lies: one pedestal channel whose own
+/// gap is more than `factor` times its noise floor, with the speed bands
+/// that hold most of it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Unexplained {
+    /// Bearing name.
+    pub bearing: String,
+    /// Direction: `y` or `z`.
+    pub direction: String,
+    /// Share of the whole machine's squared disagreement [-].
+    pub share: f64,
+    /// The channel's gap over its noise floor [-].
+    pub times_floor: f64,
+    /// The speed bands [from, to] [Hz] that together hold at least 70 % of
+    /// the channel's squared disagreement, largest first.
+    pub bands_hz: Vec<[f64; 2]>,
+}
+
+/// The channels of `locations` that hold a disagreement above `factor`
+/// times their noise floor, largest share first (module docs of
+/// [`Unexplained`]).
+pub fn unexplained(locations: &[Location], factor: f64) -> Vec<Unexplained> {
+    let mut out: Vec<Unexplained> = locations
+        .iter()
+        .filter(|l| l.gap > factor * l.floor)
+        .map(|l| {
+            let mut bands: Vec<&Band> = l.bands.iter().filter(|b| b.share > 0.0).collect();
+            bands.sort_by(|a, b| b.share.total_cmp(&a.share));
+            let mut held = 0.0;
+            let mut bands_hz = Vec::new();
+            for b in bands {
+                if held >= 0.7 {
+                    break;
+                }
+                held += b.share;
+                bands_hz.push([b.from_hz, b.to_hz]);
+            }
+            Unexplained {
+                bearing: l.bearing.clone(),
+                direction: l.direction.clone(),
+                share: l.share,
+                times_floor: if l.floor > 0.0 {
+                    l.gap / l.floor
+                } else {
+                    f64::INFINITY
+                },
+                bands_hz,
+            }
+        })
+        .collect();
+    out.sort_by(|a, b| b.share.total_cmp(&a.share));
+    out
+}
+
+impl Unexplained {
+    /// One line: `B3 z: 62 % of the disagreement, 14× its floor, at 45-60 Hz, 90-105 Hz`.
+    pub fn summary(&self) -> String {
+        let bands: Vec<String> = self
+            .bands_hz
+            .iter()
+            .map(|[a, b]| format!("{a:.0}-{b:.0} Hz"))
+            .collect();
+        format!(
+            "{} {}: {:.0} % of the disagreement, {:.1}× its noise floor, at {}",
+            self.bearing,
+            self.direction,
+            100.0 * self.share,
+            self.times_floor,
+            bands.join(", ")
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn location(bearing: &str, gap: f64, floor: f64, share: f64, bands: [f64; BANDS]) -> Location {
+        Location {
+            bearing: bearing.into(),
+            direction: "y".into(),
+            share,
+            gap,
+            floor,
+            peak_hz: 0.0,
+            resonance_hz: None,
+            trend: 0.0,
+            bands: bands
+                .iter()
+                .enumerate()
+                .map(|(i, s)| Band {
+                    from_hz: 10.0 * i as f64,
+                    to_hz: 10.0 * (i + 1) as f64,
+                    gap: 0.0,
+                    share: *s,
+                })
+                .collect(),
+            summary: String::new(),
+        }
+    }
+
+    #[test]
+    fn names_the_channels_and_bands_above_the_floor() {
+        let locs = [
+            location("A", 0.01, 0.01, 0.1, [0.2; BANDS]),
+            location("B", 0.5, 0.01, 0.9, [0.05, 0.6, 0.25, 0.05, 0.05]),
+        ];
+        let u = unexplained(&locs, 3.0);
+        assert_eq!(u.len(), 1);
+        assert_eq!(u[0].bearing, "B");
+        assert_eq!(u[0].bands_hz, vec![[10.0, 20.0], [20.0, 30.0]]);
+        assert!(u[0].summary().contains("B y: 90 %"), "{}", u[0].summary());
+    }
+}

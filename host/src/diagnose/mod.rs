@@ -9,13 +9,16 @@
 //! - [`fit`]: noise-weighted least squares (errors in variables propagated)
 //!   and the 1-D profile search;
 //! - [`gap`]: the disagreement measure (defined there) and its noise floor;
-//! - [`candidates`]: the library of effects (every formats.md name but
-//!   `foundation_coupling`);
-//! - [`foundation`]: `foundation_coupling`, pedestals on a shared unmeasured
-//!   base (`crate::estimate::base`), with its bootstrap likelihood-ratio test;
+//! - [`bearing_table`]: `bearing_coefficients`, an oil-film table written
+//!   for another clearance;
+//! - [`candidates`]: the library of linear effects (every formats.md name
+//!   but the two base models);
+//! - [`foundation`]: `foundation_coupling` (pedestals on a shared unmeasured
+//!   base) and `pedestal_sub_base` (one pedestal on its own), the model of
+//!   `crate::estimate::base`, with the bootstrap likelihood-ratio test;
 //! - [`criterion`]: the significance test and ranking of candidates;
 //! - [`locate`]: where the disagreement lives;
-//! - [`workflow`]: greedy forward selection;
+//! - [`workflow`]: forward selection with joint refits and a backward check;
 //! - [`trust`]: the verdict, and whether the numbers can be trusted;
 //! - [`report`]: the diagnosis as JSON and text;
 //! - [`machine`]: the machine-level re-simulation (`--machine`);
@@ -24,6 +27,7 @@
 
 pub use workflow::{diagnose, Options, Outcome};
 
+pub mod bearing_table;
 pub mod candidates;
 pub mod cli;
 pub mod criterion;

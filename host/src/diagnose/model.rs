@@ -23,7 +23,8 @@
 //! delay τ (a delayed channel reads q·e^{−iΩτ}, so the model uses the
 //! measured value times e^{iΩτ}).
 
-use super::data::{Point, Prepared};
+use super::bearing_table::WrittenTable;
+use super::data::{Complex2x2, Point, Prepared};
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
 use serde::Serialize;
@@ -188,21 +189,31 @@ pub enum Nonlinear {
         /// Delayed channels.
         channels: DelayChannels,
     },
+    /// Clearance correction δ = c_true/c_written − 1 [-] of an oil-film
+    /// bearing table (`super::bearing_table`, geometry in [`Model::tables`]).
+    Clearance {
+        /// Bearing index.
+        bearing: usize,
+    },
 }
 
 impl Nonlinear {
     /// The bearing the parameter belongs to.
     pub fn bearing(&self) -> usize {
         match *self {
-            Nonlinear::LossFactor { bearing } | Nonlinear::Delay { bearing, .. } => bearing,
+            Nonlinear::LossFactor { bearing }
+            | Nonlinear::Delay { bearing, .. }
+            | Nonlinear::Clearance { bearing } => bearing,
         }
     }
 
-    /// Parameter name (`eta` or `tau`, as in `crate::effects`).
+    /// Parameter name (`eta`, `tau`, as in `crate::effects`; the clearance
+    /// scalar is δ, reported as `clearance_ratio` = 1 + δ).
     pub fn name(&self) -> &'static str {
         match self {
             Nonlinear::LossFactor { .. } => "eta",
             Nonlinear::Delay { .. } => "tau",
+            Nonlinear::Clearance { .. } => "clearance_ratio",
         }
     }
 }
@@ -214,6 +225,9 @@ pub struct Model {
     pub terms: Vec<Term>,
     /// Nonlinear scalars, in parameter order.
     pub nonlinear: Vec<Nonlinear>,
+    /// Per bearing, the oil-film geometry its table was written for, when
+    /// the machine file gives it (empty: none).
+    pub tables: Vec<Option<WrittenTable>>,
 }
 
 /// Values of a model's parameters (SI units of each term).
@@ -235,6 +249,9 @@ pub struct Assembled {
     pub force: DVector<Complex<f64>>,
     /// Corrected pedestal displacement X per group equation [m].
     pub x: DVector<Complex<f64>>,
+    /// The bearing stiffness K* [N/m] of each group member, corrected by a
+    /// clearance scalar where the model has one.
+    pub kstar: Vec<Complex2x2>,
     /// Factor e^{iΩτ} applied to each measured pedestal channel.
     pub ped_phase: Vec<Complex<f64>>,
     /// Factor e^{iΩτ} applied to each measured rel channel.
@@ -328,12 +345,22 @@ impl Model {
         let omega = points[0].omega;
         let one = Complex::new(1.0, 0.0);
         let mut eta = vec![0.0; ng];
+        let mut kstar: Vec<Complex2x2> = points.iter().map(|p| p.kstar).collect();
         let mut ped_phase = vec![one; n];
         let mut rel_phase = vec![one; n];
         for (k, p) in self.nonlinear.iter().enumerate() {
             let Some(pb) = pos(p.bearing()) else { continue };
             match p {
                 Nonlinear::LossFactor { .. } => eta[pb] = nl[k],
+                Nonlinear::Clearance { bearing } => {
+                    let table = self.tables.get(*bearing).copied().flatten()?;
+                    let corr = table.correction(points[pb].speed_hz, nl[k])?;
+                    for (row, c_row) in kstar[pb].iter_mut().zip(corr) {
+                        for (v, c) in row.iter_mut().zip(c_row) {
+                            *v += c;
+                        }
+                    }
+                }
                 Nonlinear::Delay { channels, .. } => {
                     let f = Complex::from_polar(1.0, omega * nl[k]);
                     for d in 0..2 {
@@ -356,7 +383,7 @@ impl Model {
             ];
             for d in 0..2 {
                 x[2 * pb + d] = p.ped[d] * ped_phase[2 * pb + d];
-                force[2 * pb + d] = p.kstar[d][0] * rel_c[0] + p.kstar[d][1] * rel_c[1];
+                force[2 * pb + d] = kstar[pb][d][0] * rel_c[0] + kstar[pb][d][1] * rel_c[1];
             }
         }
         let mut columns = Vec::new();
@@ -406,7 +433,7 @@ impl Model {
                     let p = pos(bearing)?;
                     let unit = if imag { Complex::new(0.0, 1.0) } else { one };
                     for r in 0..2 {
-                        let v = points[p].kstar[r][dir] * unit;
+                        let v = kstar[p][r][dir] * unit;
                         col[2 * p + r] += v;
                         if let (Some(g), Some(beta)) = (offset.as_mut(), beta) {
                             g[2 * p + r] += v * beta[k];
@@ -420,6 +447,7 @@ impl Model {
             columns,
             force,
             x,
+            kstar,
             ped_phase,
             rel_phase,
             matrix,

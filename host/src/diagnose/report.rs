@@ -76,6 +76,10 @@ pub struct Step {
     pub candidates_tried: usize,
     /// Candidates that could not be fitted (not identifiable from these data).
     pub candidates_failed: usize,
+    /// Set when a later step's joint refit left this effect insignificant
+    /// (the backward check): the effect was removed again, with the reason.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dropped: Option<String>,
 }
 
 /// The likelihood-ratio test of `foundation_coupling` (module docs of
@@ -245,6 +249,9 @@ pub struct Diagnosis {
     pub trusted: bool,
     /// Why the parameters are not to be trusted (empty when trusted).
     pub trust_reasons: Vec<String>,
+    /// When the final model leaves a disagreement above the floor: the
+    /// pedestal channels and speed bands that hold it (where to look).
+    pub unexplained: Vec<super::locate::Unexplained>,
     /// Convention mistakes the data most likely carry, per pedestal
     /// (`identify::convention`): with one, every other finding is suspect.
     pub suspected_convention_errors: Vec<crate::identify::convention::ConventionFinding>,
@@ -358,6 +365,9 @@ impl Diagnosis {
                     );
                 }
                 let _ = writeln!(s, "{ev}");
+                if let Some(why) = &st.dropped {
+                    let _ = writeln!(s, "     REMOVED again: {why}");
+                }
                 if let Some(f) = &st.foundation {
                     f.write_text(&mut s);
                 }
@@ -402,6 +412,12 @@ impl Diagnosis {
             );
         }
         let _ = writeln!(s, "\n{}", self.verdict);
+        if !self.unexplained.is_empty() {
+            let _ = writeln!(s, "The unexplained disagreement lies at:");
+            for u in &self.unexplained {
+                let _ = writeln!(s, "  {}", u.summary());
+            }
+        }
         if !self.trusted {
             let _ = writeln!(s, "The identified parameters are NOT to be trusted:");
             for r in &self.trust_reasons {

@@ -203,6 +203,7 @@ mod tests {
             runner_up: None,
             candidates_tried: 20,
             candidates_failed: 0,
+            dropped: None,
         }
     }
 

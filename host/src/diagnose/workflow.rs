@@ -1,7 +1,14 @@
 //! The discrepancy workflow: fit the base model, measure the gap, then add
-//! the best-supported missing effect, one at a time (greedy forward
-//! selection), while the evidence is significant relative to the noise floor.
+//! the best-supported missing effect, one at a time (forward selection over
+//! the whole library, the bases included), while the evidence is
+//! significant relative to the noise floor. After each effect added the
+//! whole model is refitted jointly, and every earlier effect must still be
+//! significant in that joint fit (backward check, Bonferroni over the
+//! effects checked); one that is not is removed again. The bases
+//! (`foundation_coupling`, `pedestal_sub_base`) are tried in every round on
+//! the data the chosen sensor and table effects correct.
 
+use super::bearing_table::WrittenTable;
 use super::candidates::{library, Candidate, ParamRef};
 use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
@@ -9,14 +16,16 @@ use super::fit::{fit_group, jacobian, profile, search_interval, Weights};
 use super::foundation::{self, FoundationFit};
 use super::gap::{Gap, Prediction};
 use super::locate::locate;
-use super::model::{Model, Params, Term};
+use super::model::{Model, Nonlinear, Params, Term};
 use super::noise::CHANNELS;
 use super::report::{CandidateSummary, Diagnosis, Estimate, NoiseSummary, Pedestal, Step};
 use super::trust::{as_pedestal_fit, conclude};
 use crate::effects::EffectKind;
 use crate::rundir::RunDir;
+use crate::sim::oil_film::OilFilmBearing;
 use anyhow::{anyhow, Result};
 use nalgebra::{DMatrix, DVector};
+use num_complex::Complex;
 use plinth_shared::regression::Parameter;
 use std::collections::BTreeMap;
 
@@ -36,6 +45,10 @@ pub struct Options {
     pub foundation_replicates: usize,
     /// Seed of that bootstrap.
     pub foundation_seed: u64,
+    /// Oil-film geometry of bearings (by name) from the machine file: the
+    /// `bearing_coefficients` candidate of those bearings
+    /// ([`super::bearing_table`]).
+    pub oil_films: Vec<(String, OilFilmBearing)>,
 }
 
 impl Default for Options {
@@ -47,6 +60,7 @@ impl Default for Options {
             progress: false,
             foundation_replicates: foundation::REPLICATES,
             foundation_seed: foundation::SEED,
+            oil_films: Vec::new(),
         }
     }
 }
@@ -71,6 +85,7 @@ pub fn base_model(base: &[Parameter], n_bearings: usize) -> Model {
     Model {
         terms,
         nonlinear: Vec::new(),
+        tables: Vec::new(),
     }
 }
 
@@ -392,29 +407,24 @@ pub struct Outcome {
 pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let prep = Prepared::from_run(run)?;
     let mut state = State::base(&prep, &opts.base)?;
+    state.model.tables = written_tables(&prep, &opts.oil_films);
     let (pred0, gap0) = state.gap(&prep);
     let where_before = locate(&prep, &state.model, &state.params, &pred0);
     let pedestals_before = pedestals(&prep, &state)?;
     let mut states = vec![state.clone()];
     let mut steps = Vec::new();
     let mut best_rejected = None;
-    let foundation_tried =
-        if opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0 {
-            // A base fit that cannot run is "not tried", not an error.
-            foundation::evaluate(
-                &prep,
-                &pred0,
-                gap0,
-                opts.alpha,
-                opts.foundation_replicates,
-                opts.foundation_seed,
-            )
-            .ok()
-            .flatten()
-        } else {
-            None
-        };
-    let mut chosen_foundation = None;
+    let try_bases = opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0;
+    // The shared base as tried on the base model (reported whether chosen
+    // or not); later rounds try it again on the data the chosen sensor and
+    // table effects correct.
+    let mut foundation_tried = None;
+    let mut chosen_foundation: Option<FoundationFit> = None;
+    // The library effects chosen so far (for the backward check).
+    let mut chosen: Vec<Chosen> = Vec::new();
+    // The data the chosen base was fitted to (sensor and table effects
+    // of the state applied).
+    let mut base_prep: Option<Prepared> = None;
     let mut ticker = crate::progress::Ticker::new(
         "diagnose: candidate-effect rounds",
         opts.max_steps,
@@ -423,31 +433,56 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     for round in 0..opts.max_steps {
         ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
-        if round == 0 {
-            // The library's best significant candidate, refitted: the gap
-            // it leaves. The two tests' statistics are whitened differently,
-            // so the comparison is on what each explains: the gap.
-            let library_gap = outcome
-                .ranked
-                .first()
-                .filter(|_| outcome.accepted)
-                .map(|e| {
-                    Prediction::new(&prep, &e.candidate.model, &e.params)
-                        .gap(&prep, None)
-                        .gap
-                });
-            if let Some(f) = foundation_tried.as_ref().filter(|f| {
-                f.test.significant(opts.alpha)
-                    && f.evidence.delta_bic > 0.0
-                    && gap0.gap > super::foundation::TRY_ABOVE_FLOOR * gap0.floor
-                    && f.gap.gap < gap0.gap
-                    && library_gap.is_none_or(|l| f.gap.gap < l)
-            }) {
+        let (_, before) = state.gap(&prep);
+        // What a base must beat: the library's best significant candidate
+        // (refitted), or the current state when none is significant. The
+        // tests' statistics are whitened differently, so the comparison is
+        // on one yardstick, the pedestal-level χ² ([`Prediction::chi2`]),
+        // with the Schwarz penalty ln N per parameter added (a base has 6
+        // per base, a library effect its own few).
+        let criterion = |pred: &Prediction, data: &Prepared, q: usize| {
+            let (chi2, n) = pred.chi2(data);
+            chi2 + q as f64 * (n.max(2) as f64).ln()
+        };
+        let to_beat = match outcome.ranked.first().filter(|_| outcome.accepted) {
+            Some(e) => criterion(
+                &Prediction::new(&prep, &e.candidate.model, &e.params),
+                &prep,
+                e.candidate.null.len(),
+            ),
+            None => criterion(
+                &Prediction::new(&prep, &state.model, &state.params),
+                &prep,
+                0,
+            ),
+        };
+        if try_bases && corrections_only(&state.model) {
+            let bases = try_bases_on(&prep, &state, opts, round == 0)?;
+            if round == 0 {
+                foundation_tried = bases.shared.clone();
+            }
+            let best_base = [bases.shared, bases.sub_base]
+                .into_iter()
+                .flatten()
+                .map(|f| {
+                    let c = criterion(&f.prediction, &bases.prep, f.grouping.q);
+                    (f, c)
+                })
+                .filter(|(f, c)| {
+                    f.test.significant(opts.alpha)
+                        && f.evidence.delta_bic > 0.0
+                        && before.gap > super::foundation::TRY_ABOVE_FLOOR * before.floor
+                        && f.gap.gap < before.gap
+                        && *c < to_beat
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(f, _)| f);
+            if let Some(f) = best_base {
                 let first = f.grouping.groups[0][0];
                 steps.push(Step {
-                    effect: EffectKind::FoundationCoupling.name().to_string(),
+                    effect: f.kind.effect().to_string(),
                     bearing: prep.bearings[first].clone(),
-                    gap_before: gap0.gap,
+                    gap_before: before.gap,
                     gap_after: f.gap.gap,
                     gap_floor_after: f.gap.floor,
                     machine_gap_before: None,
@@ -461,10 +496,12 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                         .ranked
                         .first()
                         .map(|e| summary(&prep, e, outcome.tried)),
-                    candidates_tried: outcome.tried + 1,
+                    candidates_tried: outcome.tried + 2,
                     candidates_failed: outcome.failed.len(),
+                    dropped: None,
                 });
-                chosen_foundation = Some(f.clone());
+                chosen_foundation = Some(f);
+                base_prep = Some(bases.prep);
                 break;
             }
         }
@@ -476,7 +513,6 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             break;
         }
         let win = &outcome.ranked[0];
-        let (_, before) = state.gap(&prep);
         let next = State::fit(&prep, win.candidate.model.clone(), win.params.nl.clone())?;
         let (_, after) = next.gap(&prep);
         let parameters = effect_estimates(&prep, &next, &win.candidate)?;
@@ -499,15 +535,63 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                 .map(|e| summary(&prep, e, outcome.tried)),
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
+            dropped: None,
         });
+        chosen.push(Chosen::of(&win.candidate, steps.len() - 1));
         state = next;
+        // Backward check: every earlier effect must still be significant in
+        // the joint refit (Bonferroni over the effects checked).
+        if chosen.len() > 1 {
+            let n_total: usize = (0..prep.bearings.len())
+                .map(|b| 4 * prep.points[b].iter().flatten().count())
+                .sum();
+            let earlier = chosen.len() - 1;
+            let mut weakest: Option<(usize, Evidence)> = None;
+            for (i, c) in chosen[..earlier].iter().enumerate() {
+                let Some(ev) = c.evidence(&prep, &state, earlier, n_total) else {
+                    continue;
+                };
+                let still = ev.delta_bic > 0.0 && ev.p_adjusted < opts.alpha;
+                if !still && weakest.is_none_or(|(_, w)| ev.p_value > w.p_value) {
+                    weakest = Some((i, ev));
+                }
+            }
+            if let Some((i, ev)) = weakest {
+                let c = chosen.remove(i);
+                let model = c.removed_from(&state.model);
+                let nl = model
+                    .nonlinear
+                    .iter()
+                    .map(|p| {
+                        state
+                            .model
+                            .nonlinear
+                            .iter()
+                            .position(|q| q == p)
+                            .map_or(0.0, |k| state.params.nl[k])
+                    })
+                    .collect();
+                state = State::fit(&prep, model, nl)?;
+                steps[c.step].dropped = Some(format!(
+                    "not significant in the joint refit after step {} (ΔBIC {:.1}, adjusted p {:.2e})",
+                    steps.len(),
+                    ev.delta_bic,
+                    ev.p_adjusted
+                ));
+            }
+        }
         states.push(state.clone());
     }
     let (pred1, gap1) = match &chosen_foundation {
         Some(f) => (f.prediction.clone(), f.gap),
         None => state.gap(&prep),
     };
-    let where_after = locate(&prep, &state.model, &state.params, &pred1);
+    let where_after = locate(
+        base_prep.as_ref().unwrap_or(&prep),
+        &state.model,
+        &state.params,
+        &pred1,
+    );
     let mut pedestals_after = pedestals(&prep, &state)?;
     if let Some(f) = &chosen_foundation {
         for (b, p) in pedestals_after.iter_mut().enumerate() {
@@ -519,12 +603,21 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             }
         }
     }
-    let effects_added: Vec<String> = steps.iter().map(|s| s.effect.clone()).collect();
+    let effects_added: Vec<String> = steps
+        .iter()
+        .filter(|s| s.dropped.is_none())
+        .map(|s| s.effect.clone())
+        .collect();
     let physical: Vec<_> = pedestals_after
         .iter()
         .filter_map(|p| as_pedestal_fit(&prep, p))
         .collect();
     let conclusion = conclude(gap0, gap1, &steps, &physical);
+    let unexplained = if conclusion.verdict.contains(super::trust::UNEXPLAINED) {
+        super::locate::unexplained(&where_after, super::trust::AT_THE_FLOOR)
+    } else {
+        Vec::new()
+    };
     let mut digits = BTreeMap::new();
     for (c, q) in prep.noise.columns.iter().enumerate() {
         digits.insert(CHANNELS[c].to_string(), q.digits);
@@ -559,6 +652,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         verdict: conclusion.verdict,
         trusted: conclusion.trusted,
         trust_reasons: conclusion.reasons,
+        unexplained,
         suspected_convention_errors: crate::identify::convention::findings_for_run(run, &opts.base),
     };
     Ok(Outcome {
@@ -566,6 +660,271 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         prep,
         states,
         foundation: chosen_foundation,
+    })
+}
+
+/// A parameter of a model by what it is (indices shift as models change).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Param {
+    Term(Term),
+    Nonlinear(Nonlinear),
+}
+
+/// A library effect chosen by a step: its null hypothesis over its own
+/// parameters, by identity.
+#[derive(Clone, Debug)]
+struct Chosen {
+    /// Index of its step.
+    step: usize,
+    /// Bearing index.
+    bearing: usize,
+    /// Its parameters.
+    params: Vec<Param>,
+    /// Null hypothesis: Σ coef·param = 0 per row.
+    null: Vec<Vec<(Param, f64)>>,
+}
+
+impl Chosen {
+    fn of(c: &Candidate, step: usize) -> Self {
+        let id = |r: &ParamRef| match *r {
+            ParamRef::Term(k) => Param::Term(c.model.terms[k]),
+            ParamRef::Nonlinear(k) => Param::Nonlinear(c.model.nonlinear[k]),
+        };
+        Self {
+            step,
+            bearing: c.bearing,
+            params: c.parameters.iter().map(|(_, r)| id(r)).collect(),
+            null: c
+                .null
+                .iter()
+                .map(|row| row.iter().map(|(r, v)| (id(r), *v)).collect())
+                .collect(),
+        }
+    }
+
+    /// The effect's evidence in the joint fit of `state` (`checked`: the
+    /// Bonferroni count); `None` when it cannot be tested.
+    fn evidence(
+        &self,
+        prep: &Prepared,
+        state: &State,
+        checked: usize,
+        n_total: usize,
+    ) -> Option<Evidence> {
+        let infs = state.inference(prep).ok()?;
+        let (_, inf, refs) = infs.iter().find(|(g, _, _)| g.contains(&self.bearing))?;
+        let position = |p: &Param| {
+            refs.iter().position(|r| match (*r, p) {
+                (ParamRef::Term(k), Param::Term(t)) => state.model.terms[k] == *t,
+                (ParamRef::Nonlinear(k), Param::Nonlinear(n)) => state.model.nonlinear[k] == *n,
+                _ => false,
+            })
+        };
+        let mut c = DMatrix::zeros(self.null.len(), refs.len());
+        for (row, constraint) in self.null.iter().enumerate() {
+            for (p, coef) in constraint {
+                c[(row, position(p)?)] = *coef;
+            }
+        }
+        inf.evidence(&c, checked, n_total).ok()
+    }
+
+    /// `model` without this effect (a split mass joined again).
+    fn removed_from(&self, model: &Model) -> Model {
+        let mut m = model.clone();
+        let split_mass = self
+            .params
+            .iter()
+            .any(|p| matches!(p, Param::Term(Term::Mass { dir: Some(_), .. })));
+        m.terms.retain(|t| !self.params.contains(&Param::Term(*t)));
+        m.nonlinear
+            .retain(|n| !self.params.contains(&Param::Nonlinear(*n)));
+        if split_mass {
+            m.terms.push(Term::Mass {
+                bearing: self.bearing,
+                dir: None,
+            });
+        }
+        m
+    }
+}
+
+/// Whether every effect of `model` beyond the pedestal's own parameters is
+/// a correction of the data (probe runout, sensor delay, a bearing table's
+/// clearance): then a base can be fitted to the corrected data.
+fn corrections_only(model: &Model) -> bool {
+    model.terms.iter().all(|t| {
+        let split_mass = matches!(t, Term::Mass { dir: Some(_), .. });
+        (t.is_pedestal() && !split_mass) || matches!(t, Term::Runout { .. })
+    }) && model
+        .nonlinear
+        .iter()
+        .all(|p| !matches!(p, Nonlinear::LossFactor { .. }))
+}
+
+/// The measurements as `state` corrects them: runout removed from `rel`,
+/// delays undone, a bearing table's clearance correction added to K*.
+pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
+    let mut out = prep.clone();
+    let value = |t: Term| {
+        state
+            .model
+            .terms
+            .iter()
+            .position(|u| *u == t)
+            .map_or(0.0, |i| state.params.beta[i])
+    };
+    for (b, row) in out.points.iter_mut().enumerate() {
+        let runout: [Complex<f64>; 2] = std::array::from_fn(|dir| {
+            Complex::new(
+                value(Term::Runout {
+                    bearing: b,
+                    dir,
+                    imag: false,
+                }),
+                value(Term::Runout {
+                    bearing: b,
+                    dir,
+                    imag: true,
+                }),
+            )
+        });
+        for p in row.iter_mut().flatten() {
+            for (k, nl) in state.model.nonlinear.iter().enumerate() {
+                let v = state.params.nl[k];
+                match *nl {
+                    Nonlinear::Delay { bearing, channels } if bearing == b => {
+                        let f = Complex::from_polar(1.0, p.omega * v);
+                        for d in 0..2 {
+                            if channels.ped[d] {
+                                p.ped[d] *= f;
+                            }
+                            if channels.rel[d] {
+                                p.rel[d] *= f;
+                            }
+                        }
+                    }
+                    Nonlinear::Clearance { bearing } if bearing == b => {
+                        let corr = state
+                            .model
+                            .tables
+                            .get(b)
+                            .copied()
+                            .flatten()
+                            .and_then(|t| t.correction(p.speed_hz, v));
+                        if let Some(corr) = corr {
+                            for (k_row, c_row) in p.kstar.iter_mut().zip(corr) {
+                                for (k, c) in k_row.iter_mut().zip(c_row) {
+                                    *k += c;
+                                }
+                            }
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            for (rel, r) in p.rel.iter_mut().zip(runout) {
+                *rel -= r;
+            }
+        }
+    }
+    out
+}
+
+/// The base candidates of one round, fitted to the data the state corrects.
+struct BaseCandidates {
+    /// The corrected data.
+    prep: Prepared,
+    /// `foundation_coupling`, when it could be fitted.
+    shared: Option<FoundationFit>,
+    /// `pedestal_sub_base`, when it could be fitted.
+    sub_base: Option<FoundationFit>,
+}
+
+/// Fits and tests both base models on the data `state` corrects, starting
+/// from (and simulating the null from) the state's pedestals; on the base
+/// model (`first`) from `plinth identify`'s fits, as before any effect.
+fn try_bases_on(
+    prep: &Prepared,
+    state: &State,
+    opts: &Options,
+    first: bool,
+) -> Result<BaseCandidates> {
+    let cprep = corrected(prep, state);
+    let nb = prep.bearings.len();
+    let start: Option<Vec<[f64; 5]>> = if first {
+        None
+    } else {
+        let value = |t: Term| {
+            state
+                .model
+                .terms
+                .iter()
+                .position(|u| *u == t)
+                .map(|i| state.params.beta[i])
+        };
+        (0..nb)
+            .map(|b| {
+                Some([
+                    value(Term::Stiffness { bearing: b, dir: 0 })?,
+                    value(Term::Stiffness { bearing: b, dir: 1 })?,
+                    value(Term::Mass {
+                        bearing: b,
+                        dir: None,
+                    })?,
+                    value(Term::Damping { bearing: b, dir: 0 })?,
+                    value(Term::Damping { bearing: b, dir: 1 })?,
+                ])
+            })
+            .collect()
+    };
+    if !first && start.is_none() {
+        return Ok(BaseCandidates {
+            prep: cprep,
+            shared: None,
+            sub_base: None,
+        });
+    }
+    // The rigid model on the corrected data: the state less its corrections.
+    let rigid = base_model(&opts.base, nb);
+    let params = Params {
+        beta: rigid
+            .terms
+            .iter()
+            .map(|t| {
+                state
+                    .model
+                    .terms
+                    .iter()
+                    .position(|u| u == t)
+                    .map_or(0.0, |i| state.params.beta[i])
+            })
+            .collect(),
+        nl: Vec::new(),
+    };
+    let pred = Prediction::new(&cprep, &rigid, &params);
+    let gap = pred.gap(&cprep, None);
+    // A base fit that cannot run is "not tried", not an error.
+    let run = |kind| {
+        foundation::evaluate(
+            &cprep,
+            &pred,
+            gap,
+            opts.alpha,
+            opts.foundation_replicates,
+            opts.foundation_seed,
+            kind,
+            start.clone(),
+        )
+        .ok()
+        .flatten()
+    };
+    let shared = run(foundation::Kind::Shared);
+    let sub_base = run(foundation::Kind::SubBase);
+    Ok(BaseCandidates {
+        prep: cprep,
+        shared,
+        sub_base,
     })
 }
 
@@ -582,16 +941,82 @@ fn summary(prep: &Prepared, e: &Evaluated, tried: usize) -> CandidateSummary {
         channels: e.candidate.variant.clone(),
         test: wald_test(tried),
         evidence: e.evidence,
-        parameters: e
-            .effect_parameters()
-            .into_iter()
-            .map(|(name, value, std_err)| Estimate {
-                name,
-                value,
-                std_err,
-            })
-            .collect(),
+        parameters: as_reported(
+            &e.candidate.model,
+            e.candidate.bearing,
+            e.candidate.effect,
+            e.effect_parameters()
+                .into_iter()
+                .map(|(name, value, std_err)| Estimate {
+                    name,
+                    value,
+                    std_err,
+                })
+                .collect(),
+        ),
     }
+}
+
+/// The oil-film table of every bearing of `prep` whose geometry `films`
+/// gives and whose table it reproduces ([`WrittenTable::matched`]).
+pub fn written_tables(
+    prep: &Prepared,
+    films: &[(String, OilFilmBearing)],
+) -> Vec<Option<WrittenTable>> {
+    prep.bearings
+        .iter()
+        .enumerate()
+        .map(|(b, name)| {
+            let (_, film) = films.iter().find(|(n, _)| n == name)?;
+            let table: Vec<_> = prep.points[b]
+                .iter()
+                .flatten()
+                .map(|p| (p.speed_hz, p.kstar))
+                .collect();
+            WrittenTable::matched(film, &table)
+        })
+        .collect()
+}
+
+/// An effect's estimates as reported: the clearance scalar δ of
+/// `bearing_coefficients` as `clearance_ratio` = 1 + δ, with the written
+/// and the true clearance [m].
+fn as_reported(
+    model: &Model,
+    bearing: usize,
+    effect: EffectKind,
+    raw: Vec<Estimate>,
+) -> Vec<Estimate> {
+    if effect.name() != super::candidates::BEARING_COEFFICIENTS {
+        return raw;
+    }
+    let Some(table) = model.tables.get(bearing).copied().flatten() else {
+        return raw;
+    };
+    let mut out = Vec::new();
+    for e in raw {
+        if e.name == "clearance_ratio" {
+            let c_w = table.film.clearance;
+            out.push(Estimate {
+                name: e.name,
+                value: 1.0 + e.value,
+                std_err: e.std_err,
+            });
+            out.push(Estimate {
+                name: "clearance_true".into(),
+                value: c_w * (1.0 + e.value),
+                std_err: c_w * e.std_err,
+            });
+            out.push(Estimate {
+                name: "clearance_written".into(),
+                value: c_w,
+                std_err: 0.0,
+            });
+        } else {
+            out.push(e);
+        }
+    }
+    out
 }
 
 /// The effect's own parameters in a refitted state.
@@ -609,7 +1034,7 @@ fn effect_estimates(prep: &Prepared, state: &State, cand: &Candidate) -> Result<
             }
         }
     }
-    Ok(out)
+    Ok(as_reported(&state.model, cand.bearing, cand.effect, out))
 }
 
 /// The pedestal parameters (k, m, c terms) of every bearing with standard errors.
