@@ -94,8 +94,14 @@ impl Ticker {
             // stays hidden until a small thread shows it after
             // [`show_after`], in the process's one display.
             bar.enable_steady_tick(Duration::from_millis(200));
-            let delayed = bar.downgrade();
             let after = show_after();
+            if after.is_zero() {
+                // Shown at once (and drawn now, not at the next tick), so
+                // even a command faster than one tick shows its line.
+                multi().add(bar.clone()).tick();
+                return Ticker { bar, live };
+            }
+            let delayed = bar.downgrade();
             std::thread::spawn(move || {
                 std::thread::sleep(after);
                 if let Some(bar) = delayed.upgrade() {

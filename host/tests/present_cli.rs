@@ -413,33 +413,54 @@ fn diagnose_fits_a_speed_band() {
     );
 }
 
-/// Runs `plinth ARGS` under a pseudo-terminal (util-linux `script`), with
-/// progress shown at once, and returns what the terminal showed; `None`
-/// when `script` is missing.
+/// Runs `plinth ARGS` with its stderr on a fresh pseudo-terminal (openpty),
+/// stdout discarded, progress shown at once, and returns what the terminal
+/// showed; `None` when no pseudo-terminal can be opened. (util-linux
+/// `script` loses the session when its stdin is not a terminal.)
 fn on_a_terminal(args: &[&str]) -> Option<String> {
-    let script = ["/usr/bin/script", "/bin/script"]
-        .into_iter()
-        .find(|p| Path::new(p).is_file())?;
-    let quoted: Vec<String> = std::iter::once(env!("CARGO_BIN_EXE_plinth"))
-        .chain(args.iter().copied())
-        .map(|a| format!("'{a}'"))
-        .collect();
-    let out = Command::new(script)
-        .args([
-            "-qec",
-            &format!("{} > /dev/null", quoted.join(" ")),
-            "/dev/null",
-        ])
+    use std::io::Read;
+    use std::os::fd::{FromRawFd, OwnedFd};
+    let (mut master, mut slave) = (-1, -1);
+    // SAFETY: openpty writes two new descriptors, owned from here on.
+    let opened = unsafe {
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
+    };
+    if opened != 0 {
+        return None;
+    }
+    // SAFETY: both descriptors were just opened by openpty and are not shared.
+    let (master, slave) = unsafe { (OwnedFd::from_raw_fd(master), OwnedFd::from_raw_fd(slave)) };
+    let mut terminal = std::fs::File::from(master);
+    // Read while the command runs, so that a full pty buffer never blocks it;
+    // the read ends with EIO once the last slave descriptor is closed.
+    let reader = std::thread::spawn(move || {
+        let mut shown = Vec::new();
+        let mut chunk = [0u8; 4096];
+        while let Ok(n) = terminal.read(&mut chunk) {
+            if n == 0 {
+                break;
+            }
+            shown.extend_from_slice(&chunk[..n]);
+        }
+        shown
+    });
+    let status = Command::new(env!("CARGO_BIN_EXE_plinth"))
+        .args(args)
         .env("PLINTH_PROGRESS_AFTER_MS", "0")
         .stdin(Stdio::null())
-        .output()
+        .stdout(Stdio::null())
+        .stderr(Stdio::from(slave))
+        .status()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stdout)
-    );
-    Some(String::from_utf8_lossy(&out.stdout).to_string())
+    let shown = String::from_utf8_lossy(&reader.join().unwrap()).to_string();
+    assert!(status.success(), "{args:?}: {shown}");
+    Some(shown)
 }
 
 /// Progress is drawn on a terminal, for `identify` and `diagnose` too, and
@@ -455,9 +476,9 @@ fn progress_only_on_a_terminal_and_silenced_by_quiet() {
         let Some(shown) = on_a_terminal(&[command, d]) else {
             assert!(
                 std::env::var_os("CI").is_none(),
-                "no `script` to make a terminal"
+                "no pseudo-terminal (openpty failed)"
             );
-            eprintln!("SKIPPED: no util-linux `script` for a pseudo-terminal");
+            eprintln!("SKIPPED: no pseudo-terminal (openpty failed)");
             return;
         };
         assert!(shown.contains(label), "{command}: {shown:?}");
