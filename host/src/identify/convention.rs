@@ -4,7 +4,7 @@
 //! the noise floor, clearly better than every other reading (the data as
 //! found included). A physically impossible fit is the usual symptom; a fit
 //! far worse than the noise floor is the other (a y-z swap of a pedestal with
-//! similar stiffnesses can stay passive). Trying costs six refits, a few
+//! similar stiffnesses can stay passive). Trying costs eight refits, a few
 //! milliseconds, so it is always done.
 //!
 //! The mistakes ([`Convention`]) and what undoing each does to the run:
@@ -22,6 +22,12 @@
 //!   named) for symmetric bearing matrices.
 //! - `cross_coupling_sign`: the cross terms kyz, kzy, cyz, czy with the wrong
 //!   sign (the rotation sense or an axis taken the other way): negate them.
+//! - `ped_conjugated`: only the pedestal phasors conjugated (pick-ups read
+//!   with phase lead, probes with lag): conjugate every `ped` phasor. Mixed
+//!   conventions can leave some pedestals passive at the wrong stiffness.
+//! - `ped_velocity`: pedestal velocity written as displacement (a velocity
+//!   pick-up not integrated): divide every `ped` phasor (and its noise
+//!   column) by iΩ.
 //! - `speed_in_rpm`: speeds written in rpm where formats.md wants Hz: divide
 //!   the measurement speeds by 60, and the bearing table's speeds too when the
 //!   table is in the same unit (it covers the measured speeds as written).
@@ -74,17 +80,23 @@ pub enum Convention {
     CrossCouplingSign,
     /// Speeds in rpm read as Hz.
     SpeedInRpm,
+    /// Only the pedestal phasors conjugated.
+    PedConjugated,
+    /// Pedestal velocity written as displacement.
+    PedVelocity,
 }
 
 impl Convention {
     /// Every mistake tried, in report order.
-    pub const ALL: [Convention; 6] = [
+    pub const ALL: [Convention; 8] = [
         Convention::Conjugated,
         Convention::SwappedYz,
         Convention::RelNegated,
         Convention::BearingTransposed,
         Convention::CrossCouplingSign,
         Convention::SpeedInRpm,
+        Convention::PedConjugated,
+        Convention::PedVelocity,
     ];
 
     /// The name used in `--json` and messages.
@@ -96,6 +108,8 @@ impl Convention {
             Convention::BearingTransposed => "bearing_transposed",
             Convention::CrossCouplingSign => "cross_coupling_sign",
             Convention::SpeedInRpm => "speed_in_rpm",
+            Convention::PedConjugated => "ped_conjugated",
+            Convention::PedVelocity => "ped_velocity",
         }
     }
 
@@ -118,6 +132,12 @@ impl Convention {
                 "the bearing cross terms kyz, kzy, cyz, czy have the wrong sign"
             }
             Convention::SpeedInRpm => "the speeds are in rpm, not Hz",
+            Convention::PedConjugated => {
+                "only the pedestal phasors are conjugated (pick-ups read with phase lead, probes with lag: one phase convention for rel and ped)"
+            }
+            Convention::PedVelocity => {
+                "the pedestal readings are velocities written as displacements (formats.md: ped in m; divide a velocity by iΩ)"
+            }
         }
     }
 
@@ -163,6 +183,25 @@ impl Convention {
                     for (i, j) in [(0, 1), (1, 0)] {
                         c.k[i][j] = -c.k[i][j];
                         c.c[i][j] = -c.c[i][j];
+                    }
+                }
+            }
+            Convention::PedConjugated => {
+                for m in &mut out.measurements {
+                    for z in &mut m.ped {
+                        *z = z.conj();
+                    }
+                }
+            }
+            Convention::PedVelocity => {
+                for m in &mut out.measurements {
+                    let omega = plinth_shared::phasor::omega_from_hz(m.speed_hz);
+                    for z in &mut m.ped {
+                        *z /= num_complex::Complex::new(0.0, omega);
+                    }
+                    if let Some(sd) = &mut m.noise_sd {
+                        sd[2] /= omega;
+                        sd[3] /= omega;
                     }
                 }
             }
@@ -486,10 +525,21 @@ mod tests {
         for c in Convention::ALL {
             let once = c.correct(&r);
             assert_ne!(once, r, "{c} changes these data");
-            if c != Convention::SpeedInRpm {
+            if !matches!(c, Convention::SpeedInRpm | Convention::PedVelocity) {
                 assert_eq!(c.correct(&once), r, "{c} is its own inverse");
             }
         }
+        let m = &Convention::PedConjugated.correct(&r).measurements[0];
+        assert_eq!(
+            (m.rel, m.ped[0]),
+            (r.measurements[0].rel, C64::new(-5.0, -6.0))
+        );
+        let m = &Convention::PedVelocity.correct(&r).measurements[0];
+        let omega = 2.0 * std::f64::consts::PI * 50.0;
+        assert!((m.ped[0] * C64::new(0.0, omega) - C64::new(-5.0, 6.0)).norm() < 1e-12);
+        assert_eq!(m.rel, r.measurements[0].rel);
+        let sd = m.noise_sd.unwrap_or_default();
+        assert!((sd[3] * omega - 0.4).abs() < 1e-12 && sd[0] == 0.1);
         let m = &Convention::Conjugated.correct(&r).measurements[0];
         assert_eq!(m.rel[0], C64::new(1.0, -2.0));
         assert_eq!(m.ped[1], C64::new(7.0, -8.0));

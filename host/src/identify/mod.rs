@@ -25,6 +25,7 @@ pub mod misfit;
 pub mod model;
 pub mod on_base;
 pub mod physical;
+pub mod plausibility;
 pub mod synthetic;
 
 pub use estimator::{Estimator, NoiseReport, OlsComparison};
@@ -163,6 +164,9 @@ pub enum WarningKind {
     /// The data fit a passive pedestal to the noise floor only with a
     /// convention mistake undone ([`convention`]). Fit not trusted.
     SuspectedConventionError,
+    /// Numbers no pedestal has, or a unit mismatch between the channels
+    /// ([`plausibility`]). Fit not trusted.
+    Implausible,
 }
 
 impl WarningKind {
@@ -176,6 +180,7 @@ impl WarningKind {
                 | WarningKind::Undetermined
                 | WarningKind::PhysicallyImpossible
                 | WarningKind::SuspectedConventionError
+                | WarningKind::Implausible
         )
     }
 }
@@ -520,12 +525,16 @@ pub fn observations(
 /// first appear in `measurements.csv`, with the estimator of `options`
 /// (default: maximum likelihood with the noise model of
 /// [`crate::estimate::noise`]); every pedestal is checked for the usual
-/// convention mistakes ([`convention`]: six refits of the run).
+/// convention mistakes ([`convention`]: eight refits of the run), the run's
+/// dampings judged as one family ([`physical::recheck_run`]) and the values
+/// checked for plausibility ([`plausibility`]).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
     let mut identification = fit_run(run, options)?;
     let findings = convention::diagnose(run, &identification, &|r| fit_run(r, options));
     convention::mark(&mut identification, &findings);
     crate::present::modal::attach(&mut identification);
+    physical::recheck_run(&mut identification);
+    plausibility::mark(run, &mut identification);
     Ok(identification)
 }
 

@@ -1,0 +1,204 @@
+//! Plausibility of an identified pedestal where the fit itself can be
+//! perfect: numbers no pedestal has, and the unit or scale mismatch between
+//! channels that produces them.
+//!
+//! A scale mismatch between the pedestal pick-ups and the shaft probes
+//! (`ped` in µm against `rel` in m) scales k, m and c alike and leaves the
+//! fit exact and the natural frequencies unchanged: only the size of the
+//! numbers gives it away. The yardstick is the bearing the pedestal
+//! carries: a pedestal stiffer or softer than its bearing's direct
+//! stiffness by more than [`BEARING_STIFFNESS_RATIO`] is not a machine
+//! anybody builds, and when the ratio is near a power of 1000 the unit
+//! mistake is named. Independently, masses, stiffnesses and natural
+//! frequencies outside wide absolute ranges ([`MASS_RANGE_KG`],
+//! [`STIFFNESS_RANGE_N_PER_M`], [`NATURAL_FREQUENCY_RANGE_HZ`]) are never
+//! `ok`. A value counts as outside only when its 3σ interval is
+//! ([`SIGMAS`]), so a weakly determined mass is left to the other warnings.
+//! Velocity declared as displacement and mixed phase conventions do change
+//! the fit, and are tried as convention mistakes ([`super::convention`]).
+
+use super::{Identification, PedestalFit, Warning, WarningKind};
+use crate::rundir::RunDir;
+
+/// Pedestal masses any machine has [kg].
+pub const MASS_RANGE_KG: [f64; 2] = [0.1, 1.0e6];
+/// Pedestal stiffnesses any machine has [N/m].
+pub const STIFFNESS_RANGE_N_PER_M: [f64; 2] = [1.0e3, 1.0e12];
+/// Pedestal natural frequencies sqrt(k/m)/2π any machine has [Hz].
+pub const NATURAL_FREQUENCY_RANGE_HZ: [f64; 2] = [0.5, 2.0e4];
+/// Largest factor between a pedestal's stiffness and its bearing's direct
+/// stiffness, either way [-] (field machines: within about 30).
+pub const BEARING_STIFFNESS_RATIO: f64 = 1.0e3;
+/// Standard errors a value must lie outside a range by [-].
+pub const SIGMAS: f64 = 3.0;
+
+/// Why `fit` is implausible, one sentence each; `bearing_stiffness` is the
+/// geometric mean of the bearing's direct stiffnesses |k_yy|, |k_zz| over the
+/// measured speeds [N/m] (`None`: unknown).
+pub fn findings(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> Vec<String> {
+    let mut out = Vec::new();
+    let se = fit.std_errs();
+    let outside = |v: f64, s: f64, [lo, hi]: [f64; 2]| {
+        let s = if s.is_finite() { s } else { 0.0 };
+        v + SIGMAS * s < lo || v - SIGMAS * s > hi
+    };
+    for (name, v, s, range, unit) in [
+        ("k_y", fit.k_y, se[0], STIFFNESS_RANGE_N_PER_M, "N/m"),
+        ("k_z", fit.k_z, se[1], STIFFNESS_RANGE_N_PER_M, "N/m"),
+        ("m", fit.m, se[2], MASS_RANGE_KG, "kg"),
+    ] {
+        if v > 0.0 && outside(v, s, range) {
+            out.push(format!(
+                "{name} = {v:.3e} ± {s:.1e} {unit} is outside anything a pedestal can be ({:.0e} to {:.0e} {unit})",
+                range[0], range[1]
+            ));
+        }
+    }
+    if fit.m > 0.0 && fit.k_y > 0.0 && fit.k_z > 0.0 {
+        for (axis, k) in [("y", fit.k_y), ("z", fit.k_z)] {
+            let f = (k / fit.m).sqrt() / (2.0 * std::f64::consts::PI);
+            let [lo, hi] = NATURAL_FREQUENCY_RANGE_HZ;
+            if !(lo..=hi).contains(&f) {
+                out.push(format!(
+                    "its natural frequency in {axis}, sqrt(k_{axis}/m)/2π = {f:.3e} Hz, is outside anything a pedestal can have ({lo} to {hi:.0e} Hz)"
+                ));
+            }
+        }
+    }
+    if let Some(kb) = bearing_stiffness.filter(|k| *k > 0.0 && k.is_finite()) {
+        if fit.k_y > 0.0 && fit.k_z > 0.0 {
+            let ratio = (fit.k_y * fit.k_z).sqrt() / kb;
+            if !(1.0 / BEARING_STIFFNESS_RATIO..=BEARING_STIFFNESS_RATIO).contains(&ratio) {
+                out.push(format!(
+                    "its stiffness is {ratio:.1e} times its bearing's ({kb:.2e} N/m): {}",
+                    unit_mismatch(ratio)
+                ));
+            }
+        }
+    }
+    out
+}
+
+/// The unit mistake a pedestal/bearing stiffness ratio points to.
+fn unit_mismatch(ratio: f64) -> String {
+    // ped too large by F makes k, m, c too small by F.
+    let decades = -ratio.log10();
+    let thousands = (decades / 3.0).round() as i32;
+    let name = |e: i32| match e {
+        1 => "mm",
+        2 => "µm",
+        3 => "nm",
+        _ => "another unit",
+    };
+    if thousands != 0 && (decades - 3.0 * thousands as f64).abs() <= 1.5 {
+        let factor = format!("1e{}", 3 * thousands.abs());
+        if thousands > 0 {
+            format!(
+                "suspected unit mismatch between channels: the pedestal readings look {factor} too large against the shaft probes (ped in {}, rel in m?); formats.md wants both in m",
+                name(thousands)
+            )
+        } else {
+            format!(
+                "suspected unit mismatch between channels: the shaft probe readings look {factor} too large against the pedestal pick-ups (rel in {}, ped in m?); formats.md wants both in m",
+                name(-thousands)
+            )
+        }
+    } else {
+        "a scale mismatch between the ped and rel channels (units, gains) or a wrong bearing table is the likely cause".to_string()
+    }
+}
+
+/// Geometric mean of the bearing's direct stiffnesses |k_yy|·|k_zz| over
+/// the speeds `bearing` was measured at [N/m].
+fn bearing_stiffness(run: &RunDir, bearing: &str) -> Option<f64> {
+    let schedules = run.bearing_schedules();
+    let schedule = schedules.get(bearing)?;
+    let logs: Vec<f64> = run
+        .measurements
+        .iter()
+        .filter(|m| m.bearing == bearing)
+        .filter_map(|m| schedule.at(m.speed_hz).ok())
+        .map(|c| 0.5 * (c.k[0][0].abs() * c.k[1][1].abs()).ln())
+        .filter(|v| v.is_finite())
+        .collect();
+    (!logs.is_empty()).then(|| (logs.iter().sum::<f64>() / logs.len() as f64).exp())
+}
+
+/// Adds a [`WarningKind::Implausible`] warning to every implausible pedestal
+/// of `identification` (identified from `run`) and updates `trusted`.
+pub fn mark(run: &RunDir, identification: &mut Identification) {
+    for p in &mut identification.pedestals {
+        let found = findings(p, bearing_stiffness(run, &p.bearing));
+        if found.is_empty() {
+            continue;
+        }
+        p.warnings.push(Warning {
+            kind: WarningKind::Implausible,
+            message: format!("implausible pedestal: {}", found.join("; ")),
+        });
+        p.trusted = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::StdErr;
+
+    fn fit(k: f64, m: f64) -> PedestalFit {
+        PedestalFit {
+            bearing: "left".into(),
+            k_y: k,
+            k_z: 0.8 * k,
+            m,
+            c_y: 0.0,
+            c_z: 0.0,
+            std_err: StdErr {
+                k_y: 1e-3 * k,
+                k_z: 1e-3 * k,
+                m: 1e-3 * m,
+                c_y: 1.0,
+                c_z: 1.0,
+            },
+            residual_rms: 0.0,
+            condition_number: 2.0,
+            fixed: Vec::new(),
+            trusted: true,
+            speeds: 50,
+            equations: 200,
+            speed_range_hz: [5.0, 200.0],
+            warnings: Vec::new(),
+            ols: None,
+            suspected_convention_error: None,
+            base: None,
+            base_measured: None,
+            covariance: None,
+            modal: None,
+        }
+    }
+
+    #[test]
+    fn ordinary_pedestals_pass() {
+        assert!(findings(&fit(1e7, 80.0), Some(2e7)).is_empty());
+        assert!(findings(&fit(3e9, 5000.0), Some(1e8)).is_empty());
+    }
+
+    #[test]
+    fn micrometres_against_metres_are_named() {
+        // ped in µm: k = 1e7·1e-6 = 10 N/m, m = 80e-6 kg, f_n unchanged.
+        let f = findings(&fit(10.0, 8e-5), Some(2e7));
+        let all = f.join(" | ");
+        assert!(all.contains("1e6 too large") && all.contains("µm"), "{all}");
+        assert!(all.contains("m = 8.000e-5"), "{all}");
+        // rel in µm instead: the pedestal looks 1e6 too stiff.
+        let f = findings(&fit(1e13, 8e7), Some(2e7)).join(" | ");
+        assert!(f.contains("rel in µm"), "{f}");
+    }
+
+    #[test]
+    fn absurd_magnitudes_are_never_ok() {
+        let f = findings(&fit(1e151, 80.0), None).join(" | ");
+        assert!(f.contains("k_y") && f.contains("natural frequency"), "{f}");
+        assert!(!findings(&fit(1e7, 1e-4), None).is_empty());
+    }
+}

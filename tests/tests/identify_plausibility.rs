@@ -1,0 +1,122 @@
+//! "Never confidently wrong" (issue 17, identify's side, the calibrated
+//! part): pedestal pick-ups in µm against probes in m are named as a unit
+//! mismatch, pedestal phasors alone conjugated are named `ped_conjugated`,
+//! and clean runs (digits 2/3/12 on a three-bearing machine, 1 % noise on the
+//! undamped paper machine) are flagged by no rule that untrusts a pedestal or
+//! exits 2 (the run's dampings are one family at 1 % per run). Faults are
+//! made in the data here (scaling, conjugation), independently of Plinth's
+//! own corrections. The lack-of-fit test and the robust fit are not in main
+//! yet (wip/issue17-trust.patch: their false-alarm rates miss 1 %).
+use plinth::identify::physical::NotPhysical;
+use plinth::identify::{identify_run, Identification, Options, WarningKind};
+use plinth::rundir::RunDir;
+use plinth::sim::{unbalance_response, EffectSet, Machine, Noise};
+use plinth_tests::write_run;
+use std::path::Path;
+
+fn machine(file: &str) -> Machine {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(file);
+    let text = std::fs::read_to_string(&path).expect("machine file");
+    Machine::from_toml_str(&text, file).expect("machine")
+}
+
+/// The machine's run-down 5..=200 Hz in 2.5 Hz steps, written with `digits`
+/// and read back (so that the digits are what the numbers carry).
+fn run(machine: &Machine, noise: Option<(f64, u64)>, digits: Option<u32>) -> RunDir {
+    let speeds: Vec<f64> = (0..=78).map(|i| 5.0 + 2.5 * i as f64).collect();
+    let response = unbalance_response(machine, &speeds, &EffectSet::none()).expect("simulation");
+    let run = response
+        .to_run_dir(noise.map(|(fraction, seed)| Noise { fraction, seed }))
+        .expect("run directory");
+    let dir = write_run(&run, digits);
+    RunDir::read(dir.path()).expect("read back")
+}
+
+fn identify(run: &RunDir) -> Identification {
+    identify_run(run, &Options::default()).expect("identify")
+}
+
+/// The trust rules (untrusting or exit 2) that fired on `id`.
+fn flags(id: &Identification) -> Vec<String> {
+    let rules = [
+        WarningKind::PhysicallyImpossible,
+        WarningKind::SuspectedConventionError,
+        WarningKind::Implausible,
+    ];
+    id.pedestals
+        .iter()
+        .flat_map(|p| {
+            p.warnings
+                .iter()
+                .filter(|w| rules.contains(&w.kind))
+                .map(move |w| format!("{}: {}", p.bearing, w.message))
+        })
+        .collect()
+}
+
+#[test]
+fn the_undamped_paper_machine_with_noise_is_not_flagged() {
+    // The issue's case: 4 of 20 seeds exited 2 under the old one-sided 2σ
+    // rule. Six seeds here; twenty and more in scripts/bench-trust.sh.
+    let m = machine("examples/feng-hahn-1997.toml");
+    for seed in 1..=6 {
+        let id = identify(&run(&m, Some((0.01, seed)), Some(6)));
+        assert!(flags(&id).is_empty(), "seed {seed}: {:?}", flags(&id));
+        assert!(NotPhysical::of(&id).is_none());
+    }
+}
+
+#[test]
+fn clean_digits_are_not_flagged() {
+    let m = machine("tests/machines/three-bearing-tabulated.toml");
+    for digits in [2, 3, 12] {
+        let id = identify(&run(&m, None, Some(digits)));
+        assert!(flags(&id).is_empty(), "{digits} digits: {:?}", flags(&id));
+    }
+}
+
+#[test]
+fn micrometres_against_metres_are_named() {
+    let m = machine("examples/feng-hahn-1997-damped.toml");
+    let mut r = run(&m, None, Some(12));
+    for row in &mut r.measurements {
+        for z in &mut row.ped {
+            *z *= 1e6;
+        }
+    }
+    let id = identify(&r);
+    for p in &id.pedestals {
+        assert!(!p.trusted);
+        let w = p
+            .warnings
+            .iter()
+            .find(|w| w.kind == WarningKind::Implausible)
+            .expect("implausible");
+        assert!(w.message.contains("ped in µm, rel in m"), "{}", w.message);
+    }
+    assert!(NotPhysical::of(&id).is_some());
+}
+
+#[test]
+fn pedestal_phasors_alone_conjugated_are_named() {
+    let m = machine("tests/machines/three-bearing-tabulated.toml");
+    let mut r = run(&m, None, Some(12));
+    for row in &mut r.measurements {
+        for z in &mut row.ped {
+            *z = z.conj();
+        }
+    }
+    let id = identify(&r);
+    let named: Vec<&str> = id
+        .pedestals
+        .iter()
+        .flat_map(|p| p.warnings.iter())
+        .filter(|w| w.kind == WarningKind::SuspectedConventionError)
+        .map(|w| w.message.as_str())
+        .collect();
+    assert!(
+        named.iter().any(|m| m.contains("ped_conjugated")),
+        "{named:?}"
+    );
+    assert!(id.pedestals.iter().all(|p| !p.trusted));
+}
