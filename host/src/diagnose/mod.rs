@@ -30,6 +30,7 @@ pub use workflow::{diagnose, Options, Outcome};
 pub mod bearing_table;
 pub mod candidates;
 pub mod cli;
+pub mod correct;
 pub mod criterion;
 pub mod data;
 pub mod fit;
