@@ -8,6 +8,9 @@
 //!   is the firmware's `Registers`.
 //! - [`scenario`]: one acquisition with one injected fault.
 //! - [`check`]: every delivered sample and edge against the model's truth.
+//! - [`tasks`]: the box's `extract` and `process` tasks (the library's
+//!   extraction and protocol pass) with their shared parts locked as RTIC
+//!   locks them, under a flooded host link.
 //! - [`uart`]: the host link's receive path under line noise and overflow.
 //! - [`matrix`]: the fault matrix (`bash scripts/bench-board-faults.sh`).
 
@@ -16,4 +19,5 @@ pub mod hw;
 pub mod matrix;
 pub mod scenario;
 pub mod sim;
+pub mod tasks;
 pub mod uart;

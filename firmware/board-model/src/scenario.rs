@@ -7,7 +7,7 @@
 
 use crate::check::{Checker, Outcome};
 use crate::hw::{filtered_captures, Hw, RAM_BASE};
-use crate::sim::{Board, HandlerStats, Port};
+use crate::sim::{Board, Handler, HandlerStats, Port};
 use heapless::spsc::Queue;
 use plinth_firmware::acquisition::adc_dma::{
     self, AdcDma, AdcShared, RestartPath, KEYPHASOR_FILTER_N, KEYPHASOR_FILTER_STEP,
@@ -19,6 +19,7 @@ use plinth_firmware::ad7606::Range;
 use plinth_firmware::revert::Revert;
 use plinth_firmware::source::{SampleBuffer, SampleSource};
 use plinth_firmware::watchdog::ProgressWatch;
+use std::rc::Rc;
 
 /// Capture queue slots (as on the box).
 pub const CAPTURE_SLOTS: usize = 32;
@@ -196,14 +197,35 @@ pub fn run(s: &Scenario) -> Outcome {
     run_inner(s).0
 }
 
-fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
+/// The box's acquisition side on a model board: the firmware's interrupt
+/// handlers on their IRQs and priorities, `DmaSource` over `AdcDma` (not
+/// yet started), the injected fault and the truth checker.
+pub struct Rig {
+    /// The board.
+    pub board: Rc<Board>,
+    /// What the handlers share with `AdcDma`.
+    pub shared: &'static AdcShared,
+    /// The source over the board.
+    pub source: BoardSource,
+    /// The truth checker.
+    pub checker: Checker,
+    /// Ticks per sample.
+    pub p: u64,
+    /// Ticks of run time.
+    pub end: u64,
+    /// The timers' clock [Hz].
+    pub timer_hz: u32,
+}
+
+/// The box's sample source on the model board.
+pub type BoardSource = DmaSource<AdcDma<Port, CAPTURE_SLOTS>>;
+
+/// Builds the board for `s` (None: the box refuses to sample). `after_half`
+/// runs in the `adc_half` interrupt after the firmware's handler (the box
+/// pends its extraction task there).
+pub fn rig(s: &Scenario, after_half: Option<Handler>) -> Option<Rig> {
     let timer_hz = s.clocks.timer_hz();
-    let plan = match ReadPlan::with_revert(timer_hz, s.clocks.pclk1_hz, 51_200.0, s.revert) {
-        Ok(p) => p,
-        // The box refuses to sample (and says so): nothing delivered,
-        // nothing lost unseen.
-        Err(_) => return (Outcome::refused(), Vec::new()),
-    };
+    let plan = ReadPlan::with_revert(timer_hz, s.clocks.pclk1_hz, 51_200.0, s.revert).ok()?;
     let p = u64::from(plan.timing.timer_ticks_per_sample);
     let half = p * s.vectors_per_half as u64;
     let end = half * s.halves + p;
@@ -252,11 +274,17 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
         "spi_error",
         Box::new(move |r| adc_dma::spi_error(r, shared)),
     );
+    let mut after_half = after_half;
     board.attach(
         nvic::IRQ_DMA1_STREAM3,
         3,
         "adc_half",
-        Box::new(move |r| adc_dma::adc_half(r, shared)),
+        Box::new(move |r| {
+            adc_dma::adc_half(r, shared);
+            if let Some(h) = after_half.as_mut() {
+                h(r);
+            }
+        }),
     );
     board.attach(
         nvic::IRQ_TIM5,
@@ -275,8 +303,33 @@ fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
         s.path,
     );
     dma.revert(s.revert);
-    let mut source = DmaSource::new(dma, s.vectors_per_half, p as u32, Range::PlusMinus10V);
-    let mut checker = Checker::new(p as f64, pulses);
+    let source = DmaSource::new(dma, s.vectors_per_half, p as u32, Range::PlusMinus10V);
+    Some(Rig {
+        board,
+        shared,
+        source,
+        checker: Checker::new(p as f64, pulses),
+        p,
+        end,
+        timer_hz,
+    })
+}
+
+fn run_inner(s: &Scenario) -> (Outcome, Vec<HandlerStats>) {
+    // The box refuses to sample (and says so): nothing delivered,
+    // nothing lost unseen.
+    let Some(rig) = rig(s, None) else {
+        return (Outcome::refused(), Vec::new());
+    };
+    let Rig {
+        board,
+        shared,
+        mut source,
+        mut checker,
+        p,
+        end,
+        timer_hz,
+    } = rig;
     let mut buf = SampleBuffer::default();
     let _ = source.start();
     checker.started(board.hw.borrow().runs);

@@ -37,6 +37,10 @@ struct Irq {
     calls: u64,
     accesses: u64,
     cycles: i64,
+    /// Tick it last became pending, and the longest wait from pending to
+    /// entry [ticks].
+    pended_at: u64,
+    max_wait: u64,
 }
 
 /// Per-handler figures.
@@ -52,6 +56,10 @@ pub struct HandlerStats {
     pub accesses: u64,
     /// CPU cycles in all calls, entry and exit included.
     pub cycles: u64,
+    /// Longest wait from pending to entry [CPU cycles] (higher-priority
+    /// handlers, masked windows and critical sections at or above its
+    /// priority).
+    pub max_wait_cycles: u64,
 }
 
 /// The simulated board: hardware, NVIC, interrupt masking.
@@ -67,6 +75,8 @@ pub struct Board {
     cycles_per_tick: u64,
     /// Accesses made in the innermost running handler.
     counting: Cell<Option<usize>>,
+    /// Longest critical section ([`Board::with_ceiling`]) [ticks].
+    longest_section: Cell<u64>,
 }
 
 /// The firmware's view of the board: register and RAM access by address.
@@ -83,6 +93,7 @@ impl Board {
             masked: RefCell::new(Vec::new()),
             cycles_per_tick: cycles_per_tick.max(1),
             counting: Cell::new(None),
+            longest_section: Cell::new(0),
         })
     }
 
@@ -98,7 +109,43 @@ impl Board {
             calls: 0,
             accesses: 0,
             cycles: 0,
+            pended_at: 0,
+            max_wait: 0,
         });
+    }
+
+    /// Pends IRQ `number` from software (RTIC's `pend`: a task's
+    /// dispatcher).
+    pub fn pend(&self, number: u32) {
+        let now = self.now();
+        for irq in self.irqs.borrow_mut().iter_mut() {
+            if irq.number == number && !irq.pending {
+                irq.pending = true;
+                irq.pended_at = now;
+            }
+        }
+    }
+
+    /// Runs `f` with the running priority raised to `ceiling` (an RTIC
+    /// lock: the stack resource policy's critical section); interrupts at
+    /// or below the ceiling wait, and run as soon as it ends.
+    pub fn with_ceiling<R>(self: &Rc<Self>, ceiling: u8, f: impl FnOnce() -> R) -> R {
+        let outer = self.level.get();
+        self.level.set(outer.max(ceiling));
+        let start = self.now();
+        let r = f();
+        let held = self.now() - start;
+        self.longest_section
+            .set(self.longest_section.get().max(held));
+        self.level.set(outer);
+        self.run_until(self.now());
+        r
+    }
+
+    /// Longest critical section so far [CPU cycles] (preempting handlers
+    /// included).
+    pub fn longest_section_cycles(&self) -> u64 {
+        self.longest_section.get() * self.cycles_per_tick
     }
 
     /// Masks every interrupt from `from` for `ticks` (a critical section:
@@ -123,6 +170,7 @@ impl Board {
                 calls: i.calls,
                 accesses: i.accesses,
                 cycles: i.cycles.max(0) as u64,
+                max_wait_cycles: i.max_wait * self.cycles_per_tick,
             })
             .collect()
     }
@@ -140,11 +188,15 @@ impl Board {
     fn latch(&self) {
         let mut hw = self.hw.borrow_mut();
         let clear = std::mem::take(&mut hw.nvic_clear);
+        let now = hw.now;
         for irq in self.irqs.borrow_mut().iter_mut() {
             if clear & (1u64 << irq.number) != 0 {
                 irq.pending = false;
             }
             if !irq.active && hw.irq_line(irq.number) {
+                if !irq.pending {
+                    irq.pended_at = now;
+                }
                 irq.pending = true;
             }
         }
@@ -208,6 +260,8 @@ impl Board {
             irq.pending = false;
             irq.active = true;
             irq.calls += 1;
+            let waited = self.hw.borrow().now.saturating_sub(irq.pended_at);
+            irq.max_wait = irq.max_wait.max(waited);
             (irq.priority, irq.handler.take())
         };
         let outer_level = self.level.replace(priority);

@@ -29,10 +29,14 @@
 //!   (1 ms): each a few dozen cycles, above the device's lock so that a
 //!   long protocol pass never delays the millisecond count;
 //! - 2: `extract` (pended by each completed half: the phasor extractor
-//!   and the pipeline);
-//! - 1: `process` (pended by received bytes and the tick): the protocol,
-//!   status frames and the link (it locks the device and the source, so
-//!   `extract` waits for its pass);
+//!   and the pipeline, on its own state, `plinth_firmware::device::Extraction`);
+//! - 1: `process` (pended by received bytes and the tick): the protocol
+//!   (`Session`, its own), status frames and the link. It shares the
+//!   extraction state, the source and the outbox with `extract` (ceiling 2)
+//!   and takes each for one short section only (a command, a status
+//!   snapshot, one frame, one 64-byte chunk to the link), so `extract` waits
+//!   for at most one such section, never for a protocol pass
+//!   (firmware/README.md, "Who waits for whom").
 //! - idle: the watchdog (fed only while acquisition progresses or is
 //!   stopped on purpose), the LEDs and the once-a-second log.
 //!
@@ -117,7 +121,10 @@ mod app {
     use plinth_firmware::acquisition::pacing::apb_timer_clock_hz;
     use plinth_firmware::acquisition::read_plan::ReadPlan;
     use plinth_firmware::ad7606::Range;
-    use plinth_firmware::device::{Device, SAMPLE_RATE_HZ};
+    use plinth_firmware::device::{
+        capabilities_at, Extraction, Lock, Outbox, Session, Shared as ProtocolShared,
+        SAMPLE_RATE_HZ,
+    };
     use plinth_firmware::source::Refusable;
     use plinth_firmware::stm32::{configure_clocks, Mmio};
     use plinth_firmware::uart_dma;
@@ -152,13 +159,15 @@ mod app {
 
     #[shared]
     struct Shared {
-        device: &'static mut Device,
+        extraction: &'static mut Extraction,
         source: Source,
+        outbox: &'static mut Outbox,
     }
 
     #[local]
     struct Local {
         captures: Producer<'static, u32, CAPTURE_SLOTS>,
+        session: &'static mut Session,
         link: BoxSerial,
         watchdog: IndependentWatchdog,
         green: PD12<Output<PushPull>>,
@@ -265,12 +274,15 @@ mod app {
                 }
             };
         let link = serial::new(clocks.pclk1_hz, BAUD);
-        let Some(device) =
-            cortex_m::singleton!(: Device = Device::with_sample_rate(RANGE.volts_per_code(), rate))
-        else {
-            defmt::panic!("device taken twice")
+        // Statics (counted by `size`), not stack.
+        let session = cortex_m::singleton!(: Session =
+            Session::new(capabilities_at(RANGE.volts_per_code(), rate)));
+        let extraction = cortex_m::singleton!(: Extraction = Extraction::new());
+        let outbox = cortex_m::singleton!(: Outbox = Outbox::new());
+        let (Some(session), Some(extraction), Some(outbox)) = (session, extraction, outbox) else {
+            defmt::panic!("device parts taken twice")
         };
-        device.set_platform(clocks.source.sample_clock(), previous);
+        session.set_platform(clocks.source.sample_clock(), previous);
 
         // 1 kHz tick.
         cp.SYST
@@ -293,9 +305,14 @@ mod app {
             rate
         );
         (
-            Shared { device, source },
+            Shared {
+                extraction,
+                source,
+                outbox,
+            },
             Local {
                 captures: producer,
+                session,
                 link,
                 watchdog,
                 green: gpiod.pd12.into_push_pull_output(),
@@ -341,26 +358,87 @@ mod app {
     /// The extraction: each completed DMA half through the phasor
     /// extractor and the pipeline (priority 2: above the protocol and idle,
     /// below every acquisition interrupt; pended by `adc_half`).
-    #[task(binds = USART3, priority = 2, shared = [device, source])]
+    /// (At priority 2 every lock below is free: `extract` is the highest
+    /// priority that uses these resources.)
+    #[task(binds = USART3, priority = 2, shared = [extraction, source, outbox])]
     fn extract(cx: extract::Context) {
-        (cx.shared.device, cx.shared.source).lock(|device, source| {
-            cycles::EXTRACT.measure(|| device.extract(source));
+        let extract::SharedResources {
+            mut extraction,
+            mut source,
+            outbox,
+            ..
+        } = cx.shared;
+        let mut outbox = Held(outbox);
+        extraction.lock(|extraction| {
+            source.lock(|source| {
+                cycles::EXTRACT.measure(|| extraction.run(source, &mut outbox));
+            })
         });
     }
 
     /// The protocol (commands, status frames, the link) on whatever the
     /// interrupts handed over (priority 1: above idle, below the
-    /// extraction and every acquisition interrupt).
-    #[task(binds = USART1, priority = 1, shared = [device, source], local = [link])]
+    /// extraction and every acquisition interrupt). Its own state is
+    /// local; what it shares with `extract` it locks one short section at
+    /// a time (`ProtocolShared for BoxShared`).
+    #[task(binds = USART1, priority = 1, shared = [extraction, source, outbox], local = [session, link])]
     fn process(cx: process::Context) {
         let link = cx.local.link;
         let now = UPTIME_MS.load(Ordering::Relaxed);
-        (cx.shared.device, cx.shared.source).lock(|device, source| {
-            cycles::POLL.measure(|| device.poll(link, source, now));
-            let running = matches!(&source.0, Some(s) if s.running());
-            RUNNING.store(running, Ordering::Relaxed);
-        });
+        let process::SharedResources {
+            extraction,
+            source,
+            outbox,
+            ..
+        } = cx.shared;
+        let mut shared = BoxShared {
+            extraction,
+            source,
+            outbox,
+        };
+        cycles::POLL.measure(|| cx.local.session.poll(link, &mut shared, now));
+        let running = shared.acquisition(|e, _| e.running());
+        RUNNING.store(running, Ordering::Relaxed);
         link.kick();
+    }
+
+    /// An RTIC resource as the library's [`Lock`].
+    struct Held<M>(M);
+
+    impl<T: 'static, M: rtic::Mutex<T = &'static mut T>> Lock for Held<M> {
+        type Target = T;
+        fn lock<R>(&mut self, f: impl FnOnce(&mut T) -> R) -> R {
+            self.0.lock(|t| f(t))
+        }
+    }
+
+    /// What `process` shares with `extract`, each access one RTIC lock
+    /// (raises the priority to the ceiling, 2, for the closure only).
+    struct BoxShared<E, S, O> {
+        extraction: E,
+        source: S,
+        outbox: O,
+    }
+
+    impl<E, S, O> ProtocolShared for BoxShared<E, S, O>
+    where
+        E: rtic::Mutex<T = &'static mut Extraction>,
+        S: rtic::Mutex<T = Source>,
+        O: rtic::Mutex<T = &'static mut Outbox>,
+    {
+        type Source = Source;
+        fn acquisition<R>(&mut self, f: impl FnOnce(&mut Extraction, &mut Source) -> R) -> R {
+            let source = &mut self.source;
+            self.extraction
+                .lock(|extraction| source.lock(|source| f(extraction, source)))
+        }
+        fn outbox<R>(&mut self, f: impl FnOnce(&mut Outbox) -> R) -> R {
+            self.outbox.lock(|o| f(o))
+        }
+        /// `extract` runs the extraction in its own task.
+        fn extract_inline(&mut self) -> usize {
+            0
+        }
     }
 
     /// Runs `process` (after the pending interrupts above it).
