@@ -16,10 +16,16 @@ pub enum Revert {
     /// SPI2's error interrupt stays disabled: an overrun is never counted
     /// as one.
     SpiErrorInterrupt,
-    /// `stop` disables the SPI DMA requests without waiting for the
-    /// conversion and the read in flight to end, and leaves the words the
-    /// DMA did not take in SPI2's DR (no drain of DR/SR).
+    /// `stop` leaves the words the DMA did not take in SPI2's DR and OVR
+    /// set (no drain of DR/SR); it still waits for BUSY low and SPI idle.
     StopDrain,
+    /// `stop` does not wait for the conversion in flight to end (BUSY
+    /// low) before it clears EXTI0's pending bit; its other steps stay.
+    StopWaitBusy,
+    /// `stop` disables the SPI DMA requests and the streams without
+    /// waiting for the read in flight to end (transmit stream done, SPI
+    /// idle); its other steps stay.
+    StopWaitSpiIdle,
     /// The idle loop feeds the watchdog on every pass, whether acquisition
     /// progresses or not.
     WatchdogFeeding,
@@ -30,10 +36,12 @@ pub enum Revert {
 
 impl Revert {
     /// Every fix that can be reverted.
-    pub const ALL: [Revert; 5] = [
+    pub const ALL: [Revert; 7] = [
         Revert::SlipDetector,
         Revert::SpiErrorInterrupt,
         Revert::StopDrain,
+        Revert::StopWaitBusy,
+        Revert::StopWaitSpiIdle,
         Revert::WatchdogFeeding,
         Revert::PrescalerRefusal,
     ];
@@ -45,6 +53,8 @@ impl Revert {
             Revert::SlipDetector => "slip-detector",
             Revert::SpiErrorInterrupt => "spi-error-irq",
             Revert::StopDrain => "stop-drain",
+            Revert::StopWaitBusy => "stop-wait-busy",
+            Revert::StopWaitSpiIdle => "stop-wait-spi-idle",
             Revert::WatchdogFeeding => "watchdog-feeding",
             Revert::PrescalerRefusal => "prescaler-refusal",
         }

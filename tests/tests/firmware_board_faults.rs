@@ -134,6 +134,15 @@ fn without_the_stop_sequence_a_commanded_restart_is_not_clean() {
     reverted_fix_fails(Revert::StopDrain, "stop/restart", 12);
 }
 
+/// The stop's two waits, each reverted alone (the drain stays): a
+/// conversion still in flight lets BUSY fall after `start` unmasked EXTI0;
+/// a read still in flight leaves a word or an overrun for the next run.
+#[test]
+fn without_either_wait_of_the_stop_a_commanded_restart_is_not_clean() {
+    reverted_fix_fails(Revert::StopWaitBusy, "stop/restart", 6);
+    reverted_fix_fails(Revert::StopWaitSpiIdle, "stop/restart", 12);
+}
+
 #[test]
 fn without_progress_feeding_a_stuck_busy_line_never_resets_the_box() {
     reverted_fix_fails(Revert::WatchdogFeeding, "BUSY stuck low", 8);

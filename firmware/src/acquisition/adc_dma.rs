@@ -540,8 +540,10 @@ impl<R: Registers + Clone, const N: usize> AcquisitionHardware for AdcDma<R, N> 
         self.regs.modify(tim::TIM3 + tim::CR1, tim::CR1_CEN, 0);
         // A conversion in flight ends (BUSY low), the read in flight ends
         // (transmit stream done, SPI idle with nothing to send).
-        if self.revert != Revert::StopDrain {
+        if self.revert != Revert::StopWaitBusy {
             self.wait(gpiob::IDR, gpiob::BUSY, 0);
+        }
+        if self.revert != Revert::StopWaitSpiIdle {
             self.wait(dma1::cr(TX_STREAM), dma1::CR_EN, 0);
             self.wait(spi2::SR, spi2::SR_TXE | spi2::SR_BSY, spi2::SR_TXE);
         }
