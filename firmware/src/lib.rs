@@ -1,7 +1,9 @@
 //! Plinth field box: acquisition pipeline and drivers, target independent so
 //! that the host runs them against simulated hardware.
 //!
-//! - [`device`]: the protocol endpoint and main-loop step ([`device::Device`]).
+//! - [`device`]: the protocol endpoint: [`device::Session`] (protocol),
+//!   [`device::Extraction`] (pipeline), [`device::Outbox`] (frame queue), and
+//!   [`device::Device`], all three in one thread (the main-loop step).
 //! - [`config`]: the host's configuration commands, validated.
 //! - [`pipeline`]: samples → phasors → bearing forces → pedestal RLS → frames.
 //! - [`source`]: the [`source::SampleSource`] trait; [`replay`] (host-fed

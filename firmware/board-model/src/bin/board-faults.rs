@@ -3,7 +3,7 @@
 //! `board-faults [--stride N] [--legacy-restart | --revert FIX] [--only I]
 //! [--budget]`: runs every N-th scenario (default 1: all), on the box's
 //! code or with one fix switched off (`--revert slip-detector`,
-//! `spi-error-irq`, `stop-drain`, `watchdog-feeding`,
+//! `spi-error-irq`, `stop-drain`, `stop-wait-busy`, `stop-wait-spi-idle`, `watchdog-feeding`,
 //! `prescaler-refusal`), prints each failing scenario by name, a table per
 //! fault class, the unreported faults and unrecovered scenarios, and last
 //! `scenarios N, silent corruptions C, uncounted losses U`. Exit status 1
