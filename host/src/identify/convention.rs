@@ -767,6 +767,51 @@ mod tests {
         assert_eq!(s.bearings, r.bearings);
     }
 
+    /// The noise [`corrected_noise`] derives from the run as found is,
+    /// bit for bit, the noise estimated afresh on the corrected run, for
+    /// every correction, with the noise from the digits and the scatter and
+    /// from noise columns.
+    #[test]
+    fn transformed_noise_is_the_noise_of_the_corrected_run() {
+        use crate::rundir::{round_to_digits, DigitsMode};
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        for columns in [false, true] {
+            let mut r = run();
+            r.measurements.clear();
+            for bearing in ["left", "right"] {
+                for j in 0..40 {
+                    let f = 5.0 + 2.0 * j as f64;
+                    let mut value = |k: f64| {
+                        let n: f64 = rng.sample(rand_distr::StandardNormal);
+                        let v = 1e-6 * (f / 17.0 + k).sin() / (1.0 + k) + 1e-9 * n;
+                        round_to_digits(v, 6, DigitsMode::Round)
+                    };
+                    let mut c = |k: f64| C64::new(value(k), value(k + 0.5));
+                    let noise_sd = columns.then(|| [1e-9, 2e-9, 3e-9, 4e-9].map(|s| s * f));
+                    r.measurements.push(Measurement {
+                        speed_hz: f,
+                        bearing: bearing.into(),
+                        rel: [c(0.0), c(1.0)],
+                        ped: [c(2.0), c(3.0)],
+                        noise_sd,
+                        written: None,
+                    });
+                }
+            }
+            let noise = RunNoise::estimate(&r, Quantisation::Rounding);
+            assert!(columns || noise.bearings[0].2.scatter.iter().all(Option::is_some));
+            for c in Convention::ALL {
+                let fixed = c.correct(&r);
+                assert_eq!(
+                    corrected_noise(c, &noise, &fixed),
+                    RunNoise::estimate(&fixed, Quantisation::Rounding),
+                    "{c}, noise columns: {columns}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn names_are_formats_words() {
         for c in Convention::ALL {
