@@ -7,10 +7,14 @@
 # OLS ≤ 0.3 s, accuracy ≤ 10 s on 2 cores.
 #   scripts/bench-identify.sh            # all
 #   SKIP_ACCURACY=1 scripts/bench-identify.sh
+#   PLINTH=/tmp/old/plinth scripts/bench-identify.sh   # another build, to compare
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release -q -p plinth
-plinth=${CARGO_TARGET_DIR:-target}/release/plinth
+# PLINTH=path/to/plinth times that binary instead of building this tree's.
+if [ -z "${PLINTH:-}" ]; then
+  cargo build --release -q -p plinth
+fi
+plinth=${PLINTH:-${CARGO_TARGET_DIR:-target}/release/plinth}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 machine=examples/feng-hahn-1997-damped.toml
