@@ -392,6 +392,102 @@ impl BearingNoise {
     }
 }
 
+/// Real channels ([`REAL_CHANNELS`] order) with y and z exchanged.
+const SWAP_YZ_REAL: [usize; 8] = [2, 3, 0, 1, 6, 7, 4, 5];
+
+impl BearingNoise {
+    /// The same noise with y and z exchanged in every channel: what
+    /// [`BearingNoise::estimate`] gives for rows whose y and z readings (and
+    /// noise columns) were exchanged, since each channel's scatter and each
+    /// column's digits are estimated on their own.
+    pub fn swapped_yz(&self) -> Self {
+        let swap = |v: &[f64; 8]| SWAP_YZ_REAL.map(|c| v[c]);
+        Self {
+            var: self.var.iter().map(swap).collect(),
+            scatter: [1, 0, 3, 2].map(|ch| self.scatter[ch]),
+            scatter_var: self
+                .scatter_var
+                .as_ref()
+                .map(|v| v.iter().map(swap).collect()),
+            ..self.clone()
+        }
+    }
+}
+
+/// The noise model of every measured bearing of a run, estimated once
+/// before any fit and shared by every use of it (the fits, the noise floor,
+/// the convention refits, which transform it as they transform the data).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunNoise {
+    /// How the digits were taken to be reduced.
+    pub quantisation: Quantisation,
+    /// Per measured bearing, in order of first appearance: its name, the
+    /// indices of its rows in `run.measurements` and their noise (row for
+    /// row).
+    pub bearings: Vec<(String, Vec<usize>, BearingNoise)>,
+}
+
+impl RunNoise {
+    /// The noise of every measured bearing of `run`, with the digits of the
+    /// run's columns counted once.
+    pub fn estimate(run: &crate::rundir::RunDir, quantisation: Quantisation) -> Self {
+        let columns = ColumnDigits::of_run(&run.measurements);
+        let bearings = run
+            .measured_bearings()
+            .into_iter()
+            .map(|bearing| {
+                let index: Vec<usize> = (0..run.measurements.len())
+                    .filter(|&i| run.measurements[i].bearing == bearing)
+                    .collect();
+                let rows: Vec<&Measurement> = index.iter().map(|&i| &run.measurements[i]).collect();
+                let noise = BearingNoise::estimate(&rows, &columns, quantisation);
+                (bearing.to_string(), index, noise)
+            })
+            .collect();
+        Self {
+            quantisation,
+            bearings,
+        }
+    }
+
+    /// The noise of the rows of `bearing`, with their indices in
+    /// `run.measurements`.
+    pub fn bearing(&self, bearing: &str) -> Option<(&[usize], &BearingNoise)> {
+        self.bearings
+            .iter()
+            .find(|(name, _, _)| name == bearing)
+            .map(|(_, index, noise)| (index.as_slice(), noise))
+    }
+
+    /// The noise sd per real component [m] of the four phasors (rel y,
+    /// rel z, ped y, ped z) of each of the run's `rows` measurements: the
+    /// scatter law (floored by the digits) while the source is the digits,
+    /// else the variances as they stand (noise columns), each channel's
+    /// real and imaginary variance averaged.
+    pub fn floor(&self, rows: usize) -> Vec<[f64; 4]> {
+        let mut out = vec![[0.0; 4]; rows];
+        for (_, index, noise) in &self.bearings {
+            let var = noise.scatter_var.as_ref().unwrap_or(&noise.var);
+            for (&i, v) in index.iter().zip(var) {
+                out[i] = std::array::from_fn(|ch| (0.5 * (v[2 * ch] + v[2 * ch + 1])).sqrt());
+            }
+        }
+        out
+    }
+
+    /// [`BearingNoise::swapped_yz`] of every bearing.
+    pub fn swapped_yz(&self) -> Self {
+        Self {
+            quantisation: self.quantisation,
+            bearings: self
+                .bearings
+                .iter()
+                .map(|(name, index, noise)| (name.clone(), index.clone(), noise.swapped_yz()))
+                .collect(),
+        }
+    }
+}
+
 fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;

@@ -53,13 +53,20 @@
 //! reading (the data as found included) by [`DECISIVE_DELTA_CHI2`];
 //! otherwise nothing is named.
 //!
-//! The fit itself is a parameter ([`FitRun`]): any estimator that turns a run
-//! into an [`Identification`] (estimates and standard errors) plugs in.
+//! Every reading is first fitted by the paper's OLS, whose relative residual
+//! bounds that of any estimate from below; only the readings that bound
+//! leaves in contention are refitted with the estimator in use
+//! ([`diagnose`]), so that a clean run costs about two fits, not nine.
 
-use super::misfit::{misfit, noise_floor};
+use super::misfit::misfit;
+#[cfg(test)]
+use super::misfit::noise_floor;
 use super::physical::is_plausible;
-use super::{Identification, IdentifyError, PedestalFit, Warning, WarningKind};
+use super::{Estimator, Identification, Options, PedestalFit, Warning, WarningKind};
+use crate::estimate::noise::{Quantisation, RunNoise};
+use crate::estimate::{complex_stiffness, Observation};
 use crate::rundir::RunDir;
+use plinth_shared::phasor::omega_from_hz;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -248,10 +255,6 @@ pub const FLOOR_CHI2_PER_DOF: f64 = 10.0;
 /// as all readings have the same parameters.
 pub const DECISIVE_DELTA_CHI2: f64 = 13.815_510_557_964_274;
 
-/// A fitter: the run (as found, or with a mistake undone) in, every
-/// pedestal's estimate with standard errors out.
-pub type FitRun<'a> = dyn Fn(&RunDir) -> Result<Identification, IdentifyError> + 'a;
-
 /// How well one reading of the data fits one pedestal.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Reading {
@@ -327,17 +330,38 @@ impl Finding {
     }
 }
 
-/// The named mistakes of every pedestal of `identification` (fitted by `fit`
-/// on `run`). Every pedestal is examined, passive or not: a mistake can leave
-/// a passive pedestal that fits far worse than the data allow (a swap of y and
-/// z with similar stiffnesses). Readings whose refit fails (e.g. speeds
-/// outside the bearing table) are left out.
-pub fn diagnose(run: &RunDir, identification: &Identification, fit: &FitRun) -> Vec<Finding> {
-    let Some(sigma) = noise_floor(run) else {
-        return Vec::new();
+/// The named mistakes of every pedestal of `identification` (fitted with
+/// `options` on `run`, whose noise is `noise`). Every pedestal is examined,
+/// passive or not: a mistake can leave a passive pedestal that fits far
+/// worse than the data allow (a swap of y and z with similar stiffnesses).
+/// Readings whose refit fails (e.g. speeds outside the bearing table) are
+/// left out.
+///
+/// Every correction is first fitted by OLS ([`screen`]): OLS minimises
+/// Σ|e|² itself, so its relative residual is a lower bound on that of any
+/// other estimate of the same reading. A correction is refitted with the
+/// estimator of `options` only when that bound leaves it a chance to be
+/// named, to spoil the named one's decisiveness or to be the runner-up; the
+/// others cannot change what is named (with OLS the screen is the fit). The
+/// noise is estimated once and transformed as each correction transforms
+/// the data ([`corrected_noise`]).
+pub fn diagnose(
+    run: &RunDir,
+    identification: &Identification,
+    noise: &RunNoise,
+    options: &Options,
+) -> Vec<Finding> {
+    let floor_of = |run: &RunDir, noise: &RunNoise| {
+        if noise.quantisation == Quantisation::Rounding {
+            noise.floor(run.measurements.len())
+        } else {
+            RunNoise::estimate(run, Quantisation::Rounding).floor(run.measurements.len())
+        }
     };
-    let reading = |run: &RunDir, sigma: &[[f64; 4]], p: &PedestalFit, c| {
-        misfit(run, sigma, p).map(|m| Reading {
+    let sigma = floor_of(run, noise);
+    let schedules = run.bearing_schedules();
+    let reading = |run: &RunDir, schedules: &Schedules, sigma: &[[f64; 4]], p: &PedestalFit, c| {
+        misfit(run, schedules, sigma, p).map(|m| Reading {
             convention: c,
             chi2: m.chi2,
             dof: m.dof,
@@ -345,32 +369,96 @@ pub fn diagnose(run: &RunDir, identification: &Identification, fit: &FitRun) -> 
             plausible: is_plausible(p),
         })
     };
-    // Every correction, refitted once for the whole run.
-    let mut corrected: Vec<(Convention, Identification, RunDir, Vec<[f64; 4]>)> = Vec::new();
+    let ols = options.effective_estimator() == Estimator::Ols;
+    // Every correction with its OLS screen.
+    let mut candidates: Vec<Candidate> = Vec::new();
     for c in Convention::ALL {
         let fixed = c.correct(run);
         if fixed == *run {
             continue; // the mistake changes nothing in these data
         }
-        let (Ok(id), Some(s)) = (fit(&fixed), noise_floor(&fixed)) else {
+        let schedules = fixed.bearing_schedules();
+        let Some(screen) = screen(&fixed, &schedules, options) else {
             continue;
         };
-        corrected.push((c, id, fixed, s));
+        let noise = corrected_noise(c, noise, &fixed);
+        let sigma = floor_of(&fixed, &noise);
+        candidates.push(Candidate {
+            convention: c,
+            fit: ols.then(|| Some(screen.clone())),
+            screen,
+            fixed,
+            schedules,
+            noise,
+            sigma,
+        });
     }
-    let mut findings = Vec::new();
-    for p in &identification.pedestals {
-        let Some(found) = reading(run, &sigma, p, None) else {
-            continue;
-        };
-        let mut readings = vec![(found, p)];
-        for (c, id, fixed, s) in &corrected {
-            if let Some(q) = id.pedestal(&p.bearing) {
-                if let Some(r) = reading(fixed, s, q, Some(*c)) {
-                    readings.push((r, q));
+    // The lower bound of each correction's relative residual per pedestal
+    // (`None`: no bound, it is refitted).
+    let bound = |k: &Candidate, bearing: &str| -> Option<f64> {
+        let q = k.screen.iter().find(|q| q.bearing == bearing)?;
+        misfit(&k.fixed, &k.schedules, &k.sigma, q).map(|m| m.relative_residual * (1.0 - 1e-9))
+    };
+    let readings_of = |p: &PedestalFit, candidates: &[Candidate]| {
+        let found = reading(run, &schedules, &sigma, p, None)?;
+        let mut readings = vec![(found, p.clone())];
+        for k in candidates {
+            if let Some(Some(fits)) = &k.fit {
+                if let Some(q) = fits.iter().find(|q| q.bearing == p.bearing) {
+                    if let Some(r) =
+                        reading(&k.fixed, &k.schedules, &k.sigma, q, Some(k.convention))
+                    {
+                        readings.push((r, q.clone()));
+                    }
                 }
             }
         }
-        if let Some((best, runner_up, q)) = decide(&readings) {
+        Some(readings)
+    };
+    // Refit, cheapest first, every correction the readings so far leave a
+    // chance to matter.
+    loop {
+        let mut wanted: Vec<usize> = Vec::new();
+        for p in &identification.pedestals {
+            let Some(readings) = readings_of(p, &candidates) else {
+                continue;
+            };
+            let limit = relevance_limit(&readings);
+            let open: Vec<(usize, f64)> = candidates
+                .iter()
+                .enumerate()
+                .filter(|(_, k)| k.fit.is_none())
+                .map(|(i, k)| (i, bound(k, &p.bearing).unwrap_or(0.0)))
+                .filter(|&(_, b)| b <= limit)
+                .collect();
+            if limit.is_finite() {
+                wanted.extend(open.iter().map(|&(i, _)| i));
+            } else if let Some(&(i, _)) = open.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+                wanted.push(i);
+            }
+        }
+        if wanted.is_empty() {
+            break;
+        }
+        for i in wanted {
+            let k = &mut candidates[i];
+            if k.fit.is_none() {
+                k.fit = Some(
+                    super::fit_run_with(&k.fixed, &k.noise, options)
+                        .ok()
+                        .map(|id| id.pedestals),
+                );
+            }
+        }
+    }
+    let mut findings = Vec::new();
+    for p in &identification.pedestals {
+        let Some(readings) = readings_of(p, &candidates) else {
+            continue;
+        };
+        let found = readings[0].0;
+        let refs: Vec<(Reading, &PedestalFit)> = readings.iter().map(|(r, q)| (*r, q)).collect();
+        if let Some((best, runner_up, q)) = decide(&refs) {
             let Some(convention) = best.convention else {
                 continue;
             };
@@ -385,6 +473,108 @@ pub fn diagnose(run: &RunDir, identification: &Identification, fit: &FitRun) -> 
         }
     }
     findings
+}
+
+/// Every bearing's coefficient schedule ([`RunDir::bearing_schedules`]).
+type Schedules = std::collections::BTreeMap<String, crate::rundir::BearingSchedule>;
+
+/// One correction of a run under examination by [`diagnose`].
+struct Candidate {
+    convention: Convention,
+    /// The run with the mistake undone.
+    fixed: RunDir,
+    /// Its bearing schedules.
+    schedules: Schedules,
+    /// Its noise (the quantisation of the options).
+    noise: RunNoise,
+    /// Its noise floor ([`super::misfit::noise_floor`]).
+    sigma: Vec<[f64; 4]>,
+    /// Its OLS fits.
+    screen: Vec<PedestalFit>,
+    /// Its fits with the estimator of the options: `None` until refitted,
+    /// `Some(None)` when the refit failed.
+    fit: Option<Option<Vec<PedestalFit>>>,
+}
+
+/// The relative residual [-] below which a reading not yet fitted could
+/// still change what [`decide`] makes of `readings`: be the best passive
+/// reading, come within the decisive margin of it, or be the runner-up;
+/// infinite while no reading is passive.
+fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
+    let Some(best) = readings
+        .iter()
+        .map(|(r, _)| r)
+        .filter(|r| r.plausible && r.relative_residual.is_finite())
+        .min_by(|a, b| a.relative_residual.total_cmp(&b.relative_residual))
+    else {
+        return f64::INFINITY;
+    };
+    let decisive = best.relative_residual
+        * (DECISIVE_DELTA_CHI2 / best.dof.max(1) as f64).exp()
+        * (1.0 + 1e-9);
+    // The runner-up is the best other reading, passive or not.
+    let runner_up = readings
+        .iter()
+        .map(|(r, _)| r)
+        .filter(|r| *r != best)
+        .map(|r| r.relative_residual)
+        .fold(f64::INFINITY, f64::min);
+    if runner_up.is_finite() {
+        decisive.max(runner_up * (1.0 + 1e-9))
+    } else {
+        decisive
+    }
+}
+
+/// The noise of `run` with mistake `c` undone (`fixed`), from the noise
+/// of the run as found: the same where the correction changes only signs
+/// (each channel's scatter and each column's digits are blind to them) or
+/// only the bearing table, y and z exchanged for `swapped_yz`, estimated
+/// anew where it rescales the phasors or the speeds.
+fn corrected_noise(c: Convention, noise: &RunNoise, fixed: &RunDir) -> RunNoise {
+    match c {
+        Convention::Conjugated
+        | Convention::RelNegated
+        | Convention::PedConjugated
+        | Convention::BearingTransposed
+        | Convention::CrossCouplingSign => noise.clone(),
+        Convention::SwappedYz => noise.swapped_yz(),
+        Convention::SpeedInRpm | Convention::PedVelocity => {
+            RunNoise::estimate(fixed, noise.quantisation)
+        }
+    }
+}
+
+/// The paper's OLS fit of every pedestal of `run` with the model and
+/// equations of `options` (as [`super::fit_run`] makes it with
+/// `--estimator ols`), or `None` when the run cannot be fitted.
+fn screen(run: &RunDir, schedules: &Schedules, options: &Options) -> Option<Vec<PedestalFit>> {
+    let ols = options.ols();
+    run.measured_bearings()
+        .into_iter()
+        .map(|bearing| {
+            let schedule = schedules.get(bearing)?;
+            let points = run
+                .measurements
+                .iter()
+                .filter(|m| m.bearing == bearing)
+                .map(|m| {
+                    let kstar = complex_stiffness(
+                        &schedule.at(m.speed_hz).ok()?,
+                        omega_from_hz(m.speed_hz),
+                    );
+                    Some(Observation {
+                        speed_hz: m.speed_hz,
+                        rel: m.rel,
+                        ped: m.ped,
+                        kstar,
+                        var: [0.0; 8],
+                    })
+                })
+                .collect::<Option<Vec<Observation>>>()?;
+            super::fit_pedestal(bearing, &super::estimator::points_of(&points), &ols).ok()
+        })
+        .collect()
 }
 
 /// The decisive reading (module docs) with the runner-up and its fit, or
@@ -471,10 +661,11 @@ pub fn findings_for_run(
         model: Some(model),
         ..super::Options::default()
     };
-    let Ok(identification) = super::fit_run(run, &options) else {
+    let noise = RunNoise::estimate(run, options.quantisation);
+    let Ok(identification) = super::fit_run_with(run, &noise, &options) else {
         return Vec::new();
     };
-    diagnose(run, &identification, &|r| super::fit_run(r, &options))
+    diagnose(run, &identification, &noise, &options)
         .into_iter()
         .map(|f| ConventionFinding {
             message: f.message(),

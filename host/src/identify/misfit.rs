@@ -5,9 +5,10 @@
 //! bearing forces. Used by [`super::convention`] to compare readings of a run.
 
 use super::PedestalFit;
-use crate::estimate::noise::{BearingNoise, ColumnDigits, Quantisation};
-use crate::rundir::{Measurement, RunDir};
+use crate::estimate::noise::{Quantisation, RunNoise};
+use crate::rundir::{BearingSchedule, Measurement, RunDir};
 use plinth_shared::phasor::{omega_from_hz, Complex};
+use std::collections::BTreeMap;
 
 type C64 = Complex<f64>;
 
@@ -21,23 +22,7 @@ type C64 = Complex<f64>;
 /// resonance's curvature is not taken for noise). `None` when a bearing has
 /// no rows.
 pub fn noise_floor(run: &RunDir) -> Option<Vec<[f64; 4]>> {
-    let columns = ColumnDigits::of_run(&run.measurements);
-    let mut out = vec![[0.0; 4]; run.measurements.len()];
-    for bearing in run.measured_bearings() {
-        let index: Vec<usize> = (0..run.measurements.len())
-            .filter(|&i| run.measurements[i].bearing == bearing)
-            .collect();
-        let rows: Vec<&Measurement> = index.iter().map(|&i| &run.measurements[i]).collect();
-        if rows.is_empty() {
-            return None;
-        }
-        let noise = BearingNoise::estimate(&rows, &columns, Quantisation::Rounding);
-        let var = noise.scatter_var.as_ref().unwrap_or(&noise.var);
-        for (&i, v) in index.iter().zip(var) {
-            out[i] = std::array::from_fn(|ch| (0.5 * (v[2 * ch] + v[2 * ch + 1])).sqrt());
-        }
-    }
-    Some(out)
+    Some(RunNoise::estimate(run, Quantisation::Rounding).floor(run.measurements.len()))
 }
 
 /// How far one pedestal estimate is from its data.
@@ -53,11 +38,17 @@ pub struct Misfit {
     pub relative_residual: f64,
 }
 
-/// The misfit of `fit` on the measurements of its bearing in `run`, with the
-/// per-measurement noise `sigma` ([`noise_floor`]). `None` when no speed can
+/// The misfit of `fit` on the measurements of its bearing in `run` (whose
+/// [`RunDir::bearing_schedules`] are `schedules`), with the per-measurement
+/// noise `sigma` ([`noise_floor`]). `None` when no speed can
 /// be evaluated.
-pub fn misfit(run: &RunDir, sigma: &[[f64; 4]], fit: &PedestalFit) -> Option<Misfit> {
-    let schedule = run.bearing_schedules().remove(&fit.bearing)?;
+pub fn misfit(
+    run: &RunDir,
+    schedules: &BTreeMap<String, BearingSchedule>,
+    sigma: &[[f64; 4]],
+    fit: &PedestalFit,
+) -> Option<Misfit> {
+    let schedule = schedules.get(&fit.bearing)?;
     let th = fit.params();
     let mut total = 0.0;
     let mut residual = 0.0;

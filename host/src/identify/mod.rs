@@ -33,7 +33,7 @@ pub use estimator::{Estimator, NoiseReport, OlsComparison};
 pub use model::{mode_label, mode_name, parse_mode, Model, ModelError};
 pub use plinth_shared::regression::{EquationMode, Parameter};
 
-use crate::estimate::noise::{BearingNoise, ColumnDigits, Quantisation};
+use crate::estimate::noise::{BearingNoise, Quantisation, RunNoise};
 use crate::estimate::{complex_stiffness, Observation};
 use crate::rundir::{BearingSchedule, Measurement, OutOfRange, RunDir, RunDirError};
 use nalgebra::{DMatrix, DVector};
@@ -542,8 +542,9 @@ pub fn observations(
 /// lack of fit judged ([`trust`]) and the values checked for plausibility
 /// ([`plausibility`]).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
-    let mut identification = fit_run(run, options)?;
-    let findings = convention::diagnose(run, &identification, &|r| fit_run(r, options));
+    let noise = RunNoise::estimate(run, options.quantisation);
+    let mut identification = fit_run_with(run, &noise, options)?;
+    let findings = convention::diagnose(run, &identification, &noise, options);
     convention::mark(&mut identification, &findings);
     crate::present::modal::attach(&mut identification);
     physical::recheck_run(&mut identification);
@@ -554,12 +555,20 @@ pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, I
 
 /// Fits every measured pedestal of a run ([`fit_pedestal`]), nothing more.
 pub fn fit_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
+    fit_run_with(run, &RunNoise::estimate(run, options.quantisation), options)
+}
+
+/// [`fit_run`] with the run's noise estimated beforehand ([`RunNoise`]).
+pub fn fit_run_with(
+    run: &RunDir,
+    run_noise: &RunNoise,
+    options: &Options,
+) -> Result<Identification, IdentifyError> {
     let bearings = run.measured_bearings();
     if bearings.is_empty() {
         return Err(IdentifyError::NoMeasurements);
     }
     let schedules = run.bearing_schedules();
-    let columns = ColumnDigits::of_run(&run.measurements);
     let estimator = options.effective_estimator();
     let mut pedestals = Vec::with_capacity(bearings.len());
     let mut noise_reports = BTreeMap::new();
@@ -569,12 +578,11 @@ pub fn fit_run(run: &RunDir, options: &Options) -> Result<Identification, Identi
             .ok_or_else(|| IdentifyError::UnknownBearing {
                 bearing: bearing.to_string(),
             })?;
-        let rows: Vec<&Measurement> = run
-            .measurements
-            .iter()
-            .filter(|m| m.bearing == bearing)
-            .collect();
-        let mut noise = BearingNoise::estimate(&rows, &columns, options.quantisation);
+        let (index, noise) = run_noise
+            .bearing(bearing)
+            .ok_or(IdentifyError::NoMeasurements)?;
+        let rows: Vec<&Measurement> = index.iter().map(|&i| &run.measurements[i]).collect();
+        let mut noise = noise.clone();
         let obs = observations(&rows, schedule, &noise).map_err(|source| {
             IdentifyError::BearingRange {
                 bearing: bearing.to_string(),

@@ -108,6 +108,13 @@ pub fn round_to_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
 /// [`written_digits`] of the parsed value: a decimal of at most 15 digits is
 /// the shortest text of its f64.
 pub fn text_digits(text: &str) -> Option<(u32, i32)> {
+    counted_digits(text).filter(|&(d, _)| d <= 15)
+}
+
+/// The significant digits and the decimal exponent of the first one of a
+/// plain decimal number's text, however many digits it has (`None` for zero
+/// and for text that is not a plain decimal number).
+fn counted_digits(text: &str) -> Option<(u32, i32)> {
     let t = text.trim();
     let t = t.strip_prefix(['-', '+']).unwrap_or(t);
     let (mantissa, exponent) = match t.find(['e', 'E']) {
@@ -133,9 +140,6 @@ pub fn text_digits(text: &str) -> Option<(u32, i32)> {
     }
     let first = first?;
     let digits = last - first + 1;
-    if digits > 15 {
-        return None;
-    }
     // Decimal exponent of the digit at position `first`.
     let point = point.unwrap_or(n);
     Some((digits as u32, exponent + point - first - 1))
@@ -143,24 +147,16 @@ pub fn text_digits(text: &str) -> Option<(u32, i32)> {
 
 /// The fewest significant digits (1..=17) that reproduce `v` exactly when
 /// printed in scientific notation and parsed back, with the decimal exponent
-/// of that printing; `None` for zero and non-finite values. Rust's `{:e}`
-/// prints the shortest text that reads back as `v` (the closest of the
-/// shortest), which is that printing: one formatting, on the stack.
+/// of that printing; `None` for zero and non-finite values. Counted on the
+/// shortest text that reads back as `v` (Ryū's, on the stack; the same
+/// digits as Rust's `{:e}`, which is unique in length and, being the
+/// closest of the shortest, in its leading digit's place).
 pub fn written_digits(v: f64) -> Option<(u32, i32)> {
-    use std::io::Write;
     if v == 0.0 || !v.is_finite() {
         return None;
     }
-    let mut buf = [0u8; 40];
-    let len = {
-        let mut cursor = std::io::Cursor::new(&mut buf[..]);
-        write!(cursor, "{:e}", v.abs()).ok()?;
-        cursor.position() as usize
-    };
-    let text = std::str::from_utf8(&buf[..len]).ok()?;
-    let (mantissa, exponent) = text.split_once('e')?;
-    let digits = mantissa.bytes().filter(u8::is_ascii_digit).count() as u32;
-    Some((digits, exponent.parse().ok()?))
+    let mut buf = ryu::Buffer::new();
+    counted_digits(buf.format_finite(v.abs()))
 }
 
 /// How the eight real numbers of a `measurements.csv` row (formats.md
@@ -261,6 +257,43 @@ mod tests {
         assert_eq!(written_digits(-4.5e-9), Some((2, -9)));
         assert_eq!(written_digits(1.0), Some((1, 0)));
         assert_eq!(written_digits(0.0), None);
+    }
+
+    /// The digits counted on Ryū's text are those of Rust's own shortest
+    /// `{:e}` printing, at every magnitude and digit count.
+    #[test]
+    fn written_digits_are_those_of_the_shortest_printing() {
+        let std_digits = |v: f64| {
+            let text = format!("{:e}", v.abs());
+            let (mantissa, exponent) = text.split_once('e').unwrap();
+            let digits = mantissa.bytes().filter(u8::is_ascii_digit).count() as u32;
+            (digits, exponent.parse::<i32>().unwrap())
+        };
+        let mut x = 0.123_456_789_012_345_67_f64;
+        for k in 0..20_000 {
+            let scale = 10f64.powi(k % 600 - 300);
+            for v in [
+                x * scale,
+                -x * scale,
+                round_to_digits(x * scale, 1 + k as u32 % 17, DigitsMode::Round),
+            ] {
+                if v != 0.0 && v.is_finite() {
+                    assert_eq!(written_digits(v), Some(std_digits(v)), "{v:e}");
+                }
+            }
+            x = (x * 7.389_056_098_930_65 + 0.318_309_886) % 1.0 + 1e-3;
+        }
+        for v in [
+            1.0,
+            9.999_999_999_999_999,
+            1e16,
+            123.0,
+            5e-324,
+            f64::MAX,
+            0.1 + 0.2,
+        ] {
+            assert_eq!(written_digits(v), Some(std_digits(v)), "{v:e}");
+        }
     }
 
     #[test]

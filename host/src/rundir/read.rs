@@ -45,21 +45,8 @@ impl RunDir {
                 },
             })
             .collect();
-        let run = RunDir {
-            measurements: m_rows
-                .iter()
-                .map(|r| {
-                    let v = &r.values;
-                    Measurement {
-                        speed_hz: r.speed_hz,
-                        bearing: r.bearing.clone(),
-                        rel: [Complex::new(v[0], v[1]), Complex::new(v[2], v[3])],
-                        ped: [Complex::new(v[4], v[5]), Complex::new(v[6], v[7])],
-                        noise_sd: r.noise_sd,
-                        written: Some(r.written),
-                    }
-                })
-                .collect(),
+        let mut run = RunDir {
+            measurements: Vec::new(),
             bearings,
             truth: None,
         };
@@ -93,6 +80,21 @@ impl RunDir {
                 });
             }
         }
+
+        run.measurements = m_rows
+            .into_iter()
+            .map(|r| {
+                let v = &r.values;
+                Measurement {
+                    speed_hz: r.speed_hz,
+                    bearing: r.bearing,
+                    rel: [Complex::new(v[0], v[1]), Complex::new(v[2], v[3])],
+                    ped: [Complex::new(v[4], v[5]), Complex::new(v[6], v[7])],
+                    noise_sd: r.noise_sd,
+                    written: Some(r.written),
+                }
+            })
+            .collect();
 
         let truth = match crate::input_file::read_to_string(&t_path) {
             Ok(text) => {
@@ -175,18 +177,14 @@ fn read_table(
             message: e.to_string(),
         },
     };
-    let mut records = reader.records();
-
     // Header.
-    let header = match records.next() {
-        None => {
-            return Err(RunDirError::MissingHeader {
-                file: file(),
-                expected,
-            })
-        }
-        Some(r) => r.map_err(csv_error)?,
-    };
+    let mut header = csv::StringRecord::new();
+    if !reader.read_record(&mut header).map_err(csv_error)? {
+        return Err(RunDirError::MissingHeader {
+            file: file(),
+            expected,
+        });
+    }
     let header_line = header.position().map_or(1, csv::Position::line);
     if header
         .iter()
@@ -254,9 +252,13 @@ fn read_table(
     let width = header.len();
 
     let mut rows = Vec::new();
-    let mut seen: HashMap<(u64, String), u64> = HashMap::new();
-    for record in records {
-        let record = record.map_err(csv_error)?;
+    // (speed bits, bearing index in `names`) → first line: one allocation
+    // per bearing name, not per row.
+    let mut names: Vec<String> = Vec::new();
+    let mut seen: HashMap<(u64, usize), u64> = HashMap::new();
+    // One record, reused for every line.
+    let mut record = csv::StringRecord::new();
+    while reader.read_record(&mut record).map_err(csv_error)? {
         let line = record.position().map_or(0, csv::Position::line);
         if record.len() < width {
             let column = record.len() + 1;
@@ -326,7 +328,12 @@ fn read_table(
                 column: index[1] + 1,
             });
         }
-        if let Err(reason) = crate::names::check("bearing", bearing) {
+        let known = names.iter().any(|n| n == bearing);
+        if let Err(reason) = if known {
+            Ok(())
+        } else {
+            crate::names::check("bearing", bearing)
+        } {
             return Err(RunDirError::BadBearingName {
                 reason,
                 file: file(),
@@ -363,7 +370,14 @@ fn read_table(
             _ => None,
         };
         // -0.0 and 0.0 are the same speed.
-        let key = ((speed_hz + 0.0).to_bits(), bearing.to_string());
+        let name = match names.iter().position(|n| n == bearing) {
+            Some(i) => i,
+            None => {
+                names.push(bearing.to_string());
+                names.len() - 1
+            }
+        };
+        let key = ((speed_hz + 0.0).to_bits(), name);
         if let Some(&first_line) = seen.get(&key) {
             return Err(RunDirError::Duplicate {
                 file: file(),
