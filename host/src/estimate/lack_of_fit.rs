@@ -33,8 +33,8 @@ use super::noise::NoiseSource;
 use super::Observation;
 use nalgebra::DMatrix;
 use plinth_shared::regression::PARAMETERS;
-use serde::{Deserialize, Serialize};
 use rand::{rngs::StdRng, seq::SliceRandom, SeedableRng};
+use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Highest degree of the smooth residual basis (Legendre polynomials in
@@ -159,7 +159,9 @@ pub fn structure(speeds_hz: &[f64], whitened: &[[f64; 4]]) -> Option<Structure> 
     let mut null = Vec::with_capacity(PERMUTATIONS);
     for _ in 0..PERMUTATIONS {
         shuffled.shuffle(&mut rng);
-        null.push(share(&mut shuffled.iter().flat_map(|b| w[b.clone()].iter())));
+        null.push(share(
+            &mut shuffled.iter().flat_map(|b| w[b.clone()].iter()),
+        ));
     }
     let above = null.iter().filter(|&&v| v >= explained).count();
     null.sort_by(f64::total_cmp);

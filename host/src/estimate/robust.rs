@@ -176,7 +176,13 @@ pub fn outlier_refit(
     // Judged against the refit, with the scale of the speeds it kept.
     let d_all = distances(obs, &refit.theta, refit.equation_var)?;
     let kept_only: Vec<f64> = (0..n)
-        .map(|i| if flagged.contains(&i) { f64::NAN } else { d_all[i] })
+        .map(|i| {
+            if flagged.contains(&i) {
+                f64::NAN
+            } else {
+                d_all[i]
+            }
+        })
         .collect();
     let jumps = jump_speeds(obs);
     let confirmed: Vec<usize> = beyond(&d_all, &scale(&kept_only), n)

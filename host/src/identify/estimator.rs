@@ -273,8 +273,10 @@ pub fn fit_ml(
         });
     }
     fit.warnings.extend(extra);
-    fit.warnings
-        .extend(super::trust::bad_speeds(observations, &mut outlier_speeds_hz));
+    fit.warnings.extend(super::trust::bad_speeds(
+        observations,
+        &mut outlier_speeds_hz,
+    ));
     super::physical::check_finite(&fit)?;
     fit.warnings.extend(super::physical::violations(&fit));
     fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
@@ -339,7 +341,6 @@ pub(crate) fn report(
         outlier_speeds_hz: Vec::new(),
     }
 }
-
 
 /// The noise report of an OLS fit: χ² of the OLS estimate under the noise model.
 pub fn ols_noise_report(
