@@ -154,7 +154,7 @@ pub fn structure(speeds_hz: &[f64], whitened: &[[f64; 4]]) -> Option<Structure> 
         .step_by(BLOCK)
         .map(|a| a..(a + BLOCK).min(n))
         .collect();
-    let mut rng = StdRng::seed_from_u64(0x1a7c_0f_f17);
+    let mut rng = StdRng::seed_from_u64(0x1a7c_0ff1);
     let mut shuffled = blocks.clone();
     let mut null = Vec::with_capacity(PERMUTATIONS);
     for _ in 0..PERMUTATIONS {
