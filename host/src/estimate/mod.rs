@@ -9,9 +9,11 @@
 
 pub mod base;
 pub mod gauss_helmert;
+pub mod lack_of_fit;
 pub mod levenberg;
 pub mod ml;
 pub mod noise;
+pub mod robust;
 
 use num_complex::Complex;
 use plinth_shared::phasor::{omega_from_hz, Phasor2};

@@ -5,8 +5,10 @@
 //! Cramér–Rao bound.
 
 use super::{checks, ols_solution, Options, PedestalFit, PedestalPoint, Warning, WarningKind};
+use crate::estimate::lack_of_fit::{self, LackOfFit};
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::noise::{BearingNoise, NoiseSource, Quantisation, CHANNELS};
+use crate::estimate::robust;
 use crate::estimate::Observation;
 use crate::identify::IdentifyError;
 use plinth_shared::regression::{Parameter, PARAMETERS};
@@ -72,6 +74,14 @@ pub struct NoiseReport {
     /// (a model discrepancy; 0 when the noise explains the residuals).
     #[serde(default)]
     pub equation_error_sd: f64,
+    /// The lack-of-fit evidence ([`crate::estimate::lack_of_fit`]) when the
+    /// noise level was not known beforehand or the fit exceeded it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lack_of_fit: Option<LackOfFit>,
+    /// Speeds [Hz] left out of the fit as outliers or whose phasors look
+    /// flipped by 180° ([`crate::estimate::robust`]), ascending.
+    #[serde(default)]
+    pub outlier_speeds_hz: Vec<f64>,
 }
 
 /// The paper's OLS next to the ML estimate (`identify --compare-ols`).
@@ -125,6 +135,15 @@ pub fn fit_ml(
         if p < CHI2_P_THRESHOLD && f.chi2_per_dof() > 1.0 && noise.use_scatter() {
             obs = with_noise(noise);
             attempt = ml::fit(&obs, &columns, &f.theta);
+        }
+    }
+    let mut outlier_speeds_hz = Vec::new();
+    if let Ok(f) = &attempt {
+        if let Some(r) = robust::outlier_refit(&obs, f, &columns) {
+            // Confirmed outlier speeds are left out of everything that follows.
+            obs = r.kept;
+            outlier_speeds_hz = r.outlier_speeds_hz;
+            attempt = Ok(r.fit);
         }
     }
     let ml_fit = match attempt {
@@ -254,16 +273,27 @@ pub fn fit_ml(
         });
     }
     fit.warnings.extend(extra);
+    fit.warnings.extend(super::trust::bad_speeds(
+        observations,
+        &mut outlier_speeds_hz,
+    ));
     super::physical::check_finite(&fit)?;
     fit.warnings.extend(super::physical::violations(&fit));
     fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
     if options.compare_ols {
         fit.ols = Some(compare(&ols_fit, &ml_fit, &obs, &columns, variance_scale));
     }
-    Ok((
-        fit,
-        report(noise, chi2, dof, variance_scale, ml_fit.equation_var.sqrt()),
-    ))
+    let mut report = report(noise, chi2, dof, variance_scale, ml_fit.equation_var.sqrt());
+    report.outlier_speeds_hz = outlier_speeds_hz;
+    report.lack_of_fit = lack_of_fit::assess(
+        &obs,
+        &ml_fit.theta,
+        noise.source,
+        chi2,
+        dof,
+        CHI2_P_THRESHOLD,
+    );
+    Ok((fit, report))
 }
 
 /// `covariance` × `scale` when every entry is finite (the covariance a
@@ -307,6 +337,8 @@ pub(crate) fn report(
         scale_estimated: noise.source.scale_estimated(),
         variance_scale,
         equation_error_sd,
+        lack_of_fit: None,
+        outlier_speeds_hz: Vec::new(),
     }
 }
 

@@ -27,6 +27,7 @@ pub mod on_base;
 pub mod physical;
 pub mod plausibility;
 pub mod synthetic;
+pub mod trust;
 
 pub use estimator::{Estimator, NoiseReport, OlsComparison};
 pub use model::{mode_label, mode_name, parse_mode, Model, ModelError};
@@ -164,9 +165,19 @@ pub enum WarningKind {
     /// The data fit a passive pedestal to the noise floor only with a
     /// convention mistake undone ([`convention`]). Fit not trusted.
     SuspectedConventionError,
+    /// The residuals hold model error, not noise ([`trust`]): structured
+    /// across speed or far above the noise measured without the model.
+    /// Fit not trusted.
+    LackOfFit,
     /// Numbers no pedestal has, or a unit mismatch between the channels
     /// ([`plausibility`]). Fit not trusted.
     Implausible,
+    /// Speeds whose residuals the noise cannot explain were left out of the
+    /// fit ([`crate::estimate::robust`]). Informative.
+    OutlierSpeeds,
+    /// Every channel of the bearing looks flipped by 180° at some speeds: a
+    /// likely keyphasor fault ([`crate::estimate::robust`]). Informative.
+    KeyphasorFlip,
 }
 
 impl WarningKind {
@@ -180,6 +191,7 @@ impl WarningKind {
                 | WarningKind::Undetermined
                 | WarningKind::PhysicallyImpossible
                 | WarningKind::SuspectedConventionError
+                | WarningKind::LackOfFit
                 | WarningKind::Implausible
         )
     }
@@ -526,8 +538,9 @@ pub fn observations(
 /// (default: maximum likelihood with the noise model of
 /// [`crate::estimate::noise`]); every pedestal is checked for the usual
 /// convention mistakes ([`convention`]: eight refits of the run), the run's
-/// dampings judged as one family ([`physical::recheck_run`]) and the values
-/// checked for plausibility ([`plausibility`]).
+/// dampings judged as one family ([`physical::recheck_run`]), each bearing's
+/// lack of fit judged ([`trust`]) and the values checked for plausibility
+/// ([`plausibility`]).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
     let noise = RunNoise::estimate(run, options.quantisation);
     let mut identification = fit_run_with(run, &noise, options)?;
@@ -535,6 +548,7 @@ pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, I
     convention::mark(&mut identification, &findings);
     crate::present::modal::attach(&mut identification);
     physical::recheck_run(&mut identification);
+    trust::mark_lack_of_fit(&mut identification);
     plausibility::mark(run, &mut identification);
     Ok(identification)
 }

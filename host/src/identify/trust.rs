@@ -1,0 +1,157 @@
+//! Run-level trust verdicts on identified pedestals: lack of fit
+//! ([`crate::estimate::lack_of_fit`]) with a family-wise false-alarm rate
+//! over the run's bearings, and the warnings that name bad speeds
+//! ([`crate::estimate::robust`]).
+//!
+//! A bearing is judged when its fit could have absorbed model error as
+//! noise: its noise level came from the scatter, or its χ² exceeded the
+//! known level (digits, noise columns). It is not trusted when
+//! - **level**: with noise columns, χ² is beyond them (upper tail below
+//!   [`FAMILY_FALSE_ALARM`]/T, T the bearings judged: Bonferroni); with a
+//!   scatter or digits level, χ²/dof exceeds [`SCATTER_LEVEL_TOLERANCE`]
+//!   (the same factor beyond which the estimator models the excess as an
+//!   equation error): measured on clean data 0.6-1.2;
+//! - **structure**: the share of its whitened residuals a smooth curve in
+//!   speed explains is beyond its block-shuffle null at
+//!   [`FAMILY_FALSE_ALARM`]/T, and the fit leaves more than
+//!   [`STRUCTURE_LEVEL`] times its measured level (clean data: below 0.75
+//!   in every run measured, the scatter over-estimating the noise; the
+//!   block shuffle is only approximately the null of correlated residuals,
+//!   so structure alone, inside the noise, is not taken for model error).
+//!
+//! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
+//! machines, detections on a pedestal with its own sub-base): docs/trust.md.
+
+use super::estimator::SCATTER_LEVEL_TOLERANCE;
+use super::{Identification, Warning, WarningKind};
+use crate::estimate::noise::NoiseSource;
+use crate::estimate::robust;
+use crate::estimate::Observation;
+
+/// Family-wise false-alarm rate of the lack-of-fit rule per run [-].
+pub const FAMILY_FALSE_ALARM: f64 = 0.01;
+
+/// χ²/dof against the measured level above which structure in the
+/// residuals is taken for model error [-].
+pub const STRUCTURE_LEVEL: f64 = 1.0;
+
+/// Adds a [`WarningKind::LackOfFit`] warning to every pedestal whose fit
+/// shows model error (module docs), and updates `trusted`.
+pub fn mark_lack_of_fit(identification: &mut Identification) {
+    let judged = identification
+        .noise
+        .values()
+        .filter(|n| n.lack_of_fit.is_some())
+        .count();
+    let alpha = FAMILY_FALSE_ALARM / judged.max(1) as f64;
+    let levels: Vec<(String, f64)> = identification
+        .noise
+        .iter()
+        .filter(|(_, n)| n.dof > 0)
+        .map(|(b, n)| (b.clone(), n.chi2 / n.dof as f64))
+        .collect();
+    for p in &mut identification.pedestals {
+        let Some(l) = identification
+            .noise
+            .get(&p.bearing)
+            .and_then(|n| n.lack_of_fit)
+        else {
+            continue;
+        };
+        let mut reasons = Vec::new();
+        match l.level_from {
+            NoiseSource::Columns if l.level_p < alpha => reasons.push(format!(
+                "χ²/dof = {:.3} against its noise columns (p = {:.1e}, limit {alpha:.1e})",
+                l.level_ratio, l.level_p
+            )),
+            NoiseSource::Scatter | NoiseSource::Digits
+                if l.level_ratio > SCATTER_LEVEL_TOLERANCE =>
+            {
+                reasons.push(format!(
+                    "its fit leaves {:.3} times the variance its {} allow (the scatter between neighbouring speeds, floored by the digits, measured without the model; at most {SCATTER_LEVEL_TOLERANCE} for noise)",
+                    l.level_ratio,
+                    l.level_from.name()
+                ))
+            }
+            _ => {}
+        }
+        if let Some(s) = l.structure {
+            if s.p_value < alpha && l.level_ratio > STRUCTURE_LEVEL {
+                reasons.push(format!(
+                    "its residuals ({:.3} times its measured level) follow a smooth curve in speed as model error does and noise does not (a degree-{} polynomial explains {:.1} % of them against {:.1} % with blocks of speeds shuffled; p = {:.1e}, limit {alpha:.1e})",
+                    l.level_ratio,
+                    s.degree,
+                    100.0 * s.explained,
+                    100.0 * s.explained_null_median,
+                    s.p_value
+                ));
+            }
+        }
+        if reasons.is_empty() {
+            continue;
+        }
+        let others: Vec<String> = levels
+            .iter()
+            .filter(|(b, _)| *b != p.bearing)
+            .map(|(b, r)| format!("{b} {r:.3}"))
+            .collect();
+        let context = if others.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; χ²/dof of the other bearings against their own noise: {}",
+                others.join(", ")
+            )
+        };
+        p.warnings.push(Warning {
+            kind: WarningKind::LackOfFit,
+            message: format!(
+                "lack of fit: {}{context}. The one-mass pedestal model does not describe this bearing's data; its ± count noise only and exclude this model error: try `plinth diagnose`",
+                reasons.join("; ")
+            ),
+        });
+        p.trusted = false;
+    }
+}
+
+/// The warnings naming one bearing's bad speeds: the outlier speeds
+/// `outliers` [Hz] left out of its fit ([`robust::outlier_refit`]) and the
+/// speeds at which every channel of its `observations` looks flipped by
+/// 180° ([`robust::keyphasor_flips`]), which are added to `outliers`
+/// (ascending, no repeats).
+pub fn bad_speeds(observations: &[Observation], outliers: &mut Vec<f64>) -> Vec<Warning> {
+    let mut warnings = Vec::new();
+    if !outliers.is_empty() {
+        warnings.push(Warning {
+            kind: WarningKind::OutlierSpeeds,
+            message: format!(
+                "the residuals at {} Hz are beyond what the noise allows (χ²(4) limit at {:.2} % per fit, Bonferroni over the speeds), also against the fit without them: those speeds are left out of the fit",
+                hz_list(outliers),
+                100.0 * robust::OUTLIER_FAMILY_RATE
+            ),
+        });
+    }
+    let flips = robust::keyphasor_flips(observations);
+    if !flips.is_empty() {
+        warnings.push(Warning {
+            kind: WarningKind::KeyphasorFlip,
+            message: format!(
+                "every channel (rel and ped, y and z) is flipped by 180° against its neighbouring speeds at {} Hz: a likely keyphasor fault (the once-per-revolution mark triggered half a revolution off); the pedestal equation is blind to it (rel and ped flip together), but check those speeds",
+                hz_list(&flips)
+            ),
+        });
+        outliers.extend(flips);
+        outliers.sort_by(f64::total_cmp);
+        outliers.dedup();
+    }
+    warnings
+}
+
+/// Speeds [Hz] as a comma-separated list.
+fn hz_list(speeds_hz: &[f64]) -> String {
+    speeds_hz
+        .iter()
+        .map(|s| format!("{s}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
