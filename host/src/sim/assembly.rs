@@ -457,21 +457,77 @@ impl Assembly {
         (k, m)
     }
 
-    /// Solves A(Ω)·x = f at spin Ω [rad/s] (the speed `a` was filled at):
-    /// the factored banded part `a` and the bases;
+    /// Solves A(Ω)·x = f at spin Ω [rad/s] with bearing coefficients
+    /// `bearings` (the speed `a` was filled and factored at): the factored
+    /// banded part `a`, each banded solve refined to the exact answer of
+    /// the stored matrix (`super::refine`), and the bases;
     /// `f` (length `n_dof`) is overwritten by x.
-    pub fn solve(&self, a: &BandMatrix, omega: f64, f: &mut [C64]) -> Result<(), BandError> {
+    pub fn solve(
+        &self,
+        a: &BandMatrix,
+        omega: f64,
+        bearings: &[BearingCoefficients<f64>],
+        f: &mut [C64],
+    ) -> Result<(), BandError> {
         if f.len() != self.n_dof {
             return Err(BandError::Dimension {
                 expected: self.n_dof,
                 got: f.len(),
             });
         }
+        let extras = self.extras(omega, bearings);
         self.bases.solve(
             omega,
             f,
-            |r| a.solve_in_place(r),
+            |r| {
+                super::refine::solve_refined(a, r, |x, b, res| {
+                    self.residual(omega, &extras, x, b, res)
+                })
+                .map(|_| ())
+            },
             |column| BandError::Singular { column },
         )
+    }
+
+    /// r = b − A0(Ω)·x for the banded part A0 at spin Ω [rad/s] with its
+    /// `extras` ([`Assembly::extras`]): the stiffness K, whose large
+    /// entries (κGA/h on fine meshes) cancel, products and sums
+    /// error-free; −Ω²M, iΩ²G and the extras, which do not cancel, in
+    /// plain double.
+    fn residual(
+        &self,
+        omega: f64,
+        extras: &[(usize, C64)],
+        x: &[C64],
+        b: &[C64],
+        r: &mut [C64],
+    ) {
+        let (n, kl, ku, ldab) = (self.shape.n, self.shape.kl, self.shape.ku, self.shape.ldab());
+        let w2 = omega * omega;
+        let mut acc = super::refine::Accumulator::new(b);
+        for (c, &xc) in x.iter().enumerate().take(n) {
+            if xc.re == 0.0 && xc.im == 0.0 {
+                continue;
+            }
+            let xs = super::refine::split_complex(xc);
+            for (d, &[k, m, g]) in self.kmg.column(c).iter().enumerate() {
+                // Band entry d of column c is row c + d − ku.
+                let Some(row) = (c + d).checked_sub(ku).filter(|&r| r < n) else {
+                    continue;
+                };
+                if k != 0.0 {
+                    acc.sub_exact(row, k, xc, xs);
+                }
+                if m != 0.0 || g != 0.0 {
+                    acc.sub(row, C64::new(-w2 * m, w2 * g) * xc);
+                }
+            }
+        }
+        for &(i, v) in extras {
+            let c = i / ldab;
+            let row = (i % ldab + c) - (kl + ku);
+            acc.sub(row, v * x[c]);
+        }
+        acc.into_rounded(r);
     }
 }
