@@ -73,6 +73,28 @@ fn ten_thousand_elements_match_the_converged_answer() {
     );
 }
 
+/// 100 000 elements (the bench machine's overhangs hold 5 000 elements
+/// each, its bays 9 000), at 8 speeds to stay fast: within 1e-6 of the
+/// 1 000-element answer (the unrefined solve left 4.0e-4) and within 2e-7
+/// of the 10 000-element one. scripts/bench-fine-mesh.sh runs the full
+/// sweep through `plinth simulate`.
+#[test]
+fn hundred_thousand_elements_match_the_converged_answer() {
+    let speeds: Vec<f64> = (25..=200).step_by(25).map(f64::from).collect();
+    let reference = unbalance_response(&bench_machine(1000), &speeds, &EffectSet::none()).unwrap();
+    let ten = unbalance_response(&bench_machine(10_000), &speeds, &EffectSet::none()).unwrap();
+    let fine = drift(100_000, &reference, &speeds);
+    let against_ten = drift(100_000, &ten, &speeds);
+    eprintln!(
+        "100 000 elements: {fine:.2e} of the channel peak from 1 000, {against_ten:.2e} from 10 000"
+    );
+    assert!(fine < 1e-6, "100 000 elements: {fine:.2e}");
+    assert!(
+        against_ten < 2e-7,
+        "100 000 against 10 000 elements: {against_ten:.2e}"
+    );
+}
+
 /// One section takes any number of elements the memory allows; 10 million
 /// are refused by the estimate before the shaft is built, naming the key.
 #[test]
