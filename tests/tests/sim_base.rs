@@ -8,8 +8,8 @@
 use nalgebra::{Matrix3, Vector3};
 use num_complex::Complex;
 use plinth::sim::{unbalance_response, EffectSet, Machine, UnbalanceSolver};
-use std::f64::consts::TAU;
 use plinth_tests::ross::{channel_error, reference_dir, RossCase};
+use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 type C = Complex<f64>;

@@ -10,8 +10,8 @@ use plinth::effects::EffectKind;
 use plinth::sim::cli::{simulate, SimulateArgs};
 use plinth::sim::oil_film::OilFilmBearing;
 use plinth::sim::{unbalance_response, BearingModel, EffectSet, Machine, UnbalanceSolver};
-use std::f64::consts::TAU;
 use plinth_tests::ross::{channel_error, reference_dir, RossCase};
+use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 type C = Complex<f64>;

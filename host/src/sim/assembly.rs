@@ -515,15 +515,13 @@ impl Assembly {
     /// ([`StiffnessForm::forces`]: on a fine mesh the matrix entries κGA/h
     /// are huge and cancel, the deformation forces do not), −Ω²M, iΩ²G,
     /// the pedestals' stiffness and the extras from their entries.
-    fn residual(
-        &self,
-        omega: f64,
-        extras: &[(usize, C64)],
-        x: &[C64],
-        b: &[C64],
-        r: &mut [C64],
-    ) {
-        let (n, kl, ku, ldab) = (self.shape.n, self.shape.kl, self.shape.ku, self.shape.ldab());
+    fn residual(&self, omega: f64, extras: &[(usize, C64)], x: &[C64], b: &[C64], r: &mut [C64]) {
+        let (n, kl, ku, ldab) = (
+            self.shape.n,
+            self.shape.kl,
+            self.shape.ku,
+            self.shape.ldab(),
+        );
         let w2 = omega * omega;
         r.copy_from_slice(b);
         // Band entry d of column c is row c + d − ku.
@@ -540,10 +538,10 @@ impl Assembly {
         }
         // K in the table is the shaft's (rebuilt below) and the pedestals'.
         for &p in self.pedestal_dof.iter().flatten() {
-            for c in p..p + 2 {
+            for (c, &xc) in x.iter().enumerate().skip(p).take(2) {
                 for (d, &[k, _, _]) in self.kmg.column(c).iter().enumerate() {
                     if let (Some(i), true) = (row(c, d), k != 0.0) {
-                        r[i] -= x[c] * k;
+                        r[i] -= xc * k;
                     }
                 }
             }

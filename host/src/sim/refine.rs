@@ -97,7 +97,11 @@ mod tests {
         let exact = |i: usize| 1.0 / k0 + i as f64 / k;
         let mut plain = b.clone();
         a.solve_in_place(&mut plain).unwrap();
-        let rel = |x: &[C64]| (0..n).map(|i| (x[i].re / exact(i) - 1.0).abs()).fold(0.0, f64::max);
+        let rel = |x: &[C64]| {
+            (0..n)
+                .map(|i| (x[i].re / exact(i) - 1.0).abs())
+                .fold(0.0, f64::max)
+        };
         let plain_err = rel(&plain);
         // The residual from the spring forces k·(x[i+1] − x[i]), which do
         // not cancel (the matrix rows k·(2x[i] − x[i−1] − x[i+1]) do).

@@ -281,17 +281,33 @@ mod tests {
         for l in [0.3, 1.2e-5] {
             let e = steel(l, 0.1, 0.02);
             let k = e.stiffness_matrix();
-            let q: [C; 8] =
-                std::array::from_fn(|i| C::new(1.0 + 0.37 * i as f64, -0.5 + 0.11 * (i * i) as f64));
+            let q: [C; 8] = std::array::from_fn(|i| {
+                C::new(1.0 + 0.37 * i as f64, -0.5 + 0.11 * (i * i) as f64)
+            });
             let f = e.stiffness_form().forces(&q);
             let scale = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
             for i in 0..8 {
                 let want: C = (0..8).map(|j| q[j] * k[i][j]).sum();
-                assert!((f[i] - want).norm() <= 1e-12 * scale * 10.0, "l={l} row {i}");
+                assert!(
+                    (f[i] - want).norm() <= 1e-12 * scale * 10.0,
+                    "l={l} row {i}"
+                );
             }
-            let rigid = [C::new(0.7, 0.1), C::new(-0.2, 0.3), C::new(0.0, 0.0), C::new(0.0, 0.0),
-                C::new(0.7, 0.1), C::new(-0.2, 0.3), C::new(0.0, 0.0), C::new(0.0, 0.0)];
-            assert!(e.stiffness_form().forces(&rigid).iter().all(|v| v.norm() == 0.0));
+            let rigid = [
+                C::new(0.7, 0.1),
+                C::new(-0.2, 0.3),
+                C::new(0.0, 0.0),
+                C::new(0.0, 0.0),
+                C::new(0.7, 0.1),
+                C::new(-0.2, 0.3),
+                C::new(0.0, 0.0),
+                C::new(0.0, 0.0),
+            ];
+            assert!(e
+                .stiffness_form()
+                .forces(&rigid)
+                .iter()
+                .all(|v| v.norm() == 0.0));
         }
     }
 
