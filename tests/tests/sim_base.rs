@@ -8,34 +8,11 @@
 use nalgebra::{Matrix3, Vector3};
 use num_complex::Complex;
 use plinth::sim::{unbalance_response, EffectSet, Machine, UnbalanceSolver};
+use plinth_tests::ross::{channel_error, reference_dir, RossCase};
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 type C = Complex<f64>;
-
-fn reference_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/ross")
-}
-
-fn phasors(v: &serde_json::Value) -> Vec<C> {
-    let re = v["re"].as_array().unwrap();
-    let im = v["im"].as_array().unwrap();
-    re.iter()
-        .zip(im)
-        .map(|(a, b)| C::new(a.as_f64().unwrap(), b.as_f64().unwrap()))
-        .collect()
-}
-
-/// Largest error of `got` against `want` relative to the channel's largest
-/// magnitude over speed.
-fn channel_error(got: &[C], want: &[C]) -> f64 {
-    let max = want.iter().map(|w| w.norm()).fold(0.0, f64::max);
-    assert!(max > 0.0, "reference channel is all zero");
-    got.iter()
-        .zip(want)
-        .map(|(g, w)| (g - w).norm() / max)
-        .fold(0.0, f64::max)
-}
 
 /// Base DOF phasors (y, z) of every base at every speed, from the solver.
 fn base_motion(machine: &Machine, speeds: &[f64]) -> Vec<Vec<[C; 2]>> {
@@ -59,50 +36,15 @@ fn base_motion(machine: &Machine, speeds: &[f64]) -> Vec<Vec<[C; 2]>> {
 
 #[test]
 fn machine_c_two_bases_matches_ross() {
-    let dir = reference_dir();
-    let text = std::fs::read_to_string(dir.join("machine-c.json")).unwrap();
-    let r: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let machine = Machine::from_toml_path(dir.join("machine-c.toml")).unwrap();
+    let case = RossCase::load("machine-c");
+    let (machine, speeds) = (&case.machine, &case.speeds_hz);
     assert_eq!(machine.bases.len(), 2);
-    let speeds: Vec<f64> = r["speeds_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    let resp = unbalance_response(&machine, &speeds, &EffectSet::none()).unwrap();
-    let mut worst: f64 = 0.0;
-    for (b, bname) in resp.bearing_names.iter().enumerate() {
-        for (ch, pick) in [("rel_y", 0usize), ("rel_z", 1), ("ped_y", 2), ("ped_z", 3)] {
-            let want = phasors(&r["bearings"][bname][ch]);
-            let got: Vec<C> = resp
-                .bearings
-                .iter()
-                .map(|row| {
-                    if pick < 2 {
-                        row[b].rel[pick]
-                    } else {
-                        row[b].ped[pick - 2]
-                    }
-                })
-                .collect();
-            let err = channel_error(&got, &want);
-            assert!(
-                err < 1e-6,
-                "{bname} {ch}: error {err:.2e} of the channel maximum"
-            );
-            worst = worst.max(err);
-        }
-    }
-    let motion = base_motion(&machine, &speeds);
+    let resp = unbalance_response(machine, speeds, &EffectSet::none()).unwrap();
+    let mut worst = case.bearing_error(&resp, 1e-6);
+    let motion = base_motion(machine, speeds);
     for (j, base) in machine.bases.iter().enumerate() {
-        for (d, axis) in ["y", "z"].iter().enumerate() {
-            let want = phasors(&r["bases"][&base.name][axis]);
-            let got: Vec<C> = motion.iter().map(|m| m[j][d]).collect();
-            let err = channel_error(&got, &want);
-            assert!(err < 1e-6, "base {} {axis}: error {err:.2e}", base.name);
-            worst = worst.max(err);
-        }
+        let got: Vec<[C; 2]> = motion.iter().map(|m| m[j]).collect();
+        worst = worst.max(case.base_error("bases", &base.name, &got, 1e-6));
     }
     eprintln!("machine-c: largest error {worst:.2e} of the channel maximum");
     // truth.json records both bases and who stands on them.

@@ -10,37 +10,14 @@ use plinth::effects::EffectKind;
 use plinth::sim::cli::{simulate, SimulateArgs};
 use plinth::sim::oil_film::OilFilmBearing;
 use plinth::sim::{unbalance_response, BearingModel, EffectSet, Machine, UnbalanceSolver};
+use plinth_tests::ross::{channel_error, reference_dir, RossCase};
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 type C = Complex<f64>;
 
-fn reference_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reference/ross")
-}
-
 fn example(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../examples/{name}"))
-}
-
-fn phasors(v: &serde_json::Value) -> Vec<C> {
-    let re = v["re"].as_array().unwrap();
-    let im = v["im"].as_array().unwrap();
-    re.iter()
-        .zip(im)
-        .map(|(a, b)| C::new(a.as_f64().unwrap(), b.as_f64().unwrap()))
-        .collect()
-}
-
-/// Largest error of `got` against `want` relative to the channel's largest
-/// magnitude over speed.
-fn channel_error(got: &[C], want: &[C]) -> f64 {
-    let max = want.iter().map(|w| w.norm()).fold(0.0, f64::max);
-    assert!(max > 0.0, "reference channel is all zero");
-    got.iter()
-        .zip(want)
-        .map(|(g, w)| (g - w).norm() / max)
-        .fold(0.0, f64::max)
 }
 
 /// The (y, z) phasors of the last base DOFs (the sub-base, when it is the
@@ -62,56 +39,20 @@ fn sub_base_motion(solver: &UnbalanceSolver, speeds: &[f64]) -> Vec<[C; 2]> {
 
 #[test]
 fn machine_d_sub_base_matches_ross() {
-    let dir = reference_dir();
-    let text = std::fs::read_to_string(dir.join("machine-d.json")).unwrap();
-    let r: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let machine = Machine::from_toml_path(dir.join("machine-d.toml")).unwrap();
+    let case = RossCase::load("machine-d");
+    let (machine, speeds) = (&case.machine, &case.speeds_hz);
     assert!(machine.bearings[0].sub_base.is_some());
-    let speeds: Vec<f64> = r["speeds_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    let resp = unbalance_response(&machine, &speeds, &EffectSet::none()).unwrap();
-    let mut worst: f64 = 0.0;
-    for (b, bname) in resp.bearing_names.iter().enumerate() {
-        for (ch, pick) in [("rel_y", 0usize), ("rel_z", 1), ("ped_y", 2), ("ped_z", 3)] {
-            let want = phasors(&r["bearings"][bname][ch]);
-            let got: Vec<C> = resp
-                .bearings
-                .iter()
-                .map(|row| {
-                    if pick < 2 {
-                        row[b].rel[pick]
-                    } else {
-                        row[b].ped[pick - 2]
-                    }
-                })
-                .collect();
-            let err = channel_error(&got, &want);
-            assert!(
-                err < 1e-6,
-                "{bname} {ch}: error {err:.2e} of the channel maximum"
-            );
-            worst = worst.max(err);
-        }
-    }
-    let solver = UnbalanceSolver::new(&machine, &EffectSet::none()).unwrap();
-    let motion = sub_base_motion(&solver, &speeds);
-    for (d, axis) in ["y", "z"].iter().enumerate() {
-        let want = phasors(&r["sub_bases"]["B1"][axis]);
-        let got: Vec<C> = motion.iter().map(|m| m[d]).collect();
-        let err = channel_error(&got, &want);
-        assert!(err < 1e-6, "sub-base {axis}: error {err:.2e}");
-        worst = worst.max(err);
-    }
+    let resp = unbalance_response(machine, speeds, &EffectSet::none()).unwrap();
+    let mut worst = case.bearing_error(&resp, 1e-6);
+    let solver = UnbalanceSolver::new(machine, &EffectSet::none()).unwrap();
+    let motion = sub_base_motion(&solver, speeds);
+    worst = worst.max(case.base_error("sub_bases", "B1", &motion, 1e-6));
     eprintln!("machine-d: largest error {worst:.2e} of the channel maximum");
     // The sub-base matters (the test can fail): without it B1's pedestal
     // moves differently.
     let mut rigid = machine.clone();
     rigid.bearings[0].sub_base = None;
-    let plain = unbalance_response(&rigid, &speeds, &EffectSet::none()).unwrap();
+    let plain = unbalance_response(&rigid, speeds, &EffectSet::none()).unwrap();
     let pick = |r: &plinth::sim::Response| -> Vec<C> {
         r.bearings.iter().map(|row| row[0].ped[0]).collect()
     };

@@ -20,6 +20,7 @@ use super::banded::{BandError, BandMatrix, BandShape, C64};
 use super::base::{BaseBorder, BaseLink};
 use super::machine::Machine;
 use super::pedestal::PedestalDynamics;
+use super::timoshenko::StiffnessForm;
 use plinth_shared::bearing::BearingCoefficients;
 
 /// The assembled model of a machine with given pedestal dynamics.
@@ -45,6 +46,10 @@ pub struct Assembly {
     bearing_idx: Vec<[[[usize; 2]; 2]; 4]>,
     /// Base DOFs (after the banded part) and their links to pedestals.
     pub bases: BaseBorder,
+    /// The distinct shaft-element stiffnesses in deformation form, and which
+    /// one each element (between nodes e and e + 1) is: the residual's K.
+    stiffness_forms: Vec<StiffnessForm>,
+    element_form: Vec<u32>,
 }
 
 /// Index into the fill-free band arrays (`kl + ku + 1` rows per column) of
@@ -314,6 +319,18 @@ impl Assembly {
             links,
             first_dof: n_dof,
         };
+        let mut stiffness_forms = Vec::new();
+        let mut element_form = Vec::with_capacity(nn.saturating_sub(1));
+        let mut seen = std::collections::HashMap::<[u64; 3], u32>::new();
+        for el in machine.elements.iter().take(nn.saturating_sub(1)) {
+            let f = el.stiffness_form();
+            let key = [f.length.to_bits(), f.shear.to_bits(), f.bending.to_bits()];
+            let id = *seen.entry(key).or_insert_with(|| {
+                stiffness_forms.push(f);
+                (stiffness_forms.len() - 1) as u32
+            });
+            element_form.push(id);
+        }
         Ok(Assembly {
             n_dof: n_dof + bases.n_dof(),
             node_dof,
@@ -324,6 +341,8 @@ impl Assembly {
             damping,
             bearing_idx,
             bases,
+            stiffness_forms,
+            element_form,
         })
     }
 
@@ -457,21 +476,88 @@ impl Assembly {
         (k, m)
     }
 
-    /// Solves A(Ω)·x = f at spin Ω [rad/s] (the speed `a` was filled at):
-    /// the factored banded part `a` and the bases;
+    /// Solves A(Ω)·x = f at spin Ω [rad/s] with bearing coefficients
+    /// `bearings` (the speed `a` was filled and factored at): the factored
+    /// banded part `a`, each banded solve refined (`super::refine`) with
+    /// residuals free of cancellation ([`Assembly::residual`]), and the
+    /// bases;
     /// `f` (length `n_dof`) is overwritten by x.
-    pub fn solve(&self, a: &BandMatrix, omega: f64, f: &mut [C64]) -> Result<(), BandError> {
+    pub fn solve(
+        &self,
+        a: &BandMatrix,
+        omega: f64,
+        bearings: &[BearingCoefficients<f64>],
+        f: &mut [C64],
+    ) -> Result<(), BandError> {
         if f.len() != self.n_dof {
             return Err(BandError::Dimension {
                 expected: self.n_dof,
                 got: f.len(),
             });
         }
+        let extras = self.extras(omega, bearings);
         self.bases.solve(
             omega,
             f,
-            |r| a.solve_in_place(r),
+            |r| {
+                super::refine::solve_refined(a, r, |x, b, res| {
+                    self.residual(omega, &extras, x, b, res)
+                })
+                .map(|_| ())
+            },
             |column| BandError::Singular { column },
         )
+    }
+
+    /// r = b − A0(Ω)·x for the banded part A0 at spin Ω [rad/s] with its
+    /// `extras` ([`Assembly::extras`]), without cancellation: the shaft's
+    /// stiffness from each element's deformations
+    /// ([`StiffnessForm::forces`]: on a fine mesh the matrix entries κGA/h
+    /// are huge and cancel, the deformation forces do not), −Ω²M, iΩ²G,
+    /// the pedestals' stiffness and the extras from their entries.
+    fn residual(&self, omega: f64, extras: &[(usize, C64)], x: &[C64], b: &[C64], r: &mut [C64]) {
+        let (n, kl, ku, ldab) = (
+            self.shape.n,
+            self.shape.kl,
+            self.shape.ku,
+            self.shape.ldab(),
+        );
+        let w2 = omega * omega;
+        r.copy_from_slice(b);
+        // Band entry d of column c is row c + d − ku.
+        let row = |c: usize, d: usize| (c + d).checked_sub(ku).filter(|&r| r < n);
+        for (c, &xc) in x.iter().enumerate().take(n) {
+            if xc.re == 0.0 && xc.im == 0.0 {
+                continue;
+            }
+            for (d, &[_, m, g]) in self.kmg.column(c).iter().enumerate() {
+                if let (Some(i), true) = (row(c, d), m != 0.0 || g != 0.0) {
+                    r[i] -= C64::new(-w2 * m, w2 * g) * xc;
+                }
+            }
+        }
+        // K in the table is the shaft's (rebuilt below) and the pedestals'.
+        for &p in self.pedestal_dof.iter().flatten() {
+            for (c, &xc) in x.iter().enumerate().skip(p).take(2) {
+                for (d, &[k, _, _]) in self.kmg.column(c).iter().enumerate() {
+                    if let (Some(i), true) = (row(c, d), k != 0.0) {
+                        r[i] -= xc * k;
+                    }
+                }
+            }
+        }
+        for (e, &form) in self.element_form.iter().enumerate() {
+            let (d0, d1) = (self.node_dof[e], self.node_dof[e + 1]);
+            let q = std::array::from_fn(|i| if i < 4 { x[d0 + i] } else { x[d1 + i - 4] });
+            let f = self.stiffness_forms[form as usize].forces(&q);
+            for i in 0..4 {
+                r[d0 + i] -= f[i];
+                r[d1 + i] -= f[i + 4];
+            }
+        }
+        for &(i, v) in extras {
+            let c = i / ldab;
+            r[(i % ldab + c) - (kl + ku)] -= v * x[c];
+        }
     }
 }

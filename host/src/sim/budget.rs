@@ -55,9 +55,11 @@ pub fn model_bytes(
     let rows = (speeds as u64)
         .saturating_mul(bearings)
         .saturating_mul(per_row);
+    // Solution, load and the refinement's right-hand side and residual
+    // (complex, per DOF); node data and each element's stiffness form.
     let vectors = n_dof
-        .saturating_mul(16 * 4)
-        .saturating_add(nodes.saturating_mul(64));
+        .saturating_mul(16 * 6)
+        .saturating_add(nodes.saturating_mul(64 + 4));
     band.saturating_add(rows)
         .saturating_add(vectors)
         .saturating_add(16 << 20)

@@ -32,6 +32,7 @@ pub mod modal;
 pub mod oil_film;
 pub mod pedestal;
 pub mod predict;
+pub mod refine;
 pub mod response;
 pub mod signals;
 pub mod static_load;

@@ -212,7 +212,9 @@ impl UnbalanceSolver {
             x[d] = *u * w2;
             x[d + 1] = *u * w2 * C64::new(0.0, -1.0);
         }
-        self.assembly.solve(work, omega, x).map_err(singular)?;
+        self.assembly
+            .solve(work, omega, &coefs, x)
+            .map_err(singular)?;
         Ok(coefs)
     }
 

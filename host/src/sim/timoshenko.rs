@@ -148,6 +148,17 @@ impl ShaftElement {
         Self::both_planes(&p)
     }
 
+    /// The stiffness in deformation form (see [`StiffnessForm`]).
+    pub fn stiffness_form(&self) -> StiffnessForm {
+        let l = self.length;
+        let bending = self.young * self.second_moment() / l.powi(3);
+        StiffnessForm {
+            length: l,
+            shear: 12.0 * bending / (1.0 + self.phi()),
+            bending,
+        }
+    }
+
     /// Gyroscopic matrix [kg·m²] (multiplied by Ω and the velocities):
     /// skew-symmetric, coupling the two bending planes; twice the rotary
     /// inertia pattern because the polar moment is twice the diametral one.
@@ -162,6 +173,44 @@ impl ShaftElement {
             }
         }
         g
+    }
+}
+
+/// An element's stiffness written through its deformations: per bending
+/// plane, with (w0, θ0, w1, θ1) in (w, dw/dx) coordinates, the chord
+/// deviation a = w1 − w0 − l(θ0 + θ1)/2 [m] and the bending b = l(θ1 − θ0)
+/// [m], qᵀKq = 12s·a² + (1+φ)s·b² with s = EI/(l³(1+φ)) (the same K as
+/// [`ShaftElement::stiffness_matrix`]). K·q computed this way has no large
+/// terms that cancel (on a fine mesh 12s ≈ κGA/l is huge but a is tiny) and
+/// gives exactly zero for rigid translation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StiffnessForm {
+    /// Element length l [m].
+    pub length: f64,
+    /// 12s = 12EI/(l³(1+φ)) [N/m].
+    pub shear: f64,
+    /// (1+φ)s = EI/l³ [N/m].
+    pub bending: f64,
+}
+
+impl StiffnessForm {
+    /// K·q [N, N·m] for the 8 local DOFs `q` (module order, complex
+    /// phasors [m, rad]), from the deformations.
+    pub fn forces(&self, q: &[num_complex::Complex<f64>; 8]) -> [num_complex::Complex<f64>; 8] {
+        let mut f = [num_complex::Complex::new(0.0, 0.0); 8];
+        let half = 0.5 * self.length;
+        for (plane, sign) in [(PLANE_Y, [1.0; 4]), (PLANE_Z, SIGN_Z)] {
+            let [w0, t0, w1, t1] = std::array::from_fn(|i| q[plane[i]] * sign[i]);
+            let a = (w1 - w0) - (t0 + t1) * half;
+            let b = (t1 - t0) * self.length;
+            let fa = a * self.shear;
+            let fb = b * (self.bending * self.length);
+            let local = [-fa, -fa * half - fb, fa, -fa * half + fb];
+            for i in 0..4 {
+                f[plane[i]] = local[i] * sign[i];
+            }
+        }
+        f
     }
 }
 
@@ -221,6 +270,44 @@ mod tests {
                 assert!((k[i][j] - k[j][i]).abs() <= 1e-9 * k[0][0].abs());
                 assert!((g[i][j] + g[j][i]).abs() <= 1e-15);
             }
+        }
+    }
+
+    /// The deformation form is the stiffness matrix, on a long and on a
+    /// very short element (φ ≈ 10⁸), and a rigid translation costs nothing.
+    #[test]
+    fn deformation_form_is_the_stiffness_matrix() {
+        type C = num_complex::Complex<f64>;
+        for l in [0.3, 1.2e-5] {
+            let e = steel(l, 0.1, 0.02);
+            let k = e.stiffness_matrix();
+            let q: [C; 8] = std::array::from_fn(|i| {
+                C::new(1.0 + 0.37 * i as f64, -0.5 + 0.11 * (i * i) as f64)
+            });
+            let f = e.stiffness_form().forces(&q);
+            let scale = k.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+            for i in 0..8 {
+                let want: C = (0..8).map(|j| q[j] * k[i][j]).sum();
+                assert!(
+                    (f[i] - want).norm() <= 1e-12 * scale * 10.0,
+                    "l={l} row {i}"
+                );
+            }
+            let rigid = [
+                C::new(0.7, 0.1),
+                C::new(-0.2, 0.3),
+                C::new(0.0, 0.0),
+                C::new(0.0, 0.0),
+                C::new(0.7, 0.1),
+                C::new(-0.2, 0.3),
+                C::new(0.0, 0.0),
+                C::new(0.0, 0.0),
+            ];
+            assert!(e
+                .stiffness_form()
+                .forces(&rigid)
+                .iter()
+                .all(|v| v.norm() == 0.0));
         }
     }
 
