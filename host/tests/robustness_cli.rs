@@ -7,6 +7,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
+#[path = "../../tests/tests/stream_common/one_frame.rs"]
+mod one_frame;
+use one_frame::one_frame_log;
+
 fn plinth() -> Command {
     Command::new(env!("CARGO_BIN_EXE_plinth"))
 }
@@ -350,6 +354,31 @@ fn a_silent_port_ends_the_stream_with_a_clear_error_and_changes_nothing() {
 }
 
 #[test]
+fn offline_rebuild_of_an_empty_log_is_refused_and_changes_nothing() {
+    let t = tempfile::tempdir().unwrap();
+    let run = t.path().join("run");
+    measured_run(&run);
+    let config = stream_config(&run);
+    std::fs::write(run.join("raw.bin"), b"").unwrap();
+    let before = snapshot(&run);
+    let o = plinth()
+        .args(["stream", "--offline", "--config"])
+        .arg(&config)
+        .arg("--out")
+        .arg(&run)
+        .output()
+        .unwrap();
+    let msg = text(&o);
+    assert!(!o.status.success(), "{msg}");
+    assert!(
+        msg.contains("raw.bin is empty (0 bytes") && msg.contains("no run to rebuild"),
+        "{msg}"
+    );
+    assert_eq!(snapshot(&run), before);
+    assert!(!plinth::stream::staging_dir(&run).exists());
+}
+
+#[test]
 fn offline_rebuild_with_the_runs_own_config_keeps_it() {
     let t = tempfile::tempdir().unwrap();
     let run = t.path().join("run");
@@ -362,7 +391,7 @@ fn offline_rebuild_with_the_runs_own_config_keeps_it() {
         .unwrap();
     assert!(o.status.success(), "{}", text(&o));
     let config = stream_config(&run);
-    std::fs::write(run.join("raw.bin"), b"").unwrap();
+    std::fs::write(run.join("raw.bin"), one_frame_log(30.0, 2)).unwrap();
     let config_before = std::fs::read(&config).unwrap();
     let o = plinth()
         .args(["stream", "--offline", "--config"])
