@@ -8,9 +8,9 @@
 //! mid-run and restarted: the raw log keeps every byte and the final run
 //! directory contains the data received before the kill.
 
-mod stream_common;
 #[path = "stream_common/one_frame.rs"]
 mod one_frame;
+mod stream_common;
 
 use plinth::stream::derive::derive;
 use plinth::stream::port::SerialConnector;

@@ -54,7 +54,9 @@ pub fn pedestal_derivatives(
     let mut stencil = vec![vec![[zero; 5]; speeds.len()]; 2 * bearings];
     for (k, offset) in [-2.0, -1.0, 0.0, 1.0, 2.0].into_iter().enumerate() {
         let shifted: Vec<f64> = speeds.iter().map(|f| f + offset * d).collect();
-        let rows = solver.run_with(&shifted, false, &mut |_| {})?.measurements();
+        let rows = solver
+            .run_with(&shifted, false, &mut |_| {})?
+            .measurements();
         if rows.len() != speeds.len() * bearings {
             return Err(SignalsError::Request(format!(
                 "derivative solves returned {} rows for {} speeds × {bearings} bearings",
@@ -175,7 +177,14 @@ impl QuinticHermite {
             ],
         ];
         let (a, b) = (self.y[i], self.y[i + 1]);
-        let coef = [a[0], a[1] * h, a[2] * (h * h), b[2] * (h * h), b[1] * h, b[0]];
+        let coef = [
+            a[0],
+            a[1] * h,
+            a[2] * (h * h),
+            b[2] * (h * h),
+            b[1] * h,
+            b[0],
+        ];
         let mut out = [C64::new(0.0, 0.0); 3];
         for (c, w) in coef.iter().zip(basis) {
             for (o, wk) in out.iter_mut().zip(w) {

@@ -69,7 +69,11 @@ fn resonance(f: f64) -> [C64; 3] {
     let d = C64::new(f0 * f0 - f * f, f * c);
     let dd = C64::new(-2.0 * f, c);
     let x = 1.0 / d;
-    [x, -dd / (d * d), 2.0 * dd * dd / (d * d * d) + 2.0 / (d * d)]
+    [
+        x,
+        -dd / (d * d),
+        2.0 * dd * dd / (d * d * d) + 2.0 / (d * d),
+    ]
 }
 
 #[test]
@@ -101,7 +105,10 @@ fn quintic_hermite_is_exact_for_quintics() {
     for t in [0.0, 0.3, 0.7, 1.1, 2.9, 3.1, 3.2] {
         let (got, want) = (h.eval(t), p(t));
         for k in 0..3 {
-            assert!((got[k] - want[k]).norm() < 1e-10, "x {t} d{k}: {got:?} vs {want:?}");
+            assert!(
+                (got[k] - want[k]).norm() < 1e-10,
+                "x {t} d{k}: {got:?} vs {want:?}"
+            );
         }
     }
     assert!(QuinticHermite::new(vec![1.0, 1.0], vec![p(1.0); 2]).is_err());
@@ -150,13 +157,25 @@ fn acceleration_is_written_within_its_measured_error_where_the_spline_was_not() 
     let d = difference_step(step);
     let diff = |fs: &[f64], d: f64| -> Vec<[C64; 3]> {
         fs.iter()
-            .map(|&f| five_point([-2.0, -1.0, 0.0, 1.0, 2.0].map(|k| resonance(f + k * d)[0]), d))
+            .map(|&f| {
+                five_point(
+                    [-2.0, -1.0, 0.0, 1.0, 2.0].map(|k| resonance(f + k * d)[0]),
+                    d,
+                )
+            })
             .collect()
     };
     let hermite = QuinticHermite::new(grid.clone(), diff(&grid, d)).unwrap();
     let (fine, coarse) = (diff(&checks, d), diff(&checks, 2.0 * d));
     let kind = SensorKind::Acceleration;
-    let (_, reported) = written_error(kind, &hermite, &checks, (&fine, &coarse), omega_dot, (40.0, 50.0));
+    let (_, reported) = written_error(
+        kind,
+        &hermite,
+        &checks,
+        (&fine, &coarse),
+        omega_dot,
+        (40.0, 50.0),
+    );
     // The true error of what is written, against closed-form derivatives.
     let true_error = |eval: &dyn Fn(f64) -> [C64; 3]| {
         let (mut e, mut peak) = (0.0f64, 0.0f64);
@@ -170,15 +189,25 @@ fn acceleration_is_written_within_its_measured_error_where_the_spline_was_not() 
     };
     let written = true_error(&|f| hermite.eval(f));
     assert!(written < 2e-6, "{written:e}");
-    assert!(reported >= 0.5 * written && reported < 1e-5, "reported {reported:e}, true {written:e}");
+    assert!(
+        reported >= 0.5 * written && reported < 1e-5,
+        "reported {reported:e}, true {written:e}"
+    );
     // The natural cubic spline's second derivative (what was written
     // before) errs far beyond that.
-    let spline = ComplexSpline::new(grid.clone(), grid.iter().map(|&f| resonance(f)[0]).collect()).unwrap();
+    let spline = ComplexSpline::new(
+        grid.clone(),
+        grid.iter().map(|&f| resonance(f)[0]).collect(),
+    )
+    .unwrap();
     let spline_eval = |f: f64| {
         let (x, a, b) = spline.eval(f);
         [x, a, b]
     };
     let old = true_error(&spline_eval);
     assert!(old > 1e-4, "{old:e}");
-    assert!(reported < 0.05 * old, "reported {reported:e}, spline {old:e}");
+    assert!(
+        reported < 0.05 * old,
+        "reported {reported:e}, spline {old:e}"
+    );
 }
