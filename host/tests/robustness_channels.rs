@@ -9,6 +9,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
+mod robustness_common;
+use robustness_common::{stream_config, text};
+
 fn plinth() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_plinth"));
     c.arg("--quiet");
@@ -21,14 +24,6 @@ fn examples() -> PathBuf {
 
 fn field(name: &str) -> PathBuf {
     examples().join("field").join(name)
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
 }
 
 fn import(table: &Path, out: &Path) -> Output {
@@ -315,17 +310,7 @@ fn another_machines_file_and_a_frameless_raw_log_are_refused() {
         text(&o2)
     );
     // stream --offline on a raw log of random bytes: an error, no run.
-    let config = run.join("stream.toml");
-    let mut s = String::from("bearings = \"bearings.csv\"\n");
-    for (b, bearing) in ["left", "right"].iter().enumerate() {
-        for (q, quantity) in ["rel_y", "rel_z", "ped_y", "ped_z"].iter().enumerate() {
-            s.push_str(&format!(
-                "\n[[channels]]\nadc = {}\nbearing = \"{bearing}\"\nquantity = \"{quantity}\"\nsensor = \"proximity\"\nsensitivity = 7870.0\n",
-                4 * b + q
-            ));
-        }
-    }
-    std::fs::write(&config, s).unwrap();
+    let config = stream_config(&run);
     let before = std::fs::read(run.join("measurements.csv")).unwrap();
     let noise: Vec<u8> = (0..4096u32)
         .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)

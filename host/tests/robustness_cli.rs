@@ -2,71 +2,18 @@
 //! input, a stream that always ends, options validated before use, and
 //! messages that say what was found and what is expected.
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn plinth() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_plinth"))
-}
+#[path = "../../tests/tests/stream_common/one_frame.rs"]
+mod one_frame;
+use one_frame::one_frame_log;
 
-fn example() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/feng-hahn-1997.toml")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-/// Every file under `dir` (relative path → bytes; symbolic links as their
-/// target), to compare a directory before and after.
-fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
-        for e in std::fs::read_dir(dir).unwrap() {
-            let e = e.unwrap();
-            let p = e.path();
-            let rel = p.strip_prefix(root).unwrap().display().to_string();
-            let ft = e.file_type().unwrap();
-            if ft.is_symlink() {
-                let to = std::fs::read_link(&p).unwrap();
-                out.insert(rel, to.display().to_string().into_bytes());
-            } else if ft.is_dir() {
-                walk(root, &p, out);
-            } else {
-                out.insert(rel, std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    let mut out = BTreeMap::new();
-    walk(dir, dir, &mut out);
-    out
-}
-
-/// Runs the command, killing it if it takes longer than `limit`.
-fn run_bounded(cmd: &mut Command, limit: Duration) -> Output {
-    let mut child = cmd
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            return child.wait_with_output().unwrap();
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let o = child.wait_with_output().unwrap();
-            panic!("still running after {limit:?}: {}", text(&o));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
+mod robustness_common;
+use robustness_common::{
+    example, long_machine, plinth, run_bounded, snapshot, stream_config, text,
+};
 
 /// A "measured" run directory: a simulation whose files were then written by
 /// someone else (not in Plinth's manifest), plus the raw log of a field run.
@@ -197,18 +144,6 @@ fn out_that_is_a_file_or_a_link_is_refused() {
     assert!(text(&o).contains("symbolic link"), "{}", text(&o));
 }
 
-/// A machine file with `elements` shaft elements (a slow simulation).
-fn long_machine(dir: &Path, elements: usize) -> PathBuf {
-    let text = std::fs::read_to_string(example()).unwrap();
-    let per = elements / 12;
-    let text = text
-        .replace("elements = 10\n", &format!("elements = {}\n", 10 * per))
-        .replace("elements = 1\n", &format!("elements = {per}\n"));
-    let path = dir.join("long.toml");
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
 #[test]
 fn killing_simulate_mid_run_leaves_the_previous_run_byte_identical() {
     let t = tempfile::tempdir().unwrap();
@@ -299,22 +234,6 @@ fn numeric_options_are_validated_before_use() {
     assert!(!t.path().join("out").exists() && !t.path().join("n").exists());
 }
 
-/// A stream configuration for the paper machine's two bearings.
-fn stream_config(dir: &Path) -> PathBuf {
-    let mut s = String::from("bearings = \"bearings.csv\"\n");
-    for (b, bearing) in ["left", "right"].iter().enumerate() {
-        for (q, quantity) in ["rel_y", "rel_z", "ped_y", "ped_z"].iter().enumerate() {
-            s.push_str(&format!(
-                "\n[[channels]]\nadc = {}\nbearing = \"{bearing}\"\nquantity = \"{quantity}\"\nsensor = \"proximity\"\nsensitivity = 7870.0\n",
-                4 * b + q
-            ));
-        }
-    }
-    let path = dir.join("stream.toml");
-    std::fs::write(&path, s).unwrap();
-    path
-}
-
 #[test]
 fn a_silent_port_ends_the_stream_with_a_clear_error_and_changes_nothing() {
     let t = tempfile::tempdir().unwrap();
@@ -350,6 +269,31 @@ fn a_silent_port_ends_the_stream_with_a_clear_error_and_changes_nothing() {
 }
 
 #[test]
+fn offline_rebuild_of_an_empty_log_is_refused_and_changes_nothing() {
+    let t = tempfile::tempdir().unwrap();
+    let run = t.path().join("run");
+    measured_run(&run);
+    let config = stream_config(&run);
+    std::fs::write(run.join("raw.bin"), b"").unwrap();
+    let before = snapshot(&run);
+    let o = plinth()
+        .args(["stream", "--offline", "--config"])
+        .arg(&config)
+        .arg("--out")
+        .arg(&run)
+        .output()
+        .unwrap();
+    let msg = text(&o);
+    assert!(!o.status.success(), "{msg}");
+    assert!(
+        msg.contains("raw.bin is empty (0 bytes") && msg.contains("no run to rebuild"),
+        "{msg}"
+    );
+    assert_eq!(snapshot(&run), before);
+    assert!(!plinth::stream::staging_dir(&run).exists());
+}
+
+#[test]
 fn offline_rebuild_with_the_runs_own_config_keeps_it() {
     let t = tempfile::tempdir().unwrap();
     let run = t.path().join("run");
@@ -362,7 +306,7 @@ fn offline_rebuild_with_the_runs_own_config_keeps_it() {
         .unwrap();
     assert!(o.status.success(), "{}", text(&o));
     let config = stream_config(&run);
-    std::fs::write(run.join("raw.bin"), b"").unwrap();
+    std::fs::write(run.join("raw.bin"), one_frame_log(30.0, 2)).unwrap();
     let config_before = std::fs::read(&config).unwrap();
     let o = plinth()
         .args(["stream", "--offline", "--config"])

@@ -3,48 +3,12 @@
 //! validates every number and its memory before allocating, contradictory
 //! flags are refused, and operating-system errors are printed once.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn plinth() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_plinth"))
-}
-
-fn example() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/feng-hahn-1997.toml")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-/// Runs the command, killing it (and failing the test) if it takes longer
-/// than `limit`.
-fn run_bounded(cmd: &mut Command, limit: Duration) -> Output {
-    let mut child = cmd
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            return child.wait_with_output().unwrap();
-        }
-        if start.elapsed() > limit {
-            child.kill().unwrap();
-            let o = child.wait_with_output().unwrap();
-            panic!("blocked for more than {limit:?}: {}", text(&o));
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
+mod robustness_common;
+use robustness_common::{example, long_machine, plinth, run_bounded, text};
 
 fn mkfifo(path: &Path) {
     let _ = std::fs::remove_file(path);
@@ -207,18 +171,6 @@ fn fifos_where_files_are_expected_are_refused_without_blocking() {
     for o in ["o1", "o2", "o3", "o4", "o5"] {
         assert!(!t.path().join(o).exists(), "{o} was created");
     }
-}
-
-/// A machine file with `elements` shaft elements (a slow simulation).
-fn long_machine(dir: &Path, elements: usize) -> PathBuf {
-    let text = std::fs::read_to_string(example()).unwrap();
-    let per = elements / 12;
-    let text = text
-        .replace("elements = 10\n", &format!("elements = {}\n", 10 * per))
-        .replace("elements = 1\n", &format!("elements = {per}\n"));
-    let path = dir.join("long.toml");
-    std::fs::write(&path, text).unwrap();
-    path
 }
 
 /// Names beside `dir` that start with `.NAME.`.
@@ -565,4 +517,37 @@ fn flags_and_base_files_that_would_be_ignored_are_refused() {
             "{msg}"
         );
     }
+}
+
+#[test]
+fn a_row_deleted_from_bearings_csv_is_named_where_it_is_interpolated() {
+    let t = tempfile::tempdir().unwrap();
+    let run = t.path().join("run");
+    simulate(&run);
+    let path = run.join("bearings.csv");
+    let table = std::fs::read_to_string(&path).unwrap();
+    // Delete the 25 Hz row of bearing `left` (formats.md then interpolates
+    // between 20 and 30 Hz: allowed, but said).
+    let is_gone = |l: &str| {
+        let mut f = l.split(',');
+        f.next().and_then(|s| s.parse::<f64>().ok()) == Some(25.0) && f.next() == Some("left")
+    };
+    let kept: Vec<&str> = table.lines().filter(|l| !is_gone(l)).collect();
+    assert_eq!(kept.len() + 1, table.lines().count());
+    std::fs::write(&path, kept.join("\n") + "\n").unwrap();
+    let o = plinth().arg("identify").arg(&run).output().unwrap();
+    let msg = text(&o);
+    assert!(
+        msg.contains("warning: ")
+            && msg.contains(
+                "bearings.csv: bearing `left`: no row at 1 of its 12 measurement speeds (25 Hz)"
+            ),
+        "{msg}"
+    );
+    // The untouched bearing, and an untouched run, say nothing of it.
+    assert!(!msg.contains("bearing `right`: no row"), "{msg}");
+    let clean = t.path().join("clean");
+    simulate(&clean);
+    let o = plinth().arg("identify").arg(&clean).output().unwrap();
+    assert!(!text(&o).contains("no row at"), "{}", text(&o));
 }

@@ -8,6 +8,8 @@
 //! mid-run and restarted: the raw log keeps every byte and the final run
 //! directory contains the data received before the kill.
 
+#[path = "stream_common/one_frame.rs"]
+mod one_frame;
 mod stream_common;
 
 use plinth::stream::derive::derive;
@@ -283,10 +285,11 @@ fn killing_the_host_mid_run_loses_nothing() {
     let scenario = Scenario::paper_rundown(150.0, 100.0, 20.0);
     let device = DeviceThread::start(Faults::default(), Faults::default(), 3);
     let out = scenario.out_dir("killed");
-    // A previous run in OUT (an empty raw log rebuilt offline): the killed
-    // host must leave it byte-identical.
+    // A previous run in OUT (a one-frame raw log at 30 Hz, below the
+    // run-down, rebuilt offline): the killed host must leave it
+    // byte-identical.
     std::fs::create_dir_all(&out).unwrap();
-    std::fs::write(out.join("raw.bin"), b"").unwrap();
+    std::fs::write(out.join("raw.bin"), one_frame::one_frame_log(30.0, 2)).unwrap();
     plinth::stream::run(&plinth::stream::Args {
         port: None,
         baud: 115_200,
@@ -339,8 +342,9 @@ fn killing_the_host_mid_run_loses_nothing() {
     let rows_before = derive(&before, &scenario.config, &scenario.tables)
         .run
         .measurements;
+    // The previous run's frame (one row per bearing) and this stream's.
     assert!(
-        !rows_before.is_empty(),
+        rows_before.iter().any(|r| r.speed_hz > 30.5),
         "no phasor frame arrived before the kill"
     );
 

@@ -115,6 +115,9 @@ impl RunDir {
                 })
             }
         };
+        for note in super::schedule::unlisted_speeds(&run) {
+            eprintln!("warning: {}: {note}", b_path.display());
+        }
         Ok(RunDir { truth, ..run })
     }
 }

@@ -97,8 +97,9 @@ pub fn solver_threads(n_dof: usize, speeds: usize) -> usize {
 
 /// Estimated peak memory [bytes] of `signals` on `machine`: the model (as
 /// [`simulate_bytes`] over the `grid_points` + `check_points` speeds), the
-/// splines of every channel over the grid (value and three coefficient
-/// phasors per grid point and channel, plus the grid's truth rows) and the
+/// interpolants of every channel over the grid (spline phasors per grid
+/// point and channel, the Hermite knots and differences of velocity and
+/// acceleration channels, plus the grid's truth rows) and the
 /// ADC codes (`samples` × channels × 2 bytes, i16), all held at once.
 pub fn signals_bytes(
     machine: &Machine,
@@ -108,7 +109,10 @@ pub fn signals_bytes(
 ) -> u64 {
     let channels = 4 * machine.bearings.len() as u64;
     let model = simulate_bytes(machine, grid_points + check_points);
-    let splines = grid_points as u64 * channels * 16 * 5;
+    // Spline (value, second derivative, knot) and, for velocity and
+    // acceleration channels, the Hermite knots (value, two derivatives)
+    // and their differences: 16-byte numbers per grid point and channel.
+    let splines = grid_points as u64 * channels * 16 * 13;
     let codes = samples.saturating_mul(channels).saturating_mul(2);
     model.saturating_add(splines).saturating_add(codes)
 }

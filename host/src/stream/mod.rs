@@ -41,7 +41,8 @@
 //! - `--offline` rebuilds the run directory from `OUT.incomplete/raw.bin`
 //!   when there is one, else from `OUT/raw.bin`, and moves it into place the
 //!   same way (a `--config OUT/stream.toml` is read before anything is
-//!   written, and is never truncated).
+//!   written, and is never truncated); a log without a valid phasor frame
+//!   (empty, cut short or foreign) is refused and changes nothing.
 //!
 //! An `OUT` that holds anything but an earlier stream run (a `raw.bin`) is
 //! refused unless `--force`.

@@ -107,11 +107,16 @@ impl RawLog {
 
 /// Refuses to rebuild a run (`stream --offline`) from a raw log of `bytes`
 /// bytes at `path` in which no valid phasor frame was found (`frames` = 0):
-/// a truncated or foreign file gives an error, not an empty run. An empty
-/// log (0 bytes: a stream that received nothing) still rebuilds its empty
-/// run, as a stream that received nothing ends.
+/// a truncated, foreign or empty (0-byte) file gives an error, not an empty
+/// run.
 pub fn require_frames(path: &Path, bytes: usize, frames: usize) -> Result<()> {
-    if frames == 0 && bytes > 0 {
+    if frames == 0 && bytes == 0 {
+        anyhow::bail!(
+            "--offline: the raw log {} is empty (0 bytes: the stream received nothing): there is no run to rebuild",
+            path.display()
+        );
+    }
+    if frames == 0 {
         anyhow::bail!(
             "--offline: the raw log {} ({bytes} bytes) holds no valid phasor frame (cut short, or not a Plinth box's log): there is no run to rebuild",
             path.display()
@@ -154,7 +159,10 @@ mod tests {
             "{e}"
         );
         assert!(require_frames(Path::new("x/raw.bin"), 17, 1).is_ok());
-        assert!(require_frames(Path::new("x/raw.bin"), 0, 0).is_ok());
+        let e = require_frames(Path::new("x/raw.bin"), 0, 0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("x/raw.bin") && e.contains("is empty"), "{e}");
     }
 
     #[test]

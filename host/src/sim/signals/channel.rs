@@ -88,11 +88,14 @@ pub struct Channel {
     /// Samples clipped at the ADC's full scale (written by the synthesiser).
     #[serde(default)]
     pub clipped_samples: u64,
-    /// Largest spline interpolation error of this channel's displacement
-    /// phasor over the run [m] (measured at grid midpoints).
+    /// Largest interpolation error of this channel's displacement phasor
+    /// over the run [m] (measured at grid midpoints).
     #[serde(default)]
     pub interpolation_error_m: f64,
-    /// The same relative to the channel's largest |X| over the run [-].
+    /// The error of what the channel is written from, relative to its peak
+    /// over the run [-]: the displacement phasor's for displacement
+    /// channels; the sensed velocity or acceleration phasor's (value and
+    /// speed derivatives, [`super::derivative`]) for the others.
     #[serde(default)]
     pub interpolation_error_rel: f64,
 }

@@ -31,12 +31,18 @@
 //! Solving the machine at every sample is pointless: the response is computed
 //! on a uniform speed grid (default step 0.01 Hz, with 4 extra steps beyond
 //! each end of the run) and each channel's complex phasor is interpolated
-//! with a natural cubic spline in speed (derivatives from the same spline).
-//! The interpolation error is *measured*, not assumed: the machine is also
-//! solved at the midpoint of every grid interval the run overlaps and at 17
-//! speeds spread over the run, and the largest
+//! with a natural cubic spline in speed. Velocity and acceleration channels
+//! need X′ and X″ too, which a cubic spline gives only to O(h²): they are
+//! written from the model's own derivatives (five-point differences of
+//! solves at each grid speed) through a quintic Hermite interpolant
+//! ([`derivative`]). The interpolation error is *measured*, not assumed: the
+//! machine is also solved at the midpoint of every grid interval the run
+//! overlaps and at 17 speeds spread over the run, and the largest
 //! |X_spline − X_solved| is recorded in the header, absolute [m] and relative
-//! to that channel's largest |X| over the run. It falls as h⁴ and is set by
+//! to that channel's largest |X| over the run; for velocity and acceleration
+//! channels the relative figure is that of the sensed phasor (value and
+//! derivatives against the differences there, plus the differences' own
+//! Richardson error estimate), relative to its peak. It falls as h⁴ and is set by
 //! the sharpest resonance: on the undamped paper machine (rotor-on-pedestal
 //! modes at 27 and 45 Hz with almost no damping) 200→5 Hz gives 7.3e-3 at
 //! 0.05 Hz and 5.4e-6 at 0.01 Hz (0.05 Hz suffices for the damped twin:
@@ -67,11 +73,12 @@
 //!
 //! [`rundown`] (kinematics), [`channel`] (channel and ADC model), [`format`]
 //! (the directory format: reader and writer), [`spline`] (phasor splines in
-//! speed), [`synthesis`] (sampling the response), [`cli`] (`plinth signals`).
+//! speed), [`derivative`] (speed derivatives for velocity and acceleration), [`synthesis`] (sampling the response), [`cli`] (`plinth signals`).
 //! Everything is re-exported here.
 
 pub mod channel;
 pub mod cli;
+pub mod derivative;
 pub mod format;
 pub mod rundown;
 pub mod spline;
@@ -82,6 +89,7 @@ mod tests;
 
 pub use channel::*;
 pub use cli::*;
+pub use derivative::*;
 pub use format::*;
 pub use rundown::*;
 pub use spline::*;

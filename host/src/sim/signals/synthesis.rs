@@ -188,6 +188,29 @@ pub fn synthesise(
     checks.dedup();
     let check_rows = solver.run_with(&checks, false, &mut |_| {})?.measurements();
 
+    // Velocity and acceleration channels are written from the model's
+    // derivatives in speed (five-point differences at step d) through a
+    // quintic Hermite interpolant, and measured at the check speeds against
+    // the same differences there; the differences' own truncation error is
+    // estimated by Richardson's rule from a second set at step 2d
+    // (|D(2d) − D(d)|/15, d⁴ behaviour) and added.
+    let omega_dot = TAU * r.slope();
+    let nb = machine.bearings.len();
+    let (hermites, at_checks) = if opts.seismic_kind == SensorKind::Displacement {
+        (Vec::new(), None)
+    } else {
+        // Every stencil speed (down to f − 4d at the checks) stays ≥ 0.
+        let d = difference_step(step).min(0.2 * grid[0]);
+        let hermites = pedestal_derivatives(&solver, nb, &grid, d)?
+            .into_iter()
+            .map(|v| QuinticHermite::new(grid.clone(), v))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(SignalsError::Request)?;
+        let fine = pedestal_derivatives(&solver, nb, &checks, d)?;
+        let coarse = pedestal_derivatives(&solver, nb, &checks, 2.0 * d)?;
+        (hermites, Some((fine, coarse)))
+    };
+
     // Channels: per bearing rel_y, rel_z (probes), ped_y, ped_z (seismic).
     let mut channels = Vec::new();
     for (bi, b) in machine.bearings.iter().enumerate() {
@@ -209,6 +232,18 @@ pub fn synthesise(
                 if let Some(v) = spline.at(&b.name, q, m.speed_hz) {
                     err = err.max((v - q.of(m)).norm());
                 }
+            }
+            let mut rel = if max_x > 0.0 { err / max_x } else { 0.0 };
+            if let (Some((fine, coarse)), false) = (&at_checks, probe) {
+                let idx = 2 * bi + usize::from(q == ChannelQuantity::PedZ);
+                (err, rel) = written_error(
+                    opts.seismic_kind,
+                    &hermites[idx],
+                    &checks,
+                    (&fine[idx], &coarse[idx]),
+                    omega_dot,
+                    (lo, hi),
+                );
             }
             channels.push(Channel {
                 name: format!("{}_{}", b.name, q.name()),
@@ -233,7 +268,7 @@ pub fn synthesise(
                 },
                 clipped_samples: 0,
                 interpolation_error_m: err,
-                interpolation_error_rel: if max_x > 0.0 { err / max_x } else { 0.0 },
+                interpolation_error_rel: rel,
             });
         }
     }
@@ -260,28 +295,33 @@ pub fn synthesise(
     let mut rng = StdRng::seed_from_u64(opts.seed);
     let normal = Normal::new(0.0, 1.0)
         .map_err(|e| SignalsError::Request(format!("noise distribution: {e}")))?;
+    // The interpolant each channel is written from: the Hermite one for
+    // velocity and acceleration channels.
+    let chan_hermites: Vec<Option<&QuinticHermite>> = channels
+        .iter()
+        .map(|c| {
+            let pedestal = matches!(c.quantity, ChannelQuantity::PedY | ChannelQuantity::PedZ);
+            let idx = 2 * c.bearing_index + usize::from(c.quantity == ChannelQuantity::PedZ);
+            (pedestal && c.kind != SensorKind::Displacement)
+                .then(|| hermites.get(idx))
+                .flatten()
+        })
+        .collect();
     let mut codes = vec![0i16; samples as usize * n];
-    let omega_dot = TAU * r.slope();
     for k in 0..samples as usize {
         let t = (k as f64 - opts.t0_sample_position) / fs;
         let f = r.speed_hz(t);
         let omega = TAU * f;
         let rot = C64::from_polar(1.0, r.angle_rad(t));
         for (ci, c) in channels.iter_mut().enumerate() {
-            let (x, dxdf, d2xdf2) = chan_splines[ci].eval(f);
-            // Derivatives with respect to Ω = 2πf.
-            let dx = dxdf / TAU;
-            let d2x = d2xdf2 / (TAU * TAU);
-            let i = C64::i();
-            let phasor = match c.kind {
-                SensorKind::Displacement => x,
-                SensorKind::Velocity => i * omega * x + dx * omega_dot,
-                SensorKind::Acceleration => {
-                    i * omega_dot * x - x * (omega * omega)
-                        + i * (2.0 * omega * omega_dot) * dx
-                        + d2x * (omega_dot * omega_dot)
+            let xs = match chan_hermites[ci] {
+                Some(h) => h.eval(f),
+                None => {
+                    let (x, dxdf, d2xdf2) = chan_splines[ci].eval(f);
+                    [x, dxdf, d2xdf2]
                 }
             };
+            let phasor = sensed_phasor(c.kind, xs, omega, omega_dot);
             let value = (phasor * rot).re;
             let noise = if c.noise_v_rms > 0.0 {
                 c.noise_v_rms * normal.sample(&mut rng)
@@ -353,4 +393,36 @@ pub fn synthesise_to(
     set.write(dir)?;
     write_truth(dir, &truth)?;
     Ok(set)
+}
+
+/// Largest error of what a velocity or acceleration channel is written from
+/// (the `hermite` interpolant, sensed as `kind`) at the check speeds
+/// `checks` [Hz], against the model's five-point differences there at steps
+/// d and 2d (`fine`, `coarse`), plus the differences' own truncation error
+/// |D(2d) − D(d)|/15: (largest displacement error [m], largest sensed error
+/// relative to the channel's largest |sensed phasor| over the run's speeds
+/// `run` [Hz]).
+pub(super) fn written_error(
+    kind: SensorKind,
+    hermite: &QuinticHermite,
+    checks: &[f64],
+    (fine, coarse): (&[[C64; 3]], &[[C64; 3]]),
+    omega_dot: f64,
+    run: (f64, f64),
+) -> (f64, f64) {
+    let (mut err_m, mut err, mut peak) = (0.0f64, 0.0f64, 0.0f64);
+    for ((&f, x), x2) in checks.iter().zip(fine).zip(coarse) {
+        let omega = TAU * f;
+        let truth = sensed_phasor(kind, *x, omega, omega_dot);
+        let rough = sensed_phasor(kind, *x2, omega, omega_dot);
+        let w = hermite.eval(f);
+        err_m = err_m.max((w[0] - x[0]).norm());
+        let e = (sensed_phasor(kind, w, omega, omega_dot) - truth).norm()
+            + (rough - truth).norm() / 15.0;
+        err = err.max(e);
+        if f >= run.0 && f <= run.1 {
+            peak = peak.max(truth.norm());
+        }
+    }
+    (err_m, if peak > 0.0 { err / peak } else { 0.0 })
 }

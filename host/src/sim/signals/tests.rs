@@ -58,3 +58,156 @@ fn rundown_parses_and_rejects() {
     assert!(RunDown::parse("200:5:-1").is_err());
     assert!(RunDown::parse("5:5:1").is_err());
 }
+
+/// A resonance x(f) = 1/(f₀² − f² + i·f·c) [m] at f₀ = 45 Hz with a
+/// half-width of ≈ c/2 = 0.15 Hz (a natural cubic spline on a 0.01 Hz grid
+/// puts 4e-4 of the peak into a 20 Hz/s acceleration channel, as on the
+/// damped paper machine's 45.1 Hz mode: 2.6e-4), and
+/// its closed-form first and second derivatives in f.
+fn resonance(f: f64) -> [C64; 3] {
+    let (f0, c) = (45.0, 0.3);
+    let d = C64::new(f0 * f0 - f * f, f * c);
+    let dd = C64::new(-2.0 * f, c);
+    let x = 1.0 / d;
+    [
+        x,
+        -dd / (d * d),
+        2.0 * dd * dd / (d * d * d) + 2.0 / (d * d),
+    ]
+}
+
+#[test]
+fn quintic_hermite_is_exact_for_quintics() {
+    let p = |x: f64| {
+        let c = [
+            C64::new(1.0, -2.0),
+            C64::new(0.5, 0.3),
+            C64::new(-0.2, 0.1),
+            C64::new(0.05, -0.4),
+            C64::new(0.01, 0.02),
+            C64::new(-0.003, 0.001),
+        ];
+        let mut v = [C64::new(0.0, 0.0); 3];
+        for (k, ck) in c.iter().enumerate() {
+            let k = k as i32;
+            v[0] += ck * x.powi(k);
+            if k >= 1 {
+                v[1] += ck * (f64::from(k) * x.powi(k - 1));
+            }
+            if k >= 2 {
+                v[2] += ck * (f64::from(k * (k - 1)) * x.powi(k - 2));
+            }
+        }
+        v
+    };
+    let x: Vec<f64> = vec![0.0, 0.7, 1.5, 3.0, 3.2];
+    let h = QuinticHermite::new(x.clone(), x.iter().map(|&v| p(v)).collect()).unwrap();
+    for t in [0.0, 0.3, 0.7, 1.1, 2.9, 3.1, 3.2] {
+        let (got, want) = (h.eval(t), p(t));
+        for k in 0..3 {
+            assert!(
+                (got[k] - want[k]).norm() < 1e-10,
+                "x {t} d{k}: {got:?} vs {want:?}"
+            );
+        }
+    }
+    assert!(QuinticHermite::new(vec![1.0, 1.0], vec![p(1.0); 2]).is_err());
+}
+
+#[test]
+fn five_point_differences_and_their_error_estimate_match_closed_form() {
+    let d = difference_step(0.01);
+    assert_eq!(d, 1e-3);
+    let at = |f: f64, d: f64| {
+        five_point(
+            [-2.0, -1.0, 0.0, 1.0, 2.0].map(|k| resonance(f + k * d)[0]),
+            d,
+        )
+    };
+    for f in [44.5, 44.95, 45.0, 45.03, 45.1, 46.0] {
+        let exact = resonance(f);
+        let fine = at(f, d);
+        for k in 1..3 {
+            let err = (fine[k] - exact[k]).norm();
+            assert!(err < 2e-5 * exact[k].norm(), "f {f} d{k}: {err:e}");
+        }
+        // Richardson's estimate |D(2h) − D(h)|/15 is the error's size where
+        // truncation (h⁴) dominates the rounding: at h = 5e-3 Hz.
+        let h = 5e-3;
+        let (fine, coarse) = (at(f, h), at(f, 2.0 * h));
+        for k in 1..3 {
+            let err = (fine[k] - exact[k]).norm();
+            let estimate = (coarse[k] - fine[k]).norm() / 15.0;
+            assert!(
+                (estimate / err - 1.0).abs() < 0.1,
+                "f {f} d{k}: error {err:e}, estimate {estimate:e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn acceleration_is_written_within_its_measured_error_where_the_spline_was_not() {
+    // A 0.01 Hz grid over the resonance, a 20 Hz/s run-down (the case
+    // signals_roundtrip's grid-step test makes at < 1e-5 of the peak).
+    let step = 0.01;
+    let grid: Vec<f64> = (0..=1000).map(|k| 40.0 + k as f64 * step).collect();
+    let checks: Vec<f64> = grid.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect();
+    let omega_dot = -TAU * 20.0;
+    let d = difference_step(step);
+    let diff = |fs: &[f64], d: f64| -> Vec<[C64; 3]> {
+        fs.iter()
+            .map(|&f| {
+                five_point(
+                    [-2.0, -1.0, 0.0, 1.0, 2.0].map(|k| resonance(f + k * d)[0]),
+                    d,
+                )
+            })
+            .collect()
+    };
+    let hermite = QuinticHermite::new(grid.clone(), diff(&grid, d)).unwrap();
+    let (fine, coarse) = (diff(&checks, d), diff(&checks, 2.0 * d));
+    let kind = SensorKind::Acceleration;
+    let (_, reported) = written_error(
+        kind,
+        &hermite,
+        &checks,
+        (&fine, &coarse),
+        omega_dot,
+        (40.0, 50.0),
+    );
+    // The true error of what is written, against closed-form derivatives.
+    let true_error = |eval: &dyn Fn(f64) -> [C64; 3]| {
+        let (mut e, mut peak) = (0.0f64, 0.0f64);
+        for &f in &checks {
+            let w = TAU * f;
+            let truth = sensed_phasor(kind, resonance(f), w, omega_dot);
+            e = e.max((sensed_phasor(kind, eval(f), w, omega_dot) - truth).norm());
+            peak = peak.max(truth.norm());
+        }
+        e / peak
+    };
+    let written = true_error(&|f| hermite.eval(f));
+    assert!(written < 2e-6, "{written:e}");
+    assert!(
+        reported >= 0.5 * written && reported < 1e-5,
+        "reported {reported:e}, true {written:e}"
+    );
+    // The natural cubic spline's second derivative (what was written
+    // before) errs far beyond that.
+    let spline = ComplexSpline::new(
+        grid.clone(),
+        grid.iter().map(|&f| resonance(f)[0]).collect(),
+    )
+    .unwrap();
+    let spline_eval = |f: f64| {
+        let (x, a, b) = spline.eval(f);
+        [x, a, b]
+    };
+    let old = true_error(&spline_eval);
+    assert!(old > 1e-4, "{old:e}");
+    assert!(
+        reported < 0.05 * old,
+        "reported {reported:e}, spline {old:e}"
+    );
+}
