@@ -714,6 +714,7 @@ mod tests {
         BaseFitResult {
             pedestals: vec![[8e6, 8e6, 80.0, 300.0, 250.0]],
             pedestal_std_err: vec![[1e3, 1e3, 0.1, 1.0, 1.0]],
+            pedestal_covariance: vec![],
             base: crate::estimate::base::BaseParams { k, c: [1e3; 2], m },
             base_std_err: crate::estimate::base::BaseParams {
                 k: [se * k[0].abs(), se * k[1].abs()],
