@@ -391,7 +391,13 @@ pub fn evaluate(
             let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
             let favoured = [grouping.groups.clone()];
             let mut null = Vec::with_capacity(replicates);
-            for _ in 0..replicates {
+            let mut ticker = crate::progress::Ticker::new(
+                "diagnose: foundation bootstrap replicates",
+                replicates,
+                true,
+            );
+            for done in 0..replicates {
+                ticker.tick(done);
                 let data = null_replicate(&obs, &start, &mut rng);
                 if let Some(g) = best_grouping(&data, &start, &favoured, n_eq, None) {
                     null.push(g.score);
