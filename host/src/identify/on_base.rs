@@ -500,7 +500,12 @@ mod tests {
 
     /// Their standard errors, same order.
     fn std_errs(m: &PedestalModal) -> [f64; 4] {
-        [m.y.f_n_std_err, m.z.f_n_std_err, m.y.zeta_std_err, m.z.zeta_std_err]
+        [
+            m.y.f_n_std_err,
+            m.z.f_n_std_err,
+            m.y.zeta_std_err,
+            m.z.zeta_std_err,
+        ]
     }
 
     /// `--unmeasured-base` gives f_n and ζ a ± (the joint fit's covariance
@@ -524,7 +529,11 @@ mod tests {
         let clean = response.to_run_dir(None).expect("run");
         let mut noise_sd: BTreeMap<String, [f64; 4]> = BTreeMap::new();
         for b in clean.measured_bearings() {
-            let rows: Vec<_> = clean.measurements.iter().filter(|m| m.bearing == b).collect();
+            let rows: Vec<_> = clean
+                .measurements
+                .iter()
+                .filter(|m| m.bearing == b)
+                .collect();
             let rms = |z: &dyn Fn(&Measurement) -> num_complex::Complex<f64>| {
                 (rows.iter().map(|m| z(m).norm_sqr()).sum::<f64>() / rows.len() as f64).sqrt()
             };
@@ -579,8 +588,8 @@ mod tests {
             for (q, name) in names.iter().enumerate() {
                 let n = rows.len() as f64;
                 let mean = rows.iter().map(|r| r.0[q]).sum::<f64>() / n;
-                let sd = (rows.iter().map(|r| (r.0[q] - mean).powi(2)).sum::<f64>() / (n - 1.0))
-                    .sqrt();
+                let sd =
+                    (rows.iter().map(|r| (r.0[q] - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
                 let se = (rows.iter().map(|r| r.1[q].powi(2)).sum::<f64>() / n).sqrt();
                 assert!(se.is_finite() && se > 0.0, "{bearing} {name}: ± {se}");
                 let ratio = se / sd;
