@@ -493,6 +493,9 @@ mod tests {
     use crate::sim::{unbalance_response, EffectSet, Machine, Noise};
     use std::collections::BTreeMap;
 
+    /// One draw's f_n and ζ (y, z) and their reported standard errors.
+    type Draw = ([f64; 4], [f64; 4]);
+
     /// f_n and ζ (y, z) of a modal view, in that order.
     fn quantities(m: &PedestalModal) -> [f64; 4] {
         [m.y.f_n_hz, m.z.f_n_hz, m.y.zeta, m.z.zeta]
@@ -548,7 +551,7 @@ mod tests {
         let draws = 50;
         let options = Options::default();
         // Per bearing: the estimates and reported standard errors per draw.
-        let mut got: BTreeMap<String, Vec<([f64; 4], [f64; 4])>> = BTreeMap::new();
+        let mut got: BTreeMap<String, Vec<Draw>> = BTreeMap::new();
         let mut truth = BTreeMap::new();
         for seed in 0..draws {
             let mut run = response
