@@ -11,11 +11,17 @@ fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-fn plinth(args: &[&std::ffi::OsStr]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_plinth"))
+/// Runs `plinth ARGS`, its output whatever the exit status.
+fn run_plinth(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_plinth"))
         .args(args)
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+/// Runs `plinth ARGS` expecting success; returns stdout.
+fn plinth(args: &[&std::ffi::OsStr]) -> String {
+    let out = run_plinth(args);
     assert!(
         out.status.success(),
         "plinth {:?} failed: {}",
@@ -23,6 +29,38 @@ fn plinth(args: &[&std::ffi::OsStr]) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8_lossy(&out.stdout).to_string()
+}
+
+/// Runs `plinth ARGS` expecting a failure; returns stderr.
+fn plinth_fails(args: &[&std::ffi::OsStr]) -> String {
+    let out = run_plinth(args);
+    assert!(!out.status.success(), "plinth {args:?} succeeded");
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+/// `plinth import` of the table fixture in mils with phase lead and
+/// `rotation = "cw"` into `out` (with `--plots` when `plots`); returns its
+/// layout.
+fn import_cw(out: &Path, plots: bool) -> PathBuf {
+    let t = repo().join("tests/fixtures/field/tables");
+    let table = t.join("mil_lead_cw.csv");
+    let layout = t.join("mil_lead_cw.toml");
+    let bearings = repo().join("tests/fixtures/field/sim/bearings.csv");
+    let mut args: Vec<&std::ffi::OsStr> = vec![
+        "import".as_ref(),
+        table.as_os_str(),
+        "--layout".as_ref(),
+        layout.as_os_str(),
+        "--bearings".as_ref(),
+        bearings.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    if plots {
+        args.push("--plots".as_ref());
+    }
+    plinth(&args);
+    layout
 }
 
 fn svgs(dir: &Path, prefix: &str) -> Vec<(String, String)> {
@@ -42,21 +80,8 @@ fn svgs(dir: &Path, prefix: &str) -> Vec<(String, String)> {
 #[test]
 fn import_plots_follow_the_layout_rotation_and_units() {
     let tmp = tempfile::tempdir().unwrap();
-    let t = repo().join("tests/fixtures/field/tables");
     let out = tmp.path().join("run");
-    plinth(&[
-        "import".as_ref(),
-        t.join("mil_lead_cw.csv").as_os_str(),
-        "--layout".as_ref(),
-        t.join("mil_lead_cw.toml").as_os_str(),
-        "--bearings".as_ref(),
-        repo()
-            .join("tests/fixtures/field/sim/bearings.csv")
-            .as_os_str(),
-        "--out".as_ref(),
-        out.as_os_str(),
-        "--plots".as_ref(),
-    ]);
+    import_cw(&out, true);
     let figs = out.join("figures");
     // The layout says rotation = "cw" (seen from the driver): every polar
     // plot is drawn so, none against CCW rotation.
@@ -117,16 +142,6 @@ fn plot_options_and_identify_plots() {
     }
 }
 
-/// Runs `plinth ARGS` expecting a failure; returns stderr.
-fn plinth_fails(args: &[&std::ffi::OsStr]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_plinth"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(!out.status.success(), "plinth {args:?} succeeded");
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
-
 /// `plot` on a run directory: `transducers.csv` says where each transducer
 /// sat but not its unit, so the pick-ups are drawn in µm pk-pk; with the
 /// layout the run was imported with they are drawn in its units (the
@@ -178,21 +193,8 @@ fn plot_takes_units_and_rotation_from_the_layout() {
     );
 
     // Rotation: the mil/lead fixture's layout says cw.
-    let t = repo().join("tests/fixtures/field/tables");
     let cw_run = tmp.path().join("cw-run");
-    plinth(&[
-        "import".as_ref(),
-        t.join("mil_lead_cw.csv").as_os_str(),
-        "--layout".as_ref(),
-        t.join("mil_lead_cw.toml").as_os_str(),
-        "--bearings".as_ref(),
-        repo()
-            .join("tests/fixtures/field/sim/bearings.csv")
-            .as_os_str(),
-        "--out".as_ref(),
-        cw_run.as_os_str(),
-    ]);
-    let cw_layout = t.join("mil_lead_cw.toml");
+    let cw_layout = import_cw(&cw_run, false);
     for (extra, says) in [
         (vec![], "lag against CW rotation"),
         (vec!["--rotation", "ccw"], "lag against CCW rotation"),
@@ -225,7 +227,7 @@ fn plot_takes_units_and_rotation_from_the_layout() {
         "--out".as_ref(),
         tmp.path().join("wrong").as_os_str(),
         "--layout".as_ref(),
-        t.join("mil_lead_cw.toml").as_os_str(),
+        cw_layout.as_os_str(),
     ]);
     assert!(
         err.contains("transducers.csv") && err.contains("--layout") && err.contains("left"),

@@ -492,3 +492,158 @@ fn progress_only_on_a_terminal_and_silenced_by_quiet() {
         assert!(!String::from_utf8_lossy(&piped.stderr).contains(label));
     }
 }
+
+/// No command names its hidden staging directory (`.NAME.plinth-partial-PID`)
+/// in what it prints: every path a person reads is the final one. Each
+/// command that writes an output runs here once, small, and its stdout and
+/// stderr are searched for the staging names.
+#[test]
+fn no_command_prints_a_staging_path() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = |name: &str| tmp.path().join(name).to_str().unwrap().to_string();
+    let r = |rel: &str| repo().join(rel).to_str().unwrap().to_string();
+    let (run, _) = run_dir();
+    let run = run.path().to_str().unwrap().to_string();
+    let paper = r("examples/feng-hahn-1997.toml");
+    let runs: Vec<Vec<String>> = vec![
+        vec![
+            "simulate".into(),
+            paper.clone(),
+            "--speeds".into(),
+            "5:50:5".into(),
+            "--out".into(),
+            t("sim"),
+        ],
+        vec![
+            "signals".into(),
+            paper.clone(),
+            "--rundown".into(),
+            "30:20:20".into(),
+            "--rate".into(),
+            "2048".into(),
+            "--out".into(),
+            t("signals"),
+        ],
+        vec![
+            "import".into(),
+            r("examples/field/vector-table.csv"),
+            "--layout".into(),
+            r("examples/field/layout.toml"),
+            "--bearings".into(),
+            r("examples/field/bearings.csv"),
+            "--plots".into(),
+            "--out".into(),
+            t("imported"),
+        ],
+        vec![
+            "extract".into(),
+            r("examples/field/recording.wav"),
+            "--channels".into(),
+            r("examples/field/channels.toml"),
+            "--bearings".into(),
+            r("examples/field/bearings.csv"),
+            "--out".into(),
+            t("extracted"),
+        ],
+        vec![
+            "identify".into(),
+            run.clone(),
+            "--plots".into(),
+            t("identify-figures"),
+        ],
+        vec![
+            "diagnose".into(),
+            run.clone(),
+            "--plots".into(),
+            t("diagnose-figures"),
+        ],
+        vec!["plot".into(), run.clone(), "--out".into(), t("plots")],
+        vec![
+            "report".into(),
+            run.clone(),
+            "--out".into(),
+            t("report.html"),
+        ],
+        vec!["paper".into(), "--plots".into(), t("paper")],
+        vec![
+            "demo".into(),
+            "--rundown".into(),
+            "60:40:20".into(),
+            "--out".into(),
+            t("demo"),
+        ],
+    ];
+    for args in &runs {
+        let out = plinth().args(args).output().unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(out.status.success(), "{args:?}: {text}");
+        assert!(
+            !text.contains("plinth-partial") && !text.contains("plinth-old"),
+            "{}: prints a staging path:\n{text}",
+            args[0]
+        );
+        // Whatever it names as written is the final path.
+        let target = args.last().unwrap();
+        if text.contains(tmp.path().to_str().unwrap()) {
+            assert!(text.contains(target.as_str()), "{}: {text}", args[0]);
+        }
+    }
+}
+
+/// `diagnose` on pedestals on an unmeasured skid (the simulator's base
+/// element): the foundation candidate's parametric bootstrap, its slowest
+/// step, shows its replicates done out of the total on a terminal.
+#[test]
+fn diagnose_progress_counts_the_bootstrap_replicates() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("skid");
+    let made = plinth()
+        .args([
+            "simulate",
+            repo()
+                .join("examples/two-pedestals-on-skid.toml")
+                .to_str()
+                .unwrap(),
+        ])
+        .args([
+            "--speeds",
+            "5:120:2",
+            "--noise",
+            "0.005",
+            "--out",
+            run.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    std::fs::remove_file(run.join("base.csv")).unwrap();
+    let Some(shown) = on_a_terminal(&["diagnose", run.to_str().unwrap()]) else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "no pseudo-terminal (openpty failed)"
+        );
+        eprintln!("SKIPPED: no pseudo-terminal (openpty failed)");
+        return;
+    };
+    let label = "diagnose: foundation bootstrap replicates";
+    let total = format!("/{}", plinth::diagnose::foundation::REPLICATES);
+    assert!(
+        shown
+            .lines()
+            .any(|l| l.contains(label) && l.contains(&total))
+            || shown.split(label).skip(1).any(|after| after
+                .split('(')
+                .next()
+                .unwrap_or("")
+                .contains(&total)),
+        "{shown:?}"
+    );
+}

@@ -114,24 +114,91 @@ fn report_loads_in_headless_chromium_with_every_figure() {
     assert!(html.contains("Rotor speed [rpm]"));
     assert!(html.contains("plinth report"));
 
+    loads_in_chromium(
+        tmp.path(),
+        &html,
+        &out,
+        figures,
+        "report_loads_in_headless_chromium_with_every_figure",
+    );
+}
+
+/// The report of the bundled field example, imported as the README's
+/// field quick start does (`import` then `report --layout`), loads in
+/// headless Chromium with every figure.
+#[test]
+fn field_example_report_loads_in_headless_chromium() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ex = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/field");
+    let run = tmp.path().join("my-run");
+    let out = tmp.path().join("report.html");
+    for args in [
+        vec![
+            "import".into(),
+            ex.join("vector-table.csv").into_os_string(),
+            "--layout".into(),
+            ex.join("layout.toml").into_os_string(),
+            "--bearings".into(),
+            ex.join("bearings.csv").into_os_string(),
+            "--out".into(),
+            run.clone().into_os_string(),
+        ],
+        vec![
+            "report".into(),
+            run.clone().into_os_string(),
+            "--out".into(),
+            out.clone().into_os_string(),
+            "--layout".into(),
+            ex.join("layout.toml").into_os_string(),
+        ],
+    ] {
+        let st = Command::new(env!("CARGO_BIN_EXE_plinth"))
+            .args(&args)
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "plinth {args:?} failed: {}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+    }
+    let html = std::fs::read_to_string(&out).unwrap();
+    assert!(!html.contains("<script"), "no script");
+    // Two stiffness figures and at least the resolved Bode and polar
+    // figures of two bearings (the transducers add theirs).
+    let figures = html.matches("<figure id=").count();
+    assert!(figures >= 2 + 4 + 8, "{figures} figures in the page");
+    loads_in_chromium(
+        tmp.path(),
+        &html,
+        &out,
+        figures,
+        "field_example_report_loads_in_headless_chromium",
+    );
+}
+
+/// The page `html` (written at `out`) loads in headless Chromium without
+/// an error, shows its `figures` figures with a size, and its screenshot is
+/// not blank; skipped (said on stderr) without chromium outside CI.
+fn loads_in_chromium(tmp: &Path, html: &str, out: &Path, figures: usize, test: &str) {
     let Some(chrome) = chromium() else {
         if std::env::var_os("CI").is_some() {
             panic!("CI is set but chromium is not installed: scripts/test.sh installs it (apt-get install -y chromium)");
         }
         eprintln!(
-            "\n*** SKIPPED: report_loads_in_headless_chromium_with_every_figure: no chromium on PATH (apt-get install -y chromium); the page was checked without a browser only ***\n"
+            "\n*** SKIPPED: {test}: no chromium on PATH (apt-get install -y chromium); the page was checked without a browser only ***\n"
         );
         return;
     };
 
     // 1. Load with an error probe and dump the DOM after the load event.
-    let probe_page = tmp.path().join("probe.html");
+    let probe_page = tmp.join("probe.html");
     std::fs::write(
         &probe_page,
         html.replacen("<head>", &format!("<head>{PROBE}"), 1),
     )
     .unwrap();
-    let dump = headless(&chrome, &tmp.path().join("profile-dom"))
+    let dump = headless(&chrome, &tmp.join("profile-dom"))
         .arg("--virtual-time-budget=10000")
         .arg("--dump-dom")
         .arg(format!("file://{}", probe_page.display()))
@@ -156,8 +223,8 @@ fn report_loads_in_headless_chromium_with_every_figure() {
     }
 
     // 2. A screenshot of the page itself (no probe): not blank.
-    let shot = tmp.path().join("shot.png");
-    let st = headless(&chrome, &tmp.path().join("profile-shot"))
+    let shot = tmp.join("shot.png");
+    let st = headless(&chrome, &tmp.join("profile-shot"))
         .arg("--window-size=1280,2400")
         .arg(format!("--screenshot={}", shot.display()))
         .arg(format!("file://{}", out.display()))

@@ -412,7 +412,6 @@ fn plot_later_draws_every_transducer() {
             rotation: Some(plinth::field::plot::RotationArg::Ccw),
             ..Default::default()
         },
-        source: Default::default(),
         force: false,
     })
     .unwrap();

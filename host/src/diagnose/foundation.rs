@@ -391,7 +391,13 @@ pub fn evaluate(
             let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
             let favoured = [grouping.groups.clone()];
             let mut null = Vec::with_capacity(replicates);
-            for _ in 0..replicates {
+            let mut ticker = crate::progress::Ticker::new(
+                "diagnose: foundation bootstrap replicates",
+                replicates,
+                true,
+            );
+            for done in 0..replicates {
+                ticker.tick(done);
                 let data = null_replicate(&obs, &start, &mut rng);
                 if let Some(g) = best_grouping(&data, &start, &favoured, n_eq, None) {
                     null.push(g.score);
@@ -714,6 +720,7 @@ mod tests {
         BaseFitResult {
             pedestals: vec![[8e6, 8e6, 80.0, 300.0, 250.0]],
             pedestal_std_err: vec![[1e3, 1e3, 0.1, 1.0, 1.0]],
+            pedestal_covariance: vec![],
             base: crate::estimate::base::BaseParams { k, c: [1e3; 2], m },
             base_std_err: crate::estimate::base::BaseParams {
                 k: [se * k[0].abs(), se * k[1].abs()],

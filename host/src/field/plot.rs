@@ -43,21 +43,30 @@ pub struct Args {
     /// Directory for the figures (PNG and SVG).
     #[arg(long)]
     pub out: PathBuf,
-    /// Rotation, 0° placement and style of the figures.
+    /// The transducers' units, rotation, 0° placement and style of the figures.
     #[command(flatten)]
     pub polar: PolarArgs,
-    /// Where the transducers' units and the rotation come from.
-    #[command(flatten)]
-    pub source: SourceArgs,
     /// Replace the figures in an existing --out.
     #[arg(long)]
     pub force: bool,
 }
 
-/// The figure options `plot` and `report` share: rotation and 0° of the
+/// The figure options `plot` and `report` share: the file a run was made
+/// from (for what its `transducers.csv` does not hold: each transducer's
+/// unit and the rotation as seen from its `view`), rotation and 0° of the
 /// polar plots, speed unit and amplitude scale.
-#[derive(clap::Args, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
 pub struct PolarArgs {
+    /// The layout the run was imported with (`plinth import --layout`):
+    /// pick-ups drawn in its units (mil pp, mm/s pk, in/s pk, g), polar
+    /// plots with its `rotation`.
+    #[arg(long, value_name = "LAYOUT.toml", conflicts_with = "channels")]
+    pub layout: Option<PathBuf>,
+    /// The channels file the run was extracted with (`plinth extract
+    /// --channels`): velocity pick-ups in mm/s pk, accelerometers in g pk,
+    /// polar plots with its `rotation`.
+    #[arg(long, value_name = "CHANNELS.toml")]
+    pub channels: Option<PathBuf>,
     /// Direction of rotation as drawn on the polar plots (lag runs against
     /// it) [default: the `rotation` of --layout or --channels, else ccw].
     #[arg(long, value_enum)]
@@ -69,22 +78,6 @@ pub struct PolarArgs {
     /// Speed unit and amplitude scale.
     #[command(flatten)]
     pub style: StyleArgs,
-}
-
-/// The file a run was made from, for what its `transducers.csv` does not
-/// hold: each transducer's unit (and the rotation as seen from its `view`).
-#[derive(clap::Args, Clone, Debug, Default, PartialEq, Eq)]
-pub struct SourceArgs {
-    /// The layout the run was imported with (`plinth import --layout`):
-    /// pick-ups drawn in its units (mil pp, mm/s pk, in/s pk, g), polar
-    /// plots with its `rotation`.
-    #[arg(long, value_name = "LAYOUT.toml", conflicts_with = "channels")]
-    pub layout: Option<PathBuf>,
-    /// The channels file the run was extracted with (`plinth extract
-    /// --channels`): velocity pick-ups in mm/s pk, accelerometers in g pk,
-    /// polar plots with its `rotation`.
-    #[arg(long, value_name = "CHANNELS.toml")]
-    pub channels: Option<PathBuf>,
 }
 
 /// `--rotation` values.
@@ -645,20 +638,16 @@ fn trim(v: f64) -> String {
 }
 
 /// The transducers of the run in `dir` (its `transducers.csv`) in the
-/// units `source` gives, and the figure options of `polar` (the rotation of
-/// `source` unless `--rotation` is given).
+/// units of `polar`'s layout or channels file, and the figure options of
+/// `polar` (the rotation of that file unless `--rotation` is given).
 ///
-/// Without `source` the transducers are drawn as displacements (µm pk-pk):
+/// Without a layout or channels file the transducers are drawn as displacements (µm pk-pk):
 /// `transducers.csv` holds where each sat, not its unit (docs/formats.md).
 /// With it, every transducer of `transducers.csv` must be in the file, at
 /// the same bearing, quantity and angle; a run without `transducers.csv`
 /// takes the file's transducers.
-pub fn run_figures(
-    dir: &Path,
-    polar: &PolarArgs,
-    source: &SourceArgs,
-) -> Result<(Vec<PlotTransducer>, PlotOptions)> {
-    let (named, rotation, file) = if let Some(path) = &source.layout {
+pub fn run_figures(dir: &Path, polar: &PolarArgs) -> Result<(Vec<PlotTransducer>, PlotOptions)> {
+    let (named, rotation, file) = if let Some(path) = &polar.layout {
         let layout = super::import::Layout::read(path)?;
         let f = FieldFigures::from_layout(&layout);
         (
@@ -666,7 +655,7 @@ pub fn run_figures(
             layout.rotation,
             format!("--layout {}", path.display()),
         )
-    } else if let Some(path) = &source.channels {
+    } else if let Some(path) = &polar.channels {
         let channels = crate::extract::channels::Channels::read(path)?;
         let f = FieldFigures::from_channels(&channels);
         (
@@ -719,7 +708,7 @@ pub fn run(args: &Args) -> Result<()> {
     let run = RunDir::read(&args.dir)?;
     // An imported or extracted run keeps where its transducers sat: draw
     // each one's reading too.
-    let (transducers, options) = run_figures(&args.dir, &args.polar, &args.source)?;
+    let (transducers, options) = run_figures(&args.dir, &args.polar)?;
     let mut n = 0;
     crate::output::write_dir(&args.out, args.force, |dir| {
         n = plot_run_with(&run, dir, &transducers, &options)?.len();

@@ -11,7 +11,7 @@
 pub mod fitted;
 pub mod page;
 
-use crate::field::plot::{PlotOptions, PlotTransducer, PolarArgs, SourceArgs};
+use crate::field::plot::{PlotOptions, PlotTransducer, PolarArgs};
 use crate::identify::Identification;
 use crate::rundir::RunDir;
 use anyhow::{bail, Context, Result};
@@ -46,12 +46,9 @@ pub struct Args {
     /// identify --unmeasured-base` (e.g. `left,right`).
     #[arg(long, value_name = "B1,B2[;B3,B4]")]
     pub unmeasured_base: Option<crate::identify::on_base::BaseGroups>,
-    /// Rotation, 0° placement and style of the figures.
+    /// The transducers' units, rotation, 0° placement and style of the figures.
     #[command(flatten)]
     pub polar: PolarArgs,
-    /// Where the transducers' units and the rotation come from.
-    #[command(flatten)]
-    pub source: SourceArgs,
     /// Replace an existing --out file.
     #[arg(long)]
     pub force: bool,
@@ -173,8 +170,7 @@ pub fn run(args: &Args) -> Result<()> {
             args.out.display()
         );
     }
-    let (transducers, options) =
-        crate::field::plot::run_figures(&args.dir, &args.polar, &args.source)?;
+    let (transducers, options) = crate::field::plot::run_figures(&args.dir, &args.polar)?;
     // What `plinth identify` shows: the band, the bases, the modal view.
     let (run, identification) = crate::identify::cli::identify_args(&identify_args(args)?)
         .with_context(|| format!("identifying {}", args.dir.display()))?;

@@ -62,10 +62,9 @@ pub struct SignalsCommand {
 /// Runs `plinth signals`: the signal set is staged beside `--out` and moved
 /// into place only when complete.
 pub fn signals(command: SignalsCommand) -> anyhow::Result<()> {
-    let SignalsCommand { mut args, force } = command;
+    let SignalsCommand { args, force } = command;
     let out = OutputDir::create(&args.out, force)?;
-    args.out = out.path().to_path_buf();
-    super::signals::signals(&args)?;
+    super::signals::signals(&args, out.path())?;
     out.commit()?;
     Ok(())
 }

@@ -134,6 +134,10 @@ pub struct BaseFitResult {
     pub pedestals: Vec<[f64; 5]>,
     /// Standard errors of `pedestals`, same units.
     pub pedestal_std_err: Vec<[f64; 5]>,
+    /// Covariance of each pedestal's θ (group order; θ's units, zero rows
+    /// and columns for fixed parameters), from the Fisher information at
+    /// the estimate: f_n and ζ get their ± from it (`present::modal`).
+    pub pedestal_covariance: Vec<[[f64; 5]; 5]>,
     /// The base (meaningful as far as `identifiability` says).
     pub base: BaseParams,
     /// Standard errors of `base`, same units (∞ when not determined).

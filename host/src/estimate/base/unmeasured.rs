@@ -407,6 +407,9 @@ pub fn fit_on_unmeasured_base(
         pedestal_std_err: (0..n)
             .map(|i| std::array::from_fn(|k| se(5 * i + k)))
             .collect(),
+        pedestal_covariance: (0..n)
+            .map(|i| std::array::from_fn(|a| std::array::from_fn(|b| cov[(5 * i + a, 5 * i + b)])))
+            .collect(),
         base,
         base_std_err: base_se,
         base_frequency_hz,

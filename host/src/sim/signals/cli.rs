@@ -52,8 +52,9 @@ pub struct SignalsArgs {
     pub effects: Vec<String>,
 }
 
-/// Runs `plinth signals`.
-pub fn signals(args: &SignalsArgs) -> anyhow::Result<()> {
+/// Runs `plinth signals`, writing into `staging` (the directory the set is
+/// staged in; `args.out`, the one named in messages, once committed).
+pub fn signals(args: &SignalsArgs, staging: &Path) -> anyhow::Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
     let mut effects = EffectSet::none();
     for e in &args.effects {
@@ -76,7 +77,7 @@ pub fn signals(args: &SignalsArgs) -> anyhow::Result<()> {
         t0_sample_position: 0.5,
         seed: args.seed,
     };
-    let set = synthesise_to(&machine, &effects, &opts, &args.out)
+    let set = synthesise_to(&machine, &effects, &opts, staging)
         .with_context(|| format!("making signals of {}", args.machine.display()))?;
     let h = &set.header;
     println!(

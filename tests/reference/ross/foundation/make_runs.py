@@ -8,13 +8,13 @@ Usage:  python3 tests/reference/ross/foundation/make_runs.py
 The machines (fd-*.toml, Plinth machine-file syntax read with tomllib) are
 built in ROSS by ../make_reference.py's `build` (Timoshenko shaft, disks,
 bearing -> pedestal point mass -> base point mass -> ground). This script
-then writes each run directory itself, following ../../../../../shared/
+then writes each run directory itself, following the repository's
 docs/formats.md directly: `measurements.csv` with rel = rotor
 minus pedestal and ped = absolute pedestal motion, q(t) = Re{Q e^{iWt}},
 y vertical, z horizontal; `bearings.csv`; `truth.json` with the pedestals,
 the bases and `effects: ["foundation_coupling"]` (none for the rigid
 control). Nothing of Plinth's simulator, writer or noise model is used, so
-tests/tests/foundation_ross.rs checks Plinth against another program.
+host/tests/foundation_ross.rs checks Plinth against another program.
 
 Variants per machine:
   <name>-noisy/   complex Gaussian noise of NOISE_FRACTION of each channel's
