@@ -5,7 +5,7 @@
 
 use super::data::Prepared;
 use super::model::{Model, Nonlinear, Term};
-use super::workflow::State;
+use super::state::State;
 use num_complex::Complex;
 
 /// Whether every effect of `model` beyond the pedestal's own parameters is
