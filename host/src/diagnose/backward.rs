@@ -76,6 +76,11 @@ impl Chosen {
         inf.evidence(&c, checked, n_total).ok()
     }
 
+    /// Number of constraints of its null hypothesis (its q).
+    pub(super) fn null_len(&self) -> usize {
+        self.null.len()
+    }
+
     /// `model` without this effect (a split mass joined again).
     pub(super) fn removed_from(&self, model: &Model) -> Model {
         let mut m = model.clone();

@@ -105,6 +105,18 @@ impl State {
         })
     }
 
+    /// The pedestal stiffness and mass terms (k_y, k_z, m, m_y, m_z) whose
+    /// value is negative: no passive pedestal has them.
+    pub fn negative_pedestal_terms(&self) -> Vec<Term> {
+        self.model
+            .terms
+            .iter()
+            .zip(&self.params.beta)
+            .filter(|(t, v)| matches!(t, Term::Stiffness { .. } | Term::Mass { .. }) && **v < 0.0)
+            .map(|(t, _)| *t)
+            .collect()
+    }
+
     /// The pedestal-level prediction and gap of this state.
     pub fn gap(&self, prep: &Prepared) -> (Prediction, Gap) {
         let pred = Prediction::new(prep, &self.model, &self.params);

@@ -9,7 +9,7 @@
 //! the data the chosen sensor and table effects correct.
 
 use super::backward::Chosen;
-use super::bases::try_bases_on;
+use super::bases::{correction_on_base, lr_test, try_bases_on, weakest_on_base, BaseOn};
 use super::bearing_table::WrittenTable;
 pub use super::correct::corrected;
 use super::correct::corrections_only;
@@ -81,14 +81,21 @@ pub struct Outcome {
     pub foundation: Option<FoundationFit>,
 }
 
+/// Significant candidates of a step refitted jointly, best first, to find
+/// one that keeps every pedestal physical.
+const MAX_REFITS: usize = 4;
+
 /// Runs the whole workflow on a run directory at the pedestal level.
 ///
 /// `foundation_coupling` (pedestals on a shared, unmeasured base,
 /// [`super::foundation`]) is tried on the base model in the first round,
 /// next to the library; it wins when its bootstrap test is significant, it
 /// brings the gap down, and further down than the best significant library
-/// candidate does. Its model has no further effects on top, so the search ends
-/// there.
+/// candidate does. The search then goes on with the corrections (probe
+/// runout, sensor delays, a table's clearance, pedestal cross-coupling) on
+/// top of the base: each applied to the data, the base refitted, tested by
+/// the drop of the base's χ², with the backward check on the base
+/// ([`super::bases::correction_on_base`]).
 pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let prep = Prepared::from_run(run)?;
     let mut state = State::base(&prep, &opts.base)?;
@@ -104,12 +111,11 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     // or not); later rounds try it again on the data the chosen sensor and
     // table effects correct.
     let mut foundation_tried = None;
-    let mut chosen_foundation: Option<FoundationFit> = None;
     // The library effects chosen so far (for the backward check).
     let mut chosen: Vec<Chosen> = Vec::new();
-    // The data the chosen base was fitted to (sensor and table effects
-    // of the state applied).
-    let mut base_prep: Option<Prepared> = None;
+    // The chosen base, refitted on the data the chosen corrections
+    // (sensor, table and cross-coupling effects) correct.
+    let mut on_base: Option<BaseOn> = None;
     let mut ticker = crate::progress::Ticker::new(
         "diagnose: candidate-effect rounds",
         opts.max_steps,
@@ -118,6 +124,61 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     for round in 0..opts.max_steps {
         ticker.tick(round);
         let outcome = step(&prep, &state, opts.alpha);
+        // With a base chosen the search goes on: the corrections among the
+        // candidates, each tested by the drop of the refitted base's χ²,
+        // then the backward check on the base.
+        if let Some(base) = &on_base {
+            let (tried, best) = correction_on_base(&prep, &state, base, &outcome, opts);
+            let Some((i, next, on, evidence)) = best else {
+                best_rejected = outcome
+                    .ranked
+                    .iter()
+                    .find(|e| corrections_only(&e.candidate.model))
+                    .map(|e| summary(&prep, e, outcome.tried));
+                break;
+            };
+            let win = &outcome.ranked[i];
+            steps.push(Step {
+                effect: win.candidate.effect.name().to_string(),
+                bearing: prep.bearings[win.candidate.bearing].clone(),
+                gap_before: base.fit.gap.gap,
+                gap_after: on.fit.gap.gap,
+                gap_floor_after: on.fit.gap.floor,
+                machine_gap_before: None,
+                machine_gap_after: None,
+                channels: win.candidate.variant.clone(),
+                parameters: effect_estimates(&prep, &next, &win.candidate)?,
+                test: lr_test(tried),
+                foundation: None,
+                evidence,
+                runner_up: None,
+                candidates_tried: tried,
+                candidates_failed: outcome.failed.len(),
+                dropped: None,
+            });
+            chosen.push(Chosen::of(&win.candidate, steps.len() - 1));
+            state = next;
+            on_base = Some(on);
+            if chosen.len() > 1 {
+                if let Some(base) = &on_base {
+                    if let Some((i, ev, without, on)) =
+                        weakest_on_base(&prep, &state, base, &chosen, opts)
+                    {
+                        let c = chosen.remove(i);
+                        steps[c.step].dropped = Some(format!(
+                            "not significant on the base after step {} (ΔBIC {:.1}, adjusted p {:.2e})",
+                            steps.len(),
+                            ev.delta_bic,
+                            ev.p_adjusted
+                        ));
+                        state = without;
+                        on_base = Some(on);
+                    }
+                }
+            }
+            states.push(state.clone());
+            continue;
+        }
         let (_, before) = state.gap(&prep);
         // What a base must beat: the library's best significant candidate
         // (refitted), or the current state when none is significant. The
@@ -129,11 +190,32 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             let (chi2, n) = pred.chi2(data);
             chi2 + q as f64 * (n.max(2) as f64).ln()
         };
-        let to_beat = match outcome.ranked.first().filter(|_| outcome.accepted) {
-            Some(e) => criterion(
-                &Prediction::new(&prep, &e.candidate.model, &e.params),
+        // The winner: the best significant candidate whose joint refit
+        // keeps every pedestal physical. One that turns a positive pedestal
+        // stiffness or mass negative is rejected, as non-physical base fits
+        // are: it "explains" the gap with an impossible pedestal (a sensor
+        // delay bent to mimic a sub-base's second mode).
+        let negative_now = state.negative_pedestal_terms();
+        let mut winner: Option<(usize, State)> = None;
+        for (i, e) in outcome.ranked.iter().enumerate().take(MAX_REFITS) {
+            if !(e.evidence.delta_bic > 0.0 && e.evidence.p_adjusted < opts.alpha) {
+                continue;
+            }
+            let next = State::fit(&prep, e.candidate.model.clone(), e.params.nl.clone())?;
+            if next
+                .negative_pedestal_terms()
+                .iter()
+                .all(|t| negative_now.contains(t))
+            {
+                winner = Some((i, next));
+                break;
+            }
+        }
+        let to_beat = match &winner {
+            Some((i, next)) => criterion(
+                &Prediction::new(&prep, &next.model, &next.params),
                 &prep,
-                e.candidate.null.len(),
+                outcome.ranked[*i].candidate.null.len(),
             ),
             None => criterion(
                 &Prediction::new(&prep, &state.model, &state.params),
@@ -185,20 +267,18 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                     candidates_failed: outcome.failed.len(),
                     dropped: None,
                 });
-                chosen_foundation = Some(f);
-                base_prep = Some(bases.prep);
-                break;
+                on_base = Some(BaseOn::of(bases.prep, f));
+                continue;
             }
         }
-        if !outcome.accepted {
+        let Some((wi, next)) = winner else {
             best_rejected = outcome
                 .ranked
                 .first()
                 .map(|e| summary(&prep, e, outcome.tried));
             break;
-        }
-        let win = &outcome.ranked[0];
-        let next = State::fit(&prep, win.candidate.model.clone(), win.params.nl.clone())?;
+        };
+        let win = &outcome.ranked[wi];
         let (_, after) = next.gap(&prep);
         let parameters = effect_estimates(&prep, &next, &win.candidate)?;
         steps.push(Step {
@@ -216,8 +296,10 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             evidence: win.evidence,
             runner_up: outcome
                 .ranked
-                .get(1)
-                .map(|e| summary(&prep, e, outcome.tried)),
+                .iter()
+                .enumerate()
+                .find(|(i, _)| *i != wi)
+                .map(|(_, e)| summary(&prep, e, outcome.tried)),
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
             dropped: None,
@@ -267,6 +349,10 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         }
         states.push(state.clone());
     }
+    let (chosen_foundation, base_prep) = match on_base {
+        Some(b) => (Some(b.fit), Some(b.prep)),
+        None => (None, None),
+    };
     let (pred1, gap1) = match &chosen_foundation {
         Some(f) => (f.prediction.clone(), f.gap),
         None => state.gap(&prep),
