@@ -1,6 +1,7 @@
 //! Shared helpers for integration tests.
 
 pub mod ross;
+pub mod simulated;
 
 use plinth::identify::synthetic::SyntheticRun;
 use plinth::rundir::{DigitsMode, RunDir, WriteOptions};

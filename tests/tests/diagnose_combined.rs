@@ -18,9 +18,10 @@
 use plinth::diagnose::cli::oil_films;
 use plinth::diagnose::{diagnose, Options};
 use plinth::effects::EffectKind;
-use plinth::rundir::{DigitsMode, RunDir, WriteOptions};
+use plinth::rundir::RunDir;
 use plinth::sim::machine::BearingModel;
-use plinth::sim::{unbalance_response, EffectSet, Machine};
+use plinth::sim::{EffectSet, Machine};
+use plinth_tests::simulated::{simulated_run, speeds, Writing};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -56,14 +57,9 @@ fn sub_base() -> Machine {
     m
 }
 
-fn speeds(lo: f64, hi: f64, step: f64) -> Vec<f64> {
-    let n = ((hi - lo) / step).round() as usize;
-    (0..=n).map(|i| lo + step * i as f64).collect()
-}
-
-/// Simulates `machine` with `effects`, adds `noise` (fraction of each
-/// channel's RMS, written in the `*_sd` columns), writes the run with
-/// `digits` and reads it back.
+/// Simulates `machine` with `effects` at 5-120 Hz, adds `noise` (fraction
+/// of each channel's RMS, written in the `*_sd` columns), writes the run
+/// with `digits` and reads it back ([`simulated_run`]).
 fn run_dir(
     machine: &Machine,
     effects: &EffectSet,
@@ -71,53 +67,14 @@ fn run_dir(
     digits: Option<u32>,
     seed: u64,
 ) -> RunDir {
-    let sp = speeds(5.0, 120.0, 2.0);
-    let response = unbalance_response(machine, &sp, effects).expect("simulation");
-    let mut run = response.to_run_dir(None).expect("run dir");
-    if noise > 0.0 {
-        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-        for name in machine.bearing_names() {
-            let idx: Vec<usize> = (0..run.measurements.len())
-                .filter(|&i| run.measurements[i].bearing == name)
-                .collect();
-            let mut sd = [0.0; 4];
-            for (ch, s) in sd.iter_mut().enumerate() {
-                let ms: f64 = idx
-                    .iter()
-                    .map(|&i| {
-                        let m = &run.measurements[i];
-                        if ch < 2 { m.rel[ch] } else { m.ped[ch - 2] }.norm_sqr()
-                    })
-                    .sum::<f64>()
-                    / idx.len() as f64;
-                *s = noise * ms.sqrt();
-            }
-            for &i in &idx {
-                let m = &mut run.measurements[i];
-                for (ch, s) in sd.iter().enumerate() {
-                    let a: f64 = StandardNormal.sample(&mut rng);
-                    let b: f64 = StandardNormal.sample(&mut rng);
-                    let n = num_complex::Complex::new(a, b) * (s / std::f64::consts::SQRT_2);
-                    if ch < 2 {
-                        m.rel[ch] += n;
-                    } else {
-                        m.ped[ch - 2] += n;
-                    }
-                }
-                m.noise_sd = Some(sd);
-            }
-        }
-    }
-    let dir = tempfile::tempdir().expect("tempdir");
-    run.write_with(
-        dir.path(),
-        &WriteOptions {
-            digits,
-            digits_mode: DigitsMode::Round,
-        },
-    )
-    .expect("write");
-    RunDir::read(dir.path()).expect("read back")
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let mut normal = || -> f64 { StandardNormal.sample(&mut rng) };
+    let w = Writing {
+        digits,
+        noise,
+        rel_noise: None,
+    };
+    simulated_run(machine, &speeds(5.0, 120.0, 2.0), effects, w, &mut normal)
 }
 
 /// bearings.csv rewritten for the machine's oil films at `factor` times
@@ -155,7 +112,7 @@ fn has(named: &[(String, String)], effect: &str, bearing: Option<&str>) -> bool 
 }
 
 #[test]
-#[ignore = "NOT done: the base wins the first round and the search ends there, so the runout is left unexplained (located, untrusted)"]
+#[ignore = "NOT verified: the search now goes on after a base (bases::correction_on_base), but this run took minutes under load and its result was not seen; un-ignore once it passes in seconds"]
 fn base_plus_runout_names_both() {
     let effects = EffectSet::none().with(EffectKind::ProbeRunout, Some("right"), None);
     let run = run_dir(&skid(), &effects, NOISE, None, 51);
@@ -166,12 +123,22 @@ fn base_plus_runout_names_both() {
 }
 
 #[test]
-#[ignore = "NOT done: the base wins the first round and the search ends there; the delay shows as negative pedestal damping (untrusted)"]
 fn base_plus_delay_names_both() {
     let effects = EffectSet::none().with(EffectKind::SensorDelay, Some("left"), None);
     let run = run_dir(&skid(), &effects, NOISE, None, 52);
     let n = named(&run, &Options::default(), "skid + delay at left");
     assert!(has(&n, "sensor_delay", Some("left")), "{n:?}");
+    assert!(has(&n, "foundation_coupling", None), "{n:?}");
+    assert_eq!(n.len(), 2, "{n:?}");
+}
+
+#[test]
+#[ignore = "NOT verified: cross-coupling is now a data correction a base can be refitted on (correct.rs), but this run took minutes under load and its result was not seen"]
+fn base_plus_cross_coupling_names_both() {
+    let effects = EffectSet::none().with(EffectKind::PedestalCrossCoupling, Some("left"), None);
+    let run = run_dir(&skid(), &effects, NOISE, None, 57);
+    let n = named(&run, &Options::default(), "skid + cross-coupling at left");
+    assert!(has(&n, "pedestal_cross_coupling", Some("left")), "{n:?}");
     assert!(has(&n, "foundation_coupling", None), "{n:?}");
     assert_eq!(n.len(), 2, "{n:?}");
 }
@@ -193,7 +160,7 @@ fn two_effects_at_different_bearings_are_both_named() {
 }
 
 #[test]
-#[ignore = "NOT done: the sub-base candidate is not chosen on this machine (a sensor delay is, and the result is untrusted)"]
+#[ignore = "NOT done: the sub-base is still not named on this machine (before: a sensor delay that made the pedestal's k_z and m negative won; such a winner is now rejected, but what is named now was not captured in this session)"]
 fn a_pedestal_on_its_own_sub_base_is_named() {
     let m = sub_base();
     let run = run_dir(&m, &EffectSet::none(), NOISE, None, 54);

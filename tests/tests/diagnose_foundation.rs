@@ -16,9 +16,10 @@
 use plinth::diagnose::machine::{machine_gap, resimulate};
 use plinth::diagnose::trust::{AT_THE_FLOOR, UNEXPLAINED};
 use plinth::diagnose::{diagnose, Options};
-use plinth::rundir::{DigitsMode, RunDir, WriteOptions};
+use plinth::rundir::RunDir;
 use plinth::sim::base::Base;
-use plinth::sim::{unbalance_response, EffectSet, Machine};
+use plinth::sim::{EffectSet, Machine};
+use plinth_tests::simulated::{simulated_run, speeds, Writing};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -84,87 +85,17 @@ pedestal = { m = 110.0, k_y = 1.5e7, k_z = 1.1e7, c_y = 700.0, c_z = 500.0 }
 base = "frame"
 "#;
 
-/// How a run is written.
-#[derive(Clone, Copy, Debug)]
-struct Writing {
-    /// Significant digits (rounded); `None` = full precision.
-    digits: Option<u32>,
-    /// Complex Gaussian noise: sd = this fraction of each channel's RMS over
-    /// speed (rel, ped), written in the `*_sd` columns; 0 = none.
-    noise: f64,
-    /// Separate noise fraction of the rel probes when set (their absolute
-    /// noise floor dominates with stiff rolling-element bearings).
-    rel_noise: Option<f64>,
-}
-
 const NOISY: Writing = Writing {
     digits: None,
     noise: 0.005,
     rel_noise: None,
 };
 
-/// Simulates `machine`, adds the noise of `w` with its `*_sd` columns,
-/// writes the run to disk (no `base.csv`: the base is not measured) and
-/// reads it back.
+/// Simulates `machine` with the noise of `w` ([`simulated_run`]).
 fn run_dir(machine: &Machine, speeds: &[f64], w: Writing, seed: u64) -> RunDir {
-    let response = unbalance_response(machine, speeds, &EffectSet::none()).expect("simulation");
-    let mut run = response.to_run_dir(None).expect("run dir");
-    if w.noise > 0.0 {
-        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-        let names: Vec<String> = machine.bearing_names();
-        for name in &names {
-            let idx: Vec<usize> = (0..run.measurements.len())
-                .filter(|&i| &run.measurements[i].bearing == name)
-                .collect();
-            let mut sd = [0.0; 4];
-            for (ch, s) in sd.iter_mut().enumerate() {
-                let ms: f64 = idx
-                    .iter()
-                    .map(|&i| {
-                        let m = &run.measurements[i];
-                        if ch < 2 { m.rel[ch] } else { m.ped[ch - 2] }.norm_sqr()
-                    })
-                    .sum::<f64>()
-                    / idx.len() as f64;
-                let fraction = if ch < 2 {
-                    w.rel_noise.unwrap_or(w.noise)
-                } else {
-                    w.noise
-                };
-                *s = fraction * ms.sqrt();
-            }
-            for &i in &idx {
-                let m = &mut run.measurements[i];
-                for (ch, s) in sd.iter().enumerate() {
-                    let a: f64 = StandardNormal.sample(&mut rng);
-                    let b: f64 = StandardNormal.sample(&mut rng);
-                    let n = num_complex::Complex::new(a, b) * (s / std::f64::consts::SQRT_2);
-                    if ch < 2 {
-                        m.rel[ch] += n;
-                    } else {
-                        m.ped[ch - 2] += n;
-                    }
-                }
-                m.noise_sd = Some(sd);
-            }
-        }
-    }
-    let dir = tempfile::tempdir().expect("tempdir");
-    run.write_with(
-        dir.path(),
-        &WriteOptions {
-            digits: w.digits,
-            digits_mode: DigitsMode::Round,
-        },
-    )
-    .expect("write");
-    assert!(!dir.path().join("base.csv").exists());
-    RunDir::read(dir.path()).expect("read back")
-}
-
-fn speeds(lo: f64, hi: f64, step: f64) -> Vec<f64> {
-    let n = ((hi - lo) / step).round() as usize;
-    (0..=n).map(|i| lo + step * i as f64).collect()
+    let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+    let mut normal = || -> f64 { StandardNormal.sample(&mut rng) };
+    simulated_run(machine, speeds, &EffectSet::none(), w, &mut normal)
 }
 
 fn machine(text: &str, file: &str) -> Machine {

@@ -1,11 +1,12 @@
 //! The measurements as a diagnosis state corrects them: probe runout removed
 //! from `rel`, sensor delays undone, a bearing table's clearance correction
-//! added to the bearing coefficients K*, so that a base can be fitted to
-//! data the chosen corrections explain.
+//! added to the bearing coefficients K*, pedestal cross-coupling taken off
+//! the bearing force, so that a base can be fitted to data the chosen
+//! corrections explain.
 
 use super::data::Prepared;
 use super::model::{Model, Nonlinear, Term};
-use super::workflow::State;
+use super::state::State;
 use num_complex::Complex;
 
 /// Whether every effect of `model` beyond the pedestal's own parameters is
@@ -14,7 +15,8 @@ use num_complex::Complex;
 pub(super) fn corrections_only(model: &Model) -> bool {
     model.terms.iter().all(|t| {
         let split_mass = matches!(t, Term::Mass { dir: Some(_), .. });
-        (t.is_pedestal() && !split_mass) || matches!(t, Term::Runout { .. })
+        (t.is_pedestal() && !split_mass)
+            || matches!(t, Term::Runout { .. } | Term::CrossStiffness { .. })
     }) && model
         .nonlinear
         .iter()
@@ -84,6 +86,18 @@ pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
             }
             for (rel, r) in p.rel.iter_mut().zip(runout) {
                 *rel -= r;
+            }
+            // Pedestal cross-coupling k_yz as a force correction:
+            // F' = F − k_yz·(X_z, X_y), carried into rel through K*⁻¹.
+            let k_yz = value(Term::CrossStiffness { bearing: b });
+            if k_yz != 0.0 {
+                let k = p.kstar;
+                let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+                if det.norm() > 0.0 {
+                    let df = [p.ped[1] * k_yz, p.ped[0] * k_yz];
+                    p.rel[0] -= (k[1][1] * df[0] - k[0][1] * df[1]) / det;
+                    p.rel[1] -= (k[0][0] * df[1] - k[1][0] * df[0]) / det;
+                }
             }
         }
     }

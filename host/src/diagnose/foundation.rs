@@ -593,6 +593,37 @@ fn prediction(
 }
 
 impl FoundationFit {
+    /// The same bases (grouping and kind) refitted on other data `prep`
+    /// (the data a further correction changes), starting from this fit's
+    /// pedestals, with `rigid` the rigid-ground prediction of bearings on no
+    /// base. The bootstrap test is not repeated (the base's own test
+    /// stands). `None` when the fit fails or ends non-physical
+    /// ([`physical`]).
+    pub fn refit(&self, prep: &Prepared, rigid: &Prediction) -> Option<FoundationFit> {
+        let obs = observations(prep);
+        let n_eq: usize = obs.iter().map(|o| 4 * o.len()).sum();
+        let mut start = rigid_start(prep)?;
+        for (g, f) in self.grouping.groups.iter().zip(&self.grouping.fits) {
+            for (i, &b) in g.iter().enumerate() {
+                start[b] = f.pedestals[i];
+            }
+        }
+        let favoured = [self.grouping.groups.clone()];
+        let grouping = best_grouping(&obs, &start, &favoured, n_eq, Some(self.kind))?;
+        let prediction = prediction(prep, &obs, rigid, &grouping).ok()?;
+        let gap = prediction.gap(prep, None);
+        Some(FoundationFit {
+            kind: self.kind,
+            grouping,
+            test: self.test.clone(),
+            evidence: self.evidence,
+            prediction,
+            gap,
+        })
+    }
+}
+
+impl FoundationFit {
     /// The base's own parameters as report entries: k, c, m of y and z
     /// (`base_k_y`, ...), then the quasi-static compliance or mass where
     /// only that is determined.

@@ -13,7 +13,7 @@
 use super::data::Prepared;
 use super::foundation::FoundationFit;
 use super::model::{Nonlinear, Term};
-use super::workflow::State;
+use super::state::State;
 use crate::effects::EffectKind;
 use crate::sim::base::Base;
 use crate::sim::{unbalance_response, EffectSet, Machine, PedestalParams};

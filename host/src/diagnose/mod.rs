@@ -18,6 +18,12 @@
 //!   `crate::estimate::base`, with the bootstrap likelihood-ratio test;
 //! - [`criterion`]: the significance test and ranking of candidates;
 //! - [`locate`]: where the disagreement lives;
+//! - [`state`]: a fitted model (the base model, joint refits) and its
+//!   parameter inference;
+//! - [`forward`]: one forward step, every library candidate fitted and tested;
+//! - [`backward`]: chosen effects tested again in later joint refits;
+//! - [`bases`]: the two base candidates of a round on the corrected data;
+//! - [`summaries`]: tried and chosen effects as report entries;
 //! - [`workflow`]: forward selection with joint refits and a backward check;
 //! - [`trust`]: the verdict, and whether the numbers can be trusted;
 //! - [`report`]: the diagnosis as JSON and text;
@@ -27,6 +33,8 @@
 
 pub use workflow::{diagnose, Options, Outcome};
 
+pub mod backward;
+pub mod bases;
 pub mod bearing_table;
 pub mod candidates;
 pub mod cli;
@@ -34,6 +42,7 @@ pub mod correct;
 pub mod criterion;
 pub mod data;
 pub mod fit;
+pub mod forward;
 pub mod foundation;
 pub mod gap;
 pub mod locate;
@@ -42,6 +51,8 @@ pub mod model;
 pub mod noise;
 pub mod plots;
 pub mod report;
+pub mod state;
+pub mod summaries;
 pub mod trust;
 pub mod workflow;
 

@@ -1,0 +1,91 @@
+//! Runs made by the simulator (`plinth::sim`) for the diagnose tests: a
+//! machine's unbalance response with injected effects, complex Gaussian
+//! noise of a fraction of each channel's RMS written in the `*_sd` columns,
+//! written with some digits and read back as `plinth` reads a run. The base
+//! is never measured (no `base.csv`).
+
+use plinth::rundir::{DigitsMode, RunDir, WriteOptions};
+use plinth::sim::{unbalance_response, EffectSet, Machine};
+
+/// How a simulated run is written.
+#[derive(Clone, Copy, Debug)]
+pub struct Writing {
+    /// Significant digits (rounded); `None` = full precision.
+    pub digits: Option<u32>,
+    /// Complex Gaussian noise: sd = this fraction of each channel's RMS over
+    /// speed (rel, ped), written in the `*_sd` columns; 0 = none.
+    pub noise: f64,
+    /// Separate noise fraction of the rel probes when set (their absolute
+    /// noise floor dominates with stiff rolling-element bearings).
+    pub rel_noise: Option<f64>,
+}
+
+/// Speeds `lo`, `lo + step`, ..., `hi` [Hz].
+pub fn speeds(lo: f64, hi: f64, step: f64) -> Vec<f64> {
+    let n = ((hi - lo) / step).round() as usize;
+    (0..=n).map(|i| lo + step * i as f64).collect()
+}
+
+/// Simulates `machine` at `speeds` [Hz] with `effects`, adds the noise of
+/// `w` (standard normal draws from `normal`, two per channel and
+/// measurement: real then imaginary part) with its `*_sd` columns, writes
+/// the run with the digits of `w` and reads it back.
+pub fn simulated_run(
+    machine: &Machine,
+    speeds: &[f64],
+    effects: &EffectSet,
+    w: Writing,
+    normal: &mut dyn FnMut() -> f64,
+) -> RunDir {
+    let response = unbalance_response(machine, speeds, effects).expect("simulation");
+    let mut run = response.to_run_dir(None).expect("run dir");
+    if w.noise > 0.0 {
+        for name in machine.bearing_names() {
+            let idx: Vec<usize> = (0..run.measurements.len())
+                .filter(|&i| run.measurements[i].bearing == name)
+                .collect();
+            let mut sd = [0.0; 4];
+            for (ch, s) in sd.iter_mut().enumerate() {
+                let ms: f64 = idx
+                    .iter()
+                    .map(|&i| {
+                        let m = &run.measurements[i];
+                        if ch < 2 { m.rel[ch] } else { m.ped[ch - 2] }.norm_sqr()
+                    })
+                    .sum::<f64>()
+                    / idx.len() as f64;
+                let fraction = if ch < 2 {
+                    w.rel_noise.unwrap_or(w.noise)
+                } else {
+                    w.noise
+                };
+                *s = fraction * ms.sqrt();
+            }
+            for &i in &idx {
+                let m = &mut run.measurements[i];
+                for (ch, s) in sd.iter().enumerate() {
+                    let a = normal();
+                    let b = normal();
+                    let n = num_complex::Complex::new(a, b) * (s / std::f64::consts::SQRT_2);
+                    if ch < 2 {
+                        m.rel[ch] += n;
+                    } else {
+                        m.ped[ch - 2] += n;
+                    }
+                }
+                m.noise_sd = Some(sd);
+            }
+        }
+    }
+    let dir = tempfile::tempdir().expect("tempdir");
+    run.write_with(
+        dir.path(),
+        &WriteOptions {
+            digits: w.digits,
+            digits_mode: DigitsMode::Round,
+        },
+    )
+    .expect("write");
+    assert!(!dir.path().join("base.csv").exists());
+    RunDir::read(dir.path()).expect("read back")
+}
