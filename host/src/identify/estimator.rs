@@ -139,7 +139,13 @@ pub fn fit_ml(
     }
     let mut outlier_speeds_hz = Vec::new();
     if let Ok(f) = &attempt {
-        if let Some(r) = robust::outlier_refit(&obs, f, &columns) {
+        // Speeds are outliers only when the rest of the data fit the model:
+        // when the fit without them still leaves more than the noise allows,
+        // their residuals are model error (e.g. a base's resonance) and the
+        // lack-of-fit test, not the outlier list, reports it.
+        if let Some(r) = robust::outlier_refit(&obs, f, &columns)
+            .filter(|r| r.fit.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE)
+        {
             // Confirmed outlier speeds are left out of everything that follows.
             obs = r.kept;
             outlier_speeds_hz = r.outlier_speeds_hz;
