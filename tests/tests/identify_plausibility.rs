@@ -5,8 +5,8 @@
 //! undamped paper machine) are flagged by no rule that untrusts a pedestal or
 //! exits 2 (the run's dampings are one family at 1 % per run). Faults are
 //! made in the data here (scaling, conjugation), independently of Plinth's
-//! own corrections. The lack-of-fit test and the robust fit are not in main
-//! yet (wip/issue17-trust.patch: their false-alarm rates miss 1 %).
+//! own corrections. The lack-of-fit test and the outlier speeds are tested in
+//! identify_trust.rs (rates: scripts/bench-trust.sh, docs/trust.md).
 use plinth::identify::physical::NotPhysical;
 use plinth::identify::{identify_run, Identification, Options, WarningKind};
 use plinth::rundir::RunDir;
