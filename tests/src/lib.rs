@@ -1,6 +1,7 @@
 //! Shared helpers for integration tests.
 
 pub mod ross;
+pub mod rundown;
 pub mod simulated;
 
 use plinth::identify::synthetic::SyntheticRun;

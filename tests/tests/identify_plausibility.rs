@@ -8,50 +8,19 @@
 //! own corrections. The lack-of-fit test and the outlier speeds are tested in
 //! identify_trust.rs (rates: scripts/bench-trust.sh, docs/trust.md).
 use plinth::identify::physical::NotPhysical;
-use plinth::identify::{identify_run, Identification, Options, WarningKind};
-use plinth::rundir::RunDir;
-use plinth::sim::{unbalance_response, EffectSet, Machine, Noise};
-use plinth_tests::write_run;
-use std::path::Path;
+use plinth::identify::{Identification, WarningKind};
+use plinth_tests::rundown::{self, identify, machine, run};
 
-fn machine(file: &str) -> Machine {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(file);
-    let text = std::fs::read_to_string(&path).expect("machine file");
-    Machine::from_toml_str(&text, file).expect("machine")
-}
+/// The trust rules (untrusting or exit 2) this file checks.
+const RULES: &[WarningKind] = &[
+    WarningKind::PhysicallyImpossible,
+    WarningKind::SuspectedConventionError,
+    WarningKind::Implausible,
+];
 
-/// The machine's run-down 5..=200 Hz in 2.5 Hz steps, written with `digits`
-/// and read back (so that the digits are what the numbers carry).
-fn run(machine: &Machine, noise: Option<(f64, u64)>, digits: Option<u32>) -> RunDir {
-    let speeds: Vec<f64> = (0..=78).map(|i| 5.0 + 2.5 * i as f64).collect();
-    let response = unbalance_response(machine, &speeds, &EffectSet::none()).expect("simulation");
-    let run = response
-        .to_run_dir(noise.map(|(fraction, seed)| Noise { fraction, seed }))
-        .expect("run directory");
-    let dir = write_run(&run, digits);
-    RunDir::read(dir.path()).expect("read back")
-}
-
-fn identify(run: &RunDir) -> Identification {
-    identify_run(run, &Options::default()).expect("identify")
-}
-
-/// The trust rules (untrusting or exit 2) that fired on `id`.
+/// The trust rules that fired on `id`.
 fn flags(id: &Identification) -> Vec<String> {
-    let rules = [
-        WarningKind::PhysicallyImpossible,
-        WarningKind::SuspectedConventionError,
-        WarningKind::Implausible,
-    ];
-    id.pedestals
-        .iter()
-        .flat_map(|p| {
-            p.warnings
-                .iter()
-                .filter(|w| rules.contains(&w.kind))
-                .map(move |w| format!("{}: {}", p.bearing, w.message))
-        })
-        .collect()
+    rundown::flags(id, RULES)
 }
 
 #[test]

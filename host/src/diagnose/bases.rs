@@ -100,18 +100,7 @@ pub(super) fn try_bases_on(
 fn rigid_prediction(cprep: &Prepared, state: &State, base: &[Parameter]) -> Prediction {
     let rigid = base_model(base, cprep.bearings.len());
     let params = Params {
-        beta: rigid
-            .terms
-            .iter()
-            .map(|t| {
-                state
-                    .model
-                    .terms
-                    .iter()
-                    .position(|u| u == t)
-                    .map_or(0.0, |i| state.params.beta[i])
-            })
-            .collect(),
+        beta: carried_linear(&rigid, state),
         nl: Vec::new(),
     };
     Prediction::new(cprep, &rigid, &params)
@@ -251,6 +240,23 @@ pub(super) fn weakest_on_base(
         }
     }
     weakest
+}
+
+/// The linear values of `state` carried over to `model`'s terms (0 for new
+/// ones).
+pub(super) fn carried_linear(model: &Model, state: &State) -> Vec<f64> {
+    model
+        .terms
+        .iter()
+        .map(|t| {
+            state
+                .model
+                .terms
+                .iter()
+                .position(|u| u == t)
+                .map_or(0.0, |i| state.params.beta[i])
+        })
+        .collect()
 }
 
 /// The nonlinear values of `state` carried over to `model` (0 for new ones).

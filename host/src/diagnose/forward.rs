@@ -70,18 +70,7 @@ pub fn evaluate(
         None => fit_group(prep, model, &nl, &state.weights, &group)?,
     };
     // Whole-machine parameters: the current values, the group refitted.
-    let mut beta: Vec<f64> = model
-        .terms
-        .iter()
-        .map(|t| {
-            state
-                .model
-                .terms
-                .iter()
-                .position(|u| u == t)
-                .map_or(0.0, |i| state.params.beta[i])
-        })
-        .collect();
+    let mut beta = super::bases::carried_linear(model, state);
     for (t, v) in fit.terms.iter().zip(&fit.beta) {
         beta[*t] = *v;
     }

@@ -326,18 +326,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             if let Some((i, ev)) = weakest {
                 let c = chosen.remove(i);
                 let model = c.removed_from(&state.model);
-                let nl = model
-                    .nonlinear
-                    .iter()
-                    .map(|p| {
-                        state
-                            .model
-                            .nonlinear
-                            .iter()
-                            .position(|q| q == p)
-                            .map_or(0.0, |k| state.params.nl[k])
-                    })
-                    .collect();
+                let nl = super::bases::carried_nonlinear(&model, &state);
                 state = State::fit(&prep, model, nl)?;
                 steps[c.step].dropped = Some(format!(
                     "not significant in the joint refit after step {} (ΔBIC {:.1}, adjusted p {:.2e})",

@@ -1,0 +1,257 @@
+use super::*;
+use crate::rundir::{BearingRow, Measurement};
+use plinth_shared::phasor::Complex;
+
+type C64 = Complex<f64>;
+use plinth_shared::bearing::BearingCoefficients;
+
+fn run() -> RunDir {
+    let c = |re: f64, im: f64| C64::new(re, im);
+    let bearing = |speed_hz: f64| BearingRow {
+        speed_hz,
+        bearing: "left".into(),
+        coefficients: BearingCoefficients {
+            k: [[2e7, 1e6], [-3e6, 1.2e7]],
+            c: [[4e4, 3e3], [2e3, 3e4]],
+        },
+    };
+    RunDir {
+        measurements: vec![Measurement {
+            speed_hz: 50.0,
+            bearing: "left".into(),
+            rel: [c(1.0, 2.0), c(3.0, -4.0)],
+            ped: [c(-5.0, 6.0), c(7.0, 8.0)],
+            noise_sd: Some([0.1, 0.2, 0.3, 0.4]),
+            written: None,
+        }],
+        bearings: vec![bearing(0.0), bearing(100.0)],
+        truth: None,
+    }
+}
+
+#[test]
+fn corrections_undo_their_mistake() {
+    let r = run();
+    for c in Convention::ALL {
+        let once = c.correct(&r);
+        assert_ne!(once, r, "{c} changes these data");
+        if !matches!(c, Convention::SpeedInRpm | Convention::PedVelocity) {
+            assert_eq!(c.correct(&once), r, "{c} is its own inverse");
+        }
+    }
+    let m = &Convention::PedConjugated.correct(&r).measurements[0];
+    assert_eq!(
+        (m.rel, m.ped[0]),
+        (r.measurements[0].rel, C64::new(-5.0, -6.0))
+    );
+    let m = &Convention::PedVelocity.correct(&r).measurements[0];
+    let omega = 2.0 * std::f64::consts::PI * 50.0;
+    assert!((m.ped[0] * C64::new(0.0, omega) - C64::new(-5.0, 6.0)).norm() < 1e-12);
+    assert_eq!(m.rel, r.measurements[0].rel);
+    let sd = m.noise_sd.unwrap_or_default();
+    assert!((sd[3] * omega - 0.4).abs() < 1e-12 && sd[0] == 0.1);
+    let m = &Convention::Conjugated.correct(&r).measurements[0];
+    assert_eq!(m.rel[0], C64::new(1.0, -2.0));
+    assert_eq!(m.ped[1], C64::new(7.0, -8.0));
+    let m = &Convention::SwappedYz.correct(&r).measurements[0];
+    assert_eq!(
+        (m.rel[0], m.ped[0]),
+        (r.measurements[0].rel[1], r.measurements[0].ped[1])
+    );
+    assert_eq!(m.noise_sd, Some([0.2, 0.1, 0.4, 0.3]));
+    let m = &Convention::RelNegated.correct(&r).measurements[0];
+    assert_eq!(m.rel[1], C64::new(-3.0, 4.0));
+    assert_eq!(m.ped, r.measurements[0].ped);
+    let b = &Convention::BearingTransposed.correct(&r).bearings[0].coefficients;
+    assert_eq!(
+        (b.k[0][1], b.k[1][0], b.c[0][1], b.c[1][0]),
+        (-3e6, 1e6, 2e3, 3e3)
+    );
+    let b = &Convention::CrossCouplingSign.correct(&r).bearings[0].coefficients;
+    assert_eq!(
+        (b.k[0][1], b.k[1][0], b.c[0][1], b.c[1][0]),
+        (-1e6, 3e6, -3e3, -2e3)
+    );
+    assert_eq!((b.k[0][0], b.c[1][1]), (2e7, 3e4));
+    // Speeds in rpm: the bearing table covers 50 as written, so it is in
+    // the same unit and is converted too.
+    let s = Convention::SpeedInRpm.correct(&r);
+    assert!((s.measurements[0].speed_hz - 50.0 / 60.0).abs() < 1e-15);
+    assert!((s.bearings[1].speed_hz - 100.0 / 60.0).abs() < 1e-15);
+    // A table in Hz that does not cover the rpm figures stays as it is.
+    let mut rpm = r.clone();
+    rpm.measurements[0].speed_hz = 3000.0;
+    let s = Convention::SpeedInRpm.correct(&rpm);
+    assert_eq!(s.measurements[0].speed_hz, 50.0);
+    assert_eq!(s.bearings, r.bearings);
+}
+
+/// The noise [`corrected_noise`] derives from the run as found is,
+/// bit for bit, the noise estimated afresh on the corrected run, for
+/// every correction, with the noise from the digits and the scatter and
+/// from noise columns.
+#[test]
+fn transformed_noise_is_the_noise_of_the_corrected_run() {
+    use crate::rundir::{round_to_digits, DigitsMode};
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+    for columns in [false, true] {
+        let mut r = run();
+        r.measurements.clear();
+        for bearing in ["left", "right"] {
+            for j in 0..40 {
+                let f = 5.0 + 2.0 * j as f64;
+                let mut value = |k: f64| {
+                    let n: f64 = rng.sample(rand_distr::StandardNormal);
+                    let v = 1e-6 * (f / 17.0 + k).sin() / (1.0 + k) + 1e-9 * n;
+                    round_to_digits(v, 6, DigitsMode::Round)
+                };
+                let mut c = |k: f64| C64::new(value(k), value(k + 0.5));
+                let noise_sd = columns.then(|| [1e-9, 2e-9, 3e-9, 4e-9].map(|s| s * f));
+                r.measurements.push(Measurement {
+                    speed_hz: f,
+                    bearing: bearing.into(),
+                    rel: [c(0.0), c(1.0)],
+                    ped: [c(2.0), c(3.0)],
+                    noise_sd,
+                    written: None,
+                });
+            }
+        }
+        let noise = RunNoise::estimate(&r, Quantisation::Rounding);
+        assert!(columns || noise.bearings[0].2.scatter.iter().all(Option::is_some));
+        for c in Convention::ALL {
+            let fixed = c.correct(&r);
+            assert_eq!(
+                corrected_noise(c, &noise, &fixed),
+                RunNoise::estimate(&fixed, Quantisation::Rounding),
+                "{c}, noise columns: {columns}"
+            );
+        }
+    }
+}
+
+#[test]
+fn names_are_formats_words() {
+    for c in Convention::ALL {
+        let json = serde_json::to_string(&c).unwrap();
+        assert_eq!(json, format!("\"{}\"", c.name()));
+        assert_eq!(serde_json::from_str::<Convention>(&json).unwrap(), c);
+    }
+}
+
+#[test]
+fn noise_columns_are_the_floor_when_present() {
+    // Numbers written with ten digits: their rounding lies far below the
+    // columns' noise, which is then the floor as it stands.
+    let mut r = run();
+    let c = |re: f64, im: f64| C64::new(re, im);
+    r.measurements[0].rel = [c(1.234567891, 2.345678912), c(3.456789123, -4.567891234)];
+    r.measurements[0].ped = [c(-5.678912345, 6.789123456), c(7.891234567, 8.912345678)];
+    let s = noise_floor(&r).unwrap();
+    let want = [0.1, 0.2, 0.3, 0.4].map(|x: f64| x / std::f64::consts::SQRT_2);
+    for (a, b) in s[0].iter().zip(want) {
+        assert!((a - b).abs() < 1e-15);
+    }
+}
+
+/// A reading with χ²/ν `q` and relative residual `r`.
+fn reading(convention: Option<Convention>, q: f64, r: f64, plausible: bool) -> Reading {
+    Reading {
+        convention,
+        chi2: q * 100.0,
+        dof: 100,
+        relative_residual: r,
+        plausible,
+    }
+}
+
+#[test]
+fn only_a_passive_decisive_reading_at_the_floor_is_named() {
+    let fit = crate::identify::PedestalFit {
+        bearing: "left".into(),
+        k_y: 1.0,
+        k_z: 1.0,
+        m: 1.0,
+        c_y: 0.0,
+        c_z: 0.0,
+        std_err: crate::identify::StdErr {
+            k_y: 0.0,
+            k_z: 0.0,
+            m: 0.0,
+            c_y: 0.0,
+            c_z: 0.0,
+        },
+        residual_rms: 0.0,
+        condition_number: 1.0,
+        fixed: Vec::new(),
+        trusted: true,
+        speeds: 26,
+        equations: 104,
+        speed_range_hz: [5.0, 200.0],
+        warnings: Vec::new(),
+        suspected_convention_error: None,
+        base: None,
+        base_measured: None,
+        covariance: None,
+        modal: None,
+        ols: None,
+    };
+    let conj = Some(Convention::Conjugated);
+    let swap = Some(Convention::SwappedYz);
+    let named = |rs: &[Reading]| {
+        let v: Vec<(Reading, &PedestalFit)> = rs.iter().map(|r| (*r, &fit)).collect();
+        decide(&v).and_then(|(best, _, _)| best.convention)
+    };
+    // Decisive: as found not passive, the correction at the floor.
+    assert_eq!(
+        named(&[
+            reading(None, 90.0, 1e-1, false),
+            reading(conj, 0.9, 1e-3, true)
+        ]),
+        conj
+    );
+    // A reading that is not passive does not compete, however well it
+    // fits (rel negated: same residuals, negated parameters).
+    assert_eq!(
+        named(&[
+            reading(None, 0.9, 1e-3, false),
+            reading(conj, 0.9, 1e-3, true)
+        ]),
+        conj
+    );
+    // Two passive readings within the decisive margin: nothing named
+    // (100·ln 1.02 = 2 < 13.8).
+    assert_eq!(
+        named(&[
+            reading(None, 90.0, 1e-1, false),
+            reading(conj, 0.9, 1.00e-3, true),
+            reading(swap, 1.0, 1.02e-3, true)
+        ]),
+        None
+    );
+    // 100·ln 1.2 = 18 > 13.8: decisive.
+    assert_eq!(
+        named(&[
+            reading(conj, 0.9, 1.0e-3, true),
+            reading(swap, 1.0, 1.2e-3, true)
+        ]),
+        conj
+    );
+    // The data as found are the best passive reading: nothing named.
+    assert_eq!(
+        named(&[
+            reading(None, 0.9, 1e-3, true),
+            reading(conj, 9.0, 1e-2, true)
+        ]),
+        None
+    );
+    // Passive and decisive but far above the noise floor: nothing named.
+    assert_eq!(
+        named(&[
+            reading(None, 900.0, 1e-1, false),
+            reading(conj, 50.0, 1e-3, true)
+        ]),
+        None
+    );
+}
