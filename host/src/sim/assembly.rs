@@ -524,19 +524,22 @@ impl Assembly {
         );
         let w2 = omega * omega;
         r.copy_from_slice(b);
-        // Band entry d of column c is row c + d − ku.
-        let row = |c: usize, d: usize| (c + d).checked_sub(ku).filter(|&r| r < n);
+        // Band entry d of column c is row c + d − ku: rows c − ku ..= c + kl
+        // inside the matrix. −(−Ω²m + iΩ²g)·x_c = m·y − i·g·y, y = Ω²x_c.
         for (c, &xc) in x.iter().enumerate().take(n) {
             if xc.re == 0.0 && xc.im == 0.0 {
                 continue;
             }
-            for (d, &[_, m, g]) in self.kmg.column(c).iter().enumerate() {
-                if let (Some(i), true) = (row(c, d), m != 0.0 || g != 0.0) {
-                    r[i] -= C64::new(-w2 * m, w2 * g) * xc;
-                }
+            let y = xc * w2;
+            let (top, end) = (c.saturating_sub(ku), (c + kl + 1).min(n));
+            let column = &self.kmg.column(c)[top + ku - c..end + ku - c];
+            for (ri, &[_, m, g]) in r[top..end].iter_mut().zip(column) {
+                ri.re += m * y.re + g * y.im;
+                ri.im += m * y.im - g * y.re;
             }
         }
         // K in the table is the shaft's (rebuilt below) and the pedestals'.
+        let row = |c: usize, d: usize| (c + d).checked_sub(ku).filter(|&r| r < n);
         for &p in self.pedestal_dof.iter().flatten() {
             for (c, &xc) in x.iter().enumerate().skip(p).take(2) {
                 for (d, &[k, _, _]) in self.kmg.column(c).iter().enumerate() {

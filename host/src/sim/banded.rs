@@ -84,6 +84,9 @@ pub struct BandMatrix {
     lower: Vec<u32>,
     /// Per column of U: its first nonzero row.
     upper_top: Vec<usize>,
+    /// Reciprocals of U's diagonal (the pivots), so the back substitution
+    /// multiplies instead of dividing.
+    inv_pivot: Vec<C64>,
     factored: bool,
 }
 
@@ -100,6 +103,7 @@ impl BandMatrix {
             pivots: vec![0; n],
             lower: Vec::new(),
             upper_top: Vec::new(),
+            inv_pivot: Vec::new(),
             factored: false,
         }
     }
@@ -199,6 +203,8 @@ impl BandMatrix {
         self.lower.resize(n, 0);
         self.upper_top.clear();
         self.upper_top.extend(0..n);
+        self.inv_pivot.clear();
+        self.inv_pivot.resize(n, C64::new(0.0, 0.0));
         let mut ju = 0usize;
         for j in 0..n {
             write(a, j + kv);
@@ -234,6 +240,7 @@ impl BandMatrix {
                 }
             }
             let inv = C64::new(1.0, 0.0) / a[col + kv];
+            self.inv_pivot[j] = inv;
             for i in 1..=km {
                 a[col + kv + i] *= inv;
             }
@@ -291,7 +298,7 @@ impl BandMatrix {
         // U: back substitution, from each column's first nonzero row.
         for j in (0..n).rev() {
             let col = j * ldab + kv;
-            b[j] /= a[col];
+            b[j] *= self.inv_pivot[j];
             let bj = b[j];
             if bj.re == 0.0 && bj.im == 0.0 {
                 continue;
