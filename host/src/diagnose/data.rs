@@ -5,6 +5,7 @@
 
 use super::noise::{BearingNoise, ColumnDigits, NoiseModel, CHANNELS};
 use crate::estimate::noise::Quantisation;
+use crate::estimate::pedestal::{data_alone_sd, unscale};
 use crate::identify::{estimator::fit_ml, observations, Options as IdentifyOptions, PedestalFit};
 use crate::rundir::{Measurement, RunDir};
 use anyhow::{anyhow, bail, Context, Result};
@@ -166,15 +167,12 @@ impl Prepared {
             let (fit, _) = fit_ml(name, &obs, &mut noise, &options)
                 .with_context(|| format!("fitting the base model of bearing {name}"))?;
             // The noise from the data alone (module docs of `noise`).
-            let scale = noise.variance_scale;
-            noise.rescale(1.0 / scale);
+            unscale(&mut noise);
             for (m, var) in rows.iter().zip(&noise.var) {
                 let j = speeds_hz.partition_point(|&s| s < m.speed_hz);
                 if let Some(p) = points[b].get_mut(j).and_then(Option::as_mut) {
                     let magnitude: [f64; 8] = std::array::from_fn(|c| point_magnitude(p, c));
-                    for ((sd, v), m) in p.sigma.iter_mut().zip(var).zip(magnitude) {
-                        *sd = v.sqrt().max(PRECISION * m).max(f64::MIN_POSITIVE);
-                    }
+                    p.sigma = data_alone_sd(var, &magnitude);
                 }
             }
             noises.push(noise);
@@ -206,13 +204,6 @@ impl Prepared {
         self.bearings.iter().position(|b| b == name)
     }
 }
-
-/// Relative precision below which no phasor's digits are information: a
-/// response computed in double precision (an FE assembly and LU solve, an
-/// extraction) keeps about 10 significant digits, so the significance tests
-/// never take a number as more accurate than 1e-10 of its phasor's magnitude
-/// (it matters only for data written with more than about 10 digits).
-const PRECISION: f64 = 1e-10;
 
 /// |phasor| [m] of the complex channel real channel `c` belongs to.
 pub fn point_magnitude(p: &Point, c: usize) -> f64 {

@@ -1,4 +1,5 @@
-//! The estimation core: one noise model ([`noise`]) and one maximum-likelihood
+//! The estimation core: one noise model ([`noise`]), one noise policy
+//! ([`pedestal`]: which noise a pedestal's fit uses) and one maximum-likelihood
 //! errors-in-variables fit of the pedestal model ([`ml`]), used by
 //! `plinth identify` (its default estimator), `plinth diagnose` (its noise
 //! floor) and `plinth accuracy` (the Monte-Carlo against the Cramér–Rao bound).
@@ -13,6 +14,7 @@ pub mod lack_of_fit;
 pub mod levenberg;
 pub mod ml;
 pub mod noise;
+pub mod pedestal;
 pub mod robust;
 
 use num_complex::Complex;
