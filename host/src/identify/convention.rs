@@ -576,7 +576,7 @@ fn screen(run: &RunDir, schedules: &Schedules, options: &Options) -> Option<Vec<
                     })
                 })
                 .collect::<Option<Vec<Observation>>>()?;
-            super::fit_pedestal(bearing, &super::estimator::points_of(&points), &ols).ok()
+            super::fit_pedestal(bearing, &points, &ols).ok()
         })
         .collect()
 }

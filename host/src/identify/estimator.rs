@@ -4,7 +4,7 @@
 //! of the noise scale and, on request, OLS's efficiency against the
 //! Cramér–Rao bound.
 
-use super::{checks, ols_solution, Options, PedestalFit, PedestalPoint, Warning, WarningKind};
+use super::{checks, ols_solution, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::{self, LackOfFit};
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::noise::{BearingNoise, NoiseSource, Quantisation, CHANNELS};
@@ -106,8 +106,7 @@ pub fn fit_ml(
     noise: &mut BearingNoise,
     options: &Options,
 ) -> Result<(PedestalFit, NoiseReport), IdentifyError> {
-    let points = points_of(observations);
-    let (ols_fit, solution, used, skipped) = ols_solution(bearing, &points, options)?;
+    let (ols_fit, solution, used, skipped) = ols_solution(bearing, observations, options)?;
     let columns = options.model().parameters();
     let with_noise = |noise: &BearingNoise| -> Vec<Observation> {
         let mut obs: Vec<Observation> = observations
@@ -376,16 +375,4 @@ fn compare(
         sd_under_noise: named(&|i| (variance_scale * sandwich[i][i]).sqrt()),
         efficiency: named(&|i| ml_fit.covariance[i][i] / sandwich[i][i]),
     }
-}
-
-/// The per-speed points of OLS (pedestal phasors and bearing forces).
-pub fn points_of(observations: &[Observation]) -> Vec<PedestalPoint> {
-    observations
-        .iter()
-        .map(|o| PedestalPoint {
-            speed_hz: o.speed_hz,
-            ped: o.ped,
-            force: o.force(),
-        })
-        .collect()
 }
