@@ -24,7 +24,8 @@
 //! scatter.
 
 use crate::estimate::ml;
-use crate::estimate::noise::ColumnDigits;
+use crate::estimate::noise::{ColumnDigits, Quantisation};
+use crate::estimate::pedestal::number_variance;
 use crate::estimate::{complex_stiffness, Observation};
 use crate::identify::{fit_run, Identification, Options};
 use crate::rundir::{round_to_digits, DigitsMode, Measurement, RunDir};
@@ -166,7 +167,7 @@ pub fn monte_carlo_with_progress(
         for (b, name) in bearings.iter().enumerate() {
             let rms: [f64; 4] = std::array::from_fn(|ch| channel_rms(&clean, name, ch));
             crb_var[b] = bound_with(&clean, name, &theta_true[b], &|_, c| {
-                0.5 * (fraction * rms[c / 2]).powi(2)
+                number_variance(Quantisation::Rounding, 0.0, Some(fraction * rms[c / 2]))
             })?;
         }
     }
@@ -208,10 +209,8 @@ pub fn monte_carlo_with_progress(
                 for (b, name) in bearings.iter().enumerate() {
                     bound_var[b] =
                         bound_with(&turned, name, &theta_true[b], &|m: &Measurement, c| {
-                            quantum
-                                .ulp(crate::estimate::noise::real_value(m, c))
-                                .powi(2)
-                                / 12.0
+                            let ulp = quantum.ulp(crate::estimate::noise::real_value(m, c));
+                            number_variance(Quantisation::Rounding, ulp, None)
                         })?;
                 }
                 rounded(&turned, digits)

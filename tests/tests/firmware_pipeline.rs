@@ -8,7 +8,8 @@ mod firmware_support;
 
 use firmware_support::{Client, Scenario, VOLTS_PER_CODE};
 use num_complex::Complex;
-use plinth::identify::{fit_pedestal, Options, PedestalPoint};
+use plinth::estimate::Observation;
+use plinth::identify::{fit_pedestal, Options};
 use plinth_firmware::device::Device;
 use plinth_firmware::link::ByteLink;
 use plinth_firmware::replay::ReplaySource;
@@ -317,13 +318,12 @@ fn replayed_run_down_gives_true_phasors_and_the_batch_estimate() {
         for (g, w) in got.iter().zip(&want) {
             worst = worst.max((g - w).norm() / w.norm());
         }
-        points.push(PedestalPoint {
-            speed_hz: speed,
-            ped: [got[2], got[3]],
-            force: scenario
-                .bearing
-                .force(std::f64::consts::TAU * speed, &[got[0], got[1]]),
-        });
+        points.push(Observation::without_noise(
+            speed,
+            [got[0], got[1]],
+            [got[2], got[3]],
+            &scenario.bearing,
+        ));
     }
     assert!(worst < 1e-3, "worst relative phasor error {worst:e}");
 

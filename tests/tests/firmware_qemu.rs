@@ -10,7 +10,8 @@
 mod firmware_support;
 
 use firmware_support::{Client, Scenario};
-use plinth::identify::{fit_pedestal, Options, PedestalPoint};
+use plinth::estimate::Observation;
+use plinth::identify::{fit_pedestal, Options};
 use plinth_shared::protocol::{DeviceMessage, HostMessage};
 use std::io::{Read, Write};
 use std::os::unix::net::UnixStream;
@@ -227,18 +228,17 @@ fn image_identifies_a_replayed_run_down_under_qemu_and_exits_cleanly() {
     let c = |w: plinth_shared::protocol::WirePhasor| {
         num_complex::Complex::new(f64::from(w.re), f64::from(w.im))
     };
-    let points: Vec<PedestalPoint> = frames
+    let points: Vec<Observation> = frames
         .iter()
         .map(|f| {
             let b = &f.bearings[0];
             let speed = f64::from(f.speed_hz);
-            PedestalPoint {
-                speed_hz: speed,
-                ped: [c(b.ped[0]), c(b.ped[1])],
-                force: scenario
-                    .bearing
-                    .force(std::f64::consts::TAU * speed, &[c(b.rel[0]), c(b.rel[1])]),
-            }
+            Observation::without_noise(
+                speed,
+                [c(b.rel[0]), c(b.rel[1])],
+                [c(b.ped[0]), c(b.ped[1])],
+                &scenario.bearing,
+            )
         })
         .collect();
     let batch = fit_pedestal("0", &points, &Options::default())

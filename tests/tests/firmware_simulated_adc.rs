@@ -24,7 +24,8 @@
 use embedded_hal::digital::{ErrorType as PinErrorType, InputPin, OutputPin};
 use embedded_hal::spi::{ErrorKind, ErrorType as SpiErrorType, Operation, SpiDevice};
 use num_complex::Complex;
-use plinth::identify::{fit_pedestal, Options, PedestalPoint};
+use plinth::estimate::Observation;
+use plinth::identify::{fit_pedestal, Options};
 use plinth::sim::signals::{synthesise, Channel, RunDown, SensorKind, SignalOptions, SignalSet};
 use plinth::sim::{EffectSet, Machine};
 use plinth_firmware::ad7606::{Ad7606, Range};
@@ -445,7 +446,7 @@ fn run(machine: &Machine, rundown: (f64, f64, f64), front: FrontEnd) -> Outcome 
     let mut peaks = vec![[0.0f64; 4]; bearings.len()];
     let mut errors = vec![[0.0f64; 4]; bearings.len()];
     let mut worst_steps = vec![[0.0f64; 4]; bearings.len()];
-    let mut points: Vec<Vec<PedestalPoint>> = vec![Vec::new(); bearings.len()];
+    let mut points: Vec<Vec<Observation>> = vec![Vec::new(); bearings.len()];
     for m in &response {
         let b = bearings.iter().position(|n| *n == m.bearing).unwrap();
         for (q, quantity) in quantities.iter().enumerate() {
@@ -478,11 +479,12 @@ fn run(machine: &Machine, rundown: (f64, f64, f64), front: FrontEnd) -> Outcome 
                 worst_steps[b][q] = worst_steps[b][q].max(error / lsb_m(s, ch, speed));
             }
             let coefficients = tables_f64[b].at(speed).unwrap();
-            points[b].push(PedestalPoint {
-                speed_hz: speed,
-                ped: [got[2], got[3]],
-                force: coefficients.force(TAU * speed, &[got[0], got[1]]),
-            });
+            points[b].push(Observation::without_noise(
+                speed,
+                [got[0], got[1]],
+                [got[2], got[3]],
+                &coefficients,
+            ));
         }
     }
     for ch in &h.channels {

@@ -6,11 +6,12 @@
 //! `examples/run-paper-2digits` and simulator runs of two machines (oil-film
 //! bearings; tabulated cross-coupled bearings).
 
+use plinth::estimate::Observation;
 use plinth::identify::cli::{run as identify_cli, Args, Equations};
 use plinth::identify::convention::Convention;
 use plinth::identify::physical::{exit_code, EXIT_NOT_PHYSICAL};
 use plinth::identify::{
-    fit_pedestal, identify_run, Identification, IdentifyError, Options, PedestalPoint, WarningKind,
+    fit_pedestal, identify_run, Identification, IdentifyError, Options, WarningKind,
 };
 use plinth::rundir::RunDir;
 use plinth::sim::{unbalance_response, EffectSet, Machine, Noise};
@@ -398,14 +399,20 @@ fn negative_mass_and_stiffness_are_untrusted_with_the_reason() {
 fn an_overflowing_result_is_an_error_not_a_row() {
     // Numbers near the top of f64's range: every product in the regression
     // overflows.
-    let points: Vec<PedestalPoint> = (1..=20)
+    let points: Vec<Observation> = (1..=20)
         .map(|i| {
             let s = 10.0 * i as f64;
             let z = num_complex::Complex::new(1.0e300, -3.0e299 * i as f64);
-            PedestalPoint {
+            // The bearing forces [z·1e7, z·2e7] from rel = (z, 2z) and a
+            // diagonal bearing of 1e7 N/m.
+            let k = num_complex::Complex::new(1.0e7, 0.0);
+            let zero = num_complex::Complex::new(0.0, 0.0);
+            Observation {
                 speed_hz: s,
+                rel: [z, z * 2.0],
                 ped: [z, z * 0.5],
-                force: [z * 1.0e7, z * 2.0e7],
+                kstar: [[k, zero], [zero, k]],
+                var: [0.0; 8],
             }
         })
         .collect();

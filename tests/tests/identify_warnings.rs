@@ -2,10 +2,9 @@
 //! speeds, no pedestal resonance in range, collinear or ill-conditioned data,
 //! non-finite input.
 
+use plinth::estimate::Observation;
 use plinth::identify::synthetic::{linspace, SyntheticRun};
-use plinth::identify::{
-    fit_pedestal, identify_run, pedestal_points, Options, PedestalPoint, WarningKind,
-};
+use plinth::identify::{fit_pedestal, identify_run, pedestal_points, Options, WarningKind};
 use plinth::rundir::RunDir;
 use plinth_tests::rel_err;
 
@@ -15,7 +14,7 @@ fn run_with_speeds(speeds_hz: Vec<f64>) -> RunDir {
     recipe.build().unwrap()
 }
 
-fn left_points(run: &RunDir) -> Vec<PedestalPoint> {
+fn left_points(run: &RunDir) -> Vec<Observation> {
     pedestal_points(
         run.measurements.iter().filter(|m| m.bearing == "left"),
         &run.bearing_schedules()["left"],
@@ -148,7 +147,8 @@ fn collinear_data_narrow_speed_band() {
 fn non_finite_points_are_left_out_and_reported() {
     let run = run_with_speeds(linspace(5.0, 200.0, 50));
     let mut points = left_points(&run);
-    points[7].force[1].re = f64::NAN;
+    // A non-finite force in z (its bearing stiffness).
+    points[7].kstar[1][1].re = f64::NAN;
     points[9].ped[0].im = f64::INFINITY;
     let fit = fit_pedestal("left", &points, &Options::default()).unwrap();
     assert!(fit.has_warning(WarningKind::NonFiniteInput));

@@ -2,13 +2,14 @@
 //! the host's f64 batch fit, on the same run-down after one pass.
 
 use num_complex::Complex;
-use plinth::identify::{fit_pedestal, pedestal_points, Options, Parameter, PedestalPoint};
+use plinth::estimate::Observation;
+use plinth::identify::{fit_pedestal, pedestal_points, Options, Parameter};
 use plinth::rundir::RunDir;
 use plinth_shared::phasor::omega_from_hz;
 use plinth_shared::rls::PedestalRls;
 use plinth_tests::{paper_like_run, rel_err};
 
-fn points(run: &RunDir, bearing: &str) -> Vec<PedestalPoint> {
+fn points(run: &RunDir, bearing: &str) -> Vec<Observation> {
     let schedules = run.bearing_schedules();
     pedestal_points(
         run.measurements.iter().filter(|m| m.bearing == bearing),
@@ -22,15 +23,15 @@ fn c32(c: Complex<f64>) -> Complex<f32> {
 }
 
 /// Feeds every speed once, in run-down order (highest speed first).
-fn rls_pass(points: &[PedestalPoint]) -> [f64; 5] {
+fn rls_pass(points: &[Observation]) -> [f64; 5] {
     let mut rls = PedestalRls::<f32>::default();
-    let mut order: Vec<&PedestalPoint> = points.iter().collect();
+    let mut order: Vec<&Observation> = points.iter().collect();
     order.sort_by(|a, b| b.speed_hz.total_cmp(&a.speed_hz));
     for p in order {
         let accepted = rls.update(
             omega_from_hz(p.speed_hz as f32),
             &p.ped.map(c32),
-            &p.force.map(c32),
+            &p.force().map(c32),
         );
         assert_eq!(accepted, 4);
     }

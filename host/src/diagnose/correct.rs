@@ -55,7 +55,7 @@ pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
                 let v = state.params.nl[k];
                 match *nl {
                     Nonlinear::Delay { bearing, channels } if bearing == b => {
-                        let f = Complex::from_polar(1.0, p.omega * v);
+                        let f = Complex::from_polar(1.0, p.omega() * v);
                         for d in 0..2 {
                             if channels.ped[d] {
                                 p.ped[d] *= f;

@@ -1,65 +1,18 @@
 //! The measurements of a run directory arranged for the discrepancy workflow:
 //! one speed-sorted series of 1X phasors per bearing, with the complex bearing
-//! stiffness K* = K_b + iΩ·C_b at each measured speed and the noise standard
-//! deviation of every real number (see [`super::noise`]).
+//! stiffness K* = K_b + iΩ·C_b at each measured speed and the noise variance
+//! of every real number (see [`super::noise`]): one [`Observation`] per
+//! bearing and speed.
 
-use super::noise::{BearingNoise, ColumnDigits, NoiseModel, CHANNELS};
+use super::noise::{BearingNoise, ColumnDigits, NoiseModel};
 use crate::estimate::noise::Quantisation;
+use crate::estimate::pedestal::{data_alone_sd, unscale};
+use crate::estimate::Observation;
 use crate::identify::{estimator::fit_ml, observations, Options as IdentifyOptions, PedestalFit};
 use crate::rundir::{Measurement, RunDir};
 use anyhow::{anyhow, bail, Context, Result};
-use num_complex::Complex;
-use plinth_shared::phasor::{omega_from_hz, Phasor2};
 
-/// Complex 2×2 matrix indexed `[row][col]` over (y, z).
-pub type Complex2x2 = [[Complex<f64>; 2]; 2];
-
-/// One bearing at one speed.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Point {
-    /// Rotor speed [Hz].
-    pub speed_hz: f64,
-    /// Rotor speed [rad/s].
-    pub omega: f64,
-    /// Rotor displacement relative to the pedestal, (y, z) [m].
-    pub rel: Phasor2<f64>,
-    /// Absolute pedestal displacement, (y, z) [m].
-    pub ped: Phasor2<f64>,
-    /// Complex bearing stiffness K_b + iΩ·C_b [N/m], so that F = K*·rel.
-    pub kstar: Complex2x2,
-    /// Noise standard deviation [m] of each real number, in the order of
-    /// [`CHANNELS`] (rel y re, rel y im, rel z re, rel z im, ped y re, ...).
-    pub sigma: [f64; 8],
-}
-
-impl Point {
-    /// The force the bearing transmits to the pedestal [N]: F = K*·rel.
-    pub fn force(&self) -> Phasor2<f64> {
-        mul(&self.kstar, &self.rel)
-    }
-
-    /// The measured value of real channel `c` (order of [`CHANNELS`]) [m].
-    pub fn channel(&self, c: usize) -> f64 {
-        let z = if c < 4 {
-            self.rel[c / 2]
-        } else {
-            self.ped[(c - 4) / 2]
-        };
-        if c.is_multiple_of(2) {
-            z.re
-        } else {
-            z.im
-        }
-    }
-}
-
-/// Complex 2×2 matrix times a (y, z) phasor pair.
-pub fn mul(a: &Complex2x2, x: &Phasor2<f64>) -> Phasor2<f64> {
-    [
-        a[0][0] * x[0] + a[0][1] * x[1],
-        a[1][0] * x[0] + a[1][1] * x[1],
-    ]
-}
+pub use crate::estimate::{mul, Complex2x2};
 
 /// All bearings of a run, speed-aligned.
 #[derive(Clone, Debug)]
@@ -70,7 +23,7 @@ pub struct Prepared {
     /// Sorted distinct measured speeds [Hz].
     pub speeds_hz: Vec<f64>,
     /// `points[b][j]`: bearing `b` at `speeds_hz[j]`, when measured there.
-    pub points: Vec<Vec<Option<Point>>>,
+    pub points: Vec<Vec<Option<Observation>>>,
     /// The measurement noise model the standard deviations come from.
     pub noise: NoiseModel,
     /// Per bearing, the maximum-likelihood fit of the paper's five-parameter
@@ -95,7 +48,8 @@ impl Prepared {
         speeds_hz.sort_by(f64::total_cmp);
         speeds_hz.dedup();
         let schedules = run.bearing_schedules();
-        let mut points: Vec<Vec<Option<Point>>> = vec![vec![None; speeds_hz.len()]; bearings.len()];
+        let mut points: Vec<Vec<Option<Observation>>> =
+            vec![vec![None; speeds_hz.len()]; bearings.len()];
         for (row, m) in run.measurements.iter().enumerate() {
             let finite = m.speed_hz.is_finite()
                 && m.speed_hz > 0.0
@@ -120,25 +74,12 @@ impl Prepared {
                 })?
                 .at(m.speed_hz)
                 .with_context(|| format!("bearings.csv, bearing {}", m.bearing))?;
-            let omega = omega_from_hz(m.speed_hz);
-            let mut kstar = [[Complex::new(0.0, 0.0); 2]; 2];
-            for (r, row_k) in kstar.iter_mut().enumerate() {
-                for (c, v) in row_k.iter_mut().enumerate() {
-                    *v = Complex::new(coefficients.k[r][c], omega * coefficients.c[r][c]);
-                }
-            }
-            let mut point = Point {
-                speed_hz: m.speed_hz,
-                omega,
-                rel: m.rel,
-                ped: m.ped,
-                kstar,
-                sigma: [0.0; 8],
-            };
-            for c in 0..CHANNELS.len() {
-                point.sigma[c] = 0.0;
-            }
-            points[b][j] = Some(point);
+            points[b][j] = Some(Observation::without_noise(
+                m.speed_hz,
+                m.rel,
+                m.ped,
+                &coefficients,
+            ));
         }
         let columns = ColumnDigits::of_run(&run.measurements);
         let mut noises = Vec::with_capacity(bearings.len());
@@ -166,15 +107,13 @@ impl Prepared {
             let (fit, _) = fit_ml(name, &obs, &mut noise, &options)
                 .with_context(|| format!("fitting the base model of bearing {name}"))?;
             // The noise from the data alone (module docs of `noise`).
-            let scale = noise.variance_scale;
-            noise.rescale(1.0 / scale);
+            unscale(&mut noise);
             for (m, var) in rows.iter().zip(&noise.var) {
                 let j = speeds_hz.partition_point(|&s| s < m.speed_hz);
                 if let Some(p) = points[b].get_mut(j).and_then(Option::as_mut) {
-                    let magnitude: [f64; 8] = std::array::from_fn(|c| point_magnitude(p, c));
-                    for ((sd, v), m) in p.sigma.iter_mut().zip(var).zip(magnitude) {
-                        *sd = v.sqrt().max(PRECISION * m).max(f64::MIN_POSITIVE);
-                    }
+                    let magnitude: [f64; 8] = std::array::from_fn(|c| p.magnitude(c));
+                    let sd = data_alone_sd(var, &magnitude);
+                    p.var = sd.map(|s| s * s);
                 }
             }
             noises.push(noise);
@@ -204,21 +143,5 @@ impl Prepared {
     /// Index of a bearing by name.
     pub fn bearing_index(&self, name: &str) -> Option<usize> {
         self.bearings.iter().position(|b| b == name)
-    }
-}
-
-/// Relative precision below which no phasor's digits are information: a
-/// response computed in double precision (an FE assembly and LU solve, an
-/// extraction) keeps about 10 significant digits, so the significance tests
-/// never take a number as more accurate than 1e-10 of its phasor's magnitude
-/// (it matters only for data written with more than about 10 digits).
-const PRECISION: f64 = 1e-10;
-
-/// |phasor| [m] of the complex channel real channel `c` belongs to.
-pub fn point_magnitude(p: &Point, c: usize) -> f64 {
-    if c < 4 {
-        p.rel[c / 2].norm()
-    } else {
-        p.ped[(c - 4) / 2].norm()
     }
 }

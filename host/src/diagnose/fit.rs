@@ -55,12 +55,12 @@ impl Weights {
                             for dc in 0..2 {
                                 let c = 2 * qc + dc;
                                 let coef = m[(e, c)] * a.ped_phase[c];
-                                add(coef, pq.sigma[4 + 2 * dc], pq.sigma[5 + 2 * dc]);
+                                add(coef, pq.sd(4 + 2 * dc), pq.sd(5 + 2 * dc));
                             }
                         }
                         for dc in 0..2 {
                             let coef = -a.kstar[pb][d][dc] * a.rel_phase[2 * pb + dc];
-                            add(coef, point.sigma[2 * dc], point.sigma[2 * dc + 1]);
+                            add(coef, point.sd(2 * dc), point.sd(2 * dc + 1));
                         }
                         out[2 * d] = var_re.sqrt().max(f64::MIN_POSITIVE);
                         out[2 * d + 1] = var_im.sqrt().max(f64::MIN_POSITIVE);

@@ -224,22 +224,11 @@ pub struct FoundationFit {
 }
 
 /// The measurements as the estimation core's observations, per bearing,
-/// with the variances the diagnosis uses (`Point::sigma`).
+/// with the variances the diagnosis uses (`Observation::var`).
 pub fn observations(prep: &Prepared) -> Vec<Vec<Observation>> {
     prep.points
         .iter()
-        .map(|row| {
-            row.iter()
-                .flatten()
-                .map(|p| Observation {
-                    speed_hz: p.speed_hz,
-                    rel: p.rel,
-                    ped: p.ped,
-                    kstar: p.kstar,
-                    var: std::array::from_fn(|c| p.sigma[c] * p.sigma[c]),
-                })
-                .collect()
-        })
+        .map(|row| row.iter().flatten().copied().collect())
         .collect()
 }
 
@@ -580,10 +569,9 @@ fn prediction(
                             continue;
                         };
                         let a = p2[s].ped[i][d] - x[i][d];
-                        *v +=
-                            a.norm_sqr() * (pq.sigma[2 * c].powi(2) + pq.sigma[2 * c + 1].powi(2));
+                        *v += a.norm_sqr() * (pq.var[2 * c] + pq.var[2 * c + 1]);
                     }
-                    *v += point.sigma[4 + 2 * d].powi(2) + point.sigma[5 + 2 * d].powi(2);
+                    *v += point.var[4 + 2 * d] + point.var[5 + 2 * d];
                 }
                 out.noise_var[b][j] = Some(var);
             }

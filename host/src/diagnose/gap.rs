@@ -93,11 +93,10 @@ impl Prediction {
                                     a_ec += m_inv[(e, 2 * qb + r)] * a.kstar[qb][r][dc];
                                 }
                                 a_ec = a_ec * a.rel_phase[2 * qb + dc] / a.ped_phase[e];
-                                *v += a_ec.norm_sqr()
-                                    * (pq.sigma[2 * dc].powi(2) + pq.sigma[2 * dc + 1].powi(2));
+                                *v += a_ec.norm_sqr() * (pq.var[2 * dc] + pq.var[2 * dc + 1]);
                             }
                         }
-                        *v += point.sigma[4 + 2 * d].powi(2) + point.sigma[5 + 2 * d].powi(2);
+                        *v += point.var[4 + 2 * d] + point.var[5 + 2 * d];
                     }
                     noise_var[b][j] = Some(var);
                 }
@@ -125,10 +124,7 @@ impl Prediction {
                     n += 2;
                     let (miss, var) = match (self.ped[b][j], self.noise_var[b][j]) {
                         (Some(x), Some(v)) => ((x[d] - p.ped[d]).norm_sqr(), v[d]),
-                        _ => (
-                            p.ped[d].norm_sqr(),
-                            p.sigma[4 + 2 * d].powi(2) + p.sigma[5 + 2 * d].powi(2),
-                        ),
+                        _ => (p.ped[d].norm_sqr(), p.var[4 + 2 * d] + p.var[5 + 2 * d]),
                     };
                     if var > 0.0 && var.is_finite() {
                         chi2 += 2.0 * miss / var;

@@ -24,7 +24,8 @@
 //! measured value times e^{iΩτ}).
 
 use super::bearing_table::WrittenTable;
-use super::data::{Complex2x2, Point, Prepared};
+use super::data::{Complex2x2, Prepared};
+use crate::estimate::Observation;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
 use serde::Serialize;
@@ -338,11 +339,11 @@ impl Model {
         let ng = group.len();
         let n = 2 * ng;
         let pos = |b: usize| group.iter().position(|&g| g == b);
-        let points: Vec<&Point> = group
+        let points: Vec<&Observation> = group
             .iter()
             .map(|&b| prep.points[b][j].as_ref())
             .collect::<Option<Vec<_>>>()?;
-        let omega = points[0].omega;
+        let omega = points[0].omega();
         let one = Complex::new(1.0, 0.0);
         let mut eta = vec![0.0; ng];
         let mut kstar: Vec<Complex2x2> = points.iter().map(|p| p.kstar).collect();

@@ -1,5 +1,6 @@
 //! The measurement noise of the discrepancy workflow: the one noise model of
-//! [`crate::estimate::noise`], per bearing, decided by the same
+//! [`crate::estimate::noise`], per bearing, chosen by the one noise policy
+//! ([`crate::estimate::pedestal`]) in the same
 //! maximum-likelihood base fit `plinth identify` makes
 //! ([`crate::identify::estimator::fit_ml`]): the `*_sd` columns, else the
 //! digits each number carries (taken as truncated, mean square ulp²/3,

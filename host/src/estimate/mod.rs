@@ -1,11 +1,14 @@
-//! The estimation core: one noise model ([`noise`]) and one maximum-likelihood
+//! The estimation core: one noise model ([`noise`]), one noise policy
+//! ([`pedestal`]: which noise a pedestal's fit uses) and one maximum-likelihood
 //! errors-in-variables fit of the pedestal model ([`ml`]), used by
 //! `plinth identify` (its default estimator), `plinth diagnose` (its noise
 //! floor) and `plinth accuracy` (the Monte-Carlo against the Cramér–Rao bound).
 //!
 //! The data of one pedestal at one speed are an [`Observation`]: the measured
 //! phasors, the known complex bearing stiffness and the noise variance of
-//! every real number that was measured.
+//! every real number that was measured. It is the one type of a bearing at
+//! one speed: `identify`'s OLS and ML fits, the convention check, `diagnose`
+//! and `accuracy` all take it.
 
 pub mod base;
 pub mod gauss_helmert;
@@ -13,6 +16,7 @@ pub mod lack_of_fit;
 pub mod levenberg;
 pub mod ml;
 pub mod noise;
+pub mod pedestal;
 pub mod robust;
 
 use num_complex::Complex;
@@ -39,6 +43,25 @@ pub struct Observation {
 }
 
 impl Observation {
+    /// Bearing data at `speed_hz` [Hz]: rotor-relative and pedestal phasors
+    /// `rel`, `ped` [m], the complex stiffness of the bearing `coefficients`
+    /// at that speed, and no noise known (every variance 0: what the paper's
+    /// OLS needs; [`noise`] gives the variances).
+    pub fn without_noise(
+        speed_hz: f64,
+        rel: Phasor2<f64>,
+        ped: Phasor2<f64>,
+        coefficients: &plinth_shared::bearing::BearingCoefficients<f64>,
+    ) -> Self {
+        Self {
+            speed_hz,
+            rel,
+            ped,
+            kstar: complex_stiffness(coefficients, omega_from_hz(speed_hz)),
+            var: [0.0; 8],
+        }
+    }
+
     /// Rotor speed Ω [rad/s].
     pub fn omega(&self) -> f64 {
         omega_from_hz(self.speed_hz)
@@ -47,6 +70,32 @@ impl Observation {
     /// The force the bearing transmits to the pedestal [N]: F = K*·rel.
     pub fn force(&self) -> Phasor2<f64> {
         mul(&self.kstar, &self.rel)
+    }
+
+    /// The noise sd [m] of real number `c` ([`noise::REAL_CHANNELS`] order).
+    pub fn sd(&self, c: usize) -> f64 {
+        self.var[c].sqrt()
+    }
+
+    /// |phasor| [m] of the complex channel real number `c`
+    /// ([`noise::REAL_CHANNELS`] order) belongs to.
+    pub fn magnitude(&self, c: usize) -> f64 {
+        if c < 4 {
+            self.rel[c / 2].norm()
+        } else {
+            self.ped[(c - 4) / 2].norm()
+        }
+    }
+
+    /// True when the speed, the pedestal phasors and the bearing force are
+    /// finite: what eq. 3 needs (the paper's OLS uses no variances).
+    pub fn equation_is_finite(&self) -> bool {
+        self.speed_hz.is_finite()
+            && self
+                .ped
+                .iter()
+                .chain(&self.force())
+                .all(|c| c.re.is_finite() && c.im.is_finite())
     }
 
     /// True when every number is finite.

@@ -41,6 +41,7 @@
 //! scale is the fit's: the whitened residuals give χ², and the noise is
 //! rescaled by χ²/dof ([`BearingNoise::rescale`], done by the caller).
 
+use super::pedestal::number_variance;
 use crate::rundir::Measurement;
 use num_complex::Complex;
 use serde::{Deserialize, Serialize};
@@ -268,19 +269,17 @@ impl BearingNoise {
         columns: &[ColumnDigits; 8],
         quantisation: Quantisation,
     ) -> Self {
-        let msu = quantisation.mean_square_ulps();
-        let digits_var: Vec<[f64; 8]> = rows
-            .iter()
-            .map(|m| std::array::from_fn(|c| msu * columns[c].ulp_of(m, c).powi(2)))
-            .collect();
+        // Each number's variance: the one rule of `estimate::pedestal`.
+        let variance = |m: &Measurement, c: usize, sd: Option<f64>| {
+            number_variance(quantisation, columns[c].ulp_of(m, c), sd)
+        };
         let with_columns = !rows.is_empty() && rows.iter().all(|m| m.noise_sd.is_some());
         if with_columns {
             let var = rows
                 .iter()
-                .zip(&digits_var)
-                .map(|(m, dv)| {
+                .map(|m| {
                     let sd = m.noise_sd.unwrap_or([0.0; 4]);
-                    std::array::from_fn(|c| (0.5 * sd[c / 2] * sd[c / 2]).max(dv[c]))
+                    std::array::from_fn(|c| variance(m, c, Some(sd[c / 2])))
                 })
                 .collect();
             return Self {
@@ -292,6 +291,10 @@ impl BearingNoise {
                 variance_scale: 1.0,
             };
         }
+        let digits_var: Vec<[f64; 8]> = rows
+            .iter()
+            .map(|m| std::array::from_fn(|c| variance(m, c, None)))
+            .collect();
         let mut order: Vec<usize> = (0..rows.len()).collect();
         order.sort_by(|&a, &b| rows[a].speed_hz.total_cmp(&rows[b].speed_hz));
         // The local fits depend on the speeds only: made once, used by every channel.
@@ -457,22 +460,6 @@ impl RunNoise {
             .iter()
             .find(|(name, _, _)| name == bearing)
             .map(|(_, index, noise)| (index.as_slice(), noise))
-    }
-
-    /// The noise sd per real component [m] of the four phasors (rel y,
-    /// rel z, ped y, ped z) of each of the run's `rows` measurements: the
-    /// scatter law (floored by the digits) while the source is the digits,
-    /// else the variances as they stand (noise columns), each channel's
-    /// real and imaginary variance averaged.
-    pub fn floor(&self, rows: usize) -> Vec<[f64; 4]> {
-        let mut out = vec![[0.0; 4]; rows];
-        for (_, index, noise) in &self.bearings {
-            let var = noise.scatter_var.as_ref().unwrap_or(&noise.var);
-            for (&i, v) in index.iter().zip(var) {
-                out[i] = std::array::from_fn(|ch| (0.5 * (v[2 * ch] + v[2 * ch + 1])).sqrt());
-            }
-        }
-        out
     }
 
     /// [`BearingNoise::swapped_yz`] of every bearing.

@@ -9,8 +9,9 @@
 //! still linear in θ = (k_y, k_z, m, c_y, c_z): eq. 4 with X_ped − X_B in the
 //! k and c columns, solved by the same least squares as `identify`.
 
-use super::{lsq, pedestal_points, IdentifyError, PedestalPoint};
+use super::{lsq, pedestal_points, IdentifyError};
 use crate::base_csv::BaseRow;
+use crate::estimate::Observation;
 use crate::rundir::RunDir;
 use nalgebra::{DMatrix, DVector};
 use plinth_shared::phasor::omega_from_hz;
@@ -65,7 +66,7 @@ pub fn identify_on_measured_base(
             .ok_or_else(|| IdentifyError::UnknownBearing {
                 bearing: bearing.to_string(),
             })?;
-        let points: Vec<PedestalPoint> = pedestal_points(
+        let points: Vec<Observation> = pedestal_points(
             run.measurements.iter().filter(|m| m.bearing == bearing),
             schedule,
         )
@@ -88,8 +89,9 @@ pub fn identify_on_measured_base(
             let omega = omega_from_hz(p.speed_hz);
             let rel = [p.ped[0] - row.motion[0], p.ped[1] - row.motion[1]];
             // k and c act on X_ped − X_B, the inertia on X_ped.
-            let on_rel = equations(omega, &rel, &p.force);
-            let on_abs = equations(omega, &p.ped, &p.force);
+            let force = p.force();
+            let on_rel = equations(omega, &rel, &force);
+            let on_abs = equations(omega, &p.ped, &force);
             for (eq, abs) in on_rel.iter().zip(&on_abs) {
                 let mut r = eq.row;
                 r[Parameter::M as usize] = abs.row[Parameter::M as usize];

@@ -1,7 +1,8 @@
 //! The warnings of a pedestal fit: every reason not to believe its numbers.
 
 use super::lsq::LeastSquares;
-use super::{Options, PedestalFit, PedestalPoint, Warning, WarningKind};
+use super::{Options, PedestalFit, Warning, WarningKind};
+use crate::estimate::Observation;
 use plinth_shared::phasor::Complex;
 use plinth_shared::regression::Parameter;
 
@@ -10,7 +11,7 @@ use plinth_shared::regression::Parameter;
 /// over `columns` (the estimated parameters, in θ order).
 pub(super) fn warnings(
     fit: &PedestalFit,
-    used: &[PedestalPoint],
+    used: &[Observation],
     skipped: usize,
     solution: &LeastSquares,
     columns: &[Parameter],
@@ -119,7 +120,7 @@ pub(super) fn warnings(
         let s: Vec<f64> = used
             .iter()
             .filter(|p| p.ped[d].norm_sqr() > 0.0)
-            .map(|p| in_phase_stiffness(p.force[d], p.ped[d]))
+            .map(|p| in_phase_stiffness(p.force()[d], p.ped[d]))
             .collect();
         if s.is_empty() {
             continue;

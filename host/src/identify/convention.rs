@@ -64,6 +64,7 @@ use super::misfit::noise_floor;
 use super::physical::is_plausible;
 use super::{Estimator, Identification, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::noise::{Quantisation, RunNoise};
+use crate::estimate::pedestal::floor_sd;
 use crate::estimate::{complex_stiffness, Observation};
 use crate::rundir::RunDir;
 use plinth_shared::phasor::omega_from_hz;
@@ -353,9 +354,12 @@ pub fn diagnose(
 ) -> Vec<Finding> {
     let floor_of = |run: &RunDir, noise: &RunNoise| {
         if noise.quantisation == Quantisation::Rounding {
-            noise.floor(run.measurements.len())
+            floor_sd(noise, run.measurements.len())
         } else {
-            RunNoise::estimate(run, Quantisation::Rounding).floor(run.measurements.len())
+            floor_sd(
+                &RunNoise::estimate(run, Quantisation::Rounding),
+                run.measurements.len(),
+            )
         }
     };
     let sigma = floor_of(run, noise);
@@ -572,7 +576,7 @@ fn screen(run: &RunDir, schedules: &Schedules, options: &Options) -> Option<Vec<
                     })
                 })
                 .collect::<Option<Vec<Observation>>>()?;
-            super::fit_pedestal(bearing, &super::estimator::points_of(&points), &ols).ok()
+            super::fit_pedestal(bearing, &points, &ols).ok()
         })
         .collect()
 }

@@ -4,10 +4,11 @@
 //! of the noise scale and, on request, OLS's efficiency against the
 //! Cramér–Rao bound.
 
-use super::{checks, ols_solution, Options, PedestalFit, PedestalPoint, Warning, WarningKind};
+use super::{checks, ols_solution, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::{self, LackOfFit};
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::noise::{BearingNoise, NoiseSource, Quantisation, CHANNELS};
+use crate::estimate::pedestal::{fit_under_noise, noise_level, NoiseLevel};
 use crate::estimate::robust;
 use crate::estimate::Observation;
 use crate::identify::IdentifyError;
@@ -39,13 +40,7 @@ impl Estimator {
     }
 }
 
-/// Two-sided p-value of χ² below which the noise scale is said not to fit.
-pub const CHI2_P_THRESHOLD: f64 = 1e-3;
-
-/// Factor by which χ²/dof may exceed 1 at the scatter's own level (its
-/// local fits' estimate, itself uncertain) before the excess is taken for a
-/// model error rather than a level to rescale [-].
-pub const SCATTER_LEVEL_TOLERANCE: f64 = 4.0;
+pub use crate::estimate::pedestal::{CHI2_P_THRESHOLD, SCATTER_LEVEL_TOLERANCE};
 
 /// One bearing's noise model as `identify --json` reports it (`"noise"`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -111,8 +106,7 @@ pub fn fit_ml(
     noise: &mut BearingNoise,
     options: &Options,
 ) -> Result<(PedestalFit, NoiseReport), IdentifyError> {
-    let points = points_of(observations);
-    let (ols_fit, solution, used, skipped) = ols_solution(bearing, &points, options)?;
+    let (ols_fit, solution, used, skipped) = ols_solution(bearing, observations, options)?;
     let columns = options.model().parameters();
     let with_noise = |noise: &BearingNoise| -> Vec<Observation> {
         let mut obs: Vec<Observation> = observations
@@ -124,19 +118,18 @@ pub fn fit_ml(
         obs.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
         obs
     };
-    if noise.digits_negligible() {
-        noise.use_scatter();
-    }
-    let mut obs = with_noise(noise);
     let start = ols_fit.params();
-    let mut attempt = ml::fit(&obs, &columns, &start);
-    if let Ok(f) = &attempt {
-        let p = ml::chi2_two_sided_p(f.chi2, f.dof);
-        if p < CHI2_P_THRESHOLD && f.chi2_per_dof() > 1.0 && noise.use_scatter() {
-            obs = with_noise(noise);
-            attempt = ml::fit(&obs, &columns, &f.theta);
-        }
-    }
+    let mut obs = Vec::new();
+    // The source (columns, digits or scatter): the one noise policy.
+    let mut attempt = fit_under_noise(
+        std::slice::from_mut(noise),
+        true,
+        |noises, first: Option<&MlFit>| {
+            obs = with_noise(&noises[0]);
+            ml::fit(&obs, &columns, first.map_or(&start, |f| &f.theta))
+        },
+        |f| (f.chi2, f.dof),
+    );
     let mut outlier_speeds_hz = Vec::new();
     if let Ok(f) = &attempt {
         // Speeds are outliers only when the rest of the data fit the model:
@@ -170,37 +163,35 @@ pub fn fit_ml(
     };
     let chi2 = ml_fit.chi2;
     let dof = ml_fit.dof;
-    let ratio = ml_fit.chi2_per_dof();
     let p_value = ml::chi2_two_sided_p(chi2, dof);
     let mut extra = Vec::new();
-    // A measured noise level (columns, digits, or the scatter's own level
-    // from its local fits) that the residuals exceed by far: the model
-    // error, not the noise, dominates, and is modelled as the paper's
-    // equation error on top of the noise (estimate::ml, "Equation error").
-    let excess_limit = if noise.source.scale_estimated() {
-        SCATTER_LEVEL_TOLERANCE
-    } else {
-        1.0
-    };
     let mut ml_fit = ml_fit;
-    let variance_scale = if p_value < CHI2_P_THRESHOLD && ratio > excess_limit {
-        // Two explanations of the excess, each with one free level: the
-        // noise larger by χ²/dof everywhere, or an equation error on top of
-        // it; the one under which the residuals are the more likely wins.
-        let n = obs.len() as f64;
-        let rescaled =
-            ml::log_det(&obs, &ml_fit.theta, 0.0).map(|d| d + 4.0 * n * ratio.ln() + dof as f64);
-        let combined =
-            ml::fit_with_equation_error(&obs, &columns, &ml_fit.theta).and_then(|(f, settled)| {
-                let d = ml::log_det(&obs, &f.theta, f.equation_var)? + f.chi2;
-                Ok((f, settled, d))
-            });
-        match (combined, rescaled) {
-            (Ok((f, settled, d)), Ok(d_rescaled))
-                if f.theta.iter().all(|v| v.is_finite()) && d < d_rescaled =>
-            {
-                ml_fit = f;
-                extra.push(Warning {
+    // The level: the one noise policy's verdict on χ².
+    let variance_scale = match noise_level(chi2, dof, noise.source.scale_estimated()) {
+        // A measured noise level (columns, digits, or the scatter's own
+        // level from its local fits) that the residuals exceed by far: the
+        // model error, not the noise, may dominate, and is then modelled as
+        // the paper's equation error on top of the noise (estimate::ml,
+        // "Equation error").
+        NoiseLevel::Exceeded(ratio) => {
+            // Two explanations of the excess, each with one free level: the
+            // noise larger by χ²/dof everywhere, or an equation error on top of
+            // it; the one under which the residuals are the more likely wins.
+            let n = obs.len() as f64;
+            let rescaled = ml::log_det(&obs, &ml_fit.theta, 0.0)
+                .map(|d| d + 4.0 * n * ratio.ln() + dof as f64);
+            let combined = ml::fit_with_equation_error(&obs, &columns, &ml_fit.theta).and_then(
+                |(f, settled)| {
+                    let d = ml::log_det(&obs, &f.theta, f.equation_var)? + f.chi2;
+                    Ok((f, settled, d))
+                },
+            );
+            match (combined, rescaled) {
+                (Ok((f, settled, d)), Ok(d_rescaled))
+                    if f.theta.iter().all(|v| v.is_finite()) && d < d_rescaled =>
+                {
+                    ml_fit = f;
+                    extra.push(Warning {
                     kind: WarningKind::NoiseScaleMismatch,
                     message: format!(
                         "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows, and not in its pattern (a model discrepancy); the excess is modelled as an equation error of {:.3e} N on every real equation (the paper's OLS error model) added to the noise, and the fit and its standard errors are those of the combined model{}",
@@ -213,11 +204,11 @@ pub fn fit_ml(
                         }
                     ),
                 });
-                1.0
-            }
-            _ if noise.source.scale_estimated() => ratio,
-            _ => {
-                extra.push(Warning {
+                    1.0
+                }
+                _ if noise.source.scale_estimated() => ratio,
+                _ => {
+                    extra.push(Warning {
                     kind: WarningKind::NoiseScaleMismatch,
                     message: format!(
                         "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter more than the noise of their {} allows (a larger noise); standard errors are scaled by {:.3}",
@@ -225,22 +216,22 @@ pub fn fit_ml(
                         ratio.sqrt()
                     ),
                 });
-                ratio
+                    ratio
+                }
             }
         }
-    } else if noise.source.scale_estimated() {
-        ratio
-    } else if p_value < CHI2_P_THRESHOLD {
-        extra.push(Warning {
-            kind: WarningKind::NoiseScaleMismatch,
-            message: format!(
-                "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter less than the noise of their {} says; standard errors are kept at that noise (an upper bound)",
-                noise.source.name()
-            ),
-        });
-        1.0
-    } else {
-        1.0
+        NoiseLevel::Estimated(ratio) => ratio,
+        NoiseLevel::Below(ratio) => {
+            extra.push(Warning {
+                kind: WarningKind::NoiseScaleMismatch,
+                message: format!(
+                    "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter less than the noise of their {} says; standard errors are kept at that noise (an upper bound)",
+                    noise.source.name()
+                ),
+            });
+            1.0
+        }
+        NoiseLevel::Known => 1.0,
     };
     if noise.source.scale_estimated() {
         noise.rescale(variance_scale);
@@ -384,16 +375,4 @@ fn compare(
         sd_under_noise: named(&|i| (variance_scale * sandwich[i][i]).sqrt()),
         efficiency: named(&|i| ml_fit.covariance[i][i] / sandwich[i][i]),
     }
-}
-
-/// The per-speed points of OLS (pedestal phasors and bearing forces).
-pub fn points_of(observations: &[Observation]) -> Vec<PedestalPoint> {
-    observations
-        .iter()
-        .map(|o| PedestalPoint {
-            speed_hz: o.speed_hz,
-            ped: o.ped,
-            force: o.force(),
-        })
-        .collect()
 }

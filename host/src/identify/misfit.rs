@@ -1,11 +1,12 @@
 //! How far a pedestal estimate is from its data, against the noise the data
-//! carry: the noise floor of every phasor ([`noise_floor`], the one place
-//! where it is chosen) and the misfit of eq. 3 ([`misfit`]): a χ² with the
+//! carry: the noise floor of every phasor ([`noise_floor`], by the one noise
+//! policy of [`crate::estimate::pedestal`]) and the misfit of eq. 3 ([`misfit`]): a χ² with the
 //! noise of both readings propagated, and the residual relative to the
 //! bearing forces. Used by [`super::convention`] to compare readings of a run.
 
 use super::PedestalFit;
 use crate::estimate::noise::{Quantisation, RunNoise};
+use crate::estimate::pedestal::floor_sd;
 use crate::rundir::{BearingSchedule, Measurement, RunDir};
 use plinth_shared::phasor::{omega_from_hz, Complex};
 use std::collections::BTreeMap;
@@ -14,15 +15,18 @@ type C64 = Complex<f64>;
 
 /// The noise standard deviation per real component [m] of the four phasors
 /// (rel y, rel z, ped y, ped z) of every measurement of a run, in the order of
-/// `run.measurements`. The one place where the noise floor is chosen, from the
-/// one noise model ([`crate::estimate::noise`]): the measurement's noise
+/// `run.measurements`, from the one noise model ([`crate::estimate::noise`])
+/// by the one noise policy ([`crate::estimate::pedestal::floor_sd`]): the measurement's noise
 /// columns (formats.md: sqrt(E|n|²), split equally between real and imaginary
 /// parts) when present, else the larger of the digits each number carries and
 /// the scatter between neighbouring speeds (local smooth fits, so that a
 /// resonance's curvature is not taken for noise). `None` when a bearing has
 /// no rows.
 pub fn noise_floor(run: &RunDir) -> Option<Vec<[f64; 4]>> {
-    Some(RunNoise::estimate(run, Quantisation::Rounding).floor(run.measurements.len()))
+    Some(floor_sd(
+        &RunNoise::estimate(run, Quantisation::Rounding),
+        run.measurements.len(),
+    ))
 }
 
 /// How far one pedestal estimate is from its data.

@@ -37,22 +37,11 @@ use crate::estimate::noise::{BearingNoise, Quantisation, RunNoise};
 use crate::estimate::{complex_stiffness, Observation};
 use crate::rundir::{BearingSchedule, Measurement, OutOfRange, RunDir, RunDirError};
 use nalgebra::{DMatrix, DVector};
-use plinth_shared::phasor::{omega_from_hz, Phasor2};
+use plinth_shared::phasor::omega_from_hz;
 use plinth_shared::regression::{equations_for_mode, PARAMETERS};
 use serde::{Deserialize, Deserializer, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
-
-/// One speed's data for one pedestal: what eq. 3 relates.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PedestalPoint {
-    /// Rotor speed [Hz].
-    pub speed_hz: f64,
-    /// Absolute pedestal 1X displacement (y, z) [m].
-    pub ped: Phasor2<f64>,
-    /// Force the bearing transmits to the pedestal (y, z) [N].
-    pub force: Phasor2<f64>,
-}
 
 /// How to identify: which equations and which parameters, and when to stop
 /// trusting a fit.
@@ -390,23 +379,24 @@ pub enum IdentifyError {
     NonFinite(#[from] physical::NonFiniteResult),
 }
 
-/// The per-speed data of one pedestal: the measured pedestal phasors and the
-/// bearing forces F = (K_b + iΩC_b)·rel with the coefficients interpolated
-/// from `schedule` at each speed (formats.md; no extrapolation).
+/// The per-speed data of one pedestal without their noise
+/// ([`Observation::without_noise`]): the measured phasors and the complex
+/// bearing stiffness with the coefficients interpolated from `schedule` at
+/// each speed (formats.md; no extrapolation).
 pub fn pedestal_points<'a>(
     measurements: impl IntoIterator<Item = &'a Measurement>,
     schedule: &BearingSchedule,
-) -> Result<Vec<PedestalPoint>, OutOfRange> {
+) -> Result<Vec<Observation>, OutOfRange> {
     measurements
         .into_iter()
         .map(|m| {
             let coefficients = schedule.at(m.speed_hz)?;
-            let force = coefficients.force(omega_from_hz(m.speed_hz), &m.rel);
-            Ok(PedestalPoint {
-                speed_hz: m.speed_hz,
-                ped: m.ped,
-                force,
-            })
+            Ok(Observation::without_noise(
+                m.speed_hz,
+                m.rel,
+                m.ped,
+                &coefficients,
+            ))
         })
         .collect()
 }
@@ -419,7 +409,7 @@ pub fn pedestal_points<'a>(
 /// only when no point is finite.
 pub fn fit_pedestal(
     bearing: &str,
-    points: &[PedestalPoint],
+    points: &[Observation],
     options: &Options,
 ) -> Result<PedestalFit, IdentifyError> {
     Ok(ols_solution(bearing, points, options)?.0)
@@ -429,19 +419,16 @@ pub fn fit_pedestal(
 /// finite points used (sorted by speed) and the number left out.
 pub(crate) fn ols_solution(
     bearing: &str,
-    points: &[PedestalPoint],
+    points: &[Observation],
     options: &Options,
-) -> Result<(PedestalFit, lsq::LeastSquares, Vec<PedestalPoint>, usize), IdentifyError> {
+) -> Result<(PedestalFit, lsq::LeastSquares, Vec<Observation>, usize), IdentifyError> {
     let model = options.model();
     let columns = model.parameters();
-    let finite = |p: &&PedestalPoint| {
-        p.speed_hz.is_finite()
-            && p.ped
-                .iter()
-                .chain(&p.force)
-                .all(|c| c.re.is_finite() && c.im.is_finite())
-    };
-    let mut used: Vec<PedestalPoint> = points.iter().filter(finite).copied().collect();
+    let mut used: Vec<Observation> = points
+        .iter()
+        .filter(|p| p.equation_is_finite())
+        .copied()
+        .collect();
     let skipped = points.len() - used.len();
     if used.is_empty() {
         return Err(IdentifyError::NoData {
@@ -454,7 +441,7 @@ pub(crate) fn ols_solution(
     let mut rhs: Vec<f64> = Vec::new();
     for p in &used {
         let (eqs, n) =
-            equations_for_mode(options.mode, omega_from_hz(p.speed_hz), &p.ped, &p.force);
+            equations_for_mode(options.mode, omega_from_hz(p.speed_hz), &p.ped, &p.force());
         for eq in &eqs[..n] {
             rows.extend(columns.iter().map(|&c| eq.row[c as usize]));
             rhs.push(eq.rhs);
@@ -592,7 +579,7 @@ pub fn fit_run_with(
         let (fit, report) = match estimator {
             Estimator::Ml => estimator::fit_ml(bearing, &obs, &mut noise, options)?,
             Estimator::Ols => {
-                let fit = fit_pedestal(bearing, &estimator::points_of(&obs), options)?;
+                let fit = fit_pedestal(bearing, &obs, options)?;
                 let report = estimator::ols_noise_report(&fit, &obs, &noise);
                 (fit, report)
             }

@@ -7,7 +7,7 @@
 //! Both replace the rigid-ground fits of the pedestals concerned in an
 //! [`Identification`] and say so (`base`, `base_measured`).
 
-use super::estimator::{fit_ml, report, CHI2_P_THRESHOLD};
+use super::estimator::{fit_ml, report};
 use super::{
     observations, physical, Identification, IdentifyError, Options, PedestalFit, StdErr, Warning,
     WarningKind,
@@ -17,8 +17,8 @@ use crate::estimate::base::{
     fit_on_measured_base, fit_on_unmeasured_base, BaseFitResult, BaseGroup, BaseIdentifiability,
     BaseObservation,
 };
-use crate::estimate::ml::chi2_two_sided_p;
 use crate::estimate::noise::{BearingNoise, ColumnDigits};
+use crate::estimate::pedestal::{fit_under_noise, noise_level, number_variance};
 use crate::estimate::Observation;
 use crate::rundir::{Measurement, RunDir};
 use serde::{Deserialize, Serialize};
@@ -231,16 +231,12 @@ fn apply(
     fit.base_measured = Some(measured);
 }
 
-/// The factor by which χ² says the noise variances are to be scaled: χ²/dof
-/// when the level is estimated (scatter) or the data scatter significantly
-/// more than the known noise, else 1.
+/// The factor by which χ² says the noise variances are to be scaled (the
+/// one noise policy's level, [`noise_level`], with no equation error on a
+/// base): χ²/dof when the level is estimated (scatter) or the data scatter
+/// significantly more than the known noise, else 1.
 fn variance_scale(chi2: f64, dof: usize, estimated: bool) -> f64 {
-    let ratio = chi2 / dof.max(1) as f64;
-    if estimated || (chi2_two_sided_p(chi2, dof) < CHI2_P_THRESHOLD && ratio > 1.0) {
-        ratio
-    } else {
-        1.0
-    }
+    noise_level(chi2, dof, estimated).variance_scale()
 }
 
 /// Refits every pedestal of `identification` that stands on a base of
@@ -263,7 +259,6 @@ pub fn apply_measured_base(
             }
         }))
     });
-    let msu = options.quantisation.mean_square_ulps();
     for fit in &mut identification.pedestals {
         let Some(first) = rows.iter().find(|r| r.bearings.contains(&fit.bearing)) else {
             continue;
@@ -278,9 +273,8 @@ pub fn apply_measured_base(
                 var: std::array::from_fn(|c| {
                     let z = r.motion[c / 2];
                     let v = if c % 2 == 0 { z.re } else { z.im };
-                    let dv = msu * digits[c].ulp(v).powi(2);
-                    r.noise_sd
-                        .map_or(dv, |sd| (0.5 * sd[c / 2] * sd[c / 2]).max(dv))
+                    let sd = r.noise_sd.map(|sd| sd[c / 2]);
+                    number_variance(options.quantisation, digits[c].ulp(v), sd)
                 }),
             })
             .collect();
@@ -292,15 +286,16 @@ pub fn apply_measured_base(
                 fit.bearing
             ))
         };
-        let mut ml =
-            fit_on_measured_base(&with_noise(&obs, &noise), &base, &start).map_err(failed)?;
-        if chi2_two_sided_p(ml.chi2, ml.dof) < CHI2_P_THRESHOLD
-            && ml.chi2_per_dof() > 1.0
-            && noise.use_scatter()
-        {
-            ml = fit_on_measured_base(&with_noise(&obs, &noise), &base, &ml.theta)
-                .map_err(failed)?;
-        }
+        let ml = fit_under_noise(
+            std::slice::from_mut(&mut noise),
+            false,
+            |noises, first: Option<&crate::estimate::ml::MlFit>| {
+                let start = first.map_or(&start, |f| &f.theta);
+                fit_on_measured_base(&with_noise(&obs, &noises[0]), &base, start)
+            },
+            |f| (f.chi2, f.dof),
+        )
+        .map_err(failed)?;
         let scale = variance_scale(ml.chi2, ml.dof, noise.source.scale_estimated());
         if noise.source.scale_estimated() {
             noise.rescale(scale);
@@ -367,7 +362,7 @@ pub fn apply_unmeasured_bases(
                 _ => fit_ml(n, &o, &mut noise.clone(), options)?.0.params(),
             };
             starts.push(start);
-            obs.push(with_noise(&o, &noise));
+            obs.push(o);
             noises.push(noise);
         }
         let group = BaseGroup {
@@ -379,20 +374,21 @@ pub fn apply_unmeasured_bases(
                 names.join(",")
             ))
         };
-        let mut fit = fit_on_unmeasured_base(&obs, &group, &starts).map_err(failed)?;
-        let p = chi2_two_sided_p(fit.chi2, fit.dof);
-        if p < CHI2_P_THRESHOLD && fit.chi2 > fit.dof as f64 {
-            let mut switched = false;
-            for (k, noise) in noises.iter_mut().enumerate() {
-                if noise.use_scatter() {
-                    switched = true;
-                }
-                obs[k] = with_noise(&obs[k], noise);
-            }
-            if switched {
-                fit = fit_on_unmeasured_base(&obs, &group, &fit.pedestals).map_err(failed)?;
-            }
-        }
+        let fit = fit_under_noise(
+            &mut noises,
+            false,
+            |noises, first: Option<&BaseFitResult>| {
+                let obs: Vec<Vec<Observation>> = obs
+                    .iter()
+                    .zip(noises)
+                    .map(|(o, n)| with_noise(o, n))
+                    .collect();
+                let starts = first.map_or(&starts, |f| &f.pedestals);
+                fit_on_unmeasured_base(&obs, &group, starts)
+            },
+            |f| (f.chi2, f.dof),
+        )
+        .map_err(failed)?;
         let estimated = noises.iter().any(|n| n.source.scale_estimated());
         let scale = variance_scale(fit.chi2, fit.dof, estimated);
         for (k, n) in names.iter().enumerate() {

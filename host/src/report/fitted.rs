@@ -59,7 +59,7 @@ pub fn stiffness_inputs(
         let measured = [0, 1].map(|d| {
             points
                 .iter()
-                .map(|p| (p.speed_hz, p.force[d], p.ped[d]))
+                .map(|p| (p.speed_hz, p.force()[d], p.ped[d]))
                 .collect()
         });
         inputs.push(StiffnessInput {
