@@ -155,7 +155,6 @@ fn two_effects_at_different_bearings_are_both_named() {
 }
 
 #[test]
-#[ignore = "NOT done: the sub-base is still not named on this machine (before: a sensor delay that made the pedestal's k_z and m negative won; such a winner is now rejected, but what is named now was not captured in this session)"]
 fn a_pedestal_on_its_own_sub_base_is_named() {
     let m = sub_base();
     let run = run_dir(&m, &EffectSet::none(), NOISE, None, 54);
