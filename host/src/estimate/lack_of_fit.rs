@@ -32,7 +32,7 @@ use super::ml::{Rigid, Weighting};
 use super::noise::NoiseSource;
 use super::Observation;
 use nalgebra::DMatrix;
-use plinth_shared::regression::PARAMETERS;
+use plinth_shared::regression::{Parameter, PARAMETERS};
 use rand::{rngs::StdRng, seq::SliceRandom, SeedableRng};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -80,17 +80,24 @@ pub struct LackOfFit {
     /// Upper-tail p-value of χ² under χ²(dof): exact for noise columns,
     /// informative only for the other sources.
     pub level_p: f64,
+    /// Standard errors of c_y and c_z [N·s/m] from the residuals themselves
+    /// (the sandwich of [`super::robust::sandwich_std_errs`]: right whatever
+    /// the noise model's pattern over speed), for the negative-damping rule
+    /// ([`crate::identify::physical`]); `None` when not estimable.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping_std_err_from_residuals: Option<[f64; 2]>,
 }
 
 /// The lack-of-fit evidence of a fit at `theta` (θ units) to `obs` whose
 /// variances are the noise model's level (before any χ² rescaling; a
-/// robust fit's down-weighting included, [`super::robust`]), with
-/// χ² = `chi2` on `dof`; `None` when the noise
+/// robust fit's down-weighting included, [`super::robust`]) over the
+/// estimated `columns`, with χ² = `chi2` on `dof`; `None` when the noise
 /// is known (digits or columns) and explains χ² (upper-tail p ≥ `p_limit`):
 /// then nothing could pass for noise.
 pub fn assess(
     obs: &[Observation],
     theta: &[f64; PARAMETERS],
+    columns: &[Parameter],
     source: NoiseSource,
     chi2: f64,
     dof: usize,
@@ -116,6 +123,8 @@ pub fn assess(
         level_from: source,
         level_ratio: chi2 / dof as f64,
         level_p,
+        damping_std_err_from_residuals: super::robust::sandwich_std_errs(obs, theta, columns)
+            .map(|se| [se[Parameter::Cy as usize], se[Parameter::Cz as usize]]),
     })
 }
 

@@ -285,6 +285,7 @@ pub fn fit_ml(
     report.lack_of_fit = lack_of_fit::assess(
         &obs,
         &ml_fit.theta,
+        &columns,
         noise.source,
         chi2,
         dof,
