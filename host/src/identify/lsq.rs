@@ -362,11 +362,8 @@ mod tests {
         }
         let s = ne.solve(1e4).unwrap();
         let sigma2 = svd.rss / (n - 3) as f64;
-        for j in 0..3 {
-            assert!(
-                (s.theta[j] - svd.theta[j]).abs() <= 1e-10 * svd.theta[j].abs(),
-                "{j}"
-            );
+        for (j, (&t, &t_svd)) in s.theta.iter().zip(&svd.theta).enumerate() {
+            assert!((t - t_svd).abs() <= 1e-10 * t_svd.abs(), "{j}");
             let se = (sigma2 * s.inverse[j * 3 + j]).sqrt();
             assert!((se - svd.std_err[j]).abs() <= 1e-9 * svd.std_err[j], "{j}");
         }
