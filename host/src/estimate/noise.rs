@@ -291,20 +291,39 @@ impl BearingNoise {
                 variance_scale: 1.0,
             };
         }
-        let digits_var: Vec<[f64; 8]> = rows
-            .iter()
-            .map(|m| std::array::from_fn(|c| variance(m, c, None)))
-            .collect();
+        let digits_var = digits_variances(rows, columns, quantisation);
+        Self::with_scatter(rows, digits_var, quantisation, [None; 4])
+    }
+
+    /// The noise of `rows` under the digits, whose variances `digits_var`
+    /// (row for row) are given, with the scatter law of each complex channel
+    /// estimated from `rows`, or taken from `known` where given (a channel
+    /// whose values and speeds are those the law was estimated from).
+    fn with_scatter(
+        rows: &[&Measurement],
+        digits_var: Vec<[f64; 8]>,
+        quantisation: Quantisation,
+        known: [Option<Option<Scatter>>; 4],
+    ) -> Self {
         let mut order: Vec<usize> = (0..rows.len()).collect();
         order.sort_by(|&a, &b| rows[a].speed_hz.total_cmp(&rows[b].speed_hz));
         // The local fits depend on the speeds only: made once, used by every channel.
-        let speeds: Vec<f64> = order.iter().map(|&i| rows[i].speed_hz).collect();
-        let fits = local_fits(&speeds);
+        let fits = if known.iter().all(Option::is_some) {
+            Vec::new()
+        } else {
+            let speeds: Vec<f64> = order.iter().map(|&i| rows[i].speed_hz).collect();
+            local_fits(&speeds)
+        };
         let mut scatter = [None; 4];
         for (ch, slot) in scatter.iter_mut().enumerate() {
-            let values: Vec<Complex<f64>> =
-                order.iter().map(|&i| complex_value(rows[i], ch)).collect();
-            *slot = scatter_law_of(&fits, &values);
+            *slot = match known[ch] {
+                Some(law) => law,
+                None => {
+                    let values: Vec<Complex<f64>> =
+                        order.iter().map(|&i| complex_value(rows[i], ch)).collect();
+                    scatter_law_of(&fits, &values)
+                }
+            };
         }
         let scatter_var = rows
             .iter()
@@ -395,6 +414,18 @@ impl BearingNoise {
     }
 }
 
+/// The variance [m²] each real number of `rows` has from its digits alone,
+/// row for row ([`REAL_CHANNELS`] order).
+fn digits_variances(
+    rows: &[&Measurement],
+    columns: &[ColumnDigits; 8],
+    quantisation: Quantisation,
+) -> Vec<[f64; 8]> {
+    rows.iter()
+        .map(|m| std::array::from_fn(|c| number_variance(quantisation, columns[c].ulp_of(m, c), None)))
+        .collect()
+}
+
 /// Real channels ([`REAL_CHANNELS`] order) with y and z exchanged.
 const SWAP_YZ_REAL: [usize; 8] = [2, 3, 0, 1, 6, 7, 4, 5];
 
@@ -449,6 +480,80 @@ impl RunNoise {
             .collect();
         Self {
             quantisation,
+            bearings,
+        }
+    }
+
+    /// The noise of `fixed`, a run whose speeds differ from those this noise
+    /// was estimated on and whose phasors, texts and noise columns do not
+    /// (rpm read as Hz): exactly [`RunNoise::estimate`] of `fixed`, with the
+    /// digits kept and only the scatter between neighbouring speeds
+    /// estimated anew (noise columns do not depend on the speeds).
+    pub fn with_speeds_of(&self, fixed: &crate::rundir::RunDir) -> Self {
+        self.reestimated(fixed, false)
+    }
+
+    /// The noise of `fixed`, a run whose pedestal phasors differ from those
+    /// this noise was estimated on and whose speeds and rotor-relative
+    /// phasors do not (pedestal velocities integrated): exactly
+    /// [`RunNoise::estimate`] of `fixed`, with the rotor-relative channels'
+    /// scatter laws kept and the digits and the pedestal channels' scatter
+    /// estimated anew.
+    pub fn with_pedestal_of(&self, fixed: &crate::rundir::RunDir) -> Self {
+        self.reestimated(fixed, true)
+    }
+
+    /// [`RunNoise::with_speeds_of`] (`ped_changed` false) or
+    /// [`RunNoise::with_pedestal_of`]: what stays the same is reused while
+    /// this noise is as estimated (not switched to the scatter or
+    /// rescaled by a fit), else `fixed` is estimated afresh.
+    fn reestimated(&self, fixed: &crate::rundir::RunDir, ped_changed: bool) -> Self {
+        let pristine = self.bearings.iter().all(|(_, index, noise)| {
+            noise.variance_scale == 1.0
+                && noise.var.len() == index.len()
+                && index.iter().all(|&i| i < fixed.measurements.len())
+                && match noise.source {
+                    NoiseSource::Columns => true,
+                    NoiseSource::Digits => noise.scatter_var.is_some(),
+                    NoiseSource::Scatter => false,
+                }
+        });
+        if !pristine {
+            return Self::estimate(fixed, self.quantisation);
+        }
+        let columns = ped_changed.then(|| ColumnDigits::of_run(&fixed.measurements));
+        let bearings = self
+            .bearings
+            .iter()
+            .map(|(name, index, noise)| {
+                let rows: Vec<&Measurement> =
+                    index.iter().map(|&i| &fixed.measurements[i]).collect();
+                let noise = match (&columns, noise.source) {
+                    (Some(columns), NoiseSource::Columns) => {
+                        BearingNoise::estimate(&rows, columns, self.quantisation)
+                    }
+                    (Some(columns), _) => {
+                        let s = noise.scatter;
+                        BearingNoise::with_scatter(
+                            &rows,
+                            digits_variances(&rows, columns, self.quantisation),
+                            self.quantisation,
+                            [Some(s[0]), Some(s[1]), None, None],
+                        )
+                    }
+                    (None, NoiseSource::Columns) => noise.clone(),
+                    (None, _) => BearingNoise::with_scatter(
+                        &rows,
+                        noise.var.clone(),
+                        self.quantisation,
+                        [None; 4],
+                    ),
+                };
+                (name.clone(), index.clone(), noise)
+            })
+            .collect();
+        Self {
+            quantisation: self.quantisation,
             bearings,
         }
     }

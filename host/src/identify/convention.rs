@@ -65,9 +65,7 @@ use super::physical::is_plausible;
 use super::{Estimator, Identification, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::noise::{Quantisation, RunNoise};
 use crate::estimate::pedestal::floor_sd;
-use crate::estimate::{complex_stiffness, Observation};
 use crate::rundir::RunDir;
-use plinth_shared::phasor::omega_from_hz;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -338,7 +336,8 @@ impl Finding {
 /// Readings whose refit fails (e.g. speeds outside the bearing table) are
 /// left out.
 ///
-/// Every correction is first fitted by OLS ([`screen`]): OLS minimises
+/// Every correction is first fitted by OLS ([`screen`], from the normal
+/// equations; the named reading's fit is the full one): OLS minimises
 /// Σ|e|² itself, so its relative residual is a lower bound on that of any
 /// other estimate of the same reading. A correction is refitted with the
 /// estimator of `options` only when that bound leaves it a chance to be
@@ -374,6 +373,20 @@ pub fn diagnose(
         })
     };
     let ols = options.effective_estimator() == Estimator::Ols;
+    let pedestals = &identification.pedestals;
+    // The reading of `fits` for each pedestal (same order), each misfit
+    // computed once and kept: the refit loop asks for them again and again.
+    let readings_of_fits =
+        |k: &Candidate, fits: &[PedestalFit]| -> Vec<Option<(Reading, PedestalFit)>> {
+            pedestals
+                .iter()
+                .map(|p| {
+                    let q = fits.iter().find(|q| q.bearing == p.bearing)?;
+                    let r = reading(&k.fixed, &k.schedules, &k.sigma, q, Some(k.convention))?;
+                    Some((r, q.clone()))
+                })
+                .collect()
+        };
     // Every correction with its OLS screen.
     let mut candidates: Vec<Candidate> = Vec::new();
     for c in Convention::ALL {
@@ -381,50 +394,67 @@ pub fn diagnose(
         if fixed == *run {
             continue; // the mistake changes nothing in these data
         }
-        let schedules = fixed.bearing_schedules();
-        let Some(screen) = screen(&fixed, &schedules, options) else {
+        // The bearing table and the speeds as found unless the mistake
+        // changes them: the same schedules.
+        let schedules = if matches!(
+            c,
+            Convention::BearingTransposed | Convention::CrossCouplingSign | Convention::SpeedInRpm
+        ) {
+            fixed.bearing_schedules()
+        } else {
+            schedules.clone()
+        };
+        let Some(screen) = screen::screen(&fixed, &schedules, options, pedestals) else {
             continue;
         };
         let noise = corrected_noise(c, noise, &fixed);
         let sigma = floor_of(&fixed, &noise);
-        candidates.push(Candidate {
+        let mut k = Candidate {
             convention: c,
-            fit: ols.then(|| Some(screen.clone())),
+            fit: None,
+            readings: Vec::new(),
+            bounds: Vec::new(),
             screen,
             fixed,
             schedules,
             noise,
             sigma,
-        });
-    }
-    // The lower bound of each correction's relative residual per pedestal
-    // (`None`: no bound, it is refitted).
-    let bound = |k: &Candidate, bearing: &str| -> Option<f64> {
-        let q = k.screen.iter().find(|q| q.bearing == bearing)?;
-        misfit(&k.fixed, &k.schedules, &k.sigma, q).map(|m| m.relative_residual * (1.0 - 1e-9))
-    };
-    let readings_of = |p: &PedestalFit, candidates: &[Candidate]| {
-        let found = reading(run, &schedules, &sigma, p, None)?;
-        let mut readings = vec![(found, p.clone())];
-        for k in candidates {
-            if let Some(Some(fits)) = &k.fit {
-                if let Some(q) = fits.iter().find(|q| q.bearing == p.bearing) {
-                    if let Some(r) =
-                        reading(&k.fixed, &k.schedules, &k.sigma, q, Some(k.convention))
-                    {
-                        readings.push((r, q.clone()));
-                    }
-                }
-            }
+        };
+        let screened = readings_of_fits(&k, &k.screen);
+        if ols {
+            // With OLS the screen is the fit.
+            k.fit = Some(Some(k.screen.clone()));
+            k.readings = screened;
+        } else {
+            // The lower bound of the correction's relative residual per
+            // pedestal (`None`: no bound, it is refitted).
+            k.bounds = screened
+                .iter()
+                .map(|r| r.as_ref().map(|(r, _)| r.relative_residual * (1.0 - 1e-9)))
+                .collect();
         }
+        candidates.push(k);
+    }
+    let found: Vec<Option<(Reading, PedestalFit)>> = pedestals
+        .iter()
+        .map(|p| Some((reading(run, &schedules, &sigma, p, None)?, p.clone())))
+        .collect();
+    let readings_of = |j: usize, candidates: &[Candidate]| {
+        let found = found[j].clone()?;
+        let mut readings = vec![found];
+        readings.extend(
+            candidates
+                .iter()
+                .filter_map(|k| k.readings.get(j).cloned().flatten()),
+        );
         Some(readings)
     };
     // Refit, cheapest first, every correction the readings so far leave a
     // chance to matter.
     loop {
         let mut wanted: Vec<usize> = Vec::new();
-        for p in &identification.pedestals {
-            let Some(readings) = readings_of(p, &candidates) else {
+        for j in 0..pedestals.len() {
+            let Some(readings) = readings_of(j, &candidates) else {
                 continue;
             };
             let limit = relevance_limit(&readings);
@@ -432,7 +462,7 @@ pub fn diagnose(
                 .iter()
                 .enumerate()
                 .filter(|(_, k)| k.fit.is_none())
-                .map(|(i, k)| (i, bound(k, &p.bearing).unwrap_or(0.0)))
+                .map(|(i, k)| (i, k.bounds.get(j).copied().flatten().unwrap_or(0.0)))
                 .filter(|&(_, b)| b <= limit)
                 .collect();
             if limit.is_finite() {
@@ -445,19 +475,22 @@ pub fn diagnose(
             break;
         }
         for i in wanted {
-            let k = &mut candidates[i];
-            if k.fit.is_none() {
-                k.fit = Some(
-                    super::fit_run_with(&k.fixed, &k.noise, options)
-                        .ok()
-                        .map(|id| id.pedestals),
-                );
+            if candidates[i].fit.is_none() {
+                let fits = super::fit_run_with(&candidates[i].fixed, &candidates[i].noise, options)
+                    .ok()
+                    .map(|id| id.pedestals);
+                let k = &candidates[i];
+                let readings = fits
+                    .as_deref()
+                    .map_or_else(Vec::new, |f| readings_of_fits(k, f));
+                candidates[i].readings = readings;
+                candidates[i].fit = Some(fits);
             }
         }
     }
     let mut findings = Vec::new();
-    for p in &identification.pedestals {
-        let Some(readings) = readings_of(p, &candidates) else {
+    for (j, p) in pedestals.iter().enumerate() {
+        let Some(readings) = readings_of(j, &candidates) else {
             continue;
         };
         let found = readings[0].0;
@@ -466,13 +499,30 @@ pub fn diagnose(
             let Some(convention) = best.convention else {
                 continue;
             };
+            let mut corrected = best;
+            let mut corrected_fit = q.clone();
+            if ols {
+                // The named reading with the full OLS fit, not its screen.
+                if let Some(k) = candidates.iter().find(|k| k.convention == convention) {
+                    let exact = screen::exact(&k.fixed, &k.schedules, options, &p.bearing);
+                    if let Some((r, q)) = exact.and_then(|q| {
+                        Some((
+                            reading(&k.fixed, &k.schedules, &k.sigma, &q, Some(convention))?,
+                            q,
+                        ))
+                    }) {
+                        corrected = r;
+                        corrected_fit = q;
+                    }
+                }
+            }
             findings.push(Finding {
                 bearing: p.bearing.clone(),
                 convention,
-                corrected: best,
+                corrected,
                 as_found: found,
                 runner_up,
-                corrected_fit: q.clone(),
+                corrected_fit,
             });
         }
     }
@@ -498,6 +548,12 @@ struct Candidate {
     /// Its fits with the estimator of the options: `None` until refitted,
     /// `Some(None)` when the refit failed.
     fit: Option<Option<Vec<PedestalFit>>>,
+    /// Per pedestal of the identification (same order), the reading of
+    /// `fit` and the fit read: empty until fitted.
+    readings: Vec<Option<(Reading, PedestalFit)>>,
+    /// Per pedestal, the screen's lower bound on the relative residual of
+    /// `fit` (`None`: no bound); empty with OLS, where the screen is the fit.
+    bounds: Vec<Option<f64>>,
 }
 
 /// The relative residual [-] below which a reading not yet fitted could
@@ -534,7 +590,8 @@ fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
 /// of the run as found: the same where the correction changes only signs
 /// (each channel's scatter and each column's digits are blind to them) or
 /// only the bearing table, y and z exchanged for `swapped_yz`, estimated
-/// anew where it rescales the phasors or the speeds.
+/// anew where it rescales the phasors or the speeds (only what they change:
+/// [`RunNoise::with_speeds_of`], [`RunNoise::with_pedestal_of`]).
 fn corrected_noise(c: Convention, noise: &RunNoise, fixed: &RunDir) -> RunNoise {
     match c {
         Convention::Conjugated
@@ -543,42 +600,9 @@ fn corrected_noise(c: Convention, noise: &RunNoise, fixed: &RunDir) -> RunNoise 
         | Convention::BearingTransposed
         | Convention::CrossCouplingSign => noise.clone(),
         Convention::SwappedYz => noise.swapped_yz(),
-        Convention::SpeedInRpm | Convention::PedVelocity => {
-            RunNoise::estimate(fixed, noise.quantisation)
-        }
+        Convention::SpeedInRpm => noise.with_speeds_of(fixed),
+        Convention::PedVelocity => noise.with_pedestal_of(fixed),
     }
-}
-
-/// The paper's OLS fit of every pedestal of `run` with the model and
-/// equations of `options` (as [`super::fit_run`] makes it with
-/// `--estimator ols`), or `None` when the run cannot be fitted.
-fn screen(run: &RunDir, schedules: &Schedules, options: &Options) -> Option<Vec<PedestalFit>> {
-    let ols = options.ols();
-    run.measured_bearings()
-        .into_iter()
-        .map(|bearing| {
-            let schedule = schedules.get(bearing)?;
-            let points = run
-                .measurements
-                .iter()
-                .filter(|m| m.bearing == bearing)
-                .map(|m| {
-                    let kstar = complex_stiffness(
-                        &schedule.at(m.speed_hz).ok()?,
-                        omega_from_hz(m.speed_hz),
-                    );
-                    Some(Observation {
-                        speed_hz: m.speed_hz,
-                        rel: m.rel,
-                        ped: m.ped,
-                        kstar,
-                        var: [0.0; 8],
-                    })
-                })
-                .collect::<Option<Vec<Observation>>>()?;
-            super::fit_pedestal(bearing, &points, &ols).ok()
-        })
-        .collect()
 }
 
 /// The decisive reading (module docs) with the runner-up and its fit, or
@@ -681,5 +705,6 @@ pub fn findings_for_run(
         .collect()
 }
 
+mod screen;
 #[cfg(test)]
 mod tests;

@@ -192,6 +192,102 @@ pub fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> LeastSquares {
     }
 }
 
+/// The normal equations AᵀA·θ = Aᵀb of a tall least-squares problem,
+/// accumulated row by row without storing A: p² + p numbers however many
+/// rows. Squaring A squares its condition number, so [`solve`] (an SVD of
+/// A) stays the estimate a fit reports; this is the cheap screen of many
+/// similar problems, solved only when the column-scaled A is well
+/// conditioned ([`NormalEquations::solve`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalEquations {
+    p: usize,
+    /// AᵀA, row-major p×p.
+    ata: Vec<f64>,
+    /// Aᵀb.
+    atb: Vec<f64>,
+    /// Rows added.
+    rows: usize,
+}
+
+/// What [`NormalEquations::solve`] gives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalSolution {
+    /// The estimate θ.
+    pub theta: Vec<f64>,
+    /// (AᵀA)⁻¹, row-major p×p: σ² times it is θ's covariance.
+    pub inverse: Vec<f64>,
+    /// Condition number of A with unit-norm columns [-].
+    pub condition_number: f64,
+}
+
+impl NormalEquations {
+    /// Empty normal equations of `p` unknowns.
+    pub fn new(p: usize) -> Self {
+        Self {
+            p,
+            ata: vec![0.0; p * p],
+            atb: vec![0.0; p],
+            rows: 0,
+        }
+    }
+
+    /// Adds one equation row·θ = rhs (`row` of length p).
+    pub fn add(&mut self, row: &[f64], rhs: f64) {
+        let p = self.p;
+        for (i, &ri) in row.iter().enumerate().take(p) {
+            for (j, &rj) in row.iter().enumerate().take(p) {
+                self.ata[i * p + j] += ri * rj;
+            }
+            self.atb[i] += ri * rhs;
+        }
+        self.rows += 1;
+    }
+
+    /// Equations added.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// The least-squares solution when A has more rows than unknowns and
+    /// its column-scaled condition number is at most `max_condition`
+    /// (then θ carries about max_condition²·ε of relative error); `None`
+    /// otherwise (rank deficient, ill conditioned or not finite: use
+    /// [`solve`]).
+    pub fn solve(&self, max_condition: f64) -> Option<NormalSolution> {
+        let p = self.p;
+        if p == 0 || self.rows <= p {
+            return None;
+        }
+        let d: Vec<f64> = (0..p).map(|j| self.ata[j * p + j].sqrt()).collect();
+        if !d.iter().all(|&x| x > 0.0 && x.is_finite()) {
+            return None;
+        }
+        let m = DMatrix::from_fn(p, p, |i, j| self.ata[i * p + j] / (d[i] * d[j]));
+        let eigen = m.clone().symmetric_eigenvalues();
+        let lo = eigen.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = eigen.iter().copied().fold(0.0, f64::max);
+        let condition_number = (hi / lo).sqrt();
+        if !(lo > 0.0 && condition_number <= max_condition) {
+            return None;
+        }
+        let inverse_scaled = m.cholesky()?.inverse();
+        let inverse: Vec<f64> = (0..p * p)
+            .map(|k| inverse_scaled[(k / p, k % p)] / (d[k / p] * d[k % p]))
+            .collect();
+        let theta: Vec<f64> = (0..p)
+            .map(|i| (0..p).map(|j| inverse[i * p + j] * self.atb[j]).sum())
+            .collect();
+        theta
+            .iter()
+            .all(|t| t.is_finite())
+            .then_some(NormalSolution {
+                theta,
+                inverse,
+                condition_number,
+            })
+    }
+}
+
 fn degenerate(n: usize, p: usize) -> LeastSquares {
     LeastSquares {
         theta: vec![f64::NAN; p],
@@ -240,6 +336,43 @@ mod tests {
         assert!((fit.std_err[0] - se_icpt).abs() < 1e-12);
         assert_eq!(fit.rank, 2);
         assert!(fit.condition_number > 1.0 && fit.condition_number < 10.0);
+    }
+
+    /// The normal equations give the SVD's estimate and standard errors
+    /// on a well-conditioned problem, and refuse a rank-deficient one.
+    #[test]
+    fn normal_equations_agree_with_the_svd() {
+        let n = 200;
+        let rows: Vec<[f64; 3]> = (0..n)
+            .map(|i| {
+                let x = i as f64 / n as f64;
+                [1.0, 1e6 * x, 1e-3 * (7.0 * x).sin()]
+            })
+            .collect();
+        let b: Vec<f64> = (0..n)
+            .map(|i| {
+                2.0 - 3e-6 * rows[i][1] + 5e3 * rows[i][2] + 1e-3 * ((i * 37 % 11) as f64 - 5.0)
+            })
+            .collect();
+        let a = DMatrix::from_fn(n, 3, |i, j| rows[i][j]);
+        let svd = solve(&a, &DVector::from_vec(b.clone()));
+        let mut ne = NormalEquations::new(3);
+        for (r, &y) in rows.iter().zip(&b) {
+            ne.add(r, y);
+        }
+        let s = ne.solve(1e4).unwrap();
+        let sigma2 = svd.rss / (n - 3) as f64;
+        for (j, (&t, &t_svd)) in s.theta.iter().zip(&svd.theta).enumerate() {
+            assert!((t - t_svd).abs() <= 1e-10 * t_svd.abs(), "{j}");
+            let se = (sigma2 * s.inverse[j * 3 + j]).sqrt();
+            assert!((se - svd.std_err[j]).abs() <= 1e-9 * svd.std_err[j], "{j}");
+        }
+        assert!((s.condition_number - svd.condition_number).abs() < 1e-9 * svd.condition_number);
+        let mut collinear = NormalEquations::new(2);
+        for i in 0..10 {
+            collinear.add(&[i as f64, 2.0 * i as f64], 1.0);
+        }
+        assert_eq!(collinear.solve(1e4), None);
     }
 
     #[test]

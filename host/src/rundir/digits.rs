@@ -117,7 +117,8 @@ pub fn text_digits(text: &str) -> Option<(u32, i32)> {
 fn counted_digits(text: &str) -> Option<(u32, i32)> {
     let t = text.trim();
     let t = t.strip_prefix(['-', '+']).unwrap_or(t);
-    let (mantissa, exponent) = match t.find(['e', 'E']) {
+    // A byte search: 'e' and 'E' never occur inside a multi-byte character.
+    let (mantissa, exponent) = match t.bytes().position(|b| b == b'e' || b == b'E') {
         Some(i) => (&t[..i], t[i + 1..].parse::<i32>().ok()?),
         None => (t, 0),
     };

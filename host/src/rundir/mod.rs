@@ -445,9 +445,14 @@ impl RunDir {
     pub fn bearing_schedules(&self) -> BTreeMap<String, BearingSchedule> {
         let mut rows: BTreeMap<String, Vec<(f64, BearingCoefficients<f64>)>> = BTreeMap::new();
         for b in &self.bearings {
-            rows.entry(b.bearing.clone())
-                .or_default()
-                .push((b.speed_hz, b.coefficients));
+            let row = (b.speed_hz, b.coefficients);
+            // The name is copied once per bearing, not once per row.
+            match rows.get_mut(&b.bearing) {
+                Some(r) => r.push(row),
+                None => {
+                    rows.insert(b.bearing.clone(), vec![row]);
+                }
+            }
         }
         rows.into_iter()
             .map(|(name, r)| (name, BearingSchedule::new(r)))

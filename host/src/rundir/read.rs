@@ -164,7 +164,6 @@ fn read_table(
         .has_headers(false)
         .flexible(true)
         .quoting(false)
-        .trim(csv::Trim::All)
         .from_reader(handle);
     let csv_error = |e: csv::Error| match e.kind() {
         csv::ErrorKind::Io(_) => match e.into_kind() {
@@ -188,6 +187,10 @@ fn read_table(
             expected,
         });
     }
+    // Fields are trimmed (Unicode whitespace, as `csv::Trim::All` would):
+    // the header once here, each data field as it is used, so that no
+    // record is rebuilt per line.
+    header.trim();
     let header_line = header.position().map_or(1, csv::Position::line);
     if header
         .iter()
@@ -283,8 +286,9 @@ fn read_table(
                 expected: width,
             });
         }
+        let field = |col: usize| record.get(col).unwrap_or_default().trim();
         let number_at = |col: usize, name: &'static str| -> Result<f64, RunDirError> {
-            let text = record.get(col).unwrap_or_default();
+            let text = field(col);
             let value: f64 = text.parse().map_err(|_| RunDirError::BadNumber {
                 file: file(),
                 line,
@@ -323,7 +327,7 @@ fn read_table(
                 },
             });
         }
-        let bearing = record.get(index[1]).unwrap_or_default();
+        let bearing = field(index[1]);
         if bearing.is_empty() {
             return Err(RunDirError::EmptyBearing {
                 file: file(),
@@ -349,10 +353,8 @@ fn read_table(
         for (k, v) in values.iter_mut().enumerate() {
             *v = number(k + 2)?;
         }
-        let written = super::WrittenDigits::from_text(
-            std::array::from_fn(|k| record.get(index[k + 2]).unwrap_or_default()),
-            values,
-        );
+        let written =
+            super::WrittenDigits::from_text(std::array::from_fn(|k| field(index[k + 2])), values);
         let noise_sd = match (noise_index, optional) {
             (Some(cols), Some(names)) => {
                 let mut sd = [0.0; 4];

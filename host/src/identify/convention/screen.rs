@@ -1,0 +1,177 @@
+//! The OLS screen of a corrected run ([`super::diagnose`]): every pedestal
+//! fitted by the paper's OLS from the normal equations, accumulated in one
+//! pass over the run (5×5 numbers per pedestal, no design matrix, no SVD),
+//! with the full OLS fit ([`exact`], as `--estimator ols` makes it) where
+//! the normal equations are not well conditioned. Eight corrections of a
+//! 20 000-speed run cost eight passes, not eight SVDs of 40 000×5 matrices.
+//!
+//! A screen fit carries what a reading of it needs (the parameters, their
+//! standard errors, the fit's speed range and fixed parameters, its
+//! physical violations); its other fields are those of the pedestal as
+//! found. Its parameters agree with the full fit's to about
+//! [`MAX_CONDITION`]²·ε relative.
+
+use super::super::lsq::NormalEquations;
+use super::super::physical::violations;
+use super::super::{Options, PedestalFit, StdErr};
+use super::Schedules;
+use crate::estimate::{complex_stiffness, Observation};
+use crate::rundir::RunDir;
+use plinth_shared::phasor::omega_from_hz;
+use plinth_shared::regression::{equations_for_mode, PARAMETERS};
+
+/// Largest condition number of the column-scaled design matrix [-] at
+/// which the normal equations are solved (θ then carries at most about
+/// 1e8·ε ≈ 2e-8 relative error, far below any figure a reading prints);
+/// beyond it the screen is the full OLS fit.
+pub const MAX_CONDITION: f64 = 1e4;
+
+/// The OLS fit of every pedestal of `run` (a run as found with a mistake
+/// undone; its bearing schedules `schedules`) with the model and equations
+/// of `options`, or `None` when the run cannot be fitted. `found` are the
+/// pedestals as found, whose fields the screen fits keep where a reading
+/// does not use them.
+pub fn screen(
+    run: &RunDir,
+    schedules: &Schedules,
+    options: &Options,
+    found: &[PedestalFit],
+) -> Option<Vec<PedestalFit>> {
+    run.measured_bearings()
+        .into_iter()
+        .map(|bearing| {
+            let template = found.iter().find(|p| p.bearing == bearing);
+            template
+                .and_then(|t| normal(run, schedules, options, t))
+                .or_else(|| exact(run, schedules, options, bearing))
+        })
+        .collect()
+}
+
+/// The observations of `bearing`'s rows of `run`, the bearing's complex
+/// stiffness interpolated at each speed (no noise); `None` when a speed is
+/// outside its bearing table.
+fn observations(run: &RunDir, schedules: &Schedules, bearing: &str) -> Option<Vec<Observation>> {
+    let schedule = schedules.get(bearing)?;
+    run.measurements
+        .iter()
+        .filter(|m| m.bearing == bearing)
+        .map(|m| {
+            let kstar =
+                complex_stiffness(&schedule.at(m.speed_hz).ok()?, omega_from_hz(m.speed_hz));
+            Some(Observation {
+                speed_hz: m.speed_hz,
+                rel: m.rel,
+                ped: m.ped,
+                kstar,
+                var: [0.0; 8],
+            })
+        })
+        .collect()
+}
+
+/// The paper's OLS fit of `bearing`'s pedestal in `run`, as
+/// [`super::super::fit_run`] makes it with `--estimator ols`.
+pub fn exact(
+    run: &RunDir,
+    schedules: &Schedules,
+    options: &Options,
+    bearing: &str,
+) -> Option<PedestalFit> {
+    let points = observations(run, schedules, bearing)?;
+    super::super::fit_pedestal(
+        bearing,
+        &points,
+        &options.ols(),
+    )
+    .ok()
+}
+
+/// The OLS fit of the pedestal of `template.bearing` from the normal
+/// equations (module docs); `None` when they are not well conditioned, a
+/// speed is outside the bearing table, or a figure is not finite.
+fn normal(
+    run: &RunDir,
+    schedules: &Schedules,
+    options: &Options,
+    template: &PedestalFit,
+) -> Option<PedestalFit> {
+    let options = options.ols();
+    let columns = options.model().parameters();
+    let points = observations(run, schedules, &template.bearing)?;
+    let finite = |p: &&Observation| {
+        p.speed_hz.is_finite()
+            && p.ped
+                .iter()
+                .chain(&p.force())
+                .all(|c| c.re.is_finite() && c.im.is_finite())
+    };
+    let mut ne = NormalEquations::new(columns.len());
+    let mut row = vec![0.0; columns.len()];
+    let mut range = [f64::INFINITY, f64::NEG_INFINITY];
+    let equations_of = |p: &Observation| {
+        equations_for_mode(options.mode, p.omega(), &p.ped, &p.force())
+    };
+    for p in points.iter().filter(finite) {
+        let (eqs, n) = equations_of(p);
+        for eq in &eqs[..n] {
+            for (r, &c) in row.iter_mut().zip(&columns) {
+                *r = eq.row[c as usize];
+            }
+            ne.add(&row, eq.rhs);
+        }
+        range = [range[0].min(p.speed_hz), range[1].max(p.speed_hz)];
+    }
+    let solution = ne.solve(MAX_CONDITION)?;
+    let mut theta = [0.0; PARAMETERS];
+    for (k, &c) in columns.iter().enumerate() {
+        theta[c as usize] = solution.theta[k];
+    }
+    // The residual sum of squares from the residuals themselves (no
+    // cancellation when the fit is close).
+    let mut rss = 0.0;
+    for p in points.iter().filter(finite) {
+        let (eqs, n) = equations_of(p);
+        for eq in &eqs[..n] {
+            let e: f64 = columns
+                .iter()
+                .map(|&c| eq.row[c as usize] * theta[c as usize])
+                .sum::<f64>()
+                - eq.rhs;
+            rss += e * e;
+        }
+    }
+    let equations = ne.rows();
+    let sigma2 = rss / (equations - columns.len()) as f64;
+    let p = columns.len();
+    let mut se = [0.0; PARAMETERS];
+    for (k, &c) in columns.iter().enumerate() {
+        se[c as usize] = (sigma2 * solution.inverse[k * p + k]).sqrt();
+    }
+    if !theta.iter().chain(&se).all(|v| v.is_finite()) {
+        return None;
+    }
+    let mut fit = template.clone();
+    [fit.k_y, fit.k_z, fit.m, fit.c_y, fit.c_z] = theta;
+    fit.std_err = StdErr {
+        k_y: se[0],
+        k_z: se[1],
+        m: se[2],
+        c_y: se[3],
+        c_z: se[4],
+    };
+    fit.residual_rms = (rss / equations as f64).sqrt();
+    fit.condition_number = solution.condition_number;
+    fit.equations = equations;
+    fit.speed_range_hz = range;
+    fit.fixed = options
+        .model()
+        .fixed()
+        .iter()
+        .map(|p| p.name().to_string())
+        .collect();
+    fit.warnings = violations(&fit);
+    fit.trusted = fit.warnings.is_empty();
+    fit.suspected_convention_error = None;
+    Some(fit)
+}
