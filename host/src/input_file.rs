@@ -157,9 +157,74 @@ pub fn check_line_lengths(text: &str) -> std::io::Result<()> {
     Ok(())
 }
 
+/// The widest piece of a line a TOML error shows [characters]: the parser's
+/// own message quotes the whole line, which may be megabytes of nonsense.
+const TOML_EXCERPT_CHARS: usize = 60;
+
+/// A TOML parse error of `text` as `line L, column C: message` with at most
+/// [`TOML_EXCERPT_CHARS`] characters of the line around the column (never
+/// the whole line).
+pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
+    let Some(span) = e.span() else {
+        return format!("TOML: {}", e.message().trim_end());
+    };
+    let at = span.start.min(text.len());
+    let at = (0..=at)
+        .rev()
+        .find(|&i| text.is_char_boundary(i))
+        .unwrap_or(0);
+    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[at..].find('\n').map_or(text.len(), |i| at + i);
+    let line = text[..at].matches('\n').count() + 1;
+    let column = text[line_start..at].chars().count() + 1;
+    let whole = &text[line_start..line_end];
+    let before: Vec<char> = text[line_start..at].chars().collect();
+    let from = before.len().saturating_sub(TOML_EXCERPT_CHARS / 2);
+    let excerpt: String = whole.chars().skip(from).take(TOML_EXCERPT_CHARS).collect();
+    let clipped = from > 0 || whole.chars().count() > from + TOML_EXCERPT_CHARS;
+    format!(
+        "TOML parse error at line {line}, column {column}: {} (the line: `{}{excerpt}{}`)",
+        e.message().trim_end(),
+        if from > 0 { "…" } else { "" },
+        if clipped && whole.chars().count() > from + TOML_EXCERPT_CHARS {
+            "…"
+        } else {
+            ""
+        }
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn toml_errors_name_line_and_column_without_the_whole_line() {
+        #[derive(serde::Deserialize, Debug)]
+        #[allow(dead_code)]
+        struct T {
+            a: u32,
+        }
+        let deep = format!(
+            "a = 1\nb = {}{}\n",
+            "[".repeat(100_000),
+            "]".repeat(100_000)
+        );
+        let e = toml::from_str::<T>(&deep).unwrap_err();
+        let m = toml_error(&deep, &e);
+        assert!(m.starts_with("TOML parse error at line 2, column"), "{m}");
+        assert!(m.len() < 400, "{} bytes: {m}", m.len());
+        let text = "a = \"x\"\n";
+        let e = toml::from_str::<T>(text).unwrap_err();
+        let m = toml_error(text, &e);
+        assert!(
+            m.contains("line 1, column 5") && m.contains("`a = \"x\"`"),
+            "{m}"
+        );
+        let dup = "a = 1\na = 2\n";
+        let m = toml_error(dup, &toml::from_str::<T>(dup).unwrap_err());
+        assert!(m.contains("line 2") && m.contains("duplicate"), "{m}");
+    }
 
     #[test]
     fn directories_are_refused_and_files_read() {

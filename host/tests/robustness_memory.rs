@@ -5,16 +5,8 @@
 //! refused at its first extra line, naming the file and the figures, and
 //! nothing is written.
 
-use std::path::{Path, PathBuf};
-
 mod robustness_common;
-use robustness_common::{example, plinth, text};
-
-fn field(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../examples/field")
-        .join(name)
-}
+use robustness_common::{example, field, plinth, simulated_run, text};
 
 #[test]
 fn a_table_with_more_rows_than_the_budget_holds_is_refused_at_its_first_extra_line() {
@@ -66,14 +58,7 @@ fn a_table_with_more_rows_than_the_budget_holds_is_refused_at_its_first_extra_li
 fn a_run_directory_with_more_rows_than_the_budget_holds_is_refused_naming_its_file() {
     let t = tempfile::tempdir().unwrap();
     let run = t.path().join("run");
-    let o = plinth()
-        .arg("simulate")
-        .arg(example())
-        .args(["--speeds", "5:200:0.1", "--out"])
-        .arg(&run)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", text(&o));
+    simulated_run(&run, "5:200:0.1");
     let o = plinth()
         .env("PLINTH_MEMORY_MB", "1")
         .arg("identify")
