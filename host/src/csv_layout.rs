@@ -38,9 +38,27 @@ pub fn check(path: &Path, expected: &str) -> Result<Layout, LayoutError> {
 
 /// [`check`], then the file opened past its byte-order mark behind a
 /// [`crate::input_file::BoundedLines`] reader (lines of at most
-/// [`crate::input_file::MAX_LINE_BYTES`], no NUL bytes): what every CSV
-/// reader of an input file reads from.
+/// [`crate::input_file::MAX_LINE_BYTES`], no NUL bytes, and no more lines
+/// than the memory available holds as table rows,
+/// [`crate::sim::budget::table_lines`]): what every CSV reader of a table
+/// reads from.
 pub fn open(
+    path: &Path,
+    expected: &str,
+) -> Result<std::io::BufReader<crate::input_file::BoundedLines<std::fs::File>>, LayoutError> {
+    let available = crate::sim::budget::available_bytes();
+    let lines = open_stream(path, expected)?;
+    Ok(
+        match crate::sim::budget::table_lines(available).zip(available) {
+            Some((most, a)) => std::io::BufReader::new(lines.into_inner().with_max_lines(most, a)),
+            None => lines,
+        },
+    )
+}
+
+/// [`open`] without the bound on lines: a recording, read a block at a time
+/// (its memory does not grow with its length).
+pub fn open_stream(
     path: &Path,
     expected: &str,
 ) -> Result<std::io::BufReader<crate::input_file::BoundedLines<std::fs::File>>, LayoutError> {

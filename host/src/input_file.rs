@@ -52,9 +52,10 @@ pub const MAX_TEXT_BYTES: u64 = 64 << 20;
 pub const MAX_LINE_BYTES: usize = 1 << 20;
 
 /// A text reader that refuses, as an I/O error of kind `InvalidData`, a line
-/// longer than a bound [bytes] and any NUL byte (never text), naming the
-/// line [1-based] and never echoing its content. Memory stays bounded by the
-/// reader above it holding at most one line.
+/// longer than a bound [bytes], any NUL byte (never text) and, when given,
+/// more lines than a table can hold in memory, naming the line [1-based] and
+/// never echoing its content. Memory stays bounded by the reader above it
+/// holding at most one line (and, for a table, at most the lines allowed).
 pub struct BoundedLines<R> {
     inner: R,
     /// The current line [1-based].
@@ -62,6 +63,8 @@ pub struct BoundedLines<R> {
     /// Bytes of the current line so far.
     run: usize,
     max: usize,
+    /// The most lines allowed and the memory they stand for [bytes].
+    max_lines: Option<(u64, u64)>,
 }
 
 impl<R: Read> BoundedLines<R> {
@@ -72,7 +75,16 @@ impl<R: Read> BoundedLines<R> {
             line: 1,
             run: 0,
             max,
+            max_lines: None,
         }
+    }
+
+    /// Also refuses a line past `lines` (a table's rows held in memory,
+    /// [`crate::sim::budget::TABLE_ROW_BYTES`] each, within `available`
+    /// bytes [bytes], named in the error).
+    pub fn with_max_lines(mut self, lines: u64, available: u64) -> Self {
+        self.max_lines = Some((lines, available));
+        self
     }
 }
 
@@ -96,6 +108,20 @@ impl<R: Read> Read for BoundedLines<R> {
                     ));
                 }
                 _ => {
+                    if let Some((most, available)) = self.max_lines.filter(|_| self.run == 0) {
+                        if self.line > most {
+                            return Err(Error::new(
+                                ErrorKind::InvalidData,
+                                format!(
+                                    "line {}: more than {most} lines: a table's rows are held in memory (about {} bytes each) and this machine has {} MB available: is it the right file? ({} caps the memory Plinth plans for)",
+                                    self.line,
+                                    crate::sim::budget::TABLE_ROW_BYTES,
+                                    available >> 20,
+                                    crate::sim::budget::MEMORY_ENV
+                                ),
+                            ));
+                        }
+                    }
                     self.run += 1;
                     if self.run > self.max {
                         return Err(Error::new(
@@ -131,9 +157,74 @@ pub fn check_line_lengths(text: &str) -> std::io::Result<()> {
     Ok(())
 }
 
+/// The widest piece of a line a TOML error shows [characters]: the parser's
+/// own message quotes the whole line, which may be megabytes of nonsense.
+const TOML_EXCERPT_CHARS: usize = 60;
+
+/// A TOML parse error of `text` as `line L, column C: message` with at most
+/// [`TOML_EXCERPT_CHARS`] characters of the line around the column (never
+/// the whole line).
+pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
+    let Some(span) = e.span() else {
+        return format!("TOML: {}", e.message().trim_end());
+    };
+    let at = span.start.min(text.len());
+    let at = (0..=at)
+        .rev()
+        .find(|&i| text.is_char_boundary(i))
+        .unwrap_or(0);
+    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[at..].find('\n').map_or(text.len(), |i| at + i);
+    let line = text[..at].matches('\n').count() + 1;
+    let column = text[line_start..at].chars().count() + 1;
+    let whole = &text[line_start..line_end];
+    let before: Vec<char> = text[line_start..at].chars().collect();
+    let from = before.len().saturating_sub(TOML_EXCERPT_CHARS / 2);
+    let excerpt: String = whole.chars().skip(from).take(TOML_EXCERPT_CHARS).collect();
+    let clipped = from > 0 || whole.chars().count() > from + TOML_EXCERPT_CHARS;
+    format!(
+        "TOML parse error at line {line}, column {column}: {} (the line: `{}{excerpt}{}`)",
+        e.message().trim_end(),
+        if from > 0 { "…" } else { "" },
+        if clipped && whole.chars().count() > from + TOML_EXCERPT_CHARS {
+            "…"
+        } else {
+            ""
+        }
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn toml_errors_name_line_and_column_without_the_whole_line() {
+        #[derive(serde::Deserialize, Debug)]
+        #[allow(dead_code)]
+        struct T {
+            a: u32,
+        }
+        let deep = format!(
+            "a = 1\nb = {}{}\n",
+            "[".repeat(100_000),
+            "]".repeat(100_000)
+        );
+        let e = toml::from_str::<T>(&deep).unwrap_err();
+        let m = toml_error(&deep, &e);
+        assert!(m.starts_with("TOML parse error at line 2, column"), "{m}");
+        assert!(m.len() < 400, "{} bytes: {m}", m.len());
+        let text = "a = \"x\"\n";
+        let e = toml::from_str::<T>(text).unwrap_err();
+        let m = toml_error(text, &e);
+        assert!(
+            m.contains("line 1, column 5") && m.contains("`a = \"x\"`"),
+            "{m}"
+        );
+        let dup = "a = 1\na = 2\n";
+        let m = toml_error(dup, &toml::from_str::<T>(dup).unwrap_err());
+        assert!(m.contains("line 2") && m.contains("duplicate"), "{m}");
+    }
 
     #[test]
     fn directories_are_refused_and_files_read() {
@@ -172,6 +263,26 @@ mod tests {
         );
         let e = read_all(b"a\nb\nc\0", 10).unwrap_err().to_string();
         assert!(e.contains("line 3, byte 2: a NUL byte"), "{e}");
+    }
+
+    #[test]
+    fn a_table_longer_than_memory_allows_is_refused_at_its_first_extra_line() {
+        let lines = |n: usize| "1,2\n".repeat(n).into_bytes();
+        let read = |bytes: Vec<u8>| {
+            let mut out = Vec::new();
+            BoundedLines::new(&bytes[..], 100)
+                .with_max_lines(3, 3 << 20)
+                .read_to_end(&mut out)
+                .map(|_| out.len())
+        };
+        assert_eq!(read(lines(3)).unwrap(), 12);
+        let e = read(lines(4)).unwrap_err();
+        assert_eq!(e.kind(), ErrorKind::InvalidData);
+        let e = e.to_string();
+        assert!(
+            e.starts_with("line 4: more than 3 lines") && e.contains("3 MB available"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -6,25 +6,13 @@
 //! inputs are made here from the bundled examples, byte by byte.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::time::{Duration, Instant};
 
 mod robustness_common;
-use robustness_common::{stream_config, text};
-
-fn plinth() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_plinth"));
-    c.arg("--quiet");
-    c
-}
-
-fn examples() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples")
-}
-
-fn field(name: &str) -> PathBuf {
-    examples().join("field").join(name)
-}
+use robustness_common::{
+    example, field, offline_rebuild, plinth_quiet as plinth, simulated_run, stream_config, text,
+};
 
 fn import(table: &Path, out: &Path) -> Output {
     plinth()
@@ -105,7 +93,7 @@ fn a_disk_sized_file_of_nul_bytes_or_one_line_fails_fast() {
 fn accuracy_refuses_a_billion_draws_naming_the_option() {
     let o = plinth()
         .arg("accuracy")
-        .arg(examples().join("feng-hahn-1997.toml"))
+        .arg(example())
         .args(["--draws", "1000000000", "--speeds", "5:60:5"])
         .output()
         .unwrap();
@@ -280,16 +268,9 @@ fn a_64_bit_float_wav_with_a_streaming_size_and_an_odd_chunk_reads_as_the_pcm_on
 fn another_machines_file_and_a_frameless_raw_log_are_refused() {
     let t = tempfile::tempdir().unwrap();
     let run = t.path().join("run");
-    let o = plinth()
-        .arg("simulate")
-        .arg(examples().join("feng-hahn-1997.toml"))
-        .args(["--speeds", "5:60:1", "--out"])
-        .arg(&run)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", text(&o));
+    simulated_run(&run, "5:60:1");
     // A machine file with one bearing renamed is another machine's.
-    let text_m = std::fs::read_to_string(examples().join("feng-hahn-1997.toml")).unwrap();
+    let text_m = std::fs::read_to_string(example()).unwrap();
     let renamed = t.path().join("renamed.toml");
     std::fs::write(
         &renamed,
@@ -316,13 +297,7 @@ fn another_machines_file_and_a_frameless_raw_log_are_refused() {
         .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
         .collect();
     std::fs::write(run.join("raw.bin"), noise).unwrap();
-    let o = plinth()
-        .args(["stream", "--offline", "--config"])
-        .arg(&config)
-        .arg("--out")
-        .arg(&run)
-        .output()
-        .unwrap();
+    let o = offline_rebuild(&config, &run);
     assert!(!o.status.success(), "{}", text(&o));
     assert!(
         text(&o).contains("holds no valid phasor frame"),

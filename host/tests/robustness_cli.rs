@@ -12,7 +12,8 @@ use one_frame::one_frame_log;
 
 mod robustness_common;
 use robustness_common::{
-    example, long_machine, plinth, run_bounded, snapshot, stream_config, text,
+    example, long_machine, offline_rebuild, plinth, run_bounded, simulated_run, snapshot,
+    stream_config, text,
 };
 
 /// A "measured" run directory: a simulation whose files were then written by
@@ -148,14 +149,7 @@ fn out_that_is_a_file_or_a_link_is_refused() {
 fn killing_simulate_mid_run_leaves_the_previous_run_byte_identical() {
     let t = tempfile::tempdir().unwrap();
     let run = t.path().join("run");
-    let o = plinth()
-        .arg("simulate")
-        .arg(example())
-        .args(["--speeds", "5:50:5", "--out"])
-        .arg(&run)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", text(&o));
+    simulated_run(&run, "5:50:5");
     let before = snapshot(&run);
     let machine = long_machine(t.path(), 12_000);
     for delay_ms in [150u64, 600] {
@@ -276,13 +270,7 @@ fn offline_rebuild_of_an_empty_log_is_refused_and_changes_nothing() {
     let config = stream_config(&run);
     std::fs::write(run.join("raw.bin"), b"").unwrap();
     let before = snapshot(&run);
-    let o = plinth()
-        .args(["stream", "--offline", "--config"])
-        .arg(&config)
-        .arg("--out")
-        .arg(&run)
-        .output()
-        .unwrap();
+    let o = offline_rebuild(&config, &run);
     let msg = text(&o);
     assert!(!o.status.success(), "{msg}");
     assert!(
@@ -297,24 +285,11 @@ fn offline_rebuild_of_an_empty_log_is_refused_and_changes_nothing() {
 fn offline_rebuild_with_the_runs_own_config_keeps_it() {
     let t = tempfile::tempdir().unwrap();
     let run = t.path().join("run");
-    let o = plinth()
-        .arg("simulate")
-        .arg(example())
-        .args(["--speeds", "5:60:5", "--out"])
-        .arg(&run)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", text(&o));
+    simulated_run(&run, "5:60:5");
     let config = stream_config(&run);
     std::fs::write(run.join("raw.bin"), one_frame_log(30.0, 2)).unwrap();
     let config_before = std::fs::read(&config).unwrap();
-    let o = plinth()
-        .args(["stream", "--offline", "--config"])
-        .arg(&config)
-        .arg("--out")
-        .arg(&run)
-        .output()
-        .unwrap();
+    let o = offline_rebuild(&config, &run);
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(std::fs::read(&config).unwrap(), config_before);
     assert!(!config_before.is_empty());
@@ -327,14 +302,7 @@ fn offline_rebuild_with_the_runs_own_config_keeps_it() {
 fn identify_refuses_a_fifo_and_names_spreadsheet_layouts() {
     let t = tempfile::tempdir().unwrap();
     let run = t.path().join("run");
-    let o = plinth()
-        .arg("simulate")
-        .arg(example())
-        .args(["--speeds", "5:60:5", "--out"])
-        .arg(&run)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", text(&o));
+    simulated_run(&run, "5:60:5");
     let m = run.join("measurements.csv");
     let good = std::fs::read_to_string(&m).unwrap();
 

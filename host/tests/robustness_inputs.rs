@@ -8,7 +8,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 mod robustness_common;
-use robustness_common::{example, long_machine, plinth, run_bounded, text};
+use robustness_common::{example, long_machine, plinth, run_bounded, simulated_run, text};
 
 fn mkfifo(path: &Path) {
     let _ = std::fs::remove_file(path);
@@ -17,14 +17,7 @@ fn mkfifo(path: &Path) {
 }
 
 fn simulate(out: &Path) {
-    let o = plinth()
-        .arg("simulate")
-        .arg(example())
-        .args(["--speeds", "5:60:5", "--out"])
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", text(&o));
+    simulated_run(out, "5:60:5");
 }
 
 /// Expects a prompt refusal naming `file` as not a regular file.

@@ -98,6 +98,10 @@ pub fn run(args: &Args) -> Result<()> {
         .transpose()?;
     // Reader errors name their file, line and column already.
     crate::identify::cli::check_run_dir(&args.dir)?;
+    // A measured base motion is validated, and named as not used here.
+    if crate::base_csv::read(&args.dir)?.is_some() {
+        eprintln!("warning: {}: measured base motion is not used by diagnose (it fits on rigid ground or fits a base model); `plinth identify` subtracts it", args.dir.join("base.csv").display());
+    }
     // The whole command's line; the candidate rounds show theirs under it.
     let mut ticker = crate::progress::Ticker::activity("diagnose: fits, bootstrap, effects", true);
     let mut run = RunDir::read(&args.dir)?;

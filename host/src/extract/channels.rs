@@ -179,7 +179,8 @@ impl Channels {
 
     /// Parses CHANNELS.toml text; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Channels> {
-        let raw: Raw = toml::from_str(text).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        let raw: Raw = toml::from_str(text)
+            .map_err(|e| anyhow::anyhow!("{file}: {}", crate::input_file::toml_error(text, &e)))?;
         let positive = |key: &str, v: f64| -> Result<f64> {
             if v.is_finite() && v > 0.0 {
                 Ok(v)

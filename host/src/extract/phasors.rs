@@ -57,12 +57,88 @@ pub struct Extraction {
     pub keyphasor_span: Option<(f64, f64)>,
 }
 
+/// The most memory one block of frames may take [bytes]: 16 MiB (a
+/// recording of many channels is read in fewer frames at a time).
+pub const BLOCK_BYTES: usize = 16 << 20;
+
+/// What the extraction's memory is made of: a fixed part [bytes] (the
+/// block buffers, the extractors, the channel checks) and what every
+/// phasor output adds [bytes] (its phasors and the run rows made from it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ExtractionMemory {
+    /// Frames per block read.
+    pub block_frames: usize,
+    /// The fixed part [bytes].
+    pub fixed: u64,
+    /// Each output [bytes].
+    pub per_output: u64,
+}
+
+impl ExtractionMemory {
+    /// The memory of extracting `measured` channels in `bearings` bearings
+    /// from a recording of `recorded` channels of `sample_bytes` bytes each
+    /// (0: CSV), within `available` bytes (`None`: unknown).
+    pub fn new(
+        recorded: usize,
+        sample_bytes: usize,
+        measured: usize,
+        bearings: usize,
+        available: Option<u64>,
+    ) -> Self {
+        let groups = measured.div_ceil(GROUP) as u64;
+        // The recording's block (file bytes and volts) and the groups' blocks.
+        let per_frame = (recorded * (4 + sample_bytes)) as u64 + groups * (GROUP as u64) * 4;
+        let block_bytes = available.map_or(BLOCK_BYTES as u64, |a| (a / 8).min(BLOCK_BYTES as u64));
+        let block_frames = (block_bytes / per_frame.max(1)).clamp(1, BLOCK_FRAMES as u64) as usize;
+        let fixed = groups
+            .saturating_mul(std::mem::size_of::<PhasorExtractor<GROUP>>() as u64 + 64)
+            .saturating_add(
+                (measured as u64)
+                    .saturating_mul(std::mem::size_of::<super::health::ChannelHealth>() as u64 + 8),
+            )
+            .saturating_add((recorded as u64).saturating_mul(24))
+            .saturating_add(block_frames as u64 * per_frame);
+        let per_output = 64
+            + (measured as u64).saturating_mul(24)
+            + (bearings as u64).saturating_mul(crate::sim::budget::TABLE_ROW_BYTES);
+        ExtractionMemory {
+            block_frames,
+            fixed,
+            per_output,
+        }
+    }
+
+    /// The most outputs and faults [`Self::fixed`] leaves room for in
+    /// `available` bytes (`None`: no bound known).
+    fn most_outputs(&self, available: Option<u64>) -> Option<u64> {
+        available.map(|a| a.saturating_sub(self.fixed) / self.per_output)
+    }
+}
+
 /// Runs the extraction over the whole recording; `progress` is told the
-/// frames read after each block.
+/// frames read after each block. Memory is checked against what the machine
+/// has (`crate::sim::budget::available_bytes`).
 pub fn extract(
     recording: &mut Recording,
     config: &Channels,
+    progress: impl FnMut(u64),
+) -> Result<Extraction> {
+    extract_within(
+        recording,
+        config,
+        progress,
+        crate::sim::budget::available_bytes(),
+    )
+}
+
+/// [`extract`] within `available` bytes of memory (`None`: unbounded): the
+/// channels are checked against it before anything is allocated, and the
+/// phasors and faults as they accumulate.
+pub fn extract_within(
+    recording: &mut Recording,
+    config: &Channels,
     mut progress: impl FnMut(u64),
+    available: Option<u64>,
 ) -> Result<Extraction> {
     let file = recording.file.clone();
     let fs = recording.sample_rate_hz;
@@ -90,6 +166,24 @@ pub fn extract(
             "{file}: sample rate {fs} Hz is too low: the extractor needs {MIN_SAMPLES_PER_REVOLUTION} samples per revolution, so at most {max_speed:.3} Hz, below min_speed_hz {min_speed}"
         );
     }
+    let memory = ExtractionMemory::new(
+        n,
+        recording.sample_bytes(),
+        config.channels.len(),
+        config.bearings.len(),
+        available,
+    );
+    crate::sim::budget::check_input(
+        &format!(
+            "{file}: {} measuring channels ([[channel]] entries of the channels file) over {n} recorded channels",
+            config.channels.len()
+        ),
+        memory.fixed,
+        available,
+    )
+    .map_err(|e| anyhow::anyhow!("{e}: is it the right channels file?"))?;
+    let most_outputs = memory.most_outputs(available);
+    let block_frames = memory.block_frames;
     let groups = config.channels.len().div_ceil(GROUP);
     let mut extractors = Vec::with_capacity(groups);
     for g in 0..groups {
@@ -122,8 +216,8 @@ pub fn extract(
         sample_rate_hz: fs,
         ..Extraction::default()
     };
-    let mut buf = Vec::with_capacity(BLOCK_FRAMES * n);
-    let mut blocks: Vec<Vec<[f32; GROUP]>> = vec![Vec::with_capacity(BLOCK_FRAMES); groups];
+    let mut buf = Vec::with_capacity(block_frames * n);
+    let mut blocks: Vec<Vec<[f32; GROUP]>> = vec![Vec::with_capacity(block_frames); groups];
     let mut edges: Vec<KeyphasorEdge> = Vec::new();
     let mut events: Vec<Vec<Event<GROUP>>> = vec![Vec::new(); groups];
     let mut last_edge: Option<f64> = None;
@@ -133,7 +227,7 @@ pub fn extract(
     let mut revolution: Option<f64> = None;
     let mut health = vec![super::health::ChannelHealth::default(); config.channels.len()];
     loop {
-        let frames = recording.read(&mut buf, BLOCK_FRAMES)?;
+        let frames = recording.read(&mut buf, block_frames)?;
         if frames == 0 {
             break;
         }
@@ -209,6 +303,22 @@ pub fn extract(
         }
         collect(&events, &mut result, config.channels.len());
         result.frames += frames as u64;
+        if let Some(most) = most_outputs {
+            let held = result.outputs.len() as u64
+                + (result.faults.len() as u64 * std::mem::size_of::<Fault>() as u64)
+                    .div_ceil(memory.per_output);
+            if held > most {
+                bail!(
+                    "{file}: {} phasors and {} keyphasor faults by {:.3} s ({} channels, {} revolutions a phasor): holding them needs more than the {} MB of memory this machine has available: give more `revolutions` per phasor in the channels file, or split the recording",
+                    result.outputs.len(),
+                    result.faults.len(),
+                    result.frames as f64 / fs,
+                    config.channels.len(),
+                    config.revolutions,
+                    available.unwrap_or(0) >> 20
+                );
+            }
+        }
         progress(result.frames);
     }
     result.edges = detector.edges;
@@ -293,5 +403,99 @@ fn collect(events: &[Vec<Event<GROUP>>], result: &mut Extraction, channels: usiz
                 });
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Five channels (two `rel`, two `ped` probes of bearing B1, the
+    /// keyphasor) at 6400 Hz, a constant 50 Hz for 2 s: 100 revolutions.
+    fn recording(dir: &std::path::Path) -> (std::path::PathBuf, Channels) {
+        let mut text = String::from("time_s,r45,r135,p45,p135,kp\n");
+        for i in 0..12_800u32 {
+            let t = f64::from(i) / 6400.0;
+            let w = 2.0 * std::f64::consts::PI * 50.0 * t;
+            let kp = if i % 128 < 8 { -10.0 } else { 0.0 };
+            text.push_str(&format!(
+                "{t:.9},{:.6},{:.6},{:.6},{:.6},{kp}\n",
+                (w - 0.3).cos(),
+                (w + 1.2).cos(),
+                0.2 * (w - 0.5).cos(),
+                0.2 * (w + 1.0).cos()
+            ));
+        }
+        let path = dir.join("rec.csv");
+        std::fs::write(&path, text).unwrap();
+        let mut toml = String::from(
+            "revolutions = 1\n[keyphasor]\nchannel = 4\nthreshold_v = -5.0\nedge = \"falling\"\n",
+        );
+        for (index, (quantity, angle)) in [("rel", 45), ("rel", 135), ("ped", 45), ("ped", 135)]
+            .iter()
+            .enumerate()
+        {
+            toml.push_str(&format!(
+                "[[channel]]\nindex = {index}\nbearing = \"B1\"\nquantity = \"{quantity}\"\nangle_deg = {angle}.0\nsensor = \"proximity\"\nsensitivity = 7.87\nsensitivity_unit = \"V/mm\"\n"
+            ));
+        }
+        (path, Channels::parse(&toml, "channels.toml").unwrap())
+    }
+
+    #[test]
+    fn phasors_beyond_the_memory_budget_are_refused_and_smaller_blocks_change_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let (path, config) = recording(dir.path());
+        let run = |available: Option<u64>| {
+            let mut r = Recording::open(&path, None).unwrap();
+            extract_within(&mut r, &config, |_| {}, available)
+        };
+        let reference = run(None).unwrap();
+        let k = reference.outputs.len() as u64;
+        assert!(k > 50, "{k} outputs");
+        let (mut refused_outputs, mut refused_channels, mut passed) = (0, 0, 0);
+        for kib in [4u64, 16, 32, 64, 128, 256, 1024, 4096] {
+            let a = kib << 10;
+            let m = ExtractionMemory::new(5, 0, 4, 1, Some(a));
+            assert!(m.block_frames >= 1 && m.block_frames <= BLOCK_FRAMES);
+            match run(Some(a)) {
+                Ok(e) => {
+                    assert!(
+                        m.fixed <= a && k <= m.most_outputs(Some(a)).unwrap(),
+                        "{kib} KiB"
+                    );
+                    assert_eq!(e.outputs, reference.outputs, "{kib} KiB");
+                    passed += 1;
+                }
+                Err(e) => {
+                    let e = e.to_string();
+                    if m.fixed > a {
+                        assert!(
+                            e.contains("4 measuring channels") && e.contains("rec.csv"),
+                            "{e}"
+                        );
+                        refused_channels += 1;
+                    } else {
+                        assert!(k > m.most_outputs(Some(a)).unwrap(), "{kib} KiB: {e}");
+                        assert!(e.contains("phasors") && e.contains("`revolutions`"), "{e}");
+                        refused_outputs += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            refused_outputs > 0 && refused_channels > 0 && passed > 0,
+            "{refused_outputs} {refused_channels} {passed}"
+        );
+    }
+
+    #[test]
+    fn many_recorded_channels_are_read_in_blocks_of_bounded_memory() {
+        // 65 535 channels of 64-bit samples: one frame is 786 420 bytes.
+        let m = ExtractionMemory::new(65_535, 8, 8, 2, None);
+        assert_eq!(m.block_frames, BLOCK_BYTES / (65_535 * 12 + 32));
+        assert!(m.fixed < 2 * BLOCK_BYTES as u64, "{}", m.fixed);
+        let m = ExtractionMemory::new(9, 3, 8, 2, None);
+        assert_eq!(m.block_frames, BLOCK_FRAMES);
     }
 }

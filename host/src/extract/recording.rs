@@ -15,8 +15,18 @@ use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
 
-/// Rows read ahead from a CSV recording to measure its sample rate.
+/// Rows read ahead from a CSV recording to measure its sample rate (fewer
+/// when its channels would make them more than [`CSV_AHEAD_BYTES`]).
 const CSV_RATE_ROWS: usize = 65_536;
+
+/// The most memory the rows read ahead may take [bytes]: 64 MiB.
+const CSV_AHEAD_BYTES: usize = 64 << 20;
+
+/// Rows read ahead from a CSV recording of `channels` channels: at most
+/// [`CSV_RATE_ROWS`], at most [`CSV_AHEAD_BYTES`] of volts (f32), at least 16.
+fn csv_rate_rows(channels: usize) -> usize {
+    (CSV_AHEAD_BYTES / (4 * channels.max(1))).clamp(16, CSV_RATE_ROWS)
+}
 
 /// Clipping seen on one channel.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -148,7 +158,7 @@ impl Recording {
         bytes: u64,
         full_scale_v: Option<f64>,
     ) -> Result<Recording> {
-        let handle = crate::csv_layout::open(path, "time_s").map_err(|e| match e {
+        let handle = crate::csv_layout::open_stream(path, "time_s").map_err(|e| match e {
             crate::csv_layout::LayoutError::NotAFile(m) => anyhow::anyhow!("{file}: {m}"),
             crate::csv_layout::LayoutError::At(line, m) => anyhow::anyhow!("{file}:{line}: {m}"),
         })?;
@@ -174,7 +184,7 @@ impl Recording {
         let mut records = reader.into_records();
         let mut ahead = std::collections::VecDeque::new();
         let mut times = Vec::new();
-        for record in records.by_ref().take(CSV_RATE_ROWS) {
+        for record in records.by_ref().take(csv_rate_rows(channels)) {
             let record = record.with_context(|| file.clone())?;
             let (t, _) = parse_csv_row(&file, &record, channels, &mut ahead)?;
             times.push(t);
@@ -209,6 +219,15 @@ impl Recording {
             },
             file,
         })
+    }
+
+    /// Bytes one sample takes in the file (WAV), 0 for CSV (parsed a row
+    /// at a time).
+    pub fn sample_bytes(&self) -> usize {
+        match &self.source {
+            Source::Wav { header, .. } => usize::from(header.bits / 8),
+            Source::Csv { .. } => 0,
+        }
     }
 
     /// Reads up to `max_frames` frames into `out` (interleaved volts,
@@ -340,4 +359,19 @@ fn check_step(file: &str, line: u64, dt: f64, rate: f64) -> Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn rows_read_ahead_stay_within_their_memory_whatever_the_channels() {
+        assert_eq!(super::csv_rate_rows(9), super::CSV_RATE_ROWS);
+        for channels in [1000, 100_000, 524_288] {
+            let rows = super::csv_rate_rows(channels);
+            assert!(
+                rows >= 16 && rows * channels * 4 <= super::CSV_AHEAD_BYTES,
+                "{channels}: {rows}"
+            );
+        }
+    }
 }

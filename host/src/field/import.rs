@@ -127,7 +127,8 @@ impl Layout {
 
     /// Parses layout text; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Layout> {
-        let raw: RawLayout = toml::from_str(text).map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        let raw: RawLayout = toml::from_str(text)
+            .map_err(|e| anyhow::anyhow!("{file}: {}", crate::input_file::toml_error(text, &e)))?;
         let speed_to_hz = match raw.speed.unit.trim().to_ascii_lowercase().as_str() {
             "rpm" => 1.0 / 60.0,
             "hz" => 1.0,

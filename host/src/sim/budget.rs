@@ -151,13 +151,78 @@ pub fn check_count(
     }
 }
 
-/// Memory the operating system can still give this process [bytes]
-/// (`MemAvailable` of /proc/meminfo), `None` where that is unknown.
+/// The environment variable that caps the memory Plinth plans for [MiB]
+/// (a whole number ≥ 1): a shared machine's share, or a test's small budget.
+pub const MEMORY_ENV: &str = "PLINTH_MEMORY_MB";
+
+/// Memory this process may plan for [bytes]: what the operating system can
+/// still give it (`MemAvailable` of /proc/meminfo), capped by
+/// [`MEMORY_ENV`]; `None` where neither is known. An unreadable
+/// `PLINTH_MEMORY_MB` is named once on stderr and not used.
 pub fn available_bytes() -> Option<u64> {
+    let os = os_available_bytes();
+    match (os, memory_cap()) {
+        (Some(a), Some(c)) => Some(a.min(c)),
+        (a, c) => a.or(c),
+    }
+}
+
+fn os_available_bytes() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024)
+}
+
+/// [`MEMORY_ENV`] in bytes, if set to a whole number of MiB ≥ 1.
+fn memory_cap() -> Option<u64> {
+    let text = std::env::var_os(MEMORY_ENV)?;
+    match parse_memory_mb(&text.to_string_lossy()) {
+        Ok(b) => Some(b),
+        Err(e) => {
+            static WARNED: std::sync::Once = std::sync::Once::new();
+            WARNED.call_once(|| eprintln!("warning: {MEMORY_ENV}: {e}; not used"));
+            None
+        }
+    }
+}
+
+/// A [`MEMORY_ENV`] value [MiB] in bytes.
+fn parse_memory_mb(text: &str) -> Result<u64, String> {
+    match text.trim().parse::<u64>() {
+        Ok(mb) if mb >= 1 => Ok(mb.saturating_mul(1 << 20)),
+        _ => Err(format!(
+            "`{}` is not a whole number of MiB >= 1",
+            text.trim()
+        )),
+    }
+}
+
+/// Memory one row of a table costs once read [bytes]: the parsed row (speed,
+/// bearing name, four phasors, noise, the digits it was written with), its
+/// copies while checked and sorted, and its share of the per-speed results
+/// computed from it.
+pub const TABLE_ROW_BYTES: u64 = 1024;
+
+/// The most lines a table (run directory, bearing table, 1X vector table,
+/// `base.csv`) may have within `available` bytes of memory
+/// ([`TABLE_ROW_BYTES`] a row); `None`: no bound known.
+pub fn table_lines(available: Option<u64>) -> Option<u64> {
+    available.map(|a| (a / TABLE_ROW_BYTES).max(1))
+}
+
+/// Refuses an input whose estimated memory `needed` [bytes] is beyond
+/// `available`: `what` names the file and the count that sets it, and what
+/// to change.
+pub fn check_input(what: &str, needed: u64, available: Option<u64>) -> Result<(), String> {
+    match available {
+        Some(a) if needed > a => Err(format!(
+            "{what}: needs about {} MB of memory and this machine has {} MB available",
+            needed.div_ceil(1 << 20),
+            a >> 20
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Refuses a request of `needed` bytes beyond `available` with both figures
@@ -188,6 +253,23 @@ pub fn check_signals(what: &str, needed: u64, available: Option<u64>) -> Result<
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_memory_cap_is_a_whole_number_of_mib() {
+        assert_eq!(super::parse_memory_mb(" 64 "), Ok(64 << 20));
+        for bad in ["0", "-1", "1.5", "", "lots"] {
+            let e = super::parse_memory_mb(bad).unwrap_err();
+            assert!(e.contains("whole number of MiB"), "{bad}: {e}");
+        }
+        assert_eq!(super::table_lines(Some(1 << 20)), Some(1024));
+        assert_eq!(super::table_lines(Some(10)), Some(1));
+        assert_eq!(super::table_lines(None), None);
+        let e = super::check_input("t.csv: 9 channels", 3 << 20, Some(1 << 20)).unwrap_err();
+        assert_eq!(
+            e,
+            "t.csv: 9 channels: needs about 3 MB of memory and this machine has 1 MB available"
+        );
+        assert!(super::check_input("x", 1 << 20, Some(1 << 20)).is_ok());
+    }
     #[test]
     fn a_billion_draws_are_refused_naming_the_option() {
         let needed = super::accuracy_bytes(2, 116, 1_000_000_000);

@@ -422,7 +422,7 @@ impl Machine {
     pub fn from_toml_str(text: &str, file: &str) -> Result<Machine, MachineError> {
         let raw: RawMachine = toml::from_str(text).map_err(|e| MachineError::Parse {
             file: file.to_string(),
-            message: e.to_string(),
+            message: crate::input_file::toml_error(text, &e),
         })?;
         Self::from_raw(raw, file)
     }

@@ -213,7 +213,8 @@ impl StreamConfig {
 
     /// Parses and validates configuration text; `base` resolves relative paths.
     pub fn parse(text: &str, base: &Path) -> Result<Self> {
-        let raw: RawConfig = toml::from_str(text).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let raw: RawConfig = toml::from_str(text)
+            .map_err(|e| anyhow::anyhow!("{}", crate::input_file::toml_error(text, &e)))?;
         let bearings_csv = if raw.bearings.is_absolute() {
             raw.bearings.clone()
         } else {

@@ -1,7 +1,8 @@
 //! Scaffolding shared by the host's robustness tests (`mod
-//! robustness_common;` in each): the binary, the bundled example, a
-//! command's whole output, a bounded run, a directory snapshot, a long
-//! machine and a stream configuration for a simulated run.
+//! robustness_common;` in each): the binary, the bundled examples, a
+//! simulated run, an offline stream rebuild, a command's whole output, a
+//! bounded run, a directory snapshot, a long machine and a stream
+//! configuration for a simulated run.
 #![allow(dead_code)] // each test file uses its own subset
 
 use std::collections::BTreeMap;
@@ -14,9 +15,48 @@ pub fn plinth() -> Command {
     Command::new(env!("CARGO_BIN_EXE_plinth"))
 }
 
+/// `plinth --quiet` (no progress display).
+pub fn plinth_quiet() -> Command {
+    let mut c = plinth();
+    c.arg("--quiet");
+    c
+}
+
 /// The bundled paper machine file.
 pub fn example() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/feng-hahn-1997.toml")
+}
+
+/// A file of the bundled field example (examples/field/).
+pub fn field(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples/field")
+        .join(name)
+}
+
+/// Simulates the bundled machine over `speeds` (`LO:HI:STEP` [Hz]) into
+/// `out`, which must succeed.
+pub fn simulated_run(out: &Path, speeds: &str) {
+    let o = plinth()
+        .arg("simulate")
+        .arg(example())
+        .args(["--speeds", speeds, "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+}
+
+/// `plinth stream --offline --config CONFIG --out RUN`: the run rebuilt
+/// from its raw log.
+pub fn offline_rebuild(config: &Path, run: &Path) -> Output {
+    plinth()
+        .args(["stream", "--offline", "--config"])
+        .arg(config)
+        .arg("--out")
+        .arg(run)
+        .output()
+        .unwrap()
 }
 
 /// A command's stdout then stderr, as text.
