@@ -451,9 +451,19 @@ pub const FLIP_BLOCK: usize = 4;
 /// The [`FLIP_NEIGHBOURS`]·2 speeds nearest to speed `i` of `n` by index
 /// (both sides where there are), ascending distance.
 fn neighbours(n: usize, i: usize) -> Vec<usize> {
-    let mut near: Vec<usize> = (0..n).filter(|&j| j != i).collect();
-    near.sort_by_key(|&j| (j.abs_diff(i), j));
-    near.truncate(2 * FLIP_NEIGHBOURS);
+    // Outward from i, the lower index first at each distance: the order of
+    // a sort by (distance, index), in O(FLIP_NEIGHBOURS) instead of O(n log n).
+    let mut near = Vec::with_capacity(2 * FLIP_NEIGHBOURS);
+    let mut d = 1;
+    while near.len() < 2 * FLIP_NEIGHBOURS && (d <= i || i + d < n) {
+        if d <= i {
+            near.push(i - d);
+        }
+        if i + d < n && near.len() < 2 * FLIP_NEIGHBOURS {
+            near.push(i + d);
+        }
+        d += 1;
+    }
     near
 }
 
