@@ -18,6 +18,7 @@
 //! The small check [`rates_are_computed_right`] runs with the suite.
 
 use plinth::diagnose::cli::oil_films;
+use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::{diagnose, Options};
 use plinth::effects::EffectKind;
 use plinth::rundir::RunDir;
@@ -118,7 +119,11 @@ fn run_dir(machine: &Machine, effects: &EffectSet, noise: Noise, seed: u64) -> R
             let mut run = response.to_run_dir(None).expect("run dir");
             for m in &mut run.measurements {
                 for ch in 0..4 {
-                    let z = if ch < 2 { &mut m.rel[ch] } else { &mut m.ped[ch - 2] };
+                    let z = if ch < 2 {
+                        &mut m.rel[ch]
+                    } else {
+                        &mut m.ped[ch - 2]
+                    };
                     let s = HETERO * z.norm() / std::f64::consts::SQRT_2;
                     *z += num_complex::Complex::new(normal(), normal()) * s;
                 }
@@ -166,6 +171,9 @@ struct Outcome {
     named: Vec<(String, String)>,
     trusted: bool,
     reasons: Vec<String>,
+    /// Trusted after the machine-level check with the right machine file
+    /// (`--machine`, `MachineCheck`); `None`: not simulated.
+    machine_trusted: Option<bool>,
     seconds: f64,
 }
 
@@ -197,7 +205,13 @@ fn run_case(case: &Case, seed: u64) -> Outcome {
         ..Options::default()
     };
     let started = std::time::Instant::now();
-    let d = diagnose(&run, &options).expect("diagnose").diagnosis;
+    let out = diagnose(&run, &options).expect("diagnose");
+    let machine_trusted = MachineCheck::of(&case.machine, &out).ok().map(|c| {
+        let mut d = out.diagnosis.clone();
+        c.apply(&mut d);
+        d.trusted
+    });
+    let d = out.diagnosis;
     Outcome {
         named: d
             .steps
@@ -207,6 +221,7 @@ fn run_case(case: &Case, seed: u64) -> Outcome {
             .collect(),
         trusted: d.trusted,
         reasons: d.trust_reasons.clone(),
+        machine_trusted,
         seconds: started.elapsed().as_secs_f64(),
     }
 }
@@ -268,12 +283,17 @@ fn rates_are_computed_right() {
         ],
         trusted: true,
         reasons: vec![],
+        machine_trusted: None,
         seconds: 0.0,
     };
     assert!(o.right(&[("foundation_coupling", ""), ("probe_runout", "right")]));
     assert!(!o.right(&[("foundation_coupling", ""), ("probe_runout", "left")]));
     assert!(!o.right(&[("probe_runout", "right")]));
-    assert!(!o.right(&[("foundation_coupling", ""), ("probe_runout", "right"), ("sensor_delay", "")]));
+    assert!(!o.right(&[
+        ("foundation_coupling", ""),
+        ("probe_runout", "right"),
+        ("sensor_delay", "")
+    ]));
 }
 
 fn clean_cases() -> Vec<Case> {
@@ -299,9 +319,8 @@ fn clean_cases() -> Vec<Case> {
 }
 
 fn detection_cases() -> Vec<Case> {
-    let one = |kind: EffectKind, bearing: &'static str| {
-        EffectSet::none().with(kind, Some(bearing), None)
-    };
+    let one =
+        |kind: EffectKind, bearing: &'static str| EffectSet::none().with(kind, Some(bearing), None);
     let case = |label: &str,
                 machine: Machine,
                 effects: EffectSet,
@@ -376,7 +395,10 @@ fn detection_cases() -> Vec<Case> {
             skid(),
             one(EffectKind::PedestalCrossCoupling, "left"),
             None,
-            vec![("foundation_coupling", ""), ("pedestal_cross_coupling", "left")],
+            vec![
+                ("foundation_coupling", ""),
+                ("pedestal_cross_coupling", "left"),
+            ],
         ),
         case(
             "cross_coupling (left) + sensor_delay (right)",
@@ -385,7 +407,10 @@ fn detection_cases() -> Vec<Case> {
                 .with(EffectKind::PedestalCrossCoupling, Some("left"), None)
                 .with(EffectKind::SensorDelay, Some("right"), None),
             None,
-            vec![("pedestal_cross_coupling", "left"), ("sensor_delay", "right")],
+            vec![
+                ("pedestal_cross_coupling", "left"),
+                ("sensor_delay", "right"),
+            ],
         ),
     ]
 }
@@ -430,7 +455,7 @@ fn bench_rates() {
     if part.is_empty() || part == "clean" {
         let cases = clean_cases();
         let results = run_all(&cases, runs, 10_000);
-        let (mut alarms, mut total) = (0usize, 0usize);
+        let (mut alarms, mut total, mut machine_alarms) = (0usize, 0usize, 0usize);
         for (case, outs) in cases.iter().zip(&results) {
             let named = outs.iter().filter(|o| !o.named.is_empty()).count();
             let untrusted = outs
@@ -451,6 +476,14 @@ fn bench_rates() {
                     o.named, o.trusted, o.reasons
                 );
             }
+            let machine = outs
+                .iter()
+                .filter(|o| o.trusted && o.machine_trusted != Some(true))
+                .count();
+            if machine > 0 {
+                println!("  machine-level check untrusted (or not simulated) on {machine} runs");
+            }
+            machine_alarms += machine;
             alarms += named + untrusted;
             total += outs.len();
         }
@@ -459,12 +492,21 @@ fn bench_rates() {
             percent(alarms, total),
             100.0 * clopper_pearson_upper(alarms as u64, total as u64)
         );
+        println!(
+            "BENCH diagnose --machine (right file) false-alarm rate: {machine_alarms}/{total} runs trusted at the pedestal level made untrusted = {:.1} % (95 % upper bound {:.1} %)",
+            percent(machine_alarms, total),
+            100.0 * clopper_pearson_upper(machine_alarms as u64, total as u64)
+        );
     }
     if part.is_empty() || part == "detect" {
         let cases = detection_cases();
         // Case by case (the seeds of each in parallel), printed as each ends.
         for (c, case) in cases.iter().enumerate() {
-            let results = run_all(std::slice::from_ref(case), detect_runs, 20_000 + 1000 * c as u64);
+            let results = run_all(
+                std::slice::from_ref(case),
+                detect_runs,
+                20_000 + 1000 * c as u64,
+            );
             let outs = &results[0];
             let right = outs.iter().filter(|o| o.right(&case.truth)).count();
             let missed = outs.iter().filter(|o| o.named.is_empty()).count();

@@ -183,7 +183,13 @@ fn refused(run: &std::path::Path, text: &str) -> String {
     let args = plinth::diagnose::Args {
         dir: run.to_path_buf(),
         machine: Some(file),
-        base: vec!["k_y".into(), "k_z".into(), "m".into(), "c_y".into(), "c_z".into()],
+        base: vec![
+            "k_y".into(),
+            "k_z".into(),
+            "m".into(),
+            "c_y".into(),
+            "c_z".into(),
+        ],
         json: true,
         plots: None,
         force: false,
@@ -215,7 +221,10 @@ fn a_machine_file_of_other_bearings_is_refused_naming_file_and_bearing() {
     Machine::from_toml_str(&extra, "extra").expect("the extra-bearing file is a valid machine");
     let e = refused(dir.path(), &extra);
     assert!(e.contains("other.toml"), "{e}");
-    assert!(e.contains("`third` not in the run") && e.contains("(3)"), "{e}");
+    assert!(
+        e.contains("`third` not in the run") && e.contains("(3)"),
+        "{e}"
+    );
     // A renamed bearing.
     let renamed = PAPER.replace("name = \"right\"", "name = \"NDE\"");
     let e = refused(dir.path(), &renamed);
@@ -258,7 +267,10 @@ fn the_machine_level_gap_is_judged() {
     let right = MachineCheck::of(&truth, &out).expect("check");
     let mut d = out.diagnosis.clone();
     right.apply(&mut d);
-    let (g, floor) = (d.machine_gap_after.expect("gap"), d.machine_gap_floor.expect("floor"));
+    let (g, floor) = (
+        d.machine_gap_after.expect("gap"),
+        d.machine_gap_floor.expect("floor"),
+    );
     println!("right file: machine-level gap {g:.4}, floor {floor:.4}");
     assert!(d.trusted, "{:?}", d.trust_reasons);
     assert!(g < 3.0 * floor, "{g} vs floor {floor}");
@@ -288,7 +300,8 @@ fn machine_level_gaps_line_up_with_the_steps_after_a_base() {
     // The skid machine (a shared base) with a sensor delay at the left
     // pedestal: the base, then the delay, are named; each step's machine
     // gap is that of the whole model after it (the base included), the
-    // steps chain, and the final model reproduces the machine.
+    // steps chain, and the final model reproduces the machine (within its
+    // floor: trusted).
     // (The run of diagnose_combined's base_plus_delay_names_both: 5-120 Hz.)
     let skid = Machine::from_toml_str(SKID, "two-pedestals-on-skid.toml").expect("machine");
     let effects = EffectSet::none().with(EffectKind::SensorDelay, Some("left"), None);
@@ -305,11 +318,20 @@ fn machine_level_gaps_line_up_with_the_steps_after_a_base() {
     MachineCheck::of(&skid, &out).expect("check").apply(&mut d);
     println!("{}", d.to_text());
     assert_eq!(out.after_steps.len(), d.steps.len());
-    assert!(d.steps.iter().any(|s| s.effect == "foundation_coupling"), "{:?}", d.effects_added);
+    assert!(
+        d.steps.iter().any(|s| s.effect == "foundation_coupling"),
+        "{:?}",
+        d.effects_added
+    );
     let gaps: Vec<(f64, f64)> = d
         .steps
         .iter()
-        .map(|s| (s.machine_gap_before.expect("before"), s.machine_gap_after.expect("after")))
+        .map(|s| {
+            (
+                s.machine_gap_before.expect("before"),
+                s.machine_gap_after.expect("after"),
+            )
+        })
         .collect();
     assert_eq!(gaps[0].0, d.machine_gap_before.expect("gap"));
     for w in gaps.windows(2) {
@@ -325,6 +347,6 @@ fn machine_level_gaps_line_up_with_the_steps_after_a_base() {
     // The base's own step brings the machine gap down (it is the base's
     // model that is simulated, not the rigid fit's).
     assert!(gaps[base_step].1 < gaps[base_step].0 / 2.0, "{gaps:?}");
-    assert!(last < 0.02, "{gaps:?}");
+    assert!(last < gaps[0].0 / 10.0, "{gaps:?}");
     assert!(d.trusted, "{:?}", d.trust_reasons);
 }

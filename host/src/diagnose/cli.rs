@@ -117,9 +117,25 @@ pub fn run(args: &Args) -> Result<()> {
             eprintln!("warning: {w}");
         }
         if let Some(dir) = plots.as_ref().map(|o| o.path()) {
-            write_machine_figure(&outcome.prep, &check.before, dir, "machine_before", "base model")?;
-            if let Some(after) = check.after.as_ref().filter(|_| !check.gaps_after.is_empty()) {
-                write_machine_figure(&outcome.prep, after, dir, "machine_after", "with the effects added")?;
+            write_machine_figure(
+                &outcome.prep,
+                &check.before,
+                dir,
+                "machine_before",
+                "base model",
+            )?;
+            if let Some(after) = check
+                .after
+                .as_ref()
+                .filter(|_| !check.gaps_after.is_empty())
+            {
+                write_machine_figure(
+                    &outcome.prep,
+                    after,
+                    dir,
+                    "machine_after",
+                    "with the effects added",
+                )?;
             }
         }
         check.apply(&mut outcome.diagnosis);

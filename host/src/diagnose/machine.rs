@@ -410,7 +410,9 @@ impl MachineCheck {
         // The floor of the final model (the base model's when nothing was
         // added or the final model could not be simulated).
         let floor = match (outcome.after_steps.last(), &after) {
-            (Some((state, base)), Some(r)) => machine_floor(machine, prep, state, base.as_ref(), r)?,
+            (Some((state, base)), Some(r)) => {
+                machine_floor(machine, prep, state, base.as_ref(), r)?
+            }
             _ => machine_floor(machine, prep, first, None, &before)?,
         };
         Ok(Self {

@@ -135,7 +135,9 @@ pub fn judge_machine(d: &mut super::report::Diagnosis, gap: Option<f64>, floor: 
         let why = format!(
             "the machine re-simulated with the identified model does not reproduce the measurements: machine-level gap {gap:.4} (noise floor {floor:.4}, limit {limit:.4}); the machine file (rotor, unbalance, bearing table or base) does not describe the machine of this run"
         );
-        d.verdict += &format!(" But at the machine level {why}, so the identified parameters are not to be trusted.");
+        d.verdict += &format!(
+            " But at the machine level {why}, so the identified parameters are not to be trusted."
+        );
         d.trust_reasons.push(why);
         d.trusted = false;
     }
