@@ -4,6 +4,7 @@
 //! written with some digits and read back as `plinth` reads a run. The base
 //! is never measured (no `base.csv`).
 
+use plinth::diagnose::report::Pedestal;
 use plinth::rundir::{DigitsMode, RunDir, WriteOptions};
 use plinth::sim::{unbalance_response, EffectSet, Machine};
 
@@ -88,4 +89,36 @@ pub fn simulated_run(
     .expect("write");
     assert!(!dir.path().join("base.csv").exists());
     RunDir::read(dir.path()).expect("read back")
+}
+
+/// `machine` on rigid ground: every base removed, every bearing off it.
+pub fn on_rigid_ground(machine: &Machine) -> Machine {
+    let mut m = machine.clone();
+    m.bases.clear();
+    for b in &mut m.bearings {
+        b.base = None;
+    }
+    m.validate().expect("valid machine");
+    m
+}
+
+/// Asserts that every pedestal of `run`'s truth has k_y, k_z and m in
+/// `got` within the fraction `tolerance` of the truth (`label` in the
+/// message).
+pub fn assert_pedestals_near_truth(run: &RunDir, got: &[Pedestal], tolerance: f64, label: &str) {
+    let truth = run.truth.as_ref().expect("truth");
+    for p in &truth.pedestals {
+        let got = got
+            .iter()
+            .find(|x| x.bearing == p.bearing)
+            .expect("pedestal");
+        for (key, want) in [("k_y", p.k_y), ("k_z", p.k_z), ("m", p.m)] {
+            let v = got.values[key];
+            assert!(
+                (v - want).abs() / want < tolerance,
+                "{label} {} {key}: {v} vs {want}",
+                p.bearing
+            );
+        }
+    }
 }

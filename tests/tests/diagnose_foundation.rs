@@ -19,7 +19,9 @@ use plinth::diagnose::{diagnose, Options};
 use plinth::rundir::RunDir;
 use plinth::sim::base::Base;
 use plinth::sim::{EffectSet, Machine};
-use plinth_tests::simulated::{simulated_run, speeds, Writing};
+use plinth_tests::simulated::{
+    assert_pedestals_near_truth, on_rigid_ground, simulated_run, speeds, Writing,
+};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -131,22 +133,7 @@ fn check_named(machine: &Machine, run: &RunDir, label: &str) {
     );
     assert!(d.trusted, "{label}: {:?}", d.trust_reasons);
     assert!(!d.verdict.contains(UNEXPLAINED), "{label}");
-    let truth = run.truth.as_ref().expect("truth");
-    for p in &truth.pedestals {
-        let got = d
-            .pedestals_after
-            .iter()
-            .find(|x| x.bearing == p.bearing)
-            .expect("pedestal");
-        for (key, want) in [("k_y", p.k_y), ("k_z", p.k_z), ("m", p.m)] {
-            let v = got.values[key];
-            assert!(
-                (v - want).abs() / want < 0.02,
-                "{label} {} {key}: {v} vs {want}",
-                p.bearing
-            );
-        }
-    }
+    assert_pedestals_near_truth(run, &d.pedestals_after, 0.02, label);
     let found = step.foundation.as_ref().expect("foundation report");
     assert_eq!(found.groups.len(), 1, "{label}: one base");
     let g = &found.groups[0];
@@ -281,12 +268,7 @@ fn out_of_library_data_are_not_claimed_fixed() {
 
     // Rigid ground, but bearings.csv's stiffnesses 20 % high (damping
     // right): the forces are wrong in a speed-dependent, complex way.
-    let mut rigid = machine(SKID, "two-pedestals-on-skid.toml");
-    rigid.bases.clear();
-    for b in &mut rigid.bearings {
-        b.base = None;
-    }
-    rigid.validate().expect("valid machine");
+    let rigid = on_rigid_ground(&machine(SKID, "two-pedestals-on-skid.toml"));
     let mut run = run_dir(&rigid, &speeds(5.0, 120.0, 2.0), NOISY, 22);
     for row in &mut run.bearings {
         for r in 0..2 {
@@ -300,12 +282,7 @@ fn out_of_library_data_are_not_claimed_fixed() {
 
 #[test]
 fn rigid_ground_names_nothing() {
-    let mut rigid = machine(SKID, "two-pedestals-on-skid.toml");
-    rigid.bases.clear();
-    for b in &mut rigid.bearings {
-        b.base = None;
-    }
-    rigid.validate().expect("valid machine");
+    let rigid = on_rigid_ground(&machine(SKID, "two-pedestals-on-skid.toml"));
     let sp = speeds(5.0, 120.0, 1.0);
     let cases = [
         (

@@ -9,23 +9,24 @@ use super::data::Prepared;
 use super::forward::StepOutcome;
 use super::foundation::{self, FoundationFit};
 use super::gap::Prediction;
-use super::model::{Model, Params, Term};
+use super::model::{Model, Nonlinear, Params, Term};
 use super::state::{base_model, State};
 use super::workflow::Options;
 use anyhow::Result;
+use nalgebra::{DMatrix, DVector};
 use plinth_shared::regression::Parameter;
 
 /// The base candidates of one round, fitted to the data the state corrects.
 pub(super) struct BaseCandidates {
     /// The corrected data.
     pub(super) prep: Prepared,
-    /// `foundation_coupling`, when it could be fitted.
-    pub(super) shared: Option<FoundationFit>,
-    /// `pedestal_sub_base`, when it could be fitted.
-    pub(super) sub_base: Option<FoundationFit>,
+    /// `foundation_coupling`, when it could be fitted (not yet tested).
+    pub(super) shared: Option<foundation::Fitted>,
+    /// `pedestal_sub_base`, when it could be fitted (not yet tested).
+    pub(super) sub_base: Option<foundation::Fitted>,
 }
 
-/// Fits and tests both base models on the data `state` corrects, starting
+/// Fits both base models on the data `state` corrects, starting
 /// from (and simulating the null from) the state's pedestals; on the base
 /// model (`first`) from `plinth identify`'s fits, as before any effect.
 pub(super) fn try_bases_on(
@@ -73,18 +74,9 @@ pub(super) fn try_bases_on(
     let gap = pred.gap(&cprep, None);
     // A base fit that cannot run is "not tried", not an error.
     let run = |kind| {
-        foundation::evaluate(
-            &cprep,
-            &pred,
-            gap,
-            opts.alpha,
-            opts.foundation_replicates,
-            opts.foundation_seed,
-            kind,
-            start.clone(),
-        )
-        .ok()
-        .flatten()
+        foundation::fit(&cprep, &pred, gap, kind, start.clone())
+            .ok()
+            .flatten()
     };
     let shared = run(foundation::Kind::Shared);
     let sub_base = run(foundation::Kind::SubBase);
@@ -165,15 +157,23 @@ pub(super) fn lr_test(tried: usize) -> String {
     format!("likelihood ratio with the base refitted, χ² with Bonferroni over {tried} candidates")
 }
 
+/// Candidates refitted with the base after the screening of
+/// [`correction_on_base`].
+const REFIT_BEST: usize = 2;
+
 /// The best correction on top of a chosen base: every library candidate of
 /// `outcome` that corrects the data (probe runout, sensor delay, a table's
-/// clearance, pedestal cross-coupling: [`corrections_only`]) applied with
-/// its values from the rigid-model fit, the base refitted to the corrected
-/// data, and tested by the drop of the base's χ². Rigid-model values are
-/// not the joint maximum-likelihood ones, so the drop is at most the
-/// likelihood ratio: the test is conservative. Returns the candidate's
-/// index in `outcome.ranked`, its state, the refitted base and the
-/// evidence; `None` when no candidate is significant.
+/// clearance, pedestal cross-coupling: [`corrections_only`]) re-estimated
+/// on the base ([`tuned_on_base`]: the rigid-ground values absorb the
+/// base) and screened by the drop of the base's χ² with the base held;
+/// the [`REFIT_BEST`] best significant ones are then estimated jointly with
+/// the base ([`settled_on_base`]) and tested by the
+/// drop of the refitted base's χ² against χ²(q), Bonferroni over every
+/// candidate screened, Schwarz penalty. The held-base drop is at most the
+/// refitted one, so the screening loses no candidate the test would pass.
+/// Returns the number screened and the winner: its index in
+/// `outcome.ranked`, its state, the refitted base and the evidence; `None`
+/// when no candidate is significant.
 pub(super) fn correction_on_base(
     prep: &Prepared,
     state: &State,
@@ -185,26 +185,73 @@ pub(super) fn correction_on_base(
     let tried: Vec<usize> = (0..outcome.ranked.len())
         .filter(|&i| corrections_only(&outcome.ranked[i].candidate.model))
         .collect();
+    let q_of = |i: usize| outcome.ranked[i].candidate.null.len();
+    let significant =
+        |ev: &Evidence| ev.delta_bic > 0.0 && ev.p_adjusted < opts.alpha;
+    let mut screened: Vec<(usize, State, Evidence)> = tried
+        .iter()
+        .filter_map(|&i| {
+            let e = &outcome.ranked[i];
+            let cstate = State {
+                model: e.candidate.model.clone(),
+                params: e.params.clone(),
+                weights: state.weights.clone(),
+            };
+            let (tuned, chi2) = tuned_on_base(prep, &cstate, &base.fit, opts);
+            let ev = lr_evidence(base.chi2 - chi2, q_of(i), tried.len(), n);
+            significant(&ev).then_some((i, tuned, ev))
+        })
+        .collect();
+    screened.sort_by(|a, b| b.2.delta_bic.total_cmp(&a.2.delta_bic));
     let mut best: Option<(usize, State, BaseOn, Evidence)> = None;
-    for &i in &tried {
-        let e = &outcome.ranked[i];
-        let cstate = State {
-            model: e.candidate.model.clone(),
-            params: e.params.clone(),
-            weights: state.weights.clone(),
-        };
-        let Some(on) = BaseOn::refit(prep, &cstate, &base.fit, opts) else {
+    for (i, tuned, _) in screened.into_iter().take(REFIT_BEST) {
+        let Some((tuned, on)) = settled_on_base(prep, &tuned, &base.fit, opts) else {
             continue;
         };
-        let ev = lr_evidence(base.chi2 - on.chi2, e.candidate.null.len(), tried.len(), n);
-        if ev.delta_bic > 0.0
-            && ev.p_adjusted < opts.alpha
-            && best.as_ref().is_none_or(|b| ev.delta_bic > b.3.delta_bic)
-        {
-            best = Some((i, cstate, on, ev));
+        let ev = lr_evidence(base.chi2 - on.chi2, q_of(i), tried.len(), n);
+        if significant(&ev) && best.as_ref().is_none_or(|b| ev.delta_bic > b.3.delta_bic) {
+            best = Some((i, tuned, on, ev));
         }
     }
     (tried.len(), best)
+}
+
+/// Rounds of [`settled_on_base`], and the χ² drop [-] below which it stops.
+const SETTLE_ROUNDS: usize = 4;
+const SETTLE_DROP: f64 = 0.5;
+
+/// The corrections of `state` and the base `fit` estimated jointly:
+/// corrections re-estimated with the base held ([`tuned_on_base`]), the
+/// base refitted on the data they correct, in turn, until the base's χ²
+/// drops by less than [`SETTLE_DROP`]. A state compared before it settles
+/// would credit the next correction with what settling gains. `None` when
+/// the base cannot be refitted (or ends non-physical).
+pub(super) fn settled_on_base(
+    prep: &Prepared,
+    state: &State,
+    fit: &FoundationFit,
+    opts: &Options,
+) -> Option<(State, BaseOn)> {
+    let (mut cur, _) = tuned_on_base(prep, state, fit, opts);
+    let mut on = BaseOn::refit(prep, &cur, fit, opts)?;
+    for _ in 1..SETTLE_ROUNDS {
+        let (next, chi2) = tuned_on_base(prep, &cur, &on.fit, opts);
+        if chi2.is_nan() || chi2 >= on.chi2 - SETTLE_DROP {
+            break;
+        }
+        let Some(next_on) = BaseOn::refit(prep, &next, &on.fit, opts) else {
+            break;
+        };
+        let settled = next_on.chi2 > on.chi2 - SETTLE_DROP;
+        if next_on.chi2 < on.chi2 {
+            cur = next;
+            on = next_on;
+        }
+        if settled {
+            break;
+        }
+    }
+    Some((cur, on))
 }
 
 /// The backward check on top of a base: each chosen correction removed in
@@ -226,7 +273,7 @@ pub(super) fn weakest_on_base(
         let Ok(without) = State::fit(prep, model, nl) else {
             continue;
         };
-        let Some(on) = BaseOn::refit(prep, &without, &base.fit, opts) else {
+        let Some((without, on)) = settled_on_base(prep, &without, &base.fit, opts) else {
             continue;
         };
         let ev = lr_evidence(on.chi2 - base.chi2, c.null_len(), chosen.len(), n);
@@ -273,4 +320,162 @@ pub(super) fn carried_nonlinear(model: &Model, state: &State) -> Vec<f64> {
                 .map_or(0.0, |k| state.params.nl[k])
         })
         .collect()
+}
+
+/// A parameter of a state that corrects the data: a linear term (runout,
+/// cross-coupling) or a nonlinear scalar (a delay, a table's clearance).
+#[derive(Clone, Copy, Debug)]
+enum Slot {
+    Term(usize),
+    Nonlinear(usize),
+}
+
+/// The correcting parameters of `state` ([`super::correct::corrected`]).
+fn correction_slots(state: &State) -> Vec<Slot> {
+    let terms = state
+        .model
+        .terms
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| matches!(t, Term::Runout { .. } | Term::CrossStiffness { .. }))
+        .map(|(i, _)| Slot::Term(i));
+    let nl = state
+        .model
+        .nonlinear
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| matches!(p, Nonlinear::Delay { .. } | Nonlinear::Clearance { .. }))
+        .map(|(k, _)| Slot::Nonlinear(k));
+    terms.chain(nl).collect()
+}
+
+fn slot_value(state: &State, s: Slot) -> f64 {
+    match s {
+        Slot::Term(i) => state.params.beta[i],
+        Slot::Nonlinear(k) => state.params.nl[k],
+    }
+}
+
+fn set_slot(state: &mut State, s: Slot, v: f64) {
+    match s {
+        Slot::Term(i) => state.params.beta[i] = v,
+        Slot::Nonlinear(k) => state.params.nl[k] = v,
+    }
+}
+
+/// Finite-difference step of a correcting parameter: 1 % of its value,
+/// at least a floor in its own unit (runout: 1e-3 of the largest runout
+/// value [m]; cross-stiffness 1e3 N/m; delay 1e-6 s; clearance δ 1e-3).
+fn slot_step(state: &State, s: Slot, runout_scale: f64) -> f64 {
+    let v = slot_value(state, s).abs();
+    let floor = match s {
+        Slot::Term(i) => match state.model.terms[i] {
+            Term::Runout { .. } => 1e-3 * runout_scale.max(1e-12),
+            _ => 1e3,
+        },
+        Slot::Nonlinear(k) => match state.model.nonlinear[k] {
+            Nonlinear::Delay { .. } => 1e-6,
+            _ => 1e-3,
+        },
+    };
+    (1e-2 * v).max(floor)
+}
+
+/// The pedestal-level χ² of the chosen base `fit`, its values held, on the
+/// data `state` corrects ([`Prediction::chi2`]; ∞ when it cannot predict).
+fn held_base_chi2(prep: &Prepared, state: &State, fit: &FoundationFit, opts: &Options) -> f64 {
+    let cprep = corrected(prep, state);
+    let rigid = rigid_prediction(&cprep, state, &opts.base);
+    fit.predict_on(&cprep, &rigid)
+        .map_or(f64::INFINITY, |p| p.chi2(&cprep).0)
+}
+
+/// Newton iterations of [`tuned_on_base`].
+const TUNE_ITERATIONS: usize = 4;
+
+/// The corrections of `state` re-estimated on a chosen base: the values the
+/// rigid-ground fit gives them absorb what the base explains (a runout
+/// fitted without the base bends to mimic the base's motion), so they are
+/// moved to the minimum of the base's pedestal-level χ² with the base's
+/// values held. Newton steps on a finite-difference gradient and Hessian
+/// (exact for runout and cross-coupling, in which the χ² is quadratic),
+/// each halved until the χ² falls. Returns the state and its χ².
+pub(super) fn tuned_on_base(
+    prep: &Prepared,
+    state: &State,
+    fit: &FoundationFit,
+    opts: &Options,
+) -> (State, f64) {
+    let slots = correction_slots(state);
+    let mut cur = state.clone();
+    let mut f0 = held_base_chi2(prep, &cur, fit, opts);
+    if slots.is_empty() || !f0.is_finite() {
+        return (cur, f0);
+    }
+    let runout_scale = slots
+        .iter()
+        .filter(|s| matches!(s, Slot::Term(i) if matches!(state.model.terms[*i], Term::Runout { .. })))
+        .map(|&s| slot_value(state, s).abs())
+        .fold(0.0, f64::max);
+    let n = slots.len();
+    for _ in 0..TUNE_ITERATIONS {
+        let h: Vec<f64> = slots
+            .iter()
+            .map(|&s| slot_step(&cur, s, runout_scale))
+            .collect();
+        let eval = |moves: &[(usize, f64)]| {
+            let mut s = cur.clone();
+            for &(i, d) in moves {
+                set_slot(&mut s, slots[i], slot_value(&cur, slots[i]) + d);
+            }
+            held_base_chi2(prep, &s, fit, opts)
+        };
+        let plus: Vec<f64> = (0..n).map(|i| eval(&[(i, h[i])])).collect();
+        let minus: Vec<f64> = (0..n).map(|i| eval(&[(i, -h[i])])).collect();
+        let mut g = DVector::zeros(n);
+        let mut hess = DMatrix::zeros(n, n);
+        for i in 0..n {
+            g[i] = (plus[i] - minus[i]) / (2.0 * h[i]);
+            hess[(i, i)] = (plus[i] - 2.0 * f0 + minus[i]) / (h[i] * h[i]);
+            for j in 0..i {
+                let both = eval(&[(i, h[i]), (j, h[j])]);
+                let v = (both - plus[i] - plus[j] + f0) / (h[i] * h[j]);
+                hess[(i, j)] = v;
+                hess[(j, i)] = v;
+            }
+        }
+        if !g.iter().chain(hess.iter()).all(|v| v.is_finite()) {
+            break;
+        }
+        // A Newton step where the Hessian is positive definite, else a
+        // gradient step scaled by its diagonal.
+        let dx = match hess.clone().cholesky() {
+            Some(ch) => -ch.solve(&g),
+            None => DVector::from_iterator(
+                n,
+                (0..n).map(|i| -g[i] / hess[(i, i)].abs().max(f64::MIN_POSITIVE)),
+            ),
+        };
+        let mut t = 1.0;
+        let mut moved = false;
+        for _ in 0..8 {
+            let mut s = cur.clone();
+            for (i, &sl) in slots.iter().enumerate() {
+                set_slot(&mut s, sl, slot_value(&cur, sl) + t * dx[i]);
+            }
+            let f = held_base_chi2(prep, &s, fit, opts);
+            if f < f0 {
+                let gain = f0 - f;
+                cur = s;
+                f0 = f;
+                moved = gain > 1e-3;
+                break;
+            }
+            t *= 0.5;
+        }
+        if !moved {
+            break;
+        }
+    }
+    (cur, f0)
 }

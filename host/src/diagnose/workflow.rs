@@ -230,25 +230,41 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         };
         if try_bases && corrections_only(&state.model) {
             let bases = try_bases_on(&prep, &state, opts, round == 0)?;
-            if round == 0 {
-                foundation_tried = bases.shared.clone();
-            }
-            let best_base = [bases.shared, bases.sub_base]
+            // The bootstrap only for a base that could be chosen, best
+            // penalised χ² first, until one is significant: a base that
+            // cannot beat the alternative is reported untested.
+            let mut fitted: Vec<(foundation::Fitted, f64)> = [bases.shared, bases.sub_base]
                 .into_iter()
                 .flatten()
                 .map(|f| {
                     let c = criterion(&f.prediction, &bases.prep, f.grouping.q);
                     (f, c)
                 })
-                .filter(|(f, c)| {
-                    f.test.significant(opts.alpha)
-                        && f.evidence.delta_bic > 0.0
-                        && before.gap > super::foundation::TRY_ABOVE_FLOOR * before.floor
-                        && f.gap.gap < before.gap
-                        && *c < to_beat
-                })
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|(f, _)| f);
+                .collect();
+            fitted.sort_by(|a, b| a.1.total_cmp(&b.1));
+            let mut best_base: Option<FoundationFit> = None;
+            for (f, c) in fitted {
+                let could = f.score() > 0.0
+                    && before.gap > super::foundation::TRY_ABOVE_FLOOR * before.floor
+                    && f.gap.gap < before.gap
+                    && c < to_beat;
+                let kind = f.kind;
+                let tested = match (&best_base, could) {
+                    (None, true) => f.tested(
+                        opts.alpha,
+                        opts.foundation_replicates,
+                        opts.foundation_seed,
+                    ),
+                    (Some(_), _) => f.untested("another base is chosen"),
+                    (None, false) => f.untested("it cannot be chosen"),
+                };
+                if best_base.is_none() && could && tested.test.significant(opts.alpha) {
+                    best_base = Some(tested.clone());
+                }
+                if round == 0 && kind == foundation::Kind::Shared {
+                    foundation_tried = Some(tested);
+                }
+            }
             if let Some(f) = best_base {
                 let first = f.grouping.groups[0][0];
                 steps.push(Step {
