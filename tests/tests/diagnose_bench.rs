@@ -24,7 +24,7 @@ use plinth::effects::EffectKind;
 use plinth::rundir::RunDir;
 use plinth::sim::machine::BearingModel;
 use plinth::sim::{unbalance_response, EffectSet, Machine};
-use plinth_tests::simulated::{simulated_run, speeds, Writing};
+use plinth_tests::simulated::{on_rigid_ground, simulated_run, speeds, Writing};
 use plinth_tests::write_run;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -49,13 +49,7 @@ fn three_bearing() -> Machine {
 
 /// The skid machine on rigid ground.
 fn rigid() -> Machine {
-    let mut m = skid();
-    m.bases.clear();
-    for b in &mut m.bearings {
-        b.base = None;
-    }
-    m.validate().expect("valid machine");
-    m
+    on_rigid_ground(&skid())
 }
 
 /// The rigid skid machine with the right pedestal alone on its own sub-base.
@@ -174,6 +168,9 @@ struct Outcome {
     /// Trusted after the machine-level check with the right machine file
     /// (`--machine`, `MachineCheck`); `None`: not simulated.
     machine_trusted: Option<bool>,
+    /// The same with a machine file whose first unbalance is turned by 90°
+    /// (the machine-level rule's detection).
+    wrong_file_trusted: Option<bool>,
     seconds: f64,
 }
 
@@ -206,11 +203,17 @@ fn run_case(case: &Case, seed: u64) -> Outcome {
     };
     let started = std::time::Instant::now();
     let out = diagnose(&run, &options).expect("diagnose");
-    let machine_trusted = MachineCheck::of(&case.machine, &out).ok().map(|c| {
-        let mut d = out.diagnosis.clone();
-        c.apply(&mut d);
-        d.trusted
-    });
+    let trusted_with = |machine: &Machine| {
+        MachineCheck::of(machine, &out).ok().map(|c| {
+            let mut d = out.diagnosis.clone();
+            c.apply(&mut d);
+            d.trusted
+        })
+    };
+    let machine_trusted = trusted_with(&case.machine);
+    let mut turned = case.machine.clone();
+    turned.unbalances[0].angle_deg += 90.0;
+    let wrong_file_trusted = trusted_with(&turned);
     let d = out.diagnosis;
     Outcome {
         named: d
@@ -222,6 +225,7 @@ fn run_case(case: &Case, seed: u64) -> Outcome {
         trusted: d.trusted,
         reasons: d.trust_reasons.clone(),
         machine_trusted,
+        wrong_file_trusted,
         seconds: started.elapsed().as_secs_f64(),
     }
 }
@@ -284,6 +288,7 @@ fn rates_are_computed_right() {
         trusted: true,
         reasons: vec![],
         machine_trusted: None,
+        wrong_file_trusted: None,
         seconds: 0.0,
     };
     assert!(o.right(&[("foundation_coupling", ""), ("probe_runout", "right")]));
@@ -456,6 +461,7 @@ fn bench_rates() {
         let cases = clean_cases();
         let results = run_all(&cases, runs, 10_000);
         let (mut alarms, mut total, mut machine_alarms) = (0usize, 0usize, 0usize);
+        let (mut wrong_flagged, mut wrong_total) = (0usize, 0usize);
         for (case, outs) in cases.iter().zip(&results) {
             let named = outs.iter().filter(|o| !o.named.is_empty()).count();
             let untrusted = outs
@@ -484,6 +490,10 @@ fn bench_rates() {
                 println!("  machine-level check untrusted (or not simulated) on {machine} runs");
             }
             machine_alarms += machine;
+            for o in outs.iter().filter(|o| o.trusted) {
+                wrong_total += 1;
+                wrong_flagged += usize::from(o.wrong_file_trusted == Some(false));
+            }
             alarms += named + untrusted;
             total += outs.len();
         }
@@ -496,6 +506,10 @@ fn bench_rates() {
             "BENCH diagnose --machine (right file) false-alarm rate: {machine_alarms}/{total} runs trusted at the pedestal level made untrusted = {:.1} % (95 % upper bound {:.1} %)",
             percent(machine_alarms, total),
             100.0 * clopper_pearson_upper(machine_alarms as u64, total as u64)
+        );
+        println!(
+            "BENCH diagnose --machine detection (a file with the first unbalance turned by 90°): untrusted in {wrong_flagged}/{wrong_total} runs = {:.1} %",
+            percent(wrong_flagged, wrong_total)
         );
     }
     if part.is_empty() || part == "detect" {

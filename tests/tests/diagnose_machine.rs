@@ -15,7 +15,7 @@ use plinth::diagnose::{diagnose, Options};
 use plinth::effects::EffectKind;
 use plinth::rundir::{DigitsMode, RunDir, WriteOptions};
 use plinth::sim::{unbalance_response, EffectSet, Machine, Noise};
-use plinth_tests::simulated::{simulated_run, speeds as speeds_hz, Writing};
+use plinth_tests::simulated::{on_rigid_ground, simulated_run, speeds as speeds_hz, Writing};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -238,11 +238,8 @@ fn a_machine_file_of_other_bearings_is_refused_naming_file_and_bearing() {
 /// The skid machine on rigid ground, with `angle` [deg] the second
 /// unbalance's angle as the machine file writes it (60 in the example).
 fn rigid_skid(angle: f64) -> Machine {
-    let mut m = Machine::from_toml_str(SKID, "two-pedestals-on-skid.toml").expect("machine");
-    m.bases.clear();
-    for b in &mut m.bearings {
-        b.base = None;
-    }
+    let skid = Machine::from_toml_str(SKID, "two-pedestals-on-skid.toml").expect("machine");
+    let mut m = on_rigid_ground(&skid);
     m.unbalances[1].angle_deg = angle;
     m.validate().expect("valid machine");
     m

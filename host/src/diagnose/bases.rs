@@ -186,8 +186,7 @@ pub(super) fn correction_on_base(
         .filter(|&i| corrections_only(&outcome.ranked[i].candidate.model))
         .collect();
     let q_of = |i: usize| outcome.ranked[i].candidate.null.len();
-    let significant =
-        |ev: &Evidence| ev.delta_bic > 0.0 && ev.p_adjusted < opts.alpha;
+    let significant = |ev: &Evidence| ev.delta_bic > 0.0 && ev.p_adjusted < opts.alpha;
     let mut screened: Vec<(usize, State, Evidence)> = tried
         .iter()
         .filter_map(|&i| {
@@ -414,7 +413,9 @@ pub(super) fn tuned_on_base(
     }
     let runout_scale = slots
         .iter()
-        .filter(|s| matches!(s, Slot::Term(i) if matches!(state.model.terms[*i], Term::Runout { .. })))
+        .filter(
+            |s| matches!(s, Slot::Term(i) if matches!(state.model.terms[*i], Term::Runout { .. })),
+        )
         .map(|&s| slot_value(state, s).abs())
         .fold(0.0, f64::max);
     let n = slots.len();

@@ -250,11 +250,9 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                     && c < to_beat;
                 let kind = f.kind;
                 let tested = match (&best_base, could) {
-                    (None, true) => f.tested(
-                        opts.alpha,
-                        opts.foundation_replicates,
-                        opts.foundation_seed,
-                    ),
+                    (None, true) => {
+                        f.tested(opts.alpha, opts.foundation_replicates, opts.foundation_seed)
+                    }
                     (Some(_), _) => f.untested("another base is chosen"),
                     (None, false) => f.untested("it cannot be chosen"),
                 };

@@ -55,7 +55,6 @@ impl Fitted {
         let test = FoundationTest::from_replicates(statistic, grouping.lr, &null, self.groupings);
         self.with_test(test)
     }
-
 }
 
 /// Data simulated from the rigid-ground fit `theta` under the noise of each
@@ -180,4 +179,3 @@ fn quantile(x: &[f64], q: f64) -> f64 {
     let j = (i + 1).min(v.len() - 1);
     v[i] + f * (v[j] - v[i])
 }
-
