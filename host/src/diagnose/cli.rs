@@ -1,6 +1,6 @@
 //! `plinth diagnose DIR [--machine MACHINE.toml] [--base ...] [--json] [--plots DIR]`.
 
-use super::machine::{machine_gap, resimulate};
+use super::machine::MachineCheck;
 use super::plots::{write_machine_figure, write_pedestal_figures};
 use super::workflow::{diagnose, Options};
 use crate::rundir::RunDir;
@@ -114,52 +114,35 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let mut outcome = diagnose(&run, &options).with_context(|| args.dir.display().to_string())?;
     if let (Some(path), Some(machine)) = (&args.machine, machine) {
-        let mut gaps = Vec::new();
-        for (i, state) in outcome.states.iter().enumerate() {
-            let readings = resimulate(&machine, &outcome.prep, state, None)
-                .with_context(|| format!("--machine {}", path.display()))?;
-            gaps.push(machine_gap(&outcome.prep, &readings));
-            if let Some(dir) = plots.as_ref().map(|o| o.path()) {
-                if i == 0 || (i + 1 == outcome.states.len() && outcome.foundation.is_none()) {
-                    let (stem, label) = if i == 0 {
-                        ("machine_before", "base model")
-                    } else {
-                        ("machine_after", "with the effects added")
-                    };
-                    write_machine_figure(&outcome.prep, &readings, dir, stem, label)?;
-                }
+        // Every step's model re-simulated and the final gap judged.
+        let check = MachineCheck::of(&machine, &outcome)
+            .with_context(|| format!("--machine {}", path.display()))?;
+        for w in &check.warnings {
+            eprintln!("warning: {w}");
+        }
+        if let Some(dir) = plots.as_ref().map(|o| o.path()) {
+            write_machine_figure(
+                &outcome.prep,
+                &check.before,
+                dir,
+                "machine_before",
+                "base model",
+            )?;
+            if let Some(after) = check
+                .after
+                .as_ref()
+                .filter(|_| !check.gaps_after.is_empty())
+            {
+                write_machine_figure(
+                    &outcome.prep,
+                    after,
+                    dir,
+                    "machine_after",
+                    "with the effects added",
+                )?;
             }
         }
-        if let Some(f) = &outcome.foundation {
-            let last = outcome.states.last().context("no fitted state")?;
-            // A base the simulator cannot hold (negative stiffness: the
-            // diagnosis is then untrusted anyway) leaves the machine-level
-            // gap after the step unknown, with the reason on stderr.
-            match resimulate(&machine, &outcome.prep, last, Some(f)) {
-                Ok(readings) => {
-                    gaps.push(machine_gap(&outcome.prep, &readings));
-                    if let Some(dir) = plots.as_ref().map(|o| o.path()) {
-                        write_machine_figure(
-                            &outcome.prep,
-                            &readings,
-                            dir,
-                            "machine_after",
-                            "with the effects added",
-                        )?;
-                    }
-                }
-                Err(e) => {
-                    eprintln!("warning: no machine-level check of the identified base: {e:#}")
-                }
-            }
-        }
-        let d = &mut outcome.diagnosis;
-        d.machine_gap_before = gaps.first().copied();
-        d.machine_gap_after = gaps.last().copied();
-        for (i, s) in d.steps.iter_mut().enumerate() {
-            s.machine_gap_before = gaps.get(i).copied();
-            s.machine_gap_after = gaps.get(i + 1).copied();
-        }
+        check.apply(&mut outcome.diagnosis);
     }
     if let Some(plots) = plots {
         write_pedestal_figures(&outcome, plots.path())?;

@@ -272,3 +272,180 @@ pub fn machine_gap(prep: &Prepared, predicted: &Readings) -> f64 {
         0.0
     }
 }
+
+/// The machine-level gap's noise floor: the gap an exact model would leave
+/// [-]. Two parts, over the same numbers as [`machine_gap`]: the
+/// measurement noise, Σ σ² (σ of each real number,
+/// `super::data::Point::sigma`), and the identified parameters' own
+/// uncertainty carried through the re-simulation ([`parameter_variance`]);
+/// the re-simulation is open-loop (unbalance to response), so near the
+/// machine's resonances a parameter error of a fraction of its ± moves the
+/// response more than the noise does. floor = sqrt((Σ σ² + Σ Var X̂) / Σ |X|²).
+pub fn machine_floor(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    foundation: Option<&FoundationFit>,
+    readings: &Readings,
+) -> Result<f64> {
+    let (mut var, mut den) = (0.0, 0.0);
+    for p in prep.points.iter().flatten().flatten() {
+        var += p.sigma.iter().map(|s| s * s).sum::<f64>();
+        for d in 0..2 {
+            den += p.rel[d].norm_sqr() + p.ped[d].norm_sqr();
+        }
+    }
+    var += parameter_variance(machine, prep, state, foundation, readings)?;
+    Ok(if den > 0.0 { (var / den).sqrt() } else { 0.0 })
+}
+
+/// The re-simulated readings as real numbers (rel y, z then ped y, z, real
+/// and imaginary parts) in a fixed order; unmeasured points give none.
+fn flat(readings: &Readings) -> Vec<f64> {
+    let mut out = Vec::new();
+    for (rel, ped) in readings.iter().flatten().flatten() {
+        for z in rel.iter().chain(ped) {
+            out.push(z.re);
+            out.push(z.im);
+        }
+    }
+    out
+}
+
+/// Σ Var X̂ [m²] of the re-simulated readings `readings` from the state's
+/// parameter covariance (delta method: each reading's gradient by a
+/// forward difference of 1 % of the parameter's ±, through
+/// [`super::criterion::Inference::std_err_of`]). A chosen base's own
+/// parameters are not included (their covariance is not carried).
+pub fn parameter_variance(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    foundation: Option<&FoundationFit>,
+    readings: &Readings,
+) -> Result<f64> {
+    use super::candidates::ParamRef;
+    let x0 = flat(readings);
+    let mut total = 0.0;
+    for (_, inf, refs) in state.inference(prep)? {
+        let mut grads: Vec<Vec<f64>> = Vec::with_capacity(refs.len());
+        for (i, r) in refs.iter().enumerate() {
+            let se = inf.std_err(i);
+            let mut shifted = state.clone();
+            let h = 0.01 * se;
+            let value = match *r {
+                ParamRef::Term(k) => &mut shifted.params.beta[k],
+                ParamRef::Nonlinear(k) => &mut shifted.params.nl[k],
+            };
+            if !(h.is_finite() && h > 0.0) {
+                grads.push(vec![0.0; x0.len()]);
+                continue;
+            }
+            *value += h;
+            let x = flat(&resimulate(machine, prep, &shifted, foundation)?);
+            grads.push(x.iter().zip(&x0).map(|(a, b)| (a - b) / h).collect());
+        }
+        for o in 0..x0.len() {
+            let c: Vec<f64> = grads.iter().map(|g| g[o]).collect();
+            let se = inf.std_err_of(&c);
+            if se.is_finite() {
+                total += se * se;
+            }
+        }
+    }
+    Ok(total)
+}
+
+/// The machine-level check of a whole diagnosis (`--machine`): the
+/// re-simulated machine's gap with the base model and after each step.
+#[derive(Clone, Debug)]
+pub struct MachineCheck {
+    /// Gap of the base model [-].
+    pub gap_before: f64,
+    /// Gap after each step (aligned with the diagnosis's steps: the model
+    /// after step i, a chosen base included); `None` where the identified
+    /// model cannot be simulated (the reason in `warnings`) [-].
+    pub gaps_after: Vec<Option<f64>>,
+    /// The final model's machine-level floor ([`machine_floor`]) [-].
+    pub floor: f64,
+    /// The base model's re-simulated readings (figures).
+    pub before: Readings,
+    /// The final model's, when it could be simulated (figures).
+    pub after: Option<Readings>,
+    /// Why a step's model could not be simulated.
+    pub warnings: Vec<String>,
+}
+
+impl MachineCheck {
+    /// Re-simulates `machine` with the base model and with the model after
+    /// each step of `outcome` (`Outcome::after_steps`).
+    pub fn of(machine: &Machine, outcome: &super::Outcome) -> Result<Self> {
+        let prep = &outcome.prep;
+        let first = outcome
+            .states
+            .first()
+            .ok_or_else(|| anyhow!("no fitted base model"))?;
+        let before = resimulate(machine, prep, first, None)?;
+        let mut gaps_after = Vec::new();
+        let mut after = None;
+        let mut warnings = Vec::new();
+        for (i, (state, base)) in outcome.after_steps.iter().enumerate() {
+            match resimulate(machine, prep, state, base.as_ref()) {
+                Ok(r) => {
+                    gaps_after.push(Some(machine_gap(prep, &r)));
+                    after = Some(r);
+                }
+                // A base the simulator cannot hold (negative stiffness:
+                // the diagnosis is then untrusted anyway).
+                Err(e) => {
+                    gaps_after.push(None);
+                    after = None;
+                    warnings.push(format!(
+                        "no machine-level check of the model after step {}: {e:#}",
+                        i + 1
+                    ));
+                }
+            }
+        }
+        // The floor of the final model (the base model's when nothing was
+        // added or the final model could not be simulated).
+        let floor = match (outcome.after_steps.last(), &after) {
+            (Some((state, base)), Some(r)) => {
+                machine_floor(machine, prep, state, base.as_ref(), r)?
+            }
+            _ => machine_floor(machine, prep, first, None, &before)?,
+        };
+        Ok(Self {
+            gap_before: machine_gap(prep, &before),
+            gaps_after,
+            floor,
+            before,
+            after,
+            warnings,
+        })
+    }
+
+    /// The final model's gap: the last step's, or the base model's when
+    /// nothing was added (`None`: the final model could not be simulated).
+    pub fn gap_after(&self) -> Option<f64> {
+        match self.gaps_after.last() {
+            Some(g) => *g,
+            None => Some(self.gap_before),
+        }
+    }
+
+    /// Writes the gaps into `d` (per step and overall) and judges the final
+    /// one ([`super::trust::judge_machine`]).
+    pub fn apply(&self, d: &mut super::report::Diagnosis) {
+        d.machine_gap_before = Some(self.gap_before);
+        d.machine_gap_after = self.gap_after();
+        d.machine_gap_floor = Some(self.floor);
+        let mut before = Some(self.gap_before);
+        for (s, after) in d.steps.iter_mut().zip(&self.gaps_after) {
+            s.machine_gap_before = before;
+            s.machine_gap_after = *after;
+            before = *after;
+        }
+        super::trust::judge_machine(d, self.gap_after(), self.floor);
+    }
+}

@@ -221,6 +221,9 @@ pub struct Diagnosis {
     /// Machine-level gap of the final model, with `--machine` [-].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub machine_gap_after: Option<f64>,
+    /// Noise floor of the machine-level gap, with `--machine` [-].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine_gap_floor: Option<f64>,
     /// The noise floor.
     pub noise: NoiseSummary,
     /// Where the base model's disagreement lives, largest first.
@@ -295,8 +298,10 @@ impl Diagnosis {
             "Pedestal-level gap {:.4} (noise floor {:.4}){}",
             self.gap_before,
             self.noise.gap_floor_before,
-            self.machine_gap_before
-                .map_or(String::new(), |g| format!("; machine-level gap {g:.4}"))
+            self.machine_gap_before.map_or(String::new(), |g| format!(
+                "; machine-level gap {g:.4} (noise floor {:.4})",
+                self.machine_gap_floor.unwrap_or(0.0)
+            ))
         );
         let digits: Vec<String> = self
             .noise
@@ -365,6 +370,12 @@ impl Diagnosis {
                     );
                 }
                 let _ = writeln!(s, "{ev}");
+                if let Some(g) = st.machine_gap_before {
+                    let after = st
+                        .machine_gap_after
+                        .map_or("not simulated".to_string(), |a| format!("{a:.4}"));
+                    let _ = writeln!(s, "     machine-level gap {g:.4} -> {after}");
+                }
                 if let Some(why) = &st.dropped {
                     let _ = writeln!(s, "     REMOVED again: {why}");
                 }

@@ -114,6 +114,35 @@ pub fn conclude(before: Gap, after: Gap, steps: &[Step], pedestals: &[PedestalFi
     }
 }
 
+/// A machine-level gap (`--machine`) below this agrees whatever its noise
+/// floor: the machine file is itself a model (shaft discretisation, the
+/// unbalance as written), so a re-simulation cannot be held to the
+/// measurement noise alone (2 % relative RMS over every channel) [-].
+pub const MACHINE_TOLERANCE: f64 = 0.02;
+
+/// The machine-level gap is judged, not just printed: a final model whose
+/// re-simulated machine (`super::machine`) leaves a gap above
+/// [`AT_THE_FLOOR`] times its noise floor `floor` and above
+/// [`MACHINE_TOLERANCE`] makes the diagnosis untrusted, with the reason,
+/// even when the pedestal level agrees: the pedestals fit the measured
+/// forces, but the machine file (rotor, unbalance, bearing table or base)
+/// does not describe the machine the run was measured on. `gap` is `None`
+/// when the final model could not be simulated: nothing to judge.
+pub fn judge_machine(d: &mut super::report::Diagnosis, gap: Option<f64>, floor: f64) {
+    let Some(gap) = gap else { return };
+    let limit = (AT_THE_FLOOR * floor).max(MACHINE_TOLERANCE);
+    if !gap.is_finite() || gap > limit {
+        let why = format!(
+            "the machine re-simulated with the identified model does not reproduce the measurements: machine-level gap {gap:.4} (noise floor {floor:.4}, limit {limit:.4}); the machine file (rotor, unbalance, bearing table or base) does not describe the machine of this run"
+        );
+        d.verdict += &format!(
+            " But at the machine level {why}, so the identified parameters are not to be trusted."
+        );
+        d.trust_reasons.push(why);
+        d.trusted = false;
+    }
+}
+
 /// A diagnosis pedestal in the form `identify::physical` checks; `None` when
 /// it lacks a stiffness (a reduced `--base` always keeps both).
 pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {

@@ -79,6 +79,9 @@ pub struct Outcome {
     /// `foundation_coupling` when chosen: the bases and pedestals on them
     /// (the last state keeps the rigid fit of the bearings on no base).
     pub foundation: Option<FoundationFit>,
+    /// The whole model after each step (aligned with `diagnosis.steps`):
+    /// the state and the base it stands on, if any (`--machine`).
+    pub after_steps: Vec<(State, Option<FoundationFit>)>,
 }
 
 /// Significant candidates of a step refitted jointly, best first, to find
@@ -104,6 +107,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let where_before = locate(&prep, &state.model, &state.params, &pred0);
     let pedestals_before = pedestals(&prep, &state)?;
     let mut states = vec![state.clone()];
+    let mut after_steps = Vec::new();
     let mut steps = Vec::new();
     let mut best_rejected = None;
     let try_bases = opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0;
@@ -177,6 +181,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                 }
             }
             states.push(state.clone());
+            after_steps.push((state.clone(), on_base.as_ref().map(|b| b.fit.clone())));
             continue;
         }
         let (_, before) = state.gap(&prep);
@@ -282,6 +287,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
                     dropped: None,
                 });
                 on_base = Some(BaseOn::of(bases.prep, f));
+                after_steps.push((state.clone(), on_base.as_ref().map(|b| b.fit.clone())));
                 continue;
             }
         }
@@ -351,6 +357,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             }
         }
         states.push(state.clone());
+        after_steps.push((state.clone(), None));
     }
     let (chosen_foundation, base_prep) = match on_base {
         Some(b) => (Some(b.fit), Some(b.prep)),
@@ -410,6 +417,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         gap_after: gap1.gap,
         machine_gap_before: None,
         machine_gap_after: None,
+        machine_gap_floor: None,
         noise: NoiseSummary {
             digits,
             bearings: bearings_noise,
@@ -434,6 +442,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         prep,
         states,
         foundation: chosen_foundation,
+        after_steps,
     })
 }
 
