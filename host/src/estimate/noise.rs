@@ -422,7 +422,9 @@ fn digits_variances(
     quantisation: Quantisation,
 ) -> Vec<[f64; 8]> {
     rows.iter()
-        .map(|m| std::array::from_fn(|c| number_variance(quantisation, columns[c].ulp_of(m, c), None)))
+        .map(|m| {
+            std::array::from_fn(|c| number_variance(quantisation, columns[c].ulp_of(m, c), None))
+        })
         .collect()
 }
 

@@ -79,12 +79,7 @@ pub fn exact(
     bearing: &str,
 ) -> Option<PedestalFit> {
     let points = observations(run, schedules, bearing)?;
-    super::super::fit_pedestal(
-        bearing,
-        &points,
-        &options.ols(),
-    )
-    .ok()
+    super::super::fit_pedestal(bearing, &points, &options.ols()).ok()
 }
 
 /// The OLS fit of the pedestal of `template.bearing` from the normal
@@ -109,9 +104,8 @@ fn normal(
     let mut ne = NormalEquations::new(columns.len());
     let mut row = vec![0.0; columns.len()];
     let mut range = [f64::INFINITY, f64::NEG_INFINITY];
-    let equations_of = |p: &Observation| {
-        equations_for_mode(options.mode, p.omega(), &p.ped, &p.force())
-    };
+    let equations_of =
+        |p: &Observation| equations_for_mode(options.mode, p.omega(), &p.ped, &p.force());
     for p in points.iter().filter(finite) {
         let (eqs, n) = equations_of(p);
         for eq in &eqs[..n] {
