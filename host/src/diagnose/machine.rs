@@ -290,7 +290,7 @@ pub fn machine_floor(
 ) -> Result<f64> {
     let (mut var, mut den) = (0.0, 0.0);
     for p in prep.points.iter().flatten().flatten() {
-        var += p.sigma.iter().map(|s| s * s).sum::<f64>();
+        var += p.var.iter().sum::<f64>();
         for d in 0..2 {
             den += p.rel[d].norm_sqr() + p.ped[d].norm_sqr();
         }
