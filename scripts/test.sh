@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Plinth's whole test suite: the one command the README gives and CI runs.
-# Installs what it needs (the thumbv7em-none-eabihf target, qemu-system-arm,
+# Installs what it needs (the thumbv7em-none-eabihf target, the llvm-tools
+# component for the field image's ELF check, qemu-system-arm,
 # chromium for the report test).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -10,6 +11,11 @@ step() { printf '\n=== %s\n' "$*"; }
 step "toolchain: thumbv7em-none-eabihf target"
 if ! rustup target list --installed | grep -qx thumbv7em-none-eabihf; then
   rustup target add thumbv7em-none-eabihf
+fi
+
+step "toolchain: llvm-tools (llvm-nm, llvm-objdump: the field image's ELF check)"
+if ! rustup component list --installed | grep -q '^llvm-tools'; then
+  rustup component add llvm-tools
 fi
 
 step "qemu-system-arm"
