@@ -82,6 +82,8 @@
 //! samples — 7.1 per channel-sample, with the accumulators in FPU registers —
 //! plus about one per channel-sample of per-chunk work.
 
+mod config;
+mod events;
 mod integrator;
 mod noise;
 mod rotator;
@@ -92,6 +94,8 @@ mod variation;
 #[cfg(test)]
 mod tests;
 
+pub use config::{ConfigError, ExtractorConfig};
+pub use events::{Event, Fault, FaultKind, InputError, KeyphasorEdge, Phasors};
 pub use integrator::{RevolutionIntegrator, CHUNK, SEGMENTS};
 pub use noise::{
     average_noise_gain, long_run_factor, revolution_variance, white_noise_law, NoisePool,
@@ -105,160 +109,6 @@ pub use variation::mid_revolution;
 use crate::phasor::Phasor;
 
 const ZERO: Phasor = Phasor::new(0.0, 0.0);
-
-/// Settings of a [`PhasorExtractor`] with N channels.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ExtractorConfig<const N: usize> {
-    /// Sampling rate of every channel [Hz] (51 200 on the field box).
-    pub sample_rate_hz: f32,
-    /// The transducer on each channel.
-    pub sensors: [Sensor; N],
-    /// Revolutions averaged into one output, R ≥ 1.
-    pub revolutions_per_output: u16,
-    /// Lowest speed tracked [Hz]: no edge within 1/`min_speed_hz` is a timeout.
-    pub min_speed_hz: f32,
-    /// Highest speed accepted [Hz]; at most `sample_rate_hz`/64.
-    pub max_speed_hz: f32,
-    /// Largest accepted relative deviation of a period from its prediction
-    /// (dimensionless, in (0, 0.5)); beyond it the pulse counts as extra or
-    /// missing.
-    pub period_tolerance: f32,
-    /// Largest plausible |d(speed)/dt| while acquiring [Hz/s].
-    pub max_acceleration_hz_per_s: f32,
-}
-
-impl<const N: usize> ExtractorConfig<N> {
-    /// Defaults for a run-down: one revolution per output, 1-400 Hz, 5 %
-    /// period tolerance, speed changes up to 50 Hz/s.
-    pub fn new(sample_rate_hz: f32, sensors: [Sensor; N]) -> Self {
-        Self {
-            sample_rate_hz,
-            sensors,
-            revolutions_per_output: 1,
-            min_speed_hz: 1.0,
-            max_speed_hz: 400.0,
-            period_tolerance: 0.05,
-            max_acceleration_hz_per_s: 50.0,
-        }
-    }
-}
-
-/// A setting of [`ExtractorConfig`] that cannot work.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum ConfigError {
-    /// `sample_rate_hz` is not finite and positive.
-    SampleRate,
-    /// The sensitivity of sensor `channel` is not finite and positive.
-    Sensitivity {
-        /// Channel index.
-        channel: usize,
-    },
-    /// `revolutions_per_output` is 0.
-    Revolutions,
-    /// Not 0 < `min_speed_hz` < `max_speed_hz` ≤ `sample_rate_hz`/64, or a
-    /// revolution at `min_speed_hz` would last 2²² samples or more.
-    SpeedRange,
-    /// `period_tolerance` is not in (0, 0.5).
-    PeriodTolerance,
-    /// `max_acceleration_hz_per_s` is not finite and positive.
-    Acceleration,
-}
-
-/// A keyphasor edge inside a block of samples, from the timer capture.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct KeyphasorEdge {
-    /// Index in the block of the first sample after the edge; 0 means the
-    /// edge came after the previous block's last sample.
-    pub index: usize,
-    /// Where in the sample interval before `index` the edge happened, [0, 1):
-    /// 0 at the previous sample, → 1 at sample `index`.
-    pub fraction: f32,
-}
-
-/// A bad [`KeyphasorEdge`] list; nothing of the block was processed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum InputError {
-    /// Edge number `edge` points at or past the end of the block.
-    EdgeIndex {
-        /// Position in the edge list.
-        edge: usize,
-    },
-    /// Edge number `edge` has a fraction outside [0, 1) or NaN.
-    EdgeFraction {
-        /// Position in the edge list.
-        edge: usize,
-    },
-    /// Edge number `edge` is not after the one before it.
-    EdgeOrder {
-        /// Position in the edge list.
-        edge: usize,
-    },
-}
-
-/// 1X displacement phasors of all channels over one revolution, or the
-/// average over R consecutive revolutions.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Phasors<const N: usize> {
-    /// Displacement phasor of each channel [m], q(θ) = Re{Q·e^{iθ}} with θ
-    /// the shaft angle, 0 at the keyphasor edge.
-    pub displacement: [Phasor; N],
-    /// Standard deviation of each displacement phasor's noise [m],
-    /// sqrt(E|n|²) of the complex noise n (formats.md's noise columns), from
-    /// the scatter between the revolutions it is made of and those just
-    /// before (see [`noise`](self#noise)).
-    pub noise_sd: [f32; N],
-    /// Mean speed over the revolution(s): revolutions / duration [Hz].
-    pub speed_hz: f32,
-    /// Number of keyphasor edges received up to and including the one that
-    /// closed the (last) revolution: a monotonic revolution id.
-    pub revolution: u32,
-    /// How many revolutions were averaged (R).
-    pub revolutions: u16,
-    /// When the (last) revolution closed.
-    pub end: EdgeTime,
-}
-
-/// What went wrong with the keyphasor.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum FaultKind {
-    /// No edge by (1 + tolerance) × the predicted period.
-    MissingPulse,
-    /// An edge before (1 − tolerance) × the predicted period, or faster than
-    /// `max_speed_hz`.
-    ExtraPulse,
-    /// While acquiring, two consecutive periods differ by more than
-    /// `max_acceleration_hz_per_s` allows.
-    IrregularPulses,
-    /// No edge within 1/`min_speed_hz`: keyphasor lost or machine too slow.
-    Timeout,
-    /// A phasor came out NaN or infinite (a non-finite sample).
-    NonFinite,
-}
-
-/// A keyphasor fault; the affected revolutions were discarded.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Fault {
-    /// What happened.
-    pub kind: FaultKind,
-    /// Absolute index of the sample at which it was detected.
-    pub sample: u64,
-    /// Keyphasor edges received so far.
-    pub edges: u32,
-}
-
-/// What the extractor reports.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Event<const N: usize> {
-    /// A revolution (or R of them) completed and validated.
-    Phasors(Phasors<N>),
-    /// A keyphasor fault.
-    Fault(Fault),
-}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
