@@ -117,7 +117,7 @@ pub fn pedestal(theta: &[f64; 5], cov: Option<&Covariance>) -> PedestalModal {
 /// parameters and covariance (`identify --json`'s `modal`).
 pub fn attach(identification: &mut crate::identify::Identification) {
     for p in &mut identification.pedestals {
-        p.modal = Some(pedestal(&p.params(), p.covariance.as_ref()));
+        p.modal = Some(pedestal(&p.pedestal.theta(), p.covariance.as_ref()));
     }
 }
 
