@@ -208,11 +208,11 @@ fn diagnose_base_fit_is_identifys_fit_and_its_floor_is_a_floor() {
         for param in Parameter::ALL {
             let v = p.values[param.name()];
             assert!(
-                rel_err(v, fit.get(param)) < 1e-9,
+                rel_err(v, fit.pedestal.get(param)) < 1e-9,
                 "{} {}: diagnose {v} vs identify {}",
                 p.bearing,
                 param.name(),
-                fit.get(param)
+                fit.pedestal.get(param)
             );
         }
     }

@@ -352,7 +352,7 @@ pub fn apply_unmeasured_bases(
             // own noise copy: the rigid misfit must not set the noise level
             // of the joint fit).
             let start = match identification.pedestal(n) {
-                Some(p) if p.pedestal.theta().iter().all(|v| v.is_finite()) => p.pedestal.theta(),
+                Some(p) if p.pedestal.is_finite() => p.pedestal.theta(),
                 _ => fit_ml(n, &o, &mut noise.clone(), options)?
                     .0
                     .pedestal
