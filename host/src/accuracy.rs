@@ -147,11 +147,8 @@ pub fn monte_carlo_with_progress(
             machine.name
         );
     }
-    let theta_true: Vec<[f64; PARAMETERS]> = truth
-        .pedestals
-        .iter()
-        .map(|p| [p.k_y, p.k_z, p.m, p.c_y, p.c_z])
-        .collect();
+    let theta_true: Vec<[f64; PARAMETERS]> =
+        truth.pedestals.iter().map(|p| p.pedestal.theta()).collect();
     let nb = bearings.len();
     let needed =
         crate::sim::budget::accuracy_bytes(nb as u64, speeds_hz.len() as u64, draws as u64);
@@ -233,9 +230,10 @@ pub fn monte_carlo_with_progress(
             if ml_fit.has_warning(crate::identify::WarningKind::MlFailed) {
                 out.ml_failures += 1;
             }
-            out.ml.push((ml_fit.params(), ml_fit.std_errs()));
+            out.ml
+                .push((ml_fit.pedestal.theta(), ml_fit.std_err.theta()));
             let o = pick(&ols_id, name)?;
-            out.ols.push((o.params(), o.std_errs()));
+            out.ols.push((o.pedestal.theta(), o.std_err.theta()));
         }
         let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         if let Ok(mut t) = ticker.lock() {

@@ -69,7 +69,7 @@ fn table_and_json() {
     assert_eq!(id.equations, "real");
     assert_eq!(id.pedestals.len(), 2);
     assert_eq!(id.pedestals[0].fixed, ["c_y", "c_z"]);
-    assert!((id.pedestals[0].k_y - 1.0e7).abs() < 0.01 * 1.0e7);
+    assert!((id.pedestals[0].pedestal.k_y - 1.0e7).abs() < 0.01 * 1.0e7);
 }
 
 #[test]

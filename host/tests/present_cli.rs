@@ -58,10 +58,13 @@ fn identify_reports_natural_frequencies_and_damping_ratios() {
             .iter()
             .find(|t| t.bearing == p["bearing"].as_str().unwrap())
             .unwrap();
-        for (dir, k, c) in [("y", t.k_y, t.c_y), ("z", t.k_z, t.c_z)] {
+        for (dir, k, c) in [
+            ("y", t.pedestal.k_y, t.pedestal.c_y),
+            ("z", t.pedestal.k_z, t.pedestal.c_z),
+        ] {
             let m = &p["modal"][dir];
-            let f_true = (k / t.m).sqrt() / std::f64::consts::TAU;
-            let zeta_true = c / (2.0 * (k * t.m).sqrt());
+            let f_true = (k / t.pedestal.m).sqrt() / std::f64::consts::TAU;
+            let zeta_true = c / (2.0 * (k * t.pedestal.m).sqrt());
             let f = m["f_n_hz"].as_f64().unwrap();
             let f_se = m["f_n_std_err"].as_f64().unwrap();
             let z = m["zeta"].as_f64().unwrap();
@@ -349,12 +352,12 @@ fn diagnose_prints_the_modal_view_like_identify() {
                 .find(|t| t.bearing == bearing)
                 .unwrap();
             let (k, c) = if dir == "y" {
-                (t.k_y, t.c_y)
+                (t.pedestal.k_y, t.pedestal.c_y)
             } else {
-                (t.k_z, t.c_z)
+                (t.pedestal.k_z, t.pedestal.c_z)
             };
-            let f_true = (k / t.m).sqrt() / std::f64::consts::TAU;
-            let z_true = 100.0 * c / (2.0 * (k * t.m).sqrt());
+            let f_true = (k / t.pedestal.m).sqrt() / std::f64::consts::TAU;
+            let z_true = 100.0 * c / (2.0 * (k * t.pedestal.m).sqrt());
             assert!(
                 fs.is_finite() && *fs > 0.0 && zs.is_finite() && *zs > 0.0,
                 "{text}"

@@ -28,8 +28,8 @@ pub fn write_run(run: &RunDir, digits: Option<u32>) -> tempfile::TempDir {
 pub fn paper_like_run(speeds: usize, damping_factor: f64, digits: Option<u32>) -> RunDir {
     let mut recipe = SyntheticRun::paper_like(true, speeds);
     for p in &mut recipe.pedestals {
-        p.c_y *= damping_factor;
-        p.c_z *= damping_factor;
+        p.pedestal.c_y *= damping_factor;
+        p.pedestal.c_z *= damping_factor;
     }
     let run = recipe.build().expect("synthetic run");
     let dir = write_run(&run, digits);

@@ -112,7 +112,11 @@ pub fn assert_pedestals_near_truth(run: &RunDir, got: &[Pedestal], tolerance: f6
             .iter()
             .find(|x| x.bearing == p.bearing)
             .expect("pedestal");
-        for (key, want) in [("k_y", p.k_y), ("k_z", p.k_z), ("m", p.m)] {
+        for (key, want) in [
+            ("k_y", p.pedestal.k_y),
+            ("k_z", p.pedestal.k_z),
+            ("m", p.pedestal.m),
+        ] {
             let v = got.values[key];
             assert!(
                 (v - want).abs() / want < tolerance,

@@ -107,9 +107,12 @@ fn check_effect(machine: &Machine, kind: EffectKind, bearing: &str) {
                 ("m_z", detail.parameters["m_z"]),
             ]
         } else {
-            vec![("m", p.m)]
+            vec![("m", p.pedestal.m)]
         };
-        for (key, truth) in [("k_y", p.k_y), ("k_z", p.k_z)].into_iter().chain(m_truth) {
+        for (key, truth) in [("k_y", p.pedestal.k_y), ("k_z", p.pedestal.k_z)]
+            .into_iter()
+            .chain(m_truth)
+        {
             let v = after.values[key];
             assert!(
                 (v - truth).abs() / truth < 0.02,

@@ -57,26 +57,29 @@ fn two_digit_data_give_k_and_m_to_0_3_percent_and_c_to_10_percent() {
             assert_eq!(noise.source, NoiseSource::Digits, "{path} {}", t.bearing);
             assert!(!noise.scale_estimated);
             for (param, truth) in [
-                (Parameter::Ky, t.k_y),
-                (Parameter::Kz, t.k_z),
-                (Parameter::M, t.m),
+                (Parameter::Ky, t.pedestal.k_y),
+                (Parameter::Kz, t.pedestal.k_z),
+                (Parameter::M, t.pedestal.m),
             ] {
-                let e = rel_err(p.get(param), truth);
+                let e = rel_err(p.pedestal.get(param), truth);
                 assert!(e < 0.003, "{path} {} {}: {e:.4}", t.bearing, param.name());
             }
-            for (param, truth) in [(Parameter::Cy, t.c_y), (Parameter::Cz, t.c_z)] {
-                let e = rel_err(p.get(param), truth);
-                let se = p.std_errs()[param as usize];
+            for (param, truth) in [
+                (Parameter::Cy, t.pedestal.c_y),
+                (Parameter::Cz, t.pedestal.c_z),
+            ] {
+                let e = rel_err(p.pedestal.get(param), truth);
+                let se = p.std_err.theta()[param as usize];
                 if path.contains("feng-hahn") {
                     // The paper's pedestals have ζ ≈ 0.1 %: at 2 digits the
                     // bound on c_y is 14 % of it (`plinth accuracy`), so no
                     // estimator promises 10 %; ML must be within 3σ.
                     assert!(
-                        (p.get(param) - truth).abs() < 3.0 * se,
+                        (p.pedestal.get(param) - truth).abs() < 3.0 * se,
                         "{path} {} {}: {} ± {se} vs {truth}",
                         t.bearing,
                         param.name(),
-                        p.get(param)
+                        p.pedestal.get(param)
                     );
                 } else {
                     assert!(e < 0.10, "{path} {} {}: {e:.4}", t.bearing, param.name());
@@ -182,7 +185,7 @@ fn ols_stays_the_papers_fit_and_compare_ols_reports_its_efficiency() {
         assert!(o.ols.is_none());
         let cmp = m.ols.as_ref().expect("the OLS comparison");
         for p in Parameter::ALL {
-            assert_eq!(cmp.estimate[p.name()], o.get(p));
+            assert_eq!(cmp.estimate[p.name()], o.pedestal.get(p));
             let eff = cmp.efficiency[p.name()];
             assert!(eff > 0.0 && eff <= 1.0 + 1e-9, "{}: {eff}", p.name());
         }
@@ -205,11 +208,11 @@ fn diagnose_base_fit_is_identifys_fit_and_its_floor_is_a_floor() {
         for param in Parameter::ALL {
             let v = p.values[param.name()];
             assert!(
-                rel_err(v, fit.get(param)) < 1e-9,
+                rel_err(v, fit.pedestal.get(param)) < 1e-9,
                 "{} {}: diagnose {v} vs identify {}",
                 p.bearing,
                 param.name(),
-                fit.get(param)
+                fit.pedestal.get(param)
             );
         }
     }

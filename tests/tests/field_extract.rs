@@ -328,9 +328,9 @@ fn simulated_rundown_phasors_within_1e_3_and_identification_within_quarter_perce
     for p in &sim.truth.truth.as_ref().unwrap().pedestals {
         let f = id.pedestal(&p.bearing).unwrap();
         for (name, a, b) in [
-            ("k_y", f.k_y, p.k_y),
-            ("k_z", f.k_z, p.k_z),
-            ("m", f.m, p.m),
+            ("k_y", f.pedestal.k_y, p.pedestal.k_y),
+            ("k_z", f.pedestal.k_z, p.pedestal.k_z),
+            ("m", f.pedestal.m, p.pedestal.m),
         ] {
             eprintln!(
                 "{} {name}: {a} vs {b}: {:+.3} %",

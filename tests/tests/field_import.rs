@@ -79,7 +79,11 @@ fn every_convention_gives_the_phasors_within_six_digits_and_identifies() {
         let id = identify_run(&run, &Options::default()).unwrap();
         for p in &truth.truth.as_ref().unwrap().pedestals {
             let f = id.pedestal(&p.bearing).unwrap();
-            for (a, b) in [(f.k_y, p.k_y), (f.k_z, p.k_z), (f.m, p.m)] {
+            for (a, b) in [
+                (f.pedestal.k_y, p.pedestal.k_y),
+                (f.pedestal.k_z, p.pedestal.k_z),
+                (f.pedestal.m, p.pedestal.m),
+            ] {
                 assert!(
                     ((a - b) / b).abs() < 5e-3,
                     "{name} {}: {a} vs {b}",
@@ -317,7 +321,11 @@ fn slow_roll_removes_probe_runout() {
         let mut w: f64 = 0.0;
         for p in &truth.truth.as_ref().unwrap().pedestals {
             let f = id.pedestal(&p.bearing).unwrap();
-            for (a, b) in [(f.k_y, p.k_y), (f.k_z, p.k_z), (f.m, p.m)] {
+            for (a, b) in [
+                (f.pedestal.k_y, p.pedestal.k_y),
+                (f.pedestal.k_z, p.pedestal.k_z),
+                (f.pedestal.m, p.pedestal.m),
+            ] {
                 w = w.max(((a - b) / b).abs());
             }
         }

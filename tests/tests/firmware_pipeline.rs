@@ -330,7 +330,7 @@ fn replayed_run_down_gives_true_phasors_and_the_batch_estimate() {
     // The box's recursive estimate equals the batch least squares on the
     // same phasors (f32 on the box vs f64 SVD on the host).
     let batch = fit_pedestal("0", &points, &Options::default()).expect("batch fit");
-    let batch = batch.params();
+    let batch = batch.pedestal.theta();
     for (i, (&got, &want)) in estimate.theta.iter().zip(batch.iter()).enumerate() {
         let rel = (f64::from(got) - want).abs() / want.abs();
         assert!(rel < 2e-3, "parameter {i}: box {got} vs batch {want}");

@@ -243,7 +243,8 @@ fn image_identifies_a_replayed_run_down_under_qemu_and_exits_cleanly() {
         .collect();
     let batch = fit_pedestal("0", &points, &Options::default())
         .unwrap()
-        .params();
+        .pedestal
+        .theta();
     for (i, &fitted) in batch.iter().enumerate() {
         let got = f64::from(estimate.theta[i]);
         assert!(

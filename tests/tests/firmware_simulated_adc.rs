@@ -511,7 +511,7 @@ fn run(machine: &Machine, rundown: (f64, f64, f64), front: FrontEnd) -> Outcome 
             .find(|e| e.bearing as usize == b)
             .expect("an estimate for every pedestal");
         let fit = fit_pedestal(name, &points[b], &Options::default()).expect("batch fit");
-        let (batch, batch_se) = (fit.params(), fit.std_errs());
+        let (batch, batch_se) = (fit.pedestal.theta(), fit.std_err.theta());
         // The box weighs each phasor by its own noise and the batch (OLS) fit
         // does not: they agree to 1 % on clean data, and within 3 combined
         // standard errors where quantisation noise dominates.

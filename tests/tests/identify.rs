@@ -21,7 +21,11 @@ fn worst_k_m_error(id: &Identification, run: &RunDir) -> f64 {
     let mut worst: f64 = 0.0;
     for t in &truth.pedestals {
         let p = id.pedestal(&t.bearing).expect("pedestal identified");
-        for (a, b) in [(p.k_y, t.k_y), (p.k_z, t.k_z), (p.m, t.m)] {
+        for (a, b) in [
+            (p.pedestal.k_y, t.pedestal.k_y),
+            (p.pedestal.k_z, t.pedestal.k_z),
+            (p.pedestal.m, t.pedestal.m),
+        ] {
             worst = worst.max(rel_err(a, b));
         }
     }
@@ -38,9 +42,15 @@ fn exact_data_give_every_parameter_to_1e_9() {
     assert_eq!(id.pedestals.len(), 2);
     for t in &truth.pedestals {
         let p = id.pedestal(&t.bearing).unwrap();
-        let want = [t.k_y, t.k_z, t.m, t.c_y, t.c_z];
+        let want = [
+            t.pedestal.k_y,
+            t.pedestal.k_z,
+            t.pedestal.m,
+            t.pedestal.c_y,
+            t.pedestal.c_z,
+        ];
         for param in Parameter::ALL {
-            let got = p.get(param);
+            let got = p.pedestal.get(param);
             let want = want[param as usize];
             assert!(
                 rel_err(got, want) < 1e-9,
@@ -56,7 +66,7 @@ fn exact_data_give_every_parameter_to_1e_9() {
         assert!(p.residual_rms < 1e-9, "{}", p.residual_rms);
         assert!(p.condition_number > 1.0 && p.condition_number < 100.0);
         // Standard errors are of the size of the rounding of the inputs.
-        assert!(p.std_err.k_y < 1e-9 * t.k_y && p.std_err.m < 1e-9 * t.m);
+        assert!(p.std_err.k_y < 1e-9 * t.pedestal.k_y && p.std_err.m < 1e-9 * t.pedestal.m);
     }
     // The speeds span every pedestal resonance: 5 to 200 Hz.
     assert_eq!(id.pedestals[0].speed_range_hz, [5.0, 200.0]);
@@ -67,7 +77,10 @@ fn exact_undamped_data_give_zero_damping() {
     let run = paper_like_run(100, 0.0, None);
     let id = identify_run(&run, &Options::default()).unwrap();
     for p in &id.pedestals {
-        assert!(p.c_y.abs() < 1e-6 && p.c_z.abs() < 1e-6, "{p:?}");
+        assert!(
+            p.pedestal.c_y.abs() < 1e-6 && p.pedestal.c_z.abs() < 1e-6,
+            "{p:?}"
+        );
         // Damping consistent with zero is reported, not hidden...
         assert!(p.has_warning(plinth::identify::WarningKind::DampingNotResolved));
         // ...but does not make k and m untrustworthy.
@@ -99,7 +112,10 @@ fn table_1_two_digit_undamped_data_within_2_percent() {
         // bias makes this loose, hence 10).
         let t = run.truth.as_ref().unwrap();
         let t = t.pedestals.iter().find(|t| t.bearing == p.bearing).unwrap();
-        assert!((p.k_y - t.k_y).abs() < 10.0 * p.std_err.k_y, "{p:?}");
+        assert!(
+            (p.pedestal.k_y - t.pedestal.k_y).abs() < 10.0 * p.std_err.k_y,
+            "{p:?}"
+        );
     }
     // 3 digits are better than 2.
     let run3 = paper_like_run(100, 0.0, Some(3));
@@ -161,8 +177,18 @@ fn table_2_contrast_with_heavier_damping() {
     for t in &truth.pedestals {
         let p = id.pedestal(&t.bearing).unwrap();
         assert!(p.trusted, "{:?}", p.warnings);
-        assert!(rel_err(p.c_y, t.c_y) < 0.1, "{} c_y {}", t.bearing, p.c_y);
-        assert!(rel_err(p.c_z, t.c_z) < 0.1, "{} c_z {}", t.bearing, p.c_z);
+        assert!(
+            rel_err(p.pedestal.c_y, t.pedestal.c_y) < 0.1,
+            "{} c_y {}",
+            t.bearing,
+            p.pedestal.c_y
+        );
+        assert!(
+            rel_err(p.pedestal.c_z, t.pedestal.c_z) < 0.1,
+            "{} c_z {}",
+            t.bearing,
+            p.pedestal.c_z
+        );
     }
     for mode in &MODES[1..] {
         let other = worst_k_m_error(
@@ -193,10 +219,14 @@ fn k_and_m_do_not_depend_on_whether_c_is_estimated() {
     .unwrap();
     for (a, b) in full.pedestals.iter().zip(&undamped.pedestals) {
         for p in [Parameter::Ky, Parameter::Kz, Parameter::M] {
-            assert!(rel_err(a.get(p), b.get(p)) < 2e-3, "{}", p.name());
+            assert!(
+                rel_err(a.pedestal.get(p), b.pedestal.get(p)) < 2e-3,
+                "{}",
+                p.name()
+            );
         }
         assert_eq!(b.fixed, ["c_y", "c_z"]);
-        assert_eq!((b.c_y, b.c_z), (0.0, 0.0));
+        assert_eq!((b.pedestal.c_y, b.pedestal.c_z), (0.0, 0.0));
         assert_eq!((b.std_err.c_y, b.std_err.c_z), (0.0, 0.0));
     }
 }

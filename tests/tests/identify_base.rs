@@ -154,9 +154,9 @@ fn assert_pedestals(truth: &Truth, id: &Identification, tol: f64, what: &str) {
     for t in &truth.pedestals {
         let p = id.pedestal(&t.bearing).expect("pedestal");
         for (name, got, want) in [
-            ("k_y", p.k_y, t.k_y),
-            ("k_z", p.k_z, t.k_z),
-            ("m", p.m, t.m),
+            ("k_y", p.pedestal.k_y, t.pedestal.k_y),
+            ("k_z", p.pedestal.k_z, t.pedestal.k_z),
+            ("m", p.pedestal.m, t.pedestal.m),
         ] {
             assert!(
                 rel_err(got, want) < tol,
@@ -289,7 +289,12 @@ fn measured_base_through_the_cli() {
     // The rigid-ground fit of the same data is far off: the base matters.
     std::fs::remove_file(dir.path().join("base.csv")).unwrap();
     let (_, rigid) = identify(dir.path(), None).expect("identify");
-    assert!(rel_err(rigid.pedestal("left").unwrap().k_y, truth.pedestals[0].k_y) > 0.1);
+    assert!(
+        rel_err(
+            rigid.pedestal("left").unwrap().pedestal.k_y,
+            truth.pedestals[0].pedestal.k_y
+        ) > 0.1
+    );
 }
 
 #[test]
@@ -334,9 +339,24 @@ fn standard_errors_match_the_scatter_over_noise_draws() {
         };
         for t in &truth.pedestals {
             let p = id.pedestal(&t.bearing).unwrap();
-            add(format!("{} k_y", t.bearing), p.k_y, p.std_err.k_y, t.k_y);
-            add(format!("{} k_z", t.bearing), p.k_z, p.std_err.k_z, t.k_z);
-            add(format!("{} m", t.bearing), p.m, p.std_err.m, t.m);
+            add(
+                format!("{} k_y", t.bearing),
+                p.pedestal.k_y,
+                p.std_err.k_y,
+                t.pedestal.k_y,
+            );
+            add(
+                format!("{} k_z", t.bearing),
+                p.pedestal.k_z,
+                p.std_err.k_z,
+                t.pedestal.k_z,
+            );
+            add(
+                format!("{} m", t.bearing),
+                p.pedestal.m,
+                p.std_err.m,
+                t.pedestal.m,
+            );
         }
         let y = id.bases[0].y.as_ref().unwrap();
         add("base k_y".into(), y.k.unwrap()[0], y.k.unwrap()[1], b.k_y);

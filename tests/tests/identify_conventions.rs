@@ -364,7 +364,10 @@ fn negative_mass_and_stiffness_are_untrusted_with_the_reason() {
     let dir = with_mistake(&example_dir(), "rel_negated");
     let (id, _) = identify(dir.path());
     for p in &id.pedestals {
-        assert!(p.m < 0.0 && p.k_y < 0.0 && p.k_z < 0.0, "{p:?}");
+        assert!(
+            p.pedestal.m < 0.0 && p.pedestal.k_y < 0.0 && p.pedestal.k_z < 0.0,
+            "{p:?}"
+        );
         assert!(!p.trusted);
         let reasons: Vec<&str> = p
             .warnings

@@ -48,10 +48,17 @@ fn bundled_example_is_reproducible_and_identifies() {
     for t in &truth.pedestals {
         let p = id.pedestal(&t.bearing).unwrap();
         assert!(p.trusted);
-        for (a, b) in [(p.k_y, t.k_y), (p.k_z, t.k_z), (p.m, t.m)] {
+        for (a, b) in [
+            (p.pedestal.k_y, t.pedestal.k_y),
+            (p.pedestal.k_z, t.pedestal.k_z),
+            (p.pedestal.m, t.pedestal.m),
+        ] {
             assert!((a - b).abs() <= 0.001 * b, "{}: {a} vs {b}", t.bearing);
         }
-        for (a, se, b) in [(p.c_y, p.std_err.c_y, t.c_y), (p.c_z, p.std_err.c_z, t.c_z)] {
+        for (a, se, b) in [
+            (p.pedestal.c_y, p.std_err.c_y, t.pedestal.c_y),
+            (p.pedestal.c_z, p.std_err.c_z, t.pedestal.c_z),
+        ] {
             assert!(
                 (a - b).abs() <= 3.0 * se,
                 "{}: {a} ± {se} vs {b}",
@@ -60,7 +67,11 @@ fn bundled_example_is_reproducible_and_identifies() {
             assert!(se < 0.15 * b, "{}: c ± {se}", t.bearing);
         }
         let o = ols.pedestal(&t.bearing).unwrap();
-        for (a, b) in [(o.k_y, t.k_y), (o.k_z, t.k_z), (o.m, t.m)] {
+        for (a, b) in [
+            (o.pedestal.k_y, t.pedestal.k_y),
+            (o.pedestal.k_z, t.pedestal.k_z),
+            (o.pedestal.m, t.pedestal.m),
+        ] {
             assert!((a - b).abs() <= 0.02 * b, "{}: {a} vs {b}", t.bearing);
         }
     }

@@ -126,9 +126,10 @@ fn an_outlier_speed_is_left_out_and_listed() {
     let before = reference.pedestal("drive").expect("drive");
     // The fit without it stays within 3σ of the clean fit.
     for (a, (b, s)) in drive
-        .params()
+        .pedestal
+        .theta()
         .iter()
-        .zip(before.params().iter().zip(before.std_errs()))
+        .zip(before.pedestal.theta().iter().zip(before.std_err.theta()))
     {
         assert!((a - b).abs() < 3.0 * s, "{a} vs {b} ± {s}");
     }

@@ -156,7 +156,10 @@ fn non_finite_points_are_left_out_and_reported() {
     assert_eq!(fit.speeds, 48);
     assert!(fit.trusted);
     let t = &run.truth.unwrap().pedestals[0];
-    assert!(rel_err(fit.k_y, t.k_y) < 1e-9 && rel_err(fit.m, t.m) < 1e-9);
+    assert!(
+        rel_err(fit.pedestal.k_y, t.pedestal.k_y) < 1e-9
+            && rel_err(fit.pedestal.m, t.pedestal.m) < 1e-9
+    );
     // Nothing finite at all is an error, not a fit.
     for p in &mut points {
         p.speed_hz = f64::NAN;

@@ -46,7 +46,7 @@ fn f32_rls_agrees_with_the_f64_batch_fit_on_exact_data() {
         let batch = fit_pedestal(bearing, &pts, &Options::default()).unwrap();
         let rls = rls_pass(&pts);
         for p in Parameter::ALL {
-            let (a, b) = (rls[p as usize], batch.get(p));
+            let (a, b) = (rls[p as usize], batch.pedestal.get(p));
             assert!(rel_err(a, b) < 1e-3, "{bearing} {}: {a} vs {b}", p.name());
         }
     }
@@ -62,7 +62,7 @@ fn f32_rls_agrees_with_the_f64_batch_fit_on_two_digit_data() {
         let batch = fit_pedestal(bearing, &pts, &Options::default()).unwrap();
         let rls = rls_pass(&pts);
         for p in Parameter::ALL {
-            let (a, b) = (rls[p as usize], batch.get(p));
+            let (a, b) = (rls[p as usize], batch.pedestal.get(p));
             assert!(rel_err(a, b) < 1e-3, "{bearing} {}: {a} vs {b}", p.name());
         }
     }

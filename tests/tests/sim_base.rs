@@ -267,13 +267,13 @@ fn measured_base_makes_the_pedestal_model_linear_again() {
         assert_eq!(fit.bearing, truth.bearing);
         assert_eq!(fit.base, "skid");
         for (p, want, tol) in [
-            (Parameter::Ky, truth.k_y, 1e-6),
-            (Parameter::Kz, truth.k_z, 1e-6),
-            (Parameter::M, truth.m, 1e-6),
-            (Parameter::Cy, truth.c_y, 1e-4),
-            (Parameter::Cz, truth.c_z, 1e-4),
+            (Parameter::Ky, truth.pedestal.k_y, 1e-6),
+            (Parameter::Kz, truth.pedestal.k_z, 1e-6),
+            (Parameter::M, truth.pedestal.m, 1e-6),
+            (Parameter::Cy, truth.pedestal.c_y, 1e-4),
+            (Parameter::Cz, truth.pedestal.c_z, 1e-4),
         ] {
-            let got = fit.get(p);
+            let got = fit.pedestal.get(p);
             assert!(
                 (got - want).abs() <= tol * want,
                 "{} {}: {got} vs {want}",
@@ -282,7 +282,7 @@ fn measured_base_makes_the_pedestal_model_linear_again() {
             );
         }
         let r = rigid.pedestal(&fit.bearing).unwrap();
-        let off = (r.k_y - truth.k_y).abs() / truth.k_y;
+        let off = (r.pedestal.k_y - truth.pedestal.k_y).abs() / truth.pedestal.k_y;
         assert!(
             off > 0.05,
             "rigid-ground fit of {} only {off:.2e} off: base too stiff for this test",

@@ -409,7 +409,7 @@ fn effects_are_injected_and_recorded() {
     let diff = (r.bearings[50][0].ped[0] - base.bearings[50][0].ped[0]).norm();
     assert!(diff > 1e-3 * base.bearings[50][0].ped[0].norm());
     // The truth's pedestals stay the base model's.
-    assert_eq!(r.truth.pedestals[1].m, 60.0);
+    assert_eq!(r.truth.pedestals[1].pedestal.m, 60.0);
 }
 
 #[test]

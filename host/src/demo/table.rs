@@ -4,7 +4,7 @@
 //! `plinth identify` makes by default), each with its ± and its error
 //! against the truth in % and in its own standard errors.
 
-use crate::identify::Identification;
+use crate::identify::{Identification, Parameter};
 use crate::present::table::{self, sig};
 use crate::rundir::Truth;
 use crate::stream::report::PedestalComparison;
@@ -62,12 +62,8 @@ pub fn rows(comparisons: &[PedestalComparison], truth: &Truth) -> Vec<Comparison
     for c in comparisons {
         let t = truth.pedestals.iter().find(|p| p.bearing == c.bearing);
         for p in &c.parameters {
-            let tv = t.map(|t| match p.parameter {
-                "k_y" => t.k_y,
-                "k_z" => t.k_z,
-                "m" => t.m,
-                "c_y" => t.c_y,
-                _ => t.c_z,
+            let tv = t.map(|t| {
+                Parameter::from_name(p.parameter).map_or(t.pedestal.c_z, |q| t.pedestal.get(q))
             });
             let sigmas = |v: Option<f64>, s: Option<f64>| match (v, tv, s) {
                 (Some(b), Some(t), Some(s)) if s > 0.0 => Some((b - t) / s),

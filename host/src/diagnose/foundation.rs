@@ -232,7 +232,7 @@ pub fn observations(prep: &Prepared) -> Vec<Vec<Observation>> {
 /// The rigid-ground fit θ of every bearing (`plinth identify`'s ML fit),
 /// when all are finite.
 pub fn rigid_start(prep: &Prepared) -> Option<Vec<[f64; 5]>> {
-    let start: Vec<[f64; 5]> = prep.base_fits.iter().map(|f| f.params()).collect();
+    let start: Vec<[f64; 5]> = prep.base_fits.iter().map(|f| f.pedestal.theta()).collect();
     (start.len() == prep.bearings.len() && start.iter().flatten().all(|v| v.is_finite()))
         .then_some(start)
 }

@@ -15,8 +15,9 @@ use super::foundation::FoundationFit;
 use super::model::{Nonlinear, Term};
 use super::state::State;
 use crate::effects::EffectKind;
+use crate::estimate::Pedestal;
 use crate::sim::base::Base;
-use crate::sim::{unbalance_response, EffectSet, Machine, PedestalParams};
+use crate::sim::{unbalance_response, EffectSet, Machine};
 use anyhow::{anyhow, Context, Result};
 use num_complex::Complex;
 
@@ -78,7 +79,7 @@ pub fn resimulate(
         machine
             .set_pedestal(
                 name,
-                Some(PedestalParams {
+                Some(Pedestal {
                     m: m_y,
                     k_y,
                     k_z,
@@ -231,7 +232,7 @@ fn put_bases(machine: &mut Machine, prep: &Prepared, f: &FoundationFit) -> Resul
             machine
                 .set_pedestal(
                     name,
-                    Some(PedestalParams {
+                    Some(Pedestal {
                         m: t[2],
                         k_y: t[0],
                         k_z: t[1],

@@ -89,7 +89,11 @@ impl State {
         if base != Parameter::ALL.as_slice() || prep.base_fits.len() != prep.bearings.len() {
             return Self::fit(prep, model, Vec::new());
         }
-        let beta: Vec<f64> = prep.base_fits.iter().flat_map(|f| f.params()).collect();
+        let beta: Vec<f64> = prep
+            .base_fits
+            .iter()
+            .flat_map(|f| f.pedestal.theta())
+            .collect();
         if beta.len() != model.terms.len() || !beta.iter().all(|v| v.is_finite()) {
             return Self::fit(prep, model, Vec::new());
         }

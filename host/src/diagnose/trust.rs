@@ -15,7 +15,7 @@
 use super::data::Prepared;
 use super::gap::Gap;
 use super::report::{Pedestal, Step};
-use crate::identify::{physical, PedestalFit, StdErr};
+use crate::identify::{physical, PedestalFit};
 use plinth_shared::regression::Parameter;
 
 /// A gap within this factor of its noise floor is at the floor: the model
@@ -173,12 +173,14 @@ pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
         .collect();
     Some(PedestalFit {
         bearing: p.bearing.clone(),
-        k_y: value("k_y")?,
-        k_z: value("k_z")?,
-        m,
-        c_y: value("c_y").unwrap_or(0.0),
-        c_z: value("c_z").unwrap_or(0.0),
-        std_err: StdErr {
+        pedestal: crate::estimate::Pedestal {
+            k_y: value("k_y")?,
+            k_z: value("k_z")?,
+            m,
+            c_y: value("c_y").unwrap_or(0.0),
+            c_z: value("c_z").unwrap_or(0.0),
+        },
+        std_err: crate::estimate::Pedestal {
             k_y: se("k_y"),
             k_z: se("k_z"),
             m: m_se,
@@ -282,12 +284,14 @@ mod tests {
     fn negative_mass_is_flagged_through_identify_physical() {
         let fit = PedestalFit {
             bearing: "left".into(),
-            k_y: 1e7,
-            k_z: 8e6,
-            m: -20.0,
-            c_y: 300.0,
-            c_z: 250.0,
-            std_err: StdErr {
+            pedestal: crate::estimate::Pedestal {
+                k_y: 1e7,
+                k_z: 8e6,
+                m: -20.0,
+                c_y: 300.0,
+                c_z: 250.0,
+            },
+            std_err: crate::estimate::Pedestal {
                 k_y: 1e4,
                 k_z: 1e4,
                 m: 1.0,

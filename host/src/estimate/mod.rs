@@ -9,6 +9,9 @@
 //! every real number that was measured. It is the one type of a bearing at
 //! one speed: `identify`'s OLS and ML fits, the convention check, `diagnose`
 //! and `accuracy` all take it.
+//!
+//! The pedestal's parameters, identified, simulated or true, and their
+//! standard errors are a [`Pedestal`] ([`params`]).
 
 pub mod base;
 pub mod gauss_helmert;
@@ -16,8 +19,11 @@ pub mod lack_of_fit;
 pub mod levenberg;
 pub mod ml;
 pub mod noise;
+pub mod params;
 pub mod pedestal;
 pub mod robust;
+
+pub use params::Pedestal;
 
 use num_complex::Complex;
 use plinth_shared::phasor::{omega_from_hz, Phasor2};

@@ -11,7 +11,7 @@
 
 use super::{lsq, pedestal_points, IdentifyError};
 use crate::base_csv::BaseRow;
-use crate::estimate::Observation;
+use crate::estimate::{Observation, Pedestal};
 use crate::rundir::RunDir;
 use nalgebra::{DMatrix, DVector};
 use plinth_shared::phasor::omega_from_hz;
@@ -24,23 +24,16 @@ pub struct BaseFit {
     pub bearing: String,
     /// Base it stands on (`base.csv`).
     pub base: String,
-    /// θ = (k_y [N/m], k_z [N/m], m [kg], c_y [N·s/m], c_z [N·s/m]).
-    pub theta: [f64; PARAMETERS],
-    /// Standard errors of θ, same units.
-    pub std_err: [f64; PARAMETERS],
+    /// The identified parameters (k [N/m], m [kg], c [N·s/m]).
+    pub pedestal: Pedestal,
+    /// Their standard errors, same units.
+    pub std_err: Pedestal,
     /// Root-mean-square equation residual [N].
     pub residual_rms: f64,
     /// Condition number of the column-scaled regression.
     pub condition_number: f64,
     /// Speeds used.
     pub speeds: usize,
-}
-
-impl BaseFit {
-    /// The value of parameter `p` (units as in [`BaseFit::theta`]).
-    pub fn get(&self, p: Parameter) -> f64 {
-        self.theta[p as usize]
-    }
 }
 
 /// Identifies every measured pedestal that stands on a base listed in
@@ -111,8 +104,8 @@ pub fn identify_on_measured_base(
         fits.push(BaseFit {
             bearing: bearing.to_string(),
             base: first.base.clone(),
-            theta: std::array::from_fn(|i| solution.theta[i]),
-            std_err: std::array::from_fn(|i| solution.std_err[i]),
+            pedestal: Pedestal::from_theta(std::array::from_fn(|i| solution.theta[i])),
+            std_err: Pedestal::from_theta(std::array::from_fn(|i| solution.std_err[i])),
             residual_rms: solution.residual_rms(),
             condition_number: solution.condition_number,
             speeds: points.len(),

@@ -345,7 +345,7 @@ pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
 /// One pedestal as the shared printer shows it ([`crate::present::table`]),
 /// with the paper's OLS beside it (`--compare-ols`) and the truth when known.
 pub fn result_row(fit: &PedestalFit, truth: Option<&Truth>) -> PedestalRow {
-    let se = fit.std_errs();
+    let se = fit.std_err.theta();
     let mut below = Vec::new();
     if let Some(ols) = &fit.ols {
         let named = |map: &std::collections::BTreeMap<String, f64>, p: Parameter| {
@@ -365,15 +365,15 @@ pub fn result_row(fit: &PedestalFit, truth: Option<&Truth>) -> PedestalRow {
     let truth = truth.and_then(|t| t.pedestals.iter().find(|t| t.bearing == fit.bearing));
     let mut modal_truth = None;
     if let Some(t) = truth {
-        let values = [t.k_y, t.k_z, t.m, t.c_y, t.c_z];
+        let values = t.pedestal.theta();
         below.push(SubRow::values("truth", values.map(|v| Some((v, None)))));
-        below.push(SubRow::errors("error", fit.params(), values));
+        below.push(SubRow::errors("error", fit.pedestal.theta(), values));
         modal_truth = Some(crate::present::modal::pedestal(&values, None));
     }
     PedestalRow {
         bearing: fit.bearing.clone(),
         parameters: Parameter::ALL
-            .map(|p| (!is_fixed(fit, p)).then(|| (fit.get(p), se[p as usize]))),
+            .map(|p| (!is_fixed(fit, p)).then(|| (fit.pedestal.get(p), se[p as usize]))),
         extra: Vec::new(),
         residual_rms: Some(fit.residual_rms),
         condition_number: Some(fit.condition_number),

@@ -320,11 +320,11 @@ impl Finding {
             self.runner_up.relative_residual.sqrt(),
             self.runner_up.label(),
             passive(&self.runner_up),
-            f.k_y,
-            f.k_z,
-            f.m,
-            f.c_y,
-            f.c_z
+            f.pedestal.k_y,
+            f.pedestal.k_z,
+            f.pedestal.m,
+            f.pedestal.c_y,
+            f.pedestal.c_z
         )
     }
 }

@@ -118,7 +118,7 @@ pub fn fit_ml(
         obs.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
         obs
     };
-    let start = ols_fit.params();
+    let start = ols_fit.pedestal.theta();
     let mut obs = Vec::new();
     // The source (columns, digits or scatter): the one noise policy.
     let mut attempt = fit_under_noise(
@@ -238,18 +238,8 @@ pub fn fit_ml(
     }
     let se = ml_fit.std_err(variance_scale);
     let mut fit = ols_fit.clone();
-    fit.k_y = ml_fit.theta[0];
-    fit.k_z = ml_fit.theta[1];
-    fit.m = ml_fit.theta[2];
-    fit.c_y = ml_fit.theta[3];
-    fit.c_z = ml_fit.theta[4];
-    fit.std_err = super::StdErr {
-        k_y: se[0],
-        k_z: se[1],
-        m: se[2],
-        c_y: se[3],
-        c_z: se[4],
-    };
+    fit.pedestal = crate::estimate::Pedestal::from_theta(ml_fit.theta);
+    fit.std_err = crate::estimate::Pedestal::from_theta(se);
     fit.residual_rms = ml_fit.residual_rms;
     fit.condition_number = ml_fit.condition_number;
     fit.covariance = scaled_covariance(&ml_fit.covariance, variance_scale);
@@ -352,7 +342,7 @@ pub fn ols_noise_report(
         .copied()
         .collect();
     let p = PARAMETERS - fit.fixed.len();
-    let chi2 = ml::cost(&obs, &fit.params()).unwrap_or(f64::NAN);
+    let chi2 = ml::cost(&obs, &fit.pedestal.theta()).unwrap_or(f64::NAN);
     report(noise, chi2, (4 * obs.len()).saturating_sub(p), 1.0, 0.0)
 }
 
@@ -371,8 +361,8 @@ fn compare(
             .collect()
     };
     OlsComparison {
-        estimate: named(&|i| ols.params()[i]),
-        std_err: named(&|i| ols.std_errs()[i]),
+        estimate: named(&|i| ols.pedestal.theta()[i]),
+        std_err: named(&|i| ols.std_err.theta()[i]),
         sd_under_noise: named(&|i| (variance_scale * sandwich[i][i]).sqrt()),
         efficiency: named(&|i| ml_fit.covariance[i][i] / sandwich[i][i]),
     }

@@ -53,7 +53,7 @@ pub fn misfit(
     fit: &PedestalFit,
 ) -> Option<Misfit> {
     let schedule = schedules.get(&fit.bearing)?;
-    let th = fit.params();
+    let th = fit.pedestal.theta();
     let mut total = 0.0;
     let mut residual = 0.0;
     let mut force = 0.0;

@@ -34,12 +34,13 @@ pub use model::{mode_label, mode_name, parse_mode, Model, ModelError};
 pub use plinth_shared::regression::{EquationMode, Parameter};
 
 use crate::estimate::noise::{BearingNoise, Quantisation, RunNoise};
-use crate::estimate::{complex_stiffness, Observation};
+use crate::estimate::params::{null_is_infinite, null_is_nan};
+use crate::estimate::{complex_stiffness, Observation, Pedestal};
 use crate::rundir::{BearingSchedule, Measurement, OutOfRange, RunDir, RunDirError};
 use nalgebra::{DMatrix, DVector};
 use plinth_shared::phasor::omega_from_hz;
 use plinth_shared::regression::{equations_for_mode, PARAMETERS};
-use serde::{Deserialize, Deserializer, Serialize};
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -195,28 +196,6 @@ pub struct Warning {
     pub message: String,
 }
 
-/// Standard errors of the pedestal parameters, in their units
-/// (k [N/m], m [kg], c [N·s/m]); 0 for parameters fixed by the model,
-/// infinite (`null` in JSON) when not estimable.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct StdErr {
-    /// Of k_y [N/m].
-    #[serde(deserialize_with = "null_is_infinite")]
-    pub k_y: f64,
-    /// Of k_z [N/m].
-    #[serde(deserialize_with = "null_is_infinite")]
-    pub k_z: f64,
-    /// Of m [kg].
-    #[serde(deserialize_with = "null_is_infinite")]
-    pub m: f64,
-    /// Of c_y [N·s/m].
-    #[serde(deserialize_with = "null_is_infinite")]
-    pub c_y: f64,
-    /// Of c_z [N·s/m].
-    #[serde(deserialize_with = "null_is_infinite")]
-    pub c_z: f64,
-}
-
 /// The identified pedestal at one bearing, serialised exactly as an element
 /// of formats.md's `"pedestals"` (plus the extra keys `fixed`, `trusted`,
 /// `speeds`, `equations`, `speed_range_hz`, `warnings`).
@@ -224,23 +203,13 @@ pub struct StdErr {
 pub struct PedestalFit {
     /// Bearing name.
     pub bearing: String,
-    /// Vertical stiffness [N/m].
-    #[serde(deserialize_with = "null_is_nan")]
-    pub k_y: f64,
-    /// Horizontal stiffness [N/m].
-    #[serde(deserialize_with = "null_is_nan")]
-    pub k_z: f64,
-    /// Mass [kg].
-    #[serde(deserialize_with = "null_is_nan")]
-    pub m: f64,
-    /// Vertical damping [N·s/m] (0 when fixed).
-    #[serde(deserialize_with = "null_is_nan")]
-    pub c_y: f64,
-    /// Horizontal damping [N·s/m] (0 when fixed).
-    #[serde(deserialize_with = "null_is_nan")]
-    pub c_z: f64,
-    /// Standard errors.
-    pub std_err: StdErr,
+    /// The identified parameters (a damping fixed by the model is 0).
+    #[serde(flatten)]
+    pub pedestal: Pedestal,
+    /// Their standard errors, in their units: 0 for parameters fixed by
+    /// the model, infinite (`null` in JSON) when not estimable.
+    #[serde(deserialize_with = "crate::estimate::params::std_err")]
+    pub std_err: Pedestal,
     /// RMS of the equation residuals [N].
     #[serde(deserialize_with = "null_is_nan")]
     pub residual_rms: f64,
@@ -285,22 +254,6 @@ pub struct PedestalFit {
 }
 
 impl PedestalFit {
-    /// θ = (k_y [N/m], k_z [N/m], m [kg], c_y [N·s/m], c_z [N·s/m]).
-    pub fn params(&self) -> [f64; PARAMETERS] {
-        [self.k_y, self.k_z, self.m, self.c_y, self.c_z]
-    }
-
-    /// Standard errors in θ order and units.
-    pub fn std_errs(&self) -> [f64; PARAMETERS] {
-        let s = &self.std_err;
-        [s.k_y, s.k_z, s.m, s.c_y, s.c_z]
-    }
-
-    /// The value of one parameter (its unit: see [`Parameter`]).
-    pub fn get(&self, p: Parameter) -> f64 {
-        self.params()[p as usize]
-    }
-
     /// True when some warning is of `kind`.
     pub fn has_warning(&self, kind: WarningKind) -> bool {
         self.warnings.iter().any(|w| w.kind == kind)
@@ -462,18 +415,8 @@ pub(crate) fn ols_solution(
 
     let mut fit = PedestalFit {
         bearing: bearing.to_string(),
-        k_y: theta[0],
-        k_z: theta[1],
-        m: theta[2],
-        c_y: theta[3],
-        c_z: theta[4],
-        std_err: StdErr {
-            k_y: se[0],
-            k_z: se[1],
-            m: se[2],
-            c_y: se[3],
-            c_z: se[4],
-        },
+        pedestal: Pedestal::from_theta(theta),
+        std_err: Pedestal::from_theta(se),
         residual_rms: solution.residual_rms(),
         condition_number: solution.condition_number,
         fixed: model.fixed().iter().map(|p| p.name().to_string()).collect(),
@@ -604,14 +547,4 @@ pub fn identify_dir(
 ) -> Result<Identification, IdentifyError> {
     let run = RunDir::read(dir)?;
     identify_run(&run, options)
-}
-
-/// serde: JSON `null` (how serde_json writes a non-finite number) reads as NaN.
-fn null_is_nan<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
-}
-
-/// serde: JSON `null` reads as +∞ (an unbounded standard error or condition number).
-fn null_is_infinite<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
 }

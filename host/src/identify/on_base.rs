@@ -9,7 +9,7 @@
 
 use super::estimator::{fit_ml, report};
 use super::{
-    observations, physical, Identification, IdentifyError, Options, PedestalFit, StdErr, Warning,
+    observations, physical, Identification, IdentifyError, Options, PedestalFit, Warning,
     WarningKind,
 };
 use crate::base_csv::BaseRow;
@@ -188,14 +188,8 @@ fn apply(
     base: &str,
     measured: bool,
 ) {
-    [fit.k_y, fit.k_z, fit.m, fit.c_y, fit.c_z] = *theta;
-    fit.std_err = StdErr {
-        k_y: se[0],
-        k_z: se[1],
-        m: se[2],
-        c_y: se[3],
-        c_z: se[4],
-    };
+    fit.pedestal = crate::estimate::Pedestal::from_theta(*theta);
+    fit.std_err = crate::estimate::Pedestal::from_theta(*se);
     fit.fixed.clear();
     fit.ols = None;
     fit.covariance = None;
@@ -279,7 +273,7 @@ pub fn apply_measured_base(
             })
             .collect();
         let (obs, mut noise) = bearing_data(run, &fit.bearing, options)?;
-        let start = fit.params();
+        let start = fit.pedestal.theta();
         let failed = |e: crate::estimate::base::MeasuredBaseError| {
             IdentifyError::Base(format!(
                 "base.csv: pedestal `{}` on base `{name}`: {e}",
@@ -358,8 +352,11 @@ pub fn apply_unmeasured_bases(
             // own noise copy: the rigid misfit must not set the noise level
             // of the joint fit).
             let start = match identification.pedestal(n) {
-                Some(p) if p.params().iter().all(|v| v.is_finite()) => p.params(),
-                _ => fit_ml(n, &o, &mut noise.clone(), options)?.0.params(),
+                Some(p) if p.pedestal.is_finite() => p.pedestal.theta(),
+                _ => fit_ml(n, &o, &mut noise.clone(), options)?
+                    .0
+                    .pedestal
+                    .theta(),
             };
             starts.push(start);
             obs.push(o);
@@ -574,10 +571,7 @@ mod tests {
                     .push((quantities(&m), std_errs(&m)));
             }
             for t in &run.truth.as_ref().expect("truth").pedestals {
-                truth.insert(
-                    t.bearing.clone(),
-                    pedestal(&[t.k_y, t.k_z, t.m, t.c_y, t.c_z], None),
-                );
+                truth.insert(t.bearing.clone(), pedestal(&t.pedestal.theta(), None));
             }
         }
         assert_eq!(got.len(), 2, "both pedestals of the skid");

@@ -85,7 +85,7 @@ pub fn violations_in_family(
 ) -> Vec<Warning> {
     let sigmas = damping_sigmas(family);
     let mut out = Vec::new();
-    let mut se = fit.std_errs();
+    let mut se = fit.std_err.theta();
     if let Some([cy, cz]) = floor {
         for (p, s) in [(Parameter::Cy, cy), (Parameter::Cz, cz)] {
             if s.is_finite() && s > se[p as usize] {
@@ -94,7 +94,7 @@ pub fn violations_in_family(
         }
     }
     for p in Parameter::ALL {
-        let value = fit.get(p);
+        let value = fit.pedestal.get(p);
         let sigma = se[p as usize];
         let (unit, damping) = match p {
             Parameter::Ky | Parameter::Kz => ("N/m", false),
@@ -102,7 +102,11 @@ pub fn violations_in_family(
             Parameter::Cy | Parameter::Cz => ("N·s/m", true),
         };
         let message = if damping {
-            let k = if p == Parameter::Cy { fit.k_y } else { fit.k_z };
+            let k = if p == Parameter::Cy {
+                fit.pedestal.k_y
+            } else {
+                fit.pedestal.k_z
+            };
             let omega_max = 2.0 * std::f64::consts::PI * fit.speed_range_hz[1];
             let material = omega_max * value.abs() > NEGLIGIBLE_LOSS_FACTOR * k.abs();
             (sigma.is_finite() && value < -sigmas * sigma && material).then(|| {
@@ -163,7 +167,7 @@ pub fn recheck_run(identification: &mut super::Identification) {
 /// noise, measured without the model) that the fit's χ²/dof < 1 scaled down,
 /// the fit's own before that scaling.
 pub fn judged_std_errs(fit: &PedestalFit, noise: &super::estimator::NoiseReport) -> [f64; 2] {
-    let se = fit.std_errs();
+    let se = fit.std_err.theta();
     let own = [se[Parameter::Cy as usize], se[Parameter::Cz as usize]];
     let unshrunk = if noise.scale_estimated && noise.variance_scale > 0.0 {
         own.map(|s| s / noise.variance_scale.min(1.0).sqrt())
@@ -214,11 +218,11 @@ pub fn check_finite(fit: &PedestalFit) -> Result<(), NonFiniteResult> {
         value,
     };
     for p in Parameter::ALL {
-        let v = fit.get(p);
+        let v = fit.pedestal.get(p);
         if !v.is_finite() {
             return Err(error(p.name().to_string(), v));
         }
-        let s = fit.std_errs()[p as usize];
+        let s = fit.std_err.theta()[p as usize];
         if s.is_nan() || s < 0.0 || (s.is_infinite() && !undetermined) {
             return Err(error(format!("std_err.{}", p.name()), s));
         }
@@ -293,23 +297,13 @@ pub fn exit_code(error: &anyhow::Error) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::identify::StdErr;
+    use crate::estimate::Pedestal;
 
     fn fit(theta: [f64; 5], se: [f64; 5]) -> PedestalFit {
         PedestalFit {
             bearing: "left".into(),
-            k_y: theta[0],
-            k_z: theta[1],
-            m: theta[2],
-            c_y: theta[3],
-            c_z: theta[4],
-            std_err: StdErr {
-                k_y: se[0],
-                k_z: se[1],
-                m: se[2],
-                c_y: se[3],
-                c_z: se[4],
-            },
+            pedestal: Pedestal::from_theta(theta),
+            std_err: Pedestal::from_theta(se),
             residual_rms: 1.0,
             condition_number: 3.0,
             fixed: Vec::new(),
@@ -411,7 +405,7 @@ mod tests {
             .pedestals
             .iter()
             .all(|p| p.trusted && p.warnings.is_empty()));
-        run.pedestals[0].c_y = -150.0;
+        run.pedestals[0].pedestal.c_y = -150.0;
         recheck_run(&mut run);
         assert!(!run.pedestals[0].trusted);
         assert!(run.pedestals[0].warnings[0].message.contains("family-wise"));

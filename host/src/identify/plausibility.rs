@@ -37,15 +37,27 @@ pub const SIGMAS: f64 = 3.0;
 /// measured speeds [N/m] (`None`: unknown).
 pub fn findings(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> Vec<String> {
     let mut out = Vec::new();
-    let se = fit.std_errs();
+    let se = fit.std_err.theta();
     let outside = |v: f64, s: f64, [lo, hi]: [f64; 2]| {
         let s = if s.is_finite() { s } else { 0.0 };
         v + SIGMAS * s < lo || v - SIGMAS * s > hi
     };
     for (name, v, s, range, unit) in [
-        ("k_y", fit.k_y, se[0], STIFFNESS_RANGE_N_PER_M, "N/m"),
-        ("k_z", fit.k_z, se[1], STIFFNESS_RANGE_N_PER_M, "N/m"),
-        ("m", fit.m, se[2], MASS_RANGE_KG, "kg"),
+        (
+            "k_y",
+            fit.pedestal.k_y,
+            se[0],
+            STIFFNESS_RANGE_N_PER_M,
+            "N/m",
+        ),
+        (
+            "k_z",
+            fit.pedestal.k_z,
+            se[1],
+            STIFFNESS_RANGE_N_PER_M,
+            "N/m",
+        ),
+        ("m", fit.pedestal.m, se[2], MASS_RANGE_KG, "kg"),
     ] {
         if v > 0.0 && outside(v, s, range) {
             out.push(format!(
@@ -54,9 +66,9 @@ pub fn findings(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> Vec<String
             ));
         }
     }
-    if fit.m > 0.0 && fit.k_y > 0.0 && fit.k_z > 0.0 {
-        for (axis, k) in [("y", fit.k_y), ("z", fit.k_z)] {
-            let f = (k / fit.m).sqrt() / (2.0 * std::f64::consts::PI);
+    if fit.pedestal.m > 0.0 && fit.pedestal.k_y > 0.0 && fit.pedestal.k_z > 0.0 {
+        for (axis, k) in [("y", fit.pedestal.k_y), ("z", fit.pedestal.k_z)] {
+            let f = (k / fit.pedestal.m).sqrt() / (2.0 * std::f64::consts::PI);
             let [lo, hi] = NATURAL_FREQUENCY_RANGE_HZ;
             if !(lo..=hi).contains(&f) {
                 out.push(format!(
@@ -66,8 +78,8 @@ pub fn findings(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> Vec<String
         }
     }
     if let Some(kb) = bearing_stiffness.filter(|k| *k > 0.0 && k.is_finite()) {
-        if fit.k_y > 0.0 && fit.k_z > 0.0 {
-            let ratio = (fit.k_y * fit.k_z).sqrt() / kb;
+        if fit.pedestal.k_y > 0.0 && fit.pedestal.k_z > 0.0 {
+            let ratio = (fit.pedestal.k_y * fit.pedestal.k_z).sqrt() / kb;
             if !(1.0 / BEARING_STIFFNESS_RATIO..=BEARING_STIFFNESS_RATIO).contains(&ratio) {
                 out.push(format!(
                     "its stiffness is {ratio:.1e} times its bearing's ({kb:.2e} N/m): {}",
@@ -143,17 +155,19 @@ pub fn mark(run: &RunDir, identification: &mut Identification) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::identify::StdErr;
+    use crate::estimate::Pedestal;
 
     fn fit(k: f64, m: f64) -> PedestalFit {
         PedestalFit {
             bearing: "left".into(),
-            k_y: k,
-            k_z: 0.8 * k,
-            m,
-            c_y: 0.0,
-            c_z: 0.0,
-            std_err: StdErr {
+            pedestal: Pedestal {
+                k_y: k,
+                k_z: 0.8 * k,
+                m,
+                c_y: 0.0,
+                c_z: 0.0,
+            },
+            std_err: Pedestal {
                 k_y: 1e-3 * k,
                 k_z: 1e-3 * k,
                 m: 1e-3 * m,

@@ -18,6 +18,7 @@
 //! not the machine simulator (`crate::sim`): the bearings are not coupled
 //! through a flexible rotor.
 
+use crate::estimate::Pedestal;
 use crate::rundir::{BearingRow, BearingSchedule, Measurement, PedestalTruth, RunDir, Truth};
 use nalgebra::{DMatrix, DVector};
 use plinth_shared::bearing::BearingCoefficients;
@@ -101,19 +102,23 @@ impl SyntheticRun {
             pedestals: vec![
                 PedestalTruth {
                     bearing: "left".into(),
-                    k_y: 10.0e6,
-                    k_z: 8.0e6,
-                    m: 150.0,
-                    c_y: c(100.0),
-                    c_z: c(80.0),
+                    pedestal: Pedestal {
+                        k_y: 10.0e6,
+                        k_z: 8.0e6,
+                        m: 150.0,
+                        c_y: c(100.0),
+                        c_z: c(80.0),
+                    },
                 },
                 PedestalTruth {
                     bearing: "right".into(),
-                    k_y: 6.0e6,
-                    k_z: 7.0e6,
-                    m: 120.0,
-                    c_y: c(70.0),
-                    c_z: c(90.0),
+                    pedestal: Pedestal {
+                        k_y: 6.0e6,
+                        k_z: 7.0e6,
+                        m: 120.0,
+                        c_y: c(70.0),
+                        c_z: c(90.0),
+                    },
                 },
             ],
             speeds_hz: linspace(5.0, 200.0, speeds),
@@ -179,10 +184,7 @@ impl SyntheticRun {
         let coefficients = schedule.at(speed_hz)?;
         let b =
             |i: usize, j: usize| Complex::new(coefficients.k[i][j], omega * coefficients.c[i][j]);
-        let d = [
-            Complex::new(p.k_y - w2 * p.m, omega * p.c_y),
-            Complex::new(p.k_z - w2 * p.m, omega * p.c_z),
-        ];
+        let d = [0, 1].map(|d| p.pedestal.dynamic_stiffness(d, omega));
         let mr = Complex::new(w2 * self.rotor_mass_kg[index], 0.0);
         let zero = Complex::new(0.0, 0.0);
         #[rustfmt::skip]

@@ -4,7 +4,8 @@
 //! locate the re-prediction gap.
 
 use super::*;
-use crate::identify::{identify_run, mode_label, EquationMode, Model, Options, PedestalFit};
+use crate::estimate::Pedestal;
+use crate::identify::{identify_run, mode_label, EquationMode, Model, Options, Parameter};
 use crate::rundir::{round_to_digits, DigitsMode, Measurement, RunDir};
 use crate::sim::predict::{compare, predict_run, Comparison, IdentifiedPedestal};
 use crate::sim::{unbalance_response, EffectSet, Machine};
@@ -89,32 +90,18 @@ pub(super) fn simulate(machine: &Machine, speeds: &[f64]) -> Result<RunDir> {
     Ok(response.to_run_dir(None)?)
 }
 
-pub(super) fn truth_of(run: &RunDir, bearing: &str) -> Result<crate::rundir::PedestalTruth> {
+pub(super) fn truth_of(run: &RunDir, bearing: &str) -> Result<Pedestal> {
     run.truth
         .as_ref()
         .and_then(|t| t.pedestals.iter().find(|p| p.bearing == bearing))
-        .cloned()
+        .map(|p| p.pedestal)
         .ok_or_else(|| anyhow!("the simulation has no pedestal truth for {bearing:?}"))
 }
 
-pub(super) fn param_value(p: &crate::rundir::PedestalTruth, name: &str) -> f64 {
-    match name {
-        "k_y" => p.k_y,
-        "k_z" => p.k_z,
-        "m" => p.m,
-        "c_y" => p.c_y,
-        _ => p.c_z,
-    }
-}
-
-pub(super) fn fit_value(f: &PedestalFit, name: &str) -> f64 {
-    match name {
-        "k_y" => f.k_y,
-        "k_z" => f.k_z,
-        "m" => f.m,
-        "c_y" => f.c_y,
-        _ => f.c_z,
-    }
+/// The parameter `name` (formats.md: `k_y`, `k_z`, `m`, `c_y`, `c_z`) of
+/// `p`; NaN for any other name.
+pub(super) fn param_value(p: &Pedestal, name: &str) -> f64 {
+    Parameter::from_name(name).map_or(f64::NAN, |q| p.get(q))
 }
 
 /// The noise model's reading of how the paper's digits were reduced.
@@ -244,8 +231,8 @@ pub(super) fn table2_rows(
             let ml_fit = ml_id.as_ref().and_then(|id| id.pedestal(b));
             for param in model.parameters() {
                 let name = param.name();
-                let (t, v) = (param_value(&truth, name), fit_value(fit, name));
-                let ml = ml_fit.map(|f| fit_value(f, name));
+                let (t, v) = (param_value(&truth, name), param_value(&fit.pedestal, name));
+                let ml = ml_fit.map(|f| param_value(&f.pedestal, name));
                 rows.push(Table2Row {
                     case,
                     damping_scale,
@@ -389,8 +376,13 @@ pub fn reproduce_with(
                 .ok_or_else(|| anyhow!("no fit for pedestal {b:?}"))?;
             let truth = truth_of(&undamped, b)?;
             for param in ["k_y", "k_z", "m"] {
-                let (t, v) = (param_value(&truth, param), fit_value(fit, param));
-                let ml = ml_id.pedestal(b).map_or(f64::NAN, |f| fit_value(f, param));
+                let (t, v) = (
+                    param_value(&truth, param),
+                    param_value(&fit.pedestal, param),
+                );
+                let ml = ml_id
+                    .pedestal(b)
+                    .map_or(f64::NAN, |f| param_value(&f.pedestal, param));
                 table1.push(Table1Row {
                     digits,
                     digits_mode: opts.digits_mode,
@@ -447,12 +439,8 @@ pub fn reproduce_with(
     for fit in &id.pedestals {
         let p = IdentifiedPedestal {
             bearing: fit.bearing.clone(),
-            k_y: Some(fit.k_y),
-            k_z: Some(fit.k_z),
-            m: Some(fit.m),
-            c_y: Some(fit.c_y),
-            c_z: Some(fit.c_z),
-            std_err: Default::default(),
+            pedestal: fit.pedestal,
+            std_err: None,
         };
         machine
             .set_pedestal(&p.bearing, Some(p.params()?))

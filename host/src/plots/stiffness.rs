@@ -28,6 +28,7 @@ use super::{
     colour, draw_cell, speed_axis, speed_range, svg_string, titled_page, write_both, Axes, Band,
     Curve, Mark, Style,
 };
+use crate::estimate::Pedestal;
 use anyhow::{anyhow, Result};
 use num_complex::Complex;
 use plotters::coord::Shift;
@@ -70,12 +71,8 @@ impl Uncertainty {
 /// A rigid pedestal k − Ω²m + iΩc per direction with its uncertainty.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RigidPedestal {
-    /// Stiffness (y, z) [N/m].
-    pub k: [f64; 2],
-    /// Mass [kg] (one per pedestal).
-    pub m: f64,
-    /// Damping (y, z) [N·s/m].
-    pub c: [f64; 2],
+    /// Its parameters (k [N/m], m [kg], c [N·s/m]).
+    pub pedestal: Pedestal,
     /// Of θ = (k_y, k_z, m, c_y, c_z).
     pub uncertainty: Uncertainty,
 }
@@ -83,8 +80,8 @@ pub struct RigidPedestal {
 impl RigidPedestal {
     /// Dynamic stiffness k − Ω²m + iΩc [N/m] in direction `d` at `speed_hz`.
     pub fn dynamic_stiffness(&self, d: usize, speed_hz: f64) -> Complex<f64> {
-        let w = std::f64::consts::TAU * speed_hz;
-        Complex::new(self.k[d] - w * w * self.m, w * self.c[d])
+        self.pedestal
+            .dynamic_stiffness(d, std::f64::consts::TAU * speed_hz)
     }
 
     /// Standard deviations [N/m] of Re and Im of the dynamic stiffness in
@@ -444,9 +441,7 @@ mod tests {
 
     fn pedestal(uncertainty: Uncertainty) -> RigidPedestal {
         RigidPedestal {
-            k: [1.2e7, 0.8e7],
-            m: 150.0,
-            c: [2000.0, 1500.0],
+            pedestal: Pedestal::from_theta([1.2e7, 0.8e7, 150.0, 2000.0, 1500.0]),
             uncertainty,
         }
     }

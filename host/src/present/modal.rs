@@ -10,7 +10,8 @@
 //! standard errors alone, is needed; the test below checks the delta method
 //! against a Monte-Carlo of the parameters.
 
-use serde::{Deserialize, Deserializer, Serialize};
+use crate::estimate::params::null_is_nan;
+use serde::{Deserialize, Serialize};
 use std::f64::consts::TAU;
 
 /// One direction's natural frequency and damping ratio with standard
@@ -117,13 +118,8 @@ pub fn pedestal(theta: &[f64; 5], cov: Option<&Covariance>) -> PedestalModal {
 /// parameters and covariance (`identify --json`'s `modal`).
 pub fn attach(identification: &mut crate::identify::Identification) {
     for p in &mut identification.pedestals {
-        p.modal = Some(pedestal(&p.params(), p.covariance.as_ref()));
+        p.modal = Some(pedestal(&p.pedestal.theta(), p.covariance.as_ref()));
     }
-}
-
-/// serde: JSON `null` (how serde_json writes NaN) reads as NaN.
-fn null_is_nan<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 #[cfg(test)]

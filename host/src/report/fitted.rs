@@ -17,12 +17,10 @@ use std::path::{Path, PathBuf};
 /// so).
 pub fn rigid_pedestal(fit: &PedestalFit) -> RigidPedestal {
     RigidPedestal {
-        k: [fit.k_y, fit.k_z],
-        m: fit.m,
-        c: [fit.c_y, fit.c_z],
+        pedestal: fit.pedestal,
         uncertainty: match fit.covariance {
             Some(c) => Uncertainty::Covariance(c),
-            None => Uncertainty::StdErrors(fit.std_errs()),
+            None => Uncertainty::StdErrors(fit.std_err.theta()),
         },
     }
 }

@@ -19,6 +19,7 @@ pub use digits::*;
 pub use read::*;
 pub use schedule::*;
 
+use crate::estimate::Pedestal;
 use plinth_shared::bearing::BearingCoefficients;
 use plinth_shared::phasor::{Complex, Phasor2};
 use serde::{Deserialize, Serialize};
@@ -73,21 +74,15 @@ pub struct BearingRow {
     pub coefficients: BearingCoefficients<f64>,
 }
 
-/// The pedestal a simulated run was made with (`truth.json`).
+/// The pedestal a simulated run was made with (`truth.json`: its keys
+/// `k_y, k_z, m, c_y, c_z` next to `bearing`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PedestalTruth {
     /// Bearing name.
     pub bearing: String,
-    /// Vertical stiffness [N/m].
-    pub k_y: f64,
-    /// Horizontal stiffness [N/m].
-    pub k_z: f64,
-    /// Mass [kg].
-    pub m: f64,
-    /// Vertical viscous damping [N·s/m].
-    pub c_y: f64,
-    /// Horizontal viscous damping [N·s/m].
-    pub c_z: f64,
+    /// The pedestal's parameters (k [N/m], m [kg], c [N·s/m]).
+    #[serde(flatten)]
+    pub pedestal: Pedestal,
 }
 
 /// An effect present in simulated data beyond the paper's model, with the

@@ -76,8 +76,8 @@
 use super::base::Base;
 use super::disk::Disk;
 use super::oil_film::OilFilmBearing;
-use super::pedestal::PedestalParams;
 use super::timoshenko::ShaftElement;
+use crate::estimate::Pedestal;
 use plinth_shared::bearing::BearingCoefficients;
 
 /// A problem with a machine file, naming the file and the key.
@@ -137,7 +137,7 @@ pub struct Bearing {
     /// Coefficient model.
     pub model: BearingModel,
     /// The pedestal under the bearing; `None` = bearing on rigid ground.
-    pub pedestal: Option<PedestalParams>,
+    pub pedestal: Option<Pedestal>,
     /// Index into [`Machine::bases`] of the base the pedestal stands on;
     /// `None` = the pedestal stands on rigid ground.
     pub base: Option<usize>,
@@ -205,7 +205,7 @@ impl Machine {
     }
 
     /// The pedestal under bearing `name` (`None` for rigid ground).
-    pub fn pedestal(&self, name: &str) -> Result<Option<PedestalParams>, MachineError> {
+    pub fn pedestal(&self, name: &str) -> Result<Option<Pedestal>, MachineError> {
         Ok(self.bearings[self.bearing_index(name)?].pedestal)
     }
 
@@ -214,7 +214,7 @@ impl Machine {
     pub fn set_pedestal(
         &mut self,
         name: &str,
-        pedestal: Option<PedestalParams>,
+        pedestal: Option<Pedestal>,
     ) -> Result<(), MachineError> {
         let i = self.bearing_index(name)?;
         if let Some(p) = pedestal {

@@ -6,8 +6,8 @@ use super::base::Base;
 use super::disk::{inertia_from_geometry, Disk};
 use super::machine::{Bearing, BearingModel, Machine, MachineError, Unbalance, STANDARD_GRAVITY};
 use super::oil_film::OilFilmBearing;
-use super::pedestal::PedestalParams;
 use super::timoshenko::ShaftElement;
+use crate::estimate::Pedestal;
 use plinth_shared::bearing::BearingCoefficients;
 use serde::Deserialize;
 use std::path::Path;
@@ -695,7 +695,7 @@ impl Machine {
             let pedestal = match rb.pedestal {
                 Some(p) => {
                     let pk = format!("{key}.pedestal");
-                    Some(PedestalParams {
+                    Some(Pedestal {
                         m: ctx.positive(&format!("{pk}.m"), p.m)?,
                         k_y: ctx.positive(&format!("{pk}.k_y"), p.k_y)?,
                         k_z: ctx.positive(&format!("{pk}.k_z"), p.k_z)?,

@@ -40,7 +40,7 @@ pub mod timoshenko;
 
 pub use inject::{default_size, EffectRequest, EffectSet};
 pub use machine::{Bearing, BearingModel, Machine, MachineError, Unbalance};
-pub use pedestal::{PedestalDynamics, PedestalParams};
+pub use pedestal::PedestalDynamics;
 pub use response::{
     unbalance_response, BearingResponse, Noise, Response, SensorEffects, SimError, UnbalanceSolver,
 };

@@ -1,31 +1,9 @@
 //! Pedestals: the flexible supports between each bearing and the rigid ground.
+//! The paper's pedestal is the one parameter type [`Pedestal`]; the
+//! simulator's effects need the richer [`PedestalDynamics`] built from it.
 
+use crate::estimate::Pedestal;
 use num_complex::Complex;
-
-/// The paper's pedestal (Feng & Hahn eq. 3): one mass, direct stiffness and
-/// viscous damping in y (vertical) and z (horizontal).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PedestalParams {
-    /// Mass [kg], the same in y and z.
-    pub m: f64,
-    /// Vertical stiffness to ground [N/m].
-    pub k_y: f64,
-    /// Horizontal stiffness to ground [N/m].
-    pub k_z: f64,
-    /// Vertical viscous damping to ground [N·s/m].
-    pub c_y: f64,
-    /// Horizontal viscous damping to ground [N·s/m].
-    pub c_z: f64,
-}
-
-impl PedestalParams {
-    /// Undamped natural frequencies (vertical, horizontal) [Hz] of the
-    /// pedestal alone on its springs, sqrt(k/m)/2π.
-    pub fn natural_frequencies_hz(&self) -> (f64, f64) {
-        let f = |k: f64| (k / self.m).sqrt() / std::f64::consts::TAU;
-        (f(self.k_y), f(self.k_z))
-    }
-}
 
 /// A pedestal with everything the simulator can give it beyond the paper's
 /// model (the effects of `crate::effects`): M = diag(m_y, m_z), full 2×2
@@ -42,8 +20,8 @@ pub struct PedestalDynamics {
     pub eta: f64,
 }
 
-impl From<PedestalParams> for PedestalDynamics {
-    fn from(p: PedestalParams) -> Self {
+impl From<Pedestal> for PedestalDynamics {
+    fn from(p: Pedestal) -> Self {
         Self {
             m: [p.m, p.m],
             k: [[p.k_y, 0.0], [0.0, p.k_z]],

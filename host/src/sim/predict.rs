@@ -15,34 +15,33 @@
 
 use super::inject::{EffectRequest, EffectSet};
 use super::machine::Machine;
-use super::pedestal::PedestalParams;
 use super::response::unbalance_response;
 use super::signals::ChannelQuantity;
+use crate::estimate::Pedestal;
 use crate::rundir::{Measurement, RunDir};
 use anyhow::{anyhow, bail, Context};
+use plinth_shared::regression::Parameter;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// A pedestal as `plinth identify --json` gives it (formats.md): the keys
-/// every conforming file has; the others are ignored.
+/// every conforming file has; the others are ignored. A `null` value (the
+/// identification failed for it) reads as NaN.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 pub struct IdentifiedPedestal {
     /// Bearing name.
     pub bearing: String,
-    /// Vertical stiffness [N/m].
-    pub k_y: Option<f64>,
-    /// Horizontal stiffness [N/m].
-    pub k_z: Option<f64>,
-    /// Mass [kg].
-    pub m: Option<f64>,
-    /// Vertical damping [N·s/m].
-    pub c_y: Option<f64>,
-    /// Horizontal damping [N·s/m].
-    pub c_z: Option<f64>,
-    /// Standard errors of the parameters, by name (same units).
-    #[serde(default)]
-    pub std_err: BTreeMap<String, Option<f64>>,
+    /// The identified parameters (k [N/m], m [kg], c [N·s/m]).
+    #[serde(flatten)]
+    pub pedestal: Pedestal,
+    /// Their standard errors (same units; `null`: not estimable, +∞), when
+    /// the file gives them.
+    #[serde(
+        default,
+        deserialize_with = "crate::estimate::params::optional_std_err"
+    )]
+    pub std_err: Option<Pedestal>,
 }
 
 #[derive(Deserialize)]
@@ -54,7 +53,7 @@ impl IdentifiedPedestal {
     /// The pedestal parameters, refusing missing, non-finite or negative
     /// values (a negative identified mass, stiffness or damping is not a
     /// pedestal the simulator can be given).
-    pub fn params(&self) -> anyhow::Result<PedestalParams> {
+    pub fn params(&self) -> anyhow::Result<Pedestal> {
         self.params_with_notes().map(|(p, _)| p)
     }
 
@@ -62,18 +61,24 @@ impl IdentifiedPedestal {
     /// was negative but consistent with zero and is taken as zero: within
     /// two standard errors of zero, or (without a standard error) smaller
     /// than 1e-6 of the critical damping 2·sqrt(k·m) [N·s/m].
-    pub fn params_with_notes(&self) -> anyhow::Result<(PedestalParams, Vec<String>)> {
+    pub fn params_with_notes(&self) -> anyhow::Result<(Pedestal, Vec<String>)> {
         let mut notes = Vec::new();
-        let (k_y, k_z, m) = (self.k_y, self.k_z, self.m);
-        let mut damping = |name: &str, v: Option<f64>, k: Option<f64>| -> Option<f64> {
-            let x = v?;
+        let known = |v: f64| (!v.is_nan()).then_some(v);
+        let (k_y, k_z, m) = (
+            known(self.pedestal.k_y),
+            known(self.pedestal.k_z),
+            known(self.pedestal.m),
+        );
+        let mut damping = |p: Parameter, k: Option<f64>| -> Option<f64> {
+            let name = p.name();
+            let x = known(self.pedestal.get(p))?;
             if !(x.is_finite() && x < 0.0) {
                 return Some(x);
             }
-            let se = self.std_err.get(name).copied().flatten();
+            let se = self.std_err.map(|s| s.get(p)).filter(|s| s.is_finite());
             let critical = 2.0 * (k.unwrap_or(0.0).abs() * m.unwrap_or(0.0).abs()).sqrt();
             let zero = match se {
-                Some(se) if se.is_finite() && se > 0.0 => x >= -2.0 * se,
+                Some(se) if se > 0.0 => x >= -2.0 * se,
                 _ => -x <= 1e-6 * critical,
             };
             if !zero {
@@ -89,8 +94,8 @@ impl IdentifiedPedestal {
             ));
             Some(0.0)
         };
-        let c_y = damping("c_y", self.c_y, k_y);
-        let c_z = damping("c_z", self.c_z, k_z);
+        let c_y = damping(Parameter::Cy, k_y);
+        let c_z = damping(Parameter::Cz, k_z);
         let get = |name: &str, v: Option<f64>| -> anyhow::Result<f64> {
             match v {
                 Some(x) if x.is_finite() && x >= 0.0 => Ok(x),
@@ -99,15 +104,15 @@ impl IdentifiedPedestal {
                     self.bearing
                 ),
                 None => bail!(
-                    "pedestal {:?}: {name} is missing or null (the identification failed for it)",
+                    "pedestal {:?}: {name} is null (the identification failed for it)",
                     self.bearing
                 ),
             }
         };
-        let p = PedestalParams {
-            k_y: get("k_y", self.k_y)?,
-            k_z: get("k_z", self.k_z)?,
-            m: get("m", self.m)?,
+        let p = Pedestal {
+            k_y: get("k_y", k_y)?,
+            k_z: get("k_z", k_z)?,
+            m: get("m", m)?,
             c_y: get("c_y", c_y)?,
             c_z: get("c_z", c_z)?,
         };
@@ -389,28 +394,31 @@ mod tests {
     fn negative_identified_values_are_refused() {
         let p = IdentifiedPedestal {
             bearing: "left".into(),
-            k_y: Some(1e7),
-            k_z: Some(1e7),
-            m: Some(100.0),
-            c_y: Some(-1.0),
-            c_z: Some(0.0),
-            std_err: BTreeMap::new(),
+            pedestal: Pedestal::from_theta([1e7, 1e7, 100.0, -1.0, 0.0]),
+            std_err: None,
         };
         assert!(p.params().unwrap_err().to_string().contains("c_y"));
         // Within two standard errors of zero: zero, and said so.
         let mut p = p;
-        p.std_err.insert("c_y".into(), Some(0.6));
+        let unknown = Pedestal::from_theta([f64::INFINITY; 5]);
+        p.std_err = Some(Pedestal {
+            c_y: 0.6,
+            ..unknown
+        });
         let (params, notes) = p.params_with_notes().unwrap();
         assert_eq!(params.c_y, 0.0);
         assert!(notes[0].contains("consistent with zero"), "{notes:?}");
-        p.std_err.insert("c_y".into(), Some(0.4));
+        p.std_err = Some(Pedestal {
+            c_y: 0.4,
+            ..unknown
+        });
         assert!(p.params().is_err());
         // Round-off on noise-free data, without a standard error.
-        p.std_err.clear();
-        p.c_y = Some(-2.6e-13);
+        p.std_err = None;
+        p.pedestal.c_y = -2.6e-13;
         assert_eq!(p.params().unwrap().c_y, 0.0);
         // Negative stiffness is never zeroed.
-        p.k_y = Some(-1.0);
+        p.pedestal.k_y = -1.0;
         assert!(p.params().is_err());
     }
 }

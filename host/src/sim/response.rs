@@ -459,13 +459,9 @@ impl UnbalanceSolver {
             .bearings
             .iter()
             .filter_map(|b| {
-                b.pedestal.map(|p| PedestalTruth {
+                b.pedestal.map(|pedestal| PedestalTruth {
                     bearing: b.name.clone(),
-                    k_y: p.k_y,
-                    k_z: p.k_z,
-                    m: p.m,
-                    c_y: p.c_y,
-                    c_z: p.c_z,
+                    pedestal,
                 })
             })
             .collect();

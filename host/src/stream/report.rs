@@ -106,7 +106,7 @@ pub fn compare(
                 .map(|&p| {
                     let i = p as usize;
                     let box_value = entry.and_then(|e| finite(e.theta[i] as f64));
-                    let batch_value = fit.and_then(|f| finite(f.params()[i]));
+                    let batch_value = fit.and_then(|f| finite(f.pedestal.theta()[i]));
                     let difference = match (box_value, batch_value) {
                         (Some(a), Some(b)) => Some(a - b),
                         _ => None,
@@ -121,9 +121,9 @@ pub fn compare(
                         box_value,
                         box_std_err: entry.and_then(|e| finite(e.std_err[i] as f64)),
                         batch_value,
-                        batch_std_err: fit.and_then(|f| finite(f.std_errs()[i])),
-                        ml_value: ml_fit.and_then(|f| finite(f.params()[i])),
-                        ml_std_err: ml_fit.and_then(|f| finite(f.std_errs()[i])),
+                        batch_std_err: fit.and_then(|f| finite(f.std_err.theta()[i])),
+                        ml_value: ml_fit.and_then(|f| finite(f.pedestal.theta()[i])),
+                        ml_std_err: ml_fit.and_then(|f| finite(f.std_err.theta()[i])),
                         difference,
                         difference_percent,
                     }

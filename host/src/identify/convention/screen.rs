@@ -13,7 +13,7 @@
 
 use super::super::lsq::NormalEquations;
 use super::super::physical::violations;
-use super::super::{Options, PedestalFit, StdErr};
+use super::super::{Options, PedestalFit};
 use super::Schedules;
 use crate::estimate::{complex_stiffness, Observation};
 use crate::rundir::RunDir;
@@ -146,14 +146,8 @@ fn normal(
         return None;
     }
     let mut fit = template.clone();
-    [fit.k_y, fit.k_z, fit.m, fit.c_y, fit.c_z] = theta;
-    fit.std_err = StdErr {
-        k_y: se[0],
-        k_z: se[1],
-        m: se[2],
-        c_y: se[3],
-        c_z: se[4],
-    };
+    fit.pedestal = crate::estimate::Pedestal::from_theta(theta);
+    fit.std_err = crate::estimate::Pedestal::from_theta(se);
     fit.residual_rms = (rss / equations as f64).sqrt();
     fit.condition_number = solution.condition_number;
     fit.equations = equations;

@@ -170,12 +170,14 @@ fn reading(convention: Option<Convention>, q: f64, r: f64, plausible: bool) -> R
 fn only_a_passive_decisive_reading_at_the_floor_is_named() {
     let fit = crate::identify::PedestalFit {
         bearing: "left".into(),
-        k_y: 1.0,
-        k_z: 1.0,
-        m: 1.0,
-        c_y: 0.0,
-        c_z: 0.0,
-        std_err: crate::identify::StdErr {
+        pedestal: crate::estimate::Pedestal {
+            k_y: 1.0,
+            k_z: 1.0,
+            m: 1.0,
+            c_y: 0.0,
+            c_z: 0.0,
+        },
+        std_err: crate::estimate::Pedestal {
             k_y: 0.0,
             k_z: 0.0,
             m: 0.0,
