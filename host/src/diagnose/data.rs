@@ -125,9 +125,10 @@ impl Prepared {
         };
         for (b, name) in bearings.iter().enumerate() {
             let n = points[b].iter().flatten().count();
-            if n < 3 {
+            if n < crate::identify::MIN_SPEEDS {
                 bail!(
-                    "bearing {name}: only {n} speeds measured; the pedestal model needs at least 3"
+                    "bearing {name}: only {n} speeds measured; the pedestal model needs at least {}",
+                    crate::identify::MIN_SPEEDS
                 );
             }
         }

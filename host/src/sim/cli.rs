@@ -33,10 +33,15 @@ pub struct SimulateArgs {
     #[arg(long, requires = "digits")]
     pub truncate: bool,
     /// Complex Gaussian noise, RMS relative to each channel's RMS over speed.
-    #[arg(long, value_parser = crate::args::non_negative)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::non_negative)]
     pub noise: Option<f64>,
     /// Seed of the noise (needs --noise).
-    #[arg(long, default_value_t = 1, requires = "noise")]
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        default_value_t = 1,
+        requires = "noise"
+    )]
     pub seed: u64,
     /// Effect to inject: NAME[:BEARING][=SIZE] (repeatable; see `plinth::sim::inject`).
     #[arg(long = "effect")]
