@@ -56,11 +56,7 @@ pub struct SignalsArgs {
 /// staged in; `args.out`, the one named in messages, once committed).
 pub fn signals(args: &SignalsArgs, staging: &Path) -> anyhow::Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
-    let mut effects = EffectSet::none();
-    for e in &args.effects {
-        let req: EffectRequest = e.parse().map_err(anyhow::Error::msg)?;
-        effects.requests.push(req);
-    }
+    let effects = EffectSet::from_options(&args.effects).map_err(anyhow::Error::msg)?;
     let opts = SignalOptions {
         rundown: RunDown::parse(&args.rundown)?,
         sample_rate_hz: args.rate,
@@ -94,6 +90,22 @@ pub fn signals(args: &SignalsArgs, staging: &Path) -> anyhow::Result<()> {
         "response interpolation: {} Hz grid, largest error {:.2e} of channel peak",
         h.interpolation.grid_step_hz, h.interpolation.max_rel_error
     );
+    // A 1X peak below the noise of the mean of every sample of the channel
+    // (its noise and quantisation over √samples) cannot be resolved by any
+    // averaging: the channel holds noise only.
+    for c in &h.channels {
+        let noise = c.noise_v_rms.hypot(h.adc.volts_per_code / 12f64.sqrt());
+        let floor = noise / (h.samples.max(1) as f64).sqrt();
+        if c.signal_peak_v < floor {
+            eprintln!(
+                "warning: {}: its 1X signal peaks at {} V, below what averaging all its samples resolves ({} V: noise and ADC step over √{} samples): the channel records noise only (check the sensitivity, --adc-range and --adc-bits)",
+                c.name,
+                crate::rundir::digits::format_number(c.signal_peak_v),
+                crate::rundir::digits::format_number(floor),
+                h.samples
+            );
+        }
+    }
     for c in h.channels.iter().filter(|c| c.clipped_samples > 0) {
         eprintln!(
             "warning: {}: {} samples clipped at ±{} V (--adc-range)",
