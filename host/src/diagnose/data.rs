@@ -125,10 +125,9 @@ impl Prepared {
         };
         for (b, name) in bearings.iter().enumerate() {
             let n = points[b].iter().flatten().count();
-            if n < crate::identify::MIN_SPEEDS {
+            if n < 3 {
                 bail!(
-                    "bearing {name}: only {n} speeds measured; the pedestal model needs at least {}",
-                    crate::identify::MIN_SPEEDS
+                    "bearing {name}: only {n} speeds measured; the pedestal model needs at least 3"
                 );
             }
         }

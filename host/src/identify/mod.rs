@@ -387,10 +387,11 @@ pub enum IdentifyError {
     },
 }
 
-/// The fewest measured speeds a pedestal is identified from: each speed
-/// gives four real equations for the model's (up to five) parameters, and a
-/// third speed leaves the residual a noise estimate.
-pub const MIN_SPEEDS: usize = 3;
+/// The fewest measured speeds a pedestal is fitted from at all: one speed's
+/// four real equations cannot determine the model's five parameters (from
+/// two speeds up to [`DEFAULT_MIN_SPEEDS`] the fit is made and marked
+/// UNTRUSTED with a `TooFewSpeeds` warning).
+pub const MIN_SPEEDS: usize = 2;
 
 /// The per-speed data of one pedestal without their noise
 /// ([`Observation::without_noise`]): the measured phasors and the complex
