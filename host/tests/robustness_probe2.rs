@@ -49,8 +49,7 @@ fn write_table(dir: &Path, rows: &[Vec<String>]) {
 fn error_line(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr)
         .lines()
-        .filter(|l| l.starts_with("error:"))
-        .last()
+        .rfind(|l| l.starts_with("error:"))
         .unwrap_or("")
         .to_string()
 }
