@@ -122,6 +122,13 @@ pub fn monte_carlo_with_progress(
     if draws < 2 {
         bail!("--draws {draws}: at least 2 draws are needed for a scatter");
     }
+    if speeds_hz.len() < crate::identify::MIN_SPEEDS {
+        bail!(
+            "--speeds: {} speed(s); a pedestal is identified from at least {} (the Cramér–Rao bound of fewer is infinite)",
+            speeds_hz.len(),
+            crate::identify::MIN_SPEEDS
+        );
+    }
     match perturbation {
         Perturbation::Noise(f) if !(f.is_finite() && f > 0.0) => {
             bail!("--noise {f}: the noise fraction must be finite and > 0")
@@ -415,10 +422,10 @@ pub struct Args {
     #[arg(long)]
     pub digits: Option<u32>,
     /// Number of draws.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 200)]
     pub draws: usize,
     /// Seed of the draws.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
     pub seed: u64,
     /// Speeds [Hz] as START:STOP:STEP (inclusive), or a comma-separated list.
     #[arg(long, default_value = "5:200:1")]

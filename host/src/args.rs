@@ -8,6 +8,12 @@
 
 use std::time::Duration;
 
+/// The highest rotor speed an option accepts [Hz]: 100 kHz (6 million
+/// rpm), beyond any rotor (dental turbines turn at about 7 kHz); a larger
+/// speed is a typo or a unit mistake, and would only fail later with a
+/// singular matrix or a sample rate that cannot follow it.
+pub const MAX_SPEED_HZ: f64 = 1e5;
+
 /// The longest duration an option accepts [s]: one year.
 pub const MAX_SECONDS: f64 = 365.0 * 24.0 * 3600.0;
 

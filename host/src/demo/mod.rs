@@ -138,14 +138,15 @@ pub struct Args {
     /// Run-down START:END:RATE [Hz:Hz:Hz/s] (default 200:5:10; with --qemu 62:48:35).
     #[arg(long)]
     pub rundown: Option<String>,
-    /// Keyphasor revolutions averaged into one phasor (default 4; with --qemu 1).
-    #[arg(long)]
+    /// Keyphasor revolutions averaged into one phasor, 1 to 65535 (default 4;
+    /// with --qemu 1).
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=65535))]
     pub averaging: Option<u32>,
     /// Machine file (TOML) instead of the bundled damped paper machine.
     #[arg(long)]
     pub machine: Option<PathBuf>,
     /// Seed of the sensor noise.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
     pub seed: u64,
     /// Seismic transducers on the pedestals: displacement, velocity or
     /// acceleration (typical field sensitivities:

@@ -34,10 +34,10 @@ pub struct Args {
     #[arg(long, requires = "plots")]
     pub force: bool,
     /// Family-wise significance level of each step (Bonferroni over candidates).
-    #[arg(long, default_value_t = 1e-3, value_parser = crate::args::probability)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1e-3, value_parser = crate::args::probability)]
     pub alpha: f64,
     /// Diagnose only the speeds from LO to HI Hz (ends included), e.g. 20:120.
-    #[arg(long, value_name = "LO:HI", value_parser = crate::args::speed_band)]
+    #[arg(long, allow_negative_numbers = true, value_name = "LO:HI", value_parser = crate::args::speed_band)]
     pub speeds: Option<crate::args::SpeedBand>,
 }
 

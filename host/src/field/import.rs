@@ -258,6 +258,18 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
         if record.iter().all(|f| f.is_empty()) {
             continue;
         }
+        // A row wider than the header with something in its extra fields:
+        // an unquoted `,` inside a number (`1,234`, a decimal comma) shifted
+        // every later column. Empty extra fields (a spreadsheet's trailing
+        // empty columns) are harmless.
+        if let Some(extra) = record.iter().skip(names.len()).position(|f| !f.is_empty()) {
+            bail!(
+                "{file}:{line}:{}: the row has {} fields but the header {}: an unquoted `,` inside a number (a thousands separator such as `1,234`, or a decimal comma) shifts every later column; write numbers without separators, with `.` as the decimal point",
+                names.len() + extra + 1,
+                record.len(),
+                names.len()
+            );
+        }
         let cell = |col: usize, what: &str| -> Result<f64> {
             let text = record.get(col).ok_or_else(|| {
                 anyhow::anyhow!(
@@ -293,8 +305,9 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
         }
         if let Some(first) = seen.insert(speed_hz.to_bits(), line) {
             bail!(
-                "{file}:{line}:{}: speed {speed_hz} Hz twice (first at line {first})",
-                speed_col + 1
+                "{file}:{line}:{}: speed {} Hz twice (first at line {first})",
+                speed_col + 1,
+                crate::rundir::digits::format_number(speed_hz)
             );
         }
         let omega = std::f64::consts::TAU * speed_hz;
@@ -376,6 +389,13 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
         );
         watch.check(&what).map_err(anyhow::Error::msg)?;
     }
+    if super::plausible::radians_suspected(&watches) {
+        eprintln!(
+            "warning: {file}: every phase of every transducer, over {} rows, lies within ±2π (6.28), e.g. column `{}`: are the phases in radians? {layout_file} and docs/formats.md read degrees; if so convert them (× 180/π)",
+            rows.len() / groups.len().max(1),
+            names[cols[0].1]
+        );
+    }
     Ok(rows)
 }
 
@@ -408,9 +428,9 @@ pub fn check_against_bearings(
                 "{table}:{}:{}: speed {} Hz is outside the range {}..={} Hz that {bearings_file} lists for bearing `{}` (coefficients are not extrapolated)",
                 r.line,
                 r.speed_column,
-                m.speed_hz,
-                e.min_hz,
-                e.max_hz,
+                crate::rundir::digits::format_number(m.speed_hz),
+                crate::rundir::digits::format_number(e.min_hz),
+                crate::rundir::digits::format_number(e.max_hz),
                 m.bearing
             );
         }

@@ -2,7 +2,8 @@
 //! amplitude beyond any machine's vibration (a typo such as `1e300`, or the
 //! wrong unit) is refused at its line and column, and a transducer that
 //! reads zero, or the same amplitude and phase, at every speed is named as
-//! dead before its zeros are fitted.
+//! dead before its zeros are fitted; phases that all lie within ±2π where
+//! degrees are expected (a table written in radians) are named.
 
 use plinth_shared::extractor::SensorKind;
 
@@ -35,7 +36,15 @@ pub struct ReadingsWatch {
     first: Option<(f64, f64)>,
     all_zero: bool,
     all_same: bool,
+    /// Largest |phase| read [deg, as written].
+    max_abs_phase: f64,
+    /// Whether some phase is not a whole number (instruments print whole
+    /// degrees; radians need decimals).
+    fractional_phase: bool,
 }
+
+/// The fewest rows over which [`radians_suspected`] judges a table.
+pub const RADIANS_MIN_ROWS: u64 = 5;
 
 impl ReadingsWatch {
     /// Takes one row's amplitude (in the table's unit) and phase [deg].
@@ -46,6 +55,8 @@ impl ReadingsWatch {
         }
         self.rows += 1;
         self.all_zero &= amplitude == 0.0;
+        self.max_abs_phase = self.max_abs_phase.max(phase_deg.abs());
+        self.fractional_phase |= phase_deg.fract() != 0.0;
         match self.first {
             None => self.first = Some((amplitude, phase_deg)),
             Some(f) => self.all_same &= f == (amplitude, phase_deg),
@@ -74,6 +85,20 @@ impl ReadingsWatch {
     }
 }
 
+/// Whether the phases of a table look like radians where degrees are
+/// expected: every transducer read over at least [`RADIANS_MIN_ROWS`] rows,
+/// every phase within ±2π (6.28) and some phase with decimals. A run-down in
+/// degrees turns its phases by tens of degrees through any resonance, so all
+/// of them inside ±6.3° does not happen (measured: 0 of the bundled example
+/// and of 200 simulated noisy run-downs, docs/robustness.md).
+pub fn radians_suspected(watches: &[ReadingsWatch]) -> bool {
+    !watches.is_empty()
+        && watches
+            .iter()
+            .all(|w| w.rows >= RADIANS_MIN_ROWS && w.max_abs_phase <= std::f64::consts::TAU + 1e-9)
+        && watches.iter().any(|w| w.fractional_phase)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -99,6 +124,26 @@ mod tests {
         two.push(1.0, 2.0);
         two.push(1.0, 2.0);
         assert!(two.check("d").is_ok());
+    }
+
+    #[test]
+    fn phases_in_radians_are_suspected_and_degrees_are_not() {
+        let rows = |scale: f64| {
+            let mut w = ReadingsWatch::default();
+            for k in 0..8 {
+                // A resonance: the phase lag turns through 180° over the rows.
+                w.push(1.0, scale * (10.0 + 22.5 * k as f64));
+            }
+            w
+        };
+        let radians = std::f64::consts::PI / 180.0;
+        assert!(radians_suspected(&[rows(radians), rows(radians)]));
+        assert!(!radians_suspected(&[rows(1.0), rows(radians)]));
+        assert!(!radians_suspected(&[rows(1.0)]));
+        // Too few rows to judge.
+        let mut short = ReadingsWatch::default();
+        short.push(1.0, 0.5);
+        assert!(!radians_suspected(&[short]));
     }
 
     #[test]

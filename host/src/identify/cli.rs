@@ -75,7 +75,7 @@ pub struct Args {
     #[arg(long)]
     pub json: bool,
     /// How the real and imaginary parts of eq. 4 are used.
-    #[arg(long, value_enum, default_value_t = Equations::RAndI)]
+    #[arg(long, allow_negative_numbers = true, value_enum, default_value_t = Equations::RAndI)]
     pub equations: Equations,
     /// Parameters to estimate, comma-separated from k_y,k_z,m,c_y,c_z; the
     /// others are fixed at 0 [default: see below].
@@ -83,11 +83,11 @@ pub struct Args {
     pub model: Option<Model>,
     /// Condition number of the column-scaled regression above which a fit is
     /// not trusted.
-    #[arg(long, default_value_t = DEFAULT_MAX_CONDITION_NUMBER)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = DEFAULT_MAX_CONDITION_NUMBER, value_parser = crate::args::positive)]
     pub max_condition: f64,
     /// Estimator: ml (maximum likelihood, errors in variables; R&I only) or
     /// ols (the paper's least squares; always used with the other --equations).
-    #[arg(long, value_enum, default_value_t = Estimator::Ml)]
+    #[arg(long, allow_negative_numbers = true, value_enum, default_value_t = Estimator::Ml)]
     pub estimator: Estimator,
     /// With ml: also show the paper's OLS and its efficiency (bound variance /
     /// OLS variance under the noise model) per parameter.
@@ -117,7 +117,7 @@ pub struct Args {
     #[command(flatten)]
     pub figure_style: crate::plots::StyleArgs,
     /// Fit only the speeds from LO to HI Hz (ends included), e.g. 20:120.
-    #[arg(long, value_name = "LO:HI", value_parser = crate::args::speed_band)]
+    #[arg(long, allow_negative_numbers = true, value_name = "LO:HI", value_parser = crate::args::speed_band)]
     pub speeds: Option<crate::args::SpeedBand>,
 }
 
@@ -274,7 +274,9 @@ pub(crate) fn check_run_dir(dir: &std::path::Path) -> anyhow::Result<()> {
 fn located(dir: &std::path::Path, e: super::IdentifyError) -> anyhow::Error {
     use super::IdentifyError as E;
     let file = match &e {
-        E::NoMeasurements | E::NoData { .. } => crate::rundir::MEASUREMENTS_FILE,
+        E::NoMeasurements | E::NoData { .. } | E::TooFewSpeeds { .. } => {
+            crate::rundir::MEASUREMENTS_FILE
+        }
         E::UnknownBearing { .. } | E::BearingRange { .. } => crate::rundir::BEARINGS_FILE,
         E::RunDir(_) | E::NonFinite(_) | E::Base(_) => return e.into(),
     };

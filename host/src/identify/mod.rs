@@ -330,7 +330,21 @@ pub enum IdentifyError {
     /// A fit's result is not a finite number (an overflow).
     #[error(transparent)]
     NonFinite(#[from] physical::NonFiniteResult),
+    /// Fewer measured speeds than [`MIN_SPEEDS`] for a pedestal.
+    #[error("bearing `{bearing}`: only {speeds} speed(s) measured; the pedestal model needs at least {MIN_SPEEDS}")]
+    TooFewSpeeds {
+        /// Bearing name.
+        bearing: String,
+        /// Speeds measured.
+        speeds: usize,
+    },
 }
+
+/// The fewest measured speeds a pedestal is fitted from at all: one speed's
+/// four real equations cannot determine the model's five parameters (from
+/// two speeds up to [`DEFAULT_MIN_SPEEDS`] the fit is made and marked
+/// UNTRUSTED with a `TooFewSpeeds` warning).
+pub const MIN_SPEEDS: usize = 2;
 
 /// The per-speed data of one pedestal without their noise
 /// ([`Observation::without_noise`]): the measured phasors and the complex
@@ -512,6 +526,12 @@ pub fn fit_run_with(
             .bearing(bearing)
             .ok_or(IdentifyError::NoMeasurements)?;
         let rows: Vec<&Measurement> = index.iter().map(|&i| &run.measurements[i]).collect();
+        if rows.len() < MIN_SPEEDS {
+            return Err(IdentifyError::TooFewSpeeds {
+                bearing: bearing.to_string(),
+                speeds: rows.len(),
+            });
+        }
         let mut noise = noise.clone();
         let obs = observations(&rows, schedule, &noise).map_err(|source| {
             IdentifyError::BearingRange {

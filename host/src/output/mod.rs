@@ -446,6 +446,13 @@ fn resolve(out: &Path) -> Result<PathBuf, OutputError> {
             .map_err(io("cannot inspect", &parent))?
             .join(name)
     } else {
+        // A new --out whose parent directories are missing (a/b/c/run):
+        // created as `mkdir -p` would, as for the odd paths above.
+        if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+            if parent.symlink_metadata().is_err() {
+                std::fs::create_dir_all(parent).map_err(io("cannot create", parent))?;
+            }
+        }
         out.to_path_buf()
     };
     Ok(resolved)

@@ -97,7 +97,7 @@ pub struct Args {
     /// Mean pedestal damping ratio [-] of Table 2's heavy-damping case: the
     /// damped machine's c_y, c_z are scaled by one factor (2 significant
     /// digits) to reach it.
-    #[arg(long, default_value_t = 0.10)]
+    #[arg(long, default_value_t = 0.10, allow_negative_numbers = true, value_parser = crate::args::probability)]
     pub heavy_damping_ratio: f64,
 }
 

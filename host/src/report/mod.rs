@@ -40,7 +40,7 @@ pub struct Args {
     pub diagnose: bool,
     /// Identify (and diagnose) only the speeds from LO to HI Hz (ends
     /// included), as `plinth identify --speeds`.
-    #[arg(long, value_name = "LO:HI", value_parser = crate::args::speed_band)]
+    #[arg(long, allow_negative_numbers = true, value_name = "LO:HI", value_parser = crate::args::speed_band)]
     pub speeds: Option<crate::args::SpeedBand>,
     /// Pedestals on a base whose motion was not measured, as `plinth
     /// identify --unmeasured-base` (e.g. `left,right`).

@@ -355,7 +355,7 @@ pub enum RunDirError {
         bearings_file: PathBuf,
     },
     /// A measurement speed lies outside the speeds `bearings.csv` lists for its bearing.
-    #[error("{}:{line}:{column}: speed {speed_hz} Hz is outside the range {min_hz}..={max_hz} Hz that {} lists for bearing `{bearing}` (coefficients are not extrapolated)", file.display(), bearings_file.display())]
+    #[error("{}:{line}:{column}: speed {} Hz is outside the range {}..={} Hz that {} lists for bearing `{bearing}` (coefficients are not extrapolated)", file.display(), digits::format_number(*speed_hz), digits::format_number(*min_hz), digits::format_number(*max_hz), bearings_file.display())]
     SpeedOutOfRange {
         /// `measurements.csv`.
         file: PathBuf,

@@ -33,6 +33,7 @@ impl RunDir {
 
         let m_rows = read_table(&m_path, &MEASUREMENT_COLUMNS, Some(&NOISE_COLUMNS), true)?;
         let b_rows = read_table(&b_path, &BEARING_COLUMNS, None, false)?;
+        check_noise_not_all_zero(&m_rows, &m_path)?;
 
         let bearings: Vec<BearingRow> = b_rows
             .iter()
@@ -115,11 +116,74 @@ impl RunDir {
                 })
             }
         };
+        if let Some(t) = &truth {
+            check_truth_bearings(&run, t, &t_path)?;
+        }
         for note in super::schedule::unlisted_speeds(&run) {
             eprintln!("warning: {}: {note}", b_path.display());
         }
         Ok(RunDir { truth, ..run })
     }
+}
+
+/// A noise column that is 0 on every row says the phasors are exact: an
+/// instrument that wrote 0 for "not measured". Weighting by it would make
+/// every misfit infinitely significant, so it is refused (single zeros are
+/// allowed: a channel may be noise-free at one speed).
+fn check_noise_not_all_zero(rows: &[TableRow], path: &Path) -> Result<(), RunDirError> {
+    let Some(first) = rows.first() else {
+        return Ok(());
+    };
+    for (c, name) in NOISE_COLUMNS.iter().enumerate() {
+        let all_zero = rows
+            .iter()
+            .all(|r| r.noise_sd.is_some_and(|sd| sd[c] == 0.0));
+        if all_zero {
+            return Err(RunDirError::Csv {
+                file: path.to_path_buf(),
+                line: first.line,
+                message: format!(
+                    "column `{name}` is 0 on every row: a standard deviation of 0 says the phasors are exact (\"not measured\" written as 0?); write the measured scatter, or leave out the four `*_sd` columns and Plinth estimates the noise"
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// `truth.json` describes the run's own pedestals: a pedestal whose bearing
+/// has no rows in `measurements.csv` (another run's truth, a renamed
+/// bearing, a different case) is an error at the line that names it.
+fn check_truth_bearings(run: &RunDir, truth: &Truth, path: &Path) -> Result<(), RunDirError> {
+    let measured = run.measured_bearings();
+    let Some(p) = truth
+        .pedestals
+        .iter()
+        .find(|p| !measured.contains(&p.bearing.as_str()))
+    else {
+        return Ok(());
+    };
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let needle = format!("\"{}\"", p.bearing);
+    let (line, column) = text
+        .lines()
+        .enumerate()
+        .find_map(|(i, l)| l.find(&needle).map(|c| (i + 1, c + 1)))
+        .unwrap_or((1, 1));
+    Err(RunDirError::Truth {
+        file: path.to_path_buf(),
+        line,
+        column,
+        message: format!(
+            "pedestal `{}` is not a bearing of measurements.csv (it has {}): the truth of another run?",
+            p.bearing,
+            measured
+                .iter()
+                .map(|b| format!("`{b}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    })
 }
 
 /// One parsed data row of either CSV file: speed, bearing and the eight numbers

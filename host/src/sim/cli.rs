@@ -1,7 +1,7 @@
 //! `plinth simulate`, `plinth signals`, `plinth predict`.
 
 use super::budget;
-use super::inject::{EffectRequest, EffectSet};
+use super::inject::EffectSet;
 use super::machine::Machine;
 use super::response::{Noise, UnbalanceSolver};
 use crate::output::OutputDir;
@@ -33,10 +33,15 @@ pub struct SimulateArgs {
     #[arg(long, requires = "digits")]
     pub truncate: bool,
     /// Complex Gaussian noise, RMS relative to each channel's RMS over speed.
-    #[arg(long, value_parser = crate::args::non_negative)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::non_negative)]
     pub noise: Option<f64>,
     /// Seed of the noise (needs --noise).
-    #[arg(long, default_value_t = 1, requires = "noise")]
+    #[arg(
+        long,
+        allow_negative_numbers = true,
+        default_value_t = 1,
+        requires = "noise"
+    )]
     pub seed: u64,
     /// Effect to inject: NAME[:BEARING][=SIZE] (repeatable; see `plinth::sim::inject`).
     #[arg(long = "effect")]
@@ -80,6 +85,12 @@ pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
         if !(v.is_finite() && v >= 0.0) {
             bail!("--speeds: {v} must be finite and >= 0 Hz");
         }
+        if v > crate::args::MAX_SPEED_HZ {
+            bail!(
+                "--speeds: {v:e} Hz is above {:e} Hz (6 million rpm): a typo or rpm where Hz is meant?",
+                crate::args::MAX_SPEED_HZ
+            );
+        }
         Ok(v)
     };
     let parts: Vec<&str> = text.split(':').collect();
@@ -112,11 +123,7 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
     let speeds = parse_speeds(&args.speeds)?;
     let out = OutputDir::create(&args.out, args.force)?;
-    let mut effects = EffectSet::none();
-    for e in &args.effects {
-        let req: EffectRequest = e.parse().map_err(anyhow::Error::msg)?;
-        effects.requests.push(req);
-    }
+    let effects = EffectSet::from_options(&args.effects).map_err(anyhow::Error::msg)?;
     if let Some(d) = args.digits {
         if d == 0 {
             bail!("--digits must be at least 1");

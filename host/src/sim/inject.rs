@@ -50,6 +50,16 @@ impl EffectSet {
         Self::default()
     }
 
+    /// The effects of the command line's `--effect NAME[:BEARING][=SIZE]`
+    /// options, in order; an error names the option and its value.
+    pub fn from_options(texts: &[String]) -> Result<Self, String> {
+        let requests = texts
+            .iter()
+            .map(|t| t.parse().map_err(|m| format!("--effect {t:?}: {m}")))
+            .collect::<Result<Vec<EffectRequest>, String>>()?;
+        Ok(Self { requests })
+    }
+
     /// Adds a request (builder style).
     pub fn with(mut self, kind: EffectKind, bearing: Option<&str>, size: Option<f64>) -> Self {
         self.requests.push(EffectRequest {

@@ -34,7 +34,7 @@ pub enum OilFilmError {
     #[error("oil-film bearing needs a positive speed (got {0} Hz)")]
     Speed(f64),
     /// The eccentricity is so close to 1 that the linearisation is meaningless.
-    #[error("eccentricity ratio {eccentricity:.6} at {speed_hz} Hz: the film is too thin for short-bearing theory (ε must stay below 0.98)")]
+    #[error("eccentricity ratio {eccentricity:.6} at {} Hz: the film is too thin for short-bearing theory (ε must stay below 0.98): start the speeds (--speeds, --rundown) higher", crate::rundir::digits::format_number(*speed_hz))]
     TooEccentric {
         /// Rotor speed [Hz].
         speed_hz: f64,

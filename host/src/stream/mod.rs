@@ -75,7 +75,7 @@ pub struct Args {
     #[arg(long, required_unless_present = "offline")]
     pub port: Option<String>,
     /// Line speed [bit/s] (pseudo-terminals ignore it).
-    #[arg(long, default_value_t = 115_200)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 115_200)]
     pub baud: u32,
     /// Stream configuration (TOML: channel map, averaging, RLS, bearings.csv;
     /// documented in `plinth::stream::config`).
@@ -94,19 +94,19 @@ pub struct Args {
     #[arg(long)]
     pub replay: Option<PathBuf>,
     /// Sample blocks in flight without an acknowledgement.
-    #[arg(long, default_value_t = 4, value_parser = crate::args::count)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 4, value_parser = crate::args::count)]
     pub window: usize,
     /// Without --replay: how long to stream [s] (default: until the port is
     /// gone for good); also bounds every wait for a lost link.
-    #[arg(long, value_parser = crate::args::seconds, conflicts_with = "replay")]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::seconds, conflicts_with = "replay")]
     pub duration: Option<Duration>,
     /// Give up reopening a lost port, or waiting for a box that stopped
     /// answering, after this long [s].
-    #[arg(long, default_value = "60", value_parser = crate::args::seconds)]
+    #[arg(long, allow_negative_numbers = true, default_value = "60", value_parser = crate::args::seconds)]
     pub reconnect_timeout: Duration,
     /// How long the box may take to answer the handshake [s]; a port where
     /// nothing ever answers is given up after this long.
-    #[arg(long, default_value = "15", value_parser = crate::args::seconds)]
+    #[arg(long, allow_negative_numbers = true, default_value = "15", value_parser = crate::args::seconds)]
     pub handshake_timeout: Duration,
     /// Do not open the port: rebuild the run directory from the raw log.
     #[arg(long, conflicts_with_all = ["port", "replay", "duration"])]

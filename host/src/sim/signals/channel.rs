@@ -88,6 +88,10 @@ pub struct Channel {
     /// Samples clipped at the ADC's full scale (written by the synthesiser).
     #[serde(default)]
     pub clipped_samples: u64,
+    /// Largest |sensitivity × reading| over the run [V]: the 1X signal's
+    /// peak before noise and offset (written by the synthesiser).
+    #[serde(default)]
+    pub signal_peak_v: f64,
     /// Largest interpolation error of this channel's displacement phasor
     /// over the run [m] (measured at grid midpoints).
     #[serde(default)]

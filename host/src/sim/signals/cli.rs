@@ -14,38 +14,38 @@ pub struct SignalsArgs {
     #[arg(long, default_value = "200:5:5")]
     pub rundown: String,
     /// Sample rate per channel [Hz].
-    #[arg(long, default_value = "51200", value_parser = crate::args::positive)]
+    #[arg(long, allow_negative_numbers = true, default_value = "51200", value_parser = crate::args::positive)]
     pub rate: f64,
     /// Proximity probe sensitivity [V/mm].
-    #[arg(long, default_value = "7.87", value_parser = crate::args::positive)]
+    #[arg(long, allow_negative_numbers = true, default_value = "7.87", value_parser = crate::args::positive)]
     pub probe_v_per_mm: f64,
     /// Proximity probe gap voltage [V].
     #[arg(long, default_value = "-9", allow_hyphen_values = true, value_parser = crate::args::finite)]
     pub probe_gap: f64,
     /// Probe channel noise [mV RMS].
-    #[arg(long, default_value = "1", value_parser = crate::args::non_negative)]
+    #[arg(long, allow_negative_numbers = true, default_value = "1", value_parser = crate::args::non_negative)]
     pub probe_noise_mv: f64,
     /// Transducer on the pedestals: displacement, velocity or acceleration.
     #[arg(long, value_parser = parse_sensor_kind, default_value = "acceleration")]
     pub seismic: SensorKind,
     /// Seismic sensitivity [V/(m/s²), V/(m/s) or V/m]; default by kind:
     /// 100 mV/g, 20 mV/(mm/s), 7.87 V/mm.
-    #[arg(long, value_parser = crate::args::positive)]
+    #[arg(long, allow_negative_numbers = true, value_parser = crate::args::positive)]
     pub seismic_sensitivity: Option<f64>,
     /// Seismic channel noise [mV RMS].
-    #[arg(long, default_value = "1", value_parser = crate::args::non_negative)]
+    #[arg(long, allow_negative_numbers = true, default_value = "1", value_parser = crate::args::non_negative)]
     pub seismic_noise_mv: f64,
     /// ADC resolution [bits].
-    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=16))]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 16, value_parser = clap::value_parser!(u32).range(2..=16))]
     pub adc_bits: u32,
     /// ADC full scale [±V].
-    #[arg(long, default_value = "10", value_parser = crate::args::positive)]
+    #[arg(long, allow_negative_numbers = true, default_value = "10", value_parser = crate::args::positive)]
     pub adc_range: f64,
     /// Speed step of the precomputed response [Hz].
-    #[arg(long, default_value = "0.01", value_parser = crate::args::positive)]
+    #[arg(long, allow_negative_numbers = true, default_value = "0.01", value_parser = crate::args::positive)]
     pub grid_step: f64,
     /// Noise seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 1)]
     pub seed: u64,
     /// Effect to inject: NAME[:BEARING][=SIZE] (repeatable).
     #[arg(long = "effect")]
@@ -56,11 +56,7 @@ pub struct SignalsArgs {
 /// staged in; `args.out`, the one named in messages, once committed).
 pub fn signals(args: &SignalsArgs, staging: &Path) -> anyhow::Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
-    let mut effects = EffectSet::none();
-    for e in &args.effects {
-        let req: EffectRequest = e.parse().map_err(anyhow::Error::msg)?;
-        effects.requests.push(req);
-    }
+    let effects = EffectSet::from_options(&args.effects).map_err(anyhow::Error::msg)?;
     let opts = SignalOptions {
         rundown: RunDown::parse(&args.rundown)?,
         sample_rate_hz: args.rate,
@@ -94,10 +90,28 @@ pub fn signals(args: &SignalsArgs, staging: &Path) -> anyhow::Result<()> {
         "response interpolation: {} Hz grid, largest error {:.2e} of channel peak",
         h.interpolation.grid_step_hz, h.interpolation.max_rel_error
     );
+    // A 1X peak below the noise of the mean of every sample of the channel
+    // (its noise and quantisation over √samples) cannot be resolved by any
+    // averaging: the channel holds noise only.
+    for c in &h.channels {
+        let noise = c.noise_v_rms.hypot(h.adc.volts_per_code / 12f64.sqrt());
+        let floor = noise / (h.samples.max(1) as f64).sqrt();
+        if c.signal_peak_v < floor {
+            eprintln!(
+                "warning: {}: its 1X signal peaks at {} V, below what averaging all its samples resolves ({} V: noise and ADC step over √{} samples): the channel records noise only (check the sensitivity, --adc-range and --adc-bits)",
+                c.name,
+                crate::rundir::digits::format_number(c.signal_peak_v),
+                crate::rundir::digits::format_number(floor),
+                h.samples
+            );
+        }
+    }
     for c in h.channels.iter().filter(|c| c.clipped_samples > 0) {
         eprintln!(
-            "warning: {}: {} samples clipped at ±{} V",
-            c.name, c.clipped_samples, h.adc.full_scale_v
+            "warning: {}: {} samples clipped at ±{} V (--adc-range)",
+            c.name,
+            c.clipped_samples,
+            crate::rundir::digits::format_number(h.adc.full_scale_v)
         );
     }
     Ok(())

@@ -95,7 +95,7 @@ pub use rundown::*;
 pub use spline::*;
 pub use synthesis::*;
 
-use super::inject::{EffectRequest, EffectSet};
+use super::inject::EffectSet;
 use super::machine::Machine;
 use super::response::SimError;
 use crate::rundir::{Measurement, RunDir, RunDirError};

@@ -47,6 +47,13 @@ impl RunDown {
                 self.start_hz, self.end_hz
             ));
         }
+        let most = crate::args::MAX_SPEED_HZ;
+        if self.start_hz.max(self.end_hz) > most {
+            return Err(format!(
+                "{:e} Hz is above {most:e} Hz (6 million rpm): a typo or rpm where Hz is meant?",
+                self.start_hz.max(self.end_hz)
+            ));
+        }
         if self.start_hz == self.end_hz {
             return Err("START and END must differ".into());
         }

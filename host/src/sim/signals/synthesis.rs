@@ -267,6 +267,7 @@ pub fn synthesise(
                     opts.seismic_noise_v
                 },
                 clipped_samples: 0,
+                signal_peak_v: 0.0,
                 interpolation_error_m: err,
                 interpolation_error_rel: rel,
             });
@@ -328,6 +329,7 @@ pub fn synthesise(
             } else {
                 0.0
             };
+            c.signal_peak_v = c.signal_peak_v.max((c.sensitivity * value).abs());
             let volts = c.offset_v + c.sensitivity * value + noise;
             let (code, clipped) = opts.adc.quantise(volts);
             if clipped {
