@@ -191,10 +191,11 @@ pub fn base_variance(
             grads.push(x.iter().zip(&x0).map(|(a, b)| (a - b) / h).collect());
         }
         for o in 0..x0.len() {
+            let g: Vec<f64> = grads.iter().map(|gr| gr[o]).collect();
             let mut v = 0.0;
-            for a in 0..slots.len() {
-                for b in 0..slots.len() {
-                    v += grads[a][o] * cov[(a, b)] * grads[b][o];
+            for (a, ga) in g.iter().enumerate() {
+                for (b, gb) in g.iter().enumerate() {
+                    v += ga * cov[(a, b)] * gb;
                 }
             }
             total += v.max(0.0);

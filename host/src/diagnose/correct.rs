@@ -136,8 +136,8 @@ pub fn corrected_on(prep: &Prepared, state: &State, base: Option<&FoundationFit>
             };
             match moved {
                 Some((dped, df)) => {
-                    for d in 0..2 {
-                        p.ped[d] += dped[d];
+                    for (x, dx) in p.ped.iter_mut().zip(dped) {
+                        *x += dx;
                     }
                     add_force(p, df);
                 }
@@ -151,6 +151,9 @@ pub fn corrected_on(prep: &Prepared, state: &State, base: Option<&FoundationFit>
     }
     out
 }
+
+/// A (y, z) pair of phasors.
+type Pair = [Complex<f64>; 2];
 
 /// Adds the force `df` [N] to the bearing force F = K*·rel of `p`,
 /// carried into rel through K*⁻¹ (unchanged when K* is singular).
@@ -182,7 +185,7 @@ fn cross_coupling_on_base(
     i: usize,
     fit: &BaseFitResult,
     k_yz: f64,
-) -> Option<([Complex<f64>; 2], [Complex<f64>; 2])> {
+) -> Option<(Pair, Pair)> {
     let theta = fit.pedestals.get(i)?;
     let p = prep.points.get(group[i])?.get(j)?.as_ref()?;
     let w = p.omega();
