@@ -14,7 +14,8 @@
 #
 #   BENCH_RUNS=25 BENCH_DETECT_RUNS=3 scripts/bench-diagnose.sh [clean|detect]
 #   (seeds per clean case, default 25; per detection case, default 3: a run
-#   that chooses a base costs minutes under load)
+#   that chooses a base costs minutes under load); BENCH_CASES=TEXT runs
+#   only the detection cases whose label holds TEXT (e.g. "skid")
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$PWD/target}"

@@ -5,8 +5,11 @@
 //! corrections explain.
 
 use super::data::Prepared;
+use super::foundation::FoundationFit;
 use super::model::{Model, Nonlinear, Term};
 use super::state::State;
+use crate::estimate::base::BaseFitResult;
+use crate::estimate::Observation;
 use num_complex::Complex;
 
 /// Whether every effect of `model` beyond the pedestal's own parameters is
@@ -24,8 +27,17 @@ pub(super) fn corrections_only(model: &Model) -> bool {
 }
 
 /// The measurements as `state` corrects them: runout removed from `rel`,
-/// delays undone, a bearing table's clearance correction added to K*.
+/// delays undone, a bearing table's clearance correction added to K*,
+/// pedestal cross-coupling taken off the bearing force (on rigid ground).
 pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
+    corrected_on(prep, state, None)
+}
+
+/// The measurements as `state` corrects them with the pedestals standing
+/// on the bases of `base` (held): as [`corrected`], but the cross-coupling
+/// of a pedestal on a base acts on its motion relative to the base
+/// ([`cross_coupling_on_base`]).
+pub fn corrected_on(prep: &Prepared, state: &State, base: Option<&FoundationFit>) -> Prepared {
     let mut out = prep.clone();
     let value = |t: Term| {
         state
@@ -87,19 +99,118 @@ pub fn corrected(prep: &Prepared, state: &State) -> Prepared {
             for (rel, r) in p.rel.iter_mut().zip(runout) {
                 *rel -= r;
             }
-            // Pedestal cross-coupling k_yz as a force correction:
-            // F' = F − k_yz·(X_z, X_y), carried into rel through K*⁻¹.
-            let k_yz = value(Term::CrossStiffness { bearing: b });
-            if k_yz != 0.0 {
-                let k = p.kstar;
-                let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
-                if det.norm() > 0.0 {
-                    let df = [p.ped[1] * k_yz, p.ped[0] * k_yz];
-                    p.rel[0] -= (k[1][1] * df[0] - k[0][1] * df[1]) / det;
-                    p.rel[1] -= (k[0][0] * df[1] - k[1][0] * df[0]) / det;
+        }
+    }
+    // Pedestal cross-coupling last: on a base it needs the base's motion,
+    // i.e. the total force of the base's pedestals on the otherwise
+    // corrected data (which the correction leaves unchanged).
+    let k_yz: Vec<f64> = (0..out.points.len())
+        .map(|b| value(Term::CrossStiffness { bearing: b }))
+        .collect();
+    if k_yz.iter().all(|&k| k == 0.0) {
+        return out;
+    }
+    let on_base: Vec<Option<(Vec<usize>, usize, BaseFitResult)>> = (0..out.points.len())
+        .map(|b| {
+            let f = base?;
+            f.grouping
+                .groups
+                .iter()
+                .zip(&f.grouping.fits)
+                .find_map(|(g, fit)| {
+                    let i = g.iter().position(|&x| x == b)?;
+                    Some((g.clone(), i, fit.clone()))
+                })
+        })
+        .collect();
+    for (b, &k) in k_yz.iter().enumerate() {
+        if k == 0.0 {
+            continue;
+        }
+        for j in 0..out.speeds_hz.len() {
+            let moved = on_base[b]
+                .as_ref()
+                .and_then(|(g, i, fit)| cross_coupling_on_base(&out, j, g, *i, fit, k));
+            let Some(p) = out.points[b][j].as_mut() else {
+                continue;
+            };
+            match moved {
+                Some((dped, df)) => {
+                    for (x, dx) in p.ped.iter_mut().zip(dped) {
+                        *x += dx;
+                    }
+                    add_force(p, df);
+                }
+                None => {
+                    // Rigid ground: F' = F − k_yz·(X_z, X_y).
+                    let df = [-p.ped[1] * k, -p.ped[0] * k];
+                    add_force(p, df);
                 }
             }
         }
     }
     out
+}
+
+/// A (y, z) pair of phasors.
+type Pair = [Complex<f64>; 2];
+
+/// Adds the force `df` [N] to the bearing force F = K*·rel of `p`,
+/// carried into rel through K*⁻¹ (unchanged when K* is singular).
+fn add_force(p: &mut Observation, df: [Complex<f64>; 2]) {
+    let k = p.kstar;
+    let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+    if det.norm() > 0.0 {
+        p.rel[0] += (k[1][1] * df[0] - k[0][1] * df[1]) / det;
+        p.rel[1] += (k[0][0] * df[1] - k[1][0] * df[0]) / det;
+    }
+}
+
+/// The cross-coupling correction of pedestal `i` of base group `group`
+/// (its fit `fit`, values held) at speed index `j`, with cross-stiffness
+/// `k_yz` [N/m] acting, as the simulator's pedestal does, on the motion
+/// relative to the base: −Ω²m·X + d·(X − X_B) + K_c·(X − X_B) = F,
+/// K_c = [[0, k_yz], [k_yz, 0]], d = k + iΩc per direction. The base model
+/// (`crate::estimate::base`) has no K_c, and the base moves with the total
+/// force T = Σ (F_j + Ω²m_j·X_j) of its pedestals whatever their links, so
+/// the correction must leave T unchanged: the pedestal motion moves by
+/// δX = d⁻¹·K_c·(X − X_B) and the force by −Ω²m·δX. Then the corrected
+/// data obey the base model exactly, and T and X_B = G·T are unchanged.
+/// Returns (δX [m], δF [N]); `None` when a member of the group is not
+/// measured at that speed or d is zero.
+fn cross_coupling_on_base(
+    prep: &Prepared,
+    j: usize,
+    group: &[usize],
+    i: usize,
+    fit: &BaseFitResult,
+    k_yz: f64,
+) -> Option<(Pair, Pair)> {
+    let theta = fit.pedestals.get(i)?;
+    let p = prep.points.get(group[i])?.get(j)?.as_ref()?;
+    let w = p.omega();
+    let w2 = w * w;
+    let mut x_b = [Complex::new(0.0, 0.0); 2];
+    for (q, &b) in group.iter().enumerate() {
+        let o = prep.points.get(b)?.get(j)?.as_ref()?;
+        let m = fit.pedestals.get(q)?[2];
+        let f = o.force();
+        for d in 0..2 {
+            x_b[d] += f[d] + o.ped[d] * (w2 * m);
+        }
+    }
+    for (d, x) in x_b.iter_mut().enumerate() {
+        *x *= fit.base.receptance(d, w);
+    }
+    let mut dped = [Complex::new(0.0, 0.0); 2];
+    for d in 0..2 {
+        let spring = Complex::new(theta[d], w * theta[3 + d]);
+        if spring.norm() == 0.0 {
+            return None;
+        }
+        let other = 1 - d;
+        dped[d] = (p.ped[other] - x_b[other]) * k_yz / spring;
+    }
+    let df = [dped[0] * (-w2 * theta[2]), dped[1] * (-w2 * theta[2])];
+    Some((dped, df))
 }

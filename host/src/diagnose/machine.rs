@@ -44,8 +44,17 @@ pub fn resimulate(
     };
     let mut effects = EffectSet::none();
     for (b, name) in prep.bearings.iter().enumerate() {
-        // A pedestal on an identified base is set with its base (`put_bases`).
-        if foundation.is_some_and(|f| f.pedestal(b).is_some()) {
+        // A pedestal on an identified base is set with its base (`put_bases`);
+        // its cross-coupling (relative to the base, as the simulator's
+        // pedestal has it) in the simulator's parametrisation on that fit.
+        if let Some((theta, _)) = foundation.and_then(|f| f.pedestal(b)) {
+            if let Some(k_yz) = value(Term::CrossStiffness { bearing: b }) {
+                effects = effects.with(
+                    EffectKind::PedestalCrossCoupling,
+                    Some(name),
+                    Some(k_yz / (theta[0] * theta[1]).abs().sqrt()),
+                );
+            }
             continue;
         }
         let k_y = value(Term::Stiffness { bearing: b, dir: 0 }).unwrap_or(0.0);
@@ -278,7 +287,8 @@ pub fn machine_gap(prep: &Prepared, predicted: &Readings) -> f64 {
 /// [-]. Two parts, over the same numbers as [`machine_gap`]: the
 /// measurement noise, Σ σ² (σ of each real number,
 /// `super::data::Point::sigma`), and the identified parameters' own
-/// uncertainty carried through the re-simulation ([`parameter_variance`]);
+/// uncertainty carried through the re-simulation ([`parameter_variance`],
+/// and a chosen base's, [`super::base_floor::base_variance`]);
 /// the re-simulation is open-loop (unbalance to response), so near the
 /// machine's resonances a parameter error of a fraction of its ± moves the
 /// response more than the noise does. floor = sqrt((Σ σ² + Σ Var X̂) / Σ |X|²).
@@ -297,12 +307,13 @@ pub fn machine_floor(
         }
     }
     var += parameter_variance(machine, prep, state, foundation, readings)?;
+    var += super::base_floor::base_variance(machine, prep, state, foundation, readings)?;
     Ok(if den > 0.0 { (var / den).sqrt() } else { 0.0 })
 }
 
 /// The re-simulated readings as real numbers (rel y, z then ped y, z, real
 /// and imaginary parts) in a fixed order; unmeasured points give none.
-fn flat(readings: &Readings) -> Vec<f64> {
+pub(super) fn flat(readings: &Readings) -> Vec<f64> {
     let mut out = Vec::new();
     for (rel, ped) in readings.iter().flatten().flatten() {
         for z in rel.iter().chain(ped) {
@@ -317,7 +328,7 @@ fn flat(readings: &Readings) -> Vec<f64> {
 /// parameter covariance (delta method: each reading's gradient by a
 /// forward difference of 1 % of the parameter's ±, through
 /// [`super::criterion::Inference::std_err_of`]). A chosen base's own
-/// parameters are not included (their covariance is not carried).
+/// parameters are [`super::base_floor::base_variance`]'s.
 pub fn parameter_variance(
     machine: &Machine,
     prep: &Prepared,

@@ -28,12 +28,14 @@
 //! - [`trust`]: the verdict, and whether the numbers can be trusted;
 //! - [`report`]: the diagnosis as JSON and text;
 //! - [`machine`]: the machine-level re-simulation (`--machine`);
+//! - [`base_floor`]: a chosen base's uncertainty in its noise floor;
 //! - [`plots`]: measured-versus-predicted figures;
 //! - [`cli`]: the `plinth diagnose` command.
 
 pub use workflow::{diagnose, Options, Outcome};
 
 pub mod backward;
+pub mod base_floor;
 pub mod bases;
 pub mod bearing_table;
 pub mod candidates;

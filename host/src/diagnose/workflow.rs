@@ -108,7 +108,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     let pedestals_before = pedestals(&prep, &state)?;
     let mut states = vec![state.clone()];
     let mut after_steps = Vec::new();
-    let mut steps = Vec::new();
+    let mut steps: Vec<Step> = Vec::new();
     let mut best_rejected = None;
     let try_bases = opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0;
     // The shared base as tried on the base model (reported whether chosen
@@ -131,9 +131,35 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         // With a base chosen the search goes on: the corrections among the
         // candidates, each tested by the drop of the refitted base's χ²,
         // then the backward check on the base.
-        if let Some(base) = &on_base {
-            let (tried, best) = correction_on_base(&prep, &state, base, &outcome, opts);
+        if let Some(current) = on_base.clone() {
+            let (tried, best, null) = correction_on_base(&prep, &state, &current, &outcome, opts);
+            // The current model settled once more is the reference (and
+            // where the search goes on from).
+            let settled = null.is_some();
+            let base = match null {
+                Some((s, on)) => {
+                    state = s;
+                    on_base = Some(on.clone());
+                    on
+                }
+                None => current,
+            };
             let Some((i, next, on, evidence)) = best else {
+                // The last step's model is the one settled further.
+                if settled {
+                    if let (Some(s), Some(a)) = (steps.last_mut(), after_steps.last_mut()) {
+                        s.gap_after = base.fit.gap.gap;
+                        s.gap_floor_after = base.fit.gap.floor;
+                        *a = (state.clone(), Some(base.fit.clone()));
+                    }
+                    // (`states` holds no entry for the base's own step.)
+                    let correction_last = steps.last().is_some_and(|s| s.foundation.is_none());
+                    if correction_last && states.len() > 1 {
+                        if let Some(last) = states.last_mut() {
+                            *last = state.clone();
+                        }
+                    }
+                }
                 best_rejected = outcome
                     .ranked
                     .iter()
