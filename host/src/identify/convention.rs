@@ -476,9 +476,15 @@ pub fn diagnose(
         }
         for i in wanted {
             if candidates[i].fit.is_none() {
-                let fits = super::fit_run_with(&candidates[i].fixed, &candidates[i].noise, options)
-                    .ok()
-                    .map(|id| id.pedestals);
+                // Readings need the estimates and their plausibility only.
+                let fits = super::fit_run_checked(
+                    &candidates[i].fixed,
+                    &candidates[i].noise,
+                    options,
+                    super::estimator::Checks::Estimate,
+                )
+                .ok()
+                .map(|id| id.pedestals);
                 let k = &candidates[i];
                 let readings = fits
                     .as_deref()
