@@ -431,36 +431,39 @@ pub fn diagnose(
     let pedestals = &identification.pedestals;
     // The reading of `fits` for each pedestal (same order), each misfit
     // computed once and kept: the refit loop asks for them again and again.
-    let readings_of_fits =
-        |k: &Candidate, fits: &[PedestalFit]| -> Vec<Option<(Reading, PedestalFit)>> {
-            pedestals
-                .iter()
-                .map(|p| {
-                    let q = fits.iter().find(|q| q.bearing == p.bearing)?;
-                    let r = reading(&k.rows, &k.sigma, q, Some(k.convention))?;
-                    Some((r, q.clone()))
-                })
-                .collect()
-        };
+    let readings_of_fits = |k: &Candidate,
+                            rows: &[rows::BearingRows],
+                            fits: &[PedestalFit]|
+     -> Vec<Option<(Reading, PedestalFit)>> {
+        pedestals
+            .iter()
+            .map(|p| {
+                let q = fits.iter().find(|q| q.bearing == p.bearing)?;
+                let r = reading(rows, &k.sigma, q, Some(k.convention))?;
+                Some((r, q.clone()))
+            })
+            .collect()
+    };
+    // Each correction's rows are made when they are read, not kept: eight
+    // copies of a long run's observations cost more to hold than to make.
+    let rows_of = |c: Convention, fixed: &mut Option<RunDir>| {
+        rows::corrected(c, run, &found_rows, &schedules, fixed)
+    };
     // Every correction with its OLS screen.
     let mut candidates: Vec<Candidate> = Vec::new();
     for c in Convention::ALL {
-        if !c.changes(run) {
+        // The run with the mistake undone, made only where a reading needs
+        // more than its rows.
+        let mut fixed: Option<RunDir> = None;
+        let changes = if c == Convention::SpeedInRpm {
+            *fixed.insert(c.correct(run)) != *run
+        } else {
+            c.changes(run)
+        };
+        if !changes {
             continue; // the mistake changes nothing in these data
         }
-        // The run with the mistake undone, made only where a reading needs
-        // more than its rows (`rows`).
-        let mut fixed: Option<RunDir> = None;
-        let rows = match c {
-            Convention::SpeedInRpm => {
-                let f = fixed.insert(c.correct(run));
-                rows::of_run(f, &f.bearing_schedules())
-            }
-            Convention::BearingTransposed | Convention::CrossCouplingSign => {
-                rows::with_schedules(&found_rows, &rows::corrected_schedules(c, &schedules))
-            }
-            _ => rows::with_phasors_fixed(c, &found_rows),
-        };
+        let rows = rows_of(c, &mut fixed);
         let Some(screen) = screen::screen(&rows, options, pedestals) else {
             continue;
         };
@@ -478,12 +481,11 @@ pub fn diagnose(
             readings: Vec::new(),
             bounds: Vec::new(),
             screen,
-            rows,
             fixed,
             noise,
             sigma,
         };
-        let screened = readings_of_fits(&k, &k.screen);
+        let screened = readings_of_fits(&k, &rows, &k.screen);
         if ols {
             // With OLS the screen is the fit.
             k.fit = Some(Some(k.screen.clone()));
@@ -551,10 +553,11 @@ pub fn diagnose(
                 )
                 .ok()
                 .map(|id| id.pedestals);
+                let rows = rows_of(c, &mut k.fixed);
                 let k = &candidates[i];
                 let readings = fits
                     .as_deref()
-                    .map_or_else(Vec::new, |f| readings_of_fits(k, f));
+                    .map_or_else(Vec::new, |f| readings_of_fits(k, &rows, f));
                 candidates[i].readings = readings;
                 candidates[i].fit = Some(fits);
             }
@@ -575,14 +578,14 @@ pub fn diagnose(
             let mut corrected_fit = q.clone();
             if ols {
                 // The named reading with the full OLS fit, not its screen.
-                if let Some(k) = candidates.iter().find(|k| k.convention == convention) {
-                    let exact = k
-                        .rows
+                if let Some(k) = candidates.iter_mut().find(|k| k.convention == convention) {
+                    let rows = rows_of(convention, &mut k.fixed);
+                    let exact = rows
                         .iter()
                         .find(|r| r.bearing == p.bearing)
-                        .and_then(|r| screen::exact(&r.in_range()?, options, &p.bearing));
+                        .and_then(|r| screen::exact(r.in_range()?, options, &p.bearing));
                     if let Some((r, q)) = exact
-                        .and_then(|q| Some((reading(&k.rows, &k.sigma, &q, Some(convention))?, q)))
+                        .and_then(|q| Some((reading(&rows, &k.sigma, &q, Some(convention))?, q)))
                     {
                         corrected = r;
                         corrected_fit = q;
@@ -608,8 +611,6 @@ type Schedules = std::collections::BTreeMap<String, crate::rundir::BearingSchedu
 /// One correction of a run under examination by [`diagnose`].
 struct Candidate {
     convention: Convention,
-    /// Every measured bearing's rows with the mistake undone.
-    rows: Vec<rows::BearingRows>,
     /// The run with the mistake undone, once a reading needed it (its
     /// noise re-estimated, its ML refit).
     fixed: Option<RunDir>,

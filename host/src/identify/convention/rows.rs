@@ -25,22 +25,24 @@ use plinth_shared::phasor::omega_from_hz;
 pub struct BearingRows {
     /// The bearing.
     pub bearing: String,
-    /// Indices of its rows in `run.measurements`, increasing.
+    /// Indices in `run.measurements` of its rows whose speed is inside the
+    /// bearing's table, increasing.
     pub index: Vec<usize>,
-    /// Row for row, the observation (variances 0), or `None` where the
-    /// speed is outside the bearing's table (or the bearing has none).
-    pub obs: Vec<Option<Observation>>,
+    /// Their observations (variances 0), row for row.
+    pub obs: Vec<Observation>,
+    /// Whether every row of the bearing is inside its table.
+    pub complete: bool,
 }
 
 impl BearingRows {
     /// Every observation, in the run's order, or `None` when a speed is
     /// outside the bearing's table (the OLS fit then cannot be made).
-    pub fn in_range(&self) -> Option<Vec<Observation>> {
-        self.obs.iter().copied().collect()
+    pub fn in_range(&self) -> Option<&[Observation]> {
+        self.complete.then_some(&self.obs)
     }
 
-    /// Each observation in the table's range with the noise sd row of
-    /// `sigma` ([`super::super::misfit::noise_floor`]; indexed as
+    /// Each observation with the noise sd row of `sigma`
+    /// ([`super::super::misfit::noise_floor`]; indexed as
     /// `run.measurements`) that belongs to it.
     pub fn with_sigma<'a>(
         &'a self,
@@ -49,7 +51,7 @@ impl BearingRows {
         self.index
             .iter()
             .zip(&self.obs)
-            .filter_map(move |(&i, o)| Some(((*o)?, sigma.get(i)?)))
+            .filter_map(move |(&i, o)| Some((*o, sigma.get(i)?)))
     }
 }
 
@@ -63,6 +65,7 @@ pub fn of_run(run: &RunDir, schedules: &Schedules) -> Vec<BearingRows> {
             bearing: b.to_string(),
             index: Vec::new(),
             obs: Vec::new(),
+            complete: true,
         })
         .collect();
     let mut last = 0;
@@ -77,18 +80,21 @@ pub fn of_run(run: &RunDir, schedules: &Schedules) -> Vec<BearingRows> {
         let Some(rows) = out.get_mut(last) else {
             continue;
         };
-        let obs = schedules
+        let coefficients = schedules
             .get(&rows.bearing)
-            .and_then(|s| s.at(m.speed_hz).ok())
-            .map(|c| Observation {
-                speed_hz: m.speed_hz,
-                rel: m.rel,
-                ped: m.ped,
-                kstar: complex_stiffness(&c, omega_from_hz(m.speed_hz)),
-                var: [0.0; 8],
-            });
+            .and_then(|s| s.at(m.speed_hz).ok());
+        let Some(c) = coefficients else {
+            rows.complete = false;
+            continue;
+        };
         rows.index.push(i);
-        rows.obs.push(obs);
+        rows.obs.push(Observation {
+            speed_hz: m.speed_hz,
+            rel: m.rel,
+            ped: m.ped,
+            kstar: complex_stiffness(&c, omega_from_hz(m.speed_hz)),
+            var: [0.0; 8],
+        });
     }
     out
 }
@@ -99,17 +105,18 @@ pub fn with_phasors_fixed(c: Convention, found: &[BearingRows]) -> Vec<BearingRo
     found
         .iter()
         .map(|r| BearingRows {
+            bearing: r.bearing.clone(),
+            index: r.index.clone(),
             obs: r
                 .obs
                 .iter()
-                .map(|o| {
-                    o.map(|mut o| {
-                        c.fix_phasors(o.speed_hz, &mut o.rel, &mut o.ped);
-                        o
-                    })
+                .map(|&o| {
+                    let mut o = o;
+                    c.fix_phasors(o.speed_hz, &mut o.rel, &mut o.ped);
+                    o
                 })
                 .collect(),
-            ..r.clone()
+            complete: r.complete,
         })
         .collect()
 }
@@ -121,23 +128,50 @@ pub fn with_schedules(found: &[BearingRows], schedules: &Schedules) -> Vec<Beari
         .iter()
         .map(|r| {
             let schedule = schedules.get(&r.bearing);
-            BearingRows {
-                obs: r
-                    .obs
-                    .iter()
-                    .map(|o| {
-                        let o = (*o)?;
-                        let c = schedule?.at(o.speed_hz).ok()?;
-                        Some(Observation {
+            let mut out = BearingRows {
+                bearing: r.bearing.clone(),
+                index: Vec::with_capacity(r.index.len()),
+                obs: Vec::with_capacity(r.obs.len()),
+                complete: r.complete,
+            };
+            for (&i, o) in r.index.iter().zip(&r.obs) {
+                match schedule.and_then(|s| s.at(o.speed_hz).ok()) {
+                    Some(c) => {
+                        out.index.push(i);
+                        out.obs.push(Observation {
                             kstar: complex_stiffness(&c, omega_from_hz(o.speed_hz)),
-                            ..o
-                        })
-                    })
-                    .collect(),
-                ..r.clone()
+                            ..*o
+                        });
+                    }
+                    None => out.complete = false,
+                }
             }
+            out
         })
         .collect()
+}
+
+/// Every measured bearing's rows of `run` with mistake `c` undone, from
+/// those of the run as found (`found`, with the bearing schedules
+/// `schedules`); `fixed` is the corrected run, made here when the rows are
+/// read from it (`speed_in_rpm`).
+pub fn corrected(
+    c: Convention,
+    run: &RunDir,
+    found: &[BearingRows],
+    schedules: &Schedules,
+    fixed: &mut Option<RunDir>,
+) -> Vec<BearingRows> {
+    match c {
+        Convention::SpeedInRpm => {
+            let f = fixed.get_or_insert_with(|| c.correct(run));
+            of_run(f, &f.bearing_schedules())
+        }
+        Convention::BearingTransposed | Convention::CrossCouplingSign => {
+            with_schedules(found, &corrected_schedules(c, schedules))
+        }
+        _ => with_phasors_fixed(c, found),
+    }
 }
 
 /// The bearing schedules of the run with mistake `c` of the bearing table

@@ -39,8 +39,8 @@ pub fn screen(
             let points = r.in_range()?;
             let template = found.iter().find(|p| p.bearing == r.bearing);
             template
-                .and_then(|t| normal(&points, options, t))
-                .or_else(|| exact(&points, options, &r.bearing))
+                .and_then(|t| normal(points, options, t))
+                .or_else(|| exact(points, options, &r.bearing))
         })
         .collect()
 }
