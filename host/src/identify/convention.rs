@@ -170,16 +170,23 @@ impl Convention {
             }
             return out;
         }
-        for m in &mut out.measurements {
+        self.fix_measurements(&mut out.measurements);
+        for b in &mut out.bearings {
+            self.fix_coefficients(&mut b.coefficients);
+        }
+        out
+    }
+
+    /// Undoes the mistake on every row's phasors and noise columns (what
+    /// [`Convention::correct`] does to the measurements, except for
+    /// `speed_in_rpm`, which changes the speeds).
+    fn fix_measurements(self, measurements: &mut [crate::rundir::Measurement]) {
+        for m in measurements {
             self.fix_phasors(m.speed_hz, &mut m.rel, &mut m.ped);
             if let Some(sd) = &mut m.noise_sd {
                 self.fix_noise_sd(m.speed_hz, sd);
             }
         }
-        for b in &mut out.bearings {
-            self.fix_coefficients(&mut b.coefficients);
-        }
-        out
     }
 
     /// Whether undoing the mistake changes `run` at all
@@ -682,9 +689,20 @@ fn corrected_noise(
         | Convention::CrossCouplingSign => noise.clone(),
         Convention::SwappedYz => noise.swapped_yz(),
         Convention::SpeedInRpm => noise.with_speeds_of(fixed.get_or_insert_with(|| c.correct(run))),
-        Convention::PedVelocity => {
-            noise.with_pedestal_of(fixed.get_or_insert_with(|| c.correct(run)))
-        }
+        Convention::PedVelocity => match fixed {
+            Some(f) => noise.with_pedestal_of(f),
+            None => {
+                // The noise reads the measurements only: the corrected run
+                // without its bearing table is enough, and cheaper to make.
+                let mut measured = RunDir {
+                    measurements: run.measurements.clone(),
+                    bearings: Vec::new(),
+                    truth: None,
+                };
+                c.fix_measurements(&mut measured.measurements);
+                noise.with_pedestal_of(&measured)
+            }
+        },
     }
 }
 
