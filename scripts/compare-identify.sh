@@ -3,7 +3,9 @@
 # identify on a measured and an unmeasured base, diagnose --json and a short
 # accuracy table, over runs that take every noise source: full-precision
 # noise (scatter), 3 and 12 digits (digits; truncated digits), the noise
-# columns, a heteroscedastic noise (sd ∝ |phasor|), on two machines. For
+# columns, a heteroscedastic noise (sd ∝ |phasor|), on two machines, and
+# the six convention mistakes of scripts/convention_mistake.py made in three
+# of them (the convention check's findings). For
 # refactors that must not change a number (issue 19, "one engine").
 #   scripts/compare-identify.sh OLD_PLINTH NEW_PLINTH
 # Prints one line per case (same / DIFFERENT) and exits 1 on any difference.
@@ -74,6 +76,15 @@ write("hetero", het)
 write("columns", cols)
 EOF
 
+# Each convention mistake made in the text (scripts/convention_mistake.py)
+# of a noisy, a 3-digit and a skid run: the convention check's findings.
+mistakes="conjugated swapped_yz rel_negated bearing_transposed cross_coupling_sign speed_in_rpm"
+for run in noise digits3 skid; do
+  for mistake in $mistakes; do
+    python3 scripts/convention_mistake.py "$work/$run" "$work/${run}_$mistake" "$mistake"
+  done
+done
+
 status=0
 compare() {
   local name=$1
@@ -93,6 +104,14 @@ for run in noise digits3 trunc3 digits12 noise_digits12 hetero columns skid skid
     compare "identify $run $est" identify "$work/$run" --json --estimator "$est"
   done
 done
+for run in noise digits3 skid; do
+  for mistake in $mistakes; do
+    for est in ml ols; do
+      compare "identify ${run}_$mistake $est" identify "$work/${run}_$mistake" --json --estimator "$est"
+    done
+  done
+done
+compare "identify trunc3_rel_negated ml --truncated" identify "$work/digits3_rel_negated" --json --truncated
 compare "identify trunc3 ml --truncated" identify "$work/trunc3" --json --truncated
 compare "identify noise ml --compare-ols" identify "$work/noise" --json --compare-ols
 compare "identify skid --unmeasured-base" identify "$work/skid_unmeasured" --json --unmeasured-base left,right

@@ -168,14 +168,20 @@ impl ColumnDigits {
     /// from the number's own digits ([`digits_of`]): no formatting when
     /// they were counted as the row was read.
     pub fn ulp_of(&self, m: &Measurement, c: usize) -> f64 {
+        self.ulp_of_digits(digits_of(m, c), real_value(m, c))
+    }
+
+    /// [`ColumnDigits::ulp_of`] of a value `v` [m] of this column whose
+    /// [`digits_of`] are `digits`.
+    fn ulp_of_digits(&self, digits: Option<(u32, i32)>, v: f64) -> f64 {
         let absolute = 10f64.powi(self.lowest_digit_exponent);
-        match digits_of(m, c) {
+        match digits {
             // Written with d ≤ digits significant digits: printed with the
             // column's digits it keeps its exponent.
             Some((d, e)) if d <= self.digits => {
                 10f64.powi(e - self.digits as i32 + 1).max(absolute)
             }
-            _ => self.ulp(real_value(m, c)),
+            _ => self.ulp(v),
         }
     }
 
@@ -523,7 +529,19 @@ impl RunNoise {
         if !pristine {
             return Self::estimate(fixed, self.quantisation);
         }
-        let columns = ped_changed.then(|| ColumnDigits::of_run(&fixed.measurements));
+        // The digits of every number of `fixed`, counted once (a changed
+        // number's are counted on its value: the slow part).
+        let digits: Vec<[Option<(u32, i32)>; 8]> = if ped_changed {
+            fixed
+                .measurements
+                .iter()
+                .map(|m| std::array::from_fn(|c| digits_of(m, c)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let columns: Option<[ColumnDigits; 8]> = ped_changed
+            .then(|| std::array::from_fn(|c| ColumnDigits::of_digits(digits.iter().map(|d| d[c]))));
         let bearings = self
             .bearings
             .iter()
@@ -536,9 +554,23 @@ impl RunNoise {
                     }
                     (Some(columns), _) => {
                         let s = noise.scatter;
+                        // `digits_variances`, from the digits counted above.
+                        let digits_var = index
+                            .iter()
+                            .zip(&rows)
+                            .map(|(&i, m)| {
+                                std::array::from_fn(|c| {
+                                    let ulp = columns[c].ulp_of_digits(
+                                        digits.get(i).map_or_else(|| digits_of(m, c), |d| d[c]),
+                                        real_value(m, c),
+                                    );
+                                    number_variance(self.quantisation, ulp, None)
+                                })
+                            })
+                            .collect();
                         BearingNoise::with_scatter(
                             &rows,
-                            digits_variances(&rows, columns, self.quantisation),
+                            digits_var,
                             self.quantisation,
                             [Some(s[0]), Some(s[1]), None, None],
                         )

@@ -58,7 +58,7 @@
 //! leaves in contention are refitted with the estimator in use
 //! ([`diagnose`]), so that a clean run costs about two fits, not nine.
 
-use super::misfit::misfit;
+use super::misfit::misfit_of;
 #[cfg(test)]
 use super::misfit::noise_floor;
 use super::physical::is_plausible;
@@ -66,6 +66,8 @@ use super::{Estimator, Identification, Options, PedestalFit, Warning, WarningKin
 use crate::estimate::noise::{Quantisation, RunNoise};
 use crate::estimate::pedestal::floor_sd;
 use crate::rundir::RunDir;
+use plinth_shared::bearing::BearingCoefficients;
+use plinth_shared::phasor::Phasor2;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -151,84 +153,140 @@ impl Convention {
     /// undone on the raw data (module docs).
     pub fn correct(self, run: &RunDir) -> RunDir {
         let mut out = run.clone();
+        if self == Convention::SpeedInRpm {
+            let schedules = run.bearing_schedules();
+            let table_in_same_unit = run.measurements.iter().all(|m| {
+                schedules
+                    .get(&m.bearing)
+                    .is_some_and(|s| s.at(m.speed_hz).is_ok())
+            });
+            for m in &mut out.measurements {
+                m.speed_hz /= RPM_PER_HZ;
+            }
+            if table_in_same_unit {
+                for b in &mut out.bearings {
+                    b.speed_hz /= RPM_PER_HZ;
+                }
+            }
+            return out;
+        }
+        self.fix_measurements(&mut out.measurements);
+        for b in &mut out.bearings {
+            self.fix_coefficients(&mut b.coefficients);
+        }
+        out
+    }
+
+    /// Undoes the mistake on every row's phasors and noise columns (what
+    /// [`Convention::correct`] does to the measurements, except for
+    /// `speed_in_rpm`, which changes the speeds).
+    fn fix_measurements(self, measurements: &mut [crate::rundir::Measurement]) {
+        for m in measurements {
+            self.fix_phasors(m.speed_hz, &mut m.rel, &mut m.ped);
+            if let Some(sd) = &mut m.noise_sd {
+                self.fix_noise_sd(m.speed_hz, sd);
+            }
+        }
+    }
+
+    /// Whether undoing the mistake changes `run` at all
+    /// (`self.correct(run) != *run`), without copying it.
+    #[allow(clippy::eq_op)]
+    pub fn changes(self, run: &RunDir) -> bool {
+        if self == Convention::SpeedInRpm {
+            return self.correct(run) != *run;
+        }
+        let same_row = |m: &crate::rundir::Measurement| {
+            let (mut rel, mut ped, mut sd) = (m.rel, m.ped, m.noise_sd);
+            self.fix_phasors(m.speed_hz, &mut rel, &mut ped);
+            if let Some(sd) = &mut sd {
+                self.fix_noise_sd(m.speed_hz, sd);
+            }
+            // `Measurement`'s equality, field by field (a NaN is unequal
+            // to itself there too).
+            let same_speed = m.speed_hz == m.speed_hz;
+            same_speed && rel == m.rel && ped == m.ped && sd == m.noise_sd
+        };
+        let same_table_row = |b: &crate::rundir::BearingRow| {
+            let mut c = b.coefficients;
+            self.fix_coefficients(&mut c);
+            let same_speed = b.speed_hz == b.speed_hz;
+            same_speed && c == b.coefficients
+        };
+        !(run.measurements.iter().all(same_row)
+            && run.bearings.iter().all(same_table_row)
+            && run.truth == run.truth)
+    }
+
+    /// Undoes the mistake on one row's rotor-relative and pedestal phasors
+    /// `rel`, `ped` [m] measured at `speed_hz` [Hz] (nothing for the
+    /// mistakes of the bearing table and the speeds).
+    pub fn fix_phasors(self, speed_hz: f64, rel: &mut Phasor2<f64>, ped: &mut Phasor2<f64>) {
         match self {
             Convention::Conjugated => {
-                for m in &mut out.measurements {
-                    for z in m.rel.iter_mut().chain(m.ped.iter_mut()) {
-                        *z = z.conj();
-                    }
+                for z in rel.iter_mut().chain(ped.iter_mut()) {
+                    *z = z.conj();
                 }
             }
             Convention::SwappedYz => {
-                for m in &mut out.measurements {
-                    m.rel.swap(0, 1);
-                    m.ped.swap(0, 1);
-                    if let Some(sd) = &mut m.noise_sd {
-                        sd.swap(0, 1);
-                        sd.swap(2, 3);
-                    }
-                }
+                rel.swap(0, 1);
+                ped.swap(0, 1);
             }
             Convention::RelNegated => {
-                for m in &mut out.measurements {
-                    for z in &mut m.rel {
-                        *z = -*z;
-                    }
-                }
-            }
-            Convention::BearingTransposed => {
-                for b in &mut out.bearings {
-                    let c = &mut b.coefficients;
-                    (c.k[0][1], c.k[1][0]) = (c.k[1][0], c.k[0][1]);
-                    (c.c[0][1], c.c[1][0]) = (c.c[1][0], c.c[0][1]);
-                }
-            }
-            Convention::CrossCouplingSign => {
-                for b in &mut out.bearings {
-                    let c = &mut b.coefficients;
-                    for (i, j) in [(0, 1), (1, 0)] {
-                        c.k[i][j] = -c.k[i][j];
-                        c.c[i][j] = -c.c[i][j];
-                    }
+                for z in rel {
+                    *z = -*z;
                 }
             }
             Convention::PedConjugated => {
-                for m in &mut out.measurements {
-                    for z in &mut m.ped {
-                        *z = z.conj();
-                    }
+                for z in ped {
+                    *z = z.conj();
                 }
             }
             Convention::PedVelocity => {
-                for m in &mut out.measurements {
-                    let omega = plinth_shared::phasor::omega_from_hz(m.speed_hz);
-                    for z in &mut m.ped {
-                        *z /= num_complex::Complex::new(0.0, omega);
-                    }
-                    if let Some(sd) = &mut m.noise_sd {
-                        sd[2] /= omega;
-                        sd[3] /= omega;
-                    }
+                let omega = plinth_shared::phasor::omega_from_hz(speed_hz);
+                for z in ped {
+                    *z /= num_complex::Complex::new(0.0, omega);
                 }
             }
-            Convention::SpeedInRpm => {
-                let schedules = run.bearing_schedules();
-                let table_in_same_unit = run.measurements.iter().all(|m| {
-                    schedules
-                        .get(&m.bearing)
-                        .is_some_and(|s| s.at(m.speed_hz).is_ok())
-                });
-                for m in &mut out.measurements {
-                    m.speed_hz /= RPM_PER_HZ;
-                }
-                if table_in_same_unit {
-                    for b in &mut out.bearings {
-                        b.speed_hz /= RPM_PER_HZ;
-                    }
-                }
-            }
+            Convention::BearingTransposed
+            | Convention::CrossCouplingSign
+            | Convention::SpeedInRpm => {}
         }
-        out
+    }
+
+    /// Undoes the mistake on one row's noise columns `sd` [m] (rel y, rel z,
+    /// ped y, ped z) measured at `speed_hz` [Hz].
+    fn fix_noise_sd(self, speed_hz: f64, sd: &mut crate::rundir::NoiseSd) {
+        match self {
+            Convention::SwappedYz => {
+                sd.swap(0, 1);
+                sd.swap(2, 3);
+            }
+            Convention::PedVelocity => {
+                let omega = plinth_shared::phasor::omega_from_hz(speed_hz);
+                sd[2] /= omega;
+                sd[3] /= omega;
+            }
+            _ => {}
+        }
+    }
+
+    /// Undoes the mistake on one row of the bearing table (nothing for the
+    /// mistakes of the measurements).
+    pub fn fix_coefficients(self, c: &mut BearingCoefficients<f64>) {
+        match self {
+            Convention::BearingTransposed => {
+                (c.k[0][1], c.k[1][0]) = (c.k[1][0], c.k[0][1]);
+                (c.c[0][1], c.c[1][0]) = (c.c[1][0], c.c[0][1]);
+            }
+            Convention::CrossCouplingSign => {
+                for (i, j) in [(0, 1), (1, 0)] {
+                    c.k[i][j] = -c.k[i][j];
+                    c.c[i][j] = -c.c[i][j];
+                }
+            }
+            _ => {}
+        }
     }
 }
 
@@ -351,20 +409,24 @@ pub fn diagnose(
     noise: &RunNoise,
     options: &Options,
 ) -> Vec<Finding> {
-    let floor_of = |run: &RunDir, noise: &RunNoise| {
+    // The noise floor of a reading (of `run` with a mistake undone, made
+    // when needed: only a truncated-digits run estimates it anew).
+    let floor_of = |fixed: &mut dyn FnMut() -> RunNoise, noise: &RunNoise| {
         if noise.quantisation == Quantisation::Rounding {
             floor_sd(noise, run.measurements.len())
         } else {
-            floor_sd(
-                &RunNoise::estimate(run, Quantisation::Rounding),
-                run.measurements.len(),
-            )
+            floor_sd(&fixed(), run.measurements.len())
         }
     };
-    let sigma = floor_of(run, noise);
+    let sigma = floor_of(
+        &mut || RunNoise::estimate(run, Quantisation::Rounding),
+        noise,
+    );
     let schedules = run.bearing_schedules();
-    let reading = |run: &RunDir, schedules: &Schedules, sigma: &[[f64; 4]], p: &PedestalFit, c| {
-        misfit(run, schedules, sigma, p).map(|m| Reading {
+    let found_rows = rows::of_run(run, &schedules);
+    let reading = |rows: &[rows::BearingRows], sigma: &[[f64; 4]], p: &PedestalFit, c| {
+        let rows = rows.iter().find(|r| r.bearing == p.bearing)?;
+        misfit_of(rows.with_sigma(sigma), p).map(|m| Reading {
             convention: c,
             chi2: m.chi2,
             dof: m.dof,
@@ -376,39 +438,50 @@ pub fn diagnose(
     let pedestals = &identification.pedestals;
     // The reading of `fits` for each pedestal (same order), each misfit
     // computed once and kept: the refit loop asks for them again and again.
-    let readings_of_fits =
-        |k: &Candidate, fits: &[PedestalFit]| -> Vec<Option<(Reading, PedestalFit)>> {
-            pedestals
-                .iter()
-                .map(|p| {
-                    let q = fits.iter().find(|q| q.bearing == p.bearing)?;
-                    let r = reading(&k.fixed, &k.schedules, &k.sigma, q, Some(k.convention))?;
-                    Some((r, q.clone()))
-                })
-                .collect()
-        };
+    let readings_of_fits = |k: &Candidate,
+                            rows: &[rows::BearingRows],
+                            fits: &[PedestalFit]|
+     -> Vec<Option<(Reading, PedestalFit)>> {
+        pedestals
+            .iter()
+            .map(|p| {
+                let q = fits.iter().find(|q| q.bearing == p.bearing)?;
+                let r = reading(rows, &k.sigma, q, Some(k.convention))?;
+                Some((r, q.clone()))
+            })
+            .collect()
+    };
+    // Each correction's rows are made when they are read, not kept: eight
+    // copies of a long run's observations cost more to hold than to make.
+    let rows_of = |c: Convention, fixed: &mut Option<RunDir>| {
+        rows::corrected(c, run, &found_rows, &schedules, fixed)
+    };
     // Every correction with its OLS screen.
     let mut candidates: Vec<Candidate> = Vec::new();
     for c in Convention::ALL {
-        let fixed = c.correct(run);
-        if fixed == *run {
+        // The run with the mistake undone, made only where a reading needs
+        // more than its rows.
+        let mut fixed: Option<RunDir> = None;
+        let changes = if c == Convention::SpeedInRpm {
+            *fixed.insert(c.correct(run)) != *run
+        } else {
+            c.changes(run)
+        };
+        if !changes {
             continue; // the mistake changes nothing in these data
         }
-        // The bearing table and the speeds as found unless the mistake
-        // changes them: the same schedules.
-        let schedules = if matches!(
-            c,
-            Convention::BearingTransposed | Convention::CrossCouplingSign | Convention::SpeedInRpm
-        ) {
-            fixed.bearing_schedules()
-        } else {
-            schedules.clone()
-        };
-        let Some(screen) = screen::screen(&fixed, &schedules, options, pedestals) else {
+        let rows = rows_of(c, &mut fixed);
+        let Some(screen) = screen::screen(&rows, options, pedestals) else {
             continue;
         };
-        let noise = corrected_noise(c, noise, &fixed);
-        let sigma = floor_of(&fixed, &noise);
+        let noise = corrected_noise(c, noise, run, &mut fixed);
+        let sigma = floor_of(
+            &mut || {
+                let f = fixed.get_or_insert_with(|| c.correct(run));
+                RunNoise::estimate(f, Quantisation::Rounding)
+            },
+            &noise,
+        );
         let mut k = Candidate {
             convention: c,
             fit: None,
@@ -416,11 +489,10 @@ pub fn diagnose(
             bounds: Vec::new(),
             screen,
             fixed,
-            schedules,
             noise,
             sigma,
         };
-        let screened = readings_of_fits(&k, &k.screen);
+        let screened = readings_of_fits(&k, &rows, &k.screen);
         if ols {
             // With OLS the screen is the fit.
             k.fit = Some(Some(k.screen.clone()));
@@ -437,7 +509,7 @@ pub fn diagnose(
     }
     let found: Vec<Option<(Reading, PedestalFit)>> = pedestals
         .iter()
-        .map(|p| Some((reading(run, &schedules, &sigma, p, None)?, p.clone())))
+        .map(|p| Some((reading(&found_rows, &sigma, p, None)?, p.clone())))
         .collect();
     let readings_of = |j: usize, candidates: &[Candidate]| {
         let found = found[j].clone()?;
@@ -476,13 +548,23 @@ pub fn diagnose(
         }
         for i in wanted {
             if candidates[i].fit.is_none() {
-                let fits = super::fit_run_with(&candidates[i].fixed, &candidates[i].noise, options)
-                    .ok()
-                    .map(|id| id.pedestals);
+                let k = &mut candidates[i];
+                let c = k.convention;
+                let fixed = k.fixed.get_or_insert_with(|| c.correct(run));
+                // Readings need the estimates and their plausibility only.
+                let fits = super::fit_run_checked(
+                    fixed,
+                    &k.noise,
+                    options,
+                    super::estimator::Checks::Estimate,
+                )
+                .ok()
+                .map(|id| id.pedestals);
+                let rows = rows_of(c, &mut k.fixed);
                 let k = &candidates[i];
                 let readings = fits
                     .as_deref()
-                    .map_or_else(Vec::new, |f| readings_of_fits(k, f));
+                    .map_or_else(Vec::new, |f| readings_of_fits(k, &rows, f));
                 candidates[i].readings = readings;
                 candidates[i].fit = Some(fits);
             }
@@ -503,14 +585,15 @@ pub fn diagnose(
             let mut corrected_fit = q.clone();
             if ols {
                 // The named reading with the full OLS fit, not its screen.
-                if let Some(k) = candidates.iter().find(|k| k.convention == convention) {
-                    let exact = screen::exact(&k.fixed, &k.schedules, options, &p.bearing);
-                    if let Some((r, q)) = exact.and_then(|q| {
-                        Some((
-                            reading(&k.fixed, &k.schedules, &k.sigma, &q, Some(convention))?,
-                            q,
-                        ))
-                    }) {
+                if let Some(k) = candidates.iter_mut().find(|k| k.convention == convention) {
+                    let rows = rows_of(convention, &mut k.fixed);
+                    let exact = rows
+                        .iter()
+                        .find(|r| r.bearing == p.bearing)
+                        .and_then(|r| screen::exact(r.in_range()?, options, &p.bearing));
+                    if let Some((r, q)) = exact
+                        .and_then(|q| Some((reading(&rows, &k.sigma, &q, Some(convention))?, q)))
+                    {
                         corrected = r;
                         corrected_fit = q;
                     }
@@ -535,10 +618,9 @@ type Schedules = std::collections::BTreeMap<String, crate::rundir::BearingSchedu
 /// One correction of a run under examination by [`diagnose`].
 struct Candidate {
     convention: Convention,
-    /// The run with the mistake undone.
-    fixed: RunDir,
-    /// Its bearing schedules.
-    schedules: Schedules,
+    /// The run with the mistake undone, once a reading needed it (its
+    /// noise re-estimated, its ML refit).
+    fixed: Option<RunDir>,
     /// Its noise (the quantisation of the options).
     noise: RunNoise,
     /// Its noise floor ([`super::misfit::noise_floor`]).
@@ -592,7 +674,13 @@ fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
 /// only the bearing table, y and z exchanged for `swapped_yz`, estimated
 /// anew where it rescales the phasors or the speeds (only what they change:
 /// [`RunNoise::with_speeds_of`], [`RunNoise::with_pedestal_of`]).
-fn corrected_noise(c: Convention, noise: &RunNoise, fixed: &RunDir) -> RunNoise {
+/// `fixed` is the corrected run once made (made here when needed).
+fn corrected_noise(
+    c: Convention,
+    noise: &RunNoise,
+    run: &RunDir,
+    fixed: &mut Option<RunDir>,
+) -> RunNoise {
     match c {
         Convention::Conjugated
         | Convention::RelNegated
@@ -600,8 +688,21 @@ fn corrected_noise(c: Convention, noise: &RunNoise, fixed: &RunDir) -> RunNoise 
         | Convention::BearingTransposed
         | Convention::CrossCouplingSign => noise.clone(),
         Convention::SwappedYz => noise.swapped_yz(),
-        Convention::SpeedInRpm => noise.with_speeds_of(fixed),
-        Convention::PedVelocity => noise.with_pedestal_of(fixed),
+        Convention::SpeedInRpm => noise.with_speeds_of(fixed.get_or_insert_with(|| c.correct(run))),
+        Convention::PedVelocity => match fixed {
+            Some(f) => noise.with_pedestal_of(f),
+            None => {
+                // The noise reads the measurements only: the corrected run
+                // without its bearing table is enough, and cheaper to make.
+                let mut measured = RunDir {
+                    measurements: run.measurements.clone(),
+                    bearings: Vec::new(),
+                    truth: None,
+                };
+                c.fix_measurements(&mut measured.measurements);
+                noise.with_pedestal_of(&measured)
+            }
+        },
     }
 }
 
@@ -705,6 +806,7 @@ pub fn findings_for_run(
         .collect()
 }
 
+mod rows;
 mod screen;
 #[cfg(test)]
 mod tests;

@@ -106,6 +106,36 @@ pub fn fit_ml(
     noise: &mut BearingNoise,
     options: &Options,
 ) -> Result<(PedestalFit, NoiseReport), IdentifyError> {
+    fit_ml_checked(bearing, observations, noise, options, Checks::All)
+}
+
+/// What [`fit_ml_checked`] judges beyond the estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Checks {
+    /// Everything [`fit_ml`] reports.
+    All,
+    /// The estimate, its standard errors and the warnings that decide its
+    /// plausibility ([`super::physical::is_plausible`] reads the parameters,
+    /// standard errors, fixed parameters and speed range only); not the
+    /// checks whose verdicts only the report and the warnings carry: the
+    /// bad-speed check ([`super::trust::bad_speeds`]), the lack-of-fit
+    /// evidence ([`lack_of_fit::assess`]) and `--compare-ols`. What the
+    /// convention check's refits need: it reads their parameters, standard
+    /// errors and plausibility, never their warnings or noise reports.
+    Estimate,
+}
+
+/// [`fit_ml`] with only the `checks` asked for; with [`Checks::All`] it is
+/// [`fit_ml`], and with [`Checks::Estimate`] the parameters, standard errors,
+/// covariance, speed range and physical violations are the same bit for
+/// bit (the checks left out read the fit, they never change it).
+pub(crate) fn fit_ml_checked(
+    bearing: &str,
+    observations: &[Observation],
+    noise: &mut BearingNoise,
+    options: &Options,
+    checks: Checks,
+) -> Result<(PedestalFit, NoiseReport), IdentifyError> {
     let (ols_fit, solution, used, skipped) = ols_solution(bearing, observations, options)?;
     let columns = options.model().parameters();
     let with_noise = |noise: &BearingNoise| -> Vec<Observation> {
@@ -260,13 +290,21 @@ pub fn fit_ml(
         });
     }
     fit.warnings.extend(extra);
-    fit.warnings.extend(super::trust::bad_speeds(
-        observations,
-        &mut outlier_speeds_hz,
-    ));
+    if checks == Checks::All {
+        fit.warnings.extend(super::trust::bad_speeds(
+            observations,
+            &mut outlier_speeds_hz,
+        ));
+    }
     super::physical::check_finite(&fit)?;
     fit.warnings.extend(super::physical::violations(&fit));
     fit.trusted = !fit.warnings.iter().any(|w| w.kind.makes_untrusted());
+    if checks == Checks::Estimate {
+        return Ok((
+            fit,
+            report(noise, chi2, dof, variance_scale, ml_fit.equation_var.sqrt()),
+        ));
+    }
     if options.compare_ols {
         fit.ols = Some(compare(&ols_fit, &ml_fit, &obs, &columns, variance_scale));
     }

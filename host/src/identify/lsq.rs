@@ -232,8 +232,29 @@ impl NormalEquations {
     }
 
     /// Adds one equation row·θ = rhs (`row` of length p).
+    ///
+    /// A finite row's zero entries are skipped: their products are ±0, and
+    /// adding ±0 leaves every sum as it is (the sums start at +0 and, in
+    /// round-to-nearest, only −0 + −0 gives −0), so the result is the full
+    /// loop's bit for bit at a third of its cost on eq. 4's rows (three of
+    /// five entries non-zero).
     pub fn add(&mut self, row: &[f64], rhs: f64) {
         let p = self.p;
+        if row.iter().take(p).all(|r| r.is_finite()) && rhs.is_finite() {
+            for (i, &ri) in row.iter().enumerate().take(p) {
+                if ri == 0.0 {
+                    continue;
+                }
+                for (j, &rj) in row.iter().enumerate().take(p) {
+                    if rj != 0.0 {
+                        self.ata[i * p + j] += ri * rj;
+                    }
+                }
+                self.atb[i] += ri * rhs;
+            }
+            self.rows += 1;
+            return;
+        }
         for (i, &ri) in row.iter().enumerate().take(p) {
             for (j, &rj) in row.iter().enumerate().take(p) {
                 self.ata[i * p + j] += ri * rj;

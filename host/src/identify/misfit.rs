@@ -7,7 +7,8 @@
 use super::PedestalFit;
 use crate::estimate::noise::{Quantisation, RunNoise};
 use crate::estimate::pedestal::floor_sd;
-use crate::rundir::{BearingSchedule, Measurement, RunDir};
+use crate::estimate::{complex_stiffness, Observation};
+use crate::rundir::{BearingSchedule, RunDir};
 use plinth_shared::phasor::{omega_from_hz, Complex};
 use std::collections::BTreeMap;
 
@@ -53,35 +54,52 @@ pub fn misfit(
     fit: &PedestalFit,
 ) -> Option<Misfit> {
     let schedule = schedules.get(&fit.bearing)?;
+    let rows = run
+        .measurements
+        .iter()
+        .zip(sigma)
+        .filter(|(m, _)| m.bearing == fit.bearing)
+        .filter_map(|(m, s)| {
+            let bc = schedule.at(m.speed_hz).ok()?;
+            let kstar = complex_stiffness(&bc, omega_from_hz(m.speed_hz));
+            let o = Observation {
+                speed_hz: m.speed_hz,
+                rel: m.rel,
+                ped: m.ped,
+                kstar,
+                var: [0.0; 8],
+            };
+            Some((o, s))
+        });
+    misfit_of(rows, fit)
+}
+
+/// The misfit of `fit` on its bearing's observations, each with the noise
+/// sd of its four phasors ([`noise_floor`]'s row), in the order of the run's
+/// rows; observations with a number that is not finite are left out.
+/// `None` when no speed can be evaluated. [`misfit`] on data already paired
+/// with their bearing's stiffness (the convention check's readings).
+pub fn misfit_of<'a>(
+    rows: impl IntoIterator<Item = (Observation, &'a [f64; 4])>,
+    fit: &PedestalFit,
+) -> Option<Misfit> {
     let th = fit.pedestal.theta();
     let mut total = 0.0;
     let mut residual = 0.0;
     let mut force = 0.0;
     let mut speeds = 0usize;
-    for (m, s) in run.measurements.iter().zip(sigma) {
-        if m.bearing != fit.bearing || !finite(m) {
+    for (o, s) in rows {
+        if !finite(&o) {
             continue;
         }
-        let Ok(bc) = schedule.at(m.speed_hz) else {
-            continue;
-        };
-        let w = omega_from_hz(m.speed_hz);
+        let w = omega_from_hz(o.speed_hz);
         let z = [
             C64::new(th[0] - w * w * th[2], w * th[3]),
             C64::new(th[1] - w * w * th[2], w * th[4]),
         ];
-        let b = [
-            [
-                C64::new(bc.k[0][0], w * bc.c[0][0]),
-                C64::new(bc.k[0][1], w * bc.c[0][1]),
-            ],
-            [
-                C64::new(bc.k[1][0], w * bc.c[1][0]),
-                C64::new(bc.k[1][1], w * bc.c[1][1]),
-            ],
-        ];
+        let b = o.kstar;
         let e: [C64; 2] =
-            std::array::from_fn(|d| z[d] * m.ped[d] - b[d][0] * m.rel[0] - b[d][1] * m.rel[1]);
+            std::array::from_fn(|d| z[d] * o.ped[d] - b[d][0] * o.rel[0] - b[d][1] * o.rel[1]);
         // S = Z Σ_ped Z^H + B Σ_rel B^H (Hermitian 2×2).
         let var_rel = [s[0] * s[0], s[1] * s[1]];
         let mut cov = [[C64::new(0.0, 0.0); 2]; 2];
@@ -102,7 +120,7 @@ pub fn misfit(
         total += q;
         residual += e[0].norm_sqr() + e[1].norm_sqr();
         force += (0..2)
-            .map(|d| (b[d][0] * m.rel[0] + b[d][1] * m.rel[1]).norm_sqr())
+            .map(|d| (b[d][0] * o.rel[0] + b[d][1] * o.rel[1]).norm_sqr())
             .sum::<f64>();
         speeds += 1;
     }
@@ -114,10 +132,11 @@ pub fn misfit(
     })
 }
 
-fn finite(m: &Measurement) -> bool {
-    m.speed_hz.is_finite()
-        && m.rel
+/// Whether the speed and every phasor of `o` are finite numbers.
+fn finite(o: &Observation) -> bool {
+    o.speed_hz.is_finite()
+        && o.rel
             .iter()
-            .chain(&m.ped)
+            .chain(&o.ped)
             .all(|z| z.re.is_finite() && z.im.is_finite())
 }

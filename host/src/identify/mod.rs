@@ -508,6 +508,17 @@ pub fn fit_run_with(
     run_noise: &RunNoise,
     options: &Options,
 ) -> Result<Identification, IdentifyError> {
+    fit_run_checked(run, run_noise, options, estimator::Checks::All)
+}
+
+/// [`fit_run_with`] with only the ML fit's `checks` asked for
+/// ([`estimator::fit_ml_checked`]; the OLS fit is the same either way).
+pub(crate) fn fit_run_checked(
+    run: &RunDir,
+    run_noise: &RunNoise,
+    options: &Options,
+    checks: estimator::Checks,
+) -> Result<Identification, IdentifyError> {
     let bearings = run.measured_bearings();
     if bearings.is_empty() {
         return Err(IdentifyError::NoMeasurements);
@@ -540,7 +551,7 @@ pub fn fit_run_with(
             }
         })?;
         let (fit, report) = match estimator {
-            Estimator::Ml => estimator::fit_ml(bearing, &obs, &mut noise, options)?,
+            Estimator::Ml => estimator::fit_ml_checked(bearing, &obs, &mut noise, options, checks)?,
             Estimator::Ols => {
                 let fit = fit_pedestal(bearing, &obs, options)?;
                 let report = estimator::ols_noise_report(&fit, &obs, &noise);

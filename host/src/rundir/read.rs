@@ -5,7 +5,7 @@ use super::*;
 /// Reads and checks a `bearings.csv` on its own (formats.md layout), e.g. the
 /// bearing table given to `plinth import` or `plinth extract`.
 pub fn read_bearings(path: impl AsRef<Path>) -> Result<Vec<BearingRow>, RunDirError> {
-    let rows = read_table(path.as_ref(), &BEARING_COLUMNS, None, false)?;
+    let rows = read_table(path.as_ref(), &BEARING_COLUMNS, None, false, false)?;
     Ok(rows
         .iter()
         .map(|r| BearingRow {
@@ -31,8 +31,14 @@ impl RunDir {
         let b_path = dir.join(BEARINGS_FILE);
         let t_path = dir.join(TRUTH_FILE);
 
-        let m_rows = read_table(&m_path, &MEASUREMENT_COLUMNS, Some(&NOISE_COLUMNS), true)?;
-        let b_rows = read_table(&b_path, &BEARING_COLUMNS, None, false)?;
+        let m_rows = read_table(
+            &m_path,
+            &MEASUREMENT_COLUMNS,
+            Some(&NOISE_COLUMNS),
+            true,
+            true,
+        )?;
+        let b_rows = read_table(&b_path, &BEARING_COLUMNS, None, false, false)?;
         check_noise_not_all_zero(&m_rows, &m_path)?;
 
         let bearings: Vec<BearingRow> = b_rows
@@ -92,7 +98,7 @@ impl RunDir {
                     rel: [Complex::new(v[0], v[1]), Complex::new(v[2], v[3])],
                     ped: [Complex::new(v[4], v[5]), Complex::new(v[6], v[7])],
                     noise_sd: r.noise_sd,
-                    written: Some(r.written),
+                    written: r.written,
                 }
             })
             .collect();
@@ -195,20 +201,23 @@ struct TableRow {
     bearing: String,
     bearing_column: usize,
     values: [f64; 8],
-    /// The digits each of `values` was written with.
-    written: super::WrittenDigits,
+    /// The digits each of `values` was written with, when counted.
+    written: Option<super::WrittenDigits>,
     /// The optional noise columns, when the header has them.
     noise_sd: Option<NoiseSd>,
 }
 
 /// Reads a CSV table whose columns are `speed_hz`, `bearing` and eight numbers,
 /// plus, when `optional` is given and the header names them, four
-/// non-negative numbers (all four or none).
+/// non-negative numbers (all four or none); with `count_digits` the digits
+/// each of the eight numbers was written with (the measurements' noise
+/// model needs them, the bearing table does not).
 fn read_table(
     path: &Path,
     columns: &[&'static str; 10],
     optional: Option<&[&'static str; 4]>,
     positive_speed: bool,
+    count_digits: bool,
 ) -> Result<Vec<TableRow>, RunDirError> {
     let file = || path.to_path_buf();
     let expected = columns.join(",");
@@ -417,8 +426,9 @@ fn read_table(
         for (k, v) in values.iter_mut().enumerate() {
             *v = number(k + 2)?;
         }
-        let written =
-            super::WrittenDigits::from_text(std::array::from_fn(|k| field(index[k + 2])), values);
+        let written = count_digits.then(|| {
+            super::WrittenDigits::from_text(std::array::from_fn(|k| field(index[k + 2])), values)
+        });
         let noise_sd = match (noise_index, optional) {
             (Some(cols), Some(names)) => {
                 let mut sd = [0.0; 4];

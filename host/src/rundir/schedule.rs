@@ -51,6 +51,15 @@ impl BearingSchedule {
         Some((*self.speeds_hz.first()?, *self.speeds_hz.last()?))
     }
 
+    /// The same schedule with `f` applied to every listed coefficient set
+    /// (the listed speeds unchanged): what a bearing table with `f` applied
+    /// to each row gives, as the order by speed does not change.
+    pub fn map_coefficients(&self, f: impl Fn(&mut BearingCoefficients<f64>)) -> Self {
+        let mut out = self.clone();
+        out.coefficients.iter_mut().for_each(f);
+        out
+    }
+
     /// Coefficients at `speed_hz` [Hz], interpolated linearly in speed.
     pub fn at(&self, speed_hz: f64) -> Result<BearingCoefficients<f64>, OutOfRange> {
         let (min_hz, max_hz) = self.range_hz().unwrap_or((f64::NAN, f64::NAN));

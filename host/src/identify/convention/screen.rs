@@ -14,10 +14,8 @@
 use super::super::lsq::NormalEquations;
 use super::super::physical::violations;
 use super::super::{Options, PedestalFit};
-use super::Schedules;
-use crate::estimate::{complex_stiffness, Observation};
-use crate::rundir::RunDir;
-use plinth_shared::phasor::omega_from_hz;
+use super::rows::BearingRows;
+use crate::estimate::Observation;
 use plinth_shared::regression::{equations_for_mode, PARAMETERS};
 
 /// Largest condition number of the column-scaled design matrix [-] at
@@ -26,74 +24,44 @@ use plinth_shared::regression::{equations_for_mode, PARAMETERS};
 /// beyond it the screen is the full OLS fit.
 pub const MAX_CONDITION: f64 = 1e4;
 
-/// The OLS fit of every pedestal of `run` (a run as found with a mistake
-/// undone; its bearing schedules `schedules`) with the model and equations
-/// of `options`, or `None` when the run cannot be fitted. `found` are the
-/// pedestals as found, whose fields the screen fits keep where a reading
-/// does not use them.
+/// The OLS fit of every pedestal of a run as found with a mistake undone,
+/// given as its measured bearings' rows ([`super::rows`]), with the model
+/// and equations of `options`, or `None` when the run cannot be fitted (a
+/// speed outside its bearing's table). `found` are the pedestals as found,
+/// whose fields the screen fits keep where a reading does not use them.
 pub fn screen(
-    run: &RunDir,
-    schedules: &Schedules,
+    rows: &[BearingRows],
     options: &Options,
     found: &[PedestalFit],
 ) -> Option<Vec<PedestalFit>> {
-    run.measured_bearings()
-        .into_iter()
-        .map(|bearing| {
-            let template = found.iter().find(|p| p.bearing == bearing);
+    rows.iter()
+        .map(|r| {
+            let points = r.in_range()?;
+            let template = found.iter().find(|p| p.bearing == r.bearing);
             template
-                .and_then(|t| normal(run, schedules, options, t))
-                .or_else(|| exact(run, schedules, options, bearing))
+                .and_then(|t| normal(points, options, t))
+                .or_else(|| exact(points, options, &r.bearing))
         })
         .collect()
 }
 
-/// The observations of `bearing`'s rows of `run`, the bearing's complex
-/// stiffness interpolated at each speed (no noise); `None` when a speed is
-/// outside its bearing table.
-fn observations(run: &RunDir, schedules: &Schedules, bearing: &str) -> Option<Vec<Observation>> {
-    let schedule = schedules.get(bearing)?;
-    run.measurements
-        .iter()
-        .filter(|m| m.bearing == bearing)
-        .map(|m| {
-            let kstar =
-                complex_stiffness(&schedule.at(m.speed_hz).ok()?, omega_from_hz(m.speed_hz));
-            Some(Observation {
-                speed_hz: m.speed_hz,
-                rel: m.rel,
-                ped: m.ped,
-                kstar,
-                var: [0.0; 8],
-            })
-        })
-        .collect()
-}
-
-/// The paper's OLS fit of `bearing`'s pedestal in `run`, as
-/// [`super::super::fit_run`] makes it with `--estimator ols`.
-pub fn exact(
-    run: &RunDir,
-    schedules: &Schedules,
-    options: &Options,
-    bearing: &str,
-) -> Option<PedestalFit> {
-    let points = observations(run, schedules, bearing)?;
-    super::super::fit_pedestal(bearing, &points, &options.ols()).ok()
+/// The paper's OLS fit of `bearing`'s pedestal from its observations
+/// `points` (in the run's order), as [`super::super::fit_run`] makes it
+/// with `--estimator ols`.
+pub fn exact(points: &[Observation], options: &Options, bearing: &str) -> Option<PedestalFit> {
+    super::super::fit_pedestal(bearing, points, &options.ols()).ok()
 }
 
 /// The OLS fit of the pedestal of `template.bearing` from the normal
-/// equations (module docs); `None` when they are not well conditioned, a
-/// speed is outside the bearing table, or a figure is not finite.
+/// equations of its observations `points` (module docs); `None` when they
+/// are not well conditioned or a figure is not finite.
 fn normal(
-    run: &RunDir,
-    schedules: &Schedules,
+    points: &[Observation],
     options: &Options,
     template: &PedestalFit,
 ) -> Option<PedestalFit> {
     let options = options.ols();
     let columns = options.model().parameters();
-    let points = observations(run, schedules, &template.bearing)?;
     let finite = |p: &&Observation| {
         p.speed_hz.is_finite()
             && p.ped

@@ -123,10 +123,55 @@ fn transformed_noise_is_the_noise_of_the_corrected_run() {
         for c in Convention::ALL {
             let fixed = c.correct(&r);
             assert_eq!(
-                corrected_noise(c, &noise, &fixed),
+                corrected_noise(c, &noise, &r, &mut None),
                 RunNoise::estimate(&fixed, Quantisation::Rounding),
                 "{c}, noise columns: {columns}"
             );
+        }
+    }
+}
+
+/// A correction's rows derived from the run as found ([`rows::corrected`])
+/// are, bit for bit, those read from the corrected run, and
+/// [`Convention::changes`] says what comparing the corrected run with the
+/// run says: on a run with cross-coupled bearings, noise columns, speeds
+/// between the table's rows and one speed outside it, and on the same run
+/// with symmetric bearings (the table's mistakes then change nothing).
+#[test]
+fn corrected_rows_are_those_of_the_corrected_run() {
+    let mut r = run();
+    r.measurements.clear();
+    let c = |re: f64, im: f64| C64::new(re, im);
+    for (j, f) in [3.0, 12.5, 50.0, 99.0, 100.0, 130.0]
+        .into_iter()
+        .enumerate()
+    {
+        let x = j as f64;
+        r.measurements.push(Measurement {
+            speed_hz: f,
+            bearing: "left".into(),
+            rel: [c(1.0 + x, -2.0), c(0.0, 4.0 - x)],
+            ped: [c(-5.0, 6.0 * x), c(-0.0, 8.0)],
+            noise_sd: Some([0.1, 0.2, 0.3, 0.4 + x]),
+            written: None,
+        });
+    }
+    let mut symmetric = r.clone();
+    for b in &mut symmetric.bearings {
+        b.coefficients.k[1][0] = b.coefficients.k[0][1];
+        b.coefficients.c[1][0] = b.coefficients.c[0][1];
+    }
+    for r in [r, symmetric] {
+        let schedules = r.bearing_schedules();
+        let found = rows::of_run(&r, &schedules);
+        assert!(!found[0].complete, "130 Hz is outside the table");
+        assert_eq!(found[0].index, vec![0, 1, 2, 3, 4]);
+        for c in Convention::ALL {
+            let fixed = c.correct(&r);
+            assert_eq!(c.changes(&r), fixed != r, "{c}");
+            let derived = rows::corrected(c, &r, &found, &schedules, &mut None);
+            let read = rows::of_run(&fixed, &fixed.bearing_schedules());
+            assert_eq!(format!("{derived:?}"), format!("{read:?}"), "{c}");
         }
     }
 }
