@@ -38,10 +38,10 @@
 //! two ([`crate::identify::physical`]), so a wrong pattern does not make a
 //! zero damping significantly negative.
 
-use super::gauss_helmert::{self as gh, Equations, JacobianRequest};
+use super::gauss_helmert as gh;
 use super::ml::{self, MlFit, Rigid, Weighting};
 use super::Observation;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
 use plinth_shared::regression::{Parameter, PARAMETERS};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
@@ -69,23 +69,6 @@ fn chi2_4() -> ChiSquared {
     ChiSquared::new(4.0).expect("4 degrees of freedom")
 }
 
-/// Per-speed squared whitened residuals d_i at `theta` [-] under the
-/// observations' own noise plus an equation error of variance
-/// `equation_var` [N²] (unweighted).
-pub fn distances(
-    obs: &[Observation],
-    theta: &[f64; PARAMETERS],
-    equation_var: f64,
-) -> Option<Vec<f64>> {
-    let eq = Rigid::new(obs, &Weighting::equation_error(equation_var));
-    let w = gh::whitened(&eq, theta, None)?;
-    Some(
-        (0..obs.len())
-            .map(|j| (0..4).map(|c| w[4 * j + c].powi(2)).sum())
-            .collect(),
-    )
-}
-
 fn median(v: &[f64]) -> f64 {
     let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
     s.sort_by(f64::total_cmp);
@@ -98,6 +81,48 @@ fn median(v: &[f64]) -> f64 {
     } else {
         0.5 * (s[n / 2 - 1] + s[n / 2])
     }
+}
+
+/// The whitened residuals w (4 real ones per speed) of `obs` at `theta` under
+/// `weighting`, and their Jacobian J over the estimated `columns` (4n ×
+/// columns) with each speed's whitening L_i held at `theta`: J_i =
+/// L_i⁻¹∂e_i/∂θ, the sensitivity of the equations in noise units (the
+/// errors are linear in θ, so central differences are exact). Not the
+/// derivative of w itself: where the pedestal's dynamic stiffness is near
+/// zero L_i changes fast with θ, and ∂L_i⁻¹/∂θ·e_i (a term of the noise, not
+/// of the model) would point the fit's pull the wrong way. `None` when a
+/// figure is not finite or the sizes disagree.
+fn whitened_jacobian(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    columns: &[Parameter],
+    weighting: &Weighting,
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let n = obs.len();
+    let eq = Rigid::new(obs, weighting);
+    let factors: Vec<DMatrix<f64>> = (0..n)
+        .map(|s| gh::whitening(&eq, s, theta))
+        .collect::<Option<_>>()?;
+    let w = gh::whitened(&eq, theta, Some(&factors))?;
+    // Central-difference steps: a millionth of the value, or of a 1e-3 loss
+    // factor for a damping.
+    let typical_damping = 1e-3 * (theta[0].abs() * theta[2].abs()).sqrt();
+    let mut jac = DMatrix::<f64>::zeros(4 * n, columns.len());
+    for (c, k) in columns.iter().map(|&c| c as usize).enumerate() {
+        let floor = if k >= 3 { typical_damping } else { 0.0 };
+        let h = 1e-6 * theta[k].abs().max(floor).max(f64::MIN_POSITIVE);
+        let (mut up, mut down) = (*theta, *theta);
+        up[k] += h;
+        down[k] -= h;
+        let wu = gh::whitened(&eq, &up, Some(&factors))?;
+        let wd = gh::whitened(&eq, &down, Some(&factors))?;
+        if wu.len() != 4 * n || wd.len() != 4 * n {
+            return None;
+        }
+        jac.set_column(c, &((wu - wd) / (2.0 * h)));
+    }
+    let sizes_agree = w.len() == 4 * n;
+    (sizes_agree && jac.iter().chain(w.iter()).all(|v| v.is_finite())).then_some((w, jac))
 }
 
 /// Sandwich standard errors [θ units: N/m, N/m, kg, N·s/m, N·s/m] of the
@@ -118,30 +143,7 @@ pub fn sandwich_std_errs(
     if p == 0 || n <= p {
         return None;
     }
-    let eq = Rigid::new(obs, &Weighting::default());
-    let free: Vec<usize> = columns.iter().map(|&c| c as usize).collect();
-    // Central-difference steps where the derivative is not analytic: a
-    // millionth of the value, or of a 1e-3 loss factor for a damping.
-    let typical_damping = 1e-3 * (theta[0].abs() * theta[2].abs()).sqrt();
-    let step: Vec<f64> = free
-        .iter()
-        .map(|&k| {
-            let floor = if k >= 3 { typical_damping } else { 0.0 };
-            1e-6 * theta[k].abs().max(floor).max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    let mut jac = DMatrix::zeros(0, 0);
-    let w = eq.whiten(
-        theta,
-        Some(JacobianRequest {
-            free: &free,
-            step: &step,
-            out: &mut jac,
-        }),
-    )?;
-    if jac.nrows() != 4 * n || w.len() != 4 * n {
-        return None;
-    }
+    let (w, jac) = whitened_jacobian(obs, theta, columns, &Weighting::default())?;
     let inv = jac.tr_mul(&jac).try_inverse()?;
     let mut meat = DMatrix::<f64>::zeros(p, p);
     for i in 0..n {
@@ -159,7 +161,7 @@ pub fn sandwich_std_errs(
     }
     let cov = &inv * meat * &inv;
     let mut out = [0.0; PARAMETERS];
-    for (c, &k) in free.iter().enumerate() {
+    for (c, k) in columns.iter().map(|&c| c as usize).enumerate() {
         let v = cov[(c, c)];
         if !(v.is_finite() && v >= 0.0) {
             return None;
@@ -167,6 +169,91 @@ pub fn sandwich_std_errs(
         out[k] = v.sqrt();
     }
     Some(out)
+}
+
+/// Largest leverage (eigenvalue of J_iH⁻¹J_iᵀ, the fit through speed i) at
+/// which a speed's residual is still judged by the outlier test [-]: above
+/// it the speed alone carries at least as much of some combination of the
+/// parameters as all the others together (a sharp undamped peak, where the
+/// pedestal's dynamic stiffness k − Ω²m is near zero, average leverage
+/// 5/n), the fit without it cannot predict it within the linearised noise
+/// model (measured: a good reading at the undamped paper machine's 45 Hz
+/// peak, leverage 0.75, came out at 50 times its noise in 3 of 300 runs),
+/// and leaving it out would remove the run's most informative speed.
+pub const MAX_LEVERAGE: f64 = 0.5;
+
+/// Per speed, the squared whitened residual of `obs` at the fit `theta` of
+/// the speeds marked in `in_fit` (over `columns`, with an equation error of
+/// variance `equation_var` [N²]), standardised by its own covariance so that
+/// a good speed's is χ²(4) wherever it sits [-]:
+/// w_iᵀ(I − J_iH⁻¹J_iᵀ)⁻¹w_i for a speed in the fit (its residual is shrunk
+/// by its own pull on the fit) and w_iᵀ(I + J_iH⁻¹J_iᵀ)⁻¹w_i for a speed left
+/// out (the fit's uncertainty adds to its noise), H = Σ_{in fit} J_iᵀJ_i.
+/// Both are the leave-one-speed-out distance (externally studentised). A
+/// speed that steers the fit (a sharp undamped peak, where the pedestal's
+/// dynamic stiffness is near zero) has a leverage near 1: left out, its
+/// residual is far larger than its noise without being bad. NaN (not
+/// judged) where the leverage exceeds [`MAX_LEVERAGE`] or a covariance is
+/// singular; `None` when the Jacobian or H fails.
+pub fn deleted_distances(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    columns: &[Parameter],
+    equation_var: f64,
+    in_fit: &[bool],
+) -> Option<Vec<f64>> {
+    let n = obs.len();
+    if in_fit.len() != n {
+        return None;
+    }
+    let weighting = Weighting::equation_error(equation_var);
+    let (w, jac) = whitened_jacobian(obs, theta, columns, &weighting)?;
+    let p = columns.len();
+    let mut hess = DMatrix::<f64>::zeros(p, p);
+    for i in (0..n).filter(|&i| in_fit[i]) {
+        let rows = jac.rows(4 * i, 4);
+        hess += rows.tr_mul(&rows);
+    }
+    let inv = if p == 0 {
+        hess
+    } else {
+        hess.try_inverse()?
+    };
+    Some(
+        (0..n)
+            .map(|i| {
+                let rows = jac.rows(4 * i, 4).into_owned();
+                let wi = w.rows(4 * i, 4).into_owned();
+                let pull = &rows * &inv * rows.transpose();
+                // The largest eigenvalue of the pull: the leverage h in the
+                // fit, h/(1 − h) left out.
+                let most = pull
+                    .clone()
+                    .symmetric_eigenvalues()
+                    .iter()
+                    .fold(0.0, |a: f64, &b| a.max(b));
+                let limit = if in_fit[i] {
+                    MAX_LEVERAGE
+                } else {
+                    MAX_LEVERAGE / (1.0 - MAX_LEVERAGE)
+                };
+                if !(most <= limit) {
+                    return f64::NAN;
+                }
+                let identity = DMatrix::<f64>::identity(4, 4);
+                let cov = if in_fit[i] {
+                    identity - pull
+                } else {
+                    identity + pull
+                };
+                cov.lu()
+                    .solve(&wi)
+                    .map(|v| wi.dot(&v))
+                    .filter(|d| d.is_finite() && *d >= 0.0)
+                    .unwrap_or(f64::NAN)
+            })
+            .collect(),
+    )
 }
 
 /// Speeds on each side of a speed whose median sets its local scale in the
@@ -236,7 +323,7 @@ pub fn outlier_refit(
     columns: &[Parameter],
 ) -> Option<OutlierRefit> {
     let n = obs.len();
-    let d = distances(obs, &fit.theta, fit.equation_var)?;
+    let d = deleted_distances(obs, &fit.theta, columns, fit.equation_var, &vec![true; n])?;
     let flagged = beyond(&d, &scale(&d), n);
     if flagged.is_empty() || flagged.len() > most_outliers(n) {
         return None;
@@ -252,7 +339,8 @@ pub fn outlier_refit(
     };
     let (refit, kept) = refit_without(&flagged)?;
     // Judged against the refit, with the scale of the speeds it kept.
-    let d_all = distances(obs, &refit.theta, refit.equation_var)?;
+    let in_refit: Vec<bool> = (0..n).map(|i| !flagged.contains(&i)).collect();
+    let d_all = deleted_distances(obs, &refit.theta, columns, refit.equation_var, &in_refit)?;
     let kept_only: Vec<f64> = (0..n)
         .map(|i| {
             if flagged.contains(&i) {
