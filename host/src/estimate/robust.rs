@@ -432,7 +432,6 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "measured 2026-11-26: on this synthetic pedestal (rel noise-free, ped noise only) the sandwich is 59x the fit's own ± with the stated pattern right (expected ~1): not understood yet; on the bench's heteroscedastic undamped paper data it is 0.4-2x the fit's own and brought the sd of c/σ over 400 runs from 1.24 to 0.94 (docs/trust.md)"]
     fn sandwich_errors_follow_the_spread_whatever_the_noise_pattern() {
         // Per growth, over 40 draws: the mean sandwich standard error of
         // c_y and c_z against the mean of the fit's own (scaled by χ²/dof,
@@ -440,6 +439,13 @@ mod tests {
         // right they agree; with the noise growing 6-fold over the run
         // while one level is stated, the sandwich sees the larger spread of
         // the speeds that carry the damping and the fit's own does not.
+        // The pedestal's resonances (201 and 225 Hz at 5 kg) lie above the
+        // speeds: at 150 kg (37 and 41 Hz, inside them) the speed nearest
+        // the undamped resonance has leverage 0.9999 for the damping, and
+        // HC3's (1 − h)⁻¹ restoration makes the sandwich 2-54 times the
+        // fit's own ± (measured 2026-11-28, seeds 0-2): conservative, and
+        // why the damping rule takes the larger of the two, but not a test
+        // of the spread.
         let start = [1.01e7, 7.9e6, 5.05, 50.0, -50.0];
         for (growth, range) in [(1.0, 0.8..1.25), (6.0, 1.2..10.0)] {
             let draws = 40;
@@ -469,40 +475,6 @@ mod tests {
         let s = sandwich_std_errs(&obs, &start, &cols).expect("sandwich");
         assert_eq!((s[3], s[4]), (0.0, 0.0));
         assert!(sandwich_std_errs(&obs[..5], &start, &Parameter::ALL).is_none());
-    }
-
-    #[test]
-    fn dbg_sandwich_leverage() {
-        for mass in [150.0, 5.0] {
-            let start = [1.01e7, 7.9e6, mass * 1.01, 50.0, -50.0];
-            for seed in 0..3 {
-                let obs = undamped(mass, 1.0, seed);
-                let f = ml::fit(&obs, &Parameter::ALL, &start).expect("fit");
-                let s = sandwich_std_errs(&obs, &f.theta, &Parameter::ALL).expect("sandwich");
-                let se = f.std_err(f.chi2_per_dof());
-                let (_, jac) =
-                    whitened_jacobian(&obs, &f.theta, &Parameter::ALL, &Weighting::default())
-                        .expect("jac");
-                let inv = jac.tr_mul(&jac).try_inverse().expect("inv");
-                let mut most = (0.0, 0.0);
-                for i in 0..obs.len() {
-                    let rows = jac.rows(4 * i, 4).into_owned();
-                    let h = (&rows * &inv * rows.transpose())
-                        .symmetric_eigenvalues()
-                        .max();
-                    if h > most.0 {
-                        most = (h, obs[i].speed_hz);
-                    }
-                }
-                eprintln!(
-                    "DBG mass {mass} seed {seed}: ratio c_y {:.2} c_z {:.2}, max leverage {:.4} at {:.1} Hz",
-                    s[3] / se[3],
-                    s[4] / se[4],
-                    most.0,
-                    most.1
-                );
-            }
-        }
     }
 
     #[test]
