@@ -236,7 +236,8 @@ pub fn deleted_distances(
                 } else {
                     MAX_LEVERAGE / (1.0 - MAX_LEVERAGE)
                 };
-                if !(most <= limit) {
+                // Beyond the limit, or not a number: not judged.
+                if most.is_nan() || most > limit {
                     return f64::NAN;
                 }
                 let identity = DMatrix::<f64>::identity(4, 4);
