@@ -38,21 +38,23 @@
 //! two ([`crate::identify::physical`]), so a wrong pattern does not make a
 //! zero damping significantly negative.
 
-use super::gauss_helmert::{self as gh, Equations, JacobianRequest};
+use super::gauss_helmert as gh;
 use super::ml::{self, MlFit, Rigid, Weighting};
 use super::Observation;
-use nalgebra::DMatrix;
-use num_complex::Complex;
+use nalgebra::{DMatrix, DVector};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+mod flips;
+pub use flips::{
+    jump_speeds, keyphasor_flips, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_NEIGHBOURS, FLIP_RATIO,
+    FLIP_WINDOW,
+};
 
 /// Chance per fit that some good speed is flagged (Bonferroni over the
 /// speeds) [-]: 0.25 %, so that a run of up to four pedestals lists a good
 /// speed in at most 1 % of runs (measured: `scripts/bench-trust.sh`).
 pub const OUTLIER_FAMILY_RATE: f64 = 0.0025;
-
-/// Speeds on each side a flip test predicts from.
-pub const FLIP_NEIGHBOURS: usize = 3;
 
 /// The fit without the outlier speeds of [`outlier_refit`].
 #[derive(Clone, Debug)]
@@ -69,23 +71,7 @@ fn chi2_4() -> ChiSquared {
     ChiSquared::new(4.0).expect("4 degrees of freedom")
 }
 
-/// Per-speed squared whitened residuals d_i at `theta` [-] under the
-/// observations' own noise plus an equation error of variance
-/// `equation_var` [N²] (unweighted).
-pub fn distances(
-    obs: &[Observation],
-    theta: &[f64; PARAMETERS],
-    equation_var: f64,
-) -> Option<Vec<f64>> {
-    let eq = Rigid::new(obs, &Weighting::equation_error(equation_var));
-    let w = gh::whitened(&eq, theta, None)?;
-    Some(
-        (0..obs.len())
-            .map(|j| (0..4).map(|c| w[4 * j + c].powi(2)).sum())
-            .collect(),
-    )
-}
-
+/// The median of the finite entries of `v` (NaN when none).
 fn median(v: &[f64]) -> f64 {
     let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
     s.sort_by(f64::total_cmp);
@@ -98,6 +84,48 @@ fn median(v: &[f64]) -> f64 {
     } else {
         0.5 * (s[n / 2 - 1] + s[n / 2])
     }
+}
+
+/// The whitened residuals w (4 real ones per speed) of `obs` at `theta` under
+/// `weighting`, and their Jacobian J over the estimated `columns` (4n ×
+/// columns) with each speed's whitening L_i held at `theta`: J_i =
+/// L_i⁻¹∂e_i/∂θ, the sensitivity of the equations in noise units (the
+/// errors are linear in θ, so central differences are exact). Not the
+/// derivative of w itself: where the pedestal's dynamic stiffness is near
+/// zero L_i changes fast with θ, and ∂L_i⁻¹/∂θ·e_i (a term of the noise, not
+/// of the model) would point the fit's pull the wrong way. `None` when a
+/// figure is not finite or the sizes disagree.
+fn whitened_jacobian(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    columns: &[Parameter],
+    weighting: &Weighting,
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let n = obs.len();
+    let eq = Rigid::new(obs, weighting);
+    let factors: Vec<DMatrix<f64>> = (0..n)
+        .map(|s| gh::whitening(&eq, s, theta))
+        .collect::<Option<_>>()?;
+    let w = gh::whitened(&eq, theta, Some(&factors))?;
+    // Central-difference steps: a millionth of the value, or of a 1e-3 loss
+    // factor for a damping.
+    let typical_damping = 1e-3 * (theta[0].abs() * theta[2].abs()).sqrt();
+    let mut jac = DMatrix::<f64>::zeros(4 * n, columns.len());
+    for (c, k) in columns.iter().map(|&c| c as usize).enumerate() {
+        let floor = if k >= 3 { typical_damping } else { 0.0 };
+        let h = 1e-6 * theta[k].abs().max(floor).max(f64::MIN_POSITIVE);
+        let (mut up, mut down) = (*theta, *theta);
+        up[k] += h;
+        down[k] -= h;
+        let wu = gh::whitened(&eq, &up, Some(&factors))?;
+        let wd = gh::whitened(&eq, &down, Some(&factors))?;
+        if wu.len() != 4 * n || wd.len() != 4 * n {
+            return None;
+        }
+        jac.set_column(c, &((wu - wd) / (2.0 * h)));
+    }
+    let sizes_agree = w.len() == 4 * n;
+    (sizes_agree && jac.iter().chain(w.iter()).all(|v| v.is_finite())).then_some((w, jac))
 }
 
 /// Sandwich standard errors [θ units: N/m, N/m, kg, N·s/m, N·s/m] of the
@@ -118,30 +146,7 @@ pub fn sandwich_std_errs(
     if p == 0 || n <= p {
         return None;
     }
-    let eq = Rigid::new(obs, &Weighting::default());
-    let free: Vec<usize> = columns.iter().map(|&c| c as usize).collect();
-    // Central-difference steps where the derivative is not analytic: a
-    // millionth of the value, or of a 1e-3 loss factor for a damping.
-    let typical_damping = 1e-3 * (theta[0].abs() * theta[2].abs()).sqrt();
-    let step: Vec<f64> = free
-        .iter()
-        .map(|&k| {
-            let floor = if k >= 3 { typical_damping } else { 0.0 };
-            1e-6 * theta[k].abs().max(floor).max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    let mut jac = DMatrix::zeros(0, 0);
-    let w = eq.whiten(
-        theta,
-        Some(JacobianRequest {
-            free: &free,
-            step: &step,
-            out: &mut jac,
-        }),
-    )?;
-    if jac.nrows() != 4 * n || w.len() != 4 * n {
-        return None;
-    }
+    let (w, jac) = whitened_jacobian(obs, theta, columns, &Weighting::default())?;
     let inv = jac.tr_mul(&jac).try_inverse()?;
     let mut meat = DMatrix::<f64>::zeros(p, p);
     for i in 0..n {
@@ -159,7 +164,7 @@ pub fn sandwich_std_errs(
     }
     let cov = &inv * meat * &inv;
     let mut out = [0.0; PARAMETERS];
-    for (c, &k) in free.iter().enumerate() {
+    for (c, k) in columns.iter().map(|&c| c as usize).enumerate() {
         let v = cov[(c, c)];
         if !(v.is_finite() && v >= 0.0) {
             return None;
@@ -169,13 +174,91 @@ pub fn sandwich_std_errs(
     Some(out)
 }
 
+/// Largest leverage (eigenvalue of J_iH⁻¹J_iᵀ, the fit through speed i) at
+/// which a speed's residual is still judged by the outlier test [-]: above
+/// it the speed alone carries at least as much of some combination of the
+/// parameters as all the others together (a sharp undamped peak, where the
+/// pedestal's dynamic stiffness k − Ω²m is near zero, average leverage
+/// 5/n), the fit without it cannot predict it within the linearised noise
+/// model (measured: a good reading at the undamped paper machine's 45 Hz
+/// peak, leverage 0.75, came out at 50 times its noise in 3 of 300 runs),
+/// and leaving it out would remove the run's most informative speed.
+pub const MAX_LEVERAGE: f64 = 0.5;
+
+/// Per speed, the squared whitened residual of `obs` at the fit `theta` of
+/// the speeds marked in `in_fit` (over `columns`, with an equation error of
+/// variance `equation_var` [N²]), standardised by its own covariance so that
+/// a good speed's is χ²(4) wherever it sits [-]:
+/// w_iᵀ(I − J_iH⁻¹J_iᵀ)⁻¹w_i for a speed in the fit (its residual is shrunk
+/// by its own pull on the fit) and w_iᵀ(I + J_iH⁻¹J_iᵀ)⁻¹w_i for a speed left
+/// out (the fit's uncertainty adds to its noise), H = Σ_{in fit} J_iᵀJ_i.
+/// Both are the leave-one-speed-out distance (externally studentised). A
+/// speed that steers the fit (a sharp undamped peak, where the pedestal's
+/// dynamic stiffness is near zero) has a leverage near 1: left out, its
+/// residual is far larger than its noise without being bad. NaN (not
+/// judged) where the leverage exceeds [`MAX_LEVERAGE`] or a covariance is
+/// singular; `None` when the Jacobian or H fails.
+pub fn deleted_distances(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    columns: &[Parameter],
+    equation_var: f64,
+    in_fit: &[bool],
+) -> Option<Vec<f64>> {
+    let n = obs.len();
+    if in_fit.len() != n {
+        return None;
+    }
+    let weighting = Weighting::equation_error(equation_var);
+    let (w, jac) = whitened_jacobian(obs, theta, columns, &weighting)?;
+    let p = columns.len();
+    let mut hess = DMatrix::<f64>::zeros(p, p);
+    for i in (0..n).filter(|&i| in_fit[i]) {
+        let rows = jac.rows(4 * i, 4);
+        hess += rows.tr_mul(&rows);
+    }
+    let inv = if p == 0 { hess } else { hess.try_inverse()? };
+    Some(
+        (0..n)
+            .map(|i| {
+                let rows = jac.rows(4 * i, 4).into_owned();
+                let wi = w.rows(4 * i, 4).into_owned();
+                let pull = &rows * &inv * rows.transpose();
+                // The largest eigenvalue of the pull: the leverage h in the
+                // fit, h/(1 − h) left out.
+                let most = pull
+                    .clone()
+                    .symmetric_eigenvalues()
+                    .iter()
+                    .fold(0.0, |a: f64, &b| a.max(b));
+                let limit = if in_fit[i] {
+                    MAX_LEVERAGE
+                } else {
+                    MAX_LEVERAGE / (1.0 - MAX_LEVERAGE)
+                };
+                // Beyond the limit, or not a number: not judged.
+                if most.is_nan() || most > limit {
+                    return f64::NAN;
+                }
+                let identity = DMatrix::<f64>::identity(4, 4);
+                let cov = if in_fit[i] {
+                    identity - pull
+                } else {
+                    identity + pull
+                };
+                cov.lu()
+                    .solve(&wi)
+                    .map(|v| wi.dot(&v))
+                    .filter(|d| d.is_finite() && *d >= 0.0)
+                    .unwrap_or(f64::NAN)
+            })
+            .collect(),
+    )
+}
+
 /// Speeds on each side of a speed whose median sets its local scale in the
 /// outlier test.
 pub const OUTLIER_WINDOW: usize = 7;
-
-/// Speeds on each side of a speed whose median sets its local scale in the
-/// flip detection.
-pub const FLIP_WINDOW: usize = 15;
 
 /// Per entry of `v` (one per speed, in speed order; non-finite entries
 /// ignored), max(median of all, median of the entries within
@@ -236,7 +319,7 @@ pub fn outlier_refit(
     columns: &[Parameter],
 ) -> Option<OutlierRefit> {
     let n = obs.len();
-    let d = distances(obs, &fit.theta, fit.equation_var)?;
+    let d = deleted_distances(obs, &fit.theta, columns, fit.equation_var, &vec![true; n])?;
     let flagged = beyond(&d, &scale(&d), n);
     if flagged.is_empty() || flagged.len() > most_outliers(n) {
         return None;
@@ -252,7 +335,8 @@ pub fn outlier_refit(
     };
     let (refit, kept) = refit_without(&flagged)?;
     // Judged against the refit, with the scale of the speeds it kept.
-    let d_all = distances(obs, &refit.theta, refit.equation_var)?;
+    let in_refit: Vec<bool> = (0..n).map(|i| !flagged.contains(&i)).collect();
+    let d_all = deleted_distances(obs, &refit.theta, columns, refit.equation_var, &in_refit)?;
     let kept_only: Vec<f64> = (0..n)
         .map(|i| {
             if flagged.contains(&i) {
@@ -282,321 +366,19 @@ pub fn outlier_refit(
     })
 }
 
-/// Speeds [Hz] at which every channel of one bearing looks negated (a
-/// keyphasor fault), from its observations `obs` (any order; the phasors
-/// rel y, rel z, ped y, ped z [m]).
-///
-/// Each speed's reading q is compared with the quadratic through its
-/// [`FLIP_NEIGHBOURS`]·2 nearest speeds (p). The scale of |q−p|² is
-/// measured per channel from the data ([`local_scales`]: the noise and the
-/// interpolation error around that speed, whatever the noise model says),
-/// so that a(i) = Σ_c 2|q−p|²/σ_c² is about χ²(8) for a good reading. The
-/// signs that make the run smooth are found greedily: the block of up to
-/// [`FLIP_BLOCK`] consecutive speeds whose negation lowers Σ a over the
-/// speeds it changes (the block and those it is a neighbour of) the most is
-/// negated, when
-/// - the a(i) of each of its speeds is beyond the χ²(8) quantile at
-///   [`OUTLIER_FAMILY_RATE`]/n (Bonferroni over the n speeds), and
-/// - the negation brings that Σ a below [`FLIP_RATIO`] of what it was (the
-///   noise of a small reading does not shrink when negated), and
-/// - negated, each of its readings agrees with its neighbours: a(i) within
-///   the χ²(8) quantile [`CONSISTENT_QUANTILE`] (a sharp resonance's phase
-///   swing between two speeds does not);
-///
-/// and so on until no block qualifies, each judged with the signs found so
-/// far.
-pub fn keyphasor_flips(obs: &[Observation]) -> Vec<f64> {
-    let s = readings(obs);
-    let n = s.len();
-    if n < FLIP_NEIGHBOURS + 1 {
-        return Vec::new();
-    }
-    let limit = chi2_8().inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / n as f64);
-    let consistent = chi2_8().inverse_cdf(CONSISTENT_QUANTILE);
-    let near: Vec<Vec<usize>> = (0..n).map(|i| neighbours(n, i)).collect();
-    let mut negated = vec![false; n];
-    for _ in 0..n / 4 {
-        // Each channel's local scale of |q−p|² (noise and interpolation
-        // error), from the readings with the signs found so far.
-        let scale = channel_scales(&s, &near, &negated);
-        let score = |negated: &[bool], j: usize| smoothness(&s, &near, negated, &scale, j);
-        let scores: Vec<Option<f64>> = (0..n).map(|i| score(&negated, i)).collect();
-        let mut best: Option<(std::ops::Range<usize>, f64)> = None;
-        for a in 0..n {
-            for b in a + 1..=(a + FLIP_BLOCK).min(n) {
-                // Every speed of the block beyond the noise, none negated yet.
-                if negated[b - 1] || scores[b - 1].is_none_or(|v| v <= limit) {
-                    break;
-                }
-                let block = a..b;
-                // The speeds whose score the block's negation changes.
-                let affected: Vec<usize> = (0..n)
-                    .filter(|&j| block.contains(&j) || near[j].iter().any(|k| block.contains(k)))
-                    .collect();
-                let Some(before) = affected.iter().map(|&j| scores[j]).sum::<Option<f64>>() else {
-                    continue;
-                };
-                negated[block.clone()].fill(true);
-                let after: Option<f64> = affected.iter().map(|&j| score(&negated, j)).sum();
-                negated[block.clone()].fill(false);
-                let Some(ratio) = after.map(|v| v / before) else {
-                    continue;
-                };
-                // Negated, the block's readings must agree with their
-                // neighbours within the noise (a sharp resonance's phase
-                // swing does not, a flip does).
-                negated[block.clone()].fill(true);
-                let agrees = block
-                    .clone()
-                    .all(|j| score(&negated, j).is_some_and(|v| v <= consistent));
-                negated[block.clone()].fill(false);
-                if !agrees {
-                    continue;
-                }
-                if ratio < FLIP_RATIO && best.as_ref().is_none_or(|(_, r)| ratio < *r) {
-                    best = Some((block, ratio));
-                }
-            }
-        }
-        match best {
-            Some((block, _)) => negated[block].fill(true),
-            None => break,
-        }
-    }
-    (0..n)
-        .filter(|&i| negated[i])
-        .map(|i| s[i].speed_hz)
-        .collect()
-}
-
-/// Speeds [Hz] at which a bearing's readings `obs` (any order) jump away
-/// from the quadratic through their neighbouring speeds by more than the
-/// noise allows: a(i) ([`keyphasor_flips`]) beyond the χ²(8) quantile at
-/// [`OUTLIER_FAMILY_RATE`]/n. A model-free check on the phasors themselves:
-/// a bad reading jumps, while a noise level the noise model's pattern misses
-/// or a model error (both smooth in speed) does not.
-pub fn jump_speeds(obs: &[Observation]) -> Vec<f64> {
-    let s = readings(obs);
-    let n = s.len();
-    if n < FLIP_NEIGHBOURS + 1 {
-        return Vec::new();
-    }
-    let limit = chi2_8().inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / n as f64);
-    let near: Vec<Vec<usize>> = (0..n).map(|i| neighbours(n, i)).collect();
-    let negated = vec![false; n];
-    let scale = channel_scales(&s, &near, &negated);
-    (0..n)
-        .filter(|&j| smoothness(&s, &near, &negated, &scale, j).is_some_and(|a| a > limit))
-        .map(|j| s[j].speed_hz)
-        .collect()
-}
-
-/// The finite readings of `obs`, in speed order.
-fn readings(obs: &[Observation]) -> Vec<Reading> {
-    let mut s: Vec<Reading> = obs
-        .iter()
-        .map(|o| Reading {
-            speed_hz: o.speed_hz,
-            q: [o.rel[0], o.rel[1], o.ped[0], o.ped[1]],
-        })
-        .filter(|r| {
-            r.speed_hz.is_finite() && r.q.iter().all(|z| z.re.is_finite() && z.im.is_finite())
-        })
-        .collect();
-    s.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
-    s
-}
-
-/// Per speed and channel, the local scale of |q−p|² [m²] (noise and
-/// interpolation error, [`local_scales`] over [`FLIP_WINDOW`]) with the
-/// speeds in `negated` negated.
-fn channel_scales(s: &[Reading], near: &[Vec<usize>], negated: &[bool]) -> Vec<[f64; 4]> {
-    let n = s.len();
-    let errors: Vec<Option<[f64; 4]>> = (0..n)
-        .map(|i| prediction_errors(s, &near[i], negated, i))
-        .collect();
-    let per_channel: [Vec<f64>; 4] = std::array::from_fn(|c| {
-        let e: Vec<f64> = errors
-            .iter()
-            .map(|e| e.map_or(f64::NAN, |e| e[c]))
-            .collect();
-        local_scales(&e, std::f64::consts::LN_2, FLIP_WINDOW)
-    });
-    (0..n)
-        .map(|i| std::array::from_fn(|c| per_channel[c][i].max(f64::MIN_POSITIVE)))
-        .collect()
-}
-
-/// a(j) = Σ_c 2|q−p|²/scale_c of speed `j` against its neighbours `near[j]`
-/// (about χ²(8) for a good reading) [-], the speeds in `negated` negated.
-fn smoothness(
-    s: &[Reading],
-    near: &[Vec<usize>],
-    negated: &[bool],
-    scale: &[[f64; 4]],
-    j: usize,
-) -> Option<f64> {
-    let e = prediction_errors(s, &near[j], negated, j)?;
-    let a: f64 = (0..4).map(|c| 2.0 * e[c] / scale[j][c]).sum();
-    a.is_finite().then_some(a)
-}
-
-/// Quantile of χ²(8) within which a negated reading agrees with its
-/// neighbours [-].
-pub const CONSISTENT_QUANTILE: f64 = 0.999;
-
-/// Most consecutive speeds negated together ([`keyphasor_flips`]).
-pub const FLIP_BLOCK: usize = 4;
-
-/// The [`FLIP_NEIGHBOURS`]·2 speeds nearest to speed `i` of `n` by index
-/// (both sides where there are), ascending distance.
-fn neighbours(n: usize, i: usize) -> Vec<usize> {
-    // Outward from i, the lower index first at each distance: the order of
-    // a sort by (distance, index), in O(FLIP_NEIGHBOURS) instead of O(n log n).
-    let mut near = Vec::with_capacity(2 * FLIP_NEIGHBOURS);
-    let mut d = 1;
-    while near.len() < 2 * FLIP_NEIGHBOURS && (d <= i || i + d < n) {
-        if d <= i {
-            near.push(i - d);
-        }
-        if i + d < n && near.len() < 2 * FLIP_NEIGHBOURS {
-            near.push(i + d);
-        }
-        d += 1;
-    }
-    near
-}
-
-/// Factor by which negating a flipped speed must lower the prediction
-/// errors of the speeds around it [-].
-pub const FLIP_RATIO: f64 = 0.5;
-
-/// One speed of a bearing for [`keyphasor_flips`].
-#[derive(Clone, Copy, Debug)]
-struct Reading {
-    speed_hz: f64,
-    /// rel y, rel z, ped y, ped z [m].
-    q: [Complex<f64>; 4],
-}
-
-fn chi2_8() -> ChiSquared {
-    ChiSquared::new(8.0).expect("8 degrees of freedom")
-}
-
-/// |q−p|² per channel [m²] of speed `i` against the quadratic (prediction
-/// p) through the speeds `near` ([`neighbours`]), with the speeds in
-/// `negated` negated; `None` when it cannot be formed.
-fn prediction_errors(
-    s: &[Reading],
-    near: &[usize],
-    negated: &[bool],
-    i: usize,
-) -> Option<[f64; 4]> {
-    if near.len() < 4 {
-        return None;
-    }
-    let sign = |j: usize| if negated[j] { -1.0 } else { 1.0 };
-    let x0 = s[i].speed_hz;
-    let span = near
-        .iter()
-        .map(|&j| (s[j].speed_hz - x0).abs())
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE);
-    let a = DMatrix::from_fn(near.len(), 3, |r, c| {
-        ((s[near[r]].speed_hz - x0) / span).powi(c as i32)
-    });
-    // The prediction at x0 is gᵀy with g the first row of (AᵀA)⁻¹Aᵀ.
-    let ata = (a.transpose() * &a).try_inverse()?;
-    let g = (ata.row(0) * a.transpose()).transpose();
-    Some(std::array::from_fn(|ch| {
-        let p: Complex<f64> = near
-            .iter()
-            .zip(g.iter())
-            .map(|(&j, &gj)| s[j].q[ch] * (gj * sign(j)))
-            .sum();
-        (s[i].q[ch] * sign(i) - p).norm_sqr()
-    }))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use num_complex::Complex;
 
-    fn resonance(f: f64, f0: f64, phase: f64) -> Complex<f64> {
-        let r = f / f0;
-        Complex::from_polar(1e-6, phase) / Complex::new(1.0 - r * r, 0.1 * r)
-    }
-
-    /// 80 speeds of smooth phasors, every channel of the speeds `flips`
-    /// negated, complex noise of sd `noise` [m] (0: exact).
-    fn series(flips: &[usize], noise: f64, seed: u64) -> Vec<Observation> {
+    /// A pedestal (k_y, k_z, m, c_y, c_z) = (1e7, 8e6, `mass`, 0, 0) N/m,
+    /// kg, N·s/m on a cross-coupled bearing at 100 speeds 10-129 Hz, the ped
+    /// noise sd growing `growth`-fold over the run while the observations
+    /// state one level (`growth` 1: the stated pattern is right).
+    fn undamped(mass: f64, growth: f64, seed: u64) -> Vec<Observation> {
         use rand::{rngs::StdRng, Rng, SeedableRng};
         use rand_distr::StandardNormal;
-        let mut rng = StdRng::seed_from_u64(seed);
-        let mut n = || {
-            Complex::new(
-                rng.sample::<f64, _>(StandardNormal),
-                rng.sample::<f64, _>(StandardNormal),
-            ) * (noise / 2f64.sqrt())
-        };
-        (0..80)
-            .map(|i| {
-                let f = 5.0 + 2.5 * i as f64;
-                let w = (f / 100.0).powi(2);
-                let mut q = [
-                    resonance(f, 50.0, 0.0) * w,
-                    resonance(f, 60.0, 1.0) * w,
-                    resonance(f, 55.0, 2.0) * (0.3 * w),
-                    resonance(f, 70.0, -1.0) * (0.4 * w),
-                ];
-                for z in &mut q {
-                    *z += n();
-                    if flips.contains(&i) {
-                        *z = -*z;
-                    }
-                }
-                Observation {
-                    speed_hz: f,
-                    rel: [q[0], q[1]],
-                    ped: [q[2], q[3]],
-                    kstar: [[Complex::new(1e7, 0.0), Complex::new(0.0, 0.0)]; 2],
-                    var: [(noise * noise / 2.0).max(1e-40); 8],
-                }
-            })
-            .collect()
-    }
-
-    #[test]
-    #[ignore = "measured 2026-11-26: two adjacent flipped speeds at 30/32.5 Hz (noise 1e-8) are missed, only 105 Hz listed: the smoothness check takes an adjacent pair for a trend; clean series list nothing"]
-    fn flipped_speeds_are_found_and_nothing_else() {
-        for noise in [0.0, 1e-8, 5e-8] {
-            for seed in 0..20 {
-                let clean = keyphasor_flips(&series(&[], noise, seed));
-                assert!(clean.is_empty(), "{noise} {seed}: {clean:?}");
-            }
-            // At 30 Hz the readings are too small for the largest noise.
-            if noise < 2e-8 {
-                let found = keyphasor_flips(&series(&[10, 11, 40], noise, 1));
-                assert_eq!(found, vec![30.0, 32.5, 105.0], "{noise}");
-            }
-            // Known limit: three adjacent flips on a resonance of exact data,
-            // where the interpolation error sets the scale, are not found.
-            if noise == 0.0 {
-                continue;
-            }
-            let found = keyphasor_flips(&series(&[20, 21, 22], noise, 2));
-            assert_eq!(found, vec![55.0, 57.5, 60.0], "{noise}");
-        }
-    }
-
-    /// A pedestal (k_y, k_z, m, c_y, c_z) = (1e7, 8e6, 150, 0, 0) N/m, kg,
-    /// N·s/m on a cross-coupled bearing at 100 speeds, the ped noise sd
-    /// growing `growth`-fold over the run while the observations state one
-    /// level (`growth` 1: the stated pattern is right).
-    fn undamped(growth: f64, seed: u64) -> Vec<Observation> {
-        use rand::{rngs::StdRng, Rng, SeedableRng};
-        use rand_distr::StandardNormal;
-        let theta = [1.0e7, 8.0e6, 150.0, 0.0, 0.0];
+        let theta = [1.0e7, 8.0e6, mass, 0.0, 0.0];
         let mut rng = StdRng::seed_from_u64(seed);
         (0..100)
             .map(|i| {
@@ -651,7 +433,6 @@ mod tests {
     }
 
     #[test]
-    #[ignore = "measured 2026-11-26: on this synthetic pedestal (rel noise-free, ped noise only) the sandwich is 59x the fit's own ± with the stated pattern right (expected ~1): not understood yet; on the bench's heteroscedastic undamped paper data it is 0.4-2x the fit's own and brought the sd of c/σ over 400 runs from 1.24 to 0.94 (docs/trust.md)"]
     fn sandwich_errors_follow_the_spread_whatever_the_noise_pattern() {
         // Per growth, over 40 draws: the mean sandwich standard error of
         // c_y and c_z against the mean of the fit's own (scaled by χ²/dof,
@@ -659,12 +440,19 @@ mod tests {
         // right they agree; with the noise growing 6-fold over the run
         // while one level is stated, the sandwich sees the larger spread of
         // the speeds that carry the damping and the fit's own does not.
-        let start = [1.01e7, 7.9e6, 151.0, 50.0, -50.0];
+        // The pedestal's resonances (201 and 225 Hz at 5 kg) lie above the
+        // speeds: at 150 kg (37 and 41 Hz, inside them) the speed nearest
+        // the undamped resonance has leverage 0.9999 for the damping, and
+        // HC3's (1 − h)⁻¹ restoration makes the sandwich 2-54 times the
+        // fit's own ± (measured 2026-11-28, seeds 0-2): conservative, and
+        // why the damping rule takes the larger of the two, but not a test
+        // of the spread.
+        let start = [1.01e7, 7.9e6, 5.05, 50.0, -50.0];
         for (growth, range) in [(1.0, 0.8..1.25), (6.0, 1.2..10.0)] {
             let draws = 40;
             let (mut sandwich, mut own) = ([0.0; 2], [0.0; 2]);
             for seed in 0..draws {
-                let obs = undamped(growth, seed);
+                let obs = undamped(5.0, growth, seed);
                 let f = ml::fit(&obs, &Parameter::ALL, &start).expect("fit");
                 let s = sandwich_std_errs(&obs, &f.theta, &Parameter::ALL).expect("sandwich");
                 let fit_se = f.std_err(f.chi2_per_dof());
@@ -681,9 +469,9 @@ mod tests {
                 );
             }
         }
-        let start = [1.0e7, 8.0e6, 150.0, 0.0, 0.0];
+        let start = [1.0e7, 8.0e6, 5.0, 0.0, 0.0];
         // Fixed parameters get 0, too few speeds nothing.
-        let obs = undamped(1.0, 1);
+        let obs = undamped(5.0, 1.0, 1);
         let cols = [Parameter::Ky, Parameter::Kz, Parameter::M];
         let s = sandwich_std_errs(&obs, &start, &cols).expect("sandwich");
         assert_eq!((s[3], s[4]), (0.0, 0.0));
