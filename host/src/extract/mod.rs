@@ -174,12 +174,22 @@ pub fn measurements(extraction: &Extraction, config: &Channels) -> Vec<Measureme
                 .filter(|s| s.is_finite())
                 .collect();
             known.sort_by(f64::total_cmp);
-            let median = known.get(known.len() / 2).copied().unwrap_or(0.0);
+            // No phasor of this channel came with a noise estimate (too few
+            // revolutions), or every revolution was identical (an exactly
+            // periodic digital recording: scatter 0): there is no measured
+            // scatter to write, and 0 would claim exact phasors. The rows
+            // then have no noise columns, so the run has none and Plinth
+            // estimates the noise from the data (formats.md).
+            let median = if known.iter().all(|&s| s == 0.0) {
+                None
+            } else {
+                known.get(known.len() / 2).copied()
+            };
             for m in rows.iter_mut().filter(|m| &m.bearing == name) {
-                if let Some(s) = &mut m.noise_sd {
-                    if !s[k].is_finite() {
-                        s[k] = median;
-                    }
+                match (median, &mut m.noise_sd) {
+                    (Some(median), Some(s)) if !s[k].is_finite() || s[k] == 0.0 => s[k] = median,
+                    (None, sd) => *sd = None,
+                    _ => {}
                 }
             }
         }
