@@ -1,0 +1,229 @@
+//! The convention mistakes field data commonly carry, and how each is
+//! undone on a run (its data, its bearing table, its noise).
+
+use super::*;
+
+/// A convention mistake that field data commonly carry (formats.md names
+/// them; serialised in snake_case: `conjugated`, `swapped_yz`, ...).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Convention {
+    /// Every phasor conjugated (phase lag read as lead).
+    Conjugated,
+    /// y and z of the readings exchanged.
+    SwappedYz,
+    /// `rel` written as pedestal minus rotor.
+    RelNegated,
+    /// Bearing matrices K_b, C_b transposed.
+    BearingTransposed,
+    /// The bearing's cross-coupling terms with the wrong sign.
+    CrossCouplingSign,
+    /// Speeds in rpm read as Hz.
+    SpeedInRpm,
+    /// Only the pedestal phasors conjugated.
+    PedConjugated,
+    /// Pedestal velocity written as displacement.
+    PedVelocity,
+}
+
+impl Convention {
+    /// Every mistake tried, in report order.
+    pub const ALL: [Convention; 8] = [
+        Convention::Conjugated,
+        Convention::SwappedYz,
+        Convention::RelNegated,
+        Convention::BearingTransposed,
+        Convention::CrossCouplingSign,
+        Convention::SpeedInRpm,
+        Convention::PedConjugated,
+        Convention::PedVelocity,
+    ];
+
+    /// The name used in `--json` and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Convention::Conjugated => "conjugated",
+            Convention::SwappedYz => "swapped_yz",
+            Convention::RelNegated => "rel_negated",
+            Convention::BearingTransposed => "bearing_transposed",
+            Convention::CrossCouplingSign => "cross_coupling_sign",
+            Convention::SpeedInRpm => "speed_in_rpm",
+            Convention::PedConjugated => "ped_conjugated",
+            Convention::PedVelocity => "ped_velocity",
+        }
+    }
+
+    /// What the mistake is, for people.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Convention::Conjugated => {
+                "the phasors are conjugated (phase lag read as lead: docs/formats.md wants q(t) = Re{Q·e^{iΩt}})"
+            }
+            Convention::SwappedYz => {
+                "the y and z readings are swapped (docs/formats.md: y vertical, z horizontal)"
+            }
+            Convention::RelNegated => {
+                "rel is pedestal minus rotor (docs/formats.md: rel = rotor − pedestal)"
+            }
+            Convention::BearingTransposed => {
+                "the bearing matrices are transposed (kyz and kzy, cyz and czy exchanged)"
+            }
+            Convention::CrossCouplingSign => {
+                "the bearing cross terms kyz, kzy, cyz, czy have the wrong sign"
+            }
+            Convention::SpeedInRpm => "the speeds are in rpm, not Hz",
+            Convention::PedConjugated => {
+                "only the pedestal phasors are conjugated (pick-ups read with phase lead, probes with lag: one phase convention for rel and ped)"
+            }
+            Convention::PedVelocity => {
+                "the pedestal readings are velocities written as displacements (formats.md: ped in m; divide a velocity by iΩ)"
+            }
+        }
+    }
+
+    /// The run as it would be had the mistake not been made: the mistake
+    /// undone on the raw data (module docs).
+    pub fn correct(self, run: &RunDir) -> RunDir {
+        let mut out = run.clone();
+        if self == Convention::SpeedInRpm {
+            let schedules = run.bearing_schedules();
+            let table_in_same_unit = run.measurements.iter().all(|m| {
+                schedules
+                    .get(&m.bearing)
+                    .is_some_and(|s| s.at(m.speed_hz).is_ok())
+            });
+            for m in &mut out.measurements {
+                m.speed_hz /= crate::present::table::RPM_PER_HZ;
+            }
+            if table_in_same_unit {
+                for b in &mut out.bearings {
+                    b.speed_hz /= crate::present::table::RPM_PER_HZ;
+                }
+            }
+            return out;
+        }
+        self.fix_measurements(&mut out.measurements);
+        for b in &mut out.bearings {
+            self.fix_coefficients(&mut b.coefficients);
+        }
+        out
+    }
+
+    /// Undoes the mistake on every row's phasors and noise columns (what
+    /// [`Convention::correct`] does to the measurements, except for
+    /// `speed_in_rpm`, which changes the speeds).
+    pub(super) fn fix_measurements(self, measurements: &mut [crate::rundir::Measurement]) {
+        for m in measurements {
+            self.fix_phasors(m.speed_hz, &mut m.rel, &mut m.ped);
+            if let Some(sd) = &mut m.noise_sd {
+                self.fix_noise_sd(m.speed_hz, sd);
+            }
+        }
+    }
+
+    /// Whether undoing the mistake changes `run` at all
+    /// (`self.correct(run) != *run`), without copying it.
+    #[allow(clippy::eq_op)]
+    pub fn changes(self, run: &RunDir) -> bool {
+        if self == Convention::SpeedInRpm {
+            return self.correct(run) != *run;
+        }
+        let same_row = |m: &crate::rundir::Measurement| {
+            let (mut rel, mut ped, mut sd) = (m.rel, m.ped, m.noise_sd);
+            self.fix_phasors(m.speed_hz, &mut rel, &mut ped);
+            if let Some(sd) = &mut sd {
+                self.fix_noise_sd(m.speed_hz, sd);
+            }
+            // `Measurement`'s equality, field by field (a NaN is unequal
+            // to itself there too).
+            let same_speed = m.speed_hz == m.speed_hz;
+            same_speed && rel == m.rel && ped == m.ped && sd == m.noise_sd
+        };
+        let same_table_row = |b: &crate::rundir::BearingRow| {
+            let mut c = b.coefficients;
+            self.fix_coefficients(&mut c);
+            let same_speed = b.speed_hz == b.speed_hz;
+            same_speed && c == b.coefficients
+        };
+        !(run.measurements.iter().all(same_row)
+            && run.bearings.iter().all(same_table_row)
+            && run.truth == run.truth)
+    }
+
+    /// Undoes the mistake on one row's rotor-relative and pedestal phasors
+    /// `rel`, `ped` [m] measured at `speed_hz` [Hz] (nothing for the
+    /// mistakes of the bearing table and the speeds).
+    pub fn fix_phasors(self, speed_hz: f64, rel: &mut Phasor2<f64>, ped: &mut Phasor2<f64>) {
+        match self {
+            Convention::Conjugated => {
+                for z in rel.iter_mut().chain(ped.iter_mut()) {
+                    *z = z.conj();
+                }
+            }
+            Convention::SwappedYz => {
+                rel.swap(0, 1);
+                ped.swap(0, 1);
+            }
+            Convention::RelNegated => {
+                for z in rel {
+                    *z = -*z;
+                }
+            }
+            Convention::PedConjugated => {
+                for z in ped {
+                    *z = z.conj();
+                }
+            }
+            Convention::PedVelocity => {
+                let omega = plinth_shared::phasor::omega_from_hz(speed_hz);
+                for z in ped {
+                    *z /= num_complex::Complex::new(0.0, omega);
+                }
+            }
+            Convention::BearingTransposed
+            | Convention::CrossCouplingSign
+            | Convention::SpeedInRpm => {}
+        }
+    }
+
+    /// Undoes the mistake on one row's noise columns `sd` [m] (rel y, rel z,
+    /// ped y, ped z) measured at `speed_hz` [Hz].
+    fn fix_noise_sd(self, speed_hz: f64, sd: &mut crate::rundir::NoiseSd) {
+        match self {
+            Convention::SwappedYz => {
+                sd.swap(0, 1);
+                sd.swap(2, 3);
+            }
+            Convention::PedVelocity => {
+                let omega = plinth_shared::phasor::omega_from_hz(speed_hz);
+                sd[2] /= omega;
+                sd[3] /= omega;
+            }
+            _ => {}
+        }
+    }
+
+    /// Undoes the mistake on one row of the bearing table (nothing for the
+    /// mistakes of the measurements).
+    pub fn fix_coefficients(self, c: &mut BearingCoefficients<f64>) {
+        match self {
+            Convention::BearingTransposed => {
+                (c.k[0][1], c.k[1][0]) = (c.k[1][0], c.k[0][1]);
+                (c.c[0][1], c.c[1][0]) = (c.c[1][0], c.c[0][1]);
+            }
+            Convention::CrossCouplingSign => {
+                for (i, j) in [(0, 1), (1, 0)] {
+                    c.k[i][j] = -c.k[i][j];
+                    c.c[i][j] = -c.c[i][j];
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+impl fmt::Display for Convention {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
