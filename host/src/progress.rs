@@ -96,9 +96,11 @@ impl Ticker {
             bar.enable_steady_tick(Duration::from_millis(200));
             let after = show_after();
             if after.is_zero() {
-                // Shown at once (and drawn now, not at the next tick), so
-                // even a command faster than one tick shows its line.
-                multi().add(bar.clone()).tick();
+                // Shown at once and drawn now (`tick` does nothing while a
+                // steady tick runs, whose first tick may have fallen before
+                // the bar joined the display), so even a command faster
+                // than one tick shows its line.
+                multi().add(bar.clone()).force_draw();
                 return Ticker { bar, live };
             }
             let delayed = bar.downgrade();
