@@ -441,6 +441,23 @@ mod tests {
         assert!(e.contains("elemnts") && e.contains("line"), "{e}");
     }
 
+    /// A machine file's bearing names follow the one name rule
+    /// (`crate::names`): a field name like `Brg. 2 (DE)` is accepted, a
+    /// path or a CSV separator is refused at its key.
+    #[test]
+    fn bearing_names_follow_the_one_name_rule() {
+        let ok = BASE.replace("name = \"right\"", "name = \"Brg. 2 (DE)\"");
+        let m = Machine::from_toml_str(&ok, "m.toml").unwrap();
+        assert_eq!(m.bearings[1].name, "Brg. 2 (DE)");
+        for bad in ["../x", "DE/NDE", "a,b", "", ".."] {
+            let text = BASE.replace("name = \"right\"", &format!("name = {bad:?}"));
+            let e = Machine::from_toml_str(&text, "m.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("m.toml: bearings[1].name: bearing `"), "{bad}: {e}");
+        }
+    }
+
     #[test]
     fn table_interpolates_and_refuses_to_extrapolate() {
         let c = |k: f64| BearingCoefficients::<f64>::isotropic(k, 0.0);

@@ -244,12 +244,7 @@ fn read_bases(ctx: &Ctx, raw: &[RawBody]) -> Result<Vec<Base>, MachineError> {
             .name
             .as_deref()
             .ok_or_else(|| ctx.err(format!("{key}.name"), "missing: a base needs a name"))?;
-        if !bearing_name_ok(name) {
-            return Err(ctx.err(
-                format!("{key}.name"),
-                format!("{:?}: use letters, digits, '_', '-', '.' only", name),
-            ));
-        }
+        crate::names::check("base", name).map_err(|m| ctx.err(format!("{key}.name"), m))?;
         if let Some(other) = bases.iter().position(|b| b.name == name) {
             return Err(ctx.err(
                 format!("{key}.name"),
@@ -389,13 +384,6 @@ fn element_budget(ctx: &Ctx, raw: &RawMachine) -> Result<(), MachineError> {
         super::budget::available_bytes(),
     )
     .map_err(|m| ctx.err(format!("shaft.sections[{}].elements", largest.0), m))
-}
-
-fn bearing_name_ok(name: &str) -> bool {
-    !name.is_empty()
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.')
 }
 
 impl Machine {
@@ -592,15 +580,8 @@ impl Machine {
         let mut weight_share: Vec<usize> = Vec::new();
         for (b, rb) in raw.bearings.iter().enumerate() {
             let key = format!("bearings[{b}]");
-            if !bearing_name_ok(&rb.name) {
-                return Err(ctx.err(
-                    format!("{key}.name"),
-                    format!(
-                        "{:?}: use letters, digits, '_', '-', '.' only (it becomes a CSV field)",
-                        rb.name
-                    ),
-                ));
-            }
+            crate::names::check("bearing", &rb.name)
+                .map_err(|m| ctx.err(format!("{key}.name"), m))?;
             if let Some(other) = bearings.iter().position(|x: &Bearing| x.name == rb.name) {
                 return Err(ctx.err(
                     format!("{key}.name"),

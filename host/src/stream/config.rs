@@ -253,16 +253,8 @@ impl StreamConfig {
                     ch.adc
                 );
             }
-            let name_ok = !ch.bearing.is_empty()
-                && ch
-                    .bearing
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.');
-            if !name_ok {
-                bail!(
-                    "{here}: bearing name {:?} must be non-empty ASCII letters, digits, '_', '-' or '.'",
-                    ch.bearing
-                );
+            if let Err(m) = crate::names::check("bearing", &ch.bearing) {
+                bail!("{here}: {m}");
             }
             if !(ch.sensitivity.is_finite() && ch.sensitivity != 0.0) {
                 bail!(
@@ -610,6 +602,9 @@ mod tests {
             (
                 "bearings = \"b.csv\"\nchannels = []\n".to_string(),
                 "no [[channels]]",
+            ),            (
+                format!("bearings = \"b.csv\"\n{}", four("../DE", 0)),
+                "bearing `../DE`: the character '/' is not allowed",
             ),
         ];
         for (text, needle) in cases {
