@@ -454,7 +454,10 @@ mod tests {
             let e = Machine::from_toml_str(&text, "m.toml")
                 .unwrap_err()
                 .to_string();
-            assert!(e.starts_with("m.toml: bearings[1].name: bearing `"), "{bad}: {e}");
+            assert!(
+                e.starts_with("m.toml: bearings[1].name: bearing `"),
+                "{bad}: {e}"
+            );
         }
     }
 
