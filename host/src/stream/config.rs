@@ -602,7 +602,8 @@ mod tests {
             (
                 "bearings = \"b.csv\"\nchannels = []\n".to_string(),
                 "no [[channels]]",
-            ),            (
+            ),
+            (
                 format!("bearings = \"b.csv\"\n{}", four("../DE", 0)),
                 "bearing `../DE`: the character '/' is not allowed",
             ),
