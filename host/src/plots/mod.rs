@@ -25,6 +25,7 @@
 
 mod axis;
 mod chart;
+mod figures;
 pub mod labels;
 mod legend;
 mod phase;
@@ -32,6 +33,7 @@ pub mod stiffness;
 
 use axis::*;
 pub use chart::*;
+pub use figures::*;
 use legend::*;
 pub use phase::*;
 
