@@ -5,6 +5,7 @@ builders that prints one count per class.
 import hashlib
 import os
 import re
+import shutil
 import signal
 import subprocess
 import threading
@@ -79,6 +80,27 @@ def interrupted(argv, d, delay):
     return p.returncode, o.decode("utf-8", "replace"), e.decode("utf-8", "replace")
 
 
+def complete(c, atomic, now):
+    """Whether the --out an interrupted command left (`now`, a snapshot)
+    is the whole of what it writes uninterrupted (the signal came after
+    the commit): the same files with the same tables and JSON."""
+    if now is None:
+        return False
+    check = c["dir"] + "/out-check"
+    argv = [check if a == atomic else a for a in c["argv"] if a != "--force"]
+    p = run(argv, cwd=c["dir"], timeout=LIMIT)
+    if p.returncode != 0:
+        return False
+    want = snapshot(check, [])
+    shutil.rmtree(check, ignore_errors=True)
+    rel = lambda s, root: {os.path.relpath(k, root): v for k, v in s.items()
+                           if not os.path.basename(k).startswith(".")}
+    a, b = rel(now, atomic), rel(want, check)
+    if a.keys() != b.keys():
+        return False
+    return all(a[k] == b[k] for k in a if k.endswith((".csv", ".json")))
+
+
 def after_interrupt(c, atomic, atomic_before, lost, new, err):
     """The class of a command stopped by SIGINT: the --out as it was (or
     still absent), nothing else changed, and what the interrupted command
@@ -87,9 +109,9 @@ def after_interrupt(c, atomic, atomic_before, lost, new, err):
     now = snapshot(atomic, []) if os.path.isdir(atomic) else None
     if lost:
         return "data-loss", "changed or removed: " + ", ".join(lost[:5]), err
-    if atomic_before is not None and now != atomic_before:
-        return "data-loss", "the run under --out changed though the command was interrupted", err
-    if atomic_before is None and now is not None:
+    if now != atomic_before and not complete(c, atomic, now):
+        if atomic_before is not None:
+            return "data-loss", "the run under --out changed though the command was interrupted", err
         return "garbage", "an interrupted command left a partial --out", err
     if new:
         return "outside-out", "new: " + ", ".join(new[:5]), err
