@@ -43,9 +43,18 @@ fn a_truth_without_a_measured_bearing_says_which_in_text_and_json() {
     assert!(!String::from_utf8_lossy(&o.stderr).contains("truth"));
     for b in ["left", "right"] {
         let rows = block(&stdout, b);
-        assert!(rows.iter().any(|l| l.trim_start().starts_with("truth") && !l.contains("none")), "{b}:\n{stdout}");
+        assert!(
+            rows.iter()
+                .any(|l| l.trim_start().starts_with("truth") && !l.contains("none")),
+            "{b}:\n{stdout}"
+        );
     }
-    let o = plinth_quiet().arg("identify").arg(&run).arg("--json").output().unwrap();
+    let o = plinth_quiet()
+        .arg("identify")
+        .arg(&run)
+        .arg("--json")
+        .output()
+        .unwrap();
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(json.get("bearings_without_truth").is_none(), "{json}");
 
@@ -61,22 +70,41 @@ fn a_truth_without_a_measured_bearing_says_which_in_text_and_json() {
     );
     let right = block(&stdout, "right");
     assert!(
-        right.iter().any(|l| l.trim_start().starts_with("truth") && l.contains("none")),
+        right
+            .iter()
+            .any(|l| l.trim_start().starts_with("truth") && l.contains("none")),
         "{stdout}"
     );
-    assert!(!right.iter().any(|l| l.trim_start().starts_with("error")), "{stdout}");
+    assert!(
+        !right.iter().any(|l| l.trim_start().starts_with("error")),
+        "{stdout}"
+    );
     let left = block(&stdout, "left");
-    assert!(left.iter().any(|l| l.trim_start().starts_with("error")), "{stdout}");
+    assert!(
+        left.iter().any(|l| l.trim_start().starts_with("error")),
+        "{stdout}"
+    );
 
-    let o = plinth_quiet().arg("identify").arg(&run).arg("--json").output().unwrap();
+    let o = plinth_quiet()
+        .arg("identify")
+        .arg(&run)
+        .arg("--json")
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", text(&o));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(json["bearings_without_truth"], serde_json::json!(["right"]), "{json}");
+    assert_eq!(
+        json["bearings_without_truth"],
+        serde_json::json!(["right"]),
+        "{json}"
+    );
     assert_eq!(json["pedestals"].as_array().unwrap().len(), 2);
 
     // Truth naming a bearing the run lacks stays an error.
     let path = run.join("truth.json");
-    let edited = std::fs::read_to_string(&path).unwrap().replace("\"left\"", "\"middle\"");
+    let edited = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace("\"left\"", "\"middle\"");
     std::fs::write(&path, edited).unwrap();
     let o = plinth_quiet().arg("identify").arg(&run).output().unwrap();
     assert!(!o.status.success());

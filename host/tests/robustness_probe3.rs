@@ -27,7 +27,13 @@ fn absurd_coefficients_and_phasors_are_refused_at_their_line_and_column() {
     simulated_run(&clean, "5:60:5");
     // (file, line, 0-based column, value, what the message names)
     let cases = [
-        ("bearings.csv", 2, 2, "1.7976931348623157e308", "column 3 (`kyy`)"),
+        (
+            "bearings.csv",
+            2,
+            2,
+            "1.7976931348623157e308",
+            "column 3 (`kyy`)",
+        ),
         ("bearings.csv", 5, 9, "-2e11", "column 10 (`czz`)"),
         ("measurements.csv", 7, 6, "1e300", "column 7 (`ped_y_re`)"),
     ];
@@ -70,7 +76,10 @@ fn accuracy_noise_below_a_doubles_rounding_names_the_option() {
             .unwrap();
         let msg = text(&o);
         assert!(!o.status.success(), "{v}: {msg}");
-        assert!(msg.contains("--noise") && msg.contains("rounding"), "{v}: {msg}");
+        assert!(
+            msg.contains("--noise") && msg.contains("rounding"),
+            "{v}: {msg}"
+        );
     }
     let o = plinth_quiet()
         .arg("accuracy")

@@ -465,8 +465,8 @@ impl MachineCheck {
             }
         };
         let gap_before = simulated.as_ref().map(|r| machine_gap(prep, r));
-        let before =
-            simulated.unwrap_or_else(|| vec![vec![None; prep.speeds_hz.len()]; prep.bearings.len()]);
+        let before = simulated
+            .unwrap_or_else(|| vec![vec![None; prep.speeds_hz.len()]; prep.bearings.len()]);
         let mut gaps_after = Vec::new();
         let mut after = None;
         for (i, (state, base)) in outcome.after_steps.iter().enumerate() {

@@ -82,18 +82,30 @@ mod tests {
         let mut v = [1e8, -2e7, 3e6, 1e9, 1e5, 0.0, -1e4, 1e6];
         assert!(check(p, 2, &BEARING_COLUMNS, &index, &v).is_ok());
         v[3] = 1.7976931348623157e308;
-        let e = check(p, 7, &BEARING_COLUMNS, &index, &v).unwrap_err().to_string();
-        assert!(e.contains("bearings.csv:7:") && e.contains("column 6 (`kzz`)"), "{e}");
+        let e = check(p, 7, &BEARING_COLUMNS, &index, &v)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bearings.csv:7:") && e.contains("column 6 (`kzz`)"),
+            "{e}"
+        );
         v[3] = 1e9;
         v[7] = -2e11;
-        let e = check(p, 3, &BEARING_COLUMNS, &index, &v).unwrap_err().to_string();
-        assert!(e.contains("column 10 (`czz`)") && e.contains("N·s/m"), "{e}");
+        let e = check(p, 3, &BEARING_COLUMNS, &index, &v)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("column 10 (`czz`)") && e.contains("N·s/m"),
+            "{e}"
+        );
         let m = [1e-5, -2e-6, 0.0, 3e-5, 1e-7, 1e-7, 0.049, -0.049];
         let p = Path::new("measurements.csv");
         assert!(check(p, 2, &MEASUREMENT_COLUMNS, &index, &m).is_ok());
         let mut m2 = m;
         m2[4] = 1e300;
-        let e = check(p, 9, &MEASUREMENT_COLUMNS, &index, &m2).unwrap_err().to_string();
+        let e = check(p, 9, &MEASUREMENT_COLUMNS, &index, &m2)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("column 7 (`ped_y_re`)"), "{e}");
     }
 }

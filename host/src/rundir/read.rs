@@ -197,7 +197,11 @@ fn check_truth_bearings(
                     .map(|b| format!("`{b}`"))
                     .collect::<Vec<_>>()
                     .join(", "),
-                if missing.len() == 1 { "it is" } else { "they are" }
+                if missing.len() == 1 {
+                    "it is"
+                } else {
+                    "they are"
+                }
             )
         }));
     };
