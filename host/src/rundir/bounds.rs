@@ -1,32 +1,36 @@
 //! Whether a number of `measurements.csv` or `bearings.csv` can be real: a
-//! phasor component beyond any machine's vibration, or a bearing
-//! coefficient beyond any bearing (a `1.8e308` typo, a unit mistake), is
-//! refused at its line and column before anything is fitted. The bounds
-//! are those of a 1X vector table (`field::plausible`) for displacements,
-//! and [`MAX_STIFFNESS`] and [`MAX_DAMPING`] for coefficients.
+//! phasor component or a bearing coefficient past any machine's by orders
+//! of magnitude (a `1.8e308` typo, an overflowed export) is refused at its
+//! line and column before anything is fitted, where the fit would overflow
+//! later with a message about units, or take it silently (`plot`). The
+//! bounds leave room for the idealisations of simulated runs: a "rigid"
+//! support written as a bearing of 1e14-1e16 N/m, an undamped resonance.
 
 use super::{RunDirError, BEARING_COLUMNS, MEASUREMENT_COLUMNS};
 use std::path::Path;
 
-/// The largest plausible bearing stiffness coefficient |k_ij| [N/m]: a
-/// thousand times the stiffest journal or rolling-element bearing (about
-/// 1e10 N/m), the margin `field::plausible` gives amplitudes.
-pub const MAX_STIFFNESS: f64 = 1e13;
+/// The largest bearing stiffness coefficient |k_ij| taken [N/m]: 1e8 times
+/// the stiffest journal or rolling-element bearing (about 1e10 N/m), 100
+/// times a "rigid" support of a test machine (1e16 N/m).
+pub const MAX_STIFFNESS: f64 = 1e18;
 
-/// The largest plausible bearing damping coefficient |c_ij| [N·s/m]: a
-/// thousand times a large turbine journal bearing's (about 1e8 N·s/m).
-pub const MAX_DAMPING: f64 = 1e11;
+/// The largest bearing damping coefficient |c_ij| taken [N·s/m]: 1e8 times
+/// a large turbine journal bearing's (about 1e8 N·s/m).
+pub const MAX_DAMPING: f64 = 1e16;
+
+/// The largest phasor component taken [m]: a metre of vibration, which no
+/// bearing survives; 20 times the bound of a measured 1X vector table
+/// (`field::plausible::max_amplitude_si`), as a simulated run may hold an
+/// undamped resonance.
+pub const MAX_DISPLACEMENT: f64 = 1.0;
 
 /// The bound of the eight numbers of a row of the table with `columns`
 /// (measurements: displacement phasor components [m]; bearings: four
 /// stiffness [N/m] then four damping coefficients [N·s/m]), with their
 /// unit; `None` for another table.
 fn bounds(columns: &[&str; 10]) -> Option<[(f64, &'static str); 8]> {
-    let displacement = crate::field::plausible::max_amplitude_si(
-        plinth_shared::extractor::SensorKind::Displacement,
-    );
     if *columns == MEASUREMENT_COLUMNS {
-        Some([(displacement, "m"); 8])
+        Some([(MAX_DISPLACEMENT, "m"); 8])
     } else if *columns == BEARING_COLUMNS {
         Some(std::array::from_fn(|k| {
             if k < 4 {
@@ -60,7 +64,7 @@ pub fn check(
                 file: path.to_path_buf(),
                 line,
                 message: format!(
-                    "column {} (`{}`): {} {unit} is beyond any machine's (at most {bound:e} {unit}): a typo, or not in SI units (formats.md: m, N/m, N·s/m)?",
+                    "column {} (`{}`): {} {unit} is beyond any machine's (at most {bound:e} {unit} is taken): a typo, or an overflowed export?",
                     index[k + 2] + 1,
                     columns[k + 2],
                     super::format_number(v)
@@ -79,7 +83,7 @@ mod tests {
     fn values_past_their_bound_are_named_by_column() {
         let index = std::array::from_fn(|k| k);
         let p = Path::new("bearings.csv");
-        let mut v = [1e8, -2e7, 3e6, 1e9, 1e5, 0.0, -1e4, 1e6];
+        let mut v = [1e16, -2e7, 3e6, 1e9, 1e5, 0.0, -1e4, 1e6];
         assert!(check(p, 2, &BEARING_COLUMNS, &index, &v).is_ok());
         v[3] = 1.7976931348623157e308;
         let e = check(p, 7, &BEARING_COLUMNS, &index, &v)
@@ -90,7 +94,7 @@ mod tests {
             "{e}"
         );
         v[3] = 1e9;
-        v[7] = -2e11;
+        v[7] = -2e16;
         let e = check(p, 3, &BEARING_COLUMNS, &index, &v)
             .unwrap_err()
             .to_string();
@@ -98,7 +102,7 @@ mod tests {
             e.contains("column 10 (`czz`)") && e.contains("N·s/m"),
             "{e}"
         );
-        let m = [1e-5, -2e-6, 0.0, 3e-5, 1e-7, 1e-7, 0.049, -0.049];
+        let m = [1e-5, -2e-6, 0.0, 3e-5, 1e-7, 1e-7, 0.9, -0.9];
         let p = Path::new("measurements.csv");
         assert!(check(p, 2, &MEASUREMENT_COLUMNS, &index, &m).is_ok());
         let mut m2 = m;
