@@ -133,6 +133,14 @@ pub fn monte_carlo_with_progress(
         Perturbation::Noise(f) if !(f.is_finite() && f > 0.0) => {
             bail!("--noise {f}: the noise fraction must be finite and > 0")
         }
+        // Below a double's rounding the noise is no noise: its variance
+        // underflows to 0 and the ML weights are undefined.
+        Perturbation::Noise(f) if f < f64::EPSILON => {
+            bail!(
+                "--noise {f:e}: a noise fraction below {:e} (a double's rounding) is below the numbers' own rounding (a tiny one underflows to a variance of 0): use at least that",
+                f64::EPSILON
+            )
+        }
         Perturbation::Digits(d) if !(1..=17).contains(&d) => {
             bail!("--digits {d}: between 1 and 17")
         }

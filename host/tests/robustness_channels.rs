@@ -11,7 +11,8 @@ use std::time::{Duration, Instant};
 
 mod robustness_common;
 use robustness_common::{
-    example, field, offline_rebuild, plinth_quiet as plinth, simulated_run, stream_config, text,
+    edited_wav, example, field, offline_rebuild, plinth_quiet as plinth, simulated_run,
+    stream_config, text,
 };
 
 fn import(table: &Path, out: &Path) -> Output {
@@ -143,22 +144,6 @@ fn dead_stuck_and_absurd_table_columns_are_named() {
     // The example itself imports.
     let o = import(&field("vector-table.csv"), &t.path().join("good"));
     assert!(o.status.success(), "{}", text(&o));
-}
-
-/// The example recording (24-bit PCM, 9 channels) with `edit` applied to
-/// every sample code (frame, channel, code) -> code.
-fn edited_wav(dir: &Path, name: &str, edit: impl Fn(usize, usize, i32) -> i32) -> PathBuf {
-    let bytes = std::fs::read(field("recording.wav")).unwrap();
-    let data = bytes.windows(4).position(|w| w == b"data").unwrap() + 8;
-    let mut out = bytes.clone();
-    for (i, s) in out[data..].chunks_exact_mut(3).enumerate() {
-        let code = i32::from_le_bytes([0, s[0], s[1], s[2]]) >> 8;
-        let v = edit(i / 9, i % 9, code).to_le_bytes();
-        s.copy_from_slice(&v[..3]);
-    }
-    let path = dir.join(name);
-    std::fs::write(&path, out).unwrap();
-    path
 }
 
 #[test]

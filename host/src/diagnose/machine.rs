@@ -9,6 +9,13 @@
 //! pedestals on base elements of the simulator with the identified base
 //! parameters (`put_bases`). Sensor effects (runout, delays) are applied to the
 //! simulated readings here, exactly as identified.
+//!
+//! What each measured pedestal stands on is the identified model's, not the
+//! machine file's: pedestals fitted on rigid ground already hold the motion
+//! of whatever they stand on, so the file's base under them is left out (and
+//! an identified base put in with `foundation_coupling`). The report says so
+//! ([`replaced_bases`]): the machine-level gap is that of the file with its
+//! base replaced.
 
 use super::data::Prepared;
 use super::foundation::FoundationFit;
@@ -179,6 +186,49 @@ pub fn resimulate(
         }
     }
     Ok(out)
+}
+
+/// The machine file's bases under measured pedestals that the re-simulation
+/// replaces (module docs), as a sentence for the report; `None` when every
+/// measured pedestal of the file stands on rigid ground. `foundation` says
+/// whether the final model stands pedestals on identified bases.
+pub fn replaced_bases(machine: &Machine, bearings: &[String], foundation: bool) -> Option<String> {
+    // (file base, the measured bearings on it), in the file's base order.
+    let mut on: Vec<(usize, Vec<&str>)> = Vec::new();
+    for b in machine.bearings.iter() {
+        let Some(i) = b.base.filter(|_| bearings.contains(&b.name)) else {
+            continue;
+        };
+        match on.iter_mut().find(|(j, _)| *j == i) {
+            Some((_, names)) => names.push(&b.name),
+            None => on.push((i, vec![&b.name])),
+        }
+    }
+    if on.is_empty() {
+        return None;
+    }
+    let list = |v: &[&str]| {
+        v.iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let bases: Vec<String> = on
+        .iter()
+        .map(|(i, names)| {
+            let name = machine.bases.get(*i).map_or("?", |b| b.name.as_str());
+            format!("base `{name}` under {}", list(names))
+        })
+        .collect();
+    Some(format!(
+        "the machine-level check replaces the machine file's {} by the identified model's support (rigid ground for the base model{}): pedestals identified on rigid ground already hold the base's motion, so the file's base is not simulated under them",
+        bases.join("; "),
+        if foundation {
+            ", the identified bases for the final model"
+        } else {
+            ""
+        }
+    ))
 }
 
 /// Stands the pedestals of each identified base on a base element of the
@@ -372,20 +422,27 @@ pub fn parameter_variance(
 /// re-simulated machine's gap with the base model and after each step.
 #[derive(Clone, Debug)]
 pub struct MachineCheck {
-    /// Gap of the base model [-].
-    pub gap_before: f64,
+    /// Gap of the base model; `None` where it cannot be simulated (a
+    /// pedestal mass below zero: the base model fitted on rigid ground to
+    /// pedestals that stand on something softer; the reason in `warnings`)
+    /// [-].
+    pub gap_before: Option<f64>,
     /// Gap after each step (aligned with the diagnosis's steps: the model
     /// after step i, a chosen base included); `None` where the identified
     /// model cannot be simulated (the reason in `warnings`) [-].
     pub gaps_after: Vec<Option<f64>>,
     /// The final model's machine-level floor ([`machine_floor`]) [-].
     pub floor: f64,
-    /// The base model's re-simulated readings (figures).
+    /// The base model's re-simulated readings (figures; every point `None`
+    /// when it cannot be simulated).
     pub before: Readings,
     /// The final model's, when it could be simulated (figures).
     pub after: Option<Readings>,
     /// Why a step's model could not be simulated.
     pub warnings: Vec<String>,
+    /// The machine file's bases the re-simulation replaced
+    /// ([`replaced_bases`]), said in the verdict (text and JSON).
+    pub replaced: Option<String>,
 }
 
 impl MachineCheck {
@@ -397,10 +454,21 @@ impl MachineCheck {
             .states
             .first()
             .ok_or_else(|| anyhow!("no fitted base model"))?;
-        let before = resimulate(machine, prep, first, None)?;
+        let mut warnings = Vec::new();
+        // A base model the simulator cannot hold (a negative mass) is no
+        // reason to lose the whole diagnosis: its check is left out, said.
+        let simulated = match resimulate(machine, prep, first, None) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                warnings.push(format!("no machine-level check of the base model: {e:#}"));
+                None
+            }
+        };
+        let gap_before = simulated.as_ref().map(|r| machine_gap(prep, r));
+        let before = simulated
+            .unwrap_or_else(|| vec![vec![None; prep.speeds_hz.len()]; prep.bearings.len()]);
         let mut gaps_after = Vec::new();
         let mut after = None;
-        let mut warnings = Vec::new();
         for (i, (state, base)) in outcome.after_steps.iter().enumerate() {
             match resimulate(machine, prep, state, base.as_ref()) {
                 Ok(r) => {
@@ -425,10 +493,14 @@ impl MachineCheck {
             (Some((state, base)), Some(r)) => {
                 machine_floor(machine, prep, state, base.as_ref(), r)?
             }
-            _ => machine_floor(machine, prep, first, None, &before)?,
+            _ if gap_before.is_some() => machine_floor(machine, prep, first, None, &before)?,
+            // Nothing simulated: no gap to judge, no floor.
+            _ => 0.0,
         };
+        let foundation = (outcome.after_steps.last()).is_some_and(|(_, b)| b.is_some());
         Ok(Self {
-            gap_before: machine_gap(prep, &before),
+            replaced: replaced_bases(machine, &prep.bearings, foundation),
+            gap_before,
             gaps_after,
             floor,
             before,
@@ -442,22 +514,25 @@ impl MachineCheck {
     pub fn gap_after(&self) -> Option<f64> {
         match self.gaps_after.last() {
             Some(g) => *g,
-            None => Some(self.gap_before),
+            None => self.gap_before,
         }
     }
 
     /// Writes the gaps into `d` (per step and overall) and judges the final
     /// one ([`super::trust::judge_machine`]).
     pub fn apply(&self, d: &mut super::report::Diagnosis) {
-        d.machine_gap_before = Some(self.gap_before);
+        d.machine_gap_before = self.gap_before;
         d.machine_gap_after = self.gap_after();
         d.machine_gap_floor = Some(self.floor);
-        let mut before = Some(self.gap_before);
+        let mut before = self.gap_before;
         for (s, after) in d.steps.iter_mut().zip(&self.gaps_after) {
             s.machine_gap_before = before;
             s.machine_gap_after = *after;
             before = *after;
         }
         super::trust::judge_machine(d, self.gap_after(), self.floor);
+        if let Some(note) = &self.replaced {
+            d.verdict += &format!(" Note: {note}.");
+        }
     }
 }

@@ -262,7 +262,7 @@ pub fn run(args: &Args) -> Result<()> {
     });
     if rows.len() < before {
         eprintln!(
-            "warning: {} of {before} rows are at speeds outside the range {} lists and were left out (coefficients are not extrapolated)",
+            "warning: {} of {before} rows are at speeds outside the range {} lists and were left out (coefficients are not extrapolated; if the machine ran inside that range, every speed is scaled: is the recording's sample rate the one it was sampled at?)",
             before - rows.len(),
             args.bearings.display()
         );

@@ -258,7 +258,7 @@ pub fn extract_within(
                         short_periods += 1;
                         if short_periods >= 3 {
                             bail!(
-                                "{file}: the sample rate {fs} Hz is too low for the speed at {:.3} s: keyphasor pulses {:.1} samples apart ({:.1} Hz), but the extractor needs at least {MIN_SAMPLES_PER_REVOLUTION} samples per revolution (a sample rate of at least {:.0} Hz)",
+                                "{file}: the sample rate {fs} Hz is too low for the speed at {:.3} s: keyphasor pulses {:.1} samples apart ({:.1} Hz), but the extractor needs at least {MIN_SAMPLES_PER_REVOLUTION} samples per revolution (a sample rate of at least {:.0} Hz); or the keyphasor gives more than one pulse per revolution (a second mark, both edges of a keyway: check [keyphasor] threshold_v and edge)",
                                 at / fs,
                                 at - prev,
                                 fs / (at - prev),

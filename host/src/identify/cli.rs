@@ -6,7 +6,7 @@ use super::{
 };
 use crate::estimate::noise::Quantisation;
 use crate::present::table::{self, sig, PedestalRow, SubRow};
-use crate::rundir::{RunDir, Truth};
+use crate::rundir::{bearings_without_truth, RunDir, Truth};
 use anyhow::Context;
 use std::path::PathBuf;
 
@@ -166,7 +166,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
         }
     }
-    if args.json {
+    let no_truth = (run.truth.as_ref()).map_or(Vec::new(), |t| bearings_without_truth(&run, t));
+    if args.json && !no_truth.is_empty() {
+        // Keys may be added (formats.md): the bearings truth.json lacks.
+        let mut json = serde_json::to_value(&identification)?;
+        json["bearings_without_truth"] = serde_json::json!(no_truth);
+        println!("{}", serde_json::to_string_pretty(&json)?);
+    } else if args.json {
         println!("{}", serde_json::to_string_pretty(&identification)?);
     } else {
         print!("{}", table(&identification, run.truth.as_ref()));
@@ -364,13 +370,16 @@ pub fn result_row(fit: &PedestalFit, truth: Option<&Truth>) -> PedestalRow {
             }),
         ));
     }
-    let truth = truth.and_then(|t| t.pedestals.iter().find(|t| t.bearing == fit.bearing));
+    let own = truth.and_then(|t| t.pedestals.iter().find(|t| t.bearing == fit.bearing));
     let mut modal_truth = None;
-    if let Some(t) = truth {
+    if let Some(t) = own {
         let values = t.pedestal.theta();
         below.push(SubRow::values("truth", values.map(|v| Some((v, None)))));
         below.push(SubRow::errors("error", fit.pedestal.theta(), values));
         modal_truth = Some(crate::present::modal::pedestal(&values, None));
+    } else if truth.is_some() {
+        // truth.json without this bearing (`rundir::read::bearings_without_truth`).
+        below.push(SubRow::text("truth", Parameter::ALL.map(|_| "none".into())));
     }
     PedestalRow {
         bearing: fit.bearing.clone(),

@@ -31,7 +31,10 @@ pub(super) fn process_is_running(pid: u32) -> bool {
 /// - such a backup while `NAME` exists (killed after the second rename) is
 ///   removed when everything in it is also in `NAME` or is a file Plinth
 ///   wrote, unchanged (the commit is completed); otherwise it is left and
-///   what it alone holds is named.
+///   what it alone holds is named;
+/// - a `.NAME.plinth-trash-PID` of an ended process (a backup of a complete
+///   commit, renamed so before its removal, killed while being removed) is
+///   removed.
 ///
 /// Anything else (another name, a running process, no mark) is left alone.
 /// Failures are reported as notes, never as errors: the command goes on.
@@ -76,6 +79,18 @@ pub fn clean_leftovers(out: &Path) -> Vec<String> {
                     )),
                 }
             }
+            "plinth-trash" => match remove_tree(&path) {
+                Ok(()) => notes.push(format!(
+                    "note: removed {}, the previous {} that an interrupted Plinth command (process {pid}) had replaced and was removing",
+                    path.display(),
+                    out.display()
+                )),
+                Err(err) => notes.push(format!(
+                    "warning: cannot remove {}, the previous {} (replaced): {err}",
+                    path.display(),
+                    out.display()
+                )),
+            },
             "plinth-old" if out.is_dir() => match backup_is_merged(&path, out) {
                 Ok(()) => match remove_tree(&path) {
                     Ok(()) => notes.push(format!(

@@ -279,7 +279,18 @@ impl OutputDir {
             let _ = std::fs::rename(&backup, &self.target);
             return Err(io("cannot move the output into", &self.target)(e));
         }
-        remove_tree(&backup).map_err(io("cannot remove", &backup))
+        // The commit is complete: the backup becomes trash in one rename
+        // before it is removed, so a kill (or Ctrl-C) in the middle of the
+        // removal leaves a directory the next command removes without
+        // asking (`leftovers::clean_leftovers`), never a half-removed backup
+        // whose manifest is gone and whose files cannot be told from a
+        // user's.
+        let trash = sibling(&self.target, "plinth-trash", std::process::id());
+        let doomed = match std::fs::rename(&backup, &trash) {
+            Ok(()) => trash,
+            Err(_) => backup,
+        };
+        remove_tree(&doomed).map_err(io("cannot remove", &doomed))
     }
 
     /// `Err(Appeared)` when `dir` holds an entry that is not in `known`.

@@ -254,3 +254,33 @@ fn a_commit_killed_after_its_swap_is_completed_by_the_next_command() {
     assert!(notes[0].contains("only-here.txt"), "{notes:?}");
     assert!(backup.join("only-here.txt").exists());
 }
+
+#[test]
+fn a_commit_killed_while_removing_the_previous_directory_leaves_nothing_behind() {
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("run");
+    for n in ["1", "2"] {
+        let o = OutputDir::create(&out, true).unwrap();
+        std::fs::write(o.path().join("a.csv"), n).unwrap();
+        o.commit().unwrap();
+    }
+    // A completed commit leaves no backup nor trash.
+    let siblings = |dir: &Path| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".run."))
+            .collect()
+    };
+    assert!(siblings(t.path()).is_empty(), "{:?}", siblings(t.path()));
+    // What a kill in the middle of the removal leaves: the renamed backup,
+    // its manifest already removed, a file differing from the new one.
+    let dead = 4_000_000u32; // above pid_max: never running
+    let trash = sibling(&out, "plinth-trash", dead);
+    std::fs::create_dir(&trash).unwrap();
+    std::fs::write(trash.join("a.csv"), "1").unwrap();
+    let notes = clean_leftovers(&out);
+    assert!(notes[0].contains("had replaced"), "{notes:?}");
+    assert!(!trash.exists());
+    assert_eq!(std::fs::read_to_string(out.join("a.csv")).unwrap(), "2");
+}

@@ -9,6 +9,7 @@
 //! reduction and the shortest round-trip number text), [`schedule`]
 //! (bearing coefficients over speed). Everything is re-exported here.
 
+pub mod bounds;
 pub mod digits;
 pub mod matches;
 pub mod read;

@@ -123,7 +123,9 @@ impl RunDir {
             }
         };
         if let Some(t) = &truth {
-            check_truth_bearings(&run, t, &t_path)?;
+            if let Some(note) = check_truth_bearings(&run, t, &t_path)? {
+                eprintln!("warning: {}: {note}", t_path.display());
+            }
         }
         for note in super::schedule::unlisted_speeds(&run) {
             eprintln!("warning: {}: {note}", b_path.display());
@@ -157,17 +159,51 @@ fn check_noise_not_all_zero(rows: &[TableRow], path: &Path) -> Result<(), RunDir
     Ok(())
 }
 
+/// The measured bearings of `run` that `truth` has no pedestal for, in
+/// order of first appearance: identified, but compared with nothing.
+pub fn bearings_without_truth<'a>(run: &'a RunDir, truth: &Truth) -> Vec<&'a str> {
+    run.measured_bearings()
+        .into_iter()
+        .filter(|b| !truth.pedestals.iter().any(|p| p.bearing == *b))
+        .collect()
+}
+
 /// `truth.json` describes the run's own pedestals: a pedestal whose bearing
 /// has no rows in `measurements.csv` (another run's truth, a renamed
 /// bearing, a different case) is an error at the line that names it.
-fn check_truth_bearings(run: &RunDir, truth: &Truth, path: &Path) -> Result<(), RunDirError> {
+/// A truth over some of the measured bearings is legitimate (the simulator
+/// writes none for a bearing without a pedestal; a field run may have a
+/// shaker-tested value for one pedestal only): the bearings it lacks
+/// ([`bearings_without_truth`]) are returned as a note to print, and the
+/// identification table shows "none" as their truth.
+fn check_truth_bearings(
+    run: &RunDir,
+    truth: &Truth,
+    path: &Path,
+) -> Result<Option<String>, RunDirError> {
     let measured = run.measured_bearings();
     let Some(p) = truth
         .pedestals
         .iter()
         .find(|p| !measured.contains(&p.bearing.as_str()))
     else {
-        return Ok(());
+        let missing = bearings_without_truth(run, truth);
+        return Ok((!missing.is_empty()).then(|| {
+            format!(
+                "no pedestal for measured bearing{} {}: {} identified but compared with no truth",
+                if missing.len() == 1 { "" } else { "s" },
+                missing
+                    .iter()
+                    .map(|b| format!("`{b}`"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if missing.len() == 1 {
+                    "it is"
+                } else {
+                    "they are"
+                }
+            )
+        }));
     };
     let text = std::fs::read_to_string(path).unwrap_or_default();
     let needle = format!("\"{}\"", p.bearing);
@@ -426,6 +462,7 @@ fn read_table(
         for (k, v) in values.iter_mut().enumerate() {
             *v = number(k + 2)?;
         }
+        super::bounds::check(path, line, columns, &index, &values)?;
         let written = count_digits.then(|| {
             super::WrittenDigits::from_text(std::array::from_fn(|k| field(index[k + 2])), values)
         });

@@ -1,8 +1,9 @@
 //! Scaffolding shared by the host's robustness tests (`mod
 //! robustness_common;` in each): the binary, the bundled examples, a
 //! simulated run, an offline stream rebuild, a command's whole output, a
-//! bounded run, a directory snapshot, a long machine and a stream
-//! configuration for a simulated run.
+//! bounded run, a directory snapshot, a long machine, a stream
+//! configuration for a simulated run and the example recording edited
+//! sample by sample.
 #![allow(dead_code)] // each test file uses its own subset
 
 use std::collections::BTreeMap;
@@ -141,5 +142,21 @@ pub fn stream_config(dir: &Path) -> PathBuf {
     }
     let path = dir.join("stream.toml");
     std::fs::write(&path, s).unwrap();
+    path
+}
+
+/// The example recording (24-bit PCM, 9 channels) with `edit` applied to
+/// every sample code (frame, channel, code) -> code.
+pub fn edited_wav(dir: &Path, name: &str, edit: impl Fn(usize, usize, i32) -> i32) -> PathBuf {
+    let bytes = std::fs::read(field("recording.wav")).unwrap();
+    let data = bytes.windows(4).position(|w| w == b"data").unwrap() + 8;
+    let mut out = bytes.clone();
+    for (i, s) in out[data..].chunks_exact_mut(3).enumerate() {
+        let code = i32::from_le_bytes([0, s[0], s[1], s[2]]) >> 8;
+        let v = edit(i / 9, i % 9, code).to_le_bytes();
+        s.copy_from_slice(&v[..3]);
+    }
+    let path = dir.join(name);
+    std::fs::write(&path, out).unwrap();
     path
 }

@@ -1,0 +1,115 @@
+//! Whether a number of `measurements.csv` or `bearings.csv` can be real: a
+//! phasor component or a bearing coefficient past any machine's by orders
+//! of magnitude (a `1.8e308` typo, an overflowed export) is refused at its
+//! line and column before anything is fitted, where the fit would overflow
+//! later with a message about units, or take it silently (`plot`). The
+//! bounds leave room for the idealisations of simulated runs: a "rigid"
+//! support written as a bearing of 1e14-1e16 N/m, an undamped resonance.
+
+use super::{RunDirError, BEARING_COLUMNS, MEASUREMENT_COLUMNS};
+use std::path::Path;
+
+/// The largest bearing stiffness coefficient |k_ij| taken [N/m]: 1e8 times
+/// the stiffest journal or rolling-element bearing (about 1e10 N/m), 100
+/// times a "rigid" support of a test machine (1e16 N/m).
+pub const MAX_STIFFNESS: f64 = 1e18;
+
+/// The largest bearing damping coefficient |c_ij| taken [N·s/m]: 1e8 times
+/// a large turbine journal bearing's (about 1e8 N·s/m).
+pub const MAX_DAMPING: f64 = 1e16;
+
+/// The largest phasor component taken [m]: a metre of vibration, which no
+/// bearing survives; 20 times the bound of a measured 1X vector table
+/// (`field::plausible::max_amplitude_si`), as a simulated run may hold an
+/// undamped resonance.
+pub const MAX_DISPLACEMENT: f64 = 1.0;
+
+/// The bound of the eight numbers of a row of the table with `columns`
+/// (measurements: displacement phasor components [m]; bearings: four
+/// stiffness [N/m] then four damping coefficients [N·s/m]), with their
+/// unit; `None` for another table.
+fn bounds(columns: &[&str; 10]) -> Option<[(f64, &'static str); 8]> {
+    if *columns == MEASUREMENT_COLUMNS {
+        Some([(MAX_DISPLACEMENT, "m"); 8])
+    } else if *columns == BEARING_COLUMNS {
+        Some(std::array::from_fn(|k| {
+            if k < 4 {
+                (MAX_STIFFNESS, "N/m")
+            } else {
+                (MAX_DAMPING, "N·s/m")
+            }
+        }))
+    } else {
+        None
+    }
+}
+
+/// Checks the eight numbers `values` of one data row (file `path`, 1-based
+/// `line`; `index[k]` is the 0-based field of `columns[k]`) against their
+/// bounds: the first beyond its bound is an error naming its line and
+/// column.
+pub fn check(
+    path: &Path,
+    line: u64,
+    columns: &[&'static str; 10],
+    index: &[usize; 10],
+    values: &[f64; 8],
+) -> Result<(), RunDirError> {
+    let Some(bounds) = bounds(columns) else {
+        return Ok(());
+    };
+    for (k, (&v, (bound, unit))) in values.iter().zip(bounds).enumerate() {
+        if v.abs() > bound {
+            return Err(RunDirError::Csv {
+                file: path.to_path_buf(),
+                line,
+                message: format!(
+                    "column {} (`{}`): {} {unit} is beyond any machine's (at most {bound:e} {unit} is taken): a typo, or an overflowed export?",
+                    index[k + 2] + 1,
+                    columns[k + 2],
+                    super::format_number(v)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_past_their_bound_are_named_by_column() {
+        let index = std::array::from_fn(|k| k);
+        let p = Path::new("bearings.csv");
+        let mut v = [1e16, -2e7, 3e6, 1e9, 1e5, 0.0, -1e4, 1e6];
+        assert!(check(p, 2, &BEARING_COLUMNS, &index, &v).is_ok());
+        v[3] = 1.7976931348623157e308;
+        let e = check(p, 7, &BEARING_COLUMNS, &index, &v)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("bearings.csv:7:") && e.contains("column 6 (`kzz`)"),
+            "{e}"
+        );
+        v[3] = 1e9;
+        v[7] = -2e16;
+        let e = check(p, 3, &BEARING_COLUMNS, &index, &v)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("column 10 (`czz`)") && e.contains("N·s/m"),
+            "{e}"
+        );
+        let m = [1e-5, -2e-6, 0.0, 3e-5, 1e-7, 1e-7, 0.9, -0.9];
+        let p = Path::new("measurements.csv");
+        assert!(check(p, 2, &MEASUREMENT_COLUMNS, &index, &m).is_ok());
+        let mut m2 = m;
+        m2[4] = 1e300;
+        let e = check(p, 9, &MEASUREMENT_COLUMNS, &index, &m2)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("column 7 (`ped_y_re`)"), "{e}");
+    }
+}
