@@ -340,9 +340,12 @@ impl BearingNoise {
             .iter()
             .zip(&digits_var)
             .map(|(m, dv)| {
+                // Each channel's sd once, for its real and imaginary part.
+                let sd: [f64; 4] = std::array::from_fn(|ch| {
+                    scatter[ch].map_or(0.0, |law| law.sd(complex_value(m, ch).norm()))
+                });
                 std::array::from_fn(|c| {
-                    let s =
-                        scatter[c / 2].map_or(0.0, |law| law.sd(complex_value(m, c / 2).norm()));
+                    let s = sd[c / 2];
                     (s * s).max(dv[c])
                 })
             })
@@ -497,34 +500,19 @@ impl RunNoise {
         }
     }
 
-    /// The noise of `fixed`, a run whose speeds differ from those this noise
-    /// was estimated on and whose phasors, texts and noise columns do not
-    /// (rpm read as Hz): exactly [`RunNoise::estimate`] of `fixed`, with the
-    /// digits kept and only the scatter between neighbouring speeds
-    /// estimated anew (noise columns do not depend on the speeds).
-    pub fn with_speeds_of(&self, fixed: &crate::rundir::RunDir) -> Self {
-        self.reestimated(fixed, false)
-    }
-
-    /// The noise of `fixed`, a run whose pedestal phasors differ from those
-    /// this noise was estimated on and whose speeds and rotor-relative
-    /// phasors do not (pedestal velocities integrated): exactly
-    /// [`RunNoise::estimate`] of `fixed`, with the rotor-relative channels'
-    /// scatter laws kept and the digits and the pedestal channels' scatter
-    /// estimated anew.
-    pub fn with_pedestal_of(&self, fixed: &crate::rundir::RunDir) -> Self {
-        self.reestimated(fixed, true)
-    }
-
-    /// [`RunNoise::with_speeds_of`] (`ped_changed` false) or
-    /// [`RunNoise::with_pedestal_of`]: what stays the same is reused while
-    /// this noise is as estimated (not switched to the scatter or
-    /// rescaled by a fit), else `fixed` is estimated afresh.
-    fn reestimated(&self, fixed: &crate::rundir::RunDir, ped_changed: bool) -> Self {
+    /// The noise of `fixed`, the measurements of the run this noise was
+    /// estimated on with their pedestal phasors changed and their speeds and
+    /// rotor-relative phasors not (pedestal velocities integrated; row for
+    /// row, bearing names not read): exactly [`RunNoise::estimate`] of a run
+    /// with these measurements, with the rotor-relative channels' scatter
+    /// laws kept and the digits and the pedestal channels' scatter
+    /// estimated anew. Estimated afresh when this noise is no longer as
+    /// estimated (switched to the scatter or rescaled by a fit).
+    pub fn with_pedestal_of(&self, fixed: &[Measurement]) -> Self {
         let pristine = self.bearings.iter().all(|(_, index, noise)| {
             noise.variance_scale == 1.0
                 && noise.var.len() == index.len()
-                && index.iter().all(|&i| i < fixed.measurements.len())
+                && index.iter().all(|&i| i < fixed.len())
                 && match noise.source {
                     NoiseSource::Columns => true,
                     NoiseSource::Digits => noise.scatter_var.is_some(),
@@ -532,32 +520,42 @@ impl RunNoise {
                 }
         });
         if !pristine {
-            return Self::estimate(fixed, self.quantisation);
+            // [`RunNoise::estimate`] of `fixed`, its rows grouped as this
+            // noise groups them (the same bearings, row for row).
+            let columns = ColumnDigits::of_run(fixed);
+            let bearings = self
+                .bearings
+                .iter()
+                .map(|(name, index, _)| {
+                    let rows: Vec<&Measurement> =
+                        index.iter().filter_map(|&i| fixed.get(i)).collect();
+                    let noise = BearingNoise::estimate(&rows, &columns, self.quantisation);
+                    (name.clone(), index.clone(), noise)
+                })
+                .collect();
+            return Self {
+                quantisation: self.quantisation,
+                bearings,
+            };
         }
         // The digits of every number of `fixed`, counted once (a changed
         // number's are counted on its value: the slow part).
-        let digits: Vec<[Option<(u32, i32)>; 8]> = if ped_changed {
-            fixed
-                .measurements
-                .iter()
-                .map(|m| std::array::from_fn(|c| digits_of(m, c)))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let columns: Option<[ColumnDigits; 8]> = ped_changed
-            .then(|| std::array::from_fn(|c| ColumnDigits::of_digits(digits.iter().map(|d| d[c]))));
+        let digits: Vec<[Option<(u32, i32)>; 8]> = fixed
+            .iter()
+            .map(|m| std::array::from_fn(|c| digits_of(m, c)))
+            .collect();
+        let columns: [ColumnDigits; 8] =
+            std::array::from_fn(|c| ColumnDigits::of_digits(digits.iter().map(|d| d[c])));
         let bearings = self
             .bearings
             .iter()
             .map(|(name, index, noise)| {
-                let rows: Vec<&Measurement> =
-                    index.iter().map(|&i| &fixed.measurements[i]).collect();
-                let noise = match (&columns, noise.source) {
-                    (Some(columns), NoiseSource::Columns) => {
-                        BearingNoise::estimate(&rows, columns, self.quantisation)
+                let rows: Vec<&Measurement> = index.iter().map(|&i| &fixed[i]).collect();
+                let noise = match noise.source {
+                    NoiseSource::Columns => {
+                        BearingNoise::estimate(&rows, &columns, self.quantisation)
                     }
-                    (Some(columns), _) => {
+                    _ => {
                         let s = noise.scatter;
                         // `digits_variances`, from the digits counted above.
                         let digits_var = index
@@ -565,10 +563,8 @@ impl RunNoise {
                             .zip(&rows)
                             .map(|(&i, m)| {
                                 std::array::from_fn(|c| {
-                                    let ulp = columns[c].ulp_of_digits(
-                                        digits.get(i).map_or_else(|| digits_of(m, c), |d| d[c]),
-                                        real_value(m, c),
-                                    );
+                                    let ulp =
+                                        columns[c].ulp_of_digits(digits[i][c], real_value(m, c));
                                     number_variance(self.quantisation, ulp, None)
                                 })
                             })
@@ -580,13 +576,6 @@ impl RunNoise {
                             [Some(s[0]), Some(s[1]), None, None],
                         )
                     }
-                    (None, NoiseSource::Columns) => noise.clone(),
-                    (None, _) => BearingNoise::with_scatter(
-                        &rows,
-                        noise.var.clone(),
-                        self.quantisation,
-                        [None; 4],
-                    ),
                 };
                 (name.clone(), index.clone(), noise)
             })
