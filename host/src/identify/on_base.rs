@@ -443,6 +443,7 @@ mod tests {
     use super::*;
     use crate::identify::fit_run;
     use crate::present::modal::{pedestal, PedestalModal};
+    use crate::rundir::Measurement;
     use crate::sim::{unbalance_response, EffectSet, Machine, Noise};
     use std::collections::BTreeMap;
 

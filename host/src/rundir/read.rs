@@ -390,7 +390,7 @@ fn read_table<T>(
     // per bearing name, not per row.
     let mut names: Vec<String> = Vec::new();
     let mut seen: HashMap<(u64, usize), u64, std::hash::BuildHasherDefault<KeyHasher>> =
-        HashMap::default();
+        HashMap::with_capacity_and_hasher(room, Default::default());
     // One record, reused for every line.
     let mut record = csv::StringRecord::new();
     while reader.read_record(&mut record).map_err(csv_error)? {
