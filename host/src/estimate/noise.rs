@@ -46,8 +46,10 @@ use crate::rundir::Measurement;
 use num_complex::Complex;
 use serde::{Deserialize, Serialize};
 
+mod run;
 mod scatter;
 
+pub use run::RunNoise;
 use scatter::*;
 pub use scatter::{local_fits, local_residuals, scatter_law, LocalFit};
 
@@ -340,9 +342,12 @@ impl BearingNoise {
             .iter()
             .zip(&digits_var)
             .map(|(m, dv)| {
+                // Each channel's sd once, for its real and imaginary part.
+                let sd: [f64; 4] = std::array::from_fn(|ch| {
+                    scatter[ch].map_or(0.0, |law| law.sd(complex_value(m, ch).norm()))
+                });
                 std::array::from_fn(|c| {
-                    let s =
-                        scatter[c / 2].map_or(0.0, |law| law.sd(complex_value(m, c / 2).norm()));
+                    let s = sd[c / 2];
                     (s * s).max(dv[c])
                 })
             })
@@ -457,164 +462,6 @@ impl BearingNoise {
                 .as_ref()
                 .map(|v| v.iter().map(swap).collect()),
             ..self.clone()
-        }
-    }
-}
-
-/// The noise model of every measured bearing of a run, estimated once
-/// before any fit and shared by every use of it (the fits, the noise floor,
-/// the convention refits, which transform it as they transform the data).
-#[derive(Clone, Debug, PartialEq)]
-pub struct RunNoise {
-    /// How the digits were taken to be reduced.
-    pub quantisation: Quantisation,
-    /// Per measured bearing, in order of first appearance: its name, the
-    /// indices of its rows in `run.measurements` and their noise (row for
-    /// row).
-    pub bearings: Vec<(String, Vec<usize>, BearingNoise)>,
-}
-
-impl RunNoise {
-    /// The noise of every measured bearing of `run`, with the digits of the
-    /// run's columns counted once.
-    pub fn estimate(run: &crate::rundir::RunDir, quantisation: Quantisation) -> Self {
-        let columns = ColumnDigits::of_run(&run.measurements);
-        let bearings = run
-            .measured_bearings()
-            .into_iter()
-            .map(|bearing| {
-                let index: Vec<usize> = (0..run.measurements.len())
-                    .filter(|&i| run.measurements[i].bearing == bearing)
-                    .collect();
-                let rows: Vec<&Measurement> = index.iter().map(|&i| &run.measurements[i]).collect();
-                let noise = BearingNoise::estimate(&rows, &columns, quantisation);
-                (bearing.to_string(), index, noise)
-            })
-            .collect();
-        Self {
-            quantisation,
-            bearings,
-        }
-    }
-
-    /// The noise of `fixed`, a run whose speeds differ from those this noise
-    /// was estimated on and whose phasors, texts and noise columns do not
-    /// (rpm read as Hz): exactly [`RunNoise::estimate`] of `fixed`, with the
-    /// digits kept and only the scatter between neighbouring speeds
-    /// estimated anew (noise columns do not depend on the speeds).
-    pub fn with_speeds_of(&self, fixed: &crate::rundir::RunDir) -> Self {
-        self.reestimated(fixed, false)
-    }
-
-    /// The noise of `fixed`, a run whose pedestal phasors differ from those
-    /// this noise was estimated on and whose speeds and rotor-relative
-    /// phasors do not (pedestal velocities integrated): exactly
-    /// [`RunNoise::estimate`] of `fixed`, with the rotor-relative channels'
-    /// scatter laws kept and the digits and the pedestal channels' scatter
-    /// estimated anew.
-    pub fn with_pedestal_of(&self, fixed: &crate::rundir::RunDir) -> Self {
-        self.reestimated(fixed, true)
-    }
-
-    /// [`RunNoise::with_speeds_of`] (`ped_changed` false) or
-    /// [`RunNoise::with_pedestal_of`]: what stays the same is reused while
-    /// this noise is as estimated (not switched to the scatter or
-    /// rescaled by a fit), else `fixed` is estimated afresh.
-    fn reestimated(&self, fixed: &crate::rundir::RunDir, ped_changed: bool) -> Self {
-        let pristine = self.bearings.iter().all(|(_, index, noise)| {
-            noise.variance_scale == 1.0
-                && noise.var.len() == index.len()
-                && index.iter().all(|&i| i < fixed.measurements.len())
-                && match noise.source {
-                    NoiseSource::Columns => true,
-                    NoiseSource::Digits => noise.scatter_var.is_some(),
-                    NoiseSource::Scatter => false,
-                }
-        });
-        if !pristine {
-            return Self::estimate(fixed, self.quantisation);
-        }
-        // The digits of every number of `fixed`, counted once (a changed
-        // number's are counted on its value: the slow part).
-        let digits: Vec<[Option<(u32, i32)>; 8]> = if ped_changed {
-            fixed
-                .measurements
-                .iter()
-                .map(|m| std::array::from_fn(|c| digits_of(m, c)))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let columns: Option<[ColumnDigits; 8]> = ped_changed
-            .then(|| std::array::from_fn(|c| ColumnDigits::of_digits(digits.iter().map(|d| d[c]))));
-        let bearings = self
-            .bearings
-            .iter()
-            .map(|(name, index, noise)| {
-                let rows: Vec<&Measurement> =
-                    index.iter().map(|&i| &fixed.measurements[i]).collect();
-                let noise = match (&columns, noise.source) {
-                    (Some(columns), NoiseSource::Columns) => {
-                        BearingNoise::estimate(&rows, columns, self.quantisation)
-                    }
-                    (Some(columns), _) => {
-                        let s = noise.scatter;
-                        // `digits_variances`, from the digits counted above.
-                        let digits_var = index
-                            .iter()
-                            .zip(&rows)
-                            .map(|(&i, m)| {
-                                std::array::from_fn(|c| {
-                                    let ulp = columns[c].ulp_of_digits(
-                                        digits.get(i).map_or_else(|| digits_of(m, c), |d| d[c]),
-                                        real_value(m, c),
-                                    );
-                                    number_variance(self.quantisation, ulp, None)
-                                })
-                            })
-                            .collect();
-                        BearingNoise::with_scatter(
-                            &rows,
-                            digits_var,
-                            self.quantisation,
-                            [Some(s[0]), Some(s[1]), None, None],
-                        )
-                    }
-                    (None, NoiseSource::Columns) => noise.clone(),
-                    (None, _) => BearingNoise::with_scatter(
-                        &rows,
-                        noise.var.clone(),
-                        self.quantisation,
-                        [None; 4],
-                    ),
-                };
-                (name.clone(), index.clone(), noise)
-            })
-            .collect();
-        Self {
-            quantisation: self.quantisation,
-            bearings,
-        }
-    }
-
-    /// The noise of the rows of `bearing`, with their indices in
-    /// `run.measurements`.
-    pub fn bearing(&self, bearing: &str) -> Option<(&[usize], &BearingNoise)> {
-        self.bearings
-            .iter()
-            .find(|(name, _, _)| name == bearing)
-            .map(|(_, index, noise)| (index.as_slice(), noise))
-    }
-
-    /// [`BearingNoise::swapped_yz`] of every bearing.
-    pub fn swapped_yz(&self) -> Self {
-        Self {
-            quantisation: self.quantisation,
-            bearings: self
-                .bearings
-                .iter()
-                .map(|(name, index, noise)| (name.clone(), index.clone(), noise.swapped_yz()))
-                .collect(),
         }
     }
 }

@@ -1,8 +1,8 @@
 //! `plinth identify`: batch identification of every pedestal in a run directory.
 
 use super::{
-    identify_run, mode_label, EquationMode, Estimator, Identification, Model, Options, Parameter,
-    PedestalFit, WarningKind, DEFAULT_MAX_CONDITION_NUMBER,
+    identify_prepared, mode_label, EquationMode, Estimator, Identification, Model, Options,
+    Parameter, PedestalFit, WarningKind, DEFAULT_MAX_CONDITION_NUMBER,
 };
 use crate::estimate::noise::Quantisation;
 use crate::present::table::{self, sig, PedestalRow, SubRow};
@@ -203,6 +203,14 @@ pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
     check_run_dir(&args.dir)?;
     let mut ticker = crate::progress::Ticker::new("identify: read, fit, bases", 3, true);
     let mut run = RunDir::read(&args.dir)?;
+    // The measured base motion is read with the run, before any fit.
+    let base_rows = crate::base_csv::read(&args.dir)?;
+    if base_rows.is_some() && args.unmeasured_base.is_some() {
+        anyhow::bail!(
+            "--unmeasured-base: {} holds the measured base motion: use it (drop --unmeasured-base) or move base.csv away",
+            args.dir.join(crate::base_csv::BASE_FILE).display()
+        );
+    }
     ticker.tick(1);
     if let Some(band) = args.speeds {
         band.select(&mut run)
@@ -220,37 +228,44 @@ pub fn identify_args(args: &Args) -> anyhow::Result<(RunDir, Identification)> {
             eprintln!("warning: {w}");
         }
     }
+    if let Some(rows) = &base_rows {
+        crate::base_csv::check_bearings(&args.dir, rows, &run.measured_bearings())?;
+    }
+    let options = args.options();
+    // The run as fitted, its base and their noise, made once.
+    let prepared = super::data::Prepared::new(&run, base_rows.as_deref(), options.quantisation);
     let mut identification =
-        identify_run(&run, &args.options()).map_err(|e| located(&args.dir, e))?;
+        identify_prepared(&run, &prepared, &options).map_err(|e| located(&args.dir, e))?;
     ticker.tick(2);
-    on_bases(args, &run, &mut identification)?;
+    on_bases(args, &prepared, &mut identification)?;
     ticker.finish();
     crate::present::modal::attach(&mut identification);
     Ok((run, identification))
 }
 
 /// Pedestals on bases: refitted on the measured base of DIR/base.csv, then
-/// with the unmeasured bases of `--unmeasured-base` ([`super::on_base`]).
-fn on_bases(args: &Args, run: &RunDir, identification: &mut Identification) -> anyhow::Result<()> {
+/// with the unmeasured bases of `--unmeasured-base` ([`super::on_base`]),
+/// from what was read and made ready before fitting (`prepared`).
+fn on_bases(
+    args: &Args,
+    prepared: &super::data::Prepared,
+    identification: &mut Identification,
+) -> anyhow::Result<()> {
     let options = args.options();
     let context = || format!("identifying {} on its bases", args.dir.display());
-    let base_rows = crate::base_csv::read(&args.dir)?;
-    if base_rows.is_some() && args.unmeasured_base.is_some() {
-        anyhow::bail!(
-            "--unmeasured-base: {} holds the measured base motion: use it (drop --unmeasured-base) or move base.csv away",
-            args.dir.join(crate::base_csv::BASE_FILE).display()
-        );
-    }
-    if let Some(rows) = base_rows {
-        crate::base_csv::check_bearings(&args.dir, &rows, &run.measured_bearings())?;
-        let reports = super::on_base::apply_measured_base(run, &rows, identification, &options)
-            .with_context(context)?;
+    if !prepared.bases.is_empty() {
+        let reports =
+            super::on_base::apply_measured_base(prepared, identification).with_context(context)?;
         identification.bases.extend(reports);
     }
     if let Some(groups) = &args.unmeasured_base {
-        let reports =
-            super::on_base::apply_unmeasured_bases(run, &groups.0, identification, &options)
-                .with_context(context)?;
+        let reports = super::on_base::apply_unmeasured_bases_prepared(
+            prepared,
+            &groups.0,
+            identification,
+            &options,
+        )
+        .with_context(context)?;
         identification.bases.extend(reports);
     }
     Ok(())

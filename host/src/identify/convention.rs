@@ -69,6 +69,7 @@ use crate::rundir::RunDir;
 use plinth_shared::bearing::BearingCoefficients;
 use plinth_shared::phasor::Phasor2;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::fmt;
 
 /// Largest χ²/ν of a reading that "fits to the noise floor". The noise
@@ -225,28 +226,21 @@ pub fn diagnose(
     };
     // Each correction's rows are made when they are read, not kept: eight
     // copies of a long run's observations cost more to hold than to make.
-    let rows_of = |c: Convention, fixed: &mut Option<RunDir>| {
-        rows::corrected(c, run, &found_rows, &schedules, fixed)
-    };
+    let rows_of = |c: Convention| rows::corrected(c, run, &found_rows, &schedules);
     // Every correction with its OLS screen.
     let mut candidates: Vec<Candidate> = Vec::new();
     for c in Convention::ALL {
         // The run with the mistake undone, made only where a reading needs
         // more than its rows.
         let mut fixed: Option<RunDir> = None;
-        let changes = if c == Convention::SpeedInRpm {
-            *fixed.insert(c.correct(run)) != *run
-        } else {
-            c.changes(run)
-        };
-        if !changes {
+        if !c.changes_with(run, &schedules) {
             continue; // the mistake changes nothing in these data
         }
-        let rows = rows_of(c, &mut fixed);
+        let rows = rows_of(c);
         let Some(screen) = screen::screen(&rows, options, pedestals) else {
             continue;
         };
-        let noise = corrected_noise(c, noise, run, &mut fixed);
+        let noise = corrected_noise(c, noise, run);
         let sigma = floor_of(
             &mut || {
                 let f = fixed.get_or_insert_with(|| c.correct(run));
@@ -332,7 +326,7 @@ pub fn diagnose(
                 )
                 .ok()
                 .map(|id| id.pedestals);
-                let rows = rows_of(c, &mut k.fixed);
+                let rows = rows_of(c);
                 let k = &candidates[i];
                 let readings = fits
                     .as_deref()
@@ -358,7 +352,7 @@ pub fn diagnose(
             if ols {
                 // The named reading with the full OLS fit, not its screen.
                 if let Some(k) = candidates.iter_mut().find(|k| k.convention == convention) {
-                    let rows = rows_of(convention, &mut k.fixed);
+                    let rows = rows_of(convention);
                     let exact = rows
                         .iter()
                         .find(|r| r.bearing == p.bearing)
@@ -388,13 +382,14 @@ pub fn diagnose(
 type Schedules = std::collections::BTreeMap<String, crate::rundir::BearingSchedule>;
 
 /// One correction of a run under examination by [`diagnose`].
-struct Candidate {
+struct Candidate<'a> {
     convention: Convention,
     /// The run with the mistake undone, once a reading needed it (its
     /// noise re-estimated, its ML refit).
     fixed: Option<RunDir>,
-    /// Its noise (the quantisation of the options).
-    noise: RunNoise,
+    /// Its noise (the quantisation of the options; the run's own where the
+    /// correction leaves it as it is).
+    noise: Cow<'a, RunNoise>,
     /// Its noise floor ([`super::misfit::noise_floor`]).
     sigma: Vec<[f64; 4]>,
     /// Its OLS fits.
@@ -442,40 +437,42 @@ fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
 
 /// The noise of `run` with mistake `c` undone (`fixed`), from the noise
 /// of the run as found: the same where the correction changes only signs
-/// (each channel's scatter and each column's digits are blind to them) or
-/// only the bearing table, y and z exchanged for `swapped_yz`, estimated
-/// anew where it rescales the phasors or the speeds (only what they change:
-/// [`RunNoise::with_speeds_of`], [`RunNoise::with_pedestal_of`]).
-/// `fixed` is the corrected run once made (made here when needed).
-fn corrected_noise(
-    c: Convention,
-    noise: &RunNoise,
-    run: &RunDir,
-    fixed: &mut Option<RunDir>,
-) -> RunNoise {
-    match c {
+/// (each channel's scatter and each column's digits are blind to them),
+/// only the bearing table, or only the unit of the speeds (`speed_in_rpm`:
+/// the values, their digits and noise columns are unchanged, and the local
+/// fits that give the scatter see each speed relative to its window's span,
+/// which a change of unit leaves as it is); y and z exchanged for
+/// `swapped_yz`; estimated anew where it changes the pedestal phasors
+/// (only what that changes: [`RunNoise::with_pedestal_of`]).
+fn corrected_noise<'a>(c: Convention, noise: &'a RunNoise, run: &RunDir) -> Cow<'a, RunNoise> {
+    Cow::Owned(match c {
         Convention::Conjugated
         | Convention::RelNegated
         | Convention::PedConjugated
         | Convention::BearingTransposed
-        | Convention::CrossCouplingSign => noise.clone(),
+        | Convention::CrossCouplingSign
+        | Convention::SpeedInRpm => return Cow::Borrowed(noise),
         Convention::SwappedYz => noise.swapped_yz(),
-        Convention::SpeedInRpm => noise.with_speeds_of(fixed.get_or_insert_with(|| c.correct(run))),
-        Convention::PedVelocity => match fixed {
-            Some(f) => noise.with_pedestal_of(f),
-            None => {
-                // The noise reads the measurements only: the corrected run
-                // without its bearing table is enough, and cheaper to make.
-                let mut measured = RunDir {
-                    measurements: run.measurements.clone(),
-                    bearings: Vec::new(),
-                    truth: None,
-                };
-                c.fix_measurements(&mut measured.measurements);
-                noise.with_pedestal_of(&measured)
-            }
-        },
-    }
+        Convention::PedVelocity => {
+            // The noise reads the values of the measurements only: their
+            // corrected copies without the bearing names are enough, and
+            // cheaper to make than the corrected run.
+            let mut measured: Vec<crate::rundir::Measurement> = run
+                .measurements
+                .iter()
+                .map(|m| crate::rundir::Measurement {
+                    speed_hz: m.speed_hz,
+                    bearing: String::new(),
+                    rel: m.rel,
+                    ped: m.ped,
+                    noise_sd: m.noise_sd,
+                    written: m.written,
+                })
+                .collect();
+            c.fix_measurements(&mut measured);
+            noise.with_pedestal_of(&measured)
+        }
+    })
 }
 
 /// The decisive reading (module docs) with the runner-up and its fit, or

@@ -374,14 +374,16 @@ pub fn ols_noise_report(
     observations: &[Observation],
     noise: &BearingNoise,
 ) -> NoiseReport {
-    let obs: Vec<Observation> = observations
-        .iter()
-        .filter(|o| o.is_finite())
-        .copied()
-        .collect();
+    let finite = || observations.iter().filter(|o| o.is_finite());
     let p = PARAMETERS - fit.fixed.len();
-    let chi2 = ml::cost(&obs, &fit.pedestal.theta()).unwrap_or(f64::NAN);
-    report(noise, chi2, (4 * obs.len()).saturating_sub(p), 1.0, 0.0)
+    let chi2 = ml::cost_over(finite(), &fit.pedestal.theta(), 0.0).unwrap_or(f64::NAN);
+    report(
+        noise,
+        chi2,
+        (4 * finite().count()).saturating_sub(p),
+        1.0,
+        0.0,
+    )
 }
 
 fn compare(

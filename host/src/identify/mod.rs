@@ -19,6 +19,7 @@ pub mod base;
 mod checks;
 pub mod cli;
 pub mod convention;
+pub mod data;
 pub mod estimator;
 pub mod lsq;
 pub mod misfit;
@@ -404,8 +405,8 @@ pub(crate) fn ols_solution(
     }
     used.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
 
-    let mut rows: Vec<f64> = Vec::new();
-    let mut rhs: Vec<f64> = Vec::new();
+    let mut rows: Vec<f64> = Vec::with_capacity(4 * used.len() * columns.len());
+    let mut rhs: Vec<f64> = Vec::with_capacity(4 * used.len());
     for p in &used {
         let (eqs, n) =
             equations_for_mode(options.mode, omega_from_hz(p.speed_hz), &p.ped, &p.force());
@@ -486,9 +487,25 @@ pub fn observations(
 /// lack of fit judged ([`trust`]) and the values checked for plausibility
 /// ([`plausibility`]).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
-    let noise = RunNoise::estimate(run, options.quantisation);
-    let mut identification = fit_run_with(run, &noise, options)?;
-    let findings = convention::diagnose(run, &identification, &noise, options);
+    identify_prepared(
+        run,
+        &data::Prepared::new(run, None, options.quantisation),
+        options,
+    )
+}
+
+/// [`identify_run`] of `run` made ready for fitting beforehand
+/// ([`data::Prepared`]: its noise and observations, what the refits on a
+/// base read afterwards).
+pub fn identify_prepared(
+    run: &RunDir,
+    prepared: &data::Prepared,
+    options: &Options,
+) -> Result<Identification, IdentifyError> {
+    let noise = &prepared.noise;
+    let mut identification =
+        fit_observed(&prepared.bearings, noise, options, estimator::Checks::All)?;
+    let findings = convention::diagnose(run, &identification, noise, options);
     convention::mark(&mut identification, &findings);
     crate::present::modal::attach(&mut identification);
     physical::recheck_run(&mut identification);
@@ -519,42 +536,36 @@ pub(crate) fn fit_run_checked(
     options: &Options,
     checks: estimator::Checks,
 ) -> Result<Identification, IdentifyError> {
-    let bearings = run.measured_bearings();
+    fit_observed(&data::observe(run, run_noise), run_noise, options, checks)
+}
+
+/// Fits every measured bearing of `bearings` ([`data::observe`] of a run
+/// whose noise is `run_noise`), in their order, each on its own copy of
+/// its noise.
+fn fit_observed(
+    bearings: &[data::BearingObservations],
+    run_noise: &RunNoise,
+    options: &Options,
+    checks: estimator::Checks,
+) -> Result<Identification, IdentifyError> {
     if bearings.is_empty() {
         return Err(IdentifyError::NoMeasurements);
     }
-    let schedules = run.bearing_schedules();
     let estimator = options.effective_estimator();
     let mut pedestals = Vec::with_capacity(bearings.len());
     let mut noise_reports = BTreeMap::new();
-    for bearing in bearings {
-        let schedule = schedules
-            .get(bearing)
-            .ok_or_else(|| IdentifyError::UnknownBearing {
-                bearing: bearing.to_string(),
-            })?;
-        let (index, noise) = run_noise
+    for b in bearings {
+        let bearing = b.bearing.as_str();
+        let obs = b.observations.as_deref().map_err(|e| e.of(bearing))?;
+        let (_, noise) = run_noise
             .bearing(bearing)
             .ok_or(IdentifyError::NoMeasurements)?;
-        let rows: Vec<&Measurement> = index.iter().map(|&i| &run.measurements[i]).collect();
-        if rows.len() < MIN_SPEEDS {
-            return Err(IdentifyError::TooFewSpeeds {
-                bearing: bearing.to_string(),
-                speeds: rows.len(),
-            });
-        }
         let mut noise = noise.clone();
-        let obs = observations(&rows, schedule, &noise).map_err(|source| {
-            IdentifyError::BearingRange {
-                bearing: bearing.to_string(),
-                source,
-            }
-        })?;
         let (fit, report) = match estimator {
-            Estimator::Ml => estimator::fit_ml_checked(bearing, &obs, &mut noise, options, checks)?,
+            Estimator::Ml => estimator::fit_ml_checked(bearing, obs, &mut noise, options, checks)?,
             Estimator::Ols => {
-                let fit = fit_pedestal(bearing, &obs, options)?;
-                let report = estimator::ols_noise_report(&fit, &obs, &noise);
+                let fit = fit_pedestal(bearing, obs, options)?;
+                let report = estimator::ols_noise_report(&fit, obs, &noise);
                 (fit, report)
             }
         };

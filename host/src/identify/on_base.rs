@@ -7,20 +7,16 @@
 //! Both replace the rigid-ground fits of the pedestals concerned in an
 //! [`Identification`] and say so (`base`, `base_measured`).
 
+use super::data::Prepared;
 use super::estimator::{fit_ml, report};
-use super::{
-    observations, physical, Identification, IdentifyError, Options, PedestalFit, Warning,
-    WarningKind,
-};
-use crate::base_csv::BaseRow;
+use super::{physical, Identification, IdentifyError, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::base::{
     fit_on_measured_base, fit_on_unmeasured_base, BaseFitResult, BaseGroup, BaseIdentifiability,
-    BaseObservation,
 };
-use crate::estimate::noise::{BearingNoise, ColumnDigits};
-use crate::estimate::pedestal::{fit_under_noise, noise_level, number_variance};
+use crate::estimate::noise::BearingNoise;
+use crate::estimate::pedestal::{fit_under_noise, noise_level};
 use crate::estimate::Observation;
-use crate::rundir::{Measurement, RunDir};
+use crate::rundir::RunDir;
 use serde::{Deserialize, Serialize};
 
 /// What `identify` reports about one base (`--json`: `"bases"`).
@@ -142,33 +138,6 @@ pub fn parse_groups(text: &str) -> Result<Vec<Vec<String>>, String> {
     Ok(groups)
 }
 
-/// One bearing's observations and the noise model they came from.
-fn bearing_data(
-    run: &RunDir,
-    bearing: &str,
-    options: &Options,
-) -> Result<(Vec<Observation>, BearingNoise), IdentifyError> {
-    let schedules = run.bearing_schedules();
-    let schedule = schedules
-        .get(bearing)
-        .ok_or_else(|| IdentifyError::UnknownBearing {
-            bearing: bearing.to_string(),
-        })?;
-    let rows: Vec<&Measurement> = run
-        .measurements
-        .iter()
-        .filter(|m| m.bearing == bearing)
-        .collect();
-    let columns = ColumnDigits::of_run(&run.measurements);
-    let noise = BearingNoise::estimate(&rows, &columns, options.quantisation);
-    let obs =
-        observations(&rows, schedule, &noise).map_err(|source| IdentifyError::BearingRange {
-            bearing: bearing.to_string(),
-            source,
-        })?;
-    Ok((obs, noise))
-}
-
 /// Observations with the variances of `noise` (row for row).
 fn with_noise(obs: &[Observation], noise: &BearingNoise) -> Vec<Observation> {
     obs.iter()
@@ -234,45 +203,23 @@ fn variance_scale(chi2: f64, dof: usize, estimated: bool) -> f64 {
 }
 
 /// Refits every pedestal of `identification` that stands on a base of
-/// `base.csv` (`rows`) relative to that base's measured motion. The base
-/// phasors' noise: `y_sd,z_sd` when given, else their digits.
+/// `base.csv` relative to that base's measured motion, as read with the
+/// run ([`Prepared`]: the base phasors' noise from `y_sd,z_sd` when given,
+/// else their digits; the pedestal's observations and noise as estimated
+/// before any fit).
 pub fn apply_measured_base(
-    run: &RunDir,
-    rows: &[BaseRow],
+    prepared: &Prepared,
     identification: &mut Identification,
-    options: &Options,
 ) -> Result<Vec<BaseReport>, IdentifyError> {
     let mut reports: Vec<BaseReport> = Vec::new();
-    let digits: [ColumnDigits; 4] = std::array::from_fn(|c| {
-        ColumnDigits::of(rows.iter().map(|r| {
-            let z = r.motion[c / 2];
-            if c % 2 == 0 {
-                z.re
-            } else {
-                z.im
-            }
-        }))
-    });
     for fit in &mut identification.pedestals {
-        let Some(first) = rows.iter().find(|r| r.bearings.contains(&fit.bearing)) else {
+        let Some(measured) = prepared.base_of(&fit.bearing) else {
             continue;
         };
-        let name = first.base.clone();
-        let base: Vec<BaseObservation> = rows
-            .iter()
-            .filter(|r| r.base == name)
-            .map(|r| BaseObservation {
-                speed_hz: r.speed_hz,
-                motion: r.motion,
-                var: std::array::from_fn(|c| {
-                    let z = r.motion[c / 2];
-                    let v = if c % 2 == 0 { z.re } else { z.im };
-                    let sd = r.noise_sd.map(|sd| sd[c / 2]);
-                    number_variance(options.quantisation, digits[c].ulp(v), sd)
-                }),
-            })
-            .collect();
-        let (obs, mut noise) = bearing_data(run, &fit.bearing, options)?;
+        let name = measured.name.clone();
+        let base = &measured.observations;
+        let (obs, noise) = prepared.bearing(&fit.bearing)?;
+        let mut noise = noise.clone();
         let start = fit.pedestal.theta();
         let failed = |e: crate::estimate::base::MeasuredBaseError| {
             IdentifyError::Base(format!(
@@ -285,7 +232,7 @@ pub fn apply_measured_base(
             false,
             |noises, first: Option<&crate::estimate::ml::MlFit>| {
                 let start = first.map_or(&start, |f| &f.theta);
-                fit_on_measured_base(&with_noise(&obs, &noises[0]), &base, start)
+                fit_on_measured_base(&with_noise(obs, &noises[0]), base, start)
             },
             |f| (f.chi2, f.dof),
         )
@@ -331,7 +278,19 @@ pub fn apply_unmeasured_bases(
     identification: &mut Identification,
     options: &Options,
 ) -> Result<Vec<BaseReport>, IdentifyError> {
-    let measured = run.measured_bearings();
+    let prepared = Prepared::new(run, None, options.quantisation);
+    apply_unmeasured_bases_prepared(&prepared, groups, identification, options)
+}
+
+/// [`apply_unmeasured_bases`] of a run made ready for fitting beforehand
+/// ([`Prepared`]).
+pub fn apply_unmeasured_bases_prepared(
+    prepared: &Prepared,
+    groups: &[Vec<String>],
+    identification: &mut Identification,
+    options: &Options,
+) -> Result<Vec<BaseReport>, IdentifyError> {
+    let measured = prepared.measured_bearings();
     let mut reports = Vec::new();
     for (g, names) in groups.iter().enumerate() {
         for n in names {
@@ -347,7 +306,8 @@ pub fn apply_unmeasured_bases(
         let mut noises = Vec::new();
         let mut starts = Vec::new();
         for n in names {
-            let (o, noise) = bearing_data(run, n, options)?;
+            let (o, noise) = prepared.bearing(n)?;
+            let (o, noise) = (o.to_vec(), noise.clone());
             // The rigid-ground fit already made, else the ML fit (on its
             // own noise copy: the rigid misfit must not set the noise level
             // of the joint fit).
@@ -483,6 +443,7 @@ mod tests {
     use super::*;
     use crate::identify::fit_run;
     use crate::present::modal::{pedestal, PedestalModal};
+    use crate::rundir::Measurement;
     use crate::sim::{unbalance_response, EffectSet, Machine, Noise};
     use std::collections::BTreeMap;
 

@@ -439,9 +439,19 @@ impl RunDir {
 
     /// The coefficient schedule of every bearing listed in `bearings`.
     pub fn bearing_schedules(&self) -> BTreeMap<String, BearingSchedule> {
+        self.bearing_schedules_with(|f| f)
+    }
+
+    /// [`RunDir::bearing_schedules`] of this run with every speed `f` [Hz]
+    /// of `bearings` read as `speed(f)` (a table whose speeds were written
+    /// in another unit), made exactly as that run's would be.
+    pub fn bearing_schedules_with(
+        &self,
+        speed: impl Fn(f64) -> f64,
+    ) -> BTreeMap<String, BearingSchedule> {
         let mut rows: BTreeMap<String, Vec<(f64, BearingCoefficients<f64>)>> = BTreeMap::new();
         for b in &self.bearings {
-            let row = (b.speed_hz, b.coefficients);
+            let row = (speed(b.speed_hz), b.coefficients);
             // The name is copied once per bearing, not once per row.
             match rows.get_mut(&b.bearing) {
                 Some(r) => r.push(row),

@@ -5,18 +5,41 @@ use super::*;
 /// Reads and checks a `bearings.csv` on its own (formats.md layout), e.g. the
 /// bearing table given to `plinth import` or `plinth extract`.
 pub fn read_bearings(path: impl AsRef<Path>) -> Result<Vec<BearingRow>, RunDirError> {
-    let rows = read_table(path.as_ref(), &BEARING_COLUMNS, None, false, false)?;
-    Ok(rows
-        .iter()
-        .map(|r| BearingRow {
-            speed_hz: r.speed_hz,
-            bearing: r.bearing.clone(),
-            coefficients: BearingCoefficients {
-                k: [[r.values[0], r.values[1]], [r.values[2], r.values[3]]],
-                c: [[r.values[4], r.values[5]], [r.values[6], r.values[7]]],
-            },
-        })
-        .collect())
+    Ok(read_table(
+        path.as_ref(),
+        &BEARING_COLUMNS,
+        None,
+        false,
+        false,
+        bearing_row,
+    )?
+    .rows)
+}
+
+/// A row of `bearings.csv` as read.
+fn bearing_row(r: TableRow) -> BearingRow {
+    let v = &r.values;
+    BearingRow {
+        speed_hz: r.speed_hz,
+        bearing: r.bearing,
+        coefficients: BearingCoefficients {
+            k: [[v[0], v[1]], [v[2], v[3]]],
+            c: [[v[4], v[5]], [v[6], v[7]]],
+        },
+    }
+}
+
+/// A row of `measurements.csv` as read.
+fn measurement(r: TableRow) -> Measurement {
+    let v = &r.values;
+    Measurement {
+        speed_hz: r.speed_hz,
+        bearing: r.bearing,
+        rel: [Complex::new(v[0], v[1]), Complex::new(v[2], v[3])],
+        ped: [Complex::new(v[4], v[5]), Complex::new(v[6], v[7])],
+        noise_sd: r.noise_sd,
+        written: r.written,
+    }
 }
 
 impl RunDir {
@@ -31,45 +54,42 @@ impl RunDir {
         let b_path = dir.join(BEARINGS_FILE);
         let t_path = dir.join(TRUTH_FILE);
 
-        let m_rows = read_table(
+        let m_table = read_table(
             &m_path,
             &MEASUREMENT_COLUMNS,
             Some(&NOISE_COLUMNS),
             true,
             true,
+            measurement,
         )?;
-        let b_rows = read_table(&b_path, &BEARING_COLUMNS, None, false, false)?;
-        check_noise_not_all_zero(&m_rows, &m_path)?;
-
-        let bearings: Vec<BearingRow> = b_rows
-            .iter()
-            .map(|r| BearingRow {
-                speed_hz: r.speed_hz,
-                bearing: r.bearing.clone(),
-                coefficients: BearingCoefficients {
-                    k: [[r.values[0], r.values[1]], [r.values[2], r.values[3]]],
-                    c: [[r.values[4], r.values[5]], [r.values[6], r.values[7]]],
-                },
-            })
-            .collect();
-        let mut run = RunDir {
-            measurements: Vec::new(),
+        let bearings = read_table(&b_path, &BEARING_COLUMNS, None, false, false, bearing_row)?.rows;
+        check_noise_not_all_zero(&m_table, &m_path)?;
+        let Table {
+            rows: measurements,
+            lines,
+            speed_column,
+            bearing_column,
+        } = m_table;
+        let run = RunDir {
+            measurements,
             bearings,
             truth: None,
         };
 
         // Every measurement must be covered by its bearing's table.
         let schedules = run.bearing_schedules();
-        for r in &m_rows {
+        for (r, &line) in run.measurements.iter().zip(&lines) {
             let Some(schedule) = schedules.get(&r.bearing) else {
-                let first = m_rows
+                let first = run
+                    .measurements
                     .iter()
-                    .find(|x| x.bearing == r.bearing)
-                    .map_or(r.line, |x| x.line);
+                    .zip(&lines)
+                    .find(|(x, _)| x.bearing == r.bearing)
+                    .map_or(line, |(_, &l)| l);
                 return Err(RunDirError::UnknownBearing {
                     file: m_path,
                     line: first,
-                    column: r.bearing_column,
+                    column: bearing_column,
                     bearing: r.bearing.clone(),
                     bearings_file: b_path,
                 });
@@ -77,8 +97,8 @@ impl RunDir {
             if let Err(e) = schedule.at(r.speed_hz) {
                 return Err(RunDirError::SpeedOutOfRange {
                     file: m_path,
-                    line: r.line,
-                    column: r.speed_column,
+                    line,
+                    column: speed_column,
                     speed_hz: r.speed_hz,
                     bearing: r.bearing.clone(),
                     min_hz: e.min_hz,
@@ -87,21 +107,6 @@ impl RunDir {
                 });
             }
         }
-
-        run.measurements = m_rows
-            .into_iter()
-            .map(|r| {
-                let v = &r.values;
-                Measurement {
-                    speed_hz: r.speed_hz,
-                    bearing: r.bearing,
-                    rel: [Complex::new(v[0], v[1]), Complex::new(v[2], v[3])],
-                    ped: [Complex::new(v[4], v[5]), Complex::new(v[6], v[7])],
-                    noise_sd: r.noise_sd,
-                    written: r.written,
-                }
-            })
-            .collect();
 
         let truth = match crate::input_file::read_to_string(&t_path) {
             Ok(text) => {
@@ -127,7 +132,7 @@ impl RunDir {
                 eprintln!("warning: {}: {note}", t_path.display());
             }
         }
-        for note in super::schedule::unlisted_speeds(&run) {
+        for note in super::schedule::unlisted_speeds_with(&run, &schedules) {
             eprintln!("warning: {}: {note}", b_path.display());
         }
         Ok(RunDir { truth, ..run })
@@ -138,18 +143,19 @@ impl RunDir {
 /// instrument that wrote 0 for "not measured". Weighting by it would make
 /// every misfit infinitely significant, so it is refused (single zeros are
 /// allowed: a channel may be noise-free at one speed).
-fn check_noise_not_all_zero(rows: &[TableRow], path: &Path) -> Result<(), RunDirError> {
-    let Some(first) = rows.first() else {
+fn check_noise_not_all_zero(table: &Table<Measurement>, path: &Path) -> Result<(), RunDirError> {
+    let (Some(_), Some(&line)) = (table.rows.first(), table.lines.first()) else {
         return Ok(());
     };
     for (c, name) in NOISE_COLUMNS.iter().enumerate() {
-        let all_zero = rows
+        let all_zero = table
+            .rows
             .iter()
             .all(|r| r.noise_sd.is_some_and(|sd| sd[c] == 0.0));
         if all_zero {
             return Err(RunDirError::Csv {
                 file: path.to_path_buf(),
-                line: first.line,
+                line,
                 message: format!(
                     "column `{name}` is 0 on every row: a standard deviation of 0 says the phasors are exact (\"not measured\" written as 0?); write the measured scatter, or leave out the four `*_sd` columns and Plinth estimates the noise"
                 ),
@@ -228,14 +234,18 @@ fn check_truth_bearings(
     })
 }
 
+/// Fewest bytes of a data row in the reserve made for a table's rows: a
+/// speed, a bearing name and eight numbers of about three characters.
+const MIN_ROW_BYTES: u64 = 40;
+
+/// Most rows reserved for at once (more grow the table as they come).
+const MAX_ROOM: usize = 1 << 22;
+
 /// One parsed data row of either CSV file: speed, bearing and the eight numbers
 /// after them in the order of the expected columns.
 struct TableRow {
-    line: u64,
     speed_hz: f64,
-    speed_column: usize,
     bearing: String,
-    bearing_column: usize,
     values: [f64; 8],
     /// The digits each of `values` was written with, when counted.
     written: Option<super::WrittenDigits>,
@@ -243,18 +253,57 @@ struct TableRow {
     noise_sd: Option<NoiseSd>,
 }
 
+/// A CSV table as read: its rows made into `T`, each row's line, and the
+/// 1-based columns of the speed and the bearing name.
+struct Table<T> {
+    rows: Vec<T>,
+    lines: Vec<u64>,
+    speed_column: usize,
+    bearing_column: usize,
+}
+
+/// Hashes the duplicate check's keys (a speed's bits and a name's index):
+/// one multiply-xorshift mix per word, no per-key allocation or SipHash
+/// rounds.
+#[derive(Default)]
+struct KeyHasher(u64);
+
+impl std::hash::Hasher for KeyHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+
+    fn write_u64(&mut self, word: u64) {
+        let x = (self.0 ^ word).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        self.0 = x ^ (x >> 29);
+    }
+
+    fn write_usize(&mut self, word: usize) {
+        self.write_u64(word as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        let x = self.0.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        x ^ (x >> 31)
+    }
+}
+
 /// Reads a CSV table whose columns are `speed_hz`, `bearing` and eight numbers,
 /// plus, when `optional` is given and the header names them, four
 /// non-negative numbers (all four or none); with `count_digits` the digits
 /// each of the eight numbers was written with (the measurements' noise
-/// model needs them, the bearing table does not).
-fn read_table(
+/// model needs them, the bearing table does not). Each row is made into a
+/// `T` by `make` as it is read.
+fn read_table<T>(
     path: &Path,
     columns: &[&'static str; 10],
     optional: Option<&[&'static str; 4]>,
     positive_speed: bool,
     count_digits: bool,
-) -> Result<Vec<TableRow>, RunDirError> {
+    mut make: impl FnMut(TableRow) -> T,
+) -> Result<Table<T>, RunDirError> {
     let file = || path.to_path_buf();
     let expected = columns.join(",");
     // Spreadsheet exports and non-files are named before the CSV reader runs.
@@ -366,11 +415,18 @@ fn read_table(
     }
     let width = header.len();
 
-    let mut rows = Vec::new();
+    // Room for every row at once (a row is at least `MIN_ROW_BYTES`
+    // long): no growth by copying; what is not used is given back below.
+    let room = std::fs::metadata(path).map_or(0, |m| {
+        usize::try_from(m.len() / MIN_ROW_BYTES).map_or(MAX_ROOM, |n| n.min(MAX_ROOM))
+    });
+    let mut rows = Vec::with_capacity(room);
+    let mut lines = Vec::with_capacity(room);
     // (speed bits, bearing index in `names`) → first line: one allocation
     // per bearing name, not per row.
     let mut names: Vec<String> = Vec::new();
-    let mut seen: HashMap<(u64, usize), u64> = HashMap::new();
+    let mut seen: HashMap<(u64, usize), u64, std::hash::BuildHasherDefault<KeyHasher>> =
+        HashMap::with_capacity_and_hasher(room, Default::default());
     // One record, reused for every line.
     let mut record = csv::StringRecord::new();
     while reader.read_record(&mut record).map_err(csv_error)? {
@@ -504,18 +560,23 @@ fn read_table(
             });
         }
         seen.insert(key, line);
-        rows.push(TableRow {
-            line,
+        lines.push(line);
+        rows.push(make(TableRow {
             speed_hz,
-            speed_column: index[0] + 1,
             bearing: bearing.to_string(),
-            bearing_column: index[1] + 1,
             values,
             written,
             noise_sd,
-        });
+        }));
     }
-    Ok(rows)
+    rows.shrink_to_fit();
+    lines.shrink_to_fit();
+    Ok(Table {
+        rows,
+        lines,
+        speed_column: index[0] + 1,
+        bearing_column: index[1] + 1,
+    })
 }
 
 /// The csv crate only hands out an I/O kind for I/O errors; this keeps the

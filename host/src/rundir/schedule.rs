@@ -115,7 +115,14 @@ impl std::fmt::Display for UnlistedSpeeds {
 /// rows list at least half of its distinct measurement speeds but not all
 /// (a coarser table, listing fewer, is interpolation by design).
 pub fn unlisted_speeds(run: &RunDir) -> Vec<UnlistedSpeeds> {
-    let schedules = run.bearing_schedules();
+    unlisted_speeds_with(run, &run.bearing_schedules())
+}
+
+/// [`unlisted_speeds`] of `run`, whose bearing schedules are `schedules`.
+pub fn unlisted_speeds_with(
+    run: &RunDir,
+    schedules: &BTreeMap<String, BearingSchedule>,
+) -> Vec<UnlistedSpeeds> {
     let mut speeds: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
     for m in &run.measurements {
         speeds

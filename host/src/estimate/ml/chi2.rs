@@ -1,8 +1,7 @@
 //! χ² of a pedestal estimate under the noise model: J(θ) = Σ eᵀΣ(θ)⁻¹e
 //! over the speeds and where it falls in its χ² distribution.
 
-use super::rigid::Rigid;
-use super::{MlError, Weighting};
+use super::MlError;
 use crate::estimate::Observation;
 use plinth_shared::regression::PARAMETERS;
 
@@ -18,7 +17,22 @@ pub fn cost_with(
     theta: &[f64; PARAMETERS],
     equation_var: f64,
 ) -> Result<f64, MlError> {
-    Rigid::new(obs, &Weighting::equation_error(equation_var)).cost(theta)
+    cost_over(obs, theta, equation_var)
+}
+
+/// [`cost_with`] over the observations `obs` as they come, one speed at a
+/// time (the same arithmetic as `Rigid::cost` under
+/// `Weighting::equation_error`, without holding every speed's data) [-].
+pub fn cost_over<'a>(
+    obs: impl IntoIterator<Item = &'a Observation>,
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+) -> Result<f64, MlError> {
+    super::rigid::cost_of(
+        obs.into_iter().map(|o| super::rigid::Speed::new(o, 1.0)),
+        theta,
+        equation_var,
+    )
 }
 
 /// Where χ² = `chi2` falls in the χ²(`dof`) distribution: the probability of

@@ -204,13 +204,7 @@ impl Rigid {
 
     /// J(θ) = Σ eᵀΣ⁻¹e [-].
     pub(super) fn cost(&self, theta: &[f64]) -> Result<f64, MlError> {
-        let t = theta_vector(theta);
-        let mut sum = 0.0;
-        for sp in &self.speeds {
-            let l = sp.factor(theta, self.equation_var)?;
-            sum += forward(&l, &(sp.a * t - sp.b)).norm_squared();
-        }
-        Ok(sum)
+        cost_of(self.speeds.iter().copied(), theta, self.equation_var)
     }
 
     /// J(θ) and its slope dJ/dτ² [1/N²] at the current τ²: ∂Σ/∂τ² = c·I,
@@ -236,6 +230,23 @@ impl Rigid {
             .sum();
         (sum / (4 * self.speeds.len()).max(1) as f64).sqrt()
     }
+}
+
+/// J(θ) = Σ eᵀΣ⁻¹e [-] over `speeds` (unit covariance factor), with an
+/// equation error of variance `tau2` [N²]: [`Rigid::cost`], one speed at a
+/// time (a single evaluation need not hold every speed's data).
+pub(super) fn cost_of(
+    speeds: impl IntoIterator<Item = Speed>,
+    theta: &[f64],
+    tau2: f64,
+) -> Result<f64, MlError> {
+    let t = theta_vector(theta);
+    let mut sum = 0.0;
+    for sp in speeds {
+        let l = sp.factor(theta, tau2)?;
+        sum += forward(&l, &(sp.a * t - sp.b)).norm_squared();
+    }
+    Ok(sum)
 }
 
 pub(super) fn theta_vector(theta: &[f64]) -> nalgebra::SVector<f64, PARAMETERS> {

@@ -162,11 +162,11 @@ pub(super) fn scatter_law_of(
 ) -> Option<Scatter> {
     // (|component of the standardised residual|, local magnitude)
     let samples: Vec<(f64, f64)> = residuals_of(fits, values)
-        .filter(|(_, s)| s.norm() > 0.0 && s.norm().is_finite())
-        .flat_map(|(r, s)| {
+        .filter_map(|(r, s)| {
             let m = s.norm();
-            [(r.re.abs(), m), (r.im.abs(), m)]
+            (m > 0.0 && m.is_finite()).then_some([(r.re.abs(), m), (r.im.abs(), m)])
         })
+        .flatten()
         .collect();
     if samples.len() < 4 {
         return None;

@@ -86,18 +86,13 @@ impl Convention {
     pub fn correct(self, run: &RunDir) -> RunDir {
         let mut out = run.clone();
         if self == Convention::SpeedInRpm {
-            let schedules = run.bearing_schedules();
-            let table_in_same_unit = run.measurements.iter().all(|m| {
-                schedules
-                    .get(&m.bearing)
-                    .is_some_and(|s| s.at(m.speed_hz).is_ok())
-            });
+            let table_in_same_unit = rpm_table(run, &run.bearing_schedules());
             for m in &mut out.measurements {
-                m.speed_hz /= crate::present::table::RPM_PER_HZ;
+                m.speed_hz = rpm_to_hz(m.speed_hz);
             }
             if table_in_same_unit {
                 for b in &mut out.bearings {
-                    b.speed_hz /= crate::present::table::RPM_PER_HZ;
+                    b.speed_hz = rpm_to_hz(b.speed_hz);
                 }
             }
             return out;
@@ -123,27 +118,40 @@ impl Convention {
 
     /// Whether undoing the mistake changes `run` at all
     /// (`self.correct(run) != *run`), without copying it.
-    #[allow(clippy::eq_op)]
     pub fn changes(self, run: &RunDir) -> bool {
-        if self == Convention::SpeedInRpm {
-            return self.correct(run) != *run;
-        }
+        self.changes_with(run, &run.bearing_schedules())
+    }
+
+    /// [`Convention::changes`] of `run`, whose bearing schedules are
+    /// `schedules`.
+    #[allow(clippy::eq_op)]
+    pub(super) fn changes_with(self, run: &RunDir, schedules: &Schedules) -> bool {
+        let rpm = self == Convention::SpeedInRpm;
+        let table_rpm = rpm && rpm_table(run, schedules);
         let same_row = |m: &crate::rundir::Measurement| {
             let (mut rel, mut ped, mut sd) = (m.rel, m.ped, m.noise_sd);
             self.fix_phasors(m.speed_hz, &mut rel, &mut ped);
             if let Some(sd) = &mut sd {
                 self.fix_noise_sd(m.speed_hz, sd);
             }
+            let speed = if rpm {
+                rpm_to_hz(m.speed_hz)
+            } else {
+                m.speed_hz
+            };
             // `Measurement`'s equality, field by field (a NaN is unequal
             // to itself there too).
-            let same_speed = m.speed_hz == m.speed_hz;
-            same_speed && rel == m.rel && ped == m.ped && sd == m.noise_sd
+            speed == m.speed_hz && rel == m.rel && ped == m.ped && sd == m.noise_sd
         };
         let same_table_row = |b: &crate::rundir::BearingRow| {
             let mut c = b.coefficients;
             self.fix_coefficients(&mut c);
-            let same_speed = b.speed_hz == b.speed_hz;
-            same_speed && c == b.coefficients
+            let speed = if table_rpm {
+                rpm_to_hz(b.speed_hz)
+            } else {
+                b.speed_hz
+            };
+            speed == b.speed_hz && c == b.coefficients
         };
         !(run.measurements.iter().all(same_row)
             && run.bearings.iter().all(same_table_row)
@@ -219,6 +227,33 @@ impl Convention {
             }
             _ => {}
         }
+    }
+}
+
+/// A speed written in rpm, in Hz (what `speed_in_rpm` makes of every speed).
+pub(super) fn rpm_to_hz(speed: f64) -> f64 {
+    speed / crate::present::table::RPM_PER_HZ
+}
+
+/// Whether `speed_in_rpm` converts the bearing table too: the table (its
+/// schedules `schedules`) covers every measured speed as written, so it is
+/// in the measurements' unit.
+fn rpm_table(run: &RunDir, schedules: &Schedules) -> bool {
+    run.measurements.iter().all(|m| {
+        schedules
+            .get(&m.bearing)
+            .is_some_and(|s| s.at(m.speed_hz).is_ok())
+    })
+}
+
+/// The bearing schedules of `run` (whose own are `schedules`) with the
+/// speeds in rpm read as Hz: the schedules of `SpeedInRpm.correct(run)`,
+/// made from its table's rows in the same way, without copying the run.
+pub(super) fn rpm_schedules(run: &RunDir, schedules: &Schedules) -> Schedules {
+    if rpm_table(run, schedules) {
+        run.bearing_schedules_with(rpm_to_hz)
+    } else {
+        schedules.clone()
     }
 }
 

@@ -12,8 +12,10 @@
 //! (`bearing_transposed`, `cross_coupling_sign`) interpolates its corrected
 //! schedules at the same speeds ([`corrected_schedules`]: the table's
 //! coefficients mapped, which is what sorting the corrected rows gives, as
-//! the speeds do not change); `speed_in_rpm` is read from the corrected run
-//! itself. Every number is the one the corrected run gives, bit for bit.
+//! the speeds do not change); `speed_in_rpm` reads the run's rows at the
+//! corrected speeds from the corrected table's schedules, made from the
+//! table's rows as the corrected run's are. Every number is the one the
+//! corrected run gives, bit for bit.
 
 use super::{Convention, Schedules};
 use crate::estimate::{complex_stiffness, Observation};
@@ -58,13 +60,32 @@ impl BearingRows {
 /// Every measured bearing's rows of `run` (in the order of
 /// [`RunDir::measured_bearings`]), the stiffness from `schedules`.
 pub fn of_run(run: &RunDir, schedules: &Schedules) -> Vec<BearingRows> {
+    of_run_at(run, schedules, |f| f)
+}
+
+/// [`of_run`] with every measurement speed `f` [Hz] read as `speed(f)`
+/// (the speeds of the measurements of a corrected run).
+fn of_run_at(run: &RunDir, schedules: &Schedules, speed: impl Fn(f64) -> f64) -> Vec<BearingRows> {
     let bearings = run.measured_bearings();
+    // Room for each bearing's rows at once (they are counted first).
+    let mut counts = vec![0usize; bearings.len()];
+    let mut last = 0;
+    for m in &run.measurements {
+        if bearings.get(last).is_none_or(|b| *b != m.bearing) {
+            match bearings.iter().position(|b| *b == m.bearing) {
+                Some(k) => last = k,
+                None => continue,
+            }
+        }
+        counts[last] += 1;
+    }
     let mut out: Vec<BearingRows> = bearings
         .iter()
-        .map(|b| BearingRows {
+        .zip(counts)
+        .map(|(b, n)| BearingRows {
             bearing: b.to_string(),
-            index: Vec::new(),
-            obs: Vec::new(),
+            index: Vec::with_capacity(n),
+            obs: Vec::with_capacity(n),
             complete: true,
         })
         .collect();
@@ -80,19 +101,20 @@ pub fn of_run(run: &RunDir, schedules: &Schedules) -> Vec<BearingRows> {
         let Some(rows) = out.get_mut(last) else {
             continue;
         };
+        let speed_hz = speed(m.speed_hz);
         let coefficients = schedules
             .get(&rows.bearing)
-            .and_then(|s| s.at(m.speed_hz).ok());
+            .and_then(|s| s.at(speed_hz).ok());
         let Some(c) = coefficients else {
             rows.complete = false;
             continue;
         };
         rows.index.push(i);
         rows.obs.push(Observation {
-            speed_hz: m.speed_hz,
+            speed_hz,
             rel: m.rel,
             ped: m.ped,
-            kstar: complex_stiffness(&c, omega_from_hz(m.speed_hz)),
+            kstar: complex_stiffness(&c, omega_from_hz(speed_hz)),
             var: [0.0; 8],
         });
     }
@@ -153,20 +175,21 @@ pub fn with_schedules(found: &[BearingRows], schedules: &Schedules) -> Vec<Beari
 
 /// Every measured bearing's rows of `run` with mistake `c` undone, from
 /// those of the run as found (`found`, with the bearing schedules
-/// `schedules`); `fixed` is the corrected run, made here when the rows are
-/// read from it (`speed_in_rpm`).
+/// `schedules`), without making the corrected run: `speed_in_rpm` reads the
+/// run's rows at the corrected speeds with the corrected table
+/// ([`super::mistake::rpm_schedules`]).
 pub fn corrected(
     c: Convention,
     run: &RunDir,
     found: &[BearingRows],
     schedules: &Schedules,
-    fixed: &mut Option<RunDir>,
 ) -> Vec<BearingRows> {
     match c {
-        Convention::SpeedInRpm => {
-            let f = fixed.get_or_insert_with(|| c.correct(run));
-            of_run(f, &f.bearing_schedules())
-        }
+        Convention::SpeedInRpm => of_run_at(
+            run,
+            &super::mistake::rpm_schedules(run, schedules),
+            super::mistake::rpm_to_hz,
+        ),
         Convention::BearingTransposed | Convention::CrossCouplingSign => {
             with_schedules(found, &corrected_schedules(c, schedules))
         }
