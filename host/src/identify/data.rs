@@ -104,7 +104,7 @@ pub fn measured_bases(
 ) -> (Vec<MeasuredBase>, Vec<(String, usize)>) {
     let part = |r: &BaseRow, c: usize| {
         let z = r.motion[c / 2];
-        if c % 2 == 0 {
+        if c.is_multiple_of(2) {
             z.re
         } else {
             z.im
