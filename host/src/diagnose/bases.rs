@@ -474,8 +474,9 @@ const TUNE_ITERATIONS: usize = 4;
 /// fitted without the base bends to mimic the base's motion), so they are
 /// moved to the minimum of the base's pedestal-level χ² with the base's
 /// values held. Newton steps on a finite-difference gradient and Hessian
-/// (exact for runout and cross-coupling, in which the χ² is quadratic),
-/// each halved until the χ² falls. Returns the state and its χ².
+/// (exact for runout, in which the χ² is quadratic; nearly so for
+/// cross-coupling, whose value also moves the residuals' noise,
+/// [`residual_noise`]), each halved until the χ² falls. Returns the state and its χ².
 pub(super) fn tuned_on_base(
     prep: &Prepared,
     state: &State,

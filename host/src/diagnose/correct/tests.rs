@@ -77,26 +77,24 @@ fn noisy(prep: &Prepared, rng: &mut rand::rngs::StdRng) -> Prepared {
 #[test]
 fn the_residual_noise_through_a_cross_coupling_correction_matches_monte_carlo() {
     let (prep, k_yz) = exact_run();
-    // The rigid model with identify's fits plus the left cross-coupling at
-    // its true value, and the shared base fitted to the data it corrects.
+    // The shared base fitted to the data as measured (as diagnose chooses
+    // it, before any correction), and the rigid model with identify's fits
+    // plus the left cross-coupling at its true value.
     let mut state = State::base(&prep, Parameter::ALL.as_slice()).expect("base state");
-    state.model.terms.push(Term::CrossStiffness { bearing: 0 });
-    state.params.beta.push(k_yz);
     let rigid_model = base_model(Parameter::ALL.as_slice(), prep.bearings.len());
-    let rigid = |c: &Prepared| {
-        let params = crate::diagnose::model::Params {
-            beta: state.params.beta[..rigid_model.terms.len()].to_vec(),
-            nl: Vec::new(),
-        };
-        Prediction::new(c, &rigid_model, &params)
+    let rigid_params = crate::diagnose::model::Params {
+        beta: state.params.beta.clone(),
+        nl: Vec::new(),
     };
-    let cprep = corrected(&prep, &state);
-    let pred = rigid(&cprep);
-    let gap = pred.gap(&cprep, None);
-    let fit = foundation::fit(&cprep, &pred, gap, Kind::Shared, None)
+    let rigid = |c: &Prepared| Prediction::new(c, &rigid_model, &rigid_params);
+    let pred = rigid(&prep);
+    let gap = pred.gap(&prep, None);
+    let fit = foundation::fit(&prep, &pred, gap, Kind::Shared, None)
         .expect("base fit")
         .expect("a base")
         .untested("unit test");
+    state.model.terms.push(Term::CrossStiffness { bearing: 0 });
+    state.params.beta.push(k_yz);
     let predict = |c: &Prepared| fit.predict_on(c, &rigid(c));
     let propagated = residual_noise(&prep, &state, Some(&fit), &predict).expect("propagated");
     let residual = |data: &Prepared| {
