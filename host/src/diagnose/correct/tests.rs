@@ -110,8 +110,8 @@ fn the_residual_noise_through_a_cross_coupling_correction_matches_monte_carlo() 
     let mut empirical = vec![vec![[0.0; 2]; ns]; nb];
     for _ in 0..DRAWS {
         let (c, p) = residual(&noisy(&prep, &mut rng));
-        for b in 0..nb {
-            for j in 0..ns {
+        for (b, row) in empirical.iter_mut().enumerate() {
+            for (j, e) in row.iter_mut().enumerate() {
                 let (Some(o), Some(x), Some(o0), Some(x0)) = (
                     c.points[b][j].as_ref(),
                     p.ped[b][j],
@@ -122,7 +122,7 @@ fn the_residual_noise_through_a_cross_coupling_correction_matches_monte_carlo() 
                 };
                 for d in 0..2 {
                     let moved = (x[d] - o.ped[d]) - (x0[d] - o0.ped[d]);
-                    empirical[b][j][d] += moved.norm_sqr() / DRAWS as f64;
+                    e[d] += moved.norm_sqr() / DRAWS as f64;
                 }
             }
         }
