@@ -128,7 +128,6 @@ fn base_plus_delay_names_both() {
 }
 
 #[test]
-#[ignore = "FAILS (measured 2026-11-28, 16 s): names three effects [foundation_coupling left, pedestal_cross_coupling left (k_yz 2.228e6 vs true 2.236e6, base and pedestals within 1 %), probe_runout left]: the runout is 4.5e-10 m (0.5 sd of the rel noise) yet lowers the base's chi2 by 37 with the base held (618.6 -> 581.7, N = 472): the base + cross-coupling model leaves chi2/N = 1.3 that a constant rel offset partly takes"]
 fn base_plus_cross_coupling_names_both() {
     let effects = EffectSet::none().with(EffectKind::PedestalCrossCoupling, Some("left"), None);
     let run = run_dir(&skid(), &effects, NOISE, None, 57);

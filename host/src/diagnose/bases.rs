@@ -3,7 +3,7 @@
 //! the state's chosen corrections (runout, delays, table) correct.
 
 use super::backward::Chosen;
-use super::correct::{corrected, corrected_on, corrections_only};
+use super::correct::{corrected, corrected_on, corrections_only, mixes_channels, residual_noise};
 use super::criterion::{chi2_sf, Evidence};
 use super::data::Prepared;
 use super::forward::StepOutcome;
@@ -120,7 +120,13 @@ impl BaseOn {
     ) -> Option<Self> {
         let cprep = corrected_on(prep, state, Some(base));
         let rigid = rigid_prediction(&cprep, state, &opts.base);
-        let fit = base.refit(&cprep, &rigid)?;
+        let mut fit = base.refit(&cprep, &rigid)?;
+        if mixes_channels(state) {
+            let predict = |c: &Prepared| fit.predict_on(c, &rigid_prediction(c, state, &opts.base));
+            let noise = residual_noise(prep, state, Some(base), &predict)?;
+            fit.prediction.noise_var = noise;
+            fit.gap = fit.prediction.gap(&cprep, None);
+        }
         let (chi2, _) = fit.prediction.chi2(&cprep);
         Some(Self {
             prep: cprep,
@@ -438,10 +444,26 @@ fn slot_step(state: &State, s: Slot, runout_scale: f64) -> f64 {
 /// The pedestal-level χ² of the chosen base `fit`, its values held, on the
 /// data `state` corrects ([`Prediction::chi2`]; ∞ when it cannot predict).
 fn held_base_chi2(prep: &Prepared, state: &State, fit: &FoundationFit, opts: &Options) -> f64 {
+    held_prediction(prep, state, fit, opts).map_or(f64::INFINITY, |(c, p)| p.chi2(&c).0)
+}
+
+/// The chosen base `fit`, its values held, predicting the pedestals on the
+/// data `state` corrects on it, with each residual's noise carried through
+/// the corrections when they mix the channels ([`residual_noise`]): the
+/// corrected data and the prediction; `None` when it cannot predict.
+fn held_prediction(
+    prep: &Prepared,
+    state: &State,
+    fit: &FoundationFit,
+    opts: &Options,
+) -> Option<(Prepared, Prediction)> {
+    let predict = |c: &Prepared| fit.predict_on(c, &rigid_prediction(c, state, &opts.base));
     let cprep = corrected_on(prep, state, Some(fit));
-    let rigid = rigid_prediction(&cprep, state, &opts.base);
-    fit.predict_on(&cprep, &rigid)
-        .map_or(f64::INFINITY, |p| p.chi2(&cprep).0)
+    let mut pred = predict(&cprep)?;
+    if mixes_channels(state) {
+        pred.noise_var = residual_noise(prep, state, Some(fit), &predict)?;
+    }
+    Some((cprep, pred))
 }
 
 /// Newton iterations of [`tuned_on_base`].
@@ -452,8 +474,9 @@ const TUNE_ITERATIONS: usize = 4;
 /// fitted without the base bends to mimic the base's motion), so they are
 /// moved to the minimum of the base's pedestal-level χ² with the base's
 /// values held. Newton steps on a finite-difference gradient and Hessian
-/// (exact for runout and cross-coupling, in which the χ² is quadratic),
-/// each halved until the χ² falls. Returns the state and its χ².
+/// (exact for runout, in which the χ² is quadratic; nearly so for
+/// cross-coupling, whose value also moves the residuals' noise,
+/// [`residual_noise`]), each halved until the χ² falls. Returns the state and its χ².
 pub(super) fn tuned_on_base(
     prep: &Prepared,
     state: &State,

@@ -6,6 +6,7 @@
 
 use super::data::Prepared;
 use super::foundation::FoundationFit;
+use super::gap::Prediction;
 use super::model::{Model, Nonlinear, Term};
 use super::state::State;
 use crate::estimate::base::BaseFitResult;
@@ -214,3 +215,95 @@ fn cross_coupling_on_base(
     let df = [dped[0] * (-w2 * theta[2]), dped[1] * (-w2 * theta[2])];
     Some((dped, df))
 }
+
+/// Whether the corrections of `state` mix the measured channels (a
+/// pedestal cross-coupling: the corrected reading of one direction holds
+/// the other direction's reading, the corrected force holds the pedestal
+/// readings), so that the noise of the corrected data is no longer that of
+/// the measured numbers ([`residual_noise`]). Runout (an offset), a delay
+/// (a phase of unit modulus) and a table's clearance (K*) do not mix.
+pub(super) fn mixes_channels(state: &State) -> bool {
+    state
+        .model
+        .terms
+        .iter()
+        .zip(&state.params.beta)
+        .any(|(t, &v)| matches!(t, Term::CrossStiffness { .. }) && v != 0.0)
+}
+
+/// Noise variance [m²] of each pedestal residual X̂ − X′ (y, z) per bearing
+/// and speed index; `None` where there is no prediction.
+pub(super) type ResidualNoise = Vec<Vec<Option<[f64; 2]>>>;
+
+/// The noise variance of every pedestal residual X̂ − X′ of `predict` on
+/// the data `state` corrects (with the bases of `base` held,
+/// [`corrected_on`]), carried from every measured number it depends on.
+/// The residual is linear in the measured phasors (each correction and
+/// each prediction is), so moving one measured channel of one bearing by
+/// its noise sd at every speed at once (speeds are independent) moves each
+/// residual by its share: the variance is the sum of the squared moves over
+/// the four channels (rel y, rel z, ped y, ped z) of every bearing. The
+/// prediction's own variance ([`Prediction::noise_var`]) treats the
+/// corrected numbers as measured ones; a cross-coupling correction mixes
+/// the channels (δX = d⁻¹·K_c·(X − X_B), δF = −Ω²m·δX), and near a
+/// pedestal's resonance the other direction's reading then dominates the
+/// residual's noise. `None` when `predict` fails.
+pub(super) fn residual_noise(
+    prep: &Prepared,
+    state: &State,
+    base: Option<&FoundationFit>,
+    predict: &dyn Fn(&Prepared) -> Option<Prediction>,
+) -> Option<ResidualNoise> {
+    type Residual = Vec<Vec<Option<[Complex<f64>; 2]>>>;
+    let residual: &dyn Fn(&Prepared) -> Option<Residual> = &|data| {
+        let c = corrected_on(data, state, base);
+        let p = predict(&c)?;
+        Some(
+            c.points
+                .iter()
+                .zip(&p.ped)
+                .map(|(row, pred)| {
+                    row.iter()
+                        .zip(pred)
+                        .map(|(o, x)| {
+                            let (o, x) = (o.as_ref()?, (*x)?);
+                            Some([x[0] - o.ped[0], x[1] - o.ped[1]])
+                        })
+                        .collect()
+                })
+                .collect(),
+        )
+    };
+    let r0 = residual(prep)?;
+    let mut var: ResidualNoise = r0
+        .iter()
+        .map(|row| row.iter().map(|r| r.map(|_| [0.0; 2])).collect())
+        .collect();
+    for q in 0..prep.points.len() {
+        for ch in 0..4 {
+            let mut moved = prep.clone();
+            for o in moved.points[q].iter_mut().flatten() {
+                let sd = (o.var[2 * ch] + o.var[2 * ch + 1]).sqrt();
+                if ch < 2 {
+                    o.rel[ch] += sd;
+                } else {
+                    o.ped[ch - 2] += sd;
+                }
+            }
+            let r1 = residual(&moved)?;
+            for ((v_row, r0_row), r1_row) in var.iter_mut().zip(&r0).zip(&r1) {
+                for ((v, a), b) in v_row.iter_mut().zip(r0_row).zip(r1_row) {
+                    if let (Some(v), Some(a), Some(b)) = (v.as_mut(), a, b) {
+                        for d in 0..2 {
+                            v[d] += (b[d] - a[d]).norm_sqr();
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Some(var)
+}
+
+#[cfg(test)]
+mod tests;
