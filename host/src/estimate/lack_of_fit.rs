@@ -327,28 +327,23 @@ fn scan(
     let level = total / (4 * n) as f64;
     let scan = windows(&s, scales);
     // The largest score over the windows, and the window that gives it.
-    // The largest score over the windows, the window that gives it and its
-    // explained sum of squares.
-    let best = |w: &[[f64; 4]], ids: &[usize]| -> (f64, usize, f64) {
+    // The largest score over the windows and the window that gives it.
+    let best = |w: &[[f64; 4]], ids: &[usize]| -> (f64, usize) {
         scan.iter()
             .enumerate()
             .map(|(i, win)| {
-                let ss = win.explained(w);
                 let score = if across {
                     win.score_across(win.explained_across(w, ids), level)
                 } else {
-                    win.score(ss, level)
+                    win.score(win.explained(w), level)
                 };
-                (score, i, ss)
+                (score, i)
             })
-            .fold(
-                (f64::NEG_INFINITY, 0, 0.0),
-                |a, b| if b.0 > a.0 { b } else { a },
-            )
+            .fold((f64::NEG_INFINITY, 0), |a, b| if b.0 > a.0 { b } else { a })
     };
     let ids0: Vec<usize> = (0..n).map(|i| i / BLOCK).collect();
     let mut ids = Vec::with_capacity(n);
-    let (statistic, at, ss) = best(&w, &ids0);
+    let (statistic, at) = best(&w, &ids0);
     let blocks: Vec<std::ops::Range<usize>> = (0..n)
         .step_by(BLOCK)
         .map(|a| a..(a + BLOCK).min(n))
@@ -383,6 +378,7 @@ fn scan(
     };
     null.sort_by(f64::total_cmp);
     let win = &scan[at];
+    let ss = win.explained(&w);
     let inside: f64 = w[win.range.clone()].iter().flatten().map(|v| v * v).sum();
     Some(Structure {
         statistic,
