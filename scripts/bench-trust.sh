@@ -7,9 +7,9 @@
 # for (scripts/bench_trust.py). Prints a table: case, runs, flagged % by rule,
 # the run-level rate with its one-sided 95 % upper bound (Clopper-Pearson).
 # Runs go in parallel over $BENCH_JOBS workers (default: every CPU).
-# usage: scripts/bench-trust.sh [RUNS_PER_NOISY_CASE [CASE_FILTER]]
-#   RUNS_PER_NOISY_CASE default 100 (heteroscedastic cases at least 200; the
-#   digit cases a quarter): ~1 450 runs, ~20 min on 2 busy cores.
+# usage: scripts/bench-trust.sh [RUNS_PER_CASE [CASE_FILTER]]
+#   RUNS_PER_CASE default 100 (heteroscedastic cases at least 200; each
+#   digit run on its own speed grid): ~2 000 runs, ~5 min on 2 cores.
 #   CASE_FILTER: only the false-alarm cases whose name contains it, e.g.
 #   scripts/bench-trust.sh 300 "paper-undamped hetero"
 set -euo pipefail
