@@ -79,30 +79,86 @@ fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
         .unwrap_or_default()
 }
 
-#[test]
-#[ignore = "known limit, measured 2026-11-28: the adjacent flips at 40/42.5 Hz of `mid` are missed (near its resonance; only 120 Hz listed); scripts/bench-trust.sh 200: 3 random flipped speeds at 1 % noise listed exactly in 3/20 runs, keyphasor_flip named in 17/20"]
-fn speeds_with_one_bearing_flipped_are_listed() {
-    let m = machine("tests/machines/three-bearing-tabulated.toml");
-    let mut r = run(&m, Some((0.01, 3)), Some(6));
-    let flipped = [40.0, 42.5, 120.0];
+/// `r` with every channel of `bearing` negated at the speeds `flipped` [Hz]
+/// (a keyphasor that triggered half a revolution off).
+fn flip(r: &mut plinth::rundir::RunDir, bearing: &str, flipped: &[f64]) {
     for row in &mut r.measurements {
-        if row.bearing == "mid" && flipped.contains(&row.speed_hz) {
+        if row.bearing == bearing && flipped.contains(&row.speed_hz) {
             for z in row.rel.iter_mut().chain(row.ped.iter_mut()) {
                 *z = -*z;
             }
         }
     }
-    let id = identify(&r);
+}
+
+/// Whether `id` lists exactly `flipped` for `mid` (with a `keyphasor_flip`
+/// warning) and nothing for the other bearings.
+fn listed_exactly(id: &Identification, flipped: &[f64]) -> bool {
     let mid = id.pedestal("mid").expect("mid");
-    assert_eq!(listed(&id, "mid"), flipped.to_vec());
-    assert!(mid.has_warning(WarningKind::KeyphasorFlip));
-    for other in ["drive", "outboard"] {
-        assert!(
-            listed(&id, other).is_empty(),
-            "{other}: {:?}",
-            listed(&id, other)
-        );
+    listed(id, "mid") == flipped
+        && mid.has_warning(WarningKind::KeyphasorFlip)
+        && ["drive", "outboard"]
+            .iter()
+            .all(|other| listed(id, other).is_empty())
+}
+
+#[test]
+#[ignore = "known limit, measured 2026-11-28 (local rational model): the adjacent flips at 40/42.5 Hz next to `mid`'s resonance are missed in 40/40 runs of scripts/bench-flips.sh 200; the model's prediction there is not within the noise, so the negated readings do not agree with it"]
+fn speeds_with_one_bearing_flipped_are_listed() {
+    // Two adjacent flips next to `mid`'s pedestal resonance, one far away.
+    let m = machine("tests/machines/three-bearing-tabulated.toml");
+    let mut r = run(&m, Some((0.01, 3)), Some(6));
+    let flipped = [40.0, 42.5, 120.0];
+    flip(&mut r, "mid", &flipped);
+    let id = identify(&r);
+    assert!(
+        listed_exactly(&id, &flipped),
+        "mid {:?}, drive {:?}, outboard {:?}",
+        listed(&id, "mid"),
+        listed(&id, "drive"),
+        listed(&id, "outboard")
+    );
+}
+
+#[test]
+#[ignore = "below the bar, measured 2026-11-28: 14 of these 20 seeds missed (6/20 exact; scripts/bench-flips.sh 200: 3 random flips listed exactly in 17/40 runs, 3/20 before this model): flips at 25-47.5 Hz, where `mid`'s resonance makes the local model miss by more than the noise, are not named; no run listed a wrong speed"]
+fn three_random_flipped_speeds_are_listed_exactly() {
+    // The protocol of scripts/bench-flips.sh: three speeds of `mid` drawn
+    // from 25-192.5 Hz, 1 % noise, 20 seeds; the speeds drawn here by a
+    // simple LCG (not the estimator's generator).
+    let m = machine("tests/machines/three-bearing-tabulated.toml");
+    let grid: Vec<f64> = (8..76).map(|i| 5.0 + 2.5 * i as f64).collect();
+    let mut misses = Vec::new();
+    for seed in 1..=20u64 {
+        let mut state = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let mut flipped = Vec::new();
+        while flipped.len() < 3 {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let s = grid[((state >> 33) % grid.len() as u64) as usize];
+            if !flipped.contains(&s) {
+                flipped.push(s);
+            }
+        }
+        flipped.sort_by(f64::total_cmp);
+        let mut r = run(&m, Some((0.01, 100 + seed)), Some(6));
+        flip(&mut r, "mid", &flipped);
+        let id = identify(&r);
+        if !listed_exactly(&id, &flipped) {
+            misses.push(format!(
+                "seed {seed}: {flipped:?} listed {:?}",
+                listed(&id, "mid")
+            ));
+        }
     }
+    assert!(
+        misses.len() <= 2,
+        "{} of 20 missed: {misses:?}",
+        misses.len()
+    );
 }
 
 #[test]

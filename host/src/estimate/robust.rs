@@ -46,10 +46,12 @@ use plinth_shared::regression::{Parameter, PARAMETERS};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 mod flips;
+mod rational;
 pub use flips::{
     jump_speeds, keyphasor_flips, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_NEIGHBOURS, FLIP_RATIO,
-    FLIP_WINDOW,
+    FLIP_SIDE, FLIP_WINDOW, MAX_TRIMMED, TRIM_FACTOR,
 };
+pub use rational::LocalRational;
 
 /// Chance per fit that some good speed is flagged (Bonferroni over the
 /// speeds) [-]: 0.25 %, so that a run of up to four pedestals lists a good
@@ -261,17 +263,23 @@ pub fn deleted_distances(
 pub const OUTLIER_WINDOW: usize = 7;
 
 /// Per entry of `v` (one per speed, in speed order; non-finite entries
-/// ignored), max(median of all, median of the entries within
-/// `half_window` speeds on each side) divided by `null_median`: a robust scale
-/// that follows a level varying slowly with speed and never falls below the
-/// run's own [-].
+/// ignored), max(median of all, [`window_medians`]) divided by
+/// `null_median`: a robust scale that follows a level varying slowly with
+/// speed and never falls below the run's own [-].
 pub fn local_scales(v: &[f64], null_median: f64, half_window: usize) -> Vec<f64> {
     let global = median(v);
+    window_medians(v, half_window)
+        .into_iter()
+        .map(|m| m.max(global) / null_median)
+        .collect()
+}
+
+/// Per entry of `v` (one per speed, in speed order; non-finite entries
+/// ignored), the median of the entries within `half_window` speeds on each
+/// side [units of `v`].
+pub fn window_medians(v: &[f64], half_window: usize) -> Vec<f64> {
     (0..v.len())
-        .map(|i| {
-            let w = &v[i.saturating_sub(half_window)..(i + half_window + 1).min(v.len())];
-            median(w).max(global) / null_median
-        })
+        .map(|i| median(&v[i.saturating_sub(half_window)..(i + half_window + 1).min(v.len())]))
         .collect()
 }
 

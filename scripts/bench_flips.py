@@ -1,0 +1,177 @@
+#!/usr/bin/env python3
+"""Monte-Carlo of identify's keyphasor-flip detection (run by
+scripts/bench-flips.sh).
+
+False alarms: the clean cases of scripts/bench_trust.py (the undamped paper
+machine and the three-bearing machine with tabulated bearings; digits 2/3/12
+on shifted speed grids, white noise 0.3/1/3 %, heteroscedastic noise 2 % of
+|phasor|, noise 1 % with noise columns, noise 1 % at 3 digits). A run is a
+false alarm when any pedestal carries a `keyphasor_flip` warning. Printed:
+runs, flagged runs, the rate and its one-sided 95 % upper bound
+(Clopper-Pearson).
+
+Detections (three-bearing machine, bearing `mid`, 1 % noise): three random
+flipped speeds (the protocol of bench_trust.py: speeds 25-192.5 Hz), two and
+three adjacent ones at a random place, and the pair 40/42.5 Hz next to
+`mid`'s resonance. A run is a hit when `noise.mid.outlier_speeds_hz` is
+exactly the flipped speeds and no other bearing lists a speed.
+
+Test data: `plinth simulate` (exact, 12 digits) and scripts/trust_data.py
+(noise, digits, columns, --flip), independent of the estimator.
+
+usage: bench_flips.py PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
+"""
+import concurrent.futures
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+B = sys.argv[1]
+N = int(sys.argv[2]) if len(sys.argv) > 2 else 100
+ONLY = sys.argv[3] if len(sys.argv) > 3 else ""
+JOBS = int(os.environ.get("BENCH_JOBS", os.cpu_count() or 1))
+DATA = os.path.join(ROOT, "scripts", "trust_data.py")
+PAPER = os.path.join(ROOT, "examples", "feng-hahn-1997.toml")
+THREE = os.path.join(ROOT, "tests", "machines", "three-bearing-tabulated.toml")
+W = tempfile.mkdtemp(prefix="bench-flips-")
+SPEEDS = "5:200:2.5"
+GRID = [5 + 2.5 * i for i in range(79)]
+
+
+def sim(machine, out, *args, speeds=SPEEDS):
+    subprocess.run(["rm", "-rf", out], check=True)
+    subprocess.run([B, "simulate", machine, "--out", out, "--speeds", speeds, *args],
+                   check=True, stdout=subprocess.DEVNULL)
+
+
+def data(src, out, *args):
+    subprocess.run(["rm", "-rf", out], check=True)
+    subprocess.run([sys.executable, DATA, src, out, *args], check=True)
+
+
+def identify(run):
+    p = subprocess.run([B, "identify", run, "--json"], capture_output=True, text=True)
+    if p.returncode not in (0, 2):
+        raise RuntimeError(f"identify {run}: exit {p.returncode}: {p.stderr}")
+    return json.loads(p.stdout)
+
+
+def listed(ident, bearing):
+    return ident["noise"].get(bearing, {}).get("outlier_speeds_hz", [])
+
+
+def flip_named(ident):
+    return [p["bearing"] for p in ident["pedestals"]
+            if any(w["kind"] == "keyphasor_flip" for w in p["warnings"])]
+
+
+def upper95(k, n):
+    """One-sided 95 % Clopper-Pearson upper bound of a rate seen k times in n."""
+    if n == 0 or k >= n:
+        return 1.0
+    lo, hi = k / n, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        cdf = sum(math.comb(n, i) * mid ** i * (1 - mid) ** (n - i) for i in range(k + 1))
+        lo, hi = (mid, hi) if cdf > 0.05 else (lo, mid)
+    return hi
+
+
+def false_alarms():
+    print("FALSE ALARMS: runs with a keyphasor_flip warning on clean data")
+    print(f"{'case':36s} {'runs':>5s} {'flagged':>7s} {'%':>6s} {'≤95%up':>7s}")
+    total = flagged_total = 0
+    for mname, machine in (("paper-undamped", PAPER), ("three-bearing", THREE)):
+        exact = os.path.join(W, f"exact-{mname}")
+        sim(machine, exact, "--digits", "12")
+        cases = [(f"{mname} digits {d}", ("sim", "--digits", d)) for d in ("2", "3", "12")]
+        cases += [
+            (f"{mname} noise 0.3 %", ("data", "--noise", "0.003")),
+            (f"{mname} noise 1 %", ("data", "--noise", "0.01")),
+            (f"{mname} noise 3 %", ("data", "--noise", "0.03")),
+            (f"{mname} hetero 2 % of |phasor|", ("data", "--relative-noise", "0.02")),
+            (f"{mname} noise 1 % + columns", ("data", "--noise", "0.01", "--columns")),
+            (f"{mname} noise 1 % at 3 digits", ("data", "--noise", "0.01", "--digits", "3")),
+        ]
+        for case, how in cases:
+            if ONLY not in case:
+                continue
+
+            def one(seed, how=how, machine=machine, exact=exact):
+                out = os.path.join(W, f"clean-{seed}")
+                if how[0] == "sim":
+                    # Digits alone are deterministic: each run shifts the grid.
+                    sim(machine, out, *how[1:], speeds=f"{5 + 0.037 * (seed - 1):.3f}:200:2.5")
+                else:
+                    data(exact, out, *how[1:], "--seed", str(seed))
+                ident = identify(out)
+                subprocess.run(["rm", "-rf", out], check=True)
+                return seed, flip_named(ident)
+
+            with concurrent.futures.ThreadPoolExecutor(JOBS) as pool:
+                results = list(pool.map(one, range(1, N + 1)))
+            k = 0
+            for seed, named in results:
+                if named:
+                    k += 1
+                    print(f"    flagged: {case} seed {seed}: {named}", flush=True)
+            print(f"{case:36s} {N:5d} {k:7d} {100.0 * k / N:6.2f} {100.0 * upper95(k, N):7.2f}",
+                  flush=True)
+            total += N
+            flagged_total += k
+    if total:
+        print(f"{'ALL CLEAN RUNS':36s} {total:5d} {flagged_total:7d}"
+              f" {100.0 * flagged_total / total:6.2f} {100.0 * upper95(flagged_total, total):7.2f}")
+
+
+def detections():
+    print("\nDETECTIONS (three-bearing, `mid`, 1 % noise): flipped speeds listed exactly")
+    exact = os.path.join(W, "exact-three")
+    sim(THREE, exact, "--digits", "12")
+    n = max(N // 5, 20)
+
+    def speeds_for(kind, seed):
+        rng = random.Random(seed)
+        if kind == "3 random":
+            return sorted(rng.sample(GRID[8:76], 3))
+        if kind == "2 adjacent":
+            i = rng.randrange(8, 75)
+            return GRID[i:i + 2]
+        if kind == "3 adjacent":
+            i = rng.randrange(8, 74)
+            return GRID[i:i + 3]
+        return [40.0, 42.5]
+
+    for kind in ("3 random", "2 adjacent", "3 adjacent", "40/42.5 Hz"):
+        def one(seed, kind=kind):
+            speeds = speeds_for(kind, seed)
+            out = os.path.join(W, f"flip-{seed}")
+            data(exact, out, "--noise", "0.01", "--seed", str(seed),
+                 "--flip", "mid:" + ",".join(f"{s:g}" for s in speeds))
+            ident = identify(out)
+            subprocess.run(["rm", "-rf", out], check=True)
+            ok = sorted(listed(ident, "mid")) == speeds
+            ok &= all(not listed(ident, p["bearing"]) for p in ident["pedestals"]
+                      if p["bearing"] != "mid")
+            return seed, speeds, ok, listed(ident, "mid")
+
+        with concurrent.futures.ThreadPoolExecutor(JOBS) as pool:
+            results = list(pool.map(one, range(1, n + 1)))
+        hits = 0
+        for seed, speeds, ok, got in results:
+            hits += ok
+            if not ok:
+                print(f"    missed: {kind} seed {seed}: flipped {speeds}, listed {got}", flush=True)
+        print(f"  {kind:12s}: listed exactly in {hits}/{n} runs", flush=True)
+
+
+if __name__ == "__main__":
+    false_alarms()
+    if not ONLY:
+        detections()
+    subprocess.run(["rm", "-rf", W], check=True)
