@@ -10,9 +10,14 @@
 //! quadratic in speed. Fitted by Sanathanan–Koerner iteration
 //! (the linearised problem N_c(x) − q_c·(D(x) − 1) = q_c, reweighted by 1/|D(x)|
 //! of the previous step, so that it converges to the least squares of the
-//! residuals q_c − N_c/D themselves).
+//! residuals q_c − N_c/D themselves). Each step is solved by variable
+//! projection: the numerators enter linearly and share one weighted basis,
+//! so they are eliminated by projecting onto its orthogonal complement,
+//! leaving two complex unknowns for the denominator; the numerators follow
+//! from 3×3 normal equations. The same least squares as one solve over all
+//! 14 unknowns, at a small part of its cost (identify runs one fit per
+//! speed and bearing).
 
-use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
 
 /// Numerator coefficients per channel [-].
@@ -21,10 +26,6 @@ const NUMERATOR_TERMS: usize = 3;
 /// Denominator coefficients beyond its constant 1 [-]: two poles, for two
 /// modes within a window.
 const DENOMINATOR_TERMS: usize = 2;
-
-/// Complex unknowns of the fit: the numerators of the four channels and
-/// the denominator's.
-const UNKNOWNS: usize = 4 * NUMERATOR_TERMS + DENOMINATOR_TERMS;
 
 /// Fewest speeds a fit takes (4 channels × 5 speeds = 20 complex
 /// equations for 14 complex unknowns).
@@ -68,39 +69,108 @@ impl LocalRational {
             numerators: [[Complex::new(0.0, 0.0); NUMERATOR_TERMS]; 4],
             d: [Complex::new(0.0, 0.0); DENOMINATOR_TERMS],
         };
-        let mut row_weight = vec![1.0; points.len()];
-        for _ in 0..ITERATIONS {
-            let rows = 4 * points.len();
-            let mut a = DMatrix::<Complex<f64>>::zeros(rows, UNKNOWNS);
-            let mut b = DVector::<Complex<f64>>::zeros(rows);
-            for (k, (f, q)) in points.iter().enumerate() {
+        let m = points.len();
+        // Powers x⁰..x⁴ of each speed's x = (f − centre)/span.
+        let powers: Vec<[f64; 2 * NUMERATOR_TERMS - 1]> = points
+            .iter()
+            .map(|(f, _)| {
                 let x = (f - centre_hz) / span_hz;
-                for c in 0..4 {
-                    let g = weights[c] * row_weight[k];
-                    let r = 4 * k + c;
-                    let mut power = 1.0;
-                    for t in 0..NUMERATOR_TERMS {
-                        a[(r, NUMERATOR_TERMS * c + t)] = Complex::new(g * power, 0.0);
-                        power *= x;
-                    }
-                    let mut power = x;
-                    for t in 0..DENOMINATOR_TERMS {
-                        a[(r, 4 * NUMERATOR_TERMS + t)] = -q[c] * (g * power);
-                        power *= x;
-                    }
-                    b[r] = q[c] * g;
+                let mut p = [1.0; 2 * NUMERATOR_TERMS - 1];
+                for t in 1..p.len() {
+                    p[t] = p[t - 1] * x;
+                }
+                p
+            })
+            .collect();
+        let mut row_weight = vec![1.0; m];
+        let zero = Complex::new(0.0, 0.0);
+        // Buffers reused by every step (one fit per speed and bearing).
+        let mut basis: [Vec<f64>; NUMERATOR_TERMS] = std::array::from_fn(|_| vec![0.0; m]);
+        let mut cols: [Vec<Complex<f64>>; DENOMINATOR_TERMS + 1] =
+            std::array::from_fn(|_| vec![zero; m]);
+        for _ in 0..ITERATIONS {
+            // Orthonormal basis of the weighted numerator columns
+            // row_weight·xᵗ (t < NUMERATOR_TERMS), the same for every
+            // channel: Gram–Schmidt, twice for orthogonality.
+            for (t, column) in basis.iter_mut().enumerate() {
+                for (v, (w, p)) in column.iter_mut().zip(row_weight.iter().zip(&powers)) {
+                    *v = w * p[t];
                 }
             }
-            let svd = a.svd(true, true);
-            let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
-            let u = svd.solve(&b, 1e-12 * largest).ok()?;
+            for t in 0..NUMERATOR_TERMS {
+                let (done, rest) = basis.split_at_mut(t);
+                let column = &mut rest[0];
+                for _ in 0..2 {
+                    for earlier in done.iter() {
+                        let dot: f64 = earlier.iter().zip(column.iter()).map(|(a, b)| a * b).sum();
+                        for (v, e) in column.iter_mut().zip(earlier) {
+                            *v -= dot * e;
+                        }
+                    }
+                }
+                let norm = column.iter().map(|v| v * v).sum::<f64>().sqrt();
+                if !(norm > 0.0 && norm.is_finite()) {
+                    return None;
+                }
+                column.iter_mut().for_each(|v| *v /= norm);
+            }
+            // Variable projection: with the numerators eliminated, the
+            // denominator minimises Σ_c ‖r₀ + d₁r₁ + d₂r₂‖², r_t the part
+            // of channel c's weighted q·xᵗ no numerator can take.
+            let mut gram = [[zero; DENOMINATOR_TERMS]; DENOMINATOR_TERMS];
+            let mut rhs = [zero; DENOMINATOR_TERMS];
+            for (c, &weight) in weights.iter().enumerate() {
+                for (t, v) in cols.iter_mut().enumerate() {
+                    for (k, z) in v.iter_mut().enumerate() {
+                        *z = points[k].1[c] * (weight * row_weight[k] * powers[k][t]);
+                    }
+                    for b in &basis {
+                        let dot: Complex<f64> = v.iter().zip(b).map(|(z, e)| z * e).sum();
+                        for (z, e) in v.iter_mut().zip(b) {
+                            *z -= dot * e;
+                        }
+                    }
+                }
+                for i in 0..DENOMINATOR_TERMS {
+                    for j in 0..DENOMINATOR_TERMS {
+                        gram[i][j] += cols[i + 1]
+                            .iter()
+                            .zip(&cols[j + 1])
+                            .map(|(a, b)| a.conj() * b)
+                            .sum::<Complex<f64>>();
+                    }
+                    rhs[i] -= cols[i + 1]
+                        .iter()
+                        .zip(&cols[0])
+                        .map(|(a, b)| a.conj() * b)
+                        .sum::<Complex<f64>>();
+                }
+            }
+            model.d = solve_hermitian_2(&gram, &rhs)?;
+            // The numerators for that denominator: per channel the weighted
+            // least squares of N_c(x) against q_c·D(x) (3×3 normal
+            // equations of the well-scaled monomials, x within ±1).
+            let normal = nalgebra::Matrix3::from_fn(|i, j| {
+                (0..m)
+                    .map(|k| (row_weight[k] * row_weight[k]) * powers[k][i + j])
+                    .sum::<f64>()
+            });
+            let cholesky = normal.cholesky()?;
             for c in 0..4 {
-                for t in 0..NUMERATOR_TERMS {
-                    model.numerators[c][t] = u[NUMERATOR_TERMS * c + t];
+                let mut re = nalgebra::Vector3::zeros();
+                let mut im = nalgebra::Vector3::zeros();
+                for k in 0..m {
+                    let target = points[k].1[c] * model.denominator(points[k].0);
+                    let w2 = row_weight[k] * row_weight[k];
+                    for i in 0..NUMERATOR_TERMS {
+                        re[i] += w2 * powers[k][i] * target.re;
+                        im[i] += w2 * powers[k][i] * target.im;
+                    }
                 }
-            }
-            for t in 0..DENOMINATOR_TERMS {
-                model.d[t] = u[4 * NUMERATOR_TERMS + t];
+                let (re, im) = (cholesky.solve(&re), cholesky.solve(&im));
+                for t in 0..NUMERATOR_TERMS {
+                    model.numerators[c][t] = Complex::new(re[t], im[t]);
+                }
             }
             for (w, (f, _)) in row_weight.iter_mut().zip(points) {
                 let den = model.denominator(*f).norm();
@@ -144,9 +214,59 @@ impl LocalRational {
     }
 }
 
+/// The least-squares solution of the 2×2 Hermitian positive semidefinite
+/// system `gram`·d = `rhs`, directions whose eigenvalue is below 1e-24 of
+/// the largest left out (the minimum-norm solution, as a singular-value
+/// solve with a relative tolerance of 1e-12 on the columns gives); `None`
+/// when the system is not finite.
+fn solve_hermitian_2(
+    gram: &[[Complex<f64>; 2]; 2],
+    rhs: &[Complex<f64>; 2],
+) -> Option<[Complex<f64>; 2]> {
+    let (a, d, b) = (gram[0][0].re, gram[1][1].re, gram[0][1]);
+    if !(a.is_finite() && d.is_finite() && b.re.is_finite() && b.im.is_finite()) {
+        return None;
+    }
+    let mean = 0.5 * (a + d);
+    let radius = (0.25 * (a - d) * (a - d) + b.norm_sqr()).sqrt();
+    let eigenvalues = [mean + radius, mean - radius];
+    if eigenvalues[0].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return Some([Complex::new(0.0, 0.0); 2]);
+    }
+    // Unit eigenvectors: (b, λ − a) or (λ − d, b̄), the better scaled one.
+    let vector = |l: f64| -> [Complex<f64>; 2] {
+        let v1 = [b, Complex::new(l - a, 0.0)];
+        let v2 = [Complex::new(l - d, 0.0), b.conj()];
+        let n1 = v1[0].norm_sqr() + v1[1].norm_sqr();
+        let n2 = v2[0].norm_sqr() + v2[1].norm_sqr();
+        let (v, n) = if n1 >= n2 { (v1, n1) } else { (v2, n2) };
+        if n > 0.0 {
+            let s = n.sqrt();
+            [v[0] / s, v[1] / s]
+        } else if a >= d {
+            [Complex::new(1.0, 0.0), Complex::new(0.0, 0.0)]
+        } else {
+            [Complex::new(0.0, 0.0), Complex::new(1.0, 0.0)]
+        }
+    };
+    let first = vector(eigenvalues[0]);
+    // The second eigenvector is orthogonal to the first.
+    let second = [-first[1].conj(), first[0].conj()];
+    let mut out = [Complex::new(0.0, 0.0); 2];
+    for (l, v) in eigenvalues.into_iter().zip([first, second]) {
+        if l > 1e-24 * eigenvalues[0] {
+            let coefficient = (v[0].conj() * rhs[0] + v[1].conj() * rhs[1]) / l;
+            out[0] += v[0] * coefficient;
+            out[1] += v[1] * coefficient;
+        }
+    }
+    Some(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::DMatrix;
 
     fn mode(f: f64, f0: f64, zeta: f64) -> Complex<f64> {
         let r = f / f0;
