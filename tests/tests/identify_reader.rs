@@ -45,19 +45,19 @@ const GOOD: &str = "10,left,1e-6,0,0,1e-6,1e-7,0,0,1e-7";
 #[test]
 fn reads_unsorted_rows_any_number_format_and_column_order() {
     let m = "bearing,speed_hz,rel_y_re,rel_y_im,rel_z_re,rel_z_im,ped_y_re,ped_y_im,ped_z_re,ped_z_im,note\n\
-             left , 50 , 1.2e-05, 12, -3.0E+2, 0.5,1,2,3,4,first\n\
-             left,10.25,+1,-0,1E3,7,1,2,3,4,\n";
+             left , 50 , 1.2e-05, 12E-6, -0.3E+0, 0.5e-6,1e-6,2e-6,3e-6,4e-6,first\n\
+             left,10.25,+1e-6,-0,1E-3,7e-6,1e-6,2e-6,3e-6,4e-6,\n";
     let dir = dir_with(m, &bearings());
     let run = RunDir::read(dir.path()).unwrap();
     assert_eq!(run.measurements.len(), 2);
     let first = &run.measurements[0];
     assert_eq!(first.speed_hz, 50.0);
     assert_eq!(first.bearing, "left");
-    assert_eq!(first.rel[0], Complex::new(1.2e-5, 12.0));
-    assert_eq!(first.rel[1], Complex::new(-300.0, 0.5));
-    assert_eq!(first.ped, [Complex::new(1.0, 2.0), Complex::new(3.0, 4.0)]);
+    assert_eq!(first.rel[0], Complex::new(1.2e-5, 12e-6));
+    assert_eq!(first.rel[1], Complex::new(-0.3, 0.5e-6));
+    assert_eq!(first.ped, [Complex::new(1e-6, 2e-6), Complex::new(3e-6, 4e-6)]);
     assert_eq!(run.measurements[1].speed_hz, 10.25);
-    assert_eq!(run.measurements[1].rel[1].re, 1000.0);
+    assert_eq!(run.measurements[1].rel[1].re, 1e-3);
     assert!(run.truth.is_none());
 }
 
