@@ -55,7 +55,10 @@ fn reads_unsorted_rows_any_number_format_and_column_order() {
     assert_eq!(first.bearing, "left");
     assert_eq!(first.rel[0], Complex::new(1.2e-5, 12e-6));
     assert_eq!(first.rel[1], Complex::new(-0.3, 0.5e-6));
-    assert_eq!(first.ped, [Complex::new(1e-6, 2e-6), Complex::new(3e-6, 4e-6)]);
+    assert_eq!(
+        first.ped,
+        [Complex::new(1e-6, 2e-6), Complex::new(3e-6, 4e-6)]
+    );
     assert_eq!(run.measurements[1].speed_hz, 10.25);
     assert_eq!(run.measurements[1].rel[1].re, 1e-3);
     assert!(run.truth.is_none());

@@ -104,29 +104,44 @@ impl Window {
     /// of a model error scores alike wherever it lands); what a shuffle
     /// destroys, and a smooth curve has, is the agreement between
     /// neighbouring blocks. Zero on average for residuals without a trend.
+    ///
+    /// Every column of the basis in one pass over the rows (each column's
+    /// sums in the same order as one column at a time: the same figures),
+    /// so the rows and block ids are read once per window and shuffle.
     fn explained_across(&self, w: &[[f64; 4]], ids: &[usize]) -> f64 {
+        const MOST: usize = MAX_DEGREE + 1;
         let rows = &w[self.range.clone()];
         let ids = &ids[self.range.clone()];
-        (0..self.basis.ncols())
-            .map(|d| {
-                let col = self.basis.column(d);
-                let mut p = [0.0; 4];
-                let mut b = [0.0; 4];
-                let mut own = 0.0;
-                let mut id = usize::MAX;
-                for ((qd, r), &k) in col.iter().zip(rows).zip(ids) {
-                    if k != id {
-                        own += b.iter().map(|v| v * v).sum::<f64>();
-                        b = [0.0; 4];
-                        id = k;
-                    }
-                    for c in 0..4 {
-                        p[c] += qd * r[c];
-                        b[c] += qd * r[c];
-                    }
+        let columns = self.basis.ncols();
+        if columns > MOST {
+            // Windows are built with degree ≤ MAX_DEGREE (`windows`).
+            return f64::NAN;
+        }
+        let square = |v: &[f64; 4]| v.iter().map(|x| x * x).sum::<f64>();
+        let mut p = [[0.0; 4]; MOST];
+        let mut b = [[0.0; 4]; MOST];
+        let mut own = [0.0; MOST];
+        let mut id = usize::MAX;
+        for (i, (r, &k)) in rows.iter().zip(ids).enumerate() {
+            if k != id {
+                for d in 0..columns {
+                    own[d] += square(&b[d]);
+                    b[d] = [0.0; 4];
                 }
-                own += b.iter().map(|v| v * v).sum::<f64>();
-                p.iter().map(|v| v * v).sum::<f64>() - own
+                id = k;
+            }
+            for d in 0..columns {
+                let qd = self.basis[(i, d)];
+                for c in 0..4 {
+                    p[d][c] += qd * r[c];
+                    b[d][c] += qd * r[c];
+                }
+            }
+        }
+        (0..columns)
+            .map(|d| {
+                let own = own[d] + square(&b[d]);
+                square(&p[d]) - own
             })
             .sum()
     }
