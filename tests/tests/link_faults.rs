@@ -156,9 +156,25 @@ fn corrupted_frames_are_never_accepted_and_every_loss_is_counted() {
     assert_eq!(counted_losses, l.sequence_gaps as u64);
     assert!(l.sequence_gaps > 0 && l.crc_failures + l.cobs_failures > 0 && l.resyncs > 0);
 
-    // The box saw corrupted commands too, and counted them.
-    let box_link = report.link_box.as_ref().expect("a status frame");
-    assert!(box_link.crc_failures + box_link.cobs_failures + box_link.sequence_gaps > 0);
+    // The box saw corrupted commands too, and counted them: its counters
+    // reach the host in status frames (one a second and one after Stop),
+    // which this link corrupts too (about 0.4 of ~70-byte frames at 1e-3
+    // flips per byte), so about one run in ten accepts none (measured:
+    // 1 of the suite runs of 2026-11-28). Then the report has no box
+    // counters, and the status frames' loss is in the host's own counts.
+    match report.link_box.as_ref() {
+        Some(box_link) => {
+            assert!(box_link.crc_failures + box_link.cobs_failures + box_link.sequence_gaps > 0)
+        }
+        None => {
+            let summary = plinth::stream::summary(&report);
+            assert!(
+                l.crc_failures + l.cobs_failures > 0
+                    && summary.contains("no status frame received intact"),
+                "no status frame accepted, and no corrupted frame to explain it: {summary}"
+            );
+        }
+    }
 
     // Every measurement row is one the box computed (from its own bytes).
     let clean = derive(&sent, &scenario.config, &scenario.tables);

@@ -390,9 +390,19 @@ pub fn summary(report: &StreamReport) -> String {
         &report.link_raw_log,
     ));
     s.push('\n');
-    if let Some(l) = &report.link_box {
-        s.push_str(&report::render_link("link (box side, last status)", l));
-        s.push('\n');
+    match &report.link_box {
+        Some(l) => {
+            s.push_str(&report::render_link("link (box side, last status)", l));
+            s.push('\n');
+        }
+        // A box was streamed from but none of its status frames arrived
+        // intact: its own counters are unknown, not zero.
+        None if report.link_this_process.is_some() => {
+            s.push_str(
+                "link (box side): no status frame received intact; the box's own counters are unknown\n",
+            );
+        }
+        None => {}
     }
     if let Some(h) = &report.box_health {
         s.push_str(&report::render_health(h));
