@@ -51,7 +51,7 @@ mod scatter;
 
 pub use run::RunNoise;
 use scatter::*;
-pub use scatter::{local_fits, local_residuals, scatter_law, LocalFit};
+pub use scatter::{local_fits, local_residuals, median, scatter_law, LocalFit};
 
 /// Complex channels per bearing: rel y, rel z, ped y, ped z.
 pub const CHANNELS: [&str; 4] = ["rel_y", "rel_z", "ped_y", "ped_z"];

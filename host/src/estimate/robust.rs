@@ -76,19 +76,7 @@ fn chi2_4() -> ChiSquared {
 /// The median of the finite entries of `v` (NaN when none).
 fn median(v: &[f64]) -> f64 {
     let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    let n = s.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    // Selection, not a sort: the same value at a part of the cost (one
-    // median per speed and channel in the flip and outlier scales).
-    let (below, &mut upper, _) = s.select_nth_unstable_by(n / 2, f64::total_cmp);
-    if n % 2 == 1 {
-        upper
-    } else {
-        let lower = below.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        0.5 * (lower + upper)
-    }
+    super::noise::median(&mut s)
 }
 
 /// The whitened residuals w (4 real ones per speed) of `obs` at `theta` under

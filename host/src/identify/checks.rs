@@ -155,12 +155,5 @@ fn in_phase_stiffness(force: Complex<f64>, x: Complex<f64>) -> f64 {
 }
 
 fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
+    crate::estimate::noise::median(&mut v.to_vec())
 }

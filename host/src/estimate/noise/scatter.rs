@@ -3,7 +3,9 @@
 
 use super::*;
 
-pub(super) fn median(v: &mut [f64]) -> f64 {
+/// The median of `v` [units of `v`] by selection (reorders `v`; NaN when
+/// empty; order by `f64::total_cmp`): the one median of the estimators.
+pub fn median(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
