@@ -1,0 +1,197 @@
+#!/usr/bin/env python3
+"""Issue 17's Done-when on a machine nobody tuned to (docs/unseen.md).
+
+Usage: python3 scripts/bench_unseen.py PLINTH RUNS_DIR [SEEDS [CASES...]]
+
+RUNS_DIR holds run directories CASE-SEED made by scripts/ross_unseen.py
+(ROSS 2.3.0); missing ones are made first. SEEDS: effect cases use seeds
+1..SEEDS (default 5); clean-w1 and clean-w1c 1..SEEDS, clean-d3 1..4 (its
+seed shifts the speed grid). Every run goes through `plinth identify --json`
+and `plinth diagnose --json --machine unseen-four.toml` (the nominal machine
+file: rigid ground, the drawn clearances), $BENCH_JOBS at a time (default
+2). Prints per case:
+
+identify: runs exiting 2; per bearing how often untrusted; runs whose
+  flagged bearings are exactly the expected ones; "ok but wrong" = a
+  pedestal printed ok (trusted) with k_y, k_z or m more than 3 of its ±
+  from the ROSS truth (confidently wrong); flips listed exactly.
+diagnose: named right (exactly the expected effects, each at its bearing,
+  a base at any bearing), named wrong (something else named, or an
+  expected effect at another bearing), partly (a subset, nothing wrong),
+  missed (nothing named); untrusted verdicts; the worst k/m error of the
+  named-right runs' final pedestals; seconds per run.
+"""
+import concurrent.futures as cf
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+MACHINE = os.path.join(ROOT, "tests", "data", "ross-unseen", "unseen-four.toml")
+BEARINGS = ("B1", "B2", "B3", "B4")
+# case: (effects diagnose should name as (effect, bearing); bearings identify
+# should flag (None: no expectation beyond "not every bearing"))
+EXPECT = {
+    "clean-w1": ([], set()),
+    "clean-w1c": ([], set()),
+    "clean-d3": ([], set()),
+    "sub-base": ([("pedestal_sub_base", "B3")], {"B3"}),
+    "table": ([("bearing_coefficients", "B2")], None),
+    "cross": ([("pedestal_cross_coupling", "B4")], None),
+    "runout": ([("probe_runout", "B3")], None),
+    "flips": ([], set()),
+    "base-runout": ([("foundation_coupling", ""), ("probe_runout", "B2")], None),
+}
+
+
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from ross_unseen import CASES, kind  # noqa: E402
+
+
+def expect(case):
+    effect = kind(case)[0]
+    return EXPECT["clean-w1" if effect == "clean" else effect]
+
+
+def run_json(args):
+    t0 = time.perf_counter()
+    p = subprocess.run(args, capture_output=True, text=True)
+    dt = time.perf_counter() - t0
+    if p.returncode not in (0, 2):
+        return None, p.returncode, dt, p.stderr.strip().splitlines()[-1:]
+    return json.loads(p.stdout), p.returncode, dt, []
+
+
+def worst_rel(ped, truth, get):
+    """Largest relative error of k_y, k_z, m against the truth."""
+    t = next(t for t in truth["pedestals"] if t["bearing"] == ped["bearing"])
+    return max(abs(get(ped, k) / t[k] - 1.0) for k in ("k_y", "k_z", "m"))
+
+
+def one(b, run):
+    with open(os.path.join(run, "truth.json")) as f:
+        truth = json.load(f)
+    ident, icode, it, ierr = run_json([b, "identify", run, "--json"])
+    diag, dcode, dt, derr = run_json([b, "diagnose", run, "--json", "--machine", MACHINE])
+    r = {"run": run, "truth": truth, "icode": icode, "dcode": dcode, "it": it, "dt": dt,
+         "err": ierr + derr}
+    if ident is not None:
+        r["untrusted"] = sorted(p["bearing"] for p in ident["pedestals"] if not p["trusted"])
+        r["listed"] = {k: v.get("outlier_speeds_hz", []) for k, v in ident["noise"].items()}
+        r["kinds"] = sorted({w["kind"] for p in ident["pedestals"] for w in p["warnings"]})
+        wrong = []
+        for p in ident["pedestals"]:
+            t = next(t for t in truth["pedestals"] if t["bearing"] == p["bearing"])
+            z = max(abs(p[k] - t[k]) / p["std_err"][k] if p["std_err"][k] > 0 else math.inf
+                    for k in ("k_y", "k_z", "m"))
+            rel = worst_rel(p, truth, lambda q, k: q[k])
+            r.setdefault("ident_err", {})[p["bearing"]] = (rel, z, p["trusted"])
+            if p["trusted"] and z > 3.0:
+                wrong.append(p["bearing"])
+        r["ok_wrong"] = wrong
+    if diag is not None:
+        r["named"] = [(s["effect"], s["bearing"]) for s in diag["steps"] if not s.get("dropped")]
+        r["dtrusted"] = diag["trusted"]
+        r["gap"] = (diag["gap_before"], diag["gap_after"])
+        r["after_err"] = max(worst_rel(p, truth, lambda q, k: q[k])
+                             for p in diag["pedestals_after"])
+        r["after_each"] = {p["bearing"]: worst_rel(p, truth, lambda q, k: q[k])
+                           for p in diag["pedestals_after"]}
+    return r
+
+
+def judge(case, r):
+    want, _ = expect(case)
+    named = r.get("named")
+    if named is None:
+        return "error"
+    if not named:
+        return "missed" if want else "right"
+    def match(n, w):
+        return n[0] == w[0] and (w[1] == "" or n[1] == w[1])
+    extra = [n for n in named if not any(match(n, w) for w in want)]
+    found = [w for w in want if any(match(n, w) for n in named)]
+    if extra:
+        return "wrong"
+    return "right" if len(found) == len(want) else "partly"
+
+
+def main():
+    b, runs = sys.argv[1], sys.argv[2]
+    seeds = int(sys.argv[3]) if len(sys.argv) > 3 else 5
+    cases = sys.argv[4:] or list(CASES)
+    todo = []
+    for case in cases:
+        n = 4 if case == "clean-d3" else seeds
+        missing = [str(s) for s in range(1, n + 1) if not os.path.isdir(os.path.join(runs, f"{case}-{s}"))]
+        if missing:
+            subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "ross_unseen.py"), runs, case,
+                            *missing], check=True, capture_output=True)
+        todo += [(case, os.path.join(runs, f"{case}-{s}")) for s in range(1, n + 1)]
+    jobs = int(os.environ.get("BENCH_JOBS", "2"))
+    t0 = time.time()
+    with cf.ThreadPoolExecutor(jobs) as ex:
+        results = list(ex.map(lambda cr: (cr[0], one(b, cr[1])), todo))
+    by = {}
+    for case, r in results:
+        by.setdefault(case, []).append(r)
+    print("identify (plinth identify --json):")
+    print("| case | runs | exit 2 | untrusted per bearing B1/B2/B3/B4 | flagged as expected | ok but wrong (> 3 ±) | flips listed exactly |")
+    print("|---|---|---|---|---|---|---|")
+    for case in cases:
+        rs = by[case]
+        n = len(rs)
+        ex2 = sum(r["icode"] == 2 for r in rs)
+        per = "/".join(str(sum(bb in r.get("untrusted", []) for r in rs)) for bb in BEARINGS)
+        want = expect(case)[1]
+        exp = "-" if want is None else str(sum(set(r.get("untrusted", [])) == want for r in rs))
+        okw = sum(bool(r.get("ok_wrong")) for r in rs)
+        okw_b = sorted({bb for r in rs for bb in r.get("ok_wrong", [])})
+        fl = "-"
+        if kind(case)[0] == "flips":
+            def exact(r):
+                d = next(d for d in r["truth"]["effect_details"] if d["name"] == "keyphasor_flip")
+                want_s = sorted(d["parameters"].values())
+                others = any(v for k, v in r["listed"].items() if k != "B1")
+                return sorted(r["listed"].get("B1", [])) == want_s and not others
+            fl = str(sum(exact(r) for r in rs))
+        if kind(case)[0] in ("clean", "flips"):
+            listed = sum(any(v for v in r.get("listed", {}).values()) for r in rs)
+            if kind(case)[0] == "clean":
+                fl = f"(any listed: {listed})"
+        print(f"| {case} | {n} | {ex2} | {per} | {exp}/{n} | {okw} {okw_b if okw_b else ''} | {fl} |")
+    print()
+    print("diagnose (plinth diagnose --json --machine unseen-four.toml):")
+    print("| case | runs | named right | named wrong | partly | missed | untrusted | worst k/m error after (right runs) | s/run |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for case in cases:
+        rs = by[case]
+        n = len(rs)
+        v = [judge(case, r) for r in rs]
+        untr = sum(not r.get("dtrusted", True) for r in rs)
+        errs = [r["after_err"] for r, j in zip(rs, v) if j == "right" and "after_err" in r]
+        worst = f"{100 * max(errs):.2f} %" if errs else "-"
+        wrong = sorted({str(r.get("named")) for r, j in zip(rs, v) if j in ("wrong", "partly")})
+        sec = sum(r["dt"] for r in rs) / n
+        print(f"| {case} | {n} | {v.count('right')} | {v.count('wrong')} | {v.count('partly')} | "
+              f"{v.count('missed')} | {untr} | {worst} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
+    for case, r in results:
+        if r["err"]:
+            print(f"ERROR {r['run']}: {r['err']}")
+    print()
+    print("per run (case, identify untrusted, listed, diagnose named, trusted, gap, worst after):")
+    for case, r in results:
+        listed = {k: v for k, v in r.get("listed", {}).items() if v}
+        gap = r.get("gap", (float("nan"),) * 2)
+        print(f"  {os.path.basename(r['run'])}: identify exit {r['icode']} untrusted {r.get('untrusted')} "
+              f"listed {listed} ok_wrong {r.get('ok_wrong')}; diagnose {r.get('named')} trusted "
+              f"{r.get('dtrusted')} gap {gap[0]:.3g}->{gap[1]:.3g} after {100 * r.get('after_err', math.nan):.2f} % "
+              f"({r['it']:.1f} + {r['dt']:.0f} s)")
+    print(f"total {time.time() - t0:.0f} s wall")
+
+
+if __name__ == "__main__":
+    main()
