@@ -24,7 +24,7 @@ fn stored(case: &str) -> RunDir {
 /// `plinth diagnose RUN --machine unseen-four.toml`'s search (the file's
 /// oil-film geometry; the machine-level check is the CLI's).
 fn diagnosis(run: &RunDir) -> Diagnosis {
-    let machine = Machine::from_toml_path(&std::path::Path::new(DATA).join("unseen-four.toml"))
+    let machine = Machine::from_toml_path(std::path::Path::new(DATA).join("unseen-four.toml"))
         .expect("machine file");
     let options = Options {
         oil_films: oil_films(&machine),
@@ -156,4 +156,23 @@ fn a_worn_bearing_table_is_named_as_bearing_coefficients_at_its_bearing() {
     );
     // The pedestal values after the correction within 2 % of ROSS's (k, m).
     plinth_tests::simulated::assert_pedestals_near_truth(&run, &d.pedestals_after, 0.02, "table");
+}
+
+#[test]
+#[ignore = "known gap, measured 2026-11-28 (scripts/bench-unseen.sh 5): at 1 % noise diagnose names nothing and trusts B3 (89 % off in m) in 5/5 runs: the pooled gap 0.29 is 1.2x its floor 0.24, under TRY_ABOVE_FLOOR, while B3 y alone is 7x its own floor (docs/unseen.md)"]
+fn the_sub_base_is_named_in_diagnose() {
+    let run = stored("sub-base");
+    let d = diagnosis(&run);
+    assert_eq!(
+        named(&d),
+        vec![("pedestal_sub_base".to_string(), "B3".to_string())],
+        "{}",
+        d.to_text()
+    );
+    plinth_tests::simulated::assert_pedestals_near_truth(
+        &run,
+        &d.pedestals_after,
+        0.02,
+        "sub-base",
+    );
 }
