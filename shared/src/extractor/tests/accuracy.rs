@@ -14,7 +14,7 @@ fn constant_speed_with_non_integer_samples_per_revolution() {
             offset: 0.41,
         };
         let run = simulate(
-            ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
+            configured(&channels),
             shaft,
             &channels,
             12.0 / f,
@@ -42,14 +42,7 @@ fn run_down_200_to_5_hz_at_5_hz_per_s() {
         rate: 5.0,
         offset: 0.73,
     };
-    let run = simulate(
-        ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
-        shaft,
-        &channels,
-        39.0,
-        4096,
-        |_| {},
-    );
+    let run = simulate(configured(&channels), shaft, &channels, 39.0, 4096, |_| {});
     assert!(run.faults().is_empty(), "{:?}", run.faults());
     // Every revolution but the first acquisition ones and the one still held back.
     let outputs = run.phasors().count();
@@ -95,14 +88,7 @@ fn dc_and_harmonics_are_rejected_during_the_run_down() {
         rate: 5.0,
         offset: 0.2,
     };
-    let run = simulate(
-        ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
-        shaft,
-        &channels,
-        11.0,
-        777,
-        |_| {},
-    );
+    let run = simulate(configured(&channels), shaft, &channels, 11.0, 777, |_| {});
     let worst = check(&run, &channels, 1e-4);
     std::println!("clean {:.1e}, with DC+2X+3X {:.1e}", worst[0], worst[1]);
     assert!(run.phasors().count() > 200);
@@ -125,7 +111,7 @@ fn averaging_over_r_revolutions() {
         offset: 0.6,
     };
     let r = 4u16;
-    let mut config = ExtractorConfig::new(FS as f32, [channel.sensor]);
+    let mut config = configured(&[channel]);
     config.revolutions_per_output = r;
     let run = simulate(config, shaft, &[channel], 3.0, 2048, |_| {});
     let mut outputs = 0;
@@ -167,7 +153,7 @@ fn through_a_resonance(rate: f64) -> [f64; 3] {
         offset: 0.37,
     };
     let run = simulate(
-        ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor)),
+        configured(&channels),
         shaft,
         &channels,
         25.0 / rate,

@@ -12,7 +12,7 @@ fn sample_by_sample_equals_block_feeding() {
         rate: 5.0,
         offset: 0.3,
     };
-    let config = ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor));
+    let config = configured(&channels);
     let blocks = simulate(config, shaft, &channels, 0.4, 333, |_| {});
     let single = simulate(config, shaft, &channels, 0.4, 1, |_| {});
     assert!(blocks.phasors().count() > 20);

@@ -55,6 +55,11 @@ impl<const N: usize> Outcome<N> {
     }
 }
 
+/// The extractor's default configuration at [`FS`] for `channels`' sensors.
+fn configured<const N: usize>(channels: &[Channel; N]) -> ExtractorConfig<N> {
+    ExtractorConfig::new(FS as f32, core::array::from_fn(|c| channels[c].sensor))
+}
+
 /// Feed `seconds` of the run-down to an extractor in blocks of `block`
 /// samples; `edit` may drop or add edge times [samples] before feeding.
 fn simulate<const N: usize>(
