@@ -37,6 +37,24 @@ impl Speed {
         (g, t)
     }
 
+    /// The errors of every member's equations at `p` [N] (4 per member:
+    /// y re, y im, z re, z im), calling `each(i, d, d_i, h_i, G)` for member
+    /// i's equation in direction d on the way (the Jacobian's rows).
+    fn errors(&self, p: &[f64], mut each: impl FnMut(usize, usize, C, C, C)) -> DVector<f64> {
+        let n = self.obs.len();
+        let mut e = DVector::zeros(4 * n);
+        for d in 0..2 {
+            let (g, t) = self.base_terms(p, d);
+            for i in 0..n {
+                let (di, h, r) = self.member_error(p, i, d, (g, t));
+                e[4 * i + 2 * d] = r.re;
+                e[4 * i + 2 * d + 1] = r.im;
+                each(i, d, di, h, g);
+            }
+        }
+        e
+    }
+
     /// Member `i`'s equation in direction `d` given the base's (G, T) of
     /// [`Speed::base_terms`]: its spring d_i [N/m], h_i = d_i − Ω²m_i [N/m]
     /// and the error h_i·X_i − F_i − d_i·G·T [N].
@@ -75,18 +93,7 @@ impl Equations for Unmeasured {
     }
 
     fn error(&self, s: usize, p: &[f64]) -> DVector<f64> {
-        let sp = &self.speeds[s];
-        let n = sp.obs.len();
-        let mut e = DVector::zeros(4 * n);
-        for d in 0..2 {
-            let (g, t) = sp.base_terms(p, d);
-            for i in 0..n {
-                let (_, _, r) = sp.member_error(p, i, d, (g, t));
-                e[4 * i + 2 * d] = r.re;
-                e[4 * i + 2 * d + 1] = r.im;
-            }
-        }
-        e
+        self.speeds[s].errors(p, |_, _, _, _, _| {})
     }
 
     fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
@@ -94,27 +101,19 @@ impl Equations for Unmeasured {
         let n = sp.obs.len();
         let w = sp.omega;
         let w2 = w * w;
-        let mut e = DVector::zeros(4 * n);
         let mut b = DMatrix::zeros(4 * n, 8 * n);
-        for d in 0..2 {
-            let (g, t) = sp.base_terms(p, d);
-            for i in 0..n {
-                let (di, h, r) = sp.member_error(p, i, d, (g, t));
-                e[4 * i + 2 * d] = r.re;
-                e[4 * i + 2 * d + 1] = r.im;
-                for (j, oj) in sp.obs.iter().enumerate() {
-                    let coupling = -di * g;
-                    // ∂e_i/∂X_j and ∂e_i/∂rel_j (through F_j = K*_j·rel_j).
-                    let dx =
-                        coupling * (w2 * p[5 * j + 2]) + if i == j { h } else { C::new(0.0, 0.0) };
-                    put(&mut b, 4 * i + 2 * d, 8 * j + 4 + 2 * d, dx);
-                    let df = coupling - if i == j { 1.0 } else { 0.0 };
-                    for c in 0..2 {
-                        put(&mut b, 4 * i + 2 * d, 8 * j + 2 * c, df * oj.kstar[d][c]);
-                    }
+        let e = sp.errors(p, |i, d, di, h, g| {
+            for (j, oj) in sp.obs.iter().enumerate() {
+                let coupling = -di * g;
+                // ∂e_i/∂X_j and ∂e_i/∂rel_j (through F_j = K*_j·rel_j).
+                let dx = coupling * (w2 * p[5 * j + 2]) + if i == j { h } else { C::new(0.0, 0.0) };
+                put(&mut b, 4 * i + 2 * d, 8 * j + 4 + 2 * d, dx);
+                let df = coupling - if i == j { 1.0 } else { 0.0 };
+                for c in 0..2 {
+                    put(&mut b, 4 * i + 2 * d, 8 * j + 2 * c, df * oj.kstar[d][c]);
                 }
             }
-        }
+        });
         (e, b)
     }
 }
