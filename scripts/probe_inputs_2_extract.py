@@ -6,35 +6,29 @@ import os
 from probe_inputs_common import *  # noqa: F401,F403
 
 
+# channels.toml edits: (old, new, count) for str.replace; None prepends a line.
+CHANNELS_BAD = {
+    "index-99": ("index = 7", "index = 99", -1),
+    "keyphasor-99": ("channel = 8", "channel = 99", -1),
+    "dup-index": ("index = 7", "index = 6", -1),
+    "full-scale-0": ("full_scale_v = 10.0", "full_scale_v = 0.0", -1),
+    "full-scale-neg": ("full_scale_v = 10.0", "full_scale_v = -10.0", -1),
+    "revolutions-0": ("revolutions = 4", "revolutions = 0", -1),
+    "revolutions-huge": ("revolutions = 4", "revolutions = 1000000000", -1),
+    "threshold-never": ("threshold_v = -5.0", "threshold_v = -50.0", -1),
+    "sensitivity-0": ("sensitivity = 7.87", "sensitivity = 0.0", 1),
+    "speed-resolution-0": None,
+    "unknown-bearing": ('bearing = "right"', 'bearing = "middle"', 1),
+}
+
+
 @builder
 def extract_channels_bad(d):
     c, i, rec = extract_case(d, "error", csv=rng.random() < 0.5)
     t = open(i + "/channels.toml").read()
-    style = rng.choice(["index-99", "keyphasor-99", "dup-index", "full-scale-0", "full-scale-neg",
-                        "revolutions-0", "revolutions-huge", "threshold-never", "sensitivity-0",
-                        "speed-resolution-0", "unknown-bearing"])
-    if style == "index-99":
-        t = t.replace("index = 7", "index = 99")
-    elif style == "keyphasor-99":
-        t = t.replace("channel = 8", "channel = 99")
-    elif style == "dup-index":
-        t = t.replace("index = 7", "index = 6")
-    elif style == "full-scale-0":
-        t = t.replace("full_scale_v = 10.0", "full_scale_v = 0.0")
-    elif style == "full-scale-neg":
-        t = t.replace("full_scale_v = 10.0", "full_scale_v = -10.0")
-    elif style == "revolutions-0":
-        t = t.replace("revolutions = 4", "revolutions = 0")
-    elif style == "revolutions-huge":
-        t = t.replace("revolutions = 4", "revolutions = 1000000000")
-    elif style == "threshold-never":
-        t = t.replace("threshold_v = -5.0", "threshold_v = -50.0")
-    elif style == "sensitivity-0":
-        t = t.replace("sensitivity = 7.87", "sensitivity = 0.0", 1)
-    elif style == "speed-resolution-0":
-        t = "speed_resolution_hz = 0.0\n" + t
-    else:
-        t = t.replace('bearing = "right"', 'bearing = "middle"', 1)
+    style = rng.choice(list(CHANNELS_BAD))
+    edit = CHANNELS_BAD[style]
+    t = t.replace(*edit) if edit else "speed_resolution_hz = 0.0\n" + t
     open(i + "/channels.toml", "w").write(t)
     c["what"] = f"channels.toml: {style} ({os.path.basename(rec)})"
     return c

@@ -4,39 +4,38 @@ is off, layouts and bearing tables that disagree, a table of 10^6 rows.
 import math
 
 from probe_inputs_common import *  # noqa: F401,F403
+from probe_inputs_2_edits import csv_case, repeat_row
+
+
+def table(expect, file="vector-table.csv"):
+    """An import case expecting `expect` whose `file` the decorated function
+    edits (see `csv_case`)."""
+    return csv_case(lambda d: import_case(d, expect), file)
 
 
 # --- import: spreadsheet dialects (neutral: same run as the clean table)
-@builder
-def import_reordered_extra_columns(d):
-    c, i = import_case(d, "neutral")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("neutral")
+def import_reordered_extra_columns(rows, c):
     order = list(range(len(rows[0])))
     rng.shuffle(order)
     rows = [[r[j] for j in order] for r in rows]
     extra = rng.choice([["Comment", "Temp (C)"], ["Unnamed: 0"], ["left 45L 1X Amp (old)", "Alarm"]])
     rows = [r + (extra if k == 0 else [rng.choice(["", "ok", "21.5"]) for _ in extra]) for k, r in enumerate(rows)]
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = f"table columns shuffled + unknown columns {extra}"
-    return c
+    return rows
 
 
-@builder
-def import_quoted_numbers(d):
-    c, i = import_case(d, "neutral")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("neutral")
+def import_quoted_numbers(rows, c):
     rows = [r if k == 0 else [f'"{x}"' for x in r] for k, r in enumerate(rows)]
     if rng.random() < 0.5:
         rows[0] = [f'"{x}"' for x in rows[0]]
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = "every number quoted (Excel CSV)"
-    return c
+    return rows
 
 
-@builder
-def import_thousands_separator(d):
-    c, i = import_case(d, "neutral")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("neutral")
+def import_thousands_separator(rows, c):
     j = rows[0].index("Speed (rpm)")
     style = rng.choice(["quoted-comma", "space", "apostrophe", "unquoted-comma"])
     for r in rows[1:]:
@@ -45,46 +44,36 @@ def import_thousands_separator(d):
             s = f"{v:,}"
             r[j] = {"quoted-comma": f'"{s}"', "space": s.replace(",", " "),
                     "apostrophe": s.replace(",", "'"), "unquoted-comma": s}[style]
-    write_rows(i + "/vector-table.csv", rows)
     if style != "quoted-comma":
         c["expect"] = "error"
     c["what"] = f"speeds with thousands separators ({style})"
-    return c
+    return rows
 
 
-@builder
-def import_trailing_empty_columns(d):
-    c, i = import_case(d, "neutral")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("neutral")
+def import_trailing_empty_columns(rows, c):
     n = rng.choice([1, 3])
     rows = [r + [""] * n for r in rows]
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = f"{n} trailing empty columns on every line"
-    return c
+    return rows
 
 
-@builder
-def import_na_cell(d):
-    c, i = import_case(d, "error")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("error")
+def import_na_cell(rows, c):
     k = rng.randrange(1, len(rows))
     j = rng.randrange(1, len(rows[0]))
     rows[k][j] = rng.choice(["#N/A", "#VALUE!", "#DIV/0!", "N/A", "-", "---"])
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = f"{rows[k][j]} at line {k + 1} column {rows[0][j]!r}"
     c["names_line"] = True
-    return c
+    return rows
 
 
-@builder
-def import_trailing_spaces(d):
-    c, i = import_case(d, "neutral")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("neutral")
+def import_trailing_spaces(rows, c):
     head = rng.random() < 0.5
     rows = [[x + " " if (k > 0 or head) else x for x in r] for k, r in enumerate(rows)]
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = "trailing spaces in every cell" + (" and the header" if head else "")
-    return c
+    return rows
 
 
 @builder
@@ -103,10 +92,8 @@ def import_no_final_newline_crlf_bom(d):
     return c
 
 
-@builder
-def import_units_row_or_comments(d):
-    c, i = import_case(d, "error")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("error")
+def import_units_row_or_comments(rows, c):
     style = rng.choice(["units-row", "comment-lines", "title-line"])
     if style == "units-row":
         rows.insert(1, ["", "rpm"] + ["um pp" if "Amp" in h else "deg" for h in rows[0][2:]])
@@ -114,116 +101,89 @@ def import_units_row_or_comments(d):
         rows = [["# Exported by ADRE 408"], ["# Machine: BFP-A"]] + rows
     else:
         rows = [["Run-down 3 May 2025"]] + rows
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = f"table with {style}"
     c["names_line"] = True
-    return c
+    return rows
 
 
-@builder
-def import_phase_radians(d):
-    c, i = import_case(d, "warn")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("warn")
+def import_phase_radians(rows, c):
     for j in table_header_index(rows, lambda h: "Phase" in h):
         for r in rows[1:]:
             r[j] = f"{math.radians(float(r[j])):.4f}"
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = "phases written in radians where the layout says degrees"
-    return c
+    return rows
 
 
-@builder
-def import_phase_wrapped(d):
-    c, i = import_case(d, "neutral")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("neutral")
+def import_phase_wrapped(rows, c):
     style = rng.choice(["+360", "+720", "-360"])
     add = {"+360": 360, "+720": 720, "-360": -360}[style]
     for j in table_header_index(rows, lambda h: "Phase" in h):
         for r in rows[1:]:
             r[j] = f"{float(r[j]) + add:g}"
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = f"phases {style} (same angle)"
     c["compare"] = ("phasors", "measurements.csv", W + "/base-import/measurements.csv")
-    return c
+    return rows
 
 
-@builder
-def import_speed_repeated(d):
-    c, i = import_case(d, "warn")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("warn")
+def import_speed_repeated(rows, c):
     k = rng.randrange(2, len(rows) - 1)
-    dup = list(rows[k])
     j = rng.choice(table_header_index(rows, lambda h: "Amp" in h))
-    dup[j] = f"{float(dup[j]) * 1.7:.3g}"
-    rows.insert(k + 1, dup)
-    write_rows(i + "/vector-table.csv", rows)
+    dup = repeat_row(rows, k, j, lambda v: f"{float(v) * 1.7:.3g}")
     c["what"] = f"speed {dup[1]} rpm twice with different amplitudes"
-    return c
+    return rows
 
 
-@builder
-def import_speed_shuffled(d):
-    c, i = import_case(d, "neutral")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("neutral")
+def import_speed_shuffled(rows, c):
     body = rows[1:]
     rng.shuffle(body)
-    write_rows(i + "/vector-table.csv", [rows[0]] + body)
     c["what"] = "rows in random order (speeds not monotonic)"
     c["compare"] = ("sorted", "measurements.csv", W + "/base-import/measurements.csv")
-    return c
+    return [rows[0]] + body
 
 
-@builder
-def import_speed_zero_negative(d):
-    c, i = import_case(d, "error")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("error")
+def import_speed_zero_negative(rows, c):
     k = rng.randrange(1, len(rows))
     rows[k][1] = rng.choice(["0", "-0", "-1500", "1e-300", "-4500"])
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = f"speed {rows[k][1]} rpm at line {k + 1}"
     c["names_line"] = True
     if rows[k][1] in ("0", "-0", "1e-300"):
         c["expect"] = "warn"
-    return c
+    return rows
 
 
-@builder
-def import_huge_exponent(d):
-    c, i = import_case(d, "error")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("error")
+def import_huge_exponent(rows, c):
     k = rng.randrange(1, len(rows))
     j = rng.choice(table_header_index(rows, lambda h: "Amp" in h or "Phase" in h))
     rows[k][j] = rng.choice(["1e308", "9e307", "1.0E+300", "1e-308", "4.9e-324"])
-    write_rows(i + "/vector-table.csv", rows)
     if "Phase" in rows[0][j] or rows[k][j] in ("1e-308", "4.9e-324"):
         c["expect"] = "any"
     c["what"] = f"{rows[k][j]} at line {k + 1} column {rows[0][j]!r}"
     c["names_line"] = c["expect"] == "error"
-    return c
+    return rows
 
 
-@builder
-def import_unit_in_cell(d):
-    c, i = import_case(d, "error")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("error")
+def import_unit_in_cell(rows, c):
     k = rng.randrange(1, len(rows))
     j = rng.choice(table_header_index(rows, lambda h: "Amp" in h))
     rows[k][j] = rows[k][j] + rng.choice([" um", "um", " µm pp", "mm/s"])
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = f"a unit inside the cell: {rows[k][j]!r} at line {k + 1}"
     c["names_line"] = True
-    return c
+    return rows
 
 
-@builder
-def import_blank_row(d):
-    c, i = import_case(d, "any")
-    rows = csv_rows(i + "/vector-table.csv")
+@table("any")
+def import_blank_row(rows, c):
     k = rng.randrange(2, len(rows))
     rows.insert(k, [""] * rng.choice([len(rows[0]), 1]))
-    write_rows(i + "/vector-table.csv", rows)
     c["what"] = f"an empty row at line {k + 1}"
-    return c
+    return rows
 
 
 @builder
@@ -258,10 +218,8 @@ def import_layout_bad(d):
     return c
 
 
-@builder
-def import_bearings_mismatch(d):
-    c, i = import_case(d, "error")
-    rows = csv_rows(i + "/bearings.csv")
+@table("error", "bearings.csv")
+def import_bearings_mismatch(rows, c):
     style = rng.choice(["case", "renamed", "range", "duplicate", "extra-bearing"])
     if style == "case":
         for r in rows[1:]:
@@ -272,16 +230,12 @@ def import_bearings_mismatch(d):
     elif style == "range":
         rows = [rows[0]] + [r for r in rows[1:] if float(r[0]) <= 40]
     elif style == "duplicate":
-        k = rng.randrange(1, len(rows))
-        dup = list(rows[k])
-        dup[2] = str(float(dup[2]) * 2)
-        rows.insert(k + 1, dup)
+        repeat_row(rows, rng.randrange(1, len(rows)), 2, lambda v: str(float(v) * 2))
     else:
         rows += [[r[0], "middle"] + r[2:] for r in rows[1:] if r[1] == "left"]
         c["expect"] = "any"
-    write_rows(i + "/bearings.csv", rows)
     c["what"] = f"bearings.csv: {style}"
-    return c
+    return rows
 
 
 @builder

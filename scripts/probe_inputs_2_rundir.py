@@ -7,22 +7,25 @@ import os
 import shutil
 
 from probe_inputs_common import *  # noqa: F401,F403
+from probe_inputs_2_edits import csv_case, repeat_row
+
+
+def run_file(expect, commands, file="measurements.csv"):
+    """A run-directory case expecting `expect`, its command drawn from
+    `commands`, whose `file` the decorated function edits (see `csv_case`)."""
+    return csv_case(lambda d: identify_case(d, expect, rng.choice(commands)), file)
 
 
 # --- run directories
-@builder
-def run_reordered_columns(d):
-    cmd = rng.choice(["identify", "identify", "plot", "report"])
-    c, r = identify_case(d, "neutral", cmd)
-    rows = csv_rows(r + "/measurements.csv")
+@run_file("neutral", ["identify", "identify", "plot", "report"])
+def run_reordered_columns(rows, c):
     order = list(range(len(rows[0])))
     rng.shuffle(order)
     rows = [[x[j] for j in order] for x in rows]
     if rng.random() < 0.6:
         rows = [x + (["comment"] if k == 0 else ["x"]) for k, x in enumerate(rows)]
-    write_rows(r + "/measurements.csv", rows)
     c["what"] = "measurements.csv columns shuffled" + (" + unknown column" if rows[0][-1] == "comment" else "")
-    return c
+    return rows
 
 
 @builder
@@ -57,11 +60,8 @@ def run_truth_disagrees(d):
     return c
 
 
-@builder
-def run_bearings_disagree(d):
-    cmd = rng.choice(["identify", "diagnose", "plot", "report"])
-    c, r = identify_case(d, "error", cmd)
-    rows = csv_rows(r + "/bearings.csv")
+@run_file("error", ["identify", "diagnose", "plot", "report"], "bearings.csv")
+def run_bearings_disagree(rows, c):
     style = rng.choice(["case", "renamed", "range", "duplicate-different", "descending"])
     if style == "case":
         for x in rows[1:]:
@@ -72,30 +72,22 @@ def run_bearings_disagree(d):
     elif style == "range":
         rows = [rows[0]] + [x for x in rows[1:] if float(x[0]) >= 20]
     elif style == "duplicate-different":
-        k = rng.randrange(1, len(rows))
-        dup = list(rows[k])
-        dup[2] = str(float(dup[2]) * 3)
-        rows.insert(k + 1, dup)
+        repeat_row(rows, rng.randrange(1, len(rows)), 2, lambda v: str(float(v) * 3))
     else:
         rows = [rows[0]] + rows[1:][::-1]
         c["expect"] = "neutral"
-    write_rows(r + "/bearings.csv", rows)
     c["what"] = f"bearings.csv: {style}"
-    return c
+    return rows
 
 
-@builder
-def run_measurements_values(d):
-    cmd = rng.choice(["identify", "identify", "diagnose", "plot"])
-    c, r = identify_case(d, "error", cmd)
-    rows = csv_rows(r + "/measurements.csv")
+@run_file("error", ["identify", "identify", "diagnose", "plot"])
+def run_measurements_values(rows, c):
+    cmd = c["command"]
     style = rng.choice(["dup-different", "speed-0", "speed-negative", "huge", "case-name",
                         "dead-bearing", "one-speed", "three-speeds", "missing-rows"])
     k = rng.randrange(1, len(rows))
     if style == "dup-different":
-        dup = list(rows[k])
-        dup[2] = repr(float(dup[2]) * 1.5 + 1e-9)
-        rows.insert(k + 1, dup)
+        repeat_row(rows, k, 2, lambda v: repr(float(v) * 1.5 + 1e-9))
     elif style == "speed-0":
         rows[k][0] = "0"
         c["expect"] = "warn"
@@ -120,22 +112,18 @@ def run_measurements_values(d):
     else:
         rows = [x for x in rows if not (x[1] == "right" and x[0] not in ("1",) and float(x[0] if x[0][0].isdigit() else 0) > 30)]
         c["expect"] = "any"
-    write_rows(r + "/measurements.csv", rows)
     c["what"] = f"measurements.csv: {style}"
-    return c
+    return rows
 
 
-@builder
-def run_sd_columns(d):
-    c, r = identify_case(d, "error", rng.choice(["identify", "diagnose"]))
-    rows = csv_rows(r + "/measurements.csv")
+@run_file("error", ["identify", "diagnose"])
+def run_sd_columns(rows, c):
     style = rng.choice(["two-of-four", "negative", "zero", "nan"])
     names = ["rel_y_sd", "rel_z_sd"] if style == "two-of-four" else ["rel_y_sd", "rel_z_sd", "ped_y_sd", "ped_z_sd"]
     value = {"two-of-four": "1e-9", "negative": "-1e-9", "zero": "0", "nan": "NaN"}[style]
     rows = [x + (names if k == 0 else [value] * len(names)) for k, x in enumerate(rows)]
-    write_rows(r + "/measurements.csv", rows)
     c["what"] = f"measurements.csv *_sd columns: {style}"
-    return c
+    return rows
 
 
 @builder

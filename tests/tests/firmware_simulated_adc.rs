@@ -20,16 +20,19 @@
 //!
 //! Both: the box's recursive estimates within 1 % of the batch fit of the
 //! same phasors (measured ≤ 1.2e-5).
+//!
+//! The simulated converter and timer are `simulated_ad7606`; this file
+//! makes the run-downs, drives the firmware through them and compares.
 
-use embedded_hal::digital::{ErrorType as PinErrorType, InputPin, OutputPin};
-use embedded_hal::spi::{ErrorKind, ErrorType as SpiErrorType, Operation, SpiDevice};
+mod simulated_ad7606;
+
 use num_complex::Complex;
 use plinth::estimate::Observation;
 use plinth::identify::{fit_pedestal, Options};
 use plinth::sim::signals::{synthesise, Channel, RunDown, SensorKind, SignalOptions, SignalSet};
 use plinth::sim::{EffectSet, Machine};
 use plinth_firmware::ad7606::{Ad7606, Range};
-use plinth_firmware::adc_source::{AdcSource, CaptureTimer};
+use plinth_firmware::adc_source::AdcSource;
 use plinth_firmware::config::{Configuration, TABLE_ROWS};
 use plinth_firmware::pipeline::Pipeline;
 use plinth_firmware::source::{SampleBuffer, SampleSource};
@@ -38,153 +41,8 @@ use plinth_shared::protocol::{
     BearingTableChunk, BearingTableRow, ChannelConfig, ChannelSet, DeviceMessage, PhasorFrame,
     WirePhasor,
 };
-use std::cell::RefCell;
-use std::convert::Infallible;
+use simulated_ad7606::{Hardware, SimBusy, SimConvst, SimSpi, SimTimer, TICKS_PER_SAMPLE};
 use std::f64::consts::TAU;
-use std::rc::Rc;
-
-/// Timer ticks per sample period: TIM2 at 84 MHz over 51.2 kHz, rounded
-/// (the simulated timer clock is 1641 × the sample rate).
-const TICKS_PER_SAMPLE: u32 = 1641;
-/// BUSY polls that read high after each CONVST edge (≈ 4 µs conversion).
-const BUSY_POLLS: u32 = 3;
-/// Timer count at `start()`: the 32-bit counter wraps during the run.
-const TIMER_START: u32 = u32::MAX - 40_000_000;
-
-/// The simulated AD7606 and capture timer: one state shared by the SPI
-/// device, the pins and the timer, as on the board.
-struct Hardware {
-    /// The signal set whose codes and keyphasor the hardware serves.
-    set: SignalSet,
-    /// Timer count now [ticks] (wrapping like the 32-bit counter).
-    clock: u32,
-    /// Sample periods since TIMER_START at `clock`.
-    slot: u64,
-    /// CONVST level.
-    convst_high: bool,
-    /// The sample latched by the last CONVST rising edge, not yet read.
-    latched: Option<usize>,
-    /// BUSY polls left that read high.
-    busy_left: u32,
-    /// Next keyphasor pulse not yet taken.
-    next_pulse: usize,
-    /// Conversions served.
-    conversions: usize,
-}
-
-impl Hardware {
-    /// Timer count of keyphasor pulse j [ticks], rounded to the tick.
-    fn pulse_tick(&self, j: usize) -> u32 {
-        let ticks = (self.set.keyphasor[j] * f64::from(TICKS_PER_SAMPLE)).round() as u64;
-        TIMER_START.wrapping_add(ticks as u32)
-    }
-
-    /// Sample periods since TIMER_START of keyphasor pulse j, in ticks.
-    fn pulse_ticks_from_start(&self, j: usize) -> u64 {
-        (self.set.keyphasor[j] * f64::from(TICKS_PER_SAMPLE)).round() as u64
-    }
-}
-
-type Shared = Rc<RefCell<Hardware>>;
-
-/// The SPI device (DOUTA, CS framed): 8 big-endian 16-bit words per
-/// conversion, only after a CONVST edge and with BUSY low.
-struct SimSpi(Shared);
-/// The CONVST output.
-struct SimConvst(Shared);
-/// The BUSY input.
-struct SimBusy(Shared);
-/// The free-running timer with keyphasor input capture.
-struct SimTimer(Shared);
-
-impl SpiErrorType for SimSpi {
-    type Error = ErrorKind;
-}
-
-impl SpiDevice for SimSpi {
-    fn transaction(&mut self, operations: &mut [Operation<'_, u8>]) -> Result<(), ErrorKind> {
-        let mut hw = self.0.borrow_mut();
-        for op in operations {
-            let Operation::Read(buf) = op else {
-                return Err(ErrorKind::Other); // the AD7606 has no DIN in use
-            };
-            assert_eq!(buf.len(), 16, "one conversion is 8 words of 16 bits");
-            assert_eq!(hw.busy_left, 0, "read while BUSY is high");
-            let k = hw.latched.take().expect("SPI read without a conversion");
-            let n = hw.set.channels();
-            for (c, pair) in buf.chunks_exact_mut(2).enumerate() {
-                pair.copy_from_slice(&hw.set.codes[k * n + c].to_be_bytes());
-            }
-            hw.conversions += 1;
-            // The main loop comes back exactly at the next slot while there
-            // are samples left; at the end the timer stays put.
-            if k + 1 < hw.set.len() {
-                hw.clock = hw.clock.wrapping_add(TICKS_PER_SAMPLE);
-                hw.slot += 1;
-            }
-        }
-        Ok(())
-    }
-}
-
-impl PinErrorType for SimConvst {
-    type Error = Infallible;
-}
-
-impl OutputPin for SimConvst {
-    fn set_low(&mut self) -> Result<(), Infallible> {
-        self.0.borrow_mut().convst_high = false;
-        Ok(())
-    }
-    fn set_high(&mut self) -> Result<(), Infallible> {
-        let mut hw = self.0.borrow_mut();
-        if !hw.convst_high {
-            // Rising edge: sample all eight inputs now.
-            let k = hw.slot as usize;
-            assert!(k < hw.set.len(), "conversion after the end of the run");
-            assert!(hw.latched.is_none(), "conversion result never read");
-            hw.latched = Some(k);
-            hw.busy_left = BUSY_POLLS;
-        }
-        hw.convst_high = true;
-        Ok(())
-    }
-}
-
-impl PinErrorType for SimBusy {
-    type Error = Infallible;
-}
-
-impl InputPin for SimBusy {
-    fn is_high(&mut self) -> Result<bool, Infallible> {
-        let mut hw = self.0.borrow_mut();
-        let high = hw.busy_left > 0;
-        hw.busy_left = hw.busy_left.saturating_sub(1);
-        Ok(high)
-    }
-    fn is_low(&mut self) -> Result<bool, Infallible> {
-        self.is_high().map(|h| !h)
-    }
-}
-
-impl CaptureTimer for SimTimer {
-    fn now(&mut self) -> u32 {
-        self.0.borrow().clock
-    }
-    fn take_edge(&mut self) -> Option<u32> {
-        let mut hw = self.0.borrow_mut();
-        let j = hw.next_pulse;
-        // Captured only once the counter has passed it.
-        if j < hw.set.keyphasor.len()
-            && hw.pulse_ticks_from_start(j) <= hw.slot * u64::from(TICKS_PER_SAMPLE)
-        {
-            hw.next_pulse += 1;
-            Some(hw.pulse_tick(j))
-        } else {
-            None
-        }
-    }
-}
 
 /// The bundled Feng & Hahn machine with field-like pedestals:
 /// pedestal damping for ζ = 3 % of each pedestal's own √(k/m) (the scan's
@@ -369,16 +227,7 @@ fn run(machine: &Machine, rundown: (f64, f64, f64), front: FrontEnd) -> Outcome 
     assert!(config.ready());
 
     // The simulated board.
-    let hw: Shared = Rc::new(RefCell::new(Hardware {
-        set,
-        clock: TIMER_START,
-        slot: 0,
-        convst_high: false,
-        latched: None,
-        busy_left: 0,
-        next_pulse: 0,
-        conversions: 0,
-    }));
+    let hw = Hardware::serving(set);
     let adc = Ad7606::new(
         SimSpi(hw.clone()),
         SimConvst(hw.clone()),

@@ -29,17 +29,28 @@
 //!   conversion's BUSY could fall;
 //! - a stall: no half completed long after one was due (BUSY stuck);
 //! - DMA transfer/direct-mode errors and SPI overruns.
+//!
+//! This module is the idle task's driver ([`AdcDma`]) and the DMA set-up
+//! both sides use; `interrupts` holds the handlers, `state` what they share
+//! with the idle task.
 
 use super::dma_source::AcquisitionHardware;
-use super::handover::{DoubleBuffer, HalfCompletions};
+use super::handover::DoubleBuffer;
 use super::read_plan::ReadPlan;
 use super::rm0090::{dma1, exti, gpiob, nvic, spi2, tim};
 use crate::clock::Registers;
 use crate::revert::Revert;
 use crate::source::CHANNELS;
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-use heapless::spsc::{Consumer, Producer};
+use core::sync::atomic::Ordering;
+use heapless::spsc::Consumer;
 use plinth_shared::protocol::BoxHealth;
+
+mod interrupts;
+mod state;
+
+pub use interrupts::{adc_half, busy_fell, keyphasor, spi_error};
+use state::bump;
+pub use state::{AdcFaults, AdcShared};
 
 /// SPI2 receive stream (DMA1, channel 0).
 pub const RX_STREAM: usize = 3;
@@ -70,108 +81,6 @@ pub const CAPTURE_DELAY_TICKS: u32 =
 /// 168 MHz: a conversion plus a read).
 pub const STOP_POLLS: u32 = 2_048;
 
-/// What the interrupt handlers share with the idle task (a `static` on
-/// the board): counters written by one handler each, and the set-up of
-/// the running acquisition, written by the idle task while EXTI0 is masked.
-#[derive(Debug)]
-pub struct AdcShared {
-    /// Halves the receive DMA completed ([`adc_half`]).
-    pub completions: HalfCompletions,
-    late_reads: AtomicU32,
-    slips: AtomicU32,
-    dma_errors: AtomicU32,
-    spi_errors: AtomicU32,
-    lost_captures: AtomicU32,
-    stalls: AtomicU32,
-    /// TIM5 count before which this conversion's BUSY cannot fall.
-    next_fall: AtomicU32,
-    /// TIM5 ticks per sample.
-    ticks_per_sample: AtomicU32,
-    /// Whether [`busy_fell`] checks for slips (off only when a test
-    /// reverts the slip detector).
-    slip_check: AtomicBool,
-}
-
-impl Default for AdcShared {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-/// Adds one to a counter with a single writer (load and store).
-#[inline]
-fn bump(counter: &AtomicU32) {
-    counter.store(
-        counter.load(Ordering::Relaxed).wrapping_add(1),
-        Ordering::Relaxed,
-    );
-}
-
-/// The acquisition's fault counters since power-up.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(target_os = "none", derive(defmt::Format))]
-pub struct AdcFaults {
-    /// BUSY fell while the previous read still ran (conversion not read).
-    pub late_reads: u32,
-    /// BUSY edges merged while interrupts were masked (a conversion lost).
-    pub slips: u32,
-    /// No half completed long after one was due (BUSY stuck, DMA stopped).
-    pub stalls: u32,
-    /// DMA transfer or direct-mode errors on streams 3 and 4.
-    pub dma_errors: u32,
-    /// SPI2 overruns and mode faults.
-    pub spi_errors: u32,
-    /// Keyphasor edges lost to overcapture or a full capture queue.
-    pub lost_captures: u32,
-}
-
-impl AdcFaults {
-    /// Faults that broke the sample sequence (wrapping sum).
-    pub fn sequence(&self) -> u32 {
-        self.late_reads
-            .wrapping_add(self.slips)
-            .wrapping_add(self.stalls)
-            .wrapping_add(self.dma_errors)
-            .wrapping_add(self.spi_errors)
-    }
-}
-
-impl AdcShared {
-    /// Nothing counted.
-    pub const fn new() -> Self {
-        Self {
-            completions: HalfCompletions::new(),
-            late_reads: AtomicU32::new(0),
-            slips: AtomicU32::new(0),
-            dma_errors: AtomicU32::new(0),
-            spi_errors: AtomicU32::new(0),
-            lost_captures: AtomicU32::new(0),
-            stalls: AtomicU32::new(0),
-            next_fall: AtomicU32::new(0),
-            ticks_per_sample: AtomicU32::new(1),
-            slip_check: AtomicBool::new(true),
-        }
-    }
-
-    /// Counts a late read (for a replacement BUSY handler in a model).
-    pub fn count_late_read(&self) {
-        bump(&self.late_reads);
-    }
-
-    /// The fault counters.
-    pub fn faults(&self) -> AdcFaults {
-        let l = |a: &AtomicU32| a.load(Ordering::Relaxed);
-        AdcFaults {
-            late_reads: l(&self.late_reads),
-            slips: l(&self.slips),
-            stalls: l(&self.stalls),
-            dma_errors: l(&self.dma_errors),
-            spi_errors: l(&self.spi_errors),
-            lost_captures: l(&self.lost_captures),
-        }
-    }
-}
-
 /// Clears every flag of DMA1 stream `n`.
 fn clear_stream_flags(r: &mut impl Registers, n: usize) {
     let (_, ifcr, shift) = dma1::flags(n);
@@ -197,100 +106,6 @@ const RX_CR: u32 = dma1::cr_chsel(0)
     | dma1::CR_TCIE
     | dma1::CR_TEIE
     | dma1::CR_DMEIE;
-
-/// BUSY fell (EXTI0, highest priority): the conversion is done; clock its
-/// 8 words out, unless the sequence broke (then count and skip: the source
-/// restarts).
-pub fn busy_fell(r: &mut impl Registers, s: &AdcShared) {
-    if r.read(exti::PR) & exti::LINE_BUSY == 0 {
-        return; // pended before `stop` cleared the line: not a conversion
-    }
-    r.write(exti::PR, exti::LINE_BUSY);
-    // Slip: TIM5 counts from sample 0; this conversion's BUSY falls no
-    // earlier than `next_fall`, the next one a period later.
-    let now = r.read(tim::TIM5 + tim::CNT);
-    let late_by = now.wrapping_sub(s.next_fall.load(Ordering::Relaxed)) as i32;
-    let p = s.ticks_per_sample.load(Ordering::Relaxed);
-    if (late_by < 0 || late_by >= p as i32) && s.slip_check.load(Ordering::Relaxed) {
-        bump(&s.slips);
-        return;
-    }
-    // The previous read must be over: the receive stream has taken a whole
-    // number of conversions and the transmit stream has stopped.
-    let remaining = r.read(dma1::ndtr(RX_STREAM));
-    let tx_running = r.read(dma1::cr(TX_STREAM)) & dma1::CR_EN != 0;
-    if !remaining.is_multiple_of(WORDS) || tx_running {
-        bump(&s.late_reads);
-        return;
-    }
-    if stream_flags(r, TX_STREAM) & (dma1::TEIF | dma1::DMEIF) != 0 {
-        bump(&s.dma_errors);
-        return;
-    }
-    clear_stream_flags(r, TX_STREAM);
-    // A CS falling edge starts the AD7606's serial output; CS high ≥ 50 ns
-    // before it (two bus reads: ≥ 8 cycles at 168 MHz).
-    r.write(gpiob::BSRR, gpiob::CS);
-    let _ = r.read(gpiob::IDR);
-    let _ = r.read(gpiob::IDR);
-    r.write(gpiob::BSRR, gpiob::CS << 16);
-    r.write(dma1::ndtr(TX_STREAM), WORDS);
-    r.write(dma1::cr(TX_STREAM), TX_CR | dma1::CR_EN);
-    s.next_fall.store(
-        s.next_fall.load(Ordering::Relaxed).wrapping_add(p),
-        Ordering::Relaxed,
-    );
-}
-
-/// The receive DMA's interrupt (priority below [`busy_fell`]): a half
-/// completed, or a transfer error.
-pub fn adc_half(r: &mut impl Registers, s: &AdcShared) {
-    let flags = stream_flags(r, RX_STREAM);
-    let (isr, ifcr, shift) = dma1::flags(RX_STREAM);
-    r.write(ifcr, flags << shift);
-    if flags & (dma1::TEIF | dma1::DMEIF) != 0 {
-        bump(&s.dma_errors);
-    }
-    if flags & dma1::TCIF != 0 {
-        s.completions.complete();
-    }
-    // The clear must land before the return, or the interrupt re-enters.
-    let _ = r.read(isr);
-}
-
-/// SPI2's error interrupt: an overrun (a word came before the DMA took the
-/// one before) or a mode fault. Counted (a sequence fault); OVR is cleared
-/// by reading DR then SR.
-pub fn spi_error(r: &mut impl Registers, s: &AdcShared) {
-    let sr = r.read(spi2::SR);
-    if sr & (spi2::SR_OVR | spi2::SR_MODF) != 0 {
-        bump(&s.spi_errors);
-        let _ = r.read(spi2::DR);
-        let _ = r.read(spi2::SR);
-    }
-}
-
-/// A keyphasor edge was captured (TIM5 channel 2): its count goes to the
-/// queue; an overcapture or a full queue is counted.
-pub fn keyphasor<const N: usize>(
-    r: &mut impl Registers,
-    s: &AdcShared,
-    captures: &mut Producer<'_, u32, N>,
-) {
-    let sr = r.read(tim::TIM5 + tim::SR);
-    if sr & tim::SR_CC2OF != 0 {
-        bump(&s.lost_captures);
-        // SR's flags clear by writing 0 and ignore a 1: clear CC2OF alone.
-        r.write(tim::TIM5 + tim::SR, !tim::SR_CC2OF);
-    }
-    if sr & tim::SR_CC2IF != 0 {
-        // Reading CCR2 clears CC2IF.
-        let count = r.read(tim::TIM5 + tim::CCR2);
-        if captures.enqueue(count).is_err() {
-            bump(&s.lost_captures);
-        }
-    }
-}
 
 /// How `stop` and `start` treat the hardware.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

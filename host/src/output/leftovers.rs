@@ -43,10 +43,7 @@ pub fn clean_leftovers(out: &Path) -> Vec<String> {
     let Some(name) = out.file_name().map(|n| n.to_string_lossy().into_owned()) else {
         return notes;
     };
-    let parent = match out.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
+    let parent = parent_dir(out);
     let Ok(entries) = std::fs::read_dir(&parent) else {
         return notes;
     };
@@ -198,15 +195,34 @@ impl Drop for Lock {
     }
 }
 
+/// Whether every entry of `backup` (a previous directory moved aside by a
+/// commit) is also in `out`, or is a file Plinth wrote and nobody changed:
+/// then the commit had finished and `backup` can go. `Err` names what is
+/// only in `backup`.
+fn backup_is_merged(backup: &Path, out: &Path) -> Result<(), String> {
+    let manifest = read_manifest(backup);
+    let entries = list_entries(backup).map_err(|e| e.to_string())?;
+    for (rel, kind) in entries {
+        if rel == MANIFEST_FILE {
+            continue;
+        }
+        let (old, new) = (backup.join(&rel), out.join(&rel));
+        let ok = match kind {
+            Entry::File => {
+                let h = file_hash(&old).ok();
+                h.is_some()
+                    && (file_hash(&new).ok() == h || manifest.get(rel.as_str()).copied() == h)
+            }
+            _ => new.symlink_metadata().is_ok(),
+        };
+        if !ok {
+            return Err(rel);
+        }
+    }
+    Ok(())
+}
+
 /// `.NAME.plinth-lock` beside `out`.
 pub(super) fn lock_path(out: &Path) -> PathBuf {
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let parent = match out.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    parent.join(format!(".{name}.plinth-lock"))
+    hidden_beside(out, "plinth-lock")
 }

@@ -43,88 +43,33 @@
 //! let final_dir = out.commit()?; // "run", complete, or the error and "run" as it was
 //! # let _ = final_dir; Ok(()) }
 //! ```
+//!
+//! The parts: `target` checks `--out` before anything is computed, `merge`
+//! decides what a `--force` commit keeps of the previous directory against
+//! its `manifest`, `leftovers` recovers from killed commands and holds the
+//! lock, and `error` names every refusal.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+mod error;
 mod leftovers;
 mod manifest;
+mod merge;
+mod target;
 
+pub use error::OutputError;
 pub use leftovers::clean_leftovers;
+pub use target::describe;
+
+use error::io;
 use leftovers::*;
 use manifest::*;
+use target::{check_target, resolve};
 
 /// The manifest of the files Plinth wrote into an output directory: one line
 /// per file, `HASH SIZE RELATIVE/PATH` (FNV-1a 64-bit in hex, bytes).
 pub const MANIFEST_FILE: &str = ".plinth-written";
-
-/// Errors of an output directory; each names the path and what to do.
-#[derive(Debug, thiserror::Error)]
-pub enum OutputError {
-    /// `--out` is an existing file, not a directory.
-    #[error("--out {}: is a file, not a directory: give a directory name (a new one, or an existing run directory with --force)", .0.display())]
-    IsFile(PathBuf),
-    /// `--out` is a symbolic link.
-    #[error("--out {}: is a symbolic link: give the directory it points to ({}) or a new directory, links are not followed", .0.display(), .1.display())]
-    IsSymlink(PathBuf, PathBuf),
-    /// `--out` is neither a file nor a directory (a FIFO, a device...).
-    #[error("--out {}: is not a directory (a FIFO, socket or device): give a directory name", .0.display())]
-    NotADirectory(PathBuf),
-    /// `--out` already holds something and `--force` was not given.
-    #[error("--out {}: already holds {what}: pass --force to write into it (files Plinth did not write are kept), or choose another directory", .path.display())]
-    NotEmpty {
-        /// The directory.
-        path: PathBuf,
-        /// What it holds, e.g. "a run directory (measurements.csv, raw.bin)".
-        what: String,
-    },
-    /// `--force` would have replaced a file Plinth did not write.
-    #[error("--out {}: {file} would be replaced, but Plinth did not write it ({why}): move it away or choose another directory; nothing was changed", .dir.display())]
-    WouldReplace {
-        /// The directory.
-        dir: PathBuf,
-        /// The file, relative to the directory.
-        file: String,
-        /// Why it is protected.
-        why: String,
-    },
-    /// Another Plinth command holds the lock of `--out`.
-    #[error("--out {}: another Plinth command is writing it ({}): wait for it to finish, or choose another directory; nothing was changed", .0.display(), .1)]
-    Busy(PathBuf, String),
-    /// Something appeared in `--out` while the command ran.
-    #[error("--out {}: {what} appeared in it while this command ran (not written by it): nothing was replaced; move it away or choose another directory and run again", .path.display())]
-    Appeared {
-        /// The directory.
-        path: PathBuf,
-        /// What appeared, e.g. "2 entries (notes.txt, run.csv)".
-        what: String,
-    },
-    /// `--out` is (or contains) the current directory.
-    #[error("--out {}: is the current directory or contains it ({}); Plinth moves a finished directory into place and cannot replace the one you are in: give a new directory name, e.g. --out run1", .0.display(), .1.display())]
-    HoldsCurrentDir(PathBuf, PathBuf),
-    /// `--out` (or a directory in it) cannot be written.
-    #[error("--out {}: {} is read-only: the previous directory could not be removed after the new one is moved into place; make it writable (chmod -R u+w) or choose another directory; nothing was changed", .0.display(), .1.display())]
-    ReadOnly(PathBuf, PathBuf),
-    /// An operating-system error on a path.
-    #[error("{what} {}: {source}", .path.display())]
-    Io {
-        /// What was being done, e.g. "cannot create".
-        what: &'static str,
-        /// The path.
-        path: PathBuf,
-        /// The operating-system error.
-        #[source]
-        source: std::io::Error,
-    },
-}
-
-fn io<'a>(what: &'static str, path: &'a Path) -> impl FnOnce(std::io::Error) -> OutputError + 'a {
-    move |source| OutputError::Io {
-        what,
-        path: path.to_path_buf(),
-        source,
-    }
-}
 
 /// A directory being written: staged in a hidden sibling of `--out`, moved
 /// into place by [`OutputDir::commit`].
@@ -292,111 +237,6 @@ impl OutputDir {
         };
         remove_tree(&doomed).map_err(io("cannot remove", &doomed))
     }
-
-    /// `Err(Appeared)` when `dir` holds an entry that is not in `known`.
-    fn refuse_if_appeared(&self, dir: &Path, known: &BTreeSet<String>) -> Result<(), OutputError> {
-        let mut new: Vec<String> = list_entries(dir)?
-            .into_iter()
-            .map(|(r, _)| r)
-            .filter(|r| !known.contains(r))
-            .collect();
-        if new.is_empty() {
-            return Ok(());
-        }
-        new.sort();
-        Err(OutputError::Appeared {
-            path: self.target.clone(),
-            what: describe(&new),
-        })
-    }
-
-    /// Checks every collision and links the old files that are kept into the
-    /// staging directory; the old directory is only read.
-    /// Returns every entry the old directory held.
-    fn merge_old(&self) -> Result<BTreeSet<String>, OutputError> {
-        let old = &self.target;
-        let manifest = read_manifest(old);
-        let old_entries = list_entries(old)?;
-        let mut refused: Vec<(String, String)> = Vec::new();
-        for (rel, kind) in &old_entries {
-            if rel == MANIFEST_FILE {
-                continue;
-            }
-            let old_path = old.join(rel);
-            let ours = matches!(kind, Entry::File)
-                && manifest
-                    .get(rel.as_str())
-                    .is_some_and(|&(h, n)| file_hash(&old_path).ok() == Some((h, n)));
-            let new_path = self.staging.join(rel);
-            if new_path.symlink_metadata().is_ok() {
-                if matches!(kind, Entry::Dir) && new_path.is_dir() {
-                    continue;
-                }
-                if ours && !self.appends.contains(rel) {
-                    continue;
-                }
-                let why = match kind {
-                    Entry::Dir => "it is a directory".to_string(),
-                    Entry::Symlink => "it is a symbolic link".to_string(),
-                    Entry::Other => "it is not a regular file".to_string(),
-                    Entry::File => {
-                        if same_content(&old_path, &new_path)? {
-                            continue;
-                        }
-                        if self.appends.contains(rel) && is_prefix(&old_path, &new_path)? {
-                            continue;
-                        }
-                        if self.appends.contains(rel) {
-                            "it is an append-only log and the new one does not extend it"
-                                .to_string()
-                        } else if manifest.contains_key(rel.as_str()) {
-                            "it was changed since Plinth wrote it".to_string()
-                        } else {
-                            "it is not in the directory's list of files Plinth wrote".to_string()
-                        }
-                    }
-                };
-                refused.push((rel.clone(), why));
-                continue;
-            }
-            if !refused.is_empty() {
-                continue; // only collecting the refusals now
-            }
-            if ours {
-                continue; // a stale file of an earlier Plinth run
-            }
-            match kind {
-                Entry::Dir => {
-                    std::fs::create_dir_all(&new_path).map_err(io("cannot create", &new_path))?
-                }
-                Entry::Symlink => {
-                    let to = std::fs::read_link(&old_path).map_err(io("cannot read", &old_path))?;
-                    std::os::unix::fs::symlink(&to, &new_path)
-                        .map_err(io("cannot create", &new_path))?;
-                }
-                Entry::File | Entry::Other => {
-                    if std::fs::hard_link(&old_path, &new_path).is_err() {
-                        std::fs::copy(&old_path, &new_path)
-                            .map_err(io("cannot copy", &old_path))?;
-                    }
-                }
-            }
-        }
-        if let Some((file, why)) = refused.first() {
-            let others: Vec<&str> = refused[1..].iter().map(|(f, _)| f.as_str()).collect();
-            let file = if others.is_empty() {
-                file.clone()
-            } else {
-                format!("{file} (and {})", others.join(", "))
-            };
-            return Err(OutputError::WouldReplace {
-                dir: old.clone(),
-                file,
-                why: why.clone(),
-            });
-        }
-        Ok(old_entries.into_iter().map(|(r, _)| r).collect())
-    }
 }
 
 impl Drop for OutputDir {
@@ -415,58 +255,6 @@ impl Drop for OutputDir {
             }
         }
     }
-}
-
-/// `out` with a real last component (`.`, `..` and `a/..` resolved), and
-/// refused when it is, or contains, the current directory (it could not be
-/// moved into place).
-fn resolve(out: &Path) -> Result<PathBuf, OutputError> {
-    use std::path::Component;
-    let odd = out.file_name().is_none()
-        || out
-            .components()
-            .any(|c| matches!(c, Component::CurDir | Component::ParentDir));
-    let is_link = out
-        .symlink_metadata()
-        .is_ok_and(|m| m.file_type().is_symlink());
-    if is_link {
-        return Ok(out.to_path_buf()); // refused by check_target
-    }
-    let resolved = if out.exists() {
-        let canon = std::fs::canonicalize(out).map_err(io("cannot inspect", out))?;
-        if let Ok(cwd) = std::env::current_dir().and_then(std::fs::canonicalize) {
-            if cwd.starts_with(&canon) {
-                return Err(OutputError::HoldsCurrentDir(out.to_path_buf(), cwd));
-            }
-        }
-        if odd {
-            canon
-        } else {
-            out.to_path_buf()
-        }
-    } else if odd {
-        let name = out
-            .file_name()
-            .ok_or_else(|| OutputError::NotADirectory(out.to_path_buf()))?;
-        let parent = match out.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        std::fs::create_dir_all(&parent).map_err(io("cannot create", &parent))?;
-        std::fs::canonicalize(&parent)
-            .map_err(io("cannot inspect", &parent))?
-            .join(name)
-    } else {
-        // A new --out whose parent directories are missing (a/b/c/run):
-        // created as `mkdir -p` would, as for the odd paths above.
-        if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-            if parent.symlink_metadata().is_err() {
-                std::fs::create_dir_all(parent).map_err(io("cannot create", parent))?;
-            }
-        }
-        out.to_path_buf()
-    };
-    Ok(resolved)
 }
 
 /// `remove_dir_all`, retried once with every directory made writable by its
@@ -491,60 +279,27 @@ fn remove_tree(dir: &Path) -> std::io::Result<()> {
     std::fs::remove_dir_all(dir)
 }
 
-/// The first directory at or under `dir` (symbolic links not followed)
-/// whose entries the user cannot remove.
-fn read_only_dir(dir: &Path) -> Option<PathBuf> {
-    let writable =
-        |d: &Path| std::fs::symlink_metadata(d).is_ok_and(|m| !m.permissions().readonly());
-    if !writable(dir) {
-        return Some(dir.to_path_buf());
-    }
-    let entries = list_entries(dir).ok()?;
-    entries
-        .into_iter()
-        .filter(|(_, k)| matches!(k, Entry::Dir))
-        .map(|(r, _)| dir.join(r))
-        .find(|d| !writable(d))
-}
-
-/// Whether every entry of `backup` (a previous directory moved aside by a
-/// commit) is also in `out`, or is a file Plinth wrote and nobody changed:
-/// then the commit had finished and `backup` can go. `Err` names what is
-/// only in `backup`.
-fn backup_is_merged(backup: &Path, out: &Path) -> Result<(), String> {
-    let manifest = read_manifest(backup);
-    let entries = list_entries(backup).map_err(|e| e.to_string())?;
-    for (rel, kind) in entries {
-        if rel == MANIFEST_FILE {
-            continue;
-        }
-        let (old, new) = (backup.join(&rel), out.join(&rel));
-        let ok = match kind {
-            Entry::File => {
-                let h = file_hash(&old).ok();
-                h.is_some()
-                    && (file_hash(&new).ok() == h || manifest.get(rel.as_str()).copied() == h)
-            }
-            _ => new.symlink_metadata().is_ok(),
-        };
-        if !ok {
-            return Err(rel);
-        }
-    }
-    Ok(())
-}
-
 /// `.NAME.TAG-N` beside `path`.
 fn sibling(path: &Path, tag: &str, n: u32) -> PathBuf {
+    hidden_beside(path, &format!("{tag}-{n}"))
+}
+
+/// `.NAME.SUFFIX` in the directory `path` is in (NAME `out` when `path`
+/// has no last component).
+fn hidden_beside(path: &Path, suffix: &str) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
-    let parent = match path.parent() {
+    parent_dir(path).join(format!(".{name}.{suffix}"))
+}
+
+/// The directory `path` is in: its parent, or `.` for a bare name.
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
-    };
-    parent.join(format!(".{name}.{tag}-{n}"))
+    }
 }
 
 /// Writes a whole output directory at `out` through `write`, which fills the
@@ -558,68 +313,6 @@ pub fn write_dir(
     let staged = OutputDir::create(out, force)?;
     write(staged.path())?;
     Ok(staged.commit()?)
-}
-
-/// Checks `out`: returns whether it exists (as a directory that may be
-/// written into).
-fn check_target(out: &Path, force: bool) -> Result<bool, OutputError> {
-    let meta = match out.symlink_metadata() {
-        Ok(m) => m,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
-                std::fs::create_dir_all(parent).map_err(io("cannot create", parent))?;
-            }
-            return Ok(false);
-        }
-        Err(e) => return Err(io("cannot inspect", out)(e)),
-    };
-    let ft = meta.file_type();
-    if ft.is_symlink() {
-        let to = std::fs::read_link(out).unwrap_or_default();
-        return Err(OutputError::IsSymlink(out.to_path_buf(), to));
-    }
-    if ft.is_file() {
-        return Err(OutputError::IsFile(out.to_path_buf()));
-    }
-    if !ft.is_dir() {
-        return Err(OutputError::NotADirectory(out.to_path_buf()));
-    }
-    let mut names: Vec<String> = std::fs::read_dir(out)
-        .map_err(io("cannot read", out))?
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .collect();
-    if names.is_empty() {
-        return Ok(false);
-    }
-    if !force {
-        names.sort();
-        return Err(OutputError::NotEmpty {
-            path: out.to_path_buf(),
-            what: describe(&names),
-        });
-    }
-    if let Some(dir) = read_only_dir(out) {
-        return Err(OutputError::ReadOnly(out.to_path_buf(), dir));
-    }
-    Ok(true)
-}
-
-/// "a run directory (measurements.csv, raw.bin)" or "3 files (a, b, c)".
-pub fn describe(names: &[String]) -> String {
-    const RUN: [&str; 4] = ["measurements.csv", "bearings.csv", "raw.bin", "signals.csv"];
-    let shown: Vec<&str> = names.iter().take(4).map(String::as_str).collect();
-    let more = if names.len() > 4 { ", ..." } else { "" };
-    let kind = if names.iter().any(|n| RUN.contains(&n.as_str())) {
-        "a run directory".to_string()
-    } else {
-        format!(
-            "{} entr{}",
-            names.len(),
-            if names.len() == 1 { "y" } else { "ies" }
-        )
-    };
-    format!("{kind} ({}{more})", shown.join(", "))
 }
 
 /// Writes `bytes` to `path` through a temporary sibling and a rename, so that

@@ -1,11 +1,10 @@
 //! The figures: a phasor figure's panels and rows of charts, a scalar
-//! figure, and their PNG/SVG output.
+//! figure, and their PNG/SVG output (`figure_output!`).
 
 use super::*;
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use std::path::{Path, PathBuf};
 
 impl PhasorFigure {
     /// Checks the figure has something to draw.
@@ -101,22 +100,9 @@ impl PhasorFigure {
         let cols = self.panels.len().max(1) as u32;
         ((700 * cols).max(1000), 60 + 420 * rows)
     }
-
-    /// Writes `<stem>.png` and `<stem>.svg`; returns both paths.
-    pub fn write(&self, stem: &Path) -> Result<[PathBuf; 2]> {
-        write_both(
-            stem,
-            self.size(),
-            |root| self.draw(root),
-            |root| self.draw(root),
-        )
-    }
-
-    /// The figure as an SVG document in memory (for an HTML report).
-    pub fn to_svg(&self) -> Result<String> {
-        svg_string(self.size(), |root| self.draw(root))
-    }
 }
+
+figure_output!(PhasorFigure);
 
 /// Segments with their x (speed [Hz]) in `unit`.
 pub(super) fn in_speed_unit(
@@ -212,13 +198,10 @@ impl ScalarFigure {
         )
     }
 
-    /// Writes `<stem>.png` and `<stem>.svg`; returns both paths.
-    pub fn write(&self, stem: &Path) -> Result<[PathBuf; 2]> {
-        write_both(
-            stem,
-            (1100, 600),
-            |root| self.draw(root),
-            |root| self.draw(root),
-        )
+    /// Pixel size: one chart.
+    fn size(&self) -> (u32, u32) {
+        (1100, 600)
     }
 }
+
+figure_output!(ScalarFigure);

@@ -23,6 +23,31 @@
 //! dynamic stiffness against its fitted model), `labels` (speed labels on a
 //! locus that never overlap).
 
+/// `write` (`<stem>.png` and `<stem>.svg`) and `to_svg` (an SVG document in
+/// memory) of a figure type that has `size()` [px] and `draw()`: the one
+/// definition of a figure's output for every figure type (inherent methods,
+/// so callers need no trait in scope).
+macro_rules! figure_output {
+    ($figure:ty) => {
+        impl $figure {
+            /// Writes `<stem>.png` and `<stem>.svg`; returns both paths.
+            pub fn write(&self, stem: &std::path::Path) -> anyhow::Result<[std::path::PathBuf; 2]> {
+                $crate::plots::write_both(
+                    stem,
+                    self.size(),
+                    |root| self.draw(root),
+                    |root| self.draw(root),
+                )
+            }
+
+            /// The figure as an SVG document in memory (for an HTML report).
+            pub fn to_svg(&self) -> anyhow::Result<String> {
+                $crate::plots::svg_string(self.size(), |root| self.draw(root))
+            }
+        }
+    };
+}
+
 mod axis;
 mod chart;
 mod figures;

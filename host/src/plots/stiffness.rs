@@ -25,15 +25,13 @@
 
 use super::legend::LegendEntry;
 use super::{
-    colour, draw_cell, speed_axis, speed_range, svg_string, titled_page, write_both, Axes, Band,
-    Curve, Mark, Style,
+    colour, draw_cell, speed_axis, speed_range, titled_page, Axes, Band, Curve, Mark, Style,
 };
 use crate::estimate::Pedestal;
 use anyhow::{anyhow, Result};
 use num_complex::Complex;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use std::path::{Path, PathBuf};
 
 /// Direction names, index 0 = y (vertical), 1 = z (horizontal).
 pub const DIRECTIONS: [&str; 2] = ["y", "z"];
@@ -418,22 +416,9 @@ impl StiffnessFigure {
             60 + 3 * 330,
         )
     }
-
-    /// Writes `<stem>.png` and `<stem>.svg`; returns both paths.
-    pub fn write(&self, stem: &Path) -> Result<[PathBuf; 2]> {
-        write_both(
-            stem,
-            self.size(),
-            |root| self.draw(root),
-            |root| self.draw(root),
-        )
-    }
-
-    /// The figure as an SVG document in memory.
-    pub fn to_svg(&self) -> Result<String> {
-        svg_string(self.size(), |root| self.draw(root))
-    }
 }
+
+figure_output!(StiffnessFigure);
 
 #[cfg(test)]
 mod tests {

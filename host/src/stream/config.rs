@@ -30,16 +30,21 @@
 //! `rel_*` channels must be proximity probes (only they see the rotor relative
 //! to the pedestal); `ped_*` channels may be any of the three kinds (the box
 //! integrates velocity and acceleration to displacement in the phasor domain).
+//!
+//! This module reads and validates the file; `bearing_tables` reads the
+//! bearings.csv it names, and `device` turns both into the box's
+//! configuration commands.
 
-use crate::rundir::{self, BearingRow, RunDir};
 use anyhow::{bail, Context, Result};
-use plinth_shared::protocol::{
-    self, BearingTableChunk, BearingTableRow, Capabilities, ChannelConfig, ChannelSet, HostMessage,
-};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
+
+mod bearing_tables;
+mod device;
+
+pub use bearing_tables::{read_bearings_csv, BearingTables};
 
 /// Highest ADC channel index the box has (16 channels).
 pub const MAX_ADC_CHANNEL: u8 = 15;
@@ -319,196 +324,6 @@ impl StreamConfig {
         self.channels
             .iter()
             .find(|c| &c.bearing == name && c.quantity == quantity)
-    }
-}
-
-/// The known coefficients of every configured bearing, read from the
-/// configured bearings.csv with the run-directory reader.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BearingTables {
-    /// Rows of the configured bearings, in file order.
-    pub rows: Vec<BearingRow>,
-}
-
-impl BearingTables {
-    /// The rows of one bearing in increasing speed.
-    pub fn rows_of(&self, bearing: &str) -> Vec<&BearingRow> {
-        let mut rows: Vec<&BearingRow> =
-            self.rows.iter().filter(|r| r.bearing == bearing).collect();
-        rows.sort_by(|a, b| a.speed_hz.total_cmp(&b.speed_hz));
-        rows
-    }
-}
-
-impl StreamConfig {
-    /// Reads the configured bearings.csv and keeps the rows of the configured
-    /// bearings; every configured bearing must have at least one row.
-    pub fn load_bearing_tables(&self) -> Result<BearingTables> {
-        let all = read_bearings_csv(&self.bearings_csv)?;
-        let rows: Vec<BearingRow> = all
-            .into_iter()
-            .filter(|r| self.bearings.contains(&r.bearing))
-            .collect();
-        for b in &self.bearings {
-            if !rows.iter().any(|r| &r.bearing == b) {
-                bail!(
-                    "{}: no rows for bearing {b:?}, which the stream configuration measures",
-                    self.bearings_csv.display()
-                );
-            }
-        }
-        Ok(BearingTables { rows })
-    }
-
-    /// Checks the configuration against what the box said it can do.
-    pub fn check_capabilities(&self, caps: &Capabilities, tables: &BearingTables) -> Result<()> {
-        if let Some(ch) = self.channels.iter().find(|c| c.adc >= caps.max_channels) {
-            bail!(
-                "ADC channel {} is configured but the box has only {} channels (0..={})",
-                ch.adc,
-                caps.max_channels,
-                caps.max_channels.saturating_sub(1)
-            );
-        }
-        if self.bearings.len() > caps.max_bearings as usize {
-            bail!(
-                "{} bearings are configured but the box processes at most {}",
-                self.bearings.len(),
-                caps.max_bearings
-            );
-        }
-        for b in &self.bearings {
-            let n = tables.rows_of(b).len();
-            if n > caps.bearing_table_capacity as usize {
-                bail!(
-                    "bearing {b:?} has {n} rows in {} but the box holds at most {} per bearing",
-                    self.bearings_csv.display(),
-                    caps.bearing_table_capacity
-                );
-            }
-        }
-        Ok(())
-    }
-
-    /// The configuration commands for the box, in sending order: channels,
-    /// averaging, RLS settings, then every bearing's table in chunks.
-    pub fn device_commands(&self, tables: &BearingTables) -> Result<Vec<HostMessage>> {
-        let mut set = ChannelSet {
-            channels: Default::default(),
-        };
-        for ch in &self.channels {
-            let bearing = self.bearing_index(&ch.bearing).unwrap_or(0);
-            let entry = ChannelConfig {
-                channel: ch.adc,
-                kind: ch.sensor,
-                sensitivity: ch.sensitivity as f32,
-                bearing: bearing as u8,
-                quantity: match ch.quantity {
-                    Quantity::RelY => protocol::Quantity::RelY,
-                    Quantity::RelZ => protocol::Quantity::RelZ,
-                    Quantity::PedY => protocol::Quantity::PedY,
-                    Quantity::PedZ => protocol::Quantity::PedZ,
-                },
-            };
-            if set.channels.push(entry).is_err() {
-                bail!("more than {} channels configured", protocol::MAX_CHANNELS);
-            }
-        }
-        let mut out = vec![
-            HostMessage::ConfigureChannels(set),
-            HostMessage::ConfigureAveraging(protocol::Averaging {
-                revolutions_per_phasor: self.averaging.revolutions,
-            }),
-            HostMessage::ConfigureRls(protocol::RlsSettings {
-                forgetting_factor: self.rls.forgetting_factor as f32,
-                scale_k: self.rls.k_scale as f32,
-                scale_m: self.rls.m_scale as f32,
-                scale_c: self.rls.c_scale as f32,
-            }),
-        ];
-        for (index, b) in self.bearings.iter().enumerate() {
-            let rows: Vec<BearingTableRow> = tables
-                .rows_of(b)
-                .iter()
-                .map(|r| BearingTableRow {
-                    speed_hz: r.speed_hz as f32,
-                    coefficients: r.coefficients.cast::<f32>(),
-                })
-                .collect();
-            // f32 rounding must not merge two listed speeds.
-            if let Some(w) = rows.windows(2).find(|w| w[1].speed_hz <= w[0].speed_hz) {
-                bail!(
-                    "{}: bearing {b:?} lists speeds {} Hz and {} Hz, which are not distinct in single precision",
-                    self.bearings_csv.display(),
-                    w[0].speed_hz,
-                    w[1].speed_hz
-                );
-            }
-            let chunks = BearingTableChunk::split(index as u8, &rows)
-                .map_err(|e| anyhow::anyhow!("bearing {b:?}: {} table rows is too many", e.rows))?;
-            out.extend(chunks.map(HostMessage::BearingTable));
-        }
-        Ok(out)
-    }
-}
-
-/// Reads a bearings.csv (formats.md) with the run-directory reader.
-///
-/// The reader reads whole run directories, so the file is presented to it in
-/// a scratch directory beside an empty measurements.csv; its error messages
-/// are rewritten to name the real file.
-pub fn read_bearings_csv(path: &Path) -> Result<Vec<BearingRow>> {
-    let real = std::fs::canonicalize(path)
-        .with_context(|| format!("cannot open the bearing table {}", path.display()))?;
-    let scratch = ScratchDir::new()?;
-    let link = scratch.0.join(rundir::BEARINGS_FILE);
-    std::os::unix::fs::symlink(&real, &link).with_context(|| {
-        format!(
-            "cannot link {} into {}",
-            real.display(),
-            scratch.0.display()
-        )
-    })?;
-    std::fs::write(
-        scratch.0.join(rundir::MEASUREMENTS_FILE),
-        rundir::MEASUREMENT_COLUMNS.join(",") + "\n",
-    )
-    .with_context(|| format!("cannot write a scratch file in {}", scratch.0.display()))?;
-    match RunDir::read(&scratch.0) {
-        Ok(run) => Ok(run.bearings),
-        Err(e) => {
-            let message = e
-                .to_string()
-                .replace(&link.display().to_string(), &path.display().to_string());
-            bail!("{message}")
-        }
-    }
-}
-
-/// A directory under the system's temporary directory, removed on drop.
-struct ScratchDir(PathBuf);
-
-impl ScratchDir {
-    fn new() -> Result<Self> {
-        use std::sync::atomic::{AtomicU32, Ordering};
-        static COUNT: AtomicU32 = AtomicU32::new(0);
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.subsec_nanos());
-        let dir = std::env::temp_dir().join(format!(
-            "plinth-bearings-{}-{}-{nanos}",
-            std::process::id(),
-            COUNT.fetch_add(1, Ordering::Relaxed)
-        ));
-        std::fs::create_dir(&dir)
-            .with_context(|| format!("cannot create the scratch directory {}", dir.display()))?;
-        Ok(Self(dir))
-    }
-}
-
-impl Drop for ScratchDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
     }
 }
 

@@ -1,154 +1,21 @@
 //! The joint fit of a group of pedestals with an unmeasured base (module
 //! docs of [`super`]): the equations with X_B eliminated, the profile of the
 //! base mode, the identifiability decision, and the model's prediction.
+//!
+//! This module is the fit; `equations` holds the equations it solves and
+//! `predict` the model's prediction and misfit at given parameters.
 
-use super::{
-    put, spring, BaseFitError, BaseFitResult, BaseGroup, BaseIdentifiability, BaseParams, C,
-};
+use super::{BaseFitError, BaseFitResult, BaseGroup, BaseIdentifiability, BaseParams};
 use crate::estimate::gauss_helmert::{self as gh, Equations};
 use crate::estimate::Observation;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use std::f64::consts::TAU;
 
-/// One speed of a group: the observation of each group member.
-struct Speed {
-    omega: f64,
-    obs: Vec<Observation>,
-    /// Each member's bearing force F = K*·rel [N].
-    force: Vec<[C; 2]>,
-    var: Vec<f64>,
-}
+mod equations;
+mod predict;
 
-/// The unmeasured-base equations of a group (module docs); parameters
-/// p = (θ of each member, then (κ, μ, γ) for y, then for z).
-struct Unmeasured {
-    speeds: Vec<Speed>,
-}
-
-/// Offset of the base parameters of direction `d` in p for `n` pedestals.
-fn base_at(n: usize, d: usize) -> usize {
-    5 * n + 3 * d
-}
-
-impl Equations for Unmeasured {
-    fn speeds(&self) -> usize {
-        self.speeds.len()
-    }
-
-    fn variance(&self, s: usize) -> &[f64] {
-        &self.speeds[s].var
-    }
-
-    fn error(&self, s: usize, p: &[f64]) -> DVector<f64> {
-        let sp = &self.speeds[s];
-        let n = sp.obs.len();
-        let w = sp.omega;
-        let w2 = w * w;
-        let mut e = DVector::zeros(4 * n);
-        for d in 0..2 {
-            let q = &p[base_at(n, d)..base_at(n, d) + 3];
-            let g = C::new(q[0], 0.0) / C::new(1.0 - w2 * q[1], w * q[2]);
-            let t: C = sp
-                .obs
-                .iter()
-                .enumerate()
-                .map(|(j, o)| sp.force[j][d] + w2 * p[5 * j + 2] * o.ped[d])
-                .sum();
-            for (i, o) in sp.obs.iter().enumerate() {
-                let th = &p[5 * i..5 * i + 5];
-                let di = spring(th, d, w);
-                let r = (di - w2 * th[2]) * o.ped[d] - sp.force[i][d] - di * g * t;
-                e[4 * i + 2 * d] = r.re;
-                e[4 * i + 2 * d + 1] = r.im;
-            }
-        }
-        e
-    }
-
-    fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
-        let sp = &self.speeds[s];
-        let n = sp.obs.len();
-        let w = sp.omega;
-        let w2 = w * w;
-        let mut e = DVector::zeros(4 * n);
-        let mut b = DMatrix::zeros(4 * n, 8 * n);
-        for d in 0..2 {
-            let q = &p[base_at(n, d)..base_at(n, d) + 3];
-            let g = C::new(q[0], 0.0) / C::new(1.0 - w2 * q[1], w * q[2]);
-            let t: C = sp
-                .obs
-                .iter()
-                .enumerate()
-                .map(|(j, o)| sp.force[j][d] + w2 * p[5 * j + 2] * o.ped[d])
-                .sum();
-            for (i, o) in sp.obs.iter().enumerate() {
-                let th = &p[5 * i..5 * i + 5];
-                let di = spring(th, d, w);
-                let h = di - w2 * th[2];
-                let r = h * o.ped[d] - sp.force[i][d] - di * g * t;
-                e[4 * i + 2 * d] = r.re;
-                e[4 * i + 2 * d + 1] = r.im;
-                for (j, oj) in sp.obs.iter().enumerate() {
-                    let coupling = -di * g;
-                    // ∂e_i/∂X_j and ∂e_i/∂rel_j (through F_j = K*_j·rel_j).
-                    let dx =
-                        coupling * (w2 * p[5 * j + 2]) + if i == j { h } else { C::new(0.0, 0.0) };
-                    put(&mut b, 4 * i + 2 * d, 8 * j + 4 + 2 * d, dx);
-                    let df = coupling - if i == j { 1.0 } else { 0.0 };
-                    for c in 0..2 {
-                        put(&mut b, 4 * i + 2 * d, 8 * j + 2 * c, df * oj.kstar[d][c]);
-                    }
-                }
-            }
-        }
-        (e, b)
-    }
-}
-
-/// The speeds every member of `group` has, with their observations.
-fn common_speeds(obs: &[Vec<Observation>], group: &BaseGroup) -> Result<Vec<Speed>, BaseFitError> {
-    let mut seen = Vec::new();
-    for &i in &group.bearings {
-        if i >= obs.len() {
-            return Err(BaseFitError::NoSuchBearing {
-                index: i,
-                available: obs.len(),
-            });
-        }
-        if seen.contains(&i) {
-            return Err(BaseFitError::BadGroup(group.bearings.clone()));
-        }
-        seen.push(i);
-    }
-    let Some(&first) = group.bearings.first() else {
-        return Err(BaseFitError::BadGroup(Vec::new()));
-    };
-    let mut speeds: Vec<Speed> = Vec::new();
-    for o in obs[first].iter().filter(|o| o.is_finite()) {
-        let members: Option<Vec<Observation>> = group
-            .bearings
-            .iter()
-            .map(|&i| {
-                obs[i]
-                    .iter()
-                    .find(|x| x.speed_hz == o.speed_hz && x.is_finite())
-                    .copied()
-            })
-            .collect();
-        if let Some(members) = members {
-            let var = members.iter().flat_map(|m| m.var).collect();
-            speeds.push(Speed {
-                omega: o.omega(),
-                force: members.iter().map(Observation::force).collect(),
-                obs: members,
-                var,
-            });
-        }
-    }
-    speeds.sort_by(|a, b| a.omega.total_cmp(&b.omega));
-    speeds.dedup_by(|a, b| a.omega == b.omega);
-    Ok(speeds)
-}
+use equations::{base_at, common_speeds, Unmeasured};
+pub use predict::{chi2, predict, Prediction};
 
 /// Most iterations of a profiling fit and of the final fit.
 const GRID_ITERATIONS: usize = 8;
@@ -430,94 +297,6 @@ pub fn fit_on_unmeasured_base(
         iterations: fin.iterations,
         speeds_hz: eq.speeds.iter().map(|s| s.omega / TAU).collect(),
     })
-}
-
-/// The model's pedestal motion of a group at one speed ([`predict`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Prediction {
-    /// Rotor speed [Hz].
-    pub speed_hz: f64,
-    /// Pedestal motion (y, z) [m] of each group member (group order).
-    pub ped: Vec<[C; 2]>,
-}
-
-/// The model's prediction of every group member's pedestal motion at each
-/// speed all members share (as in [`BaseFitResult::speeds_hz`]), given the
-/// measured bearing forces (from each observation's rel), the pedestals
-/// `theta` (group order) and `base`: the solution of the coupled equations
-/// of the module docs. Compare with the measured `ped` for a gap.
-pub fn predict(
-    obs: &[Vec<Observation>],
-    group: &BaseGroup,
-    theta: &[[f64; 5]],
-    base: &BaseParams,
-) -> Result<Vec<Prediction>, BaseFitError> {
-    let speeds = common_speeds(obs, group)?;
-    let n = group.bearings.len();
-    if theta.len() != n {
-        return Err(BaseFitError::BadGroup(group.bearings.clone()));
-    }
-    let mut out = Vec::with_capacity(speeds.len());
-    for sp in &speeds {
-        let w = sp.omega;
-        let w2 = w * w;
-        let mut x = vec![[C::new(0.0, 0.0); 2]; n];
-        for d in 0..2 {
-            let g = base.receptance(d, w);
-            // (d_i − Ω²m_i)·X_i − d_i·G·Σ_j Ω²m_j·X_j = F_i + d_i·G·Σ_j F_j
-            let f_sum: C = sp.obs.iter().map(|o| o.force()[d]).sum();
-            let a = DMatrix::from_fn(n, n, |i, j| {
-                let di = spring(&theta[i], d, w);
-                let diag = if i == j {
-                    di - w2 * theta[i][2]
-                } else {
-                    C::new(0.0, 0.0)
-                };
-                diag - di * g * w2 * theta[j][2]
-            });
-            let rhs = DVector::from_fn(n, |i, _| {
-                sp.obs[i].force()[d] + spring(&theta[i], d, w) * g * f_sum
-            });
-            let sol = a.lu().solve(&rhs).ok_or(BaseFitError::NotEvaluable)?;
-            for (xi, v) in x.iter_mut().zip(sol.iter()) {
-                xi[d] = *v;
-            }
-        }
-        out.push(Prediction {
-            speed_hz: w / TAU,
-            ped: x,
-        });
-    }
-    Ok(out)
-}
-
-/// J = Σ eᵀΣ⁻¹e [-] of the group's equations (module docs) at given
-/// pedestals (group order) and base, with the observations' noise: the
-/// misfit a diagnosis compares with its degrees of freedom.
-pub fn chi2(
-    obs: &[Vec<Observation>],
-    group: &BaseGroup,
-    theta: &[[f64; 5]],
-    base: &BaseParams,
-) -> Result<f64, BaseFitError> {
-    let speeds = common_speeds(obs, group)?;
-    let n = group.bearings.len();
-    if theta.len() != n {
-        return Err(BaseFitError::BadGroup(group.bearings.clone()));
-    }
-    let mut p: Vec<f64> = theta.iter().flatten().copied().collect();
-    for d in 0..2 {
-        if base.k[d].is_finite() && base.k[d] != 0.0 {
-            p.extend([
-                1.0 / base.k[d],
-                base.m[d] / base.k[d],
-                base.c[d] / base.k[d],
-            ]);
-        } else {
-            p.extend([0.0; 3]);
-        }
-    }
-    gh::cost(&Unmeasured { speeds }, &p).ok_or(BaseFitError::NotEvaluable)
 }
 
 #[cfg(test)]

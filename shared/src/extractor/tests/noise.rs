@@ -58,7 +58,7 @@ impl Calibration {
         noise_volts: [f64; 3],
         seed: u64,
     ) {
-        let mut config = ExtractorConfig::new(FS as f32, channels.map(|c| c.sensor));
+        let mut config = configured(channels);
         config.revolutions_per_output = revolutions;
         let clean = simulate(config, shaft, channels, seconds, 4096, |_| {});
         let mut gauss = Gauss(seed);
