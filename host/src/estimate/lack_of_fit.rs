@@ -36,6 +36,7 @@
 //! and detection rates (measured by `scripts/bench-trust.sh`) are in
 //! docs/trust.md.
 
+mod mean;
 mod structure;
 
 pub use structure::{
