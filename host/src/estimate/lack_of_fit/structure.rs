@@ -255,10 +255,11 @@ fn standardised(speeds_hz: &[f64], whitened: &[[f64; 4]]) -> Option<(Vec<f64>, V
     Some((s, w))
 }
 
-/// [`structure`] with `scales` local window widths (0: the whole run's
+/// [`structure`]'s scan alone (no mean test) with `scales` local window widths (0: the whole run's
 /// polynomial only) and each window scored by the part of its explained
 /// sum of squares across blocks (`across`) or by all of it (with `scales` 0:
-/// the test before the scan).
+/// the test before the scan): the unit tests' comparisons.
+#[cfg(test)]
 fn scan(
     speeds_hz: &[f64],
     whitened: &[[f64; 4]],
