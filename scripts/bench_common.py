@@ -70,11 +70,14 @@ class Plinth:
         subprocess.run([self.binary, "simulate", machine, "--out", out, "--speeds", speeds,
                         *args], check=True, stdout=subprocess.DEVNULL)
 
-    def identify(self, run):
+    def identify(self, run, refusal_ok=False):
         """(`plinth identify RUN --json` parsed, exit code); an exit other than 0
-        or 2 raises."""
+        or 2 raises, except exit 1 with `refusal_ok` (identify refused the data,
+        e.g. a phasor beyond any machine's: then (None, 1))."""
         p = subprocess.run([self.binary, "identify", run, "--json"], capture_output=True,
                            text=True)
+        if refusal_ok and p.returncode == 1:
+            return None, 1
         if p.returncode not in (0, 2):
             raise RuntimeError(f"identify {run}: exit {p.returncode}: {p.stderr}")
         return json.loads(p.stdout), p.returncode
