@@ -27,14 +27,17 @@ pub const PERMUTATIONS: usize = 1999;
 pub const STOP_AFTER_EXCEEDANCES: usize = 20;
 
 /// The structure test of one bearing's whitened residuals: the scan over
-/// windows of speed ([`structure`]).
+/// windows of speed and the run's mean ([`structure`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Structure {
-    /// The scan statistic: the largest standardised sum of squares that a
-    /// window's polynomial explains, over every window (Wilson–Hilferty
-    /// normal score of the χ² its dimension would give white residuals) [-].
+    /// The statistic of the test that gave `p_value`: the scan's, the
+    /// largest sum of squares that a window's polynomial explains across
+    /// blocks, over every window, in units of its spread for white
+    /// residuals; or the mean's, the same for the constant over the whole
+    /// run ([`super::mean`]) [-].
     pub statistic: f64,
-    /// The same statistic's median over the block shuffles made [-].
+    /// The same statistic's median over the null draws made (blocks
+    /// shuffled for the scan, negated for the mean) [-].
     pub statistic_null_median: f64,
     /// Share of the residuals' sum of squares inside the window that
     /// scores highest which its polynomial explains [-].
