@@ -31,11 +31,17 @@
 //!   The residuals are first divided by their local RMS over speed
 //!   ([`LEVEL_WINDOW`]), so that a level the noise model's pattern misses
 //!   does not look like a trend.
+//! - **Mean** (`mean`): the residual mean over the run, which no shuffle
+//!   can judge and the scan removes: a broad one-signed model error. Its
+//!   null: blocks of [`BLOCK`] speeds negated at random (residuals
+//!   symmetric about zero). The structure test's p-value is twice the
+//!   smaller of the scan's and the mean's (Bonferroni).
 //!
 //! The rule built on them ([`crate::identify::trust`]) and its false-alarm
 //! and detection rates (measured by `scripts/bench-trust.sh`) are in
 //! docs/trust.md.
 
+mod mean;
 mod structure;
 
 pub use structure::{
