@@ -28,8 +28,10 @@
 //! and the calibrated tail probability is below the significance level.
 //!
 //! Cost: each replicate refits the bases, so the bootstrap is run only when
-//! the candidate could be chosen at all (the rigid model's gap is above
-//! [`TRY_ABOVE_FLOOR`] times its noise floor, the penalised ratio is positive and
+//! the candidate could be chosen at all (the rigid model's gap, over the
+//! machine or on any one pedestal channel against that channel's own floor
+//! ([`Prediction::above_floor`]), is above [`TRY_ABOVE_FLOOR`] times its
+//! noise floor, the penalised ratio is positive and
 //! the base model brings the gap down), and it stops early when the decision
 //! can no longer change: at the first replicate that reaches T (the effect
 //! is then not significant; the p-value shown is that of the replicates
@@ -351,7 +353,7 @@ pub fn fit(
     };
     // Nothing to explain: the rigid model already fits to the noise floor,
     // so the candidate could not be chosen (and its fits cost seconds).
-    if candidates.is_empty() || base_gap.gap <= TRY_ABOVE_FLOOR * base_gap.floor {
+    if candidates.is_empty() || !base_prediction.above_floor(prep, TRY_ABOVE_FLOOR) {
         return Ok(None);
     }
     let obs = observations(prep);

@@ -140,14 +140,31 @@ impl Prediction {
     /// The pedestal-level gap and its noise floor over all bearings, or over
     /// the bearings in `only` when given.
     pub fn gap(&self, prep: &Prepared, only: Option<&[usize]>) -> Gap {
+        self.gap_over(prep, |b, _| only.is_none_or(|o| o.contains(&b)))
+    }
+
+    /// Whether the disagreement is more than `factor` times its noise floor
+    /// anywhere: over the whole machine, or on any one pedestal channel
+    /// (bearing, direction) against that channel's own floor. A model error
+    /// at one pedestal (a sub-base under it) can hide in the pooled gap when
+    /// another, noisier channel dominates the pool's floor.
+    pub fn above_floor(&self, prep: &Prepared, factor: f64) -> bool {
+        let over = |g: Gap| g.gap > factor * g.floor;
+        over(self.gap(prep, None))
+            || (0..prep.points.len())
+                .any(|b| (0..2).any(|d| over(self.gap_over(prep, |q, e| q == b && e == d))))
+    }
+
+    /// The gap over the readings (bearing, direction) that `keep` selects.
+    fn gap_over(&self, prep: &Prepared, keep: impl Fn(usize, usize) -> bool) -> Gap {
         let (mut num, mut den, mut noise) = (0.0, 0.0, 0.0);
         for (b, row) in prep.points.iter().enumerate() {
-            if only.is_some_and(|o| !o.contains(&b)) {
-                continue;
-            }
             for (j, p) in row.iter().enumerate() {
                 let Some(p) = p else { continue };
                 for d in 0..2 {
+                    if !keep(b, d) {
+                        continue;
+                    }
                     den += p.ped[d].norm_sqr();
                     match (self.ped[b][j], self.noise_var[b][j]) {
                         (Some(x), Some(v)) => {

@@ -3,7 +3,10 @@
 //! Two things make identified parameters untrustworthy:
 //! - **an unexplained disagreement**: after the chosen effects the gap is
 //!   still well above its noise floor (more than [`AT_THE_FLOOR`] times the
-//!   final model's floor), or it rose with the effects added,
+//!   final model's floor, over the machine or on any one pedestal channel
+//!   against that channel's own floor: a model error at one pedestal must
+//!   not hide in a pool another, noisier channel dominates), or it rose with
+//!   the effects added,
 //!   so the data hold something no effect of the library explains and every
 //!   parameter fitted to them absorbs part of it; the verdict says so
 //!   plainly, and it never reports a fall of the gap the numbers do not show
@@ -14,6 +17,7 @@
 
 use super::data::Prepared;
 use super::gap::Gap;
+use super::locate::Location;
 use super::report::{Pedestal, Step};
 use crate::identify::{physical, PedestalFit};
 use plinth_shared::regression::Parameter;
@@ -40,8 +44,15 @@ pub struct Conclusion {
 
 /// Concludes a diagnosis from the base model's gap `before`, the final
 /// model's gap `after`, the effects added and the final pedestals (as
-/// [`as_pedestal_fit`] gives them).
-pub fn conclude(before: Gap, after: Gap, steps: &[Step], pedestals: &[PedestalFit]) -> Conclusion {
+/// [`as_pedestal_fit`] gives them) and the final model's disagreement per
+/// pedestal channel (`channels`, as [`super::locate::locate`] gives it).
+pub fn conclude(
+    before: Gap,
+    after: Gap,
+    steps: &[Step],
+    pedestals: &[PedestalFit],
+    channels: &[Location],
+) -> Conclusion {
     let mut reasons = Vec::new();
     let mut verdict = if steps.is_empty() {
         if before.gap <= AT_THE_FLOOR * before.floor {
@@ -98,6 +109,27 @@ pub fn conclude(before: Gap, after: Gap, steps: &[Step], pedestals: &[PedestalFi
             "{UNEXPLAINED} (gap {:.4}, {times} the noise floor {floor:.4})",
             after.gap
         ));
+    }
+    // One pedestal channel far above its own floor is a model error there,
+    // whatever the pooled gap says.
+    for l in channels {
+        if l.gap > AT_THE_FLOOR * l.floor {
+            let times = if l.floor > 0.0 {
+                format!("{:.1}×", l.gap / l.floor)
+            } else {
+                "infinitely many times".to_string()
+            };
+            if !verdict.contains(UNEXPLAINED) {
+                verdict += &format!(
+                    " But {UNEXPLAINED} at bearing {} {}: its gap {:.4} is {times} its own noise floor {:.4}, so the identified parameters are not to be trusted.",
+                    l.bearing, l.direction, l.gap, l.floor
+                );
+            }
+            reasons.push(format!(
+                "{UNEXPLAINED} at bearing {} {} (gap {:.4}, {times} its own noise floor {:.4})",
+                l.bearing, l.direction, l.gap, l.floor
+            ));
+        }
     }
     for fit in pedestals {
         for w in physical::violations(fit) {
@@ -244,7 +276,13 @@ mod tests {
 
     #[test]
     fn a_gap_that_rose_is_said_to_rise_and_is_not_trusted() {
-        let c = conclude(gap(0.10, 0.01), gap(0.12, 0.01), &[step(0.10, 0.12)], &[]);
+        let c = conclude(
+            gap(0.10, 0.01),
+            gap(0.12, 0.01),
+            &[step(0.10, 0.12)],
+            &[],
+            &[],
+        );
         assert!(c.verdict.contains("ROSE"), "{}", c.verdict);
         assert!(!c.verdict.contains("fell"), "{}", c.verdict);
         assert!(c.verdict.contains("from 0.1000 to 0.1200"), "{}", c.verdict);
@@ -255,7 +293,7 @@ mod tests {
 
     #[test]
     fn a_fall_still_far_above_the_floor_is_unexplained() {
-        let c = conclude(gap(1.5, 0.1), gap(1.29, 0.09), &[step(1.5, 1.29)], &[]);
+        let c = conclude(gap(1.5, 0.1), gap(1.29, 0.09), &[step(1.5, 1.29)], &[], &[]);
         assert!(
             c.verdict.contains("fell from 1.5000 to 1.2900"),
             "{}",
@@ -264,20 +302,55 @@ mod tests {
         assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
         assert!(!c.trusted);
         // Nothing added, gap far above the floor: unexplained too.
-        let c = conclude(gap(1.48, 0.097), gap(1.48, 0.097), &[], &[]);
+        let c = conclude(gap(1.48, 0.097), gap(1.48, 0.097), &[], &[], &[]);
         assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
         assert!(!c.trusted);
     }
 
     #[test]
     fn a_fall_to_the_floor_is_trusted() {
-        let c = conclude(gap(1.5, 0.1), gap(0.11, 0.1), &[step(1.5, 0.11)], &[]);
+        let c = conclude(gap(1.5, 0.1), gap(0.11, 0.1), &[step(1.5, 0.11)], &[], &[]);
         assert!(c.verdict.contains("fell"), "{}", c.verdict);
         assert!(!c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
         assert!(c.trusted, "{:?}", c.reasons);
-        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[]);
+        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[], &[]);
         assert!(c.verdict.starts_with("No significant missing effect"));
         assert!(c.trusted);
+    }
+
+    fn channel(bearing: &str, direction: &str, gap: f64, floor: f64) -> Location {
+        Location {
+            bearing: bearing.into(),
+            direction: direction.into(),
+            share: 0.5,
+            gap,
+            floor,
+            peak_hz: 40.0,
+            resonance_hz: None,
+            trend: 0.0,
+            bands: Vec::new(),
+            summary: String::new(),
+        }
+    }
+
+    #[test]
+    fn one_channel_far_above_its_own_floor_is_unexplained_though_the_pool_is_not() {
+        // The unseen four-bearing machine's sub-base case: pooled 0.29
+        // against 0.24, the sub-base bearing's y channel 0.615 against 0.087.
+        let chans = [
+            channel("B4", "y", 0.31, 0.30),
+            channel("B3", "y", 0.615, 0.087),
+            channel("B3", "z", 0.09, 0.085),
+        ];
+        let c = conclude(gap(0.29, 0.24), gap(0.29, 0.24), &[], &[], &chans);
+        assert!(!c.trusted);
+        assert!(c.verdict.contains("bearing B3 y"), "{}", c.verdict);
+        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
+        assert_eq!(c.reasons.len(), 1, "{:?}", c.reasons);
+        // Every channel within 3× its own floor: trusted as before.
+        let chans = [channel("B3", "y", 0.2, 0.087), channel("B4", "y", 0.3, 0.3)];
+        let c = conclude(gap(0.29, 0.24), gap(0.29, 0.24), &[], &[], &chans);
+        assert!(c.trusted, "{:?}", c.reasons);
     }
 
     #[test]
@@ -313,7 +386,7 @@ mod tests {
             covariance: None,
             modal: None,
         };
-        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[fit]);
+        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[fit], &[]);
         assert!(!c.trusted);
         assert!(c.reasons[0].contains("negative mass"), "{:?}", c.reasons);
     }

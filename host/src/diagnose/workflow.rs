@@ -210,7 +210,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             after_steps.push((state.clone(), on_base.as_ref().map(|b| b.fit.clone())));
             continue;
         }
-        let (_, before) = state.gap(&prep);
+        let (before_pred, before) = state.gap(&prep);
         // What a base must beat: the library's best significant candidate
         // (refitted), or the current state when none is significant. The
         // tests' statistics are whitened differently, so the comparison is
@@ -271,7 +271,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             let mut best_base: Option<FoundationFit> = None;
             for (f, c) in fitted {
                 let could = f.score() > 0.0
-                    && before.gap > super::foundation::TRY_ABOVE_FLOOR * before.floor
+                    && before_pred.above_floor(&prep, super::foundation::TRY_ABOVE_FLOOR)
                     && f.gap.gap < before.gap
                     && c < to_beat;
                 let kind = f.kind;
@@ -419,7 +419,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         .iter()
         .filter_map(|p| as_pedestal_fit(&prep, p))
         .collect();
-    let conclusion = conclude(gap0, gap1, &steps, &physical);
+    let conclusion = conclude(gap0, gap1, &steps, &physical, &where_after);
     let unexplained = if conclusion.verdict.contains(super::trust::UNEXPLAINED) {
         super::locate::unexplained(&where_after, super::trust::AT_THE_FLOOR)
     } else {

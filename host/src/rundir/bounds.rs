@@ -24,6 +24,11 @@ pub const MAX_DAMPING: f64 = 1e16;
 /// undamped resonance.
 pub const MAX_DISPLACEMENT: f64 = 1.0;
 
+/// Phasor components above [`MAX_DISPLACEMENT`] up to this are read as a
+/// unit mix-up rather than a typo: a metre of vibration written in µm is
+/// 1e6 [m as written].
+const MAX_UNIT_MIX_UP: f64 = 1e7;
+
 /// The bound of the eight numbers of a row of the table with `columns`
 /// (measurements: displacement phasor components [m]; bearings: four
 /// stiffness [N/m] then four damping coefficients [N·s/m]), with their
@@ -60,11 +65,19 @@ pub fn check(
     };
     for (k, (&v, (bound, unit))) in values.iter().zip(bounds).enumerate() {
         if v.abs() > bound {
+            // A phasor of metres to kilometres is a number written in a
+            // smaller unit (µm, mils, mm): the commonest mix-up between a
+            // proximity probe and a pedestal pick-up's instrument.
+            let cause = if unit == "m" && v.abs() <= MAX_UNIT_MIX_UP {
+                "a unit mix-up (this column written in µm, mils or mm, where every phasor is in metres)?"
+            } else {
+                "a typo, or an overflowed export?"
+            };
             return Err(RunDirError::Csv {
                 file: path.to_path_buf(),
                 line,
                 message: format!(
-                    "column {} (`{}`): {} {unit} is beyond any machine's (at most {bound:e} {unit} is taken): a typo, or an overflowed export?",
+                    "column {} (`{}`): {} {unit} is beyond any machine's (at most {bound:e} {unit} is taken): {cause}",
                     index[k + 2] + 1,
                     columns[k + 2],
                     super::format_number(v)
@@ -111,5 +124,12 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("column 7 (`ped_y_re`)"), "{e}");
+        assert!(e.contains("overflowed export"), "{e}");
+        // Pick-ups written in µm against probes in m: named as a unit mix-up.
+        m2[4] = 1.07;
+        let e = check(p, 9, &MEASUREMENT_COLUMNS, &index, &m2)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("unit mix-up") && e.contains("µm"), "{e}");
     }
 }
