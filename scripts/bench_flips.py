@@ -24,7 +24,12 @@ turn (a hit: every flipped speed listed for that bearing, no flipped speed
 listed for another; extra speeds listed are counted apart, since the
 outlier and lack-of-fit tests list these machines' model error).
 
-Sections: BENCH_SECTIONS=clean,detect,other (default all; a CASE_FILTER
+Every bearing flipped (the machine's keyphasor): three random speeds of the
+three-bearing machine with every channel of every bearing negated (made
+here from trust_data.py's noisy run); a hit when every bearing lists
+exactly those speeds, with the note that every bearing lists them.
+
+Sections: BENCH_SECTIONS=clean,detect,other,every (default all; a CASE_FILTER
 runs the clean cases only).
 
 Test data: `plinth simulate` (exact, 12 digits) and scripts/trust_data.py
@@ -33,6 +38,7 @@ Test data: `plinth simulate` (exact, 12 digits) and scripts/trust_data.py
 usage: bench_flips.py PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
 """
 import concurrent.futures
+import csv
 import json
 import math
 import os
@@ -46,7 +52,7 @@ B = sys.argv[1]
 N = int(sys.argv[2]) if len(sys.argv) > 2 else 100
 ONLY = sys.argv[3] if len(sys.argv) > 3 else ""
 JOBS = int(os.environ.get("BENCH_JOBS", os.cpu_count() or 1))
-SECTIONS = os.environ.get("BENCH_SECTIONS", "clean,detect,other").split(",")
+SECTIONS = os.environ.get("BENCH_SECTIONS", "clean,detect,other,every").split(",")
 DATA = os.path.join(ROOT, "scripts", "trust_data.py")
 PAPER = os.path.join(ROOT, "examples", "feng-hahn-1997.toml")
 THREE = os.path.join(ROOT, "tests", "machines", "three-bearing-tabulated.toml")
@@ -240,6 +246,51 @@ def other_machines():
                   f" ({extras} runs list other speeds too)", flush=True)
 
 
+def negate_every_bearing(run, speeds):
+    """Negates every phasor of every bearing of `run` at `speeds` [Hz]."""
+    path = os.path.join(run, "measurements.csv")
+    with open(path) as fh:
+        rows = list(csv.DictReader(fh))
+    for r in rows:
+        if float(r["speed_hz"]) in speeds:
+            for k in r:
+                if k.endswith("_re") or k.endswith("_im"):
+                    r[k] = repr(-float(r[k]))
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0].keys()))
+        w.writeheader()
+        w.writerows(rows)
+
+
+def every_bearing():
+    print("\nEVERY BEARING FLIPPED (three-bearing, 1 % noise, 3 random speeds):"
+          " listed exactly at every bearing")
+    exact = os.path.join(W, "exact-three-every")
+    sim(THREE, exact, "--digits", "12")
+    n = max(N // 5, 20)
+
+    def one(seed):
+        speeds = sorted(random.Random(seed).sample(GRID[8:76], 3))
+        out = os.path.join(W, f"every-{seed}")
+        data(exact, out, "--noise", "0.01", "--seed", str(seed))
+        negate_every_bearing(out, speeds)
+        ident = identify(out)
+        subprocess.run(["rm", "-rf", out], check=True)
+        got = {p["bearing"]: listed(ident, p["bearing"]) for p in ident["pedestals"]}
+        noted = all(any("every bearing lists" in w["message"] for w in p["warnings"])
+                    for p in ident["pedestals"])
+        wrong = any(s not in speeds for g in got.values() for s in g)
+        return seed, speeds, all(g == speeds for g in got.values()) and noted, wrong, got
+
+    with concurrent.futures.ThreadPoolExecutor(JOBS) as pool:
+        results = list(pool.map(one, range(1, n + 1)))
+    for seed, speeds, hit, _, got in results:
+        if not hit:
+            print(f"    missed: seed {seed}: flipped {speeds}, listed {got}", flush=True)
+    print(f"  listed exactly at every bearing, noted: {sum(r[2] for r in results)}/{n};"
+          f" runs listing a speed not flipped: {sum(r[3] for r in results)}", flush=True)
+
+
 if __name__ == "__main__":
     if "clean" in SECTIONS:
         false_alarms()
@@ -247,4 +298,6 @@ if __name__ == "__main__":
         detections()
     if not ONLY and "other" in SECTIONS:
         other_machines()
+    if not ONLY and "every" in SECTIONS:
+        every_bearing()
     subprocess.run(["rm", "-rf", W], check=True)

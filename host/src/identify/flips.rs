@@ -6,6 +6,12 @@
 //! added to that bearing's `outlier_speeds_hz` with a `keyphasor_flip`
 //! warning that says which evidence named it. The fit is unchanged: a
 //! negated (rel, ped) pair fits eq. 3 exactly as the pair negated back.
+//!
+//! Two hypotheses, each named with its evidence: one bearing's channels
+//! flipped (its own acquisition's keyphasor: found in speed or against the
+//! other bearings) or every bearing's at once (the machine's keyphasor:
+//! invisible across bearings, found in speed at each bearing). A speed
+//! every bearing lists gets a note saying it may be the latter.
 
 use super::data::BearingObservations;
 use super::{Identification, Warning, WarningKind};
@@ -44,6 +50,28 @@ pub fn mark_cross_bearing_flips(
     let observations: Vec<&[Observation]> = usable.iter().map(|(_, o)| *o).collect();
     let listed_refs: Vec<&[f64]> = listed.iter().map(Vec::as_slice).collect();
     let found = robust::cross_bearing_flips(&observations, &listed_refs);
+    // Speeds every bearing listed before this test.
+    let everywhere: Vec<f64> = listed[0]
+        .iter()
+        .copied()
+        .filter(|s| listed.iter().all(|l| l.contains(s)))
+        .collect();
+    if !everywhere.is_empty() {
+        let list: Vec<String> = everywhere.iter().map(|s| format!("{s}")).collect();
+        for p in identification
+            .pedestals
+            .iter_mut()
+            .filter(|p| p.has_warning(WarningKind::KeyphasorFlip))
+        {
+            p.warnings.push(Warning {
+                kind: WarningKind::KeyphasorFlip,
+                message: format!(
+                    "every bearing lists {} Hz (flipped against its neighbouring speeds, or an outlier): where every bearing flipped, the fault is common to all channels, the machine's keyphasor itself triggering half a revolution off",
+                    list.join(", ")
+                ),
+            });
+        }
+    }
     for ((name, _), speeds) in usable.iter().zip(found) {
         if speeds.is_empty() {
             continue;
