@@ -164,6 +164,35 @@ fn three_random_flipped_speeds_are_listed_exactly() {
 }
 
 #[test]
+fn every_bearing_flipped_is_listed_at_every_bearing_with_the_note() {
+    // The machine's keyphasor flips every channel of every bearing: the
+    // cross-bearing test is blind to it (a subspace holds −y with y), the
+    // test in speed finds it at each bearing where the speed steps follow
+    // the response (away from the modes at 35-50 Hz; at random speeds
+    // scripts/bench-flips.sh, section `every`, measured 13/40), and the
+    // speeds every bearing lists get the note naming the machine's keyphasor.
+    let m = machine("tests/machines/three-bearing-tabulated.toml");
+    let mut r = run(&m, Some((0.01, 5)), Some(6));
+    let flipped = [120.0, 150.0];
+    for bearing in ["drive", "mid", "outboard"] {
+        flip(&mut r, bearing, &flipped);
+    }
+    let id = identify(&r);
+    for p in &id.pedestals {
+        assert_eq!(listed(&id, &p.bearing), flipped, "{}", p.bearing);
+        assert!(
+            p.warnings
+                .iter()
+                .any(|w| w.kind == WarningKind::KeyphasorFlip
+                    && w.message.contains("every bearing lists 120, 150 Hz")),
+            "{}: {:?}",
+            p.bearing,
+            p.warnings
+        );
+    }
+}
+
+#[test]
 fn an_outlier_speed_is_left_out_and_listed() {
     let m = machine("tests/machines/three-bearing-tabulated.toml");
     let clean = run(&m, Some((0.01, 4)), Some(6));
