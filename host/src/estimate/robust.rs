@@ -27,7 +27,10 @@
 //! residual that sees it is each phasor against its neighbouring speeds
 //! (the response is smooth in speed): the reading is far from the quadratic
 //! through its neighbours by more than the noise allows, and negating it
-//! makes the run smooth again.
+//! makes the run smooth again. With three bearings or more, the readings
+//! of the other bearings at the same speed judge it too
+//! ([`cross_bearing_flips`]: every bearing responds through the same
+//! machine modes), also next to a resonance the speed steps do not resolve.
 //!
 //! **Standard errors from the residuals** ([`sandwich_std_errs`]). The
 //! fit's standard errors assume the noise model's pattern over speed; when
@@ -45,8 +48,10 @@ use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
+mod cross;
 mod flips;
 mod rational;
+pub use cross::{cross_bearing_flips, CROSS_MIN_BEARINGS, CROSS_SIDE};
 pub use flips::{
     jump_speeds, keyphasor_flips, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_NEIGHBOURS, FLIP_RATIO,
     FLIP_SIDE, FLIP_WINDOW, MAX_TRIMMED, TRIM_FACTOR,

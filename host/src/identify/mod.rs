@@ -21,6 +21,7 @@ pub mod cli;
 pub mod convention;
 pub mod data;
 pub mod estimator;
+pub mod flips;
 pub mod lsq;
 pub mod misfit;
 pub mod model;
@@ -483,7 +484,8 @@ pub fn observations(
 /// (default: maximum likelihood with the noise model of
 /// [`crate::estimate::noise`]); every pedestal is checked for the usual
 /// convention mistakes ([`convention`]: eight refits of the run), the run's
-/// dampings judged as one family ([`physical::recheck_run`]), each bearing's
+/// dampings judged as one family ([`physical::recheck_run`]), keyphasor
+/// flips judged against the other bearings ([`flips`]), each bearing's
 /// lack of fit judged ([`trust`]) and the values checked for plausibility
 /// ([`plausibility`]).
 pub fn identify_run(run: &RunDir, options: &Options) -> Result<Identification, IdentifyError> {
@@ -505,6 +507,7 @@ pub fn identify_prepared(
     let noise = &prepared.noise;
     let mut identification =
         fit_observed(&prepared.bearings, noise, options, estimator::Checks::All)?;
+    flips::mark_cross_bearing_flips(&prepared.bearings, &mut identification);
     let findings = convention::diagnose(run, &identification, noise, options);
     convention::mark(&mut identification, &findings);
     crate::present::modal::attach(&mut identification);

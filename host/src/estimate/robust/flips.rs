@@ -166,7 +166,7 @@ pub const MAX_TRIMMED: usize = 2;
 /// Per channel, one over the run's median |q−p|² against the quadratic
 /// through the neighbouring speeds, square-rooted [1/m]: the weights of the
 /// channels in the local fits (their sizes differ by orders of magnitude).
-fn channel_weights(s: &[Reading]) -> [f64; 4] {
+pub(super) fn channel_weights(s: &[Reading]) -> [f64; 4] {
     let n = s.len();
     let negated = vec![false; n];
     let near: Vec<Vec<usize>> = (0..n).map(|i| neighbours(n, i)).collect();
@@ -315,7 +315,7 @@ pub fn jump_speeds(obs: &[Observation]) -> Vec<f64> {
 }
 
 /// The finite readings of `obs`, in speed order.
-fn readings(obs: &[Observation]) -> Vec<Reading> {
+pub(super) fn readings(obs: &[Observation]) -> Vec<Reading> {
     let mut s: Vec<Reading> = obs
         .iter()
         .map(|o| Reading {
@@ -394,12 +394,14 @@ fn neighbours(n: usize, i: usize) -> Vec<usize> {
 /// errors of the speeds around it [-].
 pub const FLIP_RATIO: f64 = 0.5;
 
-/// One speed of a bearing for [`keyphasor_flips`].
+/// One speed of a bearing for [`keyphasor_flips`] and
+/// [`super::cross_bearing_flips`].
 #[derive(Clone, Copy, Debug)]
-struct Reading {
-    speed_hz: f64,
+pub(super) struct Reading {
+    /// The speed [Hz].
+    pub(super) speed_hz: f64,
     /// rel y, rel z, ped y, ped z [m].
-    q: [Complex<f64>; 4],
+    pub(super) q: [Complex<f64>; 4],
 }
 
 fn chi2_8() -> ChiSquared {

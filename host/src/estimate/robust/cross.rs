@@ -1,0 +1,380 @@
+//! Keyphasor flips against the other bearings at the same speed
+//! ([`cross_bearing_flips`]). Every bearing responds through the same
+//! machine modes: at a speed the phasors of all bearings (4 per bearing)
+//! form one vector y = Σ_m φ_m·r_m(Ω), the mode shapes φ_m fixed, so over a
+//! few neighbouring speeds these vectors lie in a subspace of few
+//! dimensions (measured on the three-bearing test machine, 12 channels,
+//! 11-speed windows: 3-5 dimensions above 1 % noise, also across its
+//! pedestal resonances at 35-50 Hz, where the speed steps resolve nothing).
+//! Negating one bearing's four channels moves the vector out of that
+//! subspace; negating it back moves it in. This needs no smoothness in
+//! speed, so it finds the flips next to a resonance that the local model
+//! in speed ([`super::keyphasor_flips`]) cannot judge; it is blind to a
+//! flip of every bearing at once (a subspace holds −y with y) and, with
+//! two bearings, cannot tell which one flipped (negating either is the
+//! same up to a common sign): both are left to the test in speed.
+
+use super::flips::{
+    channel_weights, readings, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_RATIO, FLIP_WINDOW,
+    SCREEN_QUANTILE,
+};
+use super::{window_medians, Observation, OUTLIER_FAMILY_RATE};
+use nalgebra::DMatrix;
+use num_complex::Complex;
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+/// Fewest bearings the test judges [-] (with two, which one flipped is
+/// undecidable: module docs).
+pub const CROSS_MIN_BEARINGS: usize = 3;
+
+/// Fewest window speeds on each side of a tested speed [-].
+pub const CROSS_SIDE: usize = 6;
+
+/// Speeds on each side of a screened speed left out of its window [-]:
+/// every other member of a block of up to [`FLIP_BLOCK`] flipped speeds
+/// that holds it (adjacent flips must not explain each other).
+const SCREEN_GAP: usize = FLIP_BLOCK - 1;
+
+/// Speeds [Hz] per bearing (in the order of `bearings`, each bearing's
+/// observations in any order, phasors [m]) at which every channel of that
+/// bearing alone looks negated against the other bearings at the same
+/// speed. Speeds in `listed` (per bearing, [Hz]: already named, by the
+/// outlier test or the test in speed) are left out of everything, for
+/// every bearing; so are speeds some bearing lacks.
+///
+/// Each channel is weighted by one over its noise-and-interpolation scale
+/// (`channel_weights` of [`super::flips`]). At each speed the weighted
+/// vector y (C = 4·B channels) is compared with the subspace spanned by
+/// the D = 2·B leading eigenvectors of Σ y_j y_jᴴ over the window of up to
+/// max([`CROSS_SIDE`], D) speeds on each side (the speeds within
+/// [`FLIP_BLOCK`] − 1 left out): r = |y − UUᴴy|², and its leverage
+/// ℓ = Σ_k |u_kᴴy|²/λ_k (how much of y lies along directions the window
+/// barely shows; the subspace's estimation error adds about ℓ times the
+/// noise to r). The scale of r is the median over [`FLIP_WINDOW`] speeds on
+/// each side, so that r/s is about χ²(2(C − D)) for a good reading; the
+/// speeds beyond its [`SCREEN_QUANTILE`] are candidates. The hypothesis
+/// "bearing b's channels at the candidate speeds a..b (up to
+/// [`FLIP_BLOCK`]) are negated" is tested against the subspace of the
+/// window around the block (the block left out). It is named when
+/// - Σ r/s as read is beyond the χ²(2(C − D)·L) quantile at
+///   [`OUTLIER_FAMILY_RATE`]/n (Bonferroni over the n speeds),
+/// - negated, each speed's studentised r/((1 + ℓ)·s′) (s′ the median scale
+///   of the studentised values) is within the χ²(2(C − D)) quantile
+///   [`CONSISTENT_QUANTILE`], the negation lowers Σ r/s below
+///   [`FLIP_RATIO`] of what it was, and
+/// - at every speed of the block the negated reading is the more likely
+///   one: r/((1 + ℓ)·s′) + 2(C − D)·ln(1 + ℓ) (−2 ln of its Gaussian
+///   likelihood with the variance inflated by the leverage) is lower
+///   negated than as read;
+///
+/// the block and bearing with the largest gain of that likelihood is
+/// negated first, the subspaces and scales are measured again, and so on.
+/// A speed negated for one bearing is not tested again.
+pub fn cross_bearing_flips(bearings: &[&[Observation]], listed: &[&[f64]]) -> Vec<Vec<f64>> {
+    let nb = bearings.len();
+    let mut found = vec![Vec::new(); nb];
+    if nb < CROSS_MIN_BEARINGS || listed.len() != nb {
+        return found;
+    }
+    let per_bearing: Vec<_> = bearings.iter().map(|o| readings(o)).collect();
+    let weights: Vec<[f64; 4]> = per_bearing.iter().map(|s| channel_weights(s)).collect();
+    // The speeds every bearing has and none lists, with each bearing's
+    // weighted phasors there.
+    let is_listed = |f: f64| listed.iter().any(|l| l.contains(&f));
+    let mut speeds = Vec::new();
+    let mut ys: Vec<Vec<Complex<f64>>> = Vec::new();
+    for r in &per_bearing[0] {
+        if is_listed(r.speed_hz) {
+            continue;
+        }
+        let mut y = Vec::with_capacity(4 * nb);
+        for (s, w) in per_bearing.iter().zip(&weights) {
+            let Ok(k) = s.binary_search_by(|x| x.speed_hz.total_cmp(&r.speed_hz)) else {
+                break;
+            };
+            y.extend((0..4).map(|c| s[k].q[c] * w[c]));
+        }
+        if y.len() == 4 * nb {
+            speeds.push(r.speed_hz);
+            ys.push(y);
+        }
+    }
+    let dims = 2 * nb;
+    let side = CROSS_SIDE.max(dims);
+    let n = ys.len();
+    if n < 2 * side + 2 * SCREEN_GAP + 1 {
+        return found;
+    }
+    let dof = (2 * (4 * nb - dims)) as f64;
+    let Ok(chi2) = ChiSquared::new(dof) else {
+        return found;
+    };
+    let null_median = chi2.inverse_cdf(0.5);
+    let screen = chi2.inverse_cdf(SCREEN_QUANTILE);
+    let consistent = chi2.inverse_cdf(CONSISTENT_QUANTILE);
+    let block_limit: Vec<f64> = (0..=FLIP_BLOCK)
+        .map(|l| {
+            ChiSquared::new(dof * l.max(1) as f64).map_or(f64::INFINITY, |d| {
+                d.inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / n as f64)
+            })
+        })
+        .collect();
+    // Which bearing is negated at each speed (at most one).
+    let mut negated: Vec<Option<usize>> = vec![None; n];
+    for _ in 0..n / 4 {
+        let y: Vec<Vec<Complex<f64>>> = (0..n).map(|i| signed(&ys[i], negated[i])).collect();
+        // Each speed against the window around it, its neighbours within
+        // SCREEN_GAP left out.
+        let screened: Vec<Option<(f64, f64)>> = (0..n)
+            .map(|i| {
+                let gap = i.saturating_sub(SCREEN_GAP)..(i + SCREEN_GAP + 1).min(n);
+                Subspace::of(&y, &window(n, gap, side), dims).map(|u| u.residual(&y[i]))
+            })
+            .collect();
+        let plain: Vec<f64> = screened
+            .iter()
+            .map(|r| r.map_or(f64::NAN, |r| r.0))
+            .collect();
+        let studentised: Vec<f64> = screened
+            .iter()
+            .map(|r| r.map_or(f64::NAN, |(r, l)| r / (1.0 + l)))
+            .collect();
+        let scale = scales(&plain, null_median);
+        let scale_s = scales(&studentised, null_median);
+        let candidate: Vec<bool> = (0..n)
+            .map(|i| negated[i].is_none() && plain[i] / scale[i] > screen)
+            .collect();
+        // −2 ln L of a reading (r, ℓ) at speed j, up to a constant.
+        let nll = |(r, l): (f64, f64), j: usize| r / ((1.0 + l) * scale_s[j]) + dof * l.ln_1p();
+        let mut best: Option<(usize, std::ops::Range<usize>, f64)> = None;
+        for start in 0..n {
+            for end in start + 1..=(start + FLIP_BLOCK).min(n) {
+                if !candidate[end - 1] {
+                    break;
+                }
+                let block = start..end;
+                let Some(u) = Subspace::of(&y, &window(n, block.clone(), side), dims) else {
+                    continue;
+                };
+                for b in 0..nb {
+                    let (mut before, mut after, mut gain) = (0.0, 0.0, 0.0);
+                    let mut agrees = true;
+                    for j in block.clone() {
+                        let read = u.residual(&y[j]);
+                        let flipped = u.residual(&signed(&y[j], Some(b)));
+                        before += read.0 / scale[j];
+                        after += flipped.0 / scale[j];
+                        let (l_read, l_flipped) = (nll(read, j), nll(flipped, j));
+                        agrees &= flipped.0 / ((1.0 + flipped.1) * scale_s[j]) <= consistent
+                            && l_flipped < l_read;
+                        gain += l_read - l_flipped;
+                    }
+                    let named = before > block_limit[block.len()]
+                        && agrees
+                        && after < FLIP_RATIO * before
+                        && gain.is_finite();
+                    if named && best.as_ref().is_none_or(|(_, _, g)| gain > *g) {
+                        best = Some((b, block.clone(), gain));
+                    }
+                }
+            }
+        }
+        match best {
+            Some((b, block, _)) => negated[block].fill(Some(b)),
+            None => break,
+        }
+    }
+    for (i, b) in negated.iter().enumerate() {
+        if let Some(b) = b {
+            found[*b].push(speeds[i]);
+        }
+    }
+    found
+}
+
+/// `y` with the four channels of bearing `b` negated (none when `None`).
+fn signed(y: &[Complex<f64>], b: Option<usize>) -> Vec<Complex<f64>> {
+    let mut out = y.to_vec();
+    if let Some(b) = b {
+        out[4 * b..4 * b + 4].iter_mut().for_each(|z| *z = -*z);
+    }
+    out
+}
+
+/// Per speed, the median of `v` over [`FLIP_WINDOW`] speeds on each side
+/// over `null_median` [units of `v`], never below the smallest positive
+/// number.
+fn scales(v: &[f64], null_median: f64) -> Vec<f64> {
+    window_medians(v, FLIP_WINDOW)
+        .into_iter()
+        .map(|m| (m / null_median).max(f64::MIN_POSITIVE))
+        .collect()
+}
+
+/// The indices of `2·side` speeds of `n` around the speeds `gap` (fewer
+/// when `n` is short; more on one side at the run's ends), `gap` left out.
+fn window(n: usize, gap: std::ops::Range<usize>, side: usize) -> Vec<usize> {
+    let (mut lo, mut hi) = (gap.start.saturating_sub(side), (gap.end + side).min(n));
+    while hi - lo - gap.len() < 2 * side && (lo > 0 || hi < n) {
+        if lo > 0 && gap.start - lo <= hi - gap.end || hi == n {
+            lo -= 1;
+        } else {
+            hi += 1;
+        }
+    }
+    (lo..hi).filter(|j| !gap.contains(j)).collect()
+}
+
+/// The leading eigenvectors of a window's Σ y yᴴ and their eigenvalues.
+struct Subspace {
+    /// Unit eigenvectors, one per column.
+    vectors: DMatrix<Complex<f64>>,
+    /// Their eigenvalues (positive).
+    values: Vec<f64>,
+}
+
+impl Subspace {
+    /// The `dims` leading eigenpairs of Σ_{j ∈ window} y_j y_jᴴ (only those
+    /// with a positive eigenvalue); `None` when the window is empty or the
+    /// decomposition is not finite.
+    fn of(y: &[Vec<Complex<f64>>], window: &[usize], dims: usize) -> Option<Self> {
+        let c = y.first()?.len();
+        if window.is_empty() {
+            return None;
+        }
+        let mut gram = DMatrix::<Complex<f64>>::zeros(c, c);
+        for &j in window {
+            for r in 0..c {
+                let a = y[j][r];
+                for k in 0..c {
+                    gram[(r, k)] += a * y[j][k].conj();
+                }
+            }
+        }
+        let eigen = gram.symmetric_eigen();
+        let mut order: Vec<usize> = (0..c).collect();
+        order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
+        let keep: Vec<usize> = order
+            .into_iter()
+            .take(dims)
+            .filter(|&k| eigen.eigenvalues[k] > 0.0 && eigen.eigenvalues[k].is_finite())
+            .collect();
+        let vectors = DMatrix::from_fn(c, keep.len(), |r, k| eigen.eigenvectors[(r, keep[k])]);
+        let values: Vec<f64> = keep.iter().map(|&k| eigen.eigenvalues[k]).collect();
+        vectors
+            .iter()
+            .all(|z| z.re.is_finite() && z.im.is_finite())
+            .then_some(Subspace { vectors, values })
+    }
+
+    /// (|y − UUᴴy|², Σ_k |u_kᴴy|²/λ_k) of `y` [-].
+    fn residual(&self, y: &[Complex<f64>]) -> (f64, f64) {
+        let mut rest = y.to_vec();
+        let mut leverage = 0.0;
+        for (k, &value) in self.values.iter().enumerate() {
+            let u = self.vectors.column(k);
+            let a: Complex<f64> = u.iter().zip(y).map(|(u, y)| u.conj() * y).sum();
+            for (r, u) in rest.iter_mut().zip(u.iter()) {
+                *r -= a * u;
+            }
+            leverage += a.norm_sqr() / value;
+        }
+        (rest.iter().map(|z| z.norm_sqr()).sum(), leverage)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three bearings over 80 speeds, 5-202.5 Hz, whose twelve phasors are
+    /// four sharp modes (0.5 % damping, two between 35 and 47 Hz, where
+    /// the 2.5 Hz steps resolve nothing) with fixed complex shapes, plus
+    /// complex noise of sd `noise` × each channel's RMS; every channel of
+    /// bearing `flip.0` negated at the speed indices `flip.1`.
+    fn machine(flip: (usize, &[usize]), noise: f64, seed: u64) -> Vec<Vec<Observation>> {
+        use rand::{rngs::StdRng, Rng, SeedableRng};
+        use rand_distr::StandardNormal;
+        let mut rng = StdRng::seed_from_u64(seed);
+        let modes = [36.3, 41.1, 70.0, 110.0];
+        let shape = |m: usize, ch: usize| -> Complex<f64> {
+            let k = (7 * m + 3 * ch) as f64;
+            Complex::from_polar(1.0 + 0.5 * (k * 0.37).sin(), k * 1.3)
+        };
+        let clean: Vec<[Complex<f64>; 12]> = (0..80)
+            .map(|i| {
+                let f = 5.0 + 2.5 * i as f64;
+                std::array::from_fn(|ch| {
+                    modes
+                        .iter()
+                        .enumerate()
+                        .map(|(m, &f0)| {
+                            let r = f / f0;
+                            shape(m, ch) * (1e-7 * r * r) / Complex::new(1.0 - r * r, 0.01 * r)
+                        })
+                        .sum()
+                })
+            })
+            .collect();
+        let rms: Vec<f64> = (0..12)
+            .map(|ch| (clean.iter().map(|q| q[ch].norm_sqr()).sum::<f64>() / 80.0).sqrt())
+            .collect();
+        (0..3)
+            .map(|b| {
+                clean
+                    .iter()
+                    .enumerate()
+                    .map(|(i, q)| {
+                        let mut z: [Complex<f64>; 4] = std::array::from_fn(|c| {
+                            let sd = noise * rms[4 * b + c] / 2f64.sqrt();
+                            q[4 * b + c]
+                                + Complex::new(
+                                    rng.sample::<f64, _>(StandardNormal),
+                                    rng.sample::<f64, _>(StandardNormal),
+                                ) * sd
+                        });
+                        if flip.0 == b && flip.1.contains(&i) {
+                            z.iter_mut().for_each(|v| *v = -*v);
+                        }
+                        Observation {
+                            speed_hz: 5.0 + 2.5 * i as f64,
+                            rel: [z[0], z[1]],
+                            ped: [z[2], z[3]],
+                            kstar: [[Complex::new(1e7, 0.0), Complex::new(0.0, 0.0)]; 2],
+                            var: [1e-20; 8],
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn run(obs: &[Vec<Observation>], listed: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        let refs: Vec<&[Observation]> = obs.iter().map(|o| o.as_slice()).collect();
+        let l: Vec<&[f64]> = listed.iter().map(|l| l.as_slice()).collect();
+        cross_bearing_flips(&refs, &l)
+    }
+
+    #[test]
+    fn flips_beside_sharp_modes_are_found_and_nothing_else() {
+        let none = vec![Vec::new(); 3];
+        for seed in 0..10 {
+            let clean = run(&machine((1, &[]), 0.01, seed), &none);
+            assert!(clean.iter().all(|f| f.is_empty()), "{seed}: {clean:?}");
+        }
+        // Two adjacent flips between the two close modes (indices 13, 14:
+        // 37.5 and 40 Hz) and one alone at 150 Hz.
+        let found = run(&machine((1, &[13, 14, 58]), 0.01, 3), &none);
+        assert_eq!(found, vec![vec![], vec![37.5, 40.0, 150.0], vec![]]);
+        // A listed speed is left out for every bearing.
+        let listed = vec![vec![], vec![150.0], vec![]];
+        let found = run(&machine((1, &[13, 14, 58]), 0.01, 3), &listed);
+        assert_eq!(found, vec![vec![], vec![37.5, 40.0], vec![]]);
+        // Two bearings: not judged.
+        let two = machine((1, &[13]), 0.01, 3);
+        let refs: Vec<&[Observation]> = two[..2].iter().map(|o| o.as_slice()).collect();
+        assert!(cross_bearing_flips(&refs, &[&[], &[]])
+            .iter()
+            .all(|f| f.is_empty()));
+    }
+}
