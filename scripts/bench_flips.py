@@ -33,124 +33,71 @@ Sections: BENCH_SECTIONS=clean,detect,other,every (default all; a CASE_FILTER
 runs the clean cases only).
 
 Test data: `plinth simulate` (exact, 12 digits) and scripts/trust_data.py
-(noise, digits, columns, --flip), independent of the estimator.
+(noise, digits, columns, --flip), independent of the estimator. The clean
+cases, the runners and the bound are scripts/bench_common.py's (one
+definition with bench_trust.py).
 
 usage: bench_flips.py PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
 """
-import concurrent.futures
 import csv
-import json
-import math
 import os
 import random
 import subprocess
 import sys
-import tempfile
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-B = sys.argv[1]
-N = int(sys.argv[2]) if len(sys.argv) > 2 else 100
-ONLY = sys.argv[3] if len(sys.argv) > 3 else ""
-JOBS = int(os.environ.get("BENCH_JOBS", os.cpu_count() or 1))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import bench_common as bc  # noqa: E402
+
 SECTIONS = os.environ.get("BENCH_SECTIONS", "clean,detect,other,every").split(",")
-DATA = os.path.join(ROOT, "scripts", "trust_data.py")
-PAPER = os.path.join(ROOT, "examples", "feng-hahn-1997.toml")
-THREE = os.path.join(ROOT, "tests", "machines", "three-bearing-tabulated.toml")
-W = tempfile.mkdtemp(prefix="bench-flips-")
-SPEEDS = "5:200:2.5"
-GRID = [5 + 2.5 * i for i in range(79)]
-
-
-def sim(machine, out, *args, speeds=SPEEDS):
-    subprocess.run(["rm", "-rf", out], check=True)
-    subprocess.run([B, "simulate", machine, "--out", out, "--speeds", speeds, *args],
-                   check=True, stdout=subprocess.DEVNULL)
-
-
-def data(src, out, *args):
-    subprocess.run(["rm", "-rf", out], check=True)
-    subprocess.run([sys.executable, DATA, src, out, *args], check=True)
-
-
-def identify(run):
-    p = subprocess.run([B, "identify", run, "--json"], capture_output=True, text=True)
-    if p.returncode not in (0, 2):
-        raise RuntimeError(f"identify {run}: exit {p.returncode}: {p.stderr}")
-    return json.loads(p.stdout)
-
-
-def listed(ident, bearing):
-    return ident["noise"].get(bearing, {}).get("outlier_speeds_hz", [])
+GRID = bc.GRID
+THREE = bc.THREE
+ROOT = bc.ROOT
 
 
 def flip_named(ident):
+    """The bearings identify warns of a keyphasor flip at."""
     return [p["bearing"] for p in ident["pedestals"]
             if any(w["kind"] == "keyphasor_flip" for w in p["warnings"])]
 
 
-def upper95(k, n):
-    """One-sided 95 % Clopper-Pearson upper bound of a rate seen k times in n."""
-    if n == 0 or k >= n:
-        return 1.0
-    lo, hi = k / n, 1.0
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        cdf = sum(math.comb(n, i) * mid ** i * (1 - mid) ** (n - i) for i in range(k + 1))
-        lo, hi = (mid, hi) if cdf > 0.05 else (lo, mid)
-    return hi
-
-
-def false_alarms():
+def false_alarms(pl, n, only):
     print("FALSE ALARMS: runs with a keyphasor_flip warning on clean data")
     print(f"{'case':36s} {'runs':>5s} {'flagged':>7s} {'%':>6s} {'≤95%up':>7s}")
     total = flagged_total = 0
-    for mname, machine in (("paper-undamped", PAPER), ("three-bearing", THREE)):
-        exact = os.path.join(W, f"exact-{mname}")
-        sim(machine, exact, "--digits", "12")
-        cases = [(f"{mname} digits {d}", ("sim", "--digits", d)) for d in ("2", "3", "12")]
-        cases += [
-            (f"{mname} noise 0.3 %", ("data", "--noise", "0.003")),
-            (f"{mname} noise 1 %", ("data", "--noise", "0.01")),
-            (f"{mname} noise 3 %", ("data", "--noise", "0.03")),
-            (f"{mname} hetero 2 % of |phasor|", ("data", "--relative-noise", "0.02")),
-            (f"{mname} noise 1 % + columns", ("data", "--noise", "0.01", "--columns")),
-            (f"{mname} noise 1 % at 3 digits", ("data", "--noise", "0.01", "--digits", "3")),
-        ]
-        for case, how in cases:
-            if ONLY not in case:
+    for mname, machine in bc.CLEAN_MACHINES:
+        exact = pl.path(f"exact-{mname}")
+        pl.sim(machine, exact, "--digits", "12")
+        for case, runs, how in bc.clean_cases(mname, n):
+            if only not in case:
                 continue
 
             def one(seed, how=how, machine=machine, exact=exact):
-                out = os.path.join(W, f"clean-{seed}")
-                if how[0] == "sim":
-                    # Digits alone are deterministic: each run shifts the grid.
-                    sim(machine, out, *how[1:], speeds=f"{5 + 0.037 * (seed - 1):.3f}:200:2.5")
-                else:
-                    data(exact, out, *how[1:], "--seed", str(seed))
-                ident = identify(out)
+                out = pl.path(f"clean-{seed}")
+                bc.clean_run(pl, machine, exact, how, seed, out)
+                ident, _ = pl.identify(out)
                 subprocess.run(["rm", "-rf", out], check=True)
                 return seed, flip_named(ident)
 
-            with concurrent.futures.ThreadPoolExecutor(JOBS) as pool:
-                results = list(pool.map(one, range(1, N + 1)))
+            results = bc.parallel(one, range(1, runs + 1))
             k = 0
             for seed, named in results:
                 if named:
                     k += 1
                     print(f"    flagged: {case} seed {seed}: {named}", flush=True)
-            print(f"{case:36s} {N:5d} {k:7d} {100.0 * k / N:6.2f} {100.0 * upper95(k, N):7.2f}",
-                  flush=True)
-            total += N
+            print(f"{case:36s} {runs:5d} {k:7d} {100.0 * k / runs:6.2f}"
+                  f" {100.0 * bc.upper95(k, runs):7.2f}", flush=True)
+            total += runs
             flagged_total += k
     if total:
         print(f"{'ALL CLEAN RUNS':36s} {total:5d} {flagged_total:7d}"
-              f" {100.0 * flagged_total / total:6.2f} {100.0 * upper95(flagged_total, total):7.2f}")
+              f" {100.0 * flagged_total / total:6.2f}"
+              f" {100.0 * bc.upper95(flagged_total, total):7.2f}")
 
 
-def detections():
+def detections(pl, N):
     print("\nDETECTIONS (three-bearing, `mid`, 1 % noise): flipped speeds listed exactly")
-    exact = os.path.join(W, "exact-three")
-    sim(THREE, exact, "--digits", "12")
+    exact = pl.path("exact-three")
+    pl.sim(THREE, exact, "--digits", "12")
     n = max(N // 5, 20)
 
     def speeds_for(kind, seed):
@@ -168,18 +115,17 @@ def detections():
     for kind in ("3 random", "2 adjacent", "3 adjacent", "40/42.5 Hz"):
         def one(seed, kind=kind):
             speeds = speeds_for(kind, seed)
-            out = os.path.join(W, f"flip-{seed}")
-            data(exact, out, "--noise", "0.01", "--seed", str(seed),
+            out = pl.path(f"flip-{seed}")
+            bc.data(exact, out, "--noise", "0.01", "--seed", str(seed),
                  "--flip", "mid:" + ",".join(f"{s:g}" for s in speeds))
-            ident = identify(out)
+            ident, _ = pl.identify(out)
             subprocess.run(["rm", "-rf", out], check=True)
-            ok = sorted(listed(ident, "mid")) == speeds
-            ok &= all(not listed(ident, p["bearing"]) for p in ident["pedestals"]
+            ok = sorted(bc.listed(ident, "mid")) == speeds
+            ok &= all(not bc.listed(ident, p["bearing"]) for p in ident["pedestals"]
                       if p["bearing"] != "mid")
-            return seed, speeds, ok, listed(ident, "mid")
+            return seed, speeds, ok, bc.listed(ident, "mid")
 
-        with concurrent.futures.ThreadPoolExecutor(JOBS) as pool:
-            results = list(pool.map(one, range(1, n + 1)))
+        results = bc.parallel(one, range(1, n + 1))
         hits = 0
         for seed, speeds, ok, got in results:
             hits += ok
@@ -195,47 +141,45 @@ OTHERS = [
 ]
 
 
-def other_machines():
+def other_machines(pl, N):
     print("\nOTHER MACHINES (1 % noise): clean runs with a keyphasor_flip warning;"
           " 3 random flipped speeds of each bearing")
     n = max(N // 5, 20)
     for mname, machine in OTHERS:
-        exact = os.path.join(W, f"exact-{mname}")
-        sim(machine, exact, "--digits", "12")
+        exact = pl.path(f"exact-{mname}")
+        pl.sim(machine, exact, "--digits", "12")
 
         def clean(seed, mname=mname, exact=exact):
-            out = os.path.join(W, f"other-{mname}-{seed}")
-            data(exact, out, "--noise", "0.01", "--seed", str(seed))
-            ident = identify(out)
+            out = pl.path(f"other-{mname}-{seed}")
+            bc.data(exact, out, "--noise", "0.01", "--seed", str(seed))
+            ident, _ = pl.identify(out)
             subprocess.run(["rm", "-rf", out], check=True)
             return seed, flip_named(ident)
 
-        with concurrent.futures.ThreadPoolExecutor(JOBS) as pool:
-            results = list(pool.map(clean, range(1, N + 1)))
+        results = bc.parallel(clean, range(1, N + 1))
         k = sum(1 for _, named in results if named)
         for seed, named in results:
             if named:
                 print(f"    flagged: {mname} seed {seed}: {named}", flush=True)
         print(f"  {mname} clean: {k}/{N} runs name a flip (95 % upper bound"
-              f" {100.0 * upper95(k, N):.2f} %)", flush=True)
-        bearings = [p["bearing"] for p in identify(exact)["pedestals"]]
+              f" {100.0 * bc.upper95(k, N):.2f} %)", flush=True)
+        bearings = [p["bearing"] for p in pl.identify(exact)[0]["pedestals"]]
         for bearing in bearings:
             def one(seed, bearing=bearing, exact=exact, mname=mname):
                 speeds = sorted(random.Random(seed).sample(GRID[8:76], 3))
-                out = os.path.join(W, f"other-flip-{mname}-{seed}")
-                data(exact, out, "--noise", "0.01", "--seed", str(seed),
+                out = pl.path(f"other-flip-{mname}-{seed}")
+                bc.data(exact, out, "--noise", "0.01", "--seed", str(seed),
                      "--flip", bearing + ":" + ",".join(f"{s:g}" for s in speeds))
-                ident = identify(out)
+                ident, _ = pl.identify(out)
                 subprocess.run(["rm", "-rf", out], check=True)
-                got = listed(ident, bearing)
+                got = bc.listed(ident, bearing)
                 hit = all(s in got for s in speeds)
-                hit &= all(not (set(speeds) & set(listed(ident, p["bearing"])))
+                hit &= all(not (set(speeds) & set(bc.listed(ident, p["bearing"])))
                            for p in ident["pedestals"] if p["bearing"] != bearing)
                 extra = [s for s in got if s not in speeds]
                 return seed, speeds, hit, got, extra
 
-            with concurrent.futures.ThreadPoolExecutor(JOBS) as pool:
-                results = list(pool.map(one, range(1, n + 1)))
+            results = bc.parallel(one, range(1, n + 1))
             hits = sum(r[2] for r in results)
             extras = sum(1 for r in results if r[4])
             for seed, speeds, hit, got, _ in results:
@@ -262,28 +206,27 @@ def negate_every_bearing(run, speeds):
         w.writerows(rows)
 
 
-def every_bearing():
+def every_bearing(pl, N):
     print("\nEVERY BEARING FLIPPED (three-bearing, 1 % noise, 3 random speeds):"
           " listed exactly at every bearing")
-    exact = os.path.join(W, "exact-three-every")
-    sim(THREE, exact, "--digits", "12")
+    exact = pl.path("exact-three-every")
+    pl.sim(THREE, exact, "--digits", "12")
     n = max(N // 5, 20)
 
     def one(seed):
         speeds = sorted(random.Random(seed).sample(GRID[8:76], 3))
-        out = os.path.join(W, f"every-{seed}")
-        data(exact, out, "--noise", "0.01", "--seed", str(seed))
+        out = pl.path(f"every-{seed}")
+        bc.data(exact, out, "--noise", "0.01", "--seed", str(seed))
         negate_every_bearing(out, speeds)
-        ident = identify(out)
+        ident, _ = pl.identify(out)
         subprocess.run(["rm", "-rf", out], check=True)
-        got = {p["bearing"]: listed(ident, p["bearing"]) for p in ident["pedestals"]}
+        got = {p["bearing"]: bc.listed(ident, p["bearing"]) for p in ident["pedestals"]}
         noted = all(any("every bearing lists" in w["message"] for w in p["warnings"])
                     for p in ident["pedestals"])
         wrong = any(s not in speeds for g in got.values() for s in g)
         return seed, speeds, all(g == speeds for g in got.values()) and noted, wrong, got
 
-    with concurrent.futures.ThreadPoolExecutor(JOBS) as pool:
-        results = list(pool.map(one, range(1, n + 1)))
+    results = bc.parallel(one, range(1, n + 1))
     for seed, speeds, hit, _, got in results:
         if not hit:
             print(f"    missed: seed {seed}: flipped {speeds}, listed {got}", flush=True)
@@ -291,13 +234,21 @@ def every_bearing():
           f" runs listing a speed not flipped: {sum(r[3] for r in results)}", flush=True)
 
 
+def main(argv=None):
+    binary, n, only = bc.arguments(argv)
+    pl = bc.Plinth(binary, "bench-flips-")
+    try:
+        if "clean" in SECTIONS:
+            false_alarms(pl, n, only)
+        if not only and "detect" in SECTIONS:
+            detections(pl, n)
+        if not only and "other" in SECTIONS:
+            other_machines(pl, n)
+        if not only and "every" in SECTIONS:
+            every_bearing(pl, n)
+    finally:
+        pl.close()
+
+
 if __name__ == "__main__":
-    if "clean" in SECTIONS:
-        false_alarms()
-    if not ONLY and "detect" in SECTIONS:
-        detections()
-    if not ONLY and "other" in SECTIONS:
-        other_machines()
-    if not ONLY and "every" in SECTIONS:
-        every_bearing()
-    subprocess.run(["rm", "-rf", W], check=True)
+    main()
