@@ -159,7 +159,8 @@ fn a_worn_bearing_table_is_named_as_bearing_coefficients_at_its_bearing() {
 }
 
 #[test]
-#[ignore = "known gap, measured 2026-11-28 (scripts/bench-unseen.sh 5): at 1 % noise diagnose names nothing and trusts B3 (89 % off in m) in 5/5 runs: the pooled gap 0.29 is 1.2x its floor 0.24, under TRY_ABOVE_FLOOR, while B3 y alone is 7x its own floor (docs/unseen.md)"]
+// Was a known gap (the pooled gap hid B3 y at 7× its own floor): bases are
+// now tried, and the verdict judged, per pedestal channel as well.
 fn the_sub_base_is_named_in_diagnose() {
     let run = stored("sub-base");
     let d = diagnosis(&run);
