@@ -158,9 +158,9 @@ fn a_worn_bearing_table_is_named_as_bearing_coefficients_at_its_bearing() {
     plinth_tests::simulated::assert_pedestals_near_truth(&run, &d.pedestals_after, 0.02, "table");
 }
 
-#[test]
 // Was a known gap (the pooled gap hid B3 y at 7× its own floor): bases are
 // now tried, and the verdict judged, per pedestal channel as well.
+#[test]
 fn the_sub_base_is_named_in_diagnose() {
     let run = stored("sub-base");
     let d = diagnosis(&run);
