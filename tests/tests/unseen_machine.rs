@@ -7,6 +7,7 @@
 //! is Plinth's. The rates over several seeds are in scripts/bench-unseen.sh
 //! (docs/unseen.md).
 
+use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
 use plinth::diagnose::{cli::oil_films, diagnose, Options};
 use plinth::identify::{Identification, WarningKind};
@@ -156,6 +157,36 @@ fn a_worn_bearing_table_is_named_as_bearing_coefficients_at_its_bearing() {
     );
     // The pedestal values after the correction within 2 % of ROSS's (k, m).
     plinth_tests::simulated::assert_pedestals_near_truth(&run, &d.pedestals_after, 0.02, "table");
+}
+
+/// With the machine-level check (`--machine`), the corrected clearance is
+/// simulated too: the re-simulated machine agrees with ROSS's run within
+/// the machine tolerance and the diagnosis is trusted (it stayed at the
+/// file's clearance before, machine gap 0.13 at 3 digits: untrusted).
+#[test]
+fn a_worn_bearing_table_corrected_is_trusted_at_the_machine_level() {
+    let run = stored("table");
+    let machine = Machine::from_toml_path(std::path::Path::new(DATA).join("unseen-four.toml"))
+        .expect("machine file");
+    let options = Options {
+        oil_films: oil_films(&machine),
+        ..Options::default()
+    };
+    let out = diagnose(&run, &options).expect("diagnose");
+    let check = MachineCheck::of(&machine, &out).expect("machine check");
+    let mut d = out.diagnosis;
+    check.apply(&mut d);
+    assert_eq!(
+        named(&d),
+        vec![("bearing_coefficients".to_string(), "B2".to_string())]
+    );
+    let before = check.gap_before.expect("machine gap before");
+    let after = check.gap_after().expect("machine gap after");
+    assert!(
+        after < plinth::diagnose::trust::MACHINE_TOLERANCE && after < 0.2 * before,
+        "machine-level gap {before} -> {after}"
+    );
+    assert!(d.trusted, "{:?}\n{}", d.trust_reasons, d.to_text());
 }
 
 // Was a known gap (the pooled gap hid B3 y at 7× its own floor): bases are

@@ -7,7 +7,9 @@
 //! cross-coupling as k_yz/√(k_y·k_z), mass anisotropy as m_z/m_y − 1 on
 //! m = m_y, the loss factor as is; `foundation_coupling` stands the
 //! pedestals on base elements of the simulator with the identified base
-//! parameters (`put_bases`). Sensor effects (runout, delays) are applied to the
+//! parameters (`put_bases`); a table's clearance correction
+//! (`bearing_coefficients`) simulates that bearing as the oil film its table
+//! was written for at the corrected clearance. Sensor effects (runout, delays) are applied to the
 //! simulated readings here, exactly as identified.
 //!
 //! What each measured pedestal stands on is the identified model's, not the
@@ -24,7 +26,7 @@ use super::state::State;
 use crate::effects::EffectKind;
 use crate::estimate::Pedestal;
 use crate::sim::base::Base;
-use crate::sim::{unbalance_response, EffectSet, Machine};
+use crate::sim::{unbalance_response, BearingModel, EffectSet, Machine};
 use anyhow::{anyhow, Context, Result};
 use num_complex::Complex;
 
@@ -126,6 +128,19 @@ pub fn resimulate(
                     Some(state.params.nl[k]),
                 );
             }
+        }
+    }
+    // A table's clearance correction: the bearing simulated as the oil film
+    // the table was written for, at the corrected clearance c_w·(1 + δ).
+    for (k, p) in state.model.nonlinear.iter().enumerate() {
+        if let Nonlinear::Clearance { bearing } = *p {
+            let Some(table) = state.model.tables.get(bearing).copied().flatten() else {
+                continue;
+            };
+            let mut film = table.film;
+            film.clearance *= 1.0 + state.params.nl[k];
+            let i = machine.bearing_index(&prep.bearings[bearing])?;
+            machine.bearings[i].model = BearingModel::OilFilm(film);
         }
     }
     // The identified model decides what each measured pedestal stands on:
