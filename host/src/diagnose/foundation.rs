@@ -254,16 +254,7 @@ fn best_grouping(
     for groups in groupings {
         let fits: Option<Vec<BaseFitResult>> = groups
             .iter()
-            .map(|g| {
-                fit_on_unmeasured_base(
-                    obs,
-                    &BaseGroup {
-                        bearings: g.clone(),
-                    },
-                    start,
-                )
-                .ok()
-            })
+            .map(|g| fit_group(obs, g, start, kind))
             .collect();
         let Some(fits) = fits else { continue };
         if kind.is_some_and(|k| !fits.iter().all(|f| physical(f, k))) {
@@ -286,6 +277,32 @@ fn best_grouping(
         }
     }
     best
+}
+
+/// The fit of one base group `g` (`estimate::base`) from `start`. A
+/// sub-base ([`Kind::SubBase`]) whose fit ends non-physical is fitted again
+/// from the chain its receptance shows ([`sub_base::fit_from_receptance`]:
+/// that fit's profile starts from the rigid-ground pedestal, the two
+/// springs in series, and can end in a non-physical optimum from any θ
+/// start), kept when that is physical.
+fn fit_group(
+    obs: &[Vec<Observation>],
+    g: &[usize],
+    start: &[[f64; 5]],
+    kind: Option<Kind>,
+) -> Option<BaseFitResult> {
+    let group = BaseGroup {
+        bearings: g.to_vec(),
+    };
+    let fit = fit_on_unmeasured_base(obs, &group, start).ok()?;
+    if kind != Some(Kind::SubBase) || physical(&fit, Kind::SubBase) {
+        return Some(fit);
+    }
+    let [b] = g else { return Some(fit) };
+    match sub_base::fit_from_receptance(obs, *b, &fit) {
+        Some(f) if physical(&f, Kind::SubBase) => Some(f),
+        _ => Some(fit),
+    }
 }
 
 /// The start of a sub-base fit from the rigid-ground fit `theta`: the
@@ -632,5 +649,6 @@ impl FoundationFit {
 }
 
 mod bootstrap;
+pub mod sub_base;
 #[cfg(test)]
 mod tests;
