@@ -120,9 +120,10 @@ impl BaseOn {
     ) -> Option<Self> {
         let cprep = corrected_on(prep, state, Some(base));
         let rigid = rigid_prediction(&cprep, state, &opts.base);
+        let rigid_of = |c: &Prepared| rigid_prediction(c, state, &opts.base);
         let mut fit = base.refit(&cprep, &rigid)?;
         if mixes_channels(state) {
-            let predict = |c: &Prepared| fit.predict_on(c, &rigid_prediction(c, state, &opts.base));
+            let predict = |c: &Prepared| fit.motion_on(c, &rigid_of);
             let noise = residual_noise(prep, state, Some(base), &predict)?;
             fit.prediction.noise_var = noise;
             fit.gap = fit.prediction.gap(&cprep, None);
@@ -457,12 +458,16 @@ fn held_prediction(
     fit: &FoundationFit,
     opts: &Options,
 ) -> Option<(Prepared, Prediction)> {
-    let predict = |c: &Prepared| fit.predict_on(c, &rigid_prediction(c, state, &opts.base));
+    let rigid = |c: &Prepared| rigid_prediction(c, state, &opts.base);
     let cprep = corrected_on(prep, state, Some(fit));
-    let mut pred = predict(&cprep)?;
-    if mixes_channels(state) {
-        pred.noise_var = residual_noise(prep, state, Some(fit), &predict)?;
+    if !mixes_channels(state) {
+        let pred = fit.predict_on(&cprep, &rigid(&cprep))?;
+        return Some((cprep, pred));
     }
+    // The noise is carried from the measured numbers: the motion alone.
+    let predict = |c: &Prepared| fit.motion_on(c, &rigid);
+    let mut pred = predict(&cprep)?;
+    pred.noise_var = residual_noise(prep, state, Some(fit), &predict)?;
     Some((cprep, pred))
 }
 
