@@ -123,7 +123,7 @@ pub fn chain_from_receptance(obs: &[Observation], d: usize) -> Option<Chain> {
         return None;
     }
     let w_ref = rows.iter().map(|r| r.0).fold(0.0, f64::max);
-    if !(w_ref > 0.0) {
+    if w_ref <= 0.0 || !w_ref.is_finite() {
         return None;
     }
     // Unknowns (scaled s' = s/w_ref): a₁', a₂', b₀', …, b₄'.
@@ -332,11 +332,11 @@ fn residual_rms(obs: &[Observation], theta: &[f64; 5], base: &BaseParams) -> f64
     for o in obs.iter().filter(|o| o.is_finite()) {
         let w = o.omega();
         let f = o.force();
-        for d in 0..2 {
+        for (d, (f, x)) in f.iter().zip(o.ped).enumerate() {
             let spring = spring(theta, d, w);
             let g = base.receptance(d, w);
             let inertia = w * w * theta[2];
-            let e = (spring - inertia) * o.ped[d] - f[d] - spring * g * (f[d] + inertia * o.ped[d]);
+            let e = (spring - inertia) * x - f - spring * g * (f + inertia * x);
             ss += e.norm_sqr();
             n += 2;
         }
