@@ -102,6 +102,21 @@ pub fn on_rigid_ground(machine: &Machine) -> Machine {
     m
 }
 
+/// The skid example `skid` (tests: examples/two-pedestals-on-skid.toml)
+/// with its left pedestal on rigid ground and its right pedestal alone on
+/// the base, made a sub-base of 120 kg, 8.0 / 6.0 MN/m (y / z) and
+/// 1.5 / 1.2 kN·s/m: `pedestal_sub_base` at bearing `right`.
+pub fn right_pedestal_on_a_sub_base(skid: &Machine) -> Machine {
+    let mut m = skid.clone();
+    m.bases[0].name = "sub-base".into();
+    m.bases[0].m = [120.0, 120.0];
+    m.bases[0].k = [8.0e6, 6.0e6];
+    m.bases[0].c = [1.5e3, 1.2e3];
+    m.bearings[0].base = None;
+    m.validate().expect("valid machine");
+    m
+}
+
 /// Asserts that every pedestal of `run`'s truth has k_y, k_z and m in
 /// `got` within the fraction `tolerance` of the truth (`label` in the
 /// message).

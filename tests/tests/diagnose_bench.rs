@@ -24,7 +24,9 @@ use plinth::effects::EffectKind;
 use plinth::rundir::RunDir;
 use plinth::sim::machine::BearingModel;
 use plinth::sim::{unbalance_response, EffectSet, Machine};
-use plinth_tests::simulated::{on_rigid_ground, simulated_run, speeds, Writing};
+use plinth_tests::simulated::{
+    on_rigid_ground, right_pedestal_on_a_sub_base, simulated_run, speeds, Writing,
+};
 use plinth_tests::write_run;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -54,14 +56,7 @@ fn rigid() -> Machine {
 
 /// The rigid skid machine with the right pedestal alone on its own sub-base.
 fn sub_base() -> Machine {
-    let mut m = skid();
-    m.bases[0].name = "sub-base".into();
-    m.bases[0].m = [120.0, 120.0];
-    m.bases[0].k = [8.0e6, 6.0e6];
-    m.bases[0].c = [1.5e3, 1.2e3];
-    m.bearings[0].base = None;
-    m.validate().expect("valid machine");
-    m
+    right_pedestal_on_a_sub_base(&skid())
 }
 
 /// How a bench run's numbers are written.

@@ -22,7 +22,8 @@ use plinth::rundir::RunDir;
 use plinth::sim::machine::BearingModel;
 use plinth::sim::{EffectSet, Machine};
 use plinth_tests::simulated::{
-    assert_pedestals_near_truth, on_rigid_ground, simulated_run, speeds, Writing,
+    assert_pedestals_near_truth, on_rigid_ground, right_pedestal_on_a_sub_base, simulated_run,
+    speeds, Writing,
 };
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -41,16 +42,9 @@ fn rigid() -> Machine {
     on_rigid_ground(&skid())
 }
 
-/// The rigid machine with the right pedestal alone on its own sub-base.
+/// The rigid skid machine with the right pedestal alone on its own sub-base.
 fn sub_base() -> Machine {
-    let mut m = skid();
-    m.bases[0].name = "sub-base".into();
-    m.bases[0].m = [120.0, 120.0];
-    m.bases[0].k = [8.0e6, 6.0e6];
-    m.bases[0].c = [1.5e3, 1.2e3];
-    m.bearings[0].base = None;
-    m.validate().expect("valid machine");
-    m
+    right_pedestal_on_a_sub_base(&skid())
 }
 
 /// Simulates `machine` with `effects` at 5-120 Hz, adds `noise` (fraction
@@ -155,11 +149,31 @@ fn two_effects_at_different_bearings_are_both_named() {
 
 #[test]
 fn a_pedestal_on_its_own_sub_base_is_named() {
+    check_sub_base_named(54);
+}
+
+/// The noise draws of `scripts/bench-diagnose.sh` (seeds 24001 and 24008)
+/// in which `estimate::base`'s sub-base fit ends non-physical from every
+/// start (its profile starts from the rigid-ground pedestal, the two springs
+/// in series): the fit from the chain the receptance shows
+/// (`foundation::sub_base`) reaches the physical optimum, and the sub-base is
+/// named (session 21: nothing named, untrusted).
+#[test]
+fn a_sub_base_the_rigid_start_misses_is_named() {
+    for seed in [24001, 24008] {
+        check_sub_base_named(seed);
+    }
+}
+
+/// The right pedestal on its own sub-base, noise draw `seed`: exactly
+/// `pedestal_sub_base` at right named, its parameters the sub-base's, the
+/// pedestals within 2 %, trusted.
+fn check_sub_base_named(seed: u64) {
     let m = sub_base();
-    let run = run_dir(&m, &EffectSet::none(), NOISE, None, 54);
+    let run = run_dir(&m, &EffectSet::none(), NOISE, None, seed);
     let out = diagnose(&run, &Options::default()).expect("diagnose");
     let d = &out.diagnosis;
-    println!("sub-base under right:\n{}", d.to_text());
+    println!("sub-base under right, seed {seed}:\n{}", d.to_text());
     assert_eq!(d.effects_added, vec!["pedestal_sub_base".to_string()]);
     assert_eq!(d.steps[0].bearing, "right");
     assert_pedestals_near_truth(&run, &d.pedestals_after, 0.02, "");

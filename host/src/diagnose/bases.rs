@@ -3,7 +3,9 @@
 //! the state's chosen corrections (runout, delays, table) correct.
 
 use super::backward::Chosen;
-use super::correct::{corrected, corrected_on, corrections_only, mixes_channels, residual_noise};
+use super::correct::{
+    carrying_noise, corrected, corrected_on, corrections_only, mixes_channels, residual_noise,
+};
 use super::criterion::{chi2_sf, Evidence};
 use super::data::Prepared;
 use super::forward::StepOutcome;
@@ -70,7 +72,24 @@ pub(super) fn try_bases_on(
             sub_base: None,
         });
     }
-    let pred = rigid_prediction(&cprep, state, &opts.base);
+    let mut pred = rigid_prediction(&cprep, state, &opts.base);
+    // A cross-coupling chosen on rigid ground mixes the channels: the base
+    // fits and their test weight each residual by the noise the correction
+    // carries into it (`carrying_noise`), the rigid model's gap is judged
+    // with it.
+    let cprep = if mixes_channels(state) {
+        let rigid = |c: &Prepared| Some(rigid_prediction(c, state, &opts.base));
+        match residual_noise(prep, state, None, &rigid) {
+            Some(carried) => {
+                let weighted = carrying_noise(&cprep, &pred, &carried);
+                pred.noise_var = carried;
+                weighted
+            }
+            None => cprep,
+        }
+    } else {
+        cprep
+    };
     let gap = pred.gap(&cprep, None);
     // A base fit that cannot run is "not tried", not an error.
     let run = |kind| {
@@ -120,9 +139,22 @@ impl BaseOn {
     ) -> Option<Self> {
         let cprep = corrected_on(prep, state, Some(base));
         let rigid = rigid_prediction(&cprep, state, &opts.base);
-        let mut fit = base.refit(&cprep, &rigid)?;
-        if mixes_channels(state) {
-            let predict = |c: &Prepared| fit.predict_on(c, &rigid_prediction(c, state, &opts.base));
+        let rigid_of = |c: &Prepared| rigid_prediction(c, state, &opts.base);
+        let mixing = mixes_channels(state);
+        // The refit weights each residual by the noise the correction
+        // carries into it (at the base held), not by the corrected numbers'
+        // as if measured.
+        let weighted = if mixing {
+            let own = base.predict_on(&cprep, &rigid)?;
+            let held = |c: &Prepared| base.motion_on(c, &rigid_of);
+            let carried = residual_noise(prep, state, Some(base), &held)?;
+            carrying_noise(&cprep, &own, &carried)
+        } else {
+            cprep.clone()
+        };
+        let mut fit = base.refit(&weighted, &rigid)?;
+        if mixing {
+            let predict = |c: &Prepared| fit.motion_on(c, &rigid_of);
             let noise = residual_noise(prep, state, Some(base), &predict)?;
             fit.prediction.noise_var = noise;
             fit.gap = fit.prediction.gap(&cprep, None);
@@ -457,12 +489,16 @@ fn held_prediction(
     fit: &FoundationFit,
     opts: &Options,
 ) -> Option<(Prepared, Prediction)> {
-    let predict = |c: &Prepared| fit.predict_on(c, &rigid_prediction(c, state, &opts.base));
+    let rigid = |c: &Prepared| rigid_prediction(c, state, &opts.base);
     let cprep = corrected_on(prep, state, Some(fit));
-    let mut pred = predict(&cprep)?;
-    if mixes_channels(state) {
-        pred.noise_var = residual_noise(prep, state, Some(fit), &predict)?;
+    if !mixes_channels(state) {
+        let pred = fit.predict_on(&cprep, &rigid(&cprep))?;
+        return Some((cprep, pred));
     }
+    // The noise is carried from the measured numbers: the motion alone.
+    let predict = |c: &Prepared| fit.motion_on(c, &rigid);
+    let mut pred = predict(&cprep)?;
+    pred.noise_var = residual_noise(prep, state, Some(fit), &predict)?;
     Some((cprep, pred))
 }
 

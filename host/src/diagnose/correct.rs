@@ -305,5 +305,45 @@ pub(super) fn residual_noise(
     Some(var)
 }
 
+/// The corrected data `cprep` with each pedestal reading's noise variance
+/// raised so that a fit weighting the corrected numbers as measured ones
+/// sees each residual with the noise the corrections carry into it: the
+/// residual's variance carried from the measured numbers (`carried`,
+/// [`residual_noise`]) less the variance the prediction `own` takes from
+/// the corrected numbers as if measured (its `noise_var`), where positive,
+/// split evenly over the real and imaginary part (the corrected noise is
+/// circular: each correction is complex-linear in the readings). The base's
+/// own refit (`estimate::base`, errors in variables: each residual weighted
+/// by the variance of the numbers in it) then weights the residual of every
+/// pedestal reading by its carried noise at the prediction `own` was made
+/// with. Not carried: the correlation the correction makes between the two
+/// directions and between bearings (the fit's noise model has none).
+pub(super) fn carrying_noise(
+    cprep: &Prepared,
+    own: &Prediction,
+    carried: &ResidualNoise,
+) -> Prepared {
+    let mut out = cprep.clone();
+    for (b, row) in out.points.iter_mut().enumerate() {
+        for (j, p) in row.iter_mut().enumerate() {
+            let (Some(p), Some(Some(v_own)), Some(Some(v))) = (
+                p.as_mut(),
+                own.noise_var.get(b).and_then(|r| r.get(j)),
+                carried.get(b).and_then(|r| r.get(j)),
+            ) else {
+                continue;
+            };
+            for d in 0..2 {
+                let extra = v[d] - v_own[d];
+                if extra > 0.0 && extra.is_finite() {
+                    p.var[4 + 2 * d] += 0.5 * extra;
+                    p.var[5 + 2 * d] += 0.5 * extra;
+                }
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests;

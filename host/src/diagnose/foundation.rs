@@ -44,7 +44,7 @@
 use super::criterion::Evidence;
 use super::data::Prepared;
 use super::gap::{Gap, Prediction};
-use super::report::{BaseGroupReport, Estimate, FoundationReport, FoundationTest};
+use super::report::FoundationTest;
 
 /// The rigid model's gap must exceed this multiple of its noise floor for
 /// the base to be tried: below it there is nothing a base could explain. It
@@ -54,11 +54,11 @@ use super::report::{BaseGroupReport, Estimate, FoundationReport, FoundationTest}
 /// its floor).
 pub const TRY_ABOVE_FLOOR: f64 = 1.5;
 use crate::estimate::base::{
-    fit_on_unmeasured_base, predict, BaseFitResult, BaseGroup, BaseIdentifiability,
+    fit_on_unmeasured_base, BaseFitResult, BaseGroup, BaseIdentifiability,
 };
 use crate::estimate::Observation;
-use anyhow::{anyhow, Result};
-use num_complex::Complex;
+use anyhow::Result;
+use prediction::prediction;
 
 /// Bootstrap replicates of the likelihood-ratio test (fixed: the test's
 /// resolution is 1/(R + 1) empirically, the scaled-χ² tail beyond).
@@ -256,16 +256,7 @@ fn best_grouping(
     for groups in groupings {
         let fits: Option<Vec<BaseFitResult>> = groups
             .iter()
-            .map(|g| {
-                fit_on_unmeasured_base(
-                    obs,
-                    &BaseGroup {
-                        bearings: g.clone(),
-                    },
-                    start,
-                )
-                .ok()
-            })
+            .map(|g| fit_group(obs, g, start, kind))
             .collect();
         let Some(fits) = fits else { continue };
         if kind.is_some_and(|k| !fits.iter().all(|f| physical(f, k))) {
@@ -288,6 +279,32 @@ fn best_grouping(
         }
     }
     best
+}
+
+/// The fit of one base group `g` (`estimate::base`) from `start`. A
+/// sub-base ([`Kind::SubBase`]) whose fit ends non-physical is fitted again
+/// from the chain its receptance shows ([`sub_base::fit_from_receptance`]:
+/// that fit's profile starts from the rigid-ground pedestal, the two
+/// springs in series, and can end in a non-physical optimum from any θ
+/// start), kept when that is physical.
+fn fit_group(
+    obs: &[Vec<Observation>],
+    g: &[usize],
+    start: &[[f64; 5]],
+    kind: Option<Kind>,
+) -> Option<BaseFitResult> {
+    let group = BaseGroup {
+        bearings: g.to_vec(),
+    };
+    let fit = fit_on_unmeasured_base(obs, &group, start).ok()?;
+    if kind != Some(Kind::SubBase) || physical(&fit, Kind::SubBase) {
+        return Some(fit);
+    }
+    let [b] = g else { return Some(fit) };
+    match sub_base::fit_from_receptance(obs, *b, &fit) {
+        Some(f) if physical(&f, Kind::SubBase) => Some(f),
+        _ => Some(fit),
+    }
 }
 
 /// The start of a sub-base fit from the rigid-ground fit `theta`: the
@@ -438,71 +455,6 @@ impl Fitted {
     }
 }
 
-/// The pedestal-level prediction with the bases of `grouping`: the rigid
-/// prediction for bearings on no base, `estimate::base::predict` for the
-/// others, with the noise variance of each prediction from its (linear)
-/// dependence on every rel reading of the base's pedestals.
-fn prediction(
-    prep: &Prepared,
-    obs: &[Vec<Observation>],
-    rigid: &Prediction,
-    grouping: &GroupingFit,
-) -> Result<Prediction> {
-    let mut out = rigid.clone();
-    for (group, fit) in grouping.groups.iter().zip(&grouping.fits) {
-        let g = BaseGroup {
-            bearings: group.clone(),
-        };
-        let base_pred = predict(obs, &g, &fit.pedestals, &fit.base)
-            .map_err(|e| anyhow!("predicting with the base: {e}"))?;
-        // Sensitivity to each rel channel: the prediction is linear in the
-        // forces, so a unit change of one rel phasor shows it exactly.
-        let mut sens = Vec::new();
-        for (qi, &q) in group.iter().enumerate() {
-            for c in 0..2 {
-                let mut o2 = obs.to_vec();
-                for o in &mut o2[q] {
-                    o.rel[c] += Complex::new(1.0, 0.0);
-                }
-                let p2 = predict(&o2, &g, &fit.pedestals, &fit.base)
-                    .map_err(|e| anyhow!("predicting with the base: {e}"))?;
-                sens.push((qi, q, c, p2));
-            }
-        }
-        for (s, pr) in base_pred.iter().enumerate() {
-            let (speed, x) = (&pr.speed_hz, &pr.ped);
-            // The speed comes back through Ω = 2πf: match it to a relative
-            // 1e-9, not exactly.
-            let Some(j) = prep
-                .speeds_hz
-                .iter()
-                .position(|v| (v - speed).abs() <= 1e-9 * v.abs().max(speed.abs()))
-            else {
-                continue;
-            };
-            for (i, &b) in group.iter().enumerate() {
-                let Some(point) = prep.points[b][j].as_ref() else {
-                    continue;
-                };
-                out.ped[b][j] = Some(x[i]);
-                let mut var = [0.0; 2];
-                for (d, v) in var.iter_mut().enumerate() {
-                    for (_, q, c, p2) in &sens {
-                        let Some(pq) = prep.points[*q][j].as_ref() else {
-                            continue;
-                        };
-                        let a = p2[s].ped[i][d] - x[i][d];
-                        *v += a.norm_sqr() * (pq.var[2 * c] + pq.var[2 * c + 1]);
-                    }
-                    *v += point.var[4 + 2 * d] + point.var[5 + 2 * d];
-                }
-                out.noise_var[b][j] = Some(var);
-            }
-        }
-    }
-    Ok(out)
-}
-
 impl FoundationFit {
     /// The same bases (grouping and kind) refitted on other data `prep`
     /// (the data a further correction changes), starting from this fit's
@@ -534,105 +486,9 @@ impl FoundationFit {
     }
 }
 
-impl FoundationFit {
-    /// This fit's bases, their values held, predicting the pedestals on
-    /// other data `prep` (the data a correction changes), with `rigid` the
-    /// rigid-ground prediction of bearings on no base; `None` when the
-    /// prediction fails.
-    pub fn predict_on(&self, prep: &Prepared, rigid: &Prediction) -> Option<Prediction> {
-        let obs = observations(prep);
-        prediction(prep, &obs, rigid, &self.grouping).ok()
-    }
-
-    /// The base's own parameters as report entries: k, c, m of y and z
-    /// (`base_k_y`, ...), then the quasi-static compliance or mass where
-    /// only that is determined.
-    pub fn parameters(&self, prep: &Prepared) -> Vec<Estimate> {
-        let mut out = Vec::new();
-        for r in self.report(prep).groups {
-            out.extend(r.parameters);
-        }
-        out
-    }
-
-    /// The report entry: the bases, what the data determine, and the test.
-    pub fn report(&self, prep: &Prepared) -> FoundationReport {
-        let groups = self
-            .grouping
-            .groups
-            .iter()
-            .zip(&self.grouping.fits)
-            .enumerate()
-            .map(|(gi, (g, f))| {
-                let stem = self.kind.prefix();
-                let prefix = if self.grouping.groups.len() > 1 {
-                    format!("{stem}{}_", gi + 1)
-                } else {
-                    format!("{stem}_")
-                };
-                let mut parameters = Vec::new();
-                for (d, dir) in ["y", "z"].iter().enumerate() {
-                    match f.identifiability[d] {
-                        BaseIdentifiability::Full => {
-                            for (name, v, se) in [
-                                ("k", f.base.k[d], f.base_std_err.k[d]),
-                                ("c", f.base.c[d], f.base_std_err.c[d]),
-                                ("m", f.base.m[d], f.base_std_err.m[d]),
-                            ] {
-                                parameters.push(Estimate {
-                                    name: format!("{prefix}{name}_{dir}"),
-                                    value: v,
-                                    std_err: se,
-                                });
-                            }
-                        }
-                        BaseIdentifiability::QuasiStatic {
-                            compliance_m_per_n,
-                            std_err,
-                        } => parameters.push(Estimate {
-                            name: format!("{prefix}compliance_{dir}"),
-                            value: compliance_m_per_n,
-                            std_err,
-                        }),
-                        BaseIdentifiability::MassLine { mass_kg, std_err } => {
-                            parameters.push(Estimate {
-                                name: format!("{prefix}m_{dir}"),
-                                value: mass_kg,
-                                std_err,
-                            })
-                        }
-                        BaseIdentifiability::NotDetected => {}
-                    }
-                }
-                BaseGroupReport {
-                    bearings: g.iter().map(|&b| prep.bearings[b].clone()).collect(),
-                    identifiability: f.identifiability,
-                    base: f.base,
-                    base_std_err: f.base_std_err,
-                    base_frequency_hz: f.base_frequency_hz,
-                    converged: f.converged,
-                    parameters,
-                }
-            })
-            .collect();
-        FoundationReport {
-            groups,
-            test: self.test.clone(),
-        }
-    }
-
-    /// The pedestal θ and its standard errors of bearing `b` when it stands
-    /// on one of the bases.
-    pub fn pedestal(&self, b: usize) -> Option<([f64; 5], [f64; 5])> {
-        for (g, f) in self.grouping.groups.iter().zip(&self.grouping.fits) {
-            if let Some(i) = g.iter().position(|&x| x == b) {
-                return Some((f.pedestals[i], f.pedestal_std_err[i]));
-            }
-        }
-        None
-    }
-}
-
 mod bootstrap;
+mod prediction;
+mod report;
+pub mod sub_base;
 #[cfg(test)]
 mod tests;
