@@ -55,6 +55,8 @@ pub mod plots;
 pub mod report;
 pub mod state;
 pub mod summaries;
+#[cfg(test)]
+mod test_runs;
 pub mod trust;
 pub mod workflow;
 

@@ -24,25 +24,7 @@ fn exact_run() -> (Prepared, f64) {
         .expect("simulation")
         .to_run_dir(None)
         .expect("run dir");
-    for name in machine.bearing_names() {
-        let rows: Vec<usize> = (0..run.measurements.len())
-            .filter(|&i| run.measurements[i].bearing == name)
-            .collect();
-        let sd: [f64; 4] = std::array::from_fn(|ch| {
-            let ms: f64 = rows
-                .iter()
-                .map(|&i| {
-                    let m = &run.measurements[i];
-                    if ch < 2 { m.rel[ch] } else { m.ped[ch - 2] }.norm_sqr()
-                })
-                .sum::<f64>()
-                / rows.len() as f64;
-            0.005 * ms.sqrt()
-        });
-        for &i in &rows {
-            run.measurements[i].noise_sd = Some(sd);
-        }
-    }
+    crate::diagnose::test_runs::with_noise_columns(&mut run, 0.005);
     let k_yz = run
         .truth
         .as_ref()
@@ -74,27 +56,39 @@ fn noisy(prep: &Prepared, rng: &mut rand::rngs::StdRng) -> Prepared {
     out
 }
 
+/// The shared base fitted to `prep` as measured (as diagnose chooses it,
+/// before any correction), the rigid model with identify's fits and its
+/// parameters, and the state with the left pedestal's cross-coupling at
+/// `k_yz` [N/m].
+fn base_with_cross_coupling(
+    prep: &Prepared,
+    k_yz: f64,
+) -> (State, Model, crate::diagnose::model::Params, FoundationFit) {
+    let mut state = State::base(prep, Parameter::ALL.as_slice()).expect("base state");
+    let rigid_model = base_model(Parameter::ALL.as_slice(), prep.bearings.len());
+    let rigid_params = crate::diagnose::model::Params {
+        beta: state.params.beta.clone(),
+        nl: Vec::new(),
+    };
+    let pred = Prediction::new(prep, &rigid_model, &rigid_params);
+    let gap = pred.gap(prep, None);
+    let fit = foundation::fit(prep, &pred, gap, Kind::Shared, None)
+        .expect("base fit")
+        .expect("a base")
+        .untested("unit test");
+    state.model.terms.push(Term::CrossStiffness { bearing: 0 });
+    state.params.beta.push(k_yz);
+    (state, rigid_model, rigid_params, fit)
+}
+
 #[test]
 fn the_residual_noise_through_a_cross_coupling_correction_matches_monte_carlo() {
     let (prep, k_yz) = exact_run();
     // The shared base fitted to the data as measured (as diagnose chooses
     // it, before any correction), and the rigid model with identify's fits
     // plus the left cross-coupling at its true value.
-    let mut state = State::base(&prep, Parameter::ALL.as_slice()).expect("base state");
-    let rigid_model = base_model(Parameter::ALL.as_slice(), prep.bearings.len());
-    let rigid_params = crate::diagnose::model::Params {
-        beta: state.params.beta.clone(),
-        nl: Vec::new(),
-    };
+    let (state, rigid_model, rigid_params, fit) = base_with_cross_coupling(&prep, k_yz);
     let rigid = |c: &Prepared| Prediction::new(c, &rigid_model, &rigid_params);
-    let pred = rigid(&prep);
-    let gap = pred.gap(&prep, None);
-    let fit = foundation::fit(&prep, &pred, gap, Kind::Shared, None)
-        .expect("base fit")
-        .expect("a base")
-        .untested("unit test");
-    state.model.terms.push(Term::CrossStiffness { bearing: 0 });
-    state.params.beta.push(k_yz);
     let predict = |c: &Prepared| fit.predict_on(c, &rigid(c));
     let propagated = residual_noise(&prep, &state, Some(&fit), &predict).expect("propagated");
     let residual = |data: &Prepared| {
@@ -206,21 +200,8 @@ fn base_chi2_per_speed(
 #[test]
 fn the_base_refit_weights_the_corrected_data_by_their_carried_noise() {
     let (prep, k_yz) = exact_run();
-    let mut state = State::base(&prep, Parameter::ALL.as_slice()).expect("base state");
-    let rigid_model = base_model(Parameter::ALL.as_slice(), prep.bearings.len());
-    let rigid_params = crate::diagnose::model::Params {
-        beta: state.params.beta.clone(),
-        nl: Vec::new(),
-    };
+    let (state, rigid_model, rigid_params, fit) = base_with_cross_coupling(&prep, k_yz);
     let rigid = |c: &Prepared| Prediction::new(c, &rigid_model, &rigid_params);
-    let pred = rigid(&prep);
-    let gap = pred.gap(&prep, None);
-    let fit = foundation::fit(&prep, &pred, gap, Kind::Shared, None)
-        .expect("base fit")
-        .expect("a base")
-        .untested("unit test");
-    state.model.terms.push(Term::CrossStiffness { bearing: 0 });
-    state.params.beta.push(k_yz);
     // The base refitted to the exact data its cross-coupling correction
     // makes (the correction holds the base), until they agree: the exact
     // corrected data then obey the base model.

@@ -115,25 +115,7 @@ fn exact_sub_base_run() -> Prepared {
         .expect("simulation")
         .to_run_dir(None)
         .expect("run dir");
-    for name in machine.bearing_names() {
-        let rows: Vec<usize> = (0..run.measurements.len())
-            .filter(|&i| run.measurements[i].bearing == name)
-            .collect();
-        let sd: [f64; 4] = std::array::from_fn(|ch| {
-            let ms: f64 = rows
-                .iter()
-                .map(|&i| {
-                    let m = &run.measurements[i];
-                    if ch < 2 { m.rel[ch] } else { m.ped[ch - 2] }.norm_sqr()
-                })
-                .sum::<f64>()
-                / rows.len() as f64;
-            0.005 * ms.sqrt()
-        });
-        for &i in &rows {
-            run.measurements[i].noise_sd = Some(sd);
-        }
-    }
+    crate::diagnose::test_runs::with_noise_columns(&mut run, 0.005);
     Prepared::from_run(&run).expect("prepared")
 }
 
