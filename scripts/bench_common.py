@@ -130,6 +130,28 @@ def clean_run(plinth, machine, exact, how, seed, out):
         data(exact, out, *how[1:], "--seed", str(seed))
 
 
+def clean_identifications(plinth, n, only):
+    """Every clean case (`clean_cases`, `n` runs each) whose name contains
+    `only`: yields (case, runs, [(seed, identify JSON, exit code)] for seeds
+    1..runs), each run made (`clean_run`), identified and removed in
+    parallel; each machine's exact run is simulated once."""
+    for mname, machine in CLEAN_MACHINES:
+        exact = plinth.path(f"exact-{mname}")
+        plinth.sim(machine, exact, "--digits", "12")
+        for case, runs, how in clean_cases(mname, n):
+            if only not in case:
+                continue
+
+            def one(seed, how=how, machine=machine, exact=exact):
+                out = plinth.path(f"clean-{seed}")
+                clean_run(plinth, machine, exact, how, seed, out)
+                ident, code = plinth.identify(out)
+                subprocess.run(["rm", "-rf", out], check=True)
+                return seed, ident, code
+
+            yield case, runs, parallel(one, range(1, runs + 1))
+
+
 def listed(ident, bearing):
     """The speeds identify lists as bad for `bearing` (noise.<b>.outlier_speeds_hz)."""
     return ident["noise"].get(bearing, {}).get("outlier_speeds_hz", [])

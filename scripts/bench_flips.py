@@ -64,30 +64,17 @@ def false_alarms(pl, n, only):
     print("FALSE ALARMS: runs with a keyphasor_flip warning on clean data")
     print(f"{'case':36s} {'runs':>5s} {'flagged':>7s} {'%':>6s} {'≤95%up':>7s}")
     total = flagged_total = 0
-    for mname, machine in bc.CLEAN_MACHINES:
-        exact = pl.path(f"exact-{mname}")
-        pl.sim(machine, exact, "--digits", "12")
-        for case, runs, how in bc.clean_cases(mname, n):
-            if only not in case:
-                continue
-
-            def one(seed, how=how, machine=machine, exact=exact):
-                out = pl.path(f"clean-{seed}")
-                bc.clean_run(pl, machine, exact, how, seed, out)
-                ident, _ = pl.identify(out)
-                subprocess.run(["rm", "-rf", out], check=True)
-                return seed, flip_named(ident)
-
-            results = bc.parallel(one, range(1, runs + 1))
-            k = 0
-            for seed, named in results:
-                if named:
-                    k += 1
-                    print(f"    flagged: {case} seed {seed}: {named}", flush=True)
-            print(f"{case:36s} {runs:5d} {k:7d} {100.0 * k / runs:6.2f}"
-                  f" {100.0 * bc.upper95(k, runs):7.2f}", flush=True)
-            total += runs
-            flagged_total += k
+    for case, runs, results in bc.clean_identifications(pl, n, only):
+        k = 0
+        for seed, ident, _ in results:
+            named = flip_named(ident)
+            if named:
+                k += 1
+                print(f"    flagged: {case} seed {seed}: {named}", flush=True)
+        print(f"{case:36s} {runs:5d} {k:7d} {100.0 * k / runs:6.2f}"
+              f" {100.0 * bc.upper95(k, runs):7.2f}", flush=True)
+        total += runs
+        flagged_total += k
     if total:
         print(f"{'ALL CLEAN RUNS':36s} {total:5d} {flagged_total:7d}"
               f" {100.0 * flagged_total / total:6.2f}"

@@ -85,36 +85,23 @@ def false_alarms(plinth, n, only):
     header("FALSE ALARMS per run on clean data (flagged %, by rule)")
     total = {r: 0 for r in RULES + ["any"]}
     total_runs = 0
-    for mname, machine in bc.CLEAN_MACHINES:
-        exact = plinth.path(f"exact-{mname}")
-        plinth.sim(machine, exact, "--digits", "12")
-        for case, runs, how in bc.clean_cases(mname, n):
-            if only not in case:
-                continue
-            counts = {r: 0 for r in RULES + ["any"]}
-            extremes = [0.0, 1.0]
-
-            def one(seed, how=how, machine=machine, exact=exact):
-                out = plinth.path(f"clean-{seed}")
-                bc.clean_run(plinth, machine, exact, how, seed, out)
-                ident, code = plinth.identify(out)
-                subprocess.run(["rm", "-rf", out], check=True)
-                return seed, ident, code
-
-            for seed, ident, code in bc.parallel(one, range(1, runs + 1)):
-                level, p = lack_of_fit_figures(ident)
-                extremes = [max(extremes[0], level), min(extremes[1], p)]
-                f = flags(ident, code)
-                for r in RULES:
-                    counts[r] += f[r]
-                counts["any"] += any(f.values())
-                if any(f.values()):
-                    print(f"    flagged: {case} seed {seed}: {[r for r in RULES if f[r]]}",
-                          flush=True)
-            row(case, runs, counts, extremes)
-            for r in counts:
-                total[r] += counts[r]
-            total_runs += runs
+    for case, runs, results in bc.clean_identifications(plinth, n, only):
+        counts = {r: 0 for r in RULES + ["any"]}
+        extremes = [0.0, 1.0]
+        for seed, ident, code in results:
+            level, p = lack_of_fit_figures(ident)
+            extremes = [max(extremes[0], level), min(extremes[1], p)]
+            f = flags(ident, code)
+            for r in RULES:
+                counts[r] += f[r]
+            counts["any"] += any(f.values())
+            if any(f.values()):
+                print(f"    flagged: {case} seed {seed}: {[r for r in RULES if f[r]]}",
+                      flush=True)
+        row(case, runs, counts, extremes)
+        for r in counts:
+            total[r] += counts[r]
+        total_runs += runs
     row("ALL CLEAN RUNS", total_runs, total)
 
 

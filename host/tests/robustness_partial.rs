@@ -127,6 +127,16 @@ fn skid() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/two-pedestals-on-skid.toml")
 }
 
+/// `plinth diagnose RUN --machine MACHINE` (`--json` when `json`), quiet.
+fn diagnose_machine(run: &Path, machine: &Path, json: bool) -> std::process::Output {
+    let mut c = plinth_quiet();
+    c.arg("diagnose").arg(run).arg("--machine").arg(machine);
+    if json {
+        c.arg("--json");
+    }
+    c.output().unwrap()
+}
+
 #[test]
 fn diagnose_machine_says_it_replaces_the_files_base() {
     let t = tempfile::tempdir().unwrap();
@@ -134,14 +144,7 @@ fn diagnose_machine_says_it_replaces_the_files_base() {
     // stand on `skid` there.
     let run = t.path().join("skid");
     simulate(&skid(), &run);
-    let o = plinth_quiet()
-        .arg("diagnose")
-        .arg(&run)
-        .arg("--machine")
-        .arg(skid())
-        .arg("--json")
-        .output()
-        .unwrap();
+    let o = diagnose_machine(&run, &skid(), true);
     assert!(o.status.success(), "{}", text(&o));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let verdict = json["verdict"].as_str().unwrap();
@@ -149,13 +152,7 @@ fn diagnose_machine_says_it_replaces_the_files_base() {
         verdict.contains("replaces the machine file's base `skid` under `left`, `right`"),
         "{verdict}"
     );
-    let o = plinth_quiet()
-        .arg("diagnose")
-        .arg(&run)
-        .arg("--machine")
-        .arg(skid())
-        .output()
-        .unwrap();
+    let o = diagnose_machine(&run, &skid(), false);
     assert!(o.status.success(), "{}", text(&o));
     assert!(
         String::from_utf8_lossy(&o.stdout).contains(verdict),
@@ -166,14 +163,7 @@ fn diagnose_machine_says_it_replaces_the_files_base() {
     // A machine file on rigid ground: nothing replaced, nothing said.
     let run = t.path().join("rigid");
     simulate(&example(), &run);
-    let o = plinth_quiet()
-        .arg("diagnose")
-        .arg(&run)
-        .arg("--machine")
-        .arg(example())
-        .arg("--json")
-        .output()
-        .unwrap();
+    let o = diagnose_machine(&run, &example(), true);
     assert!(o.status.success(), "{}", text(&o));
     let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let verdict = json["verdict"].as_str().unwrap();
