@@ -15,7 +15,7 @@
 //!   real 4-vector per speed) for a smooth trend in speed. Model error from
 //!   a missing resonance is local in speed; a global polynomial spreads it
 //!   over all its degrees of freedom. So every window of a set
-//!   (`structure::windows`: the whole run with Legendre polynomials of
+//!   (`window::windows`: the whole run with Legendre polynomials of
 //!   degree ≤ [`MAX_DEGREE`], and
 //!   windows of n/2, n/4, ... speeds overlapping by half with degree ≤
 //!   [`LOCAL_DEGREE`]) scores the sum of squares its polynomials explain
@@ -43,11 +43,12 @@
 
 mod mean;
 mod structure;
+mod window;
 
 pub use structure::{
-    structure, Structure, BLOCK, LEVEL_WINDOW, LOCAL_DEGREE, MAX_DEGREE, MIN_WINDOW, PERMUTATIONS,
-    SCALES, STOP_AFTER_EXCEEDANCES,
+    structure, Structure, BLOCK, LEVEL_WINDOW, PERMUTATIONS, STOP_AFTER_EXCEEDANCES,
 };
+pub use window::{LOCAL_DEGREE, MAX_DEGREE, MIN_WINDOW, SCALES};
 
 use super::gauss_helmert as gh;
 use super::ml::{Rigid, Weighting};

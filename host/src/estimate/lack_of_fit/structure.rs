@@ -2,13 +2,9 @@
 //! for a smooth trend in speed, calibrated by shuffling blocks of speeds
 //! (the module docs of [`super`] and docs/trust.md).
 
-use nalgebra::DMatrix;
+use super::window::{windows, SCALES};
 use rand::{rngs::StdRng, seq::SliceRandom, SeedableRng};
 use serde::{Deserialize, Serialize};
-
-/// Highest degree of the smooth residual basis (Legendre polynomials in
-/// speed): enough for a resonance-shaped model error over a run-down.
-pub const MAX_DEGREE: usize = 5;
 
 /// Consecutive speeds shuffled together in the structure test's null: longer
 /// than the correlation of rounding errors between neighbouring speeds.
@@ -65,152 +61,6 @@ pub struct Structure {
 /// A p-value of 1: what an absent test says.
 fn one() -> f64 {
     1.0
-}
-
-/// Degree of the Legendre basis inside each local window of the scan: a
-/// bump, a step or a sign change across a resonance.
-pub const LOCAL_DEGREE: usize = 2;
-
-/// Fewest speeds in a local window of the scan: three blocks of [`BLOCK`],
-/// so that a shuffle can still break a trend inside it.
-pub const MIN_WINDOW: usize = 3 * BLOCK;
-
-/// Number of window widths of the scan besides the whole run: n/2, n/4, ...
-/// n/2^[`SCALES`] speeds (none narrower than [`MIN_WINDOW`]).
-pub const SCALES: usize = 5;
-
-/// One window of the scan: consecutive speeds (in speed order) and an
-/// orthonormal basis of Legendre polynomials over them.
-struct Window {
-    range: std::ops::Range<usize>,
-    basis: DMatrix<f64>,
-    degree: usize,
-}
-
-impl Window {
-    fn new(speeds_hz: &[f64], range: std::ops::Range<usize>, degree: usize) -> Self {
-        let basis = legendre_basis(&speeds_hz[range.clone()], degree).qr().q();
-        Self {
-            range,
-            basis,
-            degree,
-        }
-    }
-
-    /// Sum of squares of `w` (every speed, in speed order) that the basis
-    /// explains, all four channels.
-    fn explained(&self, w: &[[f64; 4]]) -> f64 {
-        let rows = &w[self.range.clone()];
-        (0..self.basis.ncols())
-            .map(|d| {
-                let col = self.basis.column(d);
-                let mut p = [0.0; 4];
-                for (qd, r) in col.iter().zip(rows) {
-                    for c in 0..4 {
-                        p[c] += qd * r[c];
-                    }
-                }
-                p.iter().map(|v| v * v).sum::<f64>()
-            })
-            .sum()
-    }
-
-    /// The part of [`Window::explained`] across blocks: the explained sum of
-    /// squares less each block's own share (`ids`: the block of [`BLOCK`]
-    /// speeds each speed came from). A block's own share moves with the
-    /// block in a shuffle and is noise to the test (a block holding the peak
-    /// of a model error scores alike wherever it lands); what a shuffle
-    /// destroys, and a smooth curve has, is the agreement between
-    /// neighbouring blocks. Zero on average for residuals without a trend.
-    ///
-    /// Every column of the basis in one pass over the rows (each column's
-    /// sums in the same order as one column at a time: the same figures),
-    /// so the rows and block ids are read once per window and shuffle.
-    fn explained_across(&self, w: &[[f64; 4]], ids: &[usize]) -> f64 {
-        const MOST: usize = MAX_DEGREE + 1;
-        let rows = &w[self.range.clone()];
-        let ids = &ids[self.range.clone()];
-        let columns = self.basis.ncols();
-        if columns > MOST {
-            // Windows are built with degree ≤ MAX_DEGREE (`windows`).
-            return f64::NAN;
-        }
-        let square = |v: &[f64; 4]| v.iter().map(|x| x * x).sum::<f64>();
-        let mut p = [[0.0; 4]; MOST];
-        let mut b = [[0.0; 4]; MOST];
-        let mut own = [0.0; MOST];
-        let mut id = usize::MAX;
-        for (i, (r, &k)) in rows.iter().zip(ids).enumerate() {
-            if k != id {
-                for d in 0..columns {
-                    own[d] += square(&b[d]);
-                    b[d] = [0.0; 4];
-                }
-                id = k;
-            }
-            for d in 0..columns {
-                let qd = self.basis[(i, d)];
-                for c in 0..4 {
-                    p[d][c] += qd * r[c];
-                    b[d][c] += qd * r[c];
-                }
-            }
-        }
-        (0..columns)
-            .map(|d| {
-                let own = own[d] + square(&b[d]);
-                square(&p[d]) - own
-            })
-            .sum()
-    }
-
-    /// The sum across blocks `x` ([`Window::explained_across`]) in units of
-    /// its spread for white residuals of mean square `level` (about
-    /// level·√(2k) for k = 4·(degree + 1) explained components), so that
-    /// windows of every size score alike under noise.
-    fn score_across(&self, x: f64, level: f64) -> f64 {
-        let k = (4 * self.basis.ncols()) as f64;
-        x / (level * (2.0 * k).sqrt())
-    }
-
-    /// The explained sum of squares `ss` in units of the mean square
-    /// `level` as a normal score: Wilson–Hilferty's cube root of the χ²
-    /// with 4·(degree + 1) degrees of freedom that white residuals of that
-    /// level give, so that windows of every size score alike under noise.
-    fn score(&self, ss: f64, level: f64) -> f64 {
-        let k = (4 * self.basis.ncols()) as f64;
-        let v = 2.0 / (9.0 * k);
-        ((ss / (level * k)).cbrt() - (1.0 - v)) / v.sqrt()
-    }
-}
-
-/// The windows of the scan over `n` speeds `speeds_hz` (in speed order):
-/// the whole run with Legendre polynomials of degree ≤ [`MAX_DEGREE`] (at
-/// most n/(2·[`BLOCK`]) − 1), then windows of n/2, n/4, ... speeds
-/// ([`SCALES`] widths, none under [`MIN_WINDOW`]) overlapping by about
-/// half, from the first speed to the last, each with degree ≤
-/// [`LOCAL_DEGREE`].
-fn windows(speeds_hz: &[f64], scales: usize) -> Vec<Window> {
-    let n = speeds_hz.len();
-    let mut out = vec![Window::new(
-        speeds_hz,
-        0..n,
-        MAX_DEGREE.min(n / (2 * BLOCK) - 1),
-    )];
-    for k in 1..=scales {
-        let width = n >> k;
-        if width < MIN_WINDOW {
-            break;
-        }
-        // Starts spread evenly from the first speed to n − width, about
-        // half a width apart.
-        let gaps = ((n - width) as f64 / (width / 2) as f64).round().max(1.0) as usize;
-        for j in 0..=gaps {
-            let start = (j * (n - width) + gaps / 2) / gaps;
-            out.push(Window::new(speeds_hz, start..start + width, LOCAL_DEGREE));
-        }
-    }
-    out
 }
 
 /// The structure test on `whitened` residuals (one real 4-vector per speed,
@@ -386,33 +236,6 @@ fn locally_standardised(w: &[[f64; 4]]) -> Vec<[f64; 4]> {
         .collect()
 }
 
-/// Legendre polynomials P_0..P_degree of the speeds mapped onto [−1, 1],
-/// one column each.
-fn legendre_basis(speeds_hz: &[f64], degree: usize) -> DMatrix<f64> {
-    let lo = speeds_hz.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = speeds_hz.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let span = (hi - lo).max(f64::MIN_POSITIVE);
-    DMatrix::from_fn(speeds_hz.len(), degree + 1, |i, d| {
-        let x = 2.0 * (speeds_hz[i] - lo) / span - 1.0;
-        legendre(d, x)
-    })
-}
-
-/// Legendre polynomial P_d(x) by the three-term recurrence.
-fn legendre(d: usize, x: f64) -> f64 {
-    let (mut p0, mut p1) = (1.0, x);
-    if d == 0 {
-        return p0;
-    }
-    for k in 1..d {
-        let kf = k as f64;
-        let p2 = ((2.0 * kf + 1.0) * x * p1 - kf * p0) / (kf + 1.0);
-        p0 = p1;
-        p1 = p2;
-    }
-    p1
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -426,14 +249,6 @@ mod tests {
             .map(|_| std::array::from_fn(|_| level * rng.sample::<f64, _>(StandardNormal)))
             .collect();
         (speeds, w)
-    }
-
-    #[test]
-    fn legendre_recurrence_matches_closed_forms() {
-        for x in [-1.0, -0.3, 0.0, 0.7, 1.0] {
-            assert!((legendre(2, x) - 0.5 * (3.0 * x * x - 1.0)).abs() < 1e-12);
-            assert!((legendre(3, x) - 0.5 * (5.0 * x * x * x - 3.0 * x)).abs() < 1e-12);
-        }
     }
 
     /// Rounding errors of a slowly varying signal at 3 significant
@@ -514,28 +329,6 @@ mod tests {
             eprintln!("structure: {low} of 200 below p = 0.01 (the mean alone: {mean_low})");
             assert!(low <= 6, "{low} of 200 clean runs below p = 0.01");
         }
-    }
-
-    #[test]
-    fn windows_cover_the_run_at_every_width() {
-        let s: Vec<f64> = (0..70).map(|i| 5.0 + 2.5 * i as f64).collect();
-        let w = windows(&s, SCALES);
-        // The whole run (degree 5), 3 windows of 35 speeds, 8 of 17.
-        assert_eq!(w[0].range, 0..70);
-        assert_eq!(w[0].degree, MAX_DEGREE);
-        let of = |len: usize| w.iter().filter(|x| x.range.len() == len).count();
-        assert_eq!((of(35), of(17), w.len()), (3, 8, 12));
-        for x in &w[1..] {
-            assert_eq!(x.degree, LOCAL_DEGREE);
-            assert!(x.range.end <= 70);
-            // Orthonormal columns.
-            let g = x.basis.tr_mul(&x.basis);
-            assert!((g - DMatrix::identity(3, 3)).abs().max() < 1e-9);
-        }
-        // A width under MIN_WINDOW is not scanned; without scales only the
-        // whole run.
-        assert_eq!(windows(&s[..40], SCALES).len(), 1 + 3);
-        assert_eq!(windows(&s, 0).len(), 1);
     }
 
     /// White residuals of unit sd plus a resonance's residue: amplitude
