@@ -10,6 +10,10 @@ warning (lack_of_fit, physically_impossible, suspected_convention_error,
 implausible), lists an outlier speed (outlier_speeds_hz: robust fit or
 keyphasor flip), or `plinth identify` exits 2.
 
+The noise level measured without the model (the scatter source) against
+the true sd of the noise added, per bearing and channel, on clean runs of
+resonant machines.
+
 Detections: the faults each rule is for: a pedestal on its own sub-base
 (three machines), three speeds with one bearing's phasors flipped by 180°,
 one bad reading, pedestal pick-ups in um against probes in m, only the
@@ -28,8 +32,11 @@ usage: bench_trust.py PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
   CASE_FILTER: run only the false-alarm cases whose name contains it (and
   no detections), e.g. "paper-undamped hetero".
 """
+import csv
+import math
 import os
 import random
+import statistics
 import subprocess
 import sys
 import time
@@ -37,6 +44,9 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import bench_common as bc  # noqa: E402
 
+CHANNELS = ["rel_y", "rel_z", "ped_y", "ped_z"]
+# ROSS reference machine c: pedestals on two flexible bases (base.csv).
+ROSS_C = os.path.join(bc.ROOT, "tests", "reference", "ross", "machine-c.toml")
 RULES = ["lack_of_fit", "physically_impossible", "suspected_convention_error",
          "implausible", "outliers_listed", "exit_2"]
 
@@ -229,9 +239,57 @@ def conventions(plinth):
               flush=True)
 
 
+def channel_rms(run):
+    """RMS over speed [m] of each (bearing, channel) of RUN's measurements.csv:
+    what trust_data.py's --noise F is a fraction of."""
+    acc = {}
+    with open(os.path.join(run, "measurements.csv")) as fh:
+        for r in csv.DictReader(fh):
+            for c in CHANNELS:
+                z = complex(float(r[c + "_re"]), float(r[c + "_im"]))
+                acc.setdefault((r["bearing"], c), []).append(abs(z) ** 2)
+    return {k: math.sqrt(sum(v) / len(v)) for k, v in acc.items()}
+
+
+def scatter_level(plinth, n):
+    """The noise level identify measures without the model (the `scatter`
+    source, before the fit's χ²/dof rescaling: sd / sqrt(variance_scale))
+    against the true sd of the white noise trust_data.py added (1 % of each
+    channel's RMS), per bearing and channel, on clean runs of resonant
+    machines (the pedestals of ROSS machine-c on its bases, base.csv kept)
+    and on the sub-base machines (their sub-base bearing too)."""
+    machines = [("paper-undamped", bc.PAPER, False), ("three-bearing", bc.THREE, False),
+                ("three-bearing-sub-base", bc.SUB, False), ("ross machine-c", ROSS_C, True),
+                ("ross machine-d", bc.ROSS_D, False)]
+    print("  scatter level / true noise sd at 1 % white noise (median over runs; max):")
+    for name, machine, keep in machines:
+        exact = plinth.path("exact-level")
+        plinth.sim(machine, exact, "--digits", "12")
+        rms = channel_rms(exact)
+
+        def one(seed, exact=exact, keep=keep):
+            out = plinth.path(f"level-{seed}")
+            bc.data(exact, out, "--noise", "0.01", "--seed", str(seed),
+                    *(["--keep-base"] if keep else []))
+            ident, _ = plinth.identify(out)
+            subprocess.run(["rm", "-rf", out], check=True)
+            return {b: [nr["sd"][c] / math.sqrt(nr["variance_scale"]) / (0.01 * rms[(b, c)])
+                        for c in CHANNELS]
+                    for b, nr in ident["noise"].items() if nr["source"] == "scatter"}
+
+        results = bc.parallel(one, range(1, n + 1))
+        for b in sorted({b for r in results for b in r}):
+            cells = []
+            for i, c in enumerate(CHANNELS):
+                v = [r[b][i] for r in results if b in r]
+                cells.append(f"{c} {statistics.median(v):5.2f} ({max(v):5.2f})")
+            print(f"    {name:24s} {b:9s} " + "  ".join(cells), flush=True)
+
+
 def detections(plinth, n):
     print("\nDETECTIONS")
     n = max(n // 10, 5)
+    scatter_level(plinth, n)
     sub_base(plinth, n)
     flips_and_outliers(plinth, n)
     conventions(plinth)
