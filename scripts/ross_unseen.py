@@ -56,8 +56,11 @@ machine's), a wrong table scale (the table's stiffness 25 % above the
 bearing's), pedestal cross-coupling k_yz = k_zy = r sqrt(k_y k_z), probe
 runout (a constant vector on both rel probes), a sensor delay (both rel
 probes read Q e^{-i Omega tau}), keyphasor flips (every channel of the
-listed bearings negated at three random speeds), one outlier speed (every
-channel of one bearing multiplied by 1.15 e^{i 20 deg} at one random speed).
+listed bearings negated at three random speeds), one outlier speed (at one
+random speed every channel of one bearing gets an error of 0.15 of its RMS
+at a random phase, as a transient caught by the tracking filter gives; a
+common complex factor on all four channels of one bearing would be
+invisible, as the pedestal equations are homogeneous in them).
 """
 import json
 import math
@@ -75,7 +78,7 @@ from make_reference import disks_of, node_of, ocvirk, shaft_elements  # noqa: E4
 
 CHANNELS = ("rel_y", "rel_z", "ped_y", "ped_z")
 RUNOUT_SIZE = 0.2           # of the median |rel| of the bearing
-OUTLIER = 1.15 * complex(math.cos(math.radians(20.0)), math.sin(math.radians(20.0)))
+OUTLIER = 0.15             # an outlier's error on each channel, of the channel's RMS
 KEYS = ("kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz")
 
 
@@ -407,7 +410,8 @@ def make(out, case, seed, machine=DEFAULT):
         elif e[0] == "outlier":
             i = int(rng.choice(np.arange(3, len(speeds) - 3)))
             for c in CHANNELS:
-                data[(e[1], c)][i] *= OUTLIER
+                rms = math.sqrt(float(np.mean(np.abs(resp[e[1]][c]) ** 2)))
+                data[(e[1], c)][i] += OUTLIER * rms * np.exp(2j * math.pi * rng.random())
             details.append({"name": "outlier_speed", "bearing": e[1],
                             "parameters": {"speed_0_hz": float(speeds[i])}})
     write(out, speeds, names, data, sd if columns else None, digits, written)
