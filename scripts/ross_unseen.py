@@ -158,7 +158,7 @@ MACHINES = {
             "cross-runout": [("cross", "B2", 0.2), ("runout", "B1")],
         },
         "d3_effects": False,
-        "repo": ("clean-h1c", "clean-d3", "sub-base", "table-film", "table-scale", "cross", "runout",
+        "repo": ("clean-h1", "clean-h1c", "clean-d3", "sub-base", "table-film", "table-scale", "cross", "runout",
                  "delay", "flips", "outlier", "base-runout-delay", "cross-runout"),
     },
 }
