@@ -1,20 +1,23 @@
 #!/usr/bin/env python3
 """Issue 17's Done-when on a machine nobody tuned to (docs/unseen.md).
 
-Usage: python3 scripts/bench_unseen.py PLINTH RUNS_DIR [SEEDS [CASES...]]
+Usage: python3 scripts/bench_unseen.py [--machine NAME] PLINTH RUNS_DIR [SEEDS [CASES...]]
 
-RUNS_DIR holds run directories CASE-SEED made by scripts/ross_unseen.py
-(ROSS 2.3.0); missing ones are made first. SEEDS: effect cases use seeds
-1..SEEDS (default 5); clean-w1 and clean-w1c 1..SEEDS, clean-d3 1..4 (its
-seed shifts the speed grid). Every run goes through `plinth identify --json`
-and `plinth diagnose --json --machine unseen-four.toml` (the nominal machine
-file: rigid ground, the drawn clearances), $BENCH_JOBS at a time (default
-2). Prints per case:
+NAME: a machine of scripts/ross_unseen.py (default unseen-four). RUNS_DIR
+holds run directories CASE-SEED made by scripts/ross_unseen.py (ROSS
+2.3.0); missing ones are made first. SEEDS: every case uses seeds 1..SEEDS
+(default 5), except unseen-four's clean-d3: 1..4 (its seed shifts the speed
+grid). Every run goes through `plinth identify --json` and `plinth diagnose
+--json --machine FILE` (the machine's nominal file: rigid ground, the drawn
+clearances, the table as supplied), $BENCH_JOBS at a time (default 2).
+Prints per case:
 
 identify: runs exiting 2; per bearing how often untrusted; runs whose
   flagged bearings are exactly the expected ones; "ok but wrong" = a
   pedestal printed ok (trusted) with k_y, k_z or m more than 3 of its ±
-  from the ROSS truth (confidently wrong); flips listed exactly.
+  from the ROSS truth (confidently wrong); flipped (and outlier) speeds
+  listed exactly: every bearing lists exactly its flipped and outlier
+  speeds.
 diagnose: named right (exactly the expected effects, each at its bearing,
   a base at any bearing), named wrong (something else named, or an
   expected effect at another bearing), partly (a subset, nothing wrong),
@@ -30,11 +33,10 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-MACHINE = os.path.join(ROOT, "tests", "data", "ross-unseen", "unseen-four.toml")
-BEARINGS = ("B1", "B2", "B3", "B4")
-# case: (effects diagnose should name as (effect, bearing); bearings identify
-# should flag (None: no expectation beyond "not every bearing"))
-EXPECT = {
+# Per machine, case: (effects diagnose should name as (effect, bearing);
+# bearings identify should flag (None: no expectation beyond "not every
+# bearing"))
+EXPECT_FOUR = {
     "clean-w1": ([], set()),
     "clean-w1c": ([], set()),
     "clean-d3": ([], set()),
@@ -45,15 +47,46 @@ EXPECT = {
     "flips": ([], set()),
     "base-runout": ([("foundation_coupling", ""), ("probe_runout", "B2")], None),
 }
+EXPECT_OVERHUNG = {
+    "clean-w1": ([], set()),
+    "sub-base": ([("pedestal_sub_base", "B1")], {"B1"}),
+    "table-film": ([("bearing_coefficients", "B2")], {"B2"}),
+    "table-scale": ([("bearing_coefficients", "B1")], {"B1"}),
+    "cross": ([("pedestal_cross_coupling", "B1")], {"B1"}),
+    "runout": ([("probe_runout", "B2")], {"B2"}),
+    "delay": ([("sensor_delay", "B1")], {"B1"}),
+    "flips": ([], set()),
+    "outlier": ([], set()),
+    "base-runout-delay": ([("foundation_coupling", ""), ("probe_runout", "B1"), ("sensor_delay", "B2")],
+                          {"B1", "B2"}),
+    "cross-runout": ([("pedestal_cross_coupling", "B2"), ("probe_runout", "B1")], {"B1", "B2"}),
+}
+EXPECT = {"unseen-four": EXPECT_FOUR, "unseen-overhung": EXPECT_OVERHUNG}
 
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
-from ross_unseen import CASES, kind  # noqa: E402
+import ross_unseen  # noqa: E402
+
+MACHINE = ross_unseen.DEFAULT
+
+
+def kind(case):
+    return ross_unseen.kind(case, MACHINE)
 
 
 def expect(case):
     effect = kind(case)[0]
-    return EXPECT["clean-w1" if effect == "clean" else effect]
+    return EXPECT[MACHINE]["clean-w1" if effect == "clean" else effect]
+
+
+def listed_exactly(r):
+    """Every bearing lists exactly its flipped and outlier speeds."""
+    want = {}
+    for d in r["truth"]["effect_details"]:
+        if d["name"] in ("keyphasor_flip", "outlier_speed"):
+            want.setdefault(d["bearing"], []).extend(d["parameters"].values())
+    return all(sorted(r["listed"].get(b, [])) == sorted(want.get(b, []))
+               for b in set(want) | set(r["listed"]))
 
 
 def run_json(args):
@@ -75,7 +108,8 @@ def one(b, run):
     with open(os.path.join(run, "truth.json")) as f:
         truth = json.load(f)
     ident, icode, it, ierr = run_json([b, "identify", run, "--json"])
-    diag, dcode, dt, derr = run_json([b, "diagnose", run, "--json", "--machine", MACHINE])
+    diag, dcode, dt, derr = run_json([b, "diagnose", run, "--json", "--machine",
+                                     ross_unseen.machine_file(MACHINE)])
     r = {"run": run, "truth": truth, "icode": icode, "dcode": dcode, "it": it, "dt": dt,
          "err": ierr + derr}
     if ident is not None:
@@ -120,17 +154,26 @@ def judge(case, r):
 
 
 def main():
-    b, runs = sys.argv[1], sys.argv[2]
-    seeds = int(sys.argv[3]) if len(sys.argv) > 3 else 5
-    cases = sys.argv[4:] or list(CASES)
-    todo = []
+    global MACHINE
+    args = sys.argv[1:]
+    if args[:1] == ["--machine"] and len(args) >= 2:
+        MACHINE, args = args[1], args[2:]
+    if MACHINE not in ross_unseen.MACHINES:
+        sys.exit(f"--machine {MACHINE}: not one of {', '.join(ross_unseen.MACHINES)}")
+    b, runs = args[0], args[1]
+    seeds = int(args[2]) if len(args) > 2 else 5
+    cases = args[3:] or list(ross_unseen.cases_of(MACHINE))
+    bearings = [t["bearing"] for t in ross_unseen.nominal_truth(MACHINE)]
+    todo, make = [], {}
     for case in cases:
-        n = 4 if case == "clean-d3" else seeds
-        missing = [str(s) for s in range(1, n + 1) if not os.path.isdir(os.path.join(runs, f"{case}-{s}"))]
+        n = 4 if (MACHINE, case) == ("unseen-four", "clean-d3") else seeds
+        missing = tuple(str(s) for s in range(1, n + 1) if not os.path.isdir(os.path.join(runs, f"{case}-{s}")))
         if missing:
-            subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "ross_unseen.py"), runs, case,
-                            *missing], check=True, capture_output=True)
+            make.setdefault(missing, []).append(case)
         todo += [(case, os.path.join(runs, f"{case}-{s}")) for s in range(1, n + 1)]
+    for missing, group in make.items():  # one ROSS process per group: its responses are cached
+        subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "ross_unseen.py"), "--machine", MACHINE,
+                        runs, ",".join(group), *missing], check=True, capture_output=True)
     jobs = int(os.environ.get("BENCH_JOBS", "2"))
     t0 = time.time()
     with cf.ThreadPoolExecutor(jobs) as ex:
@@ -139,32 +182,29 @@ def main():
     for case, r in results:
         by.setdefault(case, []).append(r)
     print("identify (plinth identify --json):")
-    print("| case | runs | exit 2 | untrusted per bearing B1/B2/B3/B4 | flagged as expected | ok but wrong (> 3 ±) | flips listed exactly |")
+    listing = "flips listed exactly" if MACHINE == "unseen-four" else "flips/outlier listed exactly"
+    print(f"| case | runs | exit 2 | untrusted per bearing {'/'.join(bearings)} | flagged as expected "
+          f"| ok but wrong (> 3 ±) | {listing} |")
     print("|---|---|---|---|---|---|---|")
     for case in cases:
         rs = by[case]
         n = len(rs)
         ex2 = sum(r["icode"] == 2 for r in rs)
-        per = "/".join(str(sum(bb in r.get("untrusted", []) for r in rs)) for bb in BEARINGS)
+        per = "/".join(str(sum(bb in r.get("untrusted", []) for r in rs)) for bb in bearings)
         want = expect(case)[1]
         exp = "-" if want is None else str(sum(set(r.get("untrusted", [])) == want for r in rs))
         okw = sum(bool(r.get("ok_wrong")) for r in rs)
         okw_b = sorted({bb for r in rs for bb in r.get("ok_wrong", [])})
         fl = "-"
-        if kind(case)[0] == "flips":
-            def exact(r):
-                d = next(d for d in r["truth"]["effect_details"] if d["name"] == "keyphasor_flip")
-                want_s = sorted(d["parameters"].values())
-                others = any(v for k, v in r["listed"].items() if k != "B1")
-                return sorted(r["listed"].get("B1", [])) == want_s and not others
-            fl = str(sum(exact(r) for r in rs))
+        if kind(case)[0] in ("flips", "outlier"):
+            fl = str(sum(listed_exactly(r) for r in rs if "listed" in r))
         if kind(case)[0] in ("clean", "flips"):
             listed = sum(any(v for v in r.get("listed", {}).values()) for r in rs)
             if kind(case)[0] == "clean":
                 fl = f"(any listed: {listed})"
         print(f"| {case} | {n} | {ex2} | {per} | {exp}/{n} | {okw} {okw_b if okw_b else ''} | {fl} |")
     print()
-    print("diagnose (plinth diagnose --json --machine unseen-four.toml):")
+    print(f"diagnose (plinth diagnose --json --machine {os.path.basename(ross_unseen.machine_file(MACHINE))}):")
     print("| case | runs | named right | named wrong | partly | missed | untrusted | worst k/m error after (right runs) | s/run |")
     print("|---|---|---|---|---|---|---|---|---|")
     for case in cases:

@@ -1,44 +1,66 @@
 #!/usr/bin/env python3
-"""Run directories of a machine Plinth was never tuned to, made by ROSS 2.3.0.
+"""Run directories of machines Plinth was never tuned to, made by ROSS 2.3.0.
 
 Usage:
-  python3 scripts/ross_unseen.py OUT CASE SEED...  run directories OUT/CASE-SEED
-  python3 scripts/ross_unseen.py --cases            the case names
-  python3 scripts/ross_unseen.py --repo             the stored runs
-        (tests/data/ross-unseen/<case>/, seed 1 of REPO_CASES)
+  python3 scripts/ross_unseen.py [--machine NAME] OUT CASE[,CASE...] SEED...
+                                       run directories OUT/CASE-SEED
+  python3 scripts/ross_unseen.py [--machine NAME] --cases   the case names
+  python3 scripts/ross_unseen.py [--machine NAME] --repo    the stored runs
+        (the machine's data directory/<case>/, seed 1 of its repo cases)
+  python3 scripts/ross_unseen.py --compare RUN_A RUN_B
+        worst |A - B| per bearing and channel, in % of B's peak (the check
+        of a ROSS run against `plinth simulate` of the machine file)
+NAME: unseen-four (default) or unseen-overhung.
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
-Deterministic: the seed fixes the noise, the flipped speeds and (3-digit
-cases) the speed grid.
+Deterministic: the seed fixes the noise, the flipped and outlier speeds and
+(digit cases) the speed grid.
 
-The machine is tests/data/ross-unseen/unseen-four.toml (read with tomllib):
-four bearings, an overhung disk, two tabulated and two oil-film bearings,
-pedestals of 70-240 kg, B4 undamped. It is built in ROSS here, not by
-Plinth: Timoshenko shaft elements (shear, rotary inertia, gyroscopics),
-DiskElements, each bearing a BearingElement from the shaft node to a
-PointMass (n_link, the pedestal), the pedestal a BearingElement to the
-ground, to a shared base PointMass, or to its own sub-base PointMass.
-Oil-film coefficients come from the short-bearing closed form of
-tests/reference/ross/make_reference.py (`ocvirk`, Python, not Plinth's
-code) at exactly the run's speeds. The response is ROSS's
+unseen-four is tests/data/ross-unseen/unseen-four.toml (read with
+tomllib): four bearings, an overhung disk, two tabulated and two oil-film
+bearings, pedestals of 70-240 kg, B4 undamped; speeds 6-126 Hz in 1.25 Hz
+steps; 1 % white noise of each channel's RMS.
+
+unseen-overhung is tests/data/ross-unseen-2/unseen-overhung.toml: an
+overhung single-stage compressor, two bearings 0.32 m apart, a 110 kg
+impeller overhung 0.28 m, B1 a tilting-pad-like table (no cross-coupling,
+k and c rising with speed), B2 a short-bearing oil film, pedestals with
+k_z = 0.3 k_y. Its speeds are a windage-braked coast-down sampled every
+few revolutions (dOmega/dt = -b Omega^2: a constant ratio between
+successive speeds, so the grid is geometric, dense at low speed), 150 Hz
+down to 8 Hz; its noise is heteroscedastic, as a real probe's: sigma = 1 %
+of each phasor's amplitude plus a floor of 0.1 % of the channel's RMS.
+
+Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
+(shear, rotary inertia, gyroscopics), DiskElements, each bearing a
+BearingElement from the shaft node to a PointMass (n_link, the pedestal),
+the pedestal a BearingElement to the ground, to a shared base PointMass, or
+to its own sub-base PointMass. Oil-film coefficients come from the
+short-bearing closed form of tests/reference/ross/make_reference.py
+(`ocvirk`, Python, not Plinth's code) at exactly the run's speeds; tables
+are interpolated linearly in speed. The response is ROSS's
 run_unbalance_response; the run directory is written here following
 docs/formats.md directly (rel = rotor - pedestal, ped absolute, y vertical,
 z horizontal, q(t) = Re{Q e^{iWt}}; the axis map Plinth (y, z) -> ROSS
 (x, y) is make_reference.py's, a proper rotation).
 
-Cases (what the truth is; `expect` in truth.json's effect_details):
-  clean-w1     1 % white noise (of each channel's RMS), 7 digits, no columns
-  clean-w1c    the same with the *_sd noise columns
-  clean-d3     no noise, 3 significant digits, speed grid shifted by the seed
-  sub-base     B3's pedestal on its own sub-base (180/160 kg, 24/20 MN/m)
-  table        B2's true clearance 1/0.85 of the drawn one: bearings.csv is
-               computed for a clearance 15 % smaller than the machine's
-  cross        pedestal cross-coupling k_yz = k_zy = 0.2 sqrt(k_y k_z) at B4
-  runout       a speed-independent runout on B3's rel probes
-  flips        three speeds of B1 with every channel negated (keyphasor)
-  base-runout  B1 and B2 on a shared 350 kg frame, and runout on B2's probes
-Effect cases carry 1 % white noise with the *_sd columns; EFFECT-d3 is the
-same effect without noise at 3 significant digits (grid shifted by the seed).
+Cases: `--cases` lists them; each machine's table (MACHINES below) says
+what each case does. Noise kinds: clean-w1 / clean-h1 (the machine's
+noise, 7 digits, no columns), clean-w1c / clean-h1c (with the *_sd noise
+columns), clean-dN (no noise, N significant digits, the speed grid shifted
+by the seed). Effect cases carry the machine's noise with the *_sd columns;
+EFFECT-d3 (where listed) is the same effect without noise at 3 digits.
+Effects: a sub-base under one pedestal, a shared base (frame), a worn oil
+film (bearings.csv computed for a clearance 15 % smaller than the
+machine's), a wrong table scale (the table's stiffness 25 % above the
+bearing's), pedestal cross-coupling k_yz = k_zy = r sqrt(k_y k_z), probe
+runout (a constant vector on both rel probes), a sensor delay (both rel
+probes read Q e^{-i Omega tau}), keyphasor flips (every channel of the
+listed bearings negated at three random speeds), one outlier speed (at one
+random speed every channel of one bearing gets an error of 0.15 of its RMS
+at a random phase, as a transient caught by the tracking filter gives; a
+common complex factor on all four channels of one bearing would be
+invisible, as the pedestal equations are homogeneous in them).
 """
 import json
 import math
@@ -54,49 +76,140 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests", "reference", "ross"))
 from make_reference import disks_of, node_of, ocvirk, shaft_elements  # noqa: E402
 
-DATA = os.path.join(ROOT, "tests", "data", "ross-unseen")
-MACHINE = os.path.join(DATA, "unseen-four.toml")
 CHANNELS = ("rel_y", "rel_z", "ped_y", "ped_z")
-NOISE = 0.01
-STEP = 1.25  # Hz
-FIRST, LAST = 6.0, 126.0
-SUB_BASE = {"bearing": "B3", "m_y": 180.0, "m_z": 160.0, "k_y": 2.4e7, "k_z": 2.0e7,
-            "c_y": 2500.0, "c_z": 2000.0}
-FRAME = {"name": "frame", "bearings": ["B1", "B2"], "m_y": 350.0, "m_z": 350.0,
-         "k_y": 1.6e7, "k_z": 2.2e7, "c_y": 3000.0, "c_z": 2500.0}
-WORN = ("B2", 1.0 / 0.85)   # bearing, true clearance / drawn clearance
-CROSS = ("B4", 0.2)         # bearing, k_yz / sqrt(k_y k_z)
 RUNOUT_SIZE = 0.2           # of the median |rel| of the bearing
-EFFECTS = ("sub-base", "table", "cross", "runout", "flips", "base-runout")
-CASES = ("clean-w1", "clean-w1c", "clean-d3") + EFFECTS + tuple(e + "-d3" for e in EFFECTS)
-
-# The runs kept in the repository (tests/tests/unseen_machine.rs), seed 1.
-REPO_CASES = ("clean-w1c", "clean-d3", "sub-base", "sub-base-d3", "table", "cross", "runout",
-              "flips", "base-runout-d3")
+OUTLIER = 0.15             # an outlier's error on each channel, of the channel's RMS
+KEYS = ("kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz")
 
 
-def kind(case):
-    """(effect, noise) of a case: noise "w1" (1 % white), "w1c" (and the
-    *_sd columns) or "d3" (none, 3 digits)."""
+def uniform_grid(first, last, step):
+    """Speeds first..last [Hz] in steps of `step`, shifted 0.137 Hz per
+    seed in the digit cases."""
+    def speeds(shifted, seed):
+        shift = 0.137 * (seed - 1) if shifted else 0.0
+        n = int(round((last - first) / step)) + 1
+        return np.round(first + shift + step * np.arange(n), 4)
+    return speeds
+
+
+def coast_down_grid(top, bottom, n):
+    """A windage-braked coast-down sampled every few revolutions: n speeds
+    from `top` down to `bottom` [Hz] in a constant ratio (listed rising),
+    the phase of the sampling shifted by the seed in the digit cases."""
+    ratio = (bottom / top) ** (1.0 / (n - 1))
+    def speeds(shifted, seed):
+        frac = (0.37 * (seed - 1)) % 1.0 if shifted else 0.0
+        return np.round(np.sort(top * ratio ** (np.arange(n) + frac)), 3)
+    return speeds
+
+
+SUB_BASE_FOUR = {"bearing": "B3", "m_y": 180.0, "m_z": 160.0, "k_y": 2.4e7, "k_z": 2.0e7,
+                 "c_y": 2500.0, "c_z": 2000.0}
+FRAME_FOUR = {"name": "frame", "bearings": ["B1", "B2"], "m_y": 350.0, "m_z": 350.0,
+              "k_y": 1.6e7, "k_z": 2.2e7, "c_y": 3000.0, "c_z": 2500.0}
+SUB_BASE_OVERHUNG = {"bearing": "B1", "m_y": 140.0, "m_z": 140.0, "k_y": 3.0e7, "k_z": 1.0e7,
+                     "c_y": 3000.0, "c_z": 1500.0}
+SKID_OVERHUNG = {"name": "skid", "bearings": ["B1", "B2"], "m_y": 500.0, "m_z": 500.0,
+                 "k_y": 6.0e7, "k_z": 2.0e7, "c_y": 4000.0, "c_z": 2000.0}
+
+# Per machine: its file and data directory, speed grid, noise (sigma = rel
+# |phasor| + floor RMS of the channel), the seed base of its random numbers,
+# its cases (effect case: list of effects, applied in order) and the runs
+# kept in the repository (seed 1).
+MACHINES = {
+    "unseen-four": {
+        "data": os.path.join(ROOT, "tests", "data", "ross-unseen"),
+        "file": "unseen-four.toml",
+        "grid": uniform_grid(6.0, 126.0, 1.25),
+        "noise": {"rel": 0.0, "floor": 0.01},
+        "noisy": "w1",
+        "digits": ("d3",),
+        "rng": 17_000,
+        "effects": {
+            "sub-base": [("sub_base", SUB_BASE_FOUR)],
+            "table": [("worn_film", "B2", 1.0 / 0.85)],
+            "cross": [("cross", "B4", 0.2)],
+            "runout": [("runout", "B3")],
+            "flips": [("flips", ["B1"])],
+            "base-runout": [("frame", FRAME_FOUR), ("runout", "B2")],
+        },
+        "d3_effects": True,
+        "repo": ("clean-w1c", "clean-d3", "sub-base", "sub-base-d3", "table", "cross", "runout",
+                 "flips", "base-runout-d3"),
+    },
+    "unseen-overhung": {
+        "data": os.path.join(ROOT, "tests", "data", "ross-unseen-2"),
+        "file": "unseen-overhung.toml",
+        "grid": coast_down_grid(150.0, 8.0, 120),
+        "noise": {"rel": 0.01, "floor": 0.001},
+        "noisy": "h1",
+        "digits": ("d3", "d2", "d12"),
+        "rng": 23_000,
+        "effects": {
+            "sub-base": [("sub_base", SUB_BASE_OVERHUNG)],
+            "table-film": [("worn_film", "B2", 1.0 / 0.85)],
+            "table-scale": [("table_scale", "B1", 1.0 / 1.25, 1.0)],
+            "cross": [("cross", "B1", 0.2)],
+            "runout": [("runout", "B2")],
+            "delay": [("delay", "B1", 150e-6)],
+            "flips": [("flips", ["B1", "B2"])],
+            "outlier": [("outlier", "B2")],
+            "base-runout-delay": [("frame", SKID_OVERHUNG), ("runout", "B1"), ("delay", "B2", 150e-6)],
+            "cross-runout": [("cross", "B2", 0.2), ("runout", "B1")],
+        },
+        "d3_effects": False,
+        "repo": ("clean-h1", "clean-h1c", "clean-d3", "sub-base", "table-film", "table-scale", "cross", "runout",
+                 "delay", "flips", "outlier", "base-runout-delay", "cross-runout"),
+    },
+}
+DEFAULT = "unseen-four"
+
+
+def cases_of(machine=DEFAULT):
+    """The case names of a machine, in their fixed order (the order seeds
+    the random numbers)."""
+    m = MACHINES[machine]
+    clean = tuple(f"clean-{k}" for k in (m["noisy"], m["noisy"] + "c") + m["digits"])
+    effects = tuple(m["effects"])
+    return clean + effects + (tuple(e + "-d3" for e in effects) if m["d3_effects"] else ())
+
+
+CASES = cases_of()
+
+
+def machine_file(machine=DEFAULT):
+    """Path of the machine file a user would have (nominal machine)."""
+    m = MACHINES[machine]
+    return os.path.join(m["data"], m["file"])
+
+
+def kind(case, machine=DEFAULT):
+    """(effect, noise) of a case: noise "w1"/"h1" (the machine's noise),
+    with "c" appended the *_sd columns too, "dN" none at N digits."""
+    m = MACHINES[machine]
     if case.startswith("clean-"):
         return "clean", case[len("clean-"):]
     if case.endswith("-d3"):
         return case[:-3], "d3"
-    return case, "w1c"
+    return case, m["noisy"] + "c"
 
 
-def speeds_of(case, seed):
-    shift = 0.137 * (seed - 1) if kind(case)[1] == "d3" else 0.0
-    n = int(round((LAST - FIRST) / STEP)) + 1
-    return np.round(FIRST + shift + STEP * np.arange(n), 4)
+def effects_of(case, machine=DEFAULT):
+    """The list of effects of a case (empty for a clean case)."""
+    effect = kind(case, machine)[0]
+    return [] if effect == "clean" else MACHINES[machine]["effects"][effect]
+
+
+def speeds_of(case, seed, machine=DEFAULT):
+    noise = kind(case, machine)[1]
+    return MACHINES[machine]["grid"](noise.startswith("d"), seed)
 
 
 def table_row(b, s):
     """Tabulated coefficients at speed s, linear in speed between rows."""
     rows = b["coefficients"]
-    keys = ("kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz")
     sp = [r["speed_hz"] for r in rows]
-    return {k: float(np.interp(s, sp, [r.get(k, 0.0) for r in rows])) for k in keys}
+    return {k: float(np.interp(s, sp, [r.get(k, 0.0) for r in rows])) for k in KEYS}
 
 
 def film_row(of, s, clearance):
@@ -105,21 +218,28 @@ def film_row(of, s, clearance):
             "cyy": C[0][0], "cyz": C[0][1], "czy": C[1][0], "czz": C[1][1]}
 
 
-def coefficients(spec, speeds, worn):
+def coefficients(spec, speeds, effects):
     """(true, written) coefficients per bearing: lists of dicts per speed."""
+    worn = {e[1]: e[2] for e in effects if e[0] == "worn_film"}
+    scale = {e[1]: (e[2], e[3]) for e in effects if e[0] == "table_scale"}
     true, written = {}, {}
     for b in spec["bearings"]:
+        name = b["name"]
         if "oil_film" in b:
             of = b["oil_film"]
-            factor = WORN[1] if worn and b["name"] == WORN[0] else 1.0
-            true[b["name"]] = [film_row(of, s, of["clearance"] * factor) for s in speeds]
-            written[b["name"]] = [film_row(of, s, of["clearance"]) for s in speeds]
+            true[name] = [film_row(of, s, of["clearance"] * worn.get(name, 1.0)) for s in speeds]
+            written[name] = [film_row(of, s, of["clearance"]) for s in speeds]
         else:
-            true[b["name"]] = written[b["name"]] = [table_row(b, s) for s in speeds]
+            written[name] = [table_row(b, s) for s in speeds]
+            true[name] = written[name]
+            if name in scale:
+                fk, fc = scale[name]
+                true[name] = [{k: v * (fk if k[0] == "k" else fc) for k, v in r.items()}
+                              for r in written[name]]
     return true, written
 
 
-def respond(spec, speeds, case):
+def respond(spec, speeds, effects):
     """ROSS's rel and ped phasors per bearing (Plinth's axes) and the tables."""
     import ross as rs
 
@@ -133,15 +253,18 @@ def respond(spec, speeds, case):
     disk_elements = [rs.DiskElement(n=n, m=m, Id=idm, Ip=ip, tag=f"disk{k}")
                      for k, (n, m, ip, idm, _u, _a) in enumerate(disks)]
     unb = [(n, u, a) for (n, _m, _ip, _id, u, a) in disks if u > 0]
-    true, written = coefficients(spec, speeds, case == "table")
+    true, written = coefficients(spec, speeds, effects)
+    frame = next((e[1] for e in effects if e[0] == "frame"), None)
+    sub = next((e[1] for e in effects if e[0] == "sub_base"), None)
+    cross = {e[1]: e[2] for e in effects if e[0] == "cross"}
     w = 2 * math.pi * np.asarray(speeds)
     nn = len(x)
     names = [b["name"] for b in spec["bearings"]]
     extra = nn + len(names)  # the next free node number after the pedestals
     base_node = sub_node = None
-    if case == "base-runout":
+    if frame is not None:
         base_node, extra = extra, extra + 1
-    if case == "sub-base":
+    if sub is not None:
         sub_node, extra = extra, extra + 1
     elements, masses = [], []
     for i, b in enumerate(spec["bearings"]):
@@ -154,18 +277,18 @@ def respond(spec, speeds, case):
             cyy=col("czz"), tag=f"brg_{b['name']}"))
         p = b["pedestal"]
         masses.append(rs.PointMass(n=pn, m=p["m"], tag=f"ped_{b['name']}"))
-        kc = CROSS[1] * math.sqrt(p["k_y"] * p["k_z"]) if case == "cross" and b["name"] == CROSS[0] else 0.0
+        kc = cross[b["name"]] * math.sqrt(p["k_y"] * p["k_z"]) if b["name"] in cross else 0.0
         link = None
-        if base_node is not None and b["name"] in FRAME["bearings"]:
+        if base_node is not None and b["name"] in frame["bearings"]:
             link = base_node
-        if sub_node is not None and b["name"] == SUB_BASE["bearing"]:
+        if sub_node is not None and b["name"] == sub["bearing"]:
             link = sub_node
         kw = dict(kxx=p["k_y"], kyy=p["k_z"], kxy=kc, kyx=kc, cxx=p.get("c_y", 0.0),
                   cyy=p.get("c_z", 0.0), tag=f"ground_{b['name']}")
         if link is not None:
             kw["n_link"] = link
         elements.append(rs.BearingElement(n=pn, **kw))
-    for node, body in ((base_node, FRAME), (sub_node, SUB_BASE)):
+    for node, body in ((base_node, frame), (sub_node, sub)):
         if node is None:
             continue
         # mz: ROSS's axial DOF of the point mass (nothing couples to it).
@@ -200,67 +323,132 @@ def add_runout(resp, bearing):
     return {"r_y_re": r_y.real, "r_y_im": r_y.imag, "r_z_re": r_z.real, "r_z_im": r_z.imag}
 
 
+def add_delay(resp, bearing, speeds, tau):
+    """Both rel probes of `bearing` read tau [s] late: Q e^{-i Omega tau}."""
+    lag = np.exp(-1j * 2 * math.pi * np.asarray(speeds) * tau)
+    for c in ("rel_y", "rel_z"):
+        resp[bearing][c] = resp[bearing][c] * lag
+    return {"tau_s": tau}
+
+
 def sig(v, digits):
     return f"{v:.{digits - 1}e}"
+
+
+def physical_detail(effect, spec):
+    """truth.json's effect_details entry of an effect ROSS simulates."""
+    what = effect[0]
+    if what == "frame":
+        return {"name": "foundation_coupling", "bearing": effect[1]["bearings"][0], "parameters": {}}
+    if what == "sub_base":
+        return {"name": "pedestal_sub_base", "bearing": effect[1]["bearing"],
+                "parameters": {k: v for k, v in effect[1].items() if k != "bearing"}}
+    if what == "worn_film":
+        return {"name": "bearing_coefficients", "bearing": effect[1],
+                "parameters": {"clearance_ratio": effect[2]}}
+    if what == "table_scale":
+        return {"name": "bearing_coefficients", "bearing": effect[1],
+                "parameters": {"k_scale": effect[2], "c_scale": effect[3]}}
+    if what == "cross":
+        p = next(b for b in spec["bearings"] if b["name"] == effect[1])["pedestal"]
+        return {"name": "pedestal_cross_coupling", "bearing": effect[1],
+                "parameters": {"k_yz": effect[2] * math.sqrt(p["k_y"] * p["k_z"])}}
+    raise ValueError(what)
 
 
 _CACHE = {}
 
 
-def make(out, case, seed):
+def make(out, case, seed, machine=DEFAULT):
     """Writes one run directory; returns its truth dict."""
-    with open(MACHINE, "rb") as f:
+    m = MACHINES[machine]
+    with open(machine_file(machine), "rb") as f:
         spec = tomllib.load(f)
-    speeds = speeds_of(case, seed)
-    effect, noise_kind = kind(case)
-    key = (effect, tuple(speeds))
+    speeds = speeds_of(case, seed, machine)
+    effect, noise_kind = kind(case, machine)
+    effects = effects_of(case, machine)
+    physical = [e for e in effects if e[0] in ("frame", "sub_base", "worn_film", "table_scale", "cross")]
+    key = (machine, effect, tuple(speeds))
     if key not in _CACHE:  # ROSS's response depends on the effect and grid only
-        _CACHE[key] = respond(spec, speeds, effect)
+        _CACHE[key] = respond(spec, speeds, physical)
     resp, written = _CACHE[key]
     resp = {b: dict(v) for b, v in resp.items()}
     names = [b["name"] for b in spec["bearings"]]
     details = []
-    case_name, case = case, effect
-    if case == "runout":
-        details.append({"name": "probe_runout", "bearing": "B3", "parameters": add_runout(resp, "B3")})
-    if case == "base-runout":
-        details.append({"name": "foundation_coupling", "bearing": "B1", "parameters": {}})
-        details.append({"name": "probe_runout", "bearing": "B2", "parameters": add_runout(resp, "B2")})
-    if case == "sub-base":
-        details.append({"name": "pedestal_sub_base", "bearing": "B3",
-                        "parameters": {k: v for k, v in SUB_BASE.items() if k != "bearing"}})
-    if case == "table":
-        details.append({"name": "bearing_coefficients", "bearing": WORN[0],
-                        "parameters": {"clearance_ratio": WORN[1]}})
-    if case == "cross":
-        p = next(b for b in spec["bearings"] if b["name"] == CROSS[0])["pedestal"]
-        details.append({"name": "pedestal_cross_coupling", "bearing": CROSS[0],
-                        "parameters": {"k_yz": CROSS[1] * math.sqrt(p["k_y"] * p["k_z"])}})
-    rng = np.random.default_rng(17_000 + 101 * CASES.index(case_name) + seed)
-    noisy = noise_kind != "d3"
-    columns = noise_kind == "w1c"
-    digits = 7 if noisy else 3
+    for e in effects:
+        if e[0] == "runout":
+            details.append({"name": "probe_runout", "bearing": e[1], "parameters": add_runout(resp, e[1])})
+        elif e[0] == "delay":
+            details.append({"name": "sensor_delay", "bearing": e[1],
+                            "parameters": add_delay(resp, e[1], speeds, e[2])})
+        elif e in physical:
+            details.append(physical_detail(e, spec))
+    rng = np.random.default_rng(m["rng"] + 101 * cases_of(machine).index(case) + seed)
+    noisy = not noise_kind.startswith("d")
+    columns = noise_kind.endswith("c")
+    digits = 7 if noisy else int(noise_kind[1:])
     data, sd = {}, {}
     for b in names:
         for c in CHANNELS:
             v = resp[b][c]
-            s = NOISE * math.sqrt(float(np.mean(np.abs(v) ** 2))) if noisy else 0.0
+            if noisy:
+                s = m["noise"]["rel"] * np.abs(v) + m["noise"]["floor"] * math.sqrt(float(np.mean(np.abs(v) ** 2)))
+            else:
+                s = np.zeros(len(v))
             sd[(b, c)] = s
             noise = (rng.standard_normal(len(v)) + 1j * rng.standard_normal(len(v))) * s / math.sqrt(2)
             data[(b, c)] = v + noise
-    flipped = []
-    if case == "flips":
-        idx = sorted(rng.choice(np.arange(3, len(speeds) - 3), size=3, replace=False).tolist())
-        flipped = [float(speeds[i]) for i in idx]
-        for c in CHANNELS:
-            data[("B1", c)][idx] *= -1
-        details.append({"name": "keyphasor_flip", "bearing": "B1",
-                        "parameters": {f"speed_{k}_hz": s for k, s in enumerate(flipped)}})
+    for e in effects:
+        if e[0] == "flips":
+            idx = sorted(rng.choice(np.arange(3, len(speeds) - 3), size=3, replace=False).tolist())
+            flipped = [float(speeds[i]) for i in idx]
+            for b in e[1]:
+                for c in CHANNELS:
+                    data[(b, c)][idx] *= -1
+                details.append({"name": "keyphasor_flip", "bearing": b,
+                                "parameters": {f"speed_{k}_hz": s for k, s in enumerate(flipped)}})
+        elif e[0] == "outlier":
+            i = int(rng.choice(np.arange(3, len(speeds) - 3)))
+            for c in CHANNELS:
+                rms = math.sqrt(float(np.mean(np.abs(resp[e[1]][c]) ** 2)))
+                data[(e[1], c)][i] += OUTLIER * rms * np.exp(2j * math.pi * rng.random())
+            details.append({"name": "outlier_speed", "bearing": e[1],
+                            "parameters": {"speed_0_hz": float(speeds[i])}})
+    write(out, speeds, names, data, sd if columns else None, digits, written)
+    truth = {"pedestals": nominal_truth(machine),
+             "effects": [d["name"] for d in details if d["name"] not in ("keyphasor_flip", "outlier_speed")],
+             "effect_details": details}
+    bases = []
+    for e in effects:
+        if e[0] == "frame":
+            bases.append(dict(e[1], eta=0.0))
+        if e[0] == "sub_base":
+            bases.append({"name": f"{e[1]['bearing']}-sub-base", "bearings": [e[1]["bearing"]], "eta": 0.0,
+                          **{k: v for k, v in e[1].items() if k != "bearing"}})
+    if bases:
+        truth["bases"] = bases
+    with open(os.path.join(out, "truth.json"), "w") as f:
+        json.dump(truth, f, indent=1)
+        f.write("\n")
+    return truth
+
+
+def nominal_truth(machine=DEFAULT):
+    """The machine file's pedestals, as truth.json lists them."""
+    with open(machine_file(machine), "rb") as f:
+        spec = tomllib.load(f)
+    return [{"bearing": b["name"], "k_y": b["pedestal"]["k_y"], "k_z": b["pedestal"]["k_z"],
+             "m": b["pedestal"]["m"], "c_y": b["pedestal"].get("c_y", 0.0),
+             "c_z": b["pedestal"].get("c_z", 0.0)} for b in spec["bearings"]]
+
+
+def write(out, speeds, names, data, sd, digits, written):
+    """measurements.csv (sd: the *_sd columns, or None) and bearings.csv."""
     os.makedirs(out, exist_ok=True)
     fmt = lambda s: f"{s:.6g}"  # noqa: E731
     with open(os.path.join(out, "measurements.csv"), "w") as f:
         head = "speed_hz,bearing," + ",".join(f"{c}_re,{c}_im" for c in CHANNELS)
-        if columns:
+        if sd is not None:
             head += "," + ",".join(f"{c}_sd" for c in CHANNELS)
         f.write(head + "\n")
         for j, s in enumerate(speeds):
@@ -269,43 +457,62 @@ def make(out, case, seed):
                 for c in CHANNELS:
                     q = data[(b, c)][j]
                     row += [sig(q.real, digits), sig(q.imag, digits)]
-                if columns:
-                    row += [sig(sd[(b, c)], 4) for c in CHANNELS]
+                if sd is not None:
+                    row += [sig(sd[(b, c)][j], 4) for c in CHANNELS]
                 f.write(",".join(row) + "\n")
-    keys = ("kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz")
     with open(os.path.join(out, "bearings.csv"), "w") as f:
-        f.write("speed_hz,bearing," + ",".join(keys) + "\n")
+        f.write("speed_hz,bearing," + ",".join(KEYS) + "\n")
         for j, s in enumerate(speeds):
             for b in names:
-                f.write(",".join([fmt(s), b] + [sig(written[b][j][k], 10) for k in keys]) + "\n")
-    truth = {"pedestals": [], "effects": [d["name"] for d in details if d["name"] != "keyphasor_flip"],
-             "effect_details": details}
-    for b in spec["bearings"]:
-        p = b["pedestal"]
-        truth["pedestals"].append({"bearing": b["name"], "k_y": p["k_y"], "k_z": p["k_z"], "m": p["m"],
-                                   "c_y": p.get("c_y", 0.0), "c_z": p.get("c_z", 0.0)})
-    if case == "base-runout":
-        truth["bases"] = [dict(FRAME, eta=0.0)]
-    if case == "sub-base":
-        truth["bases"] = [{"name": "B3-sub-base", "bearings": ["B3"], "eta": 0.0,
-                           **{k: v for k, v in SUB_BASE.items() if k != "bearing"}}]
-    with open(os.path.join(out, "truth.json"), "w") as f:
-        json.dump(truth, f, indent=1)
-        f.write("\n")
-    return truth
+                f.write(",".join([fmt(s), b] + [sig(written[b][j][k], 10) for k in KEYS]) + "\n")
+
+
+def read_phasors(run):
+    """{(speed text, bearing, channel): complex} of a run's measurements.csv."""
+    import csv
+    with open(os.path.join(run, "measurements.csv")) as f:
+        return {(r["speed_hz"], r["bearing"], c): complex(float(r[c + "_re"]), float(r[c + "_im"]))
+                for r in csv.DictReader(f) for c in CHANNELS}
+
+
+def compare(a, b):
+    """Worst |a - b| per bearing and channel over the speeds both runs have,
+    relative to that channel's peak |b|; printed, the worst returned."""
+    pa, pb = read_phasors(a), read_phasors(b)
+    common = sorted(set(pa) & set(pb))
+    if not common:
+        sys.exit(f"{a} and {b}: no speed in common")
+    worst = 0.0
+    for bearing in sorted({k[1] for k in common}):
+        for c in CHANNELS:
+            keys = [k for k in common if k[1] == bearing and k[2] == c]
+            peak = max(abs(pb[k]) for k in keys)
+            d = max(abs(pa[k] - pb[k]) for k in keys) / peak
+            worst = max(worst, d)
+            print(f"{bearing} {c}: worst |difference| {100 * d:.3f} % of the peak ({len(keys)} speeds)")
+    print(f"worst {100 * worst:.3f} %")
+    return worst
 
 
 def main():
     args = sys.argv[1:]
+    if args[:1] == ["--compare"] and len(args) == 3:
+        compare(args[1], args[2])
+        return
+    machine = DEFAULT
+    if args[:1] == ["--machine"] and len(args) >= 2 and args[1] in MACHINES:
+        machine, args = args[1], args[2:]
+    cases = cases_of(machine)
     if args == ["--cases"]:
-        print("\n".join(CASES))
+        print("\n".join(cases))
     elif args == ["--repo"]:
-        for case in REPO_CASES:
-            make(os.path.join(DATA, case), case, 1)
+        for case in MACHINES[machine]["repo"]:
+            make(os.path.join(MACHINES[machine]["data"], case), case, 1, machine)
             print(f"{case}: written")
-    elif len(args) >= 3 and args[1] in CASES:
-        for seed in args[2:]:
-            make(os.path.join(args[0], f"{args[1]}-{seed}"), args[1], int(seed))
+    elif len(args) >= 3 and all(c in cases for c in args[1].split(",")):
+        for seed in args[2:]:  # CASE,CASE...: one process, ROSS's responses cached
+            for case in args[1].split(","):
+                make(os.path.join(args[0], f"{case}-{seed}"), case, int(seed), machine)
     else:
         sys.exit(__doc__)
 
