@@ -6,7 +6,13 @@
 //! (K_B, C_B, M_B per direction). Their covariance is that of the base's
 //! maximum-likelihood fit (`crate::estimate::base`), whose cost
 //! J = Σ eᵀΣ⁻¹e is public ([`chi2`]): the covariance is 2·H⁻¹, H the
-//! Hessian of J by central differences in the fit's own parametrisation
+//! Hessian of J by central differences, on the very observations and
+//! variances the fit minimised J over (`FoundationFit::obs`: after a
+//! pedestal cross-coupling, a correction that mixes the channels, the
+//! variances the correction carries into each residual,
+//! `super::correct::carrying_noise`, not the measured numbers' own, which
+//! would make the base look better known than its fit says), in the fit's
+//! own parametrisation
 //! (θ of every pedestal of the group, then κ = 1/K_B, μ = M_B/K_B,
 //! γ = C_B/K_B of each direction where base motion was detected), in
 //! relative units. The readings' variance then follows by the delta method
@@ -14,9 +20,8 @@
 //! the re-simulation), Σ_o g_oᵀ·C·g_o. Correlations between a base and
 //! the state's corrections (runout, delays) are not carried.
 
-use super::correct::corrected_on;
 use super::data::Prepared;
-use super::foundation::{observations, FoundationFit};
+use super::foundation::FoundationFit;
 use super::machine::{flat, resimulate, Readings};
 use super::state::State;
 use crate::estimate::base::{chi2, BaseGroup, BaseIdentifiability};
@@ -165,8 +170,7 @@ pub fn base_variance(
     let Some(f) = foundation else {
         return Ok(0.0);
     };
-    let cprep = corrected_on(prep, state, Some(f));
-    let obs = observations(&cprep);
+    let obs = &f.obs;
     let x0 = flat(readings);
     let mut total = 0.0;
     for (gi, (group, fit)) in f.grouping.groups.iter().zip(&f.grouping.fits).enumerate() {
@@ -174,7 +178,7 @@ pub fn base_variance(
         if slots.is_empty() {
             continue;
         }
-        let Some(cov) = covariance(&obs, group, fit, &slots) else {
+        let Some(cov) = covariance(obs, group, fit, &slots) else {
             return Ok(f64::INFINITY);
         };
         let mut grads: Vec<Vec<f64>> = Vec::with_capacity(slots.len());

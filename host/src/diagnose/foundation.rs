@@ -220,6 +220,12 @@ pub struct FoundationFit {
     pub prediction: Prediction,
     /// Its gap.
     pub gap: Gap,
+    /// The observations the bases were fitted to, with the variances the
+    /// fit weighted them by (the noise a channel-mixing correction carries
+    /// into them included, `super::correct::carrying_noise`): the cost
+    /// whose curvature is the fit's covariance
+    /// ([`super::base_floor::base_variance`]).
+    pub obs: Vec<Vec<Observation>>,
 }
 
 /// The measurements as the estimation core's observations, per bearing,
@@ -451,6 +457,7 @@ impl Fitted {
             evidence,
             prediction: self.prediction,
             gap: self.gap,
+            obs: self.obs,
         }
     }
 }
@@ -482,6 +489,7 @@ impl FoundationFit {
             evidence: self.evidence,
             prediction,
             gap,
+            obs,
         })
     }
 }
