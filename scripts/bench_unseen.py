@@ -19,7 +19,9 @@ diagnose: named right (exactly the expected effects, each at its bearing,
   a base at any bearing), named wrong (something else named, or an
   expected effect at another bearing), partly (a subset, nothing wrong),
   missed (nothing named); untrusted verdicts; the worst k/m error of the
-  named-right runs' final pedestals; seconds per run.
+  named-right runs' final pedestals; the flipped speeds diagnose lists
+  (`flipped_speeds_hz`: exactly the truth's on the flips case, any listed
+  on the others); seconds per run.
 """
 import concurrent.futures as cf
 import json
@@ -95,12 +97,22 @@ def one(b, run):
     if diag is not None:
         r["named"] = [(s["effect"], s["bearing"]) for s in diag["steps"] if not s.get("dropped")]
         r["dtrusted"] = diag["trusted"]
+        r["dlisted"] = diag.get("flipped_speeds_hz", {})
         r["gap"] = (diag["gap_before"], diag["gap_after"])
         r["after_err"] = max(worst_rel(p, truth, lambda q, k: q[k])
                              for p in diag["pedestals_after"])
         r["after_each"] = {p["bearing"]: worst_rel(p, truth, lambda q, k: q[k])
                            for p in diag["pedestals_after"]}
     return r
+
+
+def listed_exactly(r, listed):
+    """Whether `listed` (speeds per bearing) holds exactly the flipped speeds
+    of the truth at B1 and nothing at another bearing."""
+    d = next(d for d in r["truth"]["effect_details"] if d["name"] == "keyphasor_flip")
+    want_s = sorted(d["parameters"].values())
+    others = any(v for k, v in listed.items() if k != "B1")
+    return sorted(listed.get("B1", [])) == want_s and not others
 
 
 def judge(case, r):
@@ -152,12 +164,7 @@ def main():
         okw_b = sorted({bb for r in rs for bb in r.get("ok_wrong", [])})
         fl = "-"
         if kind(case)[0] == "flips":
-            def exact(r):
-                d = next(d for d in r["truth"]["effect_details"] if d["name"] == "keyphasor_flip")
-                want_s = sorted(d["parameters"].values())
-                others = any(v for k, v in r["listed"].items() if k != "B1")
-                return sorted(r["listed"].get("B1", [])) == want_s and not others
-            fl = str(sum(exact(r) for r in rs))
+            fl = str(sum(listed_exactly(r, r.get("listed", {})) for r in rs))
         if kind(case)[0] in ("clean", "flips"):
             listed = sum(any(v for v in r.get("listed", {}).values()) for r in rs)
             if kind(case)[0] == "clean":
@@ -165,8 +172,8 @@ def main():
         print(f"| {case} | {n} | {ex2} | {per} | {exp}/{n} | {okw} {okw_b if okw_b else ''} | {fl} |")
     print()
     print("diagnose (plinth diagnose --json --machine unseen-four.toml):")
-    print("| case | runs | named right | named wrong | partly | missed | untrusted | worst k/m error after (right runs) | s/run |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| case | runs | named right | named wrong | partly | missed | untrusted | worst k/m error after (right runs) | flips listed exactly | s/run |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for case in cases:
         rs = by[case]
         n = len(rs)
@@ -176,8 +183,11 @@ def main():
         worst = f"{100 * max(errs):.2f} %" if errs else "-"
         wrong = sorted({str(r.get("named")) for r, j in zip(rs, v) if j in ("wrong", "partly")})
         sec = sum(r["dt"] for r in rs) / n
+        fl = f"(any listed: {sum(any(r.get('dlisted', {}).values()) for r in rs)})"
+        if kind(case)[0] == "flips":
+            fl = str(sum(listed_exactly(r, r.get("dlisted", {})) for r in rs))
         print(f"| {case} | {n} | {v.count('right')} | {v.count('wrong')} | {v.count('partly')} | "
-              f"{v.count('missed')} | {untr} | {worst} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
+              f"{v.count('missed')} | {untr} | {worst} | {fl} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
     for case, r in results:
         if r["err"]:
             print(f"ERROR {r['run']}: {r['err']}")
