@@ -33,8 +33,9 @@ pub fn flipped_speeds(bearings: &[&[Observation]]) -> Vec<Vec<f64>> {
         .iter()
         .map(|obs| robust::keyphasor_flips(obs))
         .collect();
-    let listed: Vec<&[f64]> = found.iter().map(Vec::as_slice).collect();
-    let across = robust::cross_bearing_flips(bearings, &listed);
+    let flipped: Vec<&[f64]> = found.iter().map(Vec::as_slice).collect();
+    let none = vec![&[][..]; bearings.len()];
+    let across = robust::cross_bearing_flips(bearings, &none, &flipped);
     for (speeds, more) in found.iter_mut().zip(across) {
         speeds.extend(more);
         speeds.sort_by(f64::total_cmp);
@@ -59,7 +60,8 @@ pub fn listed_by_every_bearing(listed: &[Vec<f64>]) -> Vec<f64> {
 
 /// Adds to `identification` the keyphasor flips of its bearings found
 /// against the other bearings (`bearings`: the observations it was fitted
-/// to; speeds already listed for any bearing are not judged again).
+/// to; speeds already listed for any bearing are not judged again: the
+/// outliers left out, the flips found in speed negated back).
 pub fn mark_cross_bearing_flips(
     bearings: &[BearingObservations],
     identification: &mut Identification,
@@ -88,8 +90,21 @@ pub fn mark_cross_bearing_flips(
         })
         .collect();
     let observations: Vec<&[Observation]> = usable.iter().map(|(_, o)| *o).collect();
-    let listed_refs: Vec<&[f64]> = listed.iter().map(Vec::as_slice).collect();
-    let found = robust::cross_bearing_flips(&observations, &listed_refs);
+    // The flips each bearing's fit found in speed (the same test, run
+    // again: the report merges them with the outliers) are negated back,
+    // the outliers left out.
+    let in_speed: Vec<Vec<f64>> = observations
+        .iter()
+        .map(|o| robust::keyphasor_flips(o))
+        .collect();
+    let outliers: Vec<Vec<f64>> = listed
+        .iter()
+        .zip(&in_speed)
+        .map(|(l, f)| l.iter().copied().filter(|s| !f.contains(s)).collect())
+        .collect();
+    let outlier_refs: Vec<&[f64]> = outliers.iter().map(Vec::as_slice).collect();
+    let flipped_refs: Vec<&[f64]> = in_speed.iter().map(Vec::as_slice).collect();
+    let found = robust::cross_bearing_flips(&observations, &outlier_refs, &flipped_refs);
     // Speeds every bearing listed before this test.
     let everywhere = listed_by_every_bearing(&listed);
     if !everywhere.is_empty() {
