@@ -22,7 +22,9 @@ diagnose: named right (exactly the expected effects, each at its bearing,
   a base at any bearing), named wrong (something else named, or an
   expected effect at another bearing), partly (a subset, nothing wrong),
   missed (nothing named); untrusted verdicts; the worst k/m error of the
-  named-right runs' final pedestals; seconds per run.
+  named-right runs' final pedestals; the flipped speeds diagnose lists
+  (`flipped_speeds_hz`: exactly the truth's on the flips case, any listed
+  on the others); seconds per run.
 """
 import concurrent.futures as cf
 import json
@@ -79,14 +81,16 @@ def expect(case):
     return EXPECT[MACHINE]["clean-w1" if effect == "clean" else effect]
 
 
-def listed_exactly(r):
-    """Every bearing lists exactly its flipped and outlier speeds."""
+def listed_exactly(r, listed=None):
+    """Every bearing lists exactly its flipped and outlier speeds in `listed`
+    (speeds per bearing: identify's list unless another is given)."""
+    listed = r["listed"] if listed is None else listed
     want = {}
     for d in r["truth"]["effect_details"]:
         if d["name"] in ("keyphasor_flip", "outlier_speed"):
             want.setdefault(d["bearing"], []).extend(d["parameters"].values())
-    return all(sorted(r["listed"].get(b, [])) == sorted(want.get(b, []))
-               for b in set(want) | set(r["listed"]))
+    return all(sorted(listed.get(b, [])) == sorted(want.get(b, []))
+               for b in set(want) | set(listed))
 
 
 def run_json(args):
@@ -129,6 +133,7 @@ def one(b, run):
     if diag is not None:
         r["named"] = [(s["effect"], s["bearing"]) for s in diag["steps"] if not s.get("dropped")]
         r["dtrusted"] = diag["trusted"]
+        r["dlisted"] = diag.get("flipped_speeds_hz", {})
         r["gap"] = (diag["gap_before"], diag["gap_after"])
         r["after_err"] = max(worst_rel(p, truth, lambda q, k: q[k])
                              for p in diag["pedestals_after"])
@@ -205,8 +210,8 @@ def main():
         print(f"| {case} | {n} | {ex2} | {per} | {exp}/{n} | {okw} {okw_b if okw_b else ''} | {fl} |")
     print()
     print(f"diagnose (plinth diagnose --json --machine {os.path.basename(ross_unseen.machine_file(MACHINE))}):")
-    print("| case | runs | named right | named wrong | partly | missed | untrusted | worst k/m error after (right runs) | s/run |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| case | runs | named right | named wrong | partly | missed | untrusted | worst k/m error after (right runs) | flips listed exactly | s/run |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for case in cases:
         rs = by[case]
         n = len(rs)
@@ -216,8 +221,11 @@ def main():
         worst = f"{100 * max(errs):.2f} %" if errs else "-"
         wrong = sorted({str(r.get("named")) for r, j in zip(rs, v) if j in ("wrong", "partly")})
         sec = sum(r["dt"] for r in rs) / n
+        fl = f"(any listed: {sum(any(r.get('dlisted', {}).values()) for r in rs)})"
+        if kind(case)[0] == "flips":
+            fl = str(sum(listed_exactly(r, r.get("dlisted", {})) for r in rs))
         print(f"| {case} | {n} | {v.count('right')} | {v.count('wrong')} | {v.count('partly')} | "
-              f"{v.count('missed')} | {untr} | {worst} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
+              f"{v.count('missed')} | {untr} | {worst} | {fl} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
     for case, r in results:
         if r["err"]:
             print(f"ERROR {r['run']}: {r['err']}")

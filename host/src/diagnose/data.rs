@@ -29,12 +29,64 @@ pub struct Prepared {
     /// Per bearing, the maximum-likelihood fit of the paper's five-parameter
     /// model that decided the noise (`plinth identify`'s default fit).
     pub base_fits: Vec<PedestalFit>,
+    /// Per bearing (aligned with `bearings`), the speeds [Hz] whose
+    /// channels look negated, a keyphasor flip
+    /// ([`crate::identify::flips::flipped_speeds`], the tests `plinth
+    /// identify` runs), ascending: left out of `points`, the noise and
+    /// everything fitted, and reported.
+    pub flipped_speeds_hz: Vec<Vec<f64>>,
 }
 
 impl Prepared {
-    /// Arranges a run directory; fails on a bearing without coefficients at a
-    /// measured speed, non-finite numbers or too few speeds to identify.
+    /// Arranges a run directory ([`Self::arrange`]) without the readings
+    /// of the keyphasor flips `plinth identify` finds in it
+    /// ([`crate::identify::flips::flipped_speeds`] of every bearing's
+    /// series): a flipped (rel, ped) pair fits the pedestal equation as
+    /// well as the pair negated back, but it poisons the noise estimated
+    /// from the scatter between neighbouring speeds and every gap and fit
+    /// of an effect that is not homogeneous in (rel, ped) (a runout, a
+    /// base). Those readings are left out of everything and listed in
+    /// `flipped_speeds_hz`. Fails as [`Self::arrange`] does.
     pub fn from_run(run: &RunDir) -> Result<Self> {
+        let all = Self::arrange(run)?;
+        let series: Vec<Vec<Observation>> = all
+            .points
+            .iter()
+            .map(|row| row.iter().flatten().cloned().collect())
+            .collect();
+        let refs: Vec<&[Observation]> = series.iter().map(Vec::as_slice).collect();
+        let flipped = crate::identify::flips::flipped_speeds(&refs);
+        if flipped.iter().all(Vec::is_empty) {
+            return Ok(all);
+        }
+        let mut kept = run.clone();
+        kept.measurements.retain(|m| {
+            all.bearing_index(&m.bearing)
+                .and_then(|b| flipped.get(b))
+                .is_none_or(|f| !f.contains(&m.speed_hz))
+        });
+        let mut prep = Self::arrange(&kept).context(
+            "the run without the speeds whose phasors look flipped by 180° (keyphasor flips)",
+        )?;
+        // `arrange` orders the bearings by first appearance: align the
+        // lists with its order (a bearing whose first rows were left out
+        // may move).
+        prep.flipped_speeds_hz = prep
+            .bearings
+            .iter()
+            .map(|name| {
+                all.bearing_index(name)
+                    .and_then(|b| flipped.get(b).cloned())
+                    .unwrap_or_default()
+            })
+            .collect();
+        Ok(prep)
+    }
+
+    /// Arranges a run directory as it is; fails on a bearing without
+    /// coefficients at a measured speed, non-finite numbers or too few
+    /// speeds to identify.
+    pub fn arrange(run: &RunDir) -> Result<Self> {
         if run.measurements.is_empty() {
             bail!("measurements.csv holds no rows");
         }
@@ -131,12 +183,14 @@ impl Prepared {
                 );
             }
         }
+        let flipped_speeds_hz = vec![Vec::new(); bearings.len()];
         Ok(Self {
             bearings,
             speeds_hz,
             points,
             noise,
             base_fits,
+            flipped_speeds_hz,
         })
     }
 

@@ -258,6 +258,21 @@ pub struct Diagnosis {
     /// Convention mistakes the data most likely carry, per pedestal
     /// (`identify::convention`): with one, every other finding is suspect.
     pub suspected_convention_errors: Vec<crate::identify::convention::ConventionFinding>,
+    /// Per bearing, the speeds [Hz] whose channels look flipped by 180° (a
+    /// keyphasor fault; the tests of `plinth identify`,
+    /// `identify::flips::flipped_speeds`), ascending: those readings are
+    /// left out of the noise, every fit and every gap above. Only bearings
+    /// with such speeds.
+    pub flipped_speeds_hz: BTreeMap<String, Vec<f64>>,
+}
+
+/// Speeds [Hz] as a comma-separated list.
+fn hz_list(speeds_hz: &[f64]) -> String {
+    speeds_hz
+        .iter()
+        .map(|s| format!("{s}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The modal view of the pedestals by bearing, of the base and the final
@@ -291,6 +306,25 @@ impl Diagnosis {
                 s,
                 "  (the findings below are of the data as found: fix the data first)\n"
             );
+        }
+        if !self.flipped_speeds_hz.is_empty() {
+            for (bearing, speeds) in &self.flipped_speeds_hz {
+                let _ = writeln!(
+                    s,
+                    "KEYPHASOR FLIP at {bearing}: every channel (rel and ped, y and z) looks flipped by 180° at {} Hz (against its neighbouring speeds or the other bearings at the same speed): left out of the noise, the fits and the gaps below",
+                    hz_list(speeds)
+                );
+            }
+            let lists: Vec<Vec<f64>> = self.flipped_speeds_hz.values().cloned().collect();
+            let every = crate::identify::flips::listed_by_every_bearing(&lists);
+            if !every.is_empty() && lists.len() == self.pedestals_before.len() {
+                let _ = writeln!(
+                    s,
+                    "  every bearing is flipped at {} Hz: the machine's keyphasor itself triggered half a revolution off",
+                    hz_list(&every)
+                );
+            }
+            let _ = writeln!(s);
         }
         let _ = writeln!(s, "Base model: {}", self.base_model.join(", "));
         let _ = writeln!(

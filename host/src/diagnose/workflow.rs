@@ -462,6 +462,13 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         trust_reasons: conclusion.reasons,
         unexplained,
         suspected_convention_errors: crate::identify::convention::findings_for_run(run, &opts.base),
+        flipped_speeds_hz: prep
+            .bearings
+            .iter()
+            .zip(&prep.flipped_speeds_hz)
+            .filter(|(_, f)| !f.is_empty())
+            .map(|(b, f)| (b.clone(), f.clone()))
+            .collect(),
     };
     Ok(Outcome {
         diagnosis,

@@ -17,9 +17,51 @@ use super::data::BearingObservations;
 use super::{Identification, Warning, WarningKind};
 use crate::estimate::{robust, Observation};
 
+/// Per bearing (in the order of `bearings`, each bearing's observations in
+/// any order, phasors [m]), the speeds [Hz] at which its channels look
+/// negated, ascending: the test in speed of each bearing
+/// ([`robust::keyphasor_flips`]), then, with those speeds left out, the
+/// test against the other bearings at the same speed
+/// ([`robust::cross_bearing_flips`], three bearings or more). What
+/// `plinth identify` names, for a caller without a fit (`plinth diagnose`
+/// leaves these speeds out before it fits anything); identify runs the
+/// same two tests, the first inside each bearing's fit
+/// ([`super::trust::bad_speeds`], with the outlier speeds), the second in
+/// [`mark_cross_bearing_flips`].
+pub fn flipped_speeds(bearings: &[&[Observation]]) -> Vec<Vec<f64>> {
+    let mut found: Vec<Vec<f64>> = bearings
+        .iter()
+        .map(|obs| robust::keyphasor_flips(obs))
+        .collect();
+    let flipped: Vec<&[f64]> = found.iter().map(Vec::as_slice).collect();
+    let none = vec![&[][..]; bearings.len()];
+    let across = robust::cross_bearing_flips(bearings, &none, &flipped);
+    for (speeds, more) in found.iter_mut().zip(across) {
+        speeds.extend(more);
+        speeds.sort_by(f64::total_cmp);
+        speeds.dedup();
+    }
+    found
+}
+
+/// The speeds [Hz] every one of `listed` (per bearing, two bearings or
+/// more) holds: where every bearing looks flipped, the fault is common to
+/// all channels, the machine's keyphasor itself.
+pub fn listed_by_every_bearing(listed: &[Vec<f64>]) -> Vec<f64> {
+    match listed {
+        [first, _, ..] => first
+            .iter()
+            .copied()
+            .filter(|s| listed.iter().all(|l| l.contains(s)))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
 /// Adds to `identification` the keyphasor flips of its bearings found
 /// against the other bearings (`bearings`: the observations it was fitted
-/// to; speeds already listed for any bearing are not judged again).
+/// to; speeds already listed for any bearing are not judged again: the
+/// outliers left out, the flips found in speed negated back).
 pub fn mark_cross_bearing_flips(
     bearings: &[BearingObservations],
     identification: &mut Identification,
@@ -48,14 +90,23 @@ pub fn mark_cross_bearing_flips(
         })
         .collect();
     let observations: Vec<&[Observation]> = usable.iter().map(|(_, o)| *o).collect();
-    let listed_refs: Vec<&[f64]> = listed.iter().map(Vec::as_slice).collect();
-    let found = robust::cross_bearing_flips(&observations, &listed_refs);
-    // Speeds every bearing listed before this test.
-    let everywhere: Vec<f64> = listed[0]
+    // The flips each bearing's fit found in speed (the same test, run
+    // again: the report merges them with the outliers) are negated back,
+    // the outliers left out.
+    let in_speed: Vec<Vec<f64>> = observations
         .iter()
-        .copied()
-        .filter(|s| listed.iter().all(|l| l.contains(s)))
+        .map(|o| robust::keyphasor_flips(o))
         .collect();
+    let outliers: Vec<Vec<f64>> = listed
+        .iter()
+        .zip(&in_speed)
+        .map(|(l, f)| l.iter().copied().filter(|s| !f.contains(s)).collect())
+        .collect();
+    let outlier_refs: Vec<&[f64]> = outliers.iter().map(Vec::as_slice).collect();
+    let flipped_refs: Vec<&[f64]> = in_speed.iter().map(Vec::as_slice).collect();
+    let found = robust::cross_bearing_flips(&observations, &outlier_refs, &flipped_refs);
+    // Speeds every bearing listed before this test.
+    let everywhere = listed_by_every_bearing(&listed);
     if !everywhere.is_empty() {
         let list: Vec<String> = everywhere.iter().map(|s| format!("{s}")).collect();
         for p in identification
