@@ -419,7 +419,21 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         .iter()
         .filter_map(|p| as_pedestal_fit(&prep, p))
         .collect();
-    let conclusion = conclude(gap0, gap1, &steps, &physical, &where_after);
+    // Judged on both yardsticks: the gap as reported, the χ² the fits
+    // minimise for "the model got worse" (`super::trust::got_worse`).
+    let conclusion = conclude(
+        super::gap::Agreement {
+            gap: gap0,
+            ..pred0.agreement(&prep)
+        },
+        super::gap::Agreement {
+            gap: gap1,
+            ..pred1.agreement(base_prep.as_ref().unwrap_or(&prep))
+        },
+        &steps,
+        &physical,
+        &where_after,
+    );
     let unexplained = if conclusion.verdict.contains(super::trust::UNEXPLAINED) {
         super::locate::unexplained(&where_after, super::trust::AT_THE_FLOOR)
     } else {
