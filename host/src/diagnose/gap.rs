@@ -45,7 +45,45 @@ pub struct Gap {
     pub floor: f64,
 }
 
+/// A model's agreement with the measurements at the pedestal level on both
+/// yardsticks: the gap (amplitude-weighted relative RMS, what the report
+/// prints) and the noise-whitened χ² ([`Prediction::chi2`], the statistic
+/// the fits weigh residuals by: each reading against its own noise).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Agreement {
+    /// The gap and its noise floor [-].
+    pub gap: Gap,
+    /// Noise-whitened χ² of the prediction [-].
+    pub chi2: f64,
+    /// Real numbers the χ² sums (its degrees of freedom before the fitted
+    /// parameters are counted) [-].
+    pub n: usize,
+}
+
+impl Agreement {
+    /// χ² per real number summed [-] (≈ 1 for a model that explains the
+    /// data to their noise; +∞ when nothing is summed).
+    pub fn chi2_per_number(&self) -> f64 {
+        if self.n == 0 {
+            f64::INFINITY
+        } else {
+            self.chi2 / self.n as f64
+        }
+    }
+}
+
 impl Prediction {
+    /// Both yardsticks of this prediction over every pedestal reading of
+    /// `prep` ([`Agreement`]).
+    pub fn agreement(&self, prep: &Prepared) -> Agreement {
+        let (chi2, n) = self.chi2(prep);
+        Agreement {
+            gap: self.gap(prep, None),
+            chi2,
+            n,
+        }
+    }
+
     /// Predicts every pedestal channel with `model` at `params`.
     pub fn new(prep: &Prepared, model: &Model, params: &Params) -> Self {
         let nb = prep.bearings.len();

@@ -385,6 +385,21 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         states.push(state.clone());
         after_steps.push((state.clone(), None));
     }
+    // A table's clearance correction on rigid ground refitted by maximum
+    // likelihood, the estimator of the base model (`super::bearing_table::refine`).
+    let refits = if on_base.is_none() {
+        super::bearing_table::refine(&prep, &mut state, &mut steps)
+    } else {
+        Vec::new()
+    };
+    if !refits.is_empty() {
+        if let Some(last) = states.last_mut() {
+            *last = state.clone();
+        }
+        if let Some(last) = after_steps.last_mut() {
+            last.0 = state.clone();
+        }
+    }
     let (chosen_foundation, base_prep) = match on_base {
         Some(b) => (Some(b.fit), Some(b.prep)),
         None => (None, None),
@@ -400,6 +415,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         &pred1,
     );
     let mut pedestals_after = pedestals(&prep, &state)?;
+    super::bearing_table::report_refits(&prep, &refits, &mut pedestals_after);
     if let Some(f) = &chosen_foundation {
         for (b, p) in pedestals_after.iter_mut().enumerate() {
             if let Some((theta, se)) = f.pedestal(b) {
@@ -419,7 +435,21 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         .iter()
         .filter_map(|p| as_pedestal_fit(&prep, p))
         .collect();
-    let conclusion = conclude(gap0, gap1, &steps, &physical, &where_after);
+    // Judged on both yardsticks: the gap as reported, the χ² the fits
+    // minimise for "the model got worse" (`super::trust::got_worse`).
+    let conclusion = conclude(
+        super::gap::Agreement {
+            gap: gap0,
+            ..pred0.agreement(&prep)
+        },
+        super::gap::Agreement {
+            gap: gap1,
+            ..pred1.agreement(base_prep.as_ref().unwrap_or(&prep))
+        },
+        &steps,
+        &physical,
+        &where_after,
+    );
     let unexplained = if conclusion.verdict.contains(super::trust::UNEXPLAINED) {
         super::locate::unexplained(&where_after, super::trust::AT_THE_FLOOR)
     } else {
