@@ -48,6 +48,7 @@ use serde::{Deserialize, Serialize};
 
 mod run;
 mod scatter;
+pub mod variance;
 
 pub use run::RunNoise;
 use scatter::*;

@@ -345,7 +345,9 @@ pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
                 "noise {}: {}{}, sd [m] {}; χ²/dof {}\n",
                 fit.bearing,
                 n.source.name(),
-                if n.scale_estimated {
+                if n.variance_function.is_some() {
+                    " (variance function from the fit's residuals: the scatter's law rejected)"
+                } else if n.scale_estimated {
                     " (level from the fit's χ²)"
                 } else {
                     ""

@@ -7,7 +7,9 @@
 use super::{checks, ols_solution, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::{self, LackOfFit};
 use crate::estimate::ml::{self, MlFit};
-use crate::estimate::noise::{BearingNoise, NoiseSource, Quantisation, CHANNELS};
+use crate::estimate::noise::{
+    variance, BearingNoise, NoiseSource, Quantisation, Scatter, CHANNELS,
+};
 use crate::estimate::pedestal::{fit_under_noise, noise_level, NoiseLevel};
 use crate::estimate::robust;
 use crate::estimate::Observation;
@@ -77,6 +79,43 @@ pub struct NoiseReport {
     /// flipped by 180° ([`crate::estimate::robust`]), ascending.
     #[serde(default)]
     pub outlier_speeds_hz: Vec<f64>,
+    /// The variance function the fit's residuals gave when they rejected the
+    /// scatter's law ([`crate::estimate::noise::variance`]); the fit and its
+    /// standard errors are those under it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub variance_function: Option<VarianceLaw>,
+}
+
+/// A variance function per channel as reported: complex noise sd
+/// sqrt(E|n|²) = sqrt(fraction²·|X|² + floor²) [m] at a phasor of magnitude |X|.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VarianceLaw {
+    /// The part proportional to |X| per channel (`rel_y`, …) [-].
+    pub fraction: BTreeMap<String, f64>,
+    /// The floor per channel [m].
+    pub floor_sd: BTreeMap<String, f64>,
+    /// p-value of the score test that rejected the scatter's law [-].
+    pub p_value: f64,
+}
+
+impl VarianceLaw {
+    /// The report of [`variance::COMPONENTS`] `p` (per real part α [-], β
+    /// [m²]) whose variances were scaled by `scale` [-] after the fit, chosen
+    /// at the score test's `p_value` [-].
+    fn of(p: &[f64; variance::COMPONENTS], scale: f64, p_value: f64) -> Self {
+        let per = |offset: usize| {
+            CHANNELS
+                .iter()
+                .enumerate()
+                .map(|(ch, n)| (n.to_string(), (2.0 * scale * p[2 * ch + offset]).sqrt()))
+                .collect()
+        };
+        Self {
+            fraction: per(0),
+            floor_sd: per(1),
+            p_value,
+        }
+    }
 }
 
 /// The paper's OLS next to the ML estimate (`identify --compare-ols`).
@@ -191,11 +230,37 @@ pub(crate) fn fit_ml_checked(
             return Ok((fit, report));
         }
     };
+    let mut ml_fit = ml_fit;
+    // An estimated noise law the residuals reject: the fit, its standard
+    // errors and the level are those under the variance function of the
+    // residuals (estimate::noise::variance); the lack-of-fit tests keep the
+    // scatter's law and its fit (their floor is model-free).
+    let mut law = None;
+    let mut lack_of_fit_input = None;
+    // Only a proportional law can leave readings of small amplitude nearly
+    // exact; one sd per channel is left as it is (and costs nothing here).
+    let proportional = noise
+        .scatter
+        .iter()
+        .any(|law| matches!(law, Some(Scatter::Relative(_))));
+    if noise.source == NoiseSource::Scatter && proportional {
+        if let Some(r) = variance::refit(&obs, &columns, &ml_fit) {
+            for (v, o) in noise.var.iter_mut().zip(observations) {
+                let w = variance::variances(o, &r.law);
+                if w.iter().all(|x| *x > 0.0 && x.is_finite()) {
+                    *v = w;
+                }
+            }
+            let scatter_obs = std::mem::replace(&mut obs, r.obs);
+            let scatter_fit = std::mem::replace(&mut ml_fit, r.fit);
+            lack_of_fit_input = Some((scatter_obs, scatter_fit));
+            law = Some((r.law, r.p_value));
+        }
+    }
     let chi2 = ml_fit.chi2;
     let dof = ml_fit.dof;
     let p_value = ml::chi2_two_sided_p(chi2, dof);
     let mut extra = Vec::new();
-    let mut ml_fit = ml_fit;
     // The level: the one noise policy's verdict on χ².
     let variance_scale = match noise_level(chi2, dof, noise.source.scale_estimated()) {
         // A measured noise level (columns, digits, or the scatter's own
@@ -310,13 +375,21 @@ pub(crate) fn fit_ml_checked(
     }
     let mut report = report(noise, chi2, dof, variance_scale, ml_fit.equation_var.sqrt());
     report.outlier_speeds_hz = outlier_speeds_hz;
+    report.variance_function = law.map(|(p, p_value)| VarianceLaw::of(&p, variance_scale, p_value));
+    // The lack-of-fit tests see the fit under the scatter's law: its
+    // residuals, χ² and dof (before any equation error), as without a
+    // variance function.
+    let (lof_obs, lof_theta, lof_chi2, lof_dof) = match &lack_of_fit_input {
+        Some((o, f)) => (o, &f.theta, f.chi2, f.dof),
+        None => (&obs, &ml_fit.theta, chi2, dof),
+    };
     report.lack_of_fit = lack_of_fit::assess(
-        &obs,
-        &ml_fit.theta,
+        lof_obs,
+        lof_theta,
         &columns,
         noise.source,
-        chi2,
-        dof,
+        lof_chi2,
+        lof_dof,
         CHI2_P_THRESHOLD,
     );
     Ok((fit, report))
@@ -365,6 +438,7 @@ pub(crate) fn report(
         equation_error_sd,
         lack_of_fit: None,
         outlier_speeds_hz: Vec::new(),
+        variance_function: None,
     }
 }
 

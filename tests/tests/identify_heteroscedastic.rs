@@ -1,0 +1,160 @@
+//! Issue 17: heteroscedastic noise without noise columns. A real probe's
+//! noise is a fraction of the signal plus a floor; the scatter between
+//! neighbouring speeds knows only one sd per channel or one fraction of the
+//! magnitude, and under the fraction alone the readings of small amplitude
+//! look nearly exact (docs/trust.md, "Heteroscedastic noise without noise
+//! columns"). The fit's residuals then reject the scatter's law and the
+//! pedestal is refitted under the variance function they give
+//! (host/src/estimate/noise/variance.rs).
+//!
+//! The exact responses are the simulator's (`plinth::sim`, the machine's
+//! elements); the noise is drawn here, sd = 1 % of |phasor| + 0.1 % of the
+//! channel's RMS (complex, split equally on the real and imaginary parts),
+//! as scripts/ross_unseen.py's `unseen-overhung` machine does; the numbers
+//! are written with 7 digits and read back.
+
+use plinth::identify::Identification;
+use plinth::rundir::RunDir;
+use plinth::sim::{unbalance_response, EffectSet};
+use plinth_tests::rundown::{identify, machine};
+use plinth_tests::write_run;
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// The machine's exact run-down (5..=200 Hz in 2.5 Hz steps) with the
+/// mixed noise of the module docs drawn with `seed` (`relative` fraction of
+/// |phasor| plus `floor` of the channel's RMS), written with 7 digits and
+/// read back.
+fn mixed_noise_run(file: &str, relative: f64, floor: f64, seed: u64) -> RunDir {
+    let m = machine(file);
+    let speeds: Vec<f64> = (0..=78).map(|i| 5.0 + 2.5 * i as f64).collect();
+    let response = unbalance_response(&m, &speeds, &EffectSet::none()).expect("simulation");
+    let mut run = response.to_run_dir(None).expect("run directory");
+    let mut rng = StdRng::seed_from_u64(seed);
+    let mut bearings: Vec<String> = run.measurements.iter().map(|m| m.bearing.clone()).collect();
+    bearings.sort();
+    bearings.dedup();
+    for b in &bearings {
+        let rows: Vec<usize> = (0..run.measurements.len())
+            .filter(|&i| &run.measurements[i].bearing == b)
+            .collect();
+        for ch in 0..4 {
+            let value = |m: &plinth::rundir::Measurement| {
+                if ch < 2 {
+                    m.rel[ch]
+                } else {
+                    m.ped[ch - 2]
+                }
+            };
+            let rms = (rows
+                .iter()
+                .map(|&i| value(&run.measurements[i]).norm_sqr())
+                .sum::<f64>()
+                / rows.len() as f64)
+                .sqrt();
+            for &i in &rows {
+                let x = value(&run.measurements[i]);
+                let sd = (relative * x.norm() + floor * rms) / 2f64.sqrt();
+                let re: f64 = StandardNormal.sample(&mut rng);
+                let im: f64 = StandardNormal.sample(&mut rng);
+                let noisy = x + num_complex::Complex::new(re * sd, im * sd);
+                let m = &mut run.measurements[i];
+                if ch < 2 {
+                    m.rel[ch] = noisy;
+                } else {
+                    m.ped[ch - 2] = noisy;
+                }
+            }
+        }
+    }
+    let dir = write_run(&run, Some(7));
+    RunDir::read(dir.path()).expect("read back")
+}
+
+/// (estimate − truth)/± of every parameter of every pedestal printed `ok`.
+fn z_scores(run: &RunDir, id: &Identification) -> Vec<(String, f64)> {
+    let truth = run.truth.as_ref().expect("truth");
+    let mut out = Vec::new();
+    for p in id.pedestals.iter().filter(|p| p.trusted) {
+        let t = &truth
+            .pedestals
+            .iter()
+            .find(|t| t.bearing == p.bearing)
+            .expect("truth of the bearing")
+            .pedestal;
+        let (f, e) = (&p.pedestal, &p.std_err);
+        for (name, got, se, want) in [
+            ("k_y", f.k_y, e.k_y, t.k_y),
+            ("k_z", f.k_z, e.k_z, t.k_z),
+            ("m", f.m, e.m, t.m),
+            ("c_y", f.c_y, e.c_y, t.c_y),
+            ("c_z", f.c_z, e.c_z, t.c_z),
+        ] {
+            out.push((format!("{} {name}", p.bearing), (got - want) / se));
+        }
+    }
+    out
+}
+
+/// Under a fraction of |phasor| plus a floor, without noise columns, the
+/// fits whose scatter law is proportional take the variance function (not
+/// every one: the scatter may choose one sd per channel), nothing is untrusted, and the
+/// printed ± mean what they say: no value beyond 4 of its ±, RMS of
+/// (estimate − truth)/± below 1.5 over 6 runs (1 when calibrated). Before
+/// the variance function the ROSS machine gave an RMS of 14 on B1 c_y.
+#[test]
+#[ignore = "issue 17: where the scatter chooses one sd per channel under a fraction plus a floor, the \
+            variance function is not tried (the proportional gate) and the fit is confidently wrong \
+            (feng-hahn damped, seed 1: right k_y 6.6 ± off); without the gate this test passes"]
+fn a_fraction_plus_a_floor_without_columns_keeps_its_promise() {
+    let mut all = Vec::new();
+    let mut taken = 0;
+    for seed in 1..=6 {
+        let run = mixed_noise_run("examples/feng-hahn-1997-damped.toml", 0.01, 0.001, seed);
+        let id = identify(&run);
+        taken += id
+            .noise
+            .values()
+            .filter(|n| n.variance_function.is_some())
+            .count();
+        assert!(
+            id.pedestals.iter().all(|p| p.trusted),
+            "seed {seed}: untrusted {:?}",
+            id.pedestals
+                .iter()
+                .filter(|p| !p.trusted)
+                .map(|p| (&p.bearing, &p.warnings))
+                .collect::<Vec<_>>()
+        );
+        let z = z_scores(&run, &id);
+        for (name, v) in &z {
+            assert!(v.abs() < 4.0, "seed {seed}: {name} is {v:.2} of its ± off");
+        }
+        all.extend(z);
+    }
+    let rms = (all.iter().map(|(_, v)| v * v).sum::<f64>() / all.len() as f64).sqrt();
+    assert!(rms < 1.5, "RMS of (estimate − truth)/± = {rms:.2}");
+    // Where the scatter chose one sd per channel the path is not taken.
+    assert!(taken > 0, "the variance function was never taken");
+}
+
+/// Noise of one sd per channel (no fraction) is in the scatter's own law;
+/// the score test may still reject its estimated channel ratios (measured in
+/// docs/trust.md), and either way the ± keep their promise.
+#[test]
+fn one_sd_per_channel_keeps_its_promise_with_or_without_the_variance_function() {
+    let mut all = Vec::new();
+    for seed in 1..=6 {
+        let run = mixed_noise_run("examples/feng-hahn-1997-damped.toml", 0.0, 0.01, seed);
+        let id = identify(&run);
+        assert!(id.pedestals.iter().all(|p| p.trusted), "seed {seed}");
+        let z = z_scores(&run, &id);
+        for (name, v) in &z {
+            assert!(v.abs() < 4.0, "seed {seed}: {name} is {v:.2} of its ± off");
+        }
+        all.extend(z);
+    }
+    let rms = (all.iter().map(|(_, v)| v * v).sum::<f64>() / all.len() as f64).sqrt();
+    assert!(rms < 1.5, "RMS of (estimate − truth)/± = {rms:.2}");
+}
