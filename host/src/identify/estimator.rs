@@ -243,7 +243,12 @@ pub(crate) fn fit_ml_checked(
         .scatter
         .iter()
         .any(|law| matches!(law, Some(Scatter::Relative(_))));
-    if noise.source == NoiseSource::Scatter && proportional {
+    // Residuals are noise samples only when the model fits: a misfit far
+    // beyond the scatter's level (e.g. a pedestal on a base fitted on rigid
+    // ground) is model error, which no variance function describes, and this
+    // fit is then the start of the base fit that follows.
+    let model_fits = ml_fit.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE;
+    if noise.source == NoiseSource::Scatter && proportional && model_fits {
         if let Some(r) = variance::refit(&obs, &columns, &ml_fit) {
             for (v, o) in noise.var.iter_mut().zip(observations) {
                 let w = variance::variances(o, &r.law);
