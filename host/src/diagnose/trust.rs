@@ -95,7 +95,7 @@ pub fn conclude(
         let moved = if after.gap < before.gap {
             "fell"
         } else if after.gap > before.gap {
-            "rose"
+            "ROSE"
         } else {
             "stayed"
         };
@@ -338,7 +338,7 @@ mod tests {
         let c = conclude(before, after, &[step(0.411, 0.415)], &[], &[]);
         assert!(c.trusted, "{:?}", c.reasons);
         assert!(
-            c.verdict.contains("gap rose from 0.4110 to 0.4150"),
+            c.verdict.contains("gap ROSE from 0.4110 to 0.4150"),
             "{}",
             c.verdict
         );
@@ -355,7 +355,7 @@ mod tests {
         assert!(got_worse(&before, &after));
         let c = conclude(before, after, &[step(0.411, 0.415)], &[], &[]);
         assert!(!c.trusted);
-        assert!(c.verdict.contains("gap rose"), "{}", c.verdict);
+        assert!(c.verdict.contains("gap ROSE"), "{}", c.verdict);
         assert!(
             c.verdict.contains("ROSE from 12.000 to 12.500"),
             "{}",
@@ -402,7 +402,7 @@ mod tests {
         assert!(c.verdict.contains("ROSE"), "{}", c.verdict);
         assert!(!c.verdict.contains("fell"), "{}", c.verdict);
         assert!(
-            c.verdict.contains("rose from 0.1000 to 0.1200"),
+            c.verdict.contains("ROSE from 0.1000 to 0.1200"),
             "{}",
             c.verdict
         );
