@@ -99,10 +99,12 @@ pub fn conclude(
         } else {
             "stayed"
         };
+        // The χ² is said in words of its own: "fell"/"ROSE" belong to the gap
+        // (a reader scanning the verdict must not read one for the other).
         let chi2_moved = if after_chi2 < before_chi2 {
-            "fell"
+            "dropped"
         } else if after_chi2 > before_chi2 {
-            "ROSE"
+            "GREW"
         } else {
             "stayed"
         };
@@ -345,7 +347,7 @@ mod tests {
         assert!(!c.verdict.contains("gap fell"), "{}", c.verdict);
         assert!(
             c.verdict
-                .contains("χ² per real number fell from 12.000 to 1.050"),
+                .contains("χ² per real number dropped from 12.000 to 1.050"),
             "{}",
             c.verdict
         );
@@ -357,7 +359,7 @@ mod tests {
         assert!(!c.trusted);
         assert!(c.verdict.contains("gap ROSE"), "{}", c.verdict);
         assert!(
-            c.verdict.contains("ROSE from 12.000 to 12.500"),
+            c.verdict.contains("GREW from 12.000 to 12.500"),
             "{}",
             c.verdict
         );
