@@ -3,6 +3,7 @@
 pub mod ross;
 pub mod rundown;
 pub mod simulated;
+pub mod unseen;
 
 use plinth::identify::synthetic::SyntheticRun;
 use plinth::rundir::{DigitsMode, RunDir, WriteOptions};

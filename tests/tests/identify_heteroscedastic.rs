@@ -17,6 +17,7 @@ use plinth::identify::Identification;
 use plinth::rundir::RunDir;
 use plinth::sim::{unbalance_response, EffectSet};
 use plinth_tests::rundown::{identify, machine};
+use plinth_tests::unseen::printed_ok;
 use plinth_tests::write_run;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
@@ -74,27 +75,26 @@ fn mixed_noise_run(file: &str, relative: f64, floor: f64, seed: u64) -> RunDir {
 
 /// (estimate − truth)/± of every parameter of every pedestal printed `ok`.
 fn z_scores(run: &RunDir, id: &Identification) -> Vec<(String, f64)> {
-    let truth = run.truth.as_ref().expect("truth");
-    let mut out = Vec::new();
-    for p in id.pedestals.iter().filter(|p| p.trusted) {
-        let t = &truth
-            .pedestals
-            .iter()
-            .find(|t| t.bearing == p.bearing)
-            .expect("truth of the bearing")
-            .pedestal;
-        let (f, e) = (&p.pedestal, &p.std_err);
-        for (name, got, se, want) in [
-            ("k_y", f.k_y, e.k_y, t.k_y),
-            ("k_z", f.k_z, e.k_z, t.k_z),
-            ("m", f.m, e.m, t.m),
-            ("c_y", f.c_y, e.c_y, t.c_y),
-            ("c_z", f.c_z, e.c_z, t.c_z),
-        ] {
-            out.push((format!("{} {name}", p.bearing), (got - want) / se));
-        }
+    printed_ok(run, id, true)
+        .into_iter()
+        .map(|(name, got, se, want)| (name, (got - want) / se))
+        .collect()
+}
+
+/// The z-scores of seed `seed`'s pedestals ([`z_scores`]), each checked
+/// within 4 (no value beyond 4 of its ±).
+fn checked_z_scores(run: &RunDir, id: &Identification, seed: u64) -> Vec<(String, f64)> {
+    let z = z_scores(run, id);
+    for (name, v) in &z {
+        assert!(v.abs() < 4.0, "seed {seed}: {name} is {v:.2} of its ± off");
     }
-    out
+    z
+}
+
+/// RMS of the z-scores `all`, checked below 1.5 (1 when calibrated).
+fn assert_rms_calibrated(all: &[(String, f64)]) {
+    let rms = (all.iter().map(|(_, v)| v * v).sum::<f64>() / all.len() as f64).sqrt();
+    assert!(rms < 1.5, "RMS of (estimate − truth)/± = {rms:.2}");
 }
 
 /// Under a fraction of |phasor| plus a floor, without noise columns, the
@@ -127,14 +127,9 @@ fn a_fraction_plus_a_floor_without_columns_keeps_its_promise() {
                 .map(|p| (&p.bearing, &p.warnings))
                 .collect::<Vec<_>>()
         );
-        let z = z_scores(&run, &id);
-        for (name, v) in &z {
-            assert!(v.abs() < 4.0, "seed {seed}: {name} is {v:.2} of its ± off");
-        }
-        all.extend(z);
+        all.extend(checked_z_scores(&run, &id, seed));
     }
-    let rms = (all.iter().map(|(_, v)| v * v).sum::<f64>() / all.len() as f64).sqrt();
-    assert!(rms < 1.5, "RMS of (estimate − truth)/± = {rms:.2}");
+    assert_rms_calibrated(&all);
     // Where the scatter chose one sd per channel the path is not taken.
     assert!(taken > 0, "the variance function was never taken");
 }
@@ -149,12 +144,7 @@ fn one_sd_per_channel_keeps_its_promise_with_or_without_the_variance_function() 
         let run = mixed_noise_run("examples/feng-hahn-1997-damped.toml", 0.0, 0.01, seed);
         let id = identify(&run);
         assert!(id.pedestals.iter().all(|p| p.trusted), "seed {seed}");
-        let z = z_scores(&run, &id);
-        for (name, v) in &z {
-            assert!(v.abs() < 4.0, "seed {seed}: {name} is {v:.2} of its ± off");
-        }
-        all.extend(z);
+        all.extend(checked_z_scores(&run, &id, seed));
     }
-    let rms = (all.iter().map(|(_, v)| v * v).sum::<f64>() / all.len() as f64).sqrt();
-    assert!(rms < 1.5, "RMS of (estimate − truth)/± = {rms:.2}");
+    assert_rms_calibrated(&all);
 }

@@ -7,74 +7,26 @@
 //! is Plinth's. The rates over several seeds are in scripts/bench-unseen.sh
 //! (docs/unseen.md).
 
+use plinth::diagnose::diagnose;
 use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
-use plinth::diagnose::{cli::oil_films, diagnose, Options};
-use plinth::identify::{Identification, WarningKind};
+use plinth::identify::WarningKind;
 use plinth::rundir::RunDir;
-use plinth::sim::Machine;
 use plinth_tests::rundown::identify;
+use plinth_tests::unseen::{self, assert_ok_means_right, named, untrusted};
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen");
 
 /// The stored run directory of `case` (seed 1).
 fn stored(case: &str) -> RunDir {
-    RunDir::read(std::path::Path::new(DATA).join(case)).expect("stored run directory")
+    unseen::stored(DATA, case)
 }
 
 /// `plinth diagnose RUN --machine unseen-four.toml`'s search (the file's
 /// oil-film geometry; the machine-level check is the CLI's).
 fn diagnosis(run: &RunDir) -> Diagnosis {
-    let machine = Machine::from_toml_path(std::path::Path::new(DATA).join("unseen-four.toml"))
-        .expect("machine file");
-    let options = Options {
-        oil_films: oil_films(&machine),
-        ..Options::default()
-    };
+    let (_, options) = unseen::machine_and_options(DATA, "unseen-four.toml");
     diagnose(run, &options).expect("diagnose").diagnosis
-}
-
-/// The effects diagnose kept, as (effect, bearing).
-fn named(d: &Diagnosis) -> Vec<(String, String)> {
-    d.steps
-        .iter()
-        .filter(|s| s.dropped.is_none())
-        .map(|s| (s.effect.clone(), s.bearing.clone()))
-        .collect()
-}
-
-/// The bearings identify did not trust.
-fn untrusted(id: &Identification) -> Vec<String> {
-    id.pedestals
-        .iter()
-        .filter(|p| !p.trusted)
-        .map(|p| p.bearing.clone())
-        .collect()
-}
-
-/// Every pedestal identify printed as `ok` lies within 3 of its ± of the
-/// ROSS truth in k_y, k_z and m (the method's promise).
-fn assert_ok_means_right(run: &RunDir, id: &Identification, label: &str) {
-    let truth = run.truth.as_ref().expect("truth");
-    for p in id.pedestals.iter().filter(|p| p.trusted) {
-        let t = &truth
-            .pedestals
-            .iter()
-            .find(|t| t.bearing == p.bearing)
-            .expect("truth of the bearing")
-            .pedestal;
-        for (name, got, se, want) in [
-            ("k_y", p.pedestal.k_y, p.std_err.k_y, t.k_y),
-            ("k_z", p.pedestal.k_z, p.std_err.k_z, t.k_z),
-            ("m", p.pedestal.m, p.std_err.m, t.m),
-        ] {
-            assert!(
-                (got - want).abs() <= 3.0 * se,
-                "{label}: {} {name} = {got:.6e} ± {se:.2e} printed ok, truth {want:.6e}",
-                p.bearing
-            );
-        }
-    }
 }
 
 #[test]
@@ -166,12 +118,7 @@ fn a_worn_bearing_table_is_named_as_bearing_coefficients_at_its_bearing() {
 #[test]
 fn a_worn_bearing_table_corrected_is_trusted_at_the_machine_level() {
     let run = stored("table");
-    let machine = Machine::from_toml_path(std::path::Path::new(DATA).join("unseen-four.toml"))
-        .expect("machine file");
-    let options = Options {
-        oil_films: oil_films(&machine),
-        ..Options::default()
-    };
+    let (machine, options) = unseen::machine_and_options(DATA, "unseen-four.toml");
     let out = diagnose(&run, &options).expect("diagnose");
     let check = MachineCheck::of(&machine, &out).expect("machine check");
     let mut d = out.diagnosis;

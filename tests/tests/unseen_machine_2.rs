@@ -13,48 +13,31 @@
 //! What does not work yet is written with the right assertion and ignored
 //! with the measured rate, so it can be un-ignored when fixed.
 
+use plinth::diagnose::diagnose;
 use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
-use plinth::diagnose::{cli::oil_films, diagnose, Options};
 use plinth::identify::{Identification, WarningKind};
 use plinth::rundir::RunDir;
-use plinth::sim::Machine;
 use plinth_tests::rundown::identify;
+use plinth_tests::unseen::{self, assert_ok_means_right, named, ok_but_wrong, untrusted};
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-2");
 
 /// The stored run directory of `case` (seed 1).
 fn stored(case: &str) -> RunDir {
-    RunDir::read(std::path::Path::new(DATA).join(case)).expect("stored run directory")
+    unseen::stored(DATA, case)
 }
 
 /// `plinth diagnose RUN --machine unseen-overhung.toml` as the command line
 /// runs it: the search with the file's oil-film geometry, then the
 /// machine-level check applied to the verdict.
 fn diagnosis(run: &RunDir) -> Diagnosis {
-    let machine = Machine::from_toml_path(std::path::Path::new(DATA).join("unseen-overhung.toml"))
-        .expect("machine file");
-    let options = Options {
-        oil_films: oil_films(&machine),
-        ..Options::default()
-    };
+    let (machine, options) = unseen::machine_and_options(DATA, "unseen-overhung.toml");
     let out = diagnose(run, &options).expect("diagnose");
     let check = MachineCheck::of(&machine, &out).expect("machine check");
     let mut d = out.diagnosis;
     check.apply(&mut d);
     d
-}
-
-/// The effects diagnose kept, as (effect, bearing), sorted.
-fn named(d: &Diagnosis) -> Vec<(String, String)> {
-    let mut v: Vec<(String, String)> = d
-        .steps
-        .iter()
-        .filter(|s| s.dropped.is_none())
-        .map(|s| (s.effect.clone(), s.bearing.clone()))
-        .collect();
-    v.sort();
-    v
 }
 
 /// (effect, bearing) pairs as owned strings, sorted.
@@ -65,55 +48,6 @@ fn pairs(v: &[(&str, &str)]) -> Vec<(String, String)> {
         .collect();
     v.sort();
     v
-}
-
-/// The bearings identify did not trust.
-fn untrusted(id: &Identification) -> Vec<String> {
-    id.pedestals
-        .iter()
-        .filter(|p| !p.trusted)
-        .map(|p| p.bearing.clone())
-        .collect()
-}
-
-/// The values identify printed as `ok` that lie more than 3 of their ±
-/// from the ROSS truth: k_y, k_z and m, and c_y, c_z with `damping`.
-fn ok_but_wrong(run: &RunDir, id: &Identification, damping: bool) -> Vec<String> {
-    let truth = run.truth.as_ref().expect("truth");
-    let mut wrong = Vec::new();
-    for p in id.pedestals.iter().filter(|p| p.trusted) {
-        let t = &truth
-            .pedestals
-            .iter()
-            .find(|t| t.bearing == p.bearing)
-            .expect("truth of the bearing")
-            .pedestal;
-        let (f, e) = (&p.pedestal, &p.std_err);
-        let mut values = vec![
-            ("k_y", f.k_y, e.k_y, t.k_y),
-            ("k_z", f.k_z, e.k_z, t.k_z),
-            ("m", f.m, e.m, t.m),
-        ];
-        if damping {
-            values.extend([("c_y", f.c_y, e.c_y, t.c_y), ("c_z", f.c_z, e.c_z, t.c_z)]);
-        }
-        for (name, got, se, want) in values {
-            if (got - want).abs() > 3.0 * se {
-                wrong.push(format!(
-                    "{} {name} = {got:.6e} ± {se:.2e} printed ok, truth {want:.6e}",
-                    p.bearing
-                ));
-            }
-        }
-    }
-    wrong
-}
-
-/// Every pedestal identify printed as `ok` lies within 3 of its ± of the
-/// ROSS truth in k_y, k_z and m (the method's promise).
-fn assert_ok_means_right(run: &RunDir, id: &Identification, label: &str) {
-    let wrong = ok_but_wrong(run, id, false);
-    assert!(wrong.is_empty(), "{label}: {wrong:?}");
 }
 
 /// The speeds the truth lists for `bearing` under `effect` (flipped or

@@ -259,36 +259,59 @@ pub fn profile(
     }
     let (ib, _) =
         best.ok_or_else(|| anyhow!("no value of the nonlinear parameter gives a solvable fit"))?;
-    let (mut a, mut b) = (
+    let (a, b) = (
         lo + step * ib.saturating_sub(1) as f64,
         lo + step * (ib + 1).min(GRID - 1) as f64,
     );
+    let s = golden_section(
+        |s| eval(s).map(|f| f.rss).unwrap_or(f64::INFINITY),
+        (a, b),
+        60,
+        1e-12 * (hi - lo),
+    );
+    let fit = eval(s)?;
+    Ok((s, fit))
+}
+
+/// The minimiser of `cost` on the bracket `(a, b)` by golden section: at
+/// most `max_steps` steps, stopping once the bracket is no wider than
+/// `width` (in `cost`'s argument units). `cost` is called in a fixed order
+/// (the two inner points, then one new point per step), so a cost that
+/// warm-starts from its previous call sees the same sequence every time.
+pub fn golden_section(
+    mut cost: impl FnMut(f64) -> f64,
+    (mut a, mut b): (f64, f64),
+    max_steps: usize,
+    width: f64,
+) -> f64 {
     let phi = 0.5 * (5f64.sqrt() - 1.0);
     let mut c = b - phi * (b - a);
     let mut d = a + phi * (b - a);
-    let mut fc = eval(c).map(|f| f.rss).unwrap_or(f64::INFINITY);
-    let mut fd = eval(d).map(|f| f.rss).unwrap_or(f64::INFINITY);
-    for _ in 0..60 {
+    let mut fc = cost(c);
+    let mut fd = cost(d);
+    for _ in 0..max_steps {
+        if (b - a).abs() <= width {
+            break;
+        }
         if fc < fd {
             b = d;
             d = c;
             fd = fc;
             c = b - phi * (b - a);
-            fc = eval(c).map(|f| f.rss).unwrap_or(f64::INFINITY);
+            fc = cost(c);
         } else {
             a = c;
             c = d;
             fc = fd;
             d = a + phi * (b - a);
-            fd = eval(d).map(|f| f.rss).unwrap_or(f64::INFINITY);
-        }
-        if (b - a).abs() <= 1e-12 * (hi - lo) {
-            break;
+            fd = cost(d);
         }
     }
-    let s = if fc < fd { c } else { d };
-    let fit = eval(s)?;
-    Ok((s, fit))
+    if fc < fd {
+        c
+    } else {
+        d
+    }
 }
 
 /// The whitened Jacobian [X | ∂r/∂s] of `fit` with respect to its linear

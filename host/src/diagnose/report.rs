@@ -3,6 +3,7 @@
 
 use super::criterion::Evidence;
 use super::locate::Location;
+use crate::identify::trust::hz_list;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write;
@@ -264,15 +265,6 @@ pub struct Diagnosis {
     /// left out of the noise, every fit and every gap above. Only bearings
     /// with such speeds.
     pub flipped_speeds_hz: BTreeMap<String, Vec<f64>>,
-}
-
-/// Speeds [Hz] as a comma-separated list.
-fn hz_list(speeds_hz: &[f64]) -> String {
-    speeds_hz
-        .iter()
-        .map(|s| format!("{s}"))
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// The modal view of the pedestals by bearing, of the base and the final

@@ -185,8 +185,9 @@ pub fn bad_speeds(observations: &[Observation], outliers: &mut Vec<f64>) -> Vec<
     warnings
 }
 
-/// Speeds [Hz] as a comma-separated list.
-fn hz_list(speeds_hz: &[f64]) -> String {
+/// Speeds [Hz] as a comma-separated list (the one wording of identify's
+/// and diagnose's speed lists).
+pub(crate) fn hz_list(speeds_hz: &[f64]) -> String {
     speeds_hz
         .iter()
         .map(|s| format!("{s}"))

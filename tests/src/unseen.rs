@@ -1,0 +1,103 @@
+//! The machines nobody tuned to (run directories made by ROSS 2.3.0 with
+//! scripts/ross_unseen.py, seed 1 of each case kept under tests/data/) and
+//! what their tests read off `identify` and `diagnose`: one definition for
+//! every such machine.
+
+use plinth::diagnose::report::Diagnosis;
+use plinth::diagnose::{cli::oil_films, Options};
+use plinth::identify::Identification;
+use plinth::rundir::RunDir;
+use plinth::sim::Machine;
+use std::path::Path;
+
+/// The stored run directory of `case` under `data`.
+pub fn stored(data: &str, case: &str) -> RunDir {
+    RunDir::read(Path::new(data).join(case)).expect("stored run directory")
+}
+
+/// The machine file `file` under `data` and the diagnose options
+/// `plinth diagnose --machine` gives its search (the file's oil-film
+/// geometry).
+pub fn machine_and_options(data: &str, file: &str) -> (Machine, Options) {
+    let machine = Machine::from_toml_path(Path::new(data).join(file)).expect("machine file");
+    let options = Options {
+        oil_films: oil_films(&machine),
+        ..Options::default()
+    };
+    (machine, options)
+}
+
+/// The effects diagnose kept, as (effect, bearing), sorted.
+pub fn named(d: &Diagnosis) -> Vec<(String, String)> {
+    let mut v: Vec<(String, String)> = d
+        .steps
+        .iter()
+        .filter(|s| s.dropped.is_none())
+        .map(|s| (s.effect.clone(), s.bearing.clone()))
+        .collect();
+    v.sort();
+    v
+}
+
+/// The bearings identify did not trust.
+pub fn untrusted(id: &Identification) -> Vec<String> {
+    id.pedestals
+        .iter()
+        .filter(|p| !p.trusted)
+        .map(|p| p.bearing.clone())
+        .collect()
+}
+
+/// Every value of every pedestal identify printed as `ok`, against the
+/// truth: ("bearing parameter", estimate, ±, truth) for k_y, k_z and m, and
+/// c_y, c_z with `damping` (SI units).
+pub fn printed_ok(
+    run: &RunDir,
+    id: &Identification,
+    damping: bool,
+) -> Vec<(String, f64, f64, f64)> {
+    let truth = run.truth.as_ref().expect("truth");
+    let mut out = Vec::new();
+    for p in id.pedestals.iter().filter(|p| p.trusted) {
+        let t = &truth
+            .pedestals
+            .iter()
+            .find(|t| t.bearing == p.bearing)
+            .expect("truth of the bearing")
+            .pedestal;
+        let (f, e) = (&p.pedestal, &p.std_err);
+        let mut values = vec![
+            ("k_y", f.k_y, e.k_y, t.k_y),
+            ("k_z", f.k_z, e.k_z, t.k_z),
+            ("m", f.m, e.m, t.m),
+        ];
+        if damping {
+            values.extend([("c_y", f.c_y, e.c_y, t.c_y), ("c_z", f.c_z, e.c_z, t.c_z)]);
+        }
+        out.extend(
+            values
+                .into_iter()
+                .map(|(name, got, se, want)| (format!("{} {name}", p.bearing), got, se, want)),
+        );
+    }
+    out
+}
+
+/// The values identify printed as `ok` that lie more than 3 of their ±
+/// from the truth ([`printed_ok`]), as messages.
+pub fn ok_but_wrong(run: &RunDir, id: &Identification, damping: bool) -> Vec<String> {
+    printed_ok(run, id, damping)
+        .into_iter()
+        .filter(|(_, got, se, want)| (got - want).abs() > 3.0 * se)
+        .map(|(name, got, se, want)| {
+            format!("{name} = {got:.6e} ± {se:.2e} printed ok, truth {want:.6e}")
+        })
+        .collect()
+}
+
+/// Every pedestal identify printed as `ok` lies within 3 of its ± of the
+/// truth in k_y, k_z and m (the method's promise).
+pub fn assert_ok_means_right(run: &RunDir, id: &Identification, label: &str) {
+    let wrong = ok_but_wrong(run, id, false);
+    assert!(wrong.is_empty(), "{label}: {wrong:?}");
+}
