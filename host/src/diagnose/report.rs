@@ -225,6 +225,10 @@ pub struct Diagnosis {
     /// Noise floor of the machine-level gap, with `--machine` [-].
     #[serde(skip_serializing_if = "Option::is_none")]
     pub machine_gap_floor: Option<f64>,
+    /// Whether the machine-level check could judge the final model (its
+    /// limit at most `trust::MACHINE_INFORMATIVE_LIMIT`), with `--machine`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine_check_informative: Option<bool>,
     /// The noise floor.
     pub noise: NoiseSummary,
     /// Where the base model's disagreement lives, largest first.

@@ -195,6 +195,13 @@ pub fn conclude(
 /// measurement noise alone (2 % relative RMS over every channel) [-].
 pub const MACHINE_TOLERANCE: f64 = 0.02;
 
+/// A machine-level limit ([`AT_THE_FLOOR`] × floor) above this lets a gap of
+/// half the response pass: the identified model's own uncertainty, carried
+/// to the response by the delta method (beyond its linear range there), is
+/// then as large as the response, and the check is reported as unable to
+/// judge (`machine_check_informative: false`), not as agreement [-].
+pub const MACHINE_INFORMATIVE_LIMIT: f64 = 0.5;
+
 /// The machine-level gap is judged, not just printed: a final model whose
 /// re-simulated machine (`super::machine`) leaves a gap above
 /// [`AT_THE_FLOOR`] times its noise floor `floor` and above
@@ -205,16 +212,62 @@ pub const MACHINE_TOLERANCE: f64 = 0.02;
 /// when the final model could not be simulated: nothing to judge.
 pub fn judge_machine(d: &mut super::report::Diagnosis, gap: Option<f64>, floor: f64) {
     let Some(gap) = gap else { return };
-    let limit = (AT_THE_FLOOR * floor).max(MACHINE_TOLERANCE);
-    if !gap.is_finite() || gap > limit {
-        let why = format!(
-            "the machine re-simulated with the identified model does not reproduce the measurements: machine-level gap {gap:.4} (noise floor {floor:.4}, limit {limit:.4}); the machine file (rotor, unbalance, bearing table or base) does not describe the machine of this run"
-        );
-        d.verdict += &format!(
-            " But at the machine level {why}, so the identified parameters are not to be trusted."
-        );
-        d.trust_reasons.push(why);
-        d.trusted = false;
+    let check = MachineCheck::of(gap, floor);
+    d.machine_check_informative = Some(!matches!(check, MachineCheck::CannotJudge { .. }));
+    match check {
+        MachineCheck::Agrees => {}
+        // A limit this wide passes nearly any model: the check is said not
+        // to have judged, rather than read as a confirmation.
+        MachineCheck::CannotJudge { limit } => {
+            d.verdict += &format!(
+                " The machine-level check cannot judge this model: its noise floor {floor:.3} (the identified parameters' own ± carried through the re-simulation) lets a gap up to {limit:.3} pass, so the verdict rests on the pedestal-level checks alone."
+            );
+        }
+        MachineCheck::Disagrees { limit } => {
+            let why = format!(
+                "the machine re-simulated with the identified model does not reproduce the measurements: machine-level gap {gap:.4} (noise floor {floor:.4}, limit {limit:.4}); the machine file (rotor, unbalance, bearing table or base) does not describe the machine of this run"
+            );
+            d.verdict += &format!(
+                " But at the machine level {why}, so the identified parameters are not to be trusted."
+            );
+            d.trust_reasons.push(why);
+            d.trusted = false;
+        }
+    }
+}
+
+/// What the machine-level check says of a final model's gap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MachineCheck {
+    /// The gap is within its limit, and the limit can tell.
+    Agrees,
+    /// The gap exceeds the limit: the machine file does not describe the run.
+    Disagrees {
+        /// The limit the gap exceeded [-].
+        limit: f64,
+    },
+    /// The limit exceeds [`MACHINE_INFORMATIVE_LIMIT`]: the check passes
+    /// nearly any model and judges nothing.
+    CannotJudge {
+        /// The (too wide) limit [-].
+        limit: f64,
+    },
+}
+
+impl MachineCheck {
+    /// Judges a machine-level gap `gap` [-] against its noise floor `floor`
+    /// [-]: the limit is [`AT_THE_FLOOR`] × floor, at least
+    /// [`MACHINE_TOLERANCE`]. A gap above the limit (or not finite)
+    /// disagrees even when the limit is wide.
+    pub fn of(gap: f64, floor: f64) -> Self {
+        let limit = (AT_THE_FLOOR * floor).max(MACHINE_TOLERANCE);
+        if !gap.is_finite() || gap > limit {
+            Self::Disagrees { limit }
+        } else if limit > MACHINE_INFORMATIVE_LIMIT {
+            Self::CannotJudge { limit }
+        } else {
+            Self::Agrees
+        }
     }
 }
 
@@ -280,236 +333,4 @@ pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::diagnose::criterion::Evidence;
-    use crate::diagnose::gap::Gap;
-
-    fn step(before: f64, after: f64) -> Step {
-        Step {
-            effect: "structural_damping".into(),
-            bearing: "left".into(),
-            gap_before: before,
-            gap_after: after,
-            gap_floor_after: 0.01,
-            machine_gap_before: None,
-            machine_gap_after: None,
-            channels: None,
-            parameters: Vec::new(),
-            test: "Wald".into(),
-            foundation: None,
-            evidence: Evidence {
-                wald_floor: 100.0,
-                wald_robust: 100.0,
-                wald: 100.0,
-                extra_parameters: 1,
-                delta_bic: 90.0,
-                p_value: 1e-9,
-                p_adjusted: 1e-8,
-            },
-            runner_up: None,
-            candidates_tried: 20,
-            candidates_failed: 0,
-            dropped: None,
-        }
-    }
-
-    /// An agreement whose χ² moves with the gap (every reading the same
-    /// share of it): (gap/floor)² per real number over 200 numbers.
-    fn gap(gap: f64, floor: f64) -> Agreement {
-        with_chi2(gap, floor, 200.0 * (gap / floor).powi(2))
-    }
-
-    fn with_chi2(gap: f64, floor: f64, chi2: f64) -> Agreement {
-        Agreement {
-            gap: Gap { gap, floor },
-            chi2,
-            n: 200,
-        }
-    }
-
-    /// The worn table of the unseen machine, seed 4: the amplitude-weighted
-    /// gap rose a little (0.411 → 0.415) while the noise-whitened χ² the
-    /// fit minimises fell by far: not worse, trusted, and the gap's rise is
-    /// still said.
-    #[test]
-    fn a_gap_that_rose_while_the_chi2_fell_is_not_said_to_be_worse() {
-        let before = with_chi2(0.411, 0.2, 2400.0);
-        let after = with_chi2(0.415, 0.2, 210.0);
-        assert!(!got_worse(&before, &after));
-        let c = conclude(before, after, &[step(0.411, 0.415)], &[], &[]);
-        assert!(c.trusted, "{:?}", c.reasons);
-        assert!(
-            c.verdict.contains("gap ROSE from 0.4110 to 0.4150"),
-            "{}",
-            c.verdict
-        );
-        assert!(!c.verdict.contains("gap fell"), "{}", c.verdict);
-        assert!(
-            c.verdict
-                .contains("χ² per real number dropped from 12.000 to 1.050"),
-            "{}",
-            c.verdict
-        );
-        assert!(!c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
-        // The same gaps with a χ² that rose: worse, untrusted, said so.
-        let after = with_chi2(0.415, 0.2, 2500.0);
-        assert!(got_worse(&before, &after));
-        let c = conclude(before, after, &[step(0.411, 0.415)], &[], &[]);
-        assert!(!c.trusted);
-        assert!(c.verdict.contains("gap ROSE"), "{}", c.verdict);
-        assert!(
-            c.verdict.contains("GREW from 12.000 to 12.500"),
-            "{}",
-            c.verdict
-        );
-        assert!(
-            c.reasons.iter().any(|r| r.contains("got worse")),
-            "{:?}",
-            c.reasons
-        );
-        // A gap that fell while the χ² rose: the gap is said to fall, the
-        // model is still worse on the fit's yardstick.
-        let c = conclude(
-            with_chi2(0.30, 0.2, 300.0),
-            with_chi2(0.25, 0.2, 320.0),
-            &[step(0.30, 0.25)],
-            &[],
-            &[],
-        );
-        assert!(
-            c.verdict.contains("gap fell from 0.3000 to 0.2500"),
-            "{}",
-            c.verdict
-        );
-        assert!(!c.trusted);
-        // Nothing added: nothing got worse, whatever the numbers.
-        assert!(
-            conclude(before, with_chi2(0.411, 0.2, 2500.0), &[], &[], &[])
-                .reasons
-                .iter()
-                .all(|r| !r.contains("got worse"))
-        );
-    }
-
-    #[test]
-    fn a_gap_that_rose_is_said_to_rise_and_is_not_trusted() {
-        let c = conclude(
-            gap(0.10, 0.01),
-            gap(0.12, 0.01),
-            &[step(0.10, 0.12)],
-            &[],
-            &[],
-        );
-        assert!(c.verdict.contains("ROSE"), "{}", c.verdict);
-        assert!(!c.verdict.contains("fell"), "{}", c.verdict);
-        assert!(
-            c.verdict.contains("ROSE from 0.1000 to 0.1200"),
-            "{}",
-            c.verdict
-        );
-        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
-        assert!(!c.trusted);
-        assert!(c.reasons.iter().any(|r| r.contains("rose")));
-    }
-
-    #[test]
-    fn a_fall_still_far_above_the_floor_is_unexplained() {
-        let c = conclude(gap(1.5, 0.1), gap(1.29, 0.09), &[step(1.5, 1.29)], &[], &[]);
-        assert!(
-            c.verdict.contains("fell from 1.5000 to 1.2900"),
-            "{}",
-            c.verdict
-        );
-        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
-        assert!(!c.trusted);
-        // Nothing added, gap far above the floor: unexplained too.
-        let c = conclude(gap(1.48, 0.097), gap(1.48, 0.097), &[], &[], &[]);
-        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
-        assert!(!c.trusted);
-    }
-
-    #[test]
-    fn a_fall_to_the_floor_is_trusted() {
-        let c = conclude(gap(1.5, 0.1), gap(0.11, 0.1), &[step(1.5, 0.11)], &[], &[]);
-        assert!(c.verdict.contains("fell"), "{}", c.verdict);
-        assert!(!c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
-        assert!(c.trusted, "{:?}", c.reasons);
-        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[], &[]);
-        assert!(c.verdict.starts_with("No significant missing effect"));
-        assert!(c.trusted);
-    }
-
-    fn channel(bearing: &str, direction: &str, gap: f64, floor: f64) -> Location {
-        Location {
-            bearing: bearing.into(),
-            direction: direction.into(),
-            share: 0.5,
-            gap,
-            floor,
-            peak_hz: 40.0,
-            resonance_hz: None,
-            trend: 0.0,
-            bands: Vec::new(),
-            summary: String::new(),
-        }
-    }
-
-    #[test]
-    fn one_channel_far_above_its_own_floor_is_unexplained_though_the_pool_is_not() {
-        // The unseen four-bearing machine's sub-base case: pooled 0.29
-        // against 0.24, the sub-base bearing's y channel 0.615 against 0.087.
-        let chans = [
-            channel("B4", "y", 0.31, 0.30),
-            channel("B3", "y", 0.615, 0.087),
-            channel("B3", "z", 0.09, 0.085),
-        ];
-        let c = conclude(gap(0.29, 0.24), gap(0.29, 0.24), &[], &[], &chans);
-        assert!(!c.trusted);
-        assert!(c.verdict.contains("bearing B3 y"), "{}", c.verdict);
-        assert!(c.verdict.contains(UNEXPLAINED), "{}", c.verdict);
-        assert_eq!(c.reasons.len(), 1, "{:?}", c.reasons);
-        // Every channel within 3× its own floor: trusted as before.
-        let chans = [channel("B3", "y", 0.2, 0.087), channel("B4", "y", 0.3, 0.3)];
-        let c = conclude(gap(0.29, 0.24), gap(0.29, 0.24), &[], &[], &chans);
-        assert!(c.trusted, "{:?}", c.reasons);
-    }
-
-    #[test]
-    fn negative_mass_is_flagged_through_identify_physical() {
-        let fit = PedestalFit {
-            bearing: "left".into(),
-            pedestal: crate::estimate::Pedestal {
-                k_y: 1e7,
-                k_z: 8e6,
-                m: -20.0,
-                c_y: 300.0,
-                c_z: 250.0,
-            },
-            std_err: crate::estimate::Pedestal {
-                k_y: 1e4,
-                k_z: 1e4,
-                m: 1.0,
-                c_y: 10.0,
-                c_z: 10.0,
-            },
-            residual_rms: 0.0,
-            condition_number: 1.0,
-            fixed: Vec::new(),
-            trusted: true,
-            speeds: 50,
-            equations: 200,
-            speed_range_hz: [5.0, 100.0],
-            warnings: Vec::new(),
-            ols: None,
-            suspected_convention_error: None,
-            base: None,
-            base_measured: None,
-            covariance: None,
-            modal: None,
-        };
-        let c = conclude(gap(0.02, 0.01), gap(0.02, 0.01), &[], &[fit], &[]);
-        assert!(!c.trusted);
-        assert!(c.reasons[0].contains("negative mass"), "{:?}", c.reasons);
-    }
-}
+mod tests;

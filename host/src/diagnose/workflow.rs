@@ -474,6 +474,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
         machine_gap_before: None,
         machine_gap_after: None,
         machine_gap_floor: None,
+        machine_check_informative: None,
         noise: NoiseSummary {
             digits,
             bearings: bearings_noise,
