@@ -112,14 +112,13 @@ fn clean_runs_are_flagged_by_nothing_and_ok_means_right() {
 
 /// Heteroscedastic noise (1 % of each phasor plus a floor) without the
 /// noise columns is clean data too. Measured over 30 seeds
-/// (`scripts/bench-unseen.sh --machine unseen-overhung 30 clean-h1`):
-/// identify prints a value `ok` more than 3 of its ± off in 22/30 (B1 c_y's
-/// error is 14 times its ± RMS), untrusts B1 in 4/30 and lists a speed in
-/// 6/30; diagnose names an effect in 21/30, 12 of them trusted. The stored
-/// seed 1: B1 c_y −5.4 % ± 1.9 %, probe_runout named at B1, trusted.
+/// (`scripts/bench-unseen.sh --machine unseen-overhung 30 clean-h1`,
+/// session 24): identify prints no k or m `ok` more than 3 of its ± off
+/// (session 23: 22/30 before the variance function), but untrusts B1 for
+/// lack of fit in 4/30 and lists a speed (77.1 Hz) in 6/30 (docs/trust.md,
+/// "Session 24"); diagnose names nothing in 30/30, all trusted (session 23:
+/// 21/30 named). The stored seed 1 is one of the clean 26.
 #[test]
-#[ignore = "issue 17: clean heteroscedastic noise without noise columns: identify ok but > 3 ± \
-            off in 22/30 (B1 c_y), diagnose names an effect in 21/30 (12 trusted)"]
 fn clean_heteroscedastic_noise_without_columns_is_flagged_by_nothing() {
     let run = stored("clean-h1");
     let id = identify(&run);

@@ -7,9 +7,7 @@
 use super::{checks, ols_solution, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::{self, LackOfFit};
 use crate::estimate::ml::{self, MlFit};
-use crate::estimate::noise::{
-    variance, BearingNoise, NoiseSource, Quantisation, Scatter, CHANNELS,
-};
+use crate::estimate::noise::{variance, BearingNoise, NoiseSource, Quantisation, CHANNELS};
 use crate::estimate::pedestal::{fit_under_noise, noise_level, NoiseLevel};
 use crate::estimate::robust;
 use crate::estimate::Observation;
@@ -237,18 +235,16 @@ pub(crate) fn fit_ml_checked(
     // scatter's law and its fit (their floor is model-free).
     let mut law = None;
     let mut lack_of_fit_input = None;
-    // Only a proportional law can leave readings of small amplitude nearly
-    // exact; one sd per channel is left as it is (and costs nothing here).
-    let proportional = noise
-        .scatter
-        .iter()
-        .any(|law| matches!(law, Some(Scatter::Relative(_))));
+    // Either scatter law can be wrong: the proportional one leaves readings
+    // of small amplitude nearly exact, one sd per channel over-weights them
+    // when the noise grows with the signal (a fraction plus a floor). The
+    // score test reads the residuals the fit already has (bounded cost).
     // Residuals are noise samples only when the model fits: a misfit far
     // beyond the scatter's level (e.g. a pedestal on a base fitted on rigid
     // ground) is model error, which no variance function describes, and this
     // fit is then the start of the base fit that follows.
     let model_fits = ml_fit.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE;
-    if noise.source == NoiseSource::Scatter && proportional && model_fits {
+    if noise.source == NoiseSource::Scatter && model_fits {
         if let Some(r) = variance::refit(&obs, &columns, &ml_fit) {
             for (v, o) in noise.var.iter_mut().zip(observations) {
                 let w = variance::variances(o, &r.law);
