@@ -184,11 +184,12 @@ fn a_sub_base_above_the_range_is_not_printed_ok() {
 /// is the table's scaled by 1/1.25 to within the noise, and the pedestal
 /// equations are homogeneous in it: k, m and c all come out 1.25 times the
 /// truth and fit to the noise. Only the machine level (`--machine`, the
-/// rotor tying the absolute scale) can see it. Seed 1 is untrusted only by
-/// the spurious speed_in_rpm suspicion above.
+/// rotor tying the absolute scale) can see it. Measured over seeds 1-5:
+/// B3 printed `ok` 25 % off (144 ±) in 2/5; the other 3 (seed 1 among
+/// them) are untrusted only by the spurious speed_in_rpm suspicion above.
 #[test]
 #[ignore = "issue 17: a tabulated stiff bearing's scale error is absorbed in B3's pedestal \
-            (k, m, c +25 %) with a perfect fit"]
+            (k, m, c +25 %) with a perfect fit: ok in 2/5, the rest untrusted only by speed_in_rpm"]
 fn a_wrong_table_scale_is_not_printed_ok() {
     let run = stored("table-scale");
     let id = identify(&run);
