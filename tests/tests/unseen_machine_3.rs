@@ -197,3 +197,21 @@ fn a_wrong_table_scale_is_not_printed_ok() {
     let wrong = ok_but_wrong(&run, &id, false);
     assert!(wrong.is_empty(), "{wrong:?}");
 }
+
+/// One outlier speed at B3 (seed 1: 54.077 Hz). identify lists exactly
+/// that speed at B3, 5/5 runs; diagnose does not leave it out (it does for
+/// keyphasor flips), the gap at that one speed is taken for model error and
+/// `pedestal_sub_base` at B3 is named with the verdict trusted (gap 0.054 →
+/// 0.032) in 1/5 runs, seed 1 (`scripts/bench-unseen.sh --machine
+/// unseen-train 5 outlier`; diagnose takes ~4 min on this run, hence
+/// ignored in CI even when fixed).
+#[test]
+#[ignore = "issue 17: diagnose names pedestal_sub_base at B3 (trusted) on one outlier speed \
+            identify lists: 1/5 runs; ~4 min"]
+fn one_outlier_speed_names_nothing_in_diagnose() {
+    let run = stored("outlier");
+    let id = identify(&run);
+    assert_eq!(listed(&id, "B3").len(), 1, "{:?}", listed(&id, "B3"));
+    let d = diagnosis(&run);
+    assert!(named(&d).is_empty(), "{}", d.to_text());
+}
