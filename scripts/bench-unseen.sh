@@ -11,7 +11,11 @@
 # columns, at 3, 2 and 12 digits; a sub-base, a worn oil film, a wrong
 # table scale, cross-coupling, runout, a sensor delay, flips of every
 # bearing, one outlier speed, base + runout + delay, two effects at two
-# bearings).
+# bearings) and unseen-train (a motor-pump train on three bearings, a run-up
+# with a skipped band, per-sensor noise: clean-p2/-p2c, clean-d3, clean-dmix
+# (2/3/4 digits per bearing), clean-d12, and the effects of its table in
+# scripts/ross_unseen.py). $BENCH_DIAGNOSE_PLAIN=1: diagnose without
+# --machine.
 # usage: scripts/bench-unseen.sh [--machine NAME] [SEEDS [CASE...]]
 #   SEEDS default 5 (runs per case; unseen-four's clean-d3 always 4 grids).
 #   The run directories are kept in $UNSEEN_RUNS (default

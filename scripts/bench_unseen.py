@@ -9,7 +9,8 @@ holds run directories CASE-SEED made by scripts/ross_unseen.py (ROSS
 (default 5), except unseen-four's clean-d3: 1..4 (its seed shifts the speed
 grid). Every run goes through `plinth identify --json` and `plinth diagnose
 --json --machine FILE` (the machine's nominal file: rigid ground, the drawn
-clearances, the table as supplied), $BENCH_JOBS at a time (default 2).
+clearances, the table as supplied; without --machine when
+$BENCH_DIAGNOSE_PLAIN=1), $BENCH_JOBS at a time (default 2).
 Prints per case:
 
 identify: runs exiting 2; per bearing how often untrusted; runs whose
@@ -21,7 +22,8 @@ identify: runs exiting 2; per bearing how often untrusted; runs whose
 diagnose: named right (exactly the expected effects, each at its bearing,
   a base at any bearing), named wrong (something else named, or an
   expected effect at another bearing), partly (a subset, nothing wrong),
-  missed (nothing named); untrusted verdicts; the worst k/m error of the
+  missed (nothing named); named wrong with the verdict trusted (confidently
+  wrong); untrusted verdicts; the worst k/m error of the
   named-right runs' final pedestals; the flipped speeds diagnose lists
   (`flipped_speeds_hz`: exactly the truth's on the flips case, any listed
   on the others); seconds per run.
@@ -63,13 +65,27 @@ EXPECT_OVERHUNG = {
                           {"B1", "B2"}),
     "cross-runout": ([("pedestal_cross_coupling", "B2"), ("probe_runout", "B1")], {"B1", "B2"}),
 }
-EXPECT = {"unseen-four": EXPECT_FOUR, "unseen-overhung": EXPECT_OVERHUNG}
+EXPECT_TRAIN = {
+    "clean-w1": ([], set()),
+    "sub-base": ([("pedestal_sub_base", "B2")], {"B2"}),
+    "table-film": ([("bearing_coefficients", "B2")], {"B2"}),
+    "table-scale": ([("bearing_coefficients", "B3")], {"B3"}),
+    "cross": ([("pedestal_cross_coupling", "B3")], {"B3"}),
+    "runout": ([("probe_runout", "B1")], {"B1"}),
+    "delay": ([("sensor_delay", "B2")], {"B2"}),
+    "flips": ([], set()),
+    "outlier": ([], set()),
+    "base-runout": ([("foundation_coupling", ""), ("probe_runout", "B1")], {"B1", "B2", "B3"}),
+    "cross-delay": ([("pedestal_cross_coupling", "B2"), ("sensor_delay", "B3")], {"B2", "B3"}),
+}
+EXPECT = {"unseen-four": EXPECT_FOUR, "unseen-overhung": EXPECT_OVERHUNG, "unseen-train": EXPECT_TRAIN}
 
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import ross_unseen  # noqa: E402
 
 MACHINE = ross_unseen.DEFAULT
+DIAGNOSE_MACHINE = []  # ["--machine", FILE] unless $BENCH_DIAGNOSE_PLAIN=1
 
 
 def kind(case):
@@ -112,8 +128,7 @@ def one(b, run):
     with open(os.path.join(run, "truth.json")) as f:
         truth = json.load(f)
     ident, icode, it, ierr = run_json([b, "identify", run, "--json"])
-    diag, dcode, dt, derr = run_json([b, "diagnose", run, "--json", "--machine",
-                                     ross_unseen.machine_file(MACHINE)])
+    diag, dcode, dt, derr = run_json([b, "diagnose", run, "--json"] + DIAGNOSE_MACHINE)
     r = {"run": run, "truth": truth, "icode": icode, "dcode": dcode, "it": it, "dt": dt,
          "err": ierr + derr}
     if ident is not None:
@@ -165,6 +180,9 @@ def main():
         MACHINE, args = args[1], args[2:]
     if MACHINE not in ross_unseen.MACHINES:
         sys.exit(f"--machine {MACHINE}: not one of {', '.join(ross_unseen.MACHINES)}")
+    global DIAGNOSE_MACHINE
+    if os.environ.get("BENCH_DIAGNOSE_PLAIN", "0") != "1":
+        DIAGNOSE_MACHINE = ["--machine", ross_unseen.machine_file(MACHINE)]
     b, runs = args[0], args[1]
     seeds = int(args[2]) if len(args) > 2 else 5
     cases = args[3:] or list(ross_unseen.cases_of(MACHINE))
@@ -209,9 +227,11 @@ def main():
                 fl = f"(any listed: {listed})"
         print(f"| {case} | {n} | {ex2} | {per} | {exp}/{n} | {okw} {okw_b if okw_b else ''} | {fl} |")
     print()
-    print(f"diagnose (plinth diagnose --json --machine {os.path.basename(ross_unseen.machine_file(MACHINE))}):")
-    print("| case | runs | named right | named wrong | partly | missed | untrusted | worst k/m error after (right runs) | flips listed exactly | s/run |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    how = " ".join(["--json"] + [os.path.basename(a) for a in DIAGNOSE_MACHINE])
+    print(f"diagnose (plinth diagnose {how}):")
+    print("| case | runs | named right | named wrong | wrong and trusted | partly | missed | untrusted "
+          "| worst k/m error after (right runs) | flips listed exactly | s/run |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for case in cases:
         rs = by[case]
         n = len(rs)
@@ -224,7 +244,8 @@ def main():
         fl = f"(any listed: {sum(any(r.get('dlisted', {}).values()) for r in rs)})"
         if kind(case)[0] == "flips":
             fl = str(sum(listed_exactly(r, r.get("dlisted", {})) for r in rs))
-        print(f"| {case} | {n} | {v.count('right')} | {v.count('wrong')} | {v.count('partly')} | "
+        wt = sum(j == "wrong" and r.get("dtrusted", False) for r, j in zip(rs, v))
+        print(f"| {case} | {n} | {v.count('right')} | {v.count('wrong')} | {wt} | {v.count('partly')} | "
               f"{v.count('missed')} | {untr} | {worst} | {fl} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
     for case, r in results:
         if r["err"]:

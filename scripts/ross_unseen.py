@@ -10,7 +10,7 @@ Usage:
   python3 scripts/ross_unseen.py --compare RUN_A RUN_B
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
-NAME: unseen-four (default) or unseen-overhung.
+NAME: unseen-four (default), unseen-overhung or unseen-train.
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and
@@ -31,6 +31,19 @@ successive speeds, so the grid is geometric, dense at low speed), 150 Hz
 down to 8 Hz; its noise is heteroscedastic, as a real probe's: sigma = 1 %
 of each phasor's amplitude plus a floor of 0.1 % of the channel's RMS.
 
+unseen-train is tests/data/ross-unseen-3/unseen-train.toml: a motor-pump
+train as one flexible shaft on three bearings (B1 a cross-coupled sleeve
+table on a pedestal ten times stiffer than its bearing, B2 an oil film, B3
+a stiff lightly damped table on a soft bracket, the impeller overhung
+beyond it; B3's rel is tiny over most of the range and B2's rel_y passes
+near a node at 50 Hz). Its speeds are a run-up at constant acceleration
+sampled every few revolutions (Omega^2 in equal steps: dense at high
+speed), 5 to 85 Hz, with the band 38-46 Hz skipped (136 speeds left); its
+noise differs by kind of sensor: pedestal pick-ups sigma = 2 % of |phasor|
+(no floor), proximity probes a constant sigma of 0.5 % of the channel's
+RMS. Its digit case clean-dmix writes B1 at 2 significant digits, B2 at 3
+and B3 at 4.
+
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
 BearingElement from the shaft node to a PointMass (n_link, the pedestal),
@@ -48,7 +61,8 @@ Cases: `--cases` lists them; each machine's table (MACHINES below) says
 what each case does. Noise kinds: clean-w1 / clean-h1 (the machine's
 noise, 7 digits, no columns), clean-w1c / clean-h1c (with the *_sd noise
 columns), clean-dN (no noise, N significant digits, the speed grid shifted
-by the seed). Effect cases carry the machine's noise with the *_sd columns;
+by the seed; clean-dmix: the machine's digits per bearing). unseen-train's
+noisy cases are clean-p2 / clean-p2c. Effect cases carry the machine's noise with the *_sd columns;
 EFFECT-d3 (where listed) is the same effect without noise at 3 digits.
 Effects: a sub-base under one pedestal, a shared base (frame), a worn oil
 film (bearings.csv computed for a clearance 15 % smaller than the
@@ -103,6 +117,20 @@ def coast_down_grid(top, bottom, n):
     return speeds
 
 
+def run_up_grid(bottom, top, n, skipped):
+    """A run-up at constant acceleration sampled every few revolutions:
+    Omega^2 grows by the same step per sample, so n speeds from `bottom` to
+    `top` [Hz] spaced ever closer at high speed; the speeds inside the band
+    `skipped` = (lo, hi) [Hz] are missing (the operator drove fast through
+    it); the phase of the sampling shifted by the seed in the digit cases."""
+    def speeds(shifted, seed):
+        frac = (0.37 * (seed - 1)) % 1.0 if shifted else 0.0
+        sq = bottom**2 + (top**2 - bottom**2) * (np.arange(n) + frac) / (n - 1)
+        s = np.round(np.sqrt(sq), 3)
+        return s[(s < skipped[0]) | (s > skipped[1])]
+    return speeds
+
+
 SUB_BASE_FOUR = {"bearing": "B3", "m_y": 180.0, "m_z": 160.0, "k_y": 2.4e7, "k_z": 2.0e7,
                  "c_y": 2500.0, "c_z": 2000.0}
 FRAME_FOUR = {"name": "frame", "bearings": ["B1", "B2"], "m_y": 350.0, "m_z": 350.0,
@@ -111,6 +139,11 @@ SUB_BASE_OVERHUNG = {"bearing": "B1", "m_y": 140.0, "m_z": 140.0, "k_y": 3.0e7, 
                      "c_y": 3000.0, "c_z": 1500.0}
 SKID_OVERHUNG = {"name": "skid", "bearings": ["B1", "B2"], "m_y": 500.0, "m_z": 500.0,
                  "k_y": 6.0e7, "k_z": 2.0e7, "c_y": 4000.0, "c_z": 2000.0}
+
+SUB_BASE_TRAIN = {"bearing": "B2", "m_y": 150.0, "m_z": 150.0, "k_y": 2.0e8, "k_z": 1.2e8,
+                  "c_y": 5000.0, "c_z": 3000.0}
+FRAME_TRAIN = {"name": "baseplate", "bearings": ["B2", "B3"], "m_y": 400.0, "m_z": 400.0,
+               "k_y": 1.2e8, "k_z": 6.0e7, "c_y": 6000.0, "c_z": 4000.0}
 
 # Per machine: its file and data directory, speed grid, noise (sigma = rel
 # |phasor| + floor RMS of the channel), the seed base of its random numbers,
@@ -161,8 +194,45 @@ MACHINES = {
         "repo": ("clean-h1", "clean-h1c", "clean-d3", "sub-base", "table-film", "table-scale", "cross", "runout",
                  "delay", "flips", "outlier", "base-runout-delay", "cross-runout"),
     },
+    "unseen-train": {
+        "data": os.path.join(ROOT, "tests", "data", "ross-unseen-3"),
+        "file": "unseen-train.toml",
+        "grid": run_up_grid(5.0, 85.0, 150, (38.0, 46.0)),
+        # pedestal pick-ups: 2 % of |phasor|, no floor; proximity probes: a
+        # constant floor of 0.5 % of the channel's RMS
+        "noise": {"rel": {"rel": 0.0, "floor": 0.005}, "ped": {"rel": 0.02, "floor": 0.0}},
+        "noisy": "p2",
+        "digits": ("d3", "dmix", "d12"),
+        "mixed_digits": {"B1": 2, "B2": 3, "B3": 4},
+        "rng": 24_000,
+        "effects": {
+            "sub-base": [("sub_base", SUB_BASE_TRAIN)],
+            "table-film": [("worn_film", "B2", 1.0 / 0.85)],
+            "table-scale": [("table_scale", "B3", 1.0 / 1.25, 1.0)],
+            "cross": [("cross", "B3", 0.2)],
+            "runout": [("runout", "B1")],
+            "delay": [("delay", "B2", 150e-6)],
+            "flips": [("flips", ["B1", "B2", "B3"])],
+            "outlier": [("outlier", "B3")],
+            "base-runout": [("frame", FRAME_TRAIN), ("runout", "B1")],
+            "cross-delay": [("cross", "B2", 0.2), ("delay", "B3", 150e-6)],
+        },
+        "d3_effects": False,
+        "repo": ("clean-p2", "clean-p2c", "clean-dmix", "sub-base", "table-film", "table-scale", "cross", "runout",
+                 "delay", "outlier", "base-runout"),
+    },
 }
 DEFAULT = "unseen-four"
+
+
+def noise_sd(m, channel, v):
+    """sigma [m] of each phasor of one channel: a fraction of |phasor| plus
+    a floor (a fraction of the channel's RMS), per machine, or per kind of
+    channel (rel / ped) where the machine gives them apart."""
+    law = m["noise"]
+    if "rel" in law and isinstance(law["rel"], dict):
+        law = law[channel.split("_")[0]]
+    return law["rel"] * np.abs(v) + law["floor"] * math.sqrt(float(np.mean(np.abs(v) ** 2)))
 
 
 def cases_of(machine=DEFAULT):
@@ -386,13 +456,18 @@ def make(out, case, seed, machine=DEFAULT):
     rng = np.random.default_rng(m["rng"] + 101 * cases_of(machine).index(case) + seed)
     noisy = not noise_kind.startswith("d")
     columns = noise_kind.endswith("c")
-    digits = 7 if noisy else int(noise_kind[1:])
+    if noisy:
+        digits = {b: 7 for b in names}
+    elif noise_kind == "dmix":
+        digits = m["mixed_digits"]
+    else:
+        digits = {b: int(noise_kind[1:]) for b in names}
     data, sd = {}, {}
     for b in names:
         for c in CHANNELS:
             v = resp[b][c]
             if noisy:
-                s = m["noise"]["rel"] * np.abs(v) + m["noise"]["floor"] * math.sqrt(float(np.mean(np.abs(v) ** 2)))
+                s = noise_sd(m, c, v)
             else:
                 s = np.zeros(len(v))
             sd[(b, c)] = s
@@ -443,7 +518,8 @@ def nominal_truth(machine=DEFAULT):
 
 
 def write(out, speeds, names, data, sd, digits, written):
-    """measurements.csv (sd: the *_sd columns, or None) and bearings.csv."""
+    """measurements.csv (sd: the *_sd columns, or None; digits: significant
+    digits per bearing) and bearings.csv."""
     os.makedirs(out, exist_ok=True)
     fmt = lambda s: f"{s:.6g}"  # noqa: E731
     with open(os.path.join(out, "measurements.csv"), "w") as f:
@@ -456,7 +532,7 @@ def write(out, speeds, names, data, sd, digits, written):
                 row = [fmt(s), b]
                 for c in CHANNELS:
                     q = data[(b, c)][j]
-                    row += [sig(q.real, digits), sig(q.imag, digits)]
+                    row += [sig(q.real, digits[b]), sig(q.imag, digits[b])]
                 if sd is not None:
                     row += [sig(sd[(b, c)][j], 4) for c in CHANNELS]
                 f.write(",".join(row) + "\n")

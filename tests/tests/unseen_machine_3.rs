@@ -1,0 +1,217 @@
+//! Issue 17 on a third machine nobody tuned to, different in kind from the
+//! first two: a motor-pump train modelled as one long flexible shaft on
+//! three bearings (tests/data/ross-unseen-3/unseen-train.toml: B1 a
+//! cross-coupled sleeve table on a pedestal ten times stiffer than its
+//! bearing, B2 an oil film, B3 a stiff lightly damped table on a soft
+//! bracket with the impeller overhung beyond it), run UP at constant
+//! acceleration (dense at high speed) with the band 38-46 Hz skipped, noise
+//! of a different style per kind of sensor (pedestal pick-ups 2 % of each
+//! phasor, proximity probes a constant floor), and a digits case with B1 at
+//! 2 significant digits, B2 at 3, B3 at 4. Every phasor and the truth are
+//! ROSS 2.3.0's and scripts/ross_unseen.py's (`--machine unseen-train`),
+//! seed 1 of each case kept in tests/data/ross-unseen-3/<case>/; only the
+//! reading is Plinth's. The rates over several seeds are measured by
+//! `scripts/bench-unseen.sh --machine unseen-train` (docs/unseen.md). What
+//! does not work yet is written with the right assertion and ignored with
+//! the measured rate, so it can be un-ignored when fixed.
+
+use plinth::diagnose::diagnose;
+use plinth::diagnose::machine::MachineCheck;
+use plinth::diagnose::report::Diagnosis;
+use plinth::identify::{Identification, WarningKind};
+use plinth::rundir::RunDir;
+use plinth_tests::rundown::identify;
+use plinth_tests::unseen::{self, assert_ok_means_right, named, ok_but_wrong, untrusted};
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-3");
+const BEARINGS: [&str; 3] = ["B1", "B2", "B3"];
+
+/// The stored run directory of `case` (seed 1).
+fn stored(case: &str) -> RunDir {
+    unseen::stored(DATA, case)
+}
+
+/// `plinth diagnose RUN --machine unseen-train.toml` as the command line
+/// runs it: the search with the file's oil-film geometry, then the
+/// machine-level check applied to the verdict.
+fn diagnosis(run: &RunDir) -> Diagnosis {
+    let (machine, options) = unseen::machine_and_options(DATA, "unseen-train.toml");
+    let out = diagnose(run, &options).expect("diagnose");
+    let check = MachineCheck::of(&machine, &out).expect("machine check");
+    let mut d = out.diagnosis;
+    check.apply(&mut d);
+    d
+}
+
+/// The speeds identify listed as outliers at `bearing`, sorted.
+fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
+    let mut v = id.noise[bearing].outlier_speeds_hz.clone();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+/// The convention mistakes identify suspected, as "bearing: mistake".
+fn suspected(id: &Identification) -> Vec<String> {
+    id.pedestals
+        .iter()
+        .filter_map(|p| {
+            p.suspected_convention_error
+                .map(|c| format!("{}: {}", p.bearing, c.name()))
+        })
+        .collect()
+}
+
+/// Clean data with a noise style the first two machines did not have: the
+/// pick-ups' 2 % of each phasor with the probes' constant floor, no noise
+/// columns.
+#[test]
+fn clean_per_sensor_noise_is_flagged_by_nothing_and_ok_means_right() {
+    let run = stored("clean-p2");
+    let id = identify(&run);
+    assert!(untrusted(&id).is_empty(), "{:?}", untrusted(&id));
+    for b in BEARINGS {
+        assert!(listed(&id, b).is_empty(), "{b} lists {:?}", listed(&id, b));
+    }
+    assert_ok_means_right(&run, &id, "clean-p2");
+    let d = diagnosis(&run);
+    assert!(named(&d).is_empty(), "{}", d.to_text());
+    assert!(d.trusted, "{:?}\n{}", d.trust_reasons, d.to_text());
+}
+
+/// Each bearing at its own number of digits (B1 2, B2 3, B3 4): nothing
+/// untrusted, every `ok` right (identify only: diagnose takes about a
+/// minute on these runs).
+#[test]
+fn digits_per_bearing_untrust_nothing_and_ok_means_right() {
+    let run = stored("clean-dmix");
+    let id = identify(&run);
+    assert!(untrusted(&id).is_empty(), "{:?}", untrusted(&id));
+    assert_ok_means_right(&run, &id, "clean-dmix");
+}
+
+/// The digits are counted per column of measurements.csv over every
+/// bearing (`estimate::noise::ColumnDigits`: the most digits in the
+/// column), so B1 (2 digits) and B2 (3) are given B3's 4-digit floor, it
+/// does not fit, and their noise falls back to one scatter level per
+/// channel; rounding to 3 digits is proportional to the amplitude, so B2's
+/// largest readings (the rotor's peak near 78 Hz) stand out as outliers.
+/// Measured: a clean speed listed at B2 in 16/30 runs (`python3
+/// scripts/bench_unseen.py --machine unseen-train target/release/plinth DIR
+/// 30 clean-dmix`); the stored seed 1 lists 77.257, 77.569 and 78.189 Hz.
+/// Nothing is untrusted and the pedestals stay right (1/30 runs with an
+/// `ok` value 3.0 ± off).
+#[test]
+#[ignore = "issue 17: digits differing by bearing: clean speeds listed as outliers at B2 in \
+            16/30 runs (digits counted per column over all bearings)"]
+fn digits_per_bearing_list_no_clean_speed() {
+    let id = identify(&stored("clean-dmix"));
+    for b in BEARINGS {
+        assert!(listed(&id, b).is_empty(), "{b} lists {:?}", listed(&id, b));
+    }
+}
+
+/// B3's bearing is stiff and nearly undamped (ΩC_b is under 1 % of K_b), so
+/// reading the speeds as rpm (Ω/60, the table's speeds too) changes only
+/// B3's tiny bearing damping force and scales m by 3600 and c by 60: the
+/// two readings fit alike, and which one wins is the noise's choice. The
+/// rule compares them by ν·ln(r_b/r_a) of the unweighted relative residual
+/// (identify::convention::log_likelihood_ratio), a likelihood ratio only
+/// when every speed's equation error has the same variance; with the
+/// pick-ups' 2 % proportional noise a few resonance speeds carry the sum
+/// and a 4 % smaller r (1.46e-2 against 1.52e-2 on the stored run, whose
+/// noise-whitened χ²/ν is WORSE under rpm: 1.028 against 0.994) passes for
+/// decisive. Measured (`UNSEEN_RUNS=DIR scripts/bench-unseen.sh --machine
+/// unseen-train 30 clean-p2 clean-p2c`): B3 untrusted and exit 2 with
+/// "suspected convention error speed_in_rpm" (m = 3.06e5 kg) in 13/30
+/// clean runs with noise columns and 7/30 without, and on effect runs at
+/// B3 where nothing acts (runout seed 1).
+#[test]
+#[ignore = "issue 17: clean data named speed_in_rpm at B3 (a stiff nearly undamped bearing): \
+            13/30 clean runs with noise columns, 7/30 without; the rule's likelihood ratio \
+            assumes equal-variance equation errors"]
+fn a_nearly_undamped_bearing_is_not_taken_for_speeds_in_rpm() {
+    for case in ["clean-p2c", "runout"] {
+        let id = identify(&stored(case));
+        let named = suspected(&id);
+        assert!(named.is_empty(), "{case}: {named:?}");
+    }
+}
+
+/// Every effect untrusts exactly the bearing(s) it acts on, and the other
+/// bearings' `ok` values are right.
+#[test]
+fn each_effect_untrusts_exactly_its_bearings_in_identify() {
+    for (case, bearings) in [
+        ("table-film", &["B2"][..]),
+        ("cross", &["B3"]),
+        ("delay", &["B2"]),
+        ("base-runout", &["B1", "B2", "B3"]),
+    ] {
+        let run = stored(case);
+        let id = identify(&run);
+        assert_eq!(untrusted(&id), bearings, "{case}");
+        assert_ok_means_right(&run, &id, case);
+    }
+    let id = identify(&stored("table-film"));
+    let b2 = id.pedestal("B2").expect("B2");
+    assert!(b2.has_warning(WarningKind::LackOfFit));
+}
+
+/// B2's pedestal on a stiff sub-base (150 kg, 200/120 MN/m: its own
+/// resonance near 180 Hz, the pedestal's 137/103 Hz, both above the
+/// 85 Hz top speed). Below both resonances the two masses move as one: the
+/// support seen at the bearing is a single pedestal of the series stiffness
+/// k·k_s/(k + k_s) (82.4/48.0 MN/m) and a mass m + m_s·(k/(k + k_s))²
+/// (215 kg), and it fits the data to the noise (χ²/ν 0.67): identify prints
+/// B2 `ok` with k_y 83.1 ± 0.1 MN/m against the pedestal element's 140
+/// (−41 %), m 222 kg against 190. No reading of 5-85 Hz data can tell the
+/// two apart; what is wrong is the promise, not the fit: the printed k is
+/// the support's apparent stiffness over the measured range, not the
+/// pedestal element's. Measured: 5/5 runs (`scripts/bench-unseen.sh
+/// --machine unseen-train 5 sub-base`).
+#[test]
+#[ignore = "issue 17: a sub-base whose resonance lies above the measured range is absorbed: B2 \
+            printed ok with k_y -41 % (the series stiffness), 5/5 runs"]
+fn a_sub_base_above_the_range_is_not_printed_ok() {
+    let run = stored("sub-base");
+    let id = identify(&run);
+    let wrong = ok_but_wrong(&run, &id, false);
+    assert!(wrong.is_empty(), "{wrong:?}");
+}
+
+/// B3's table 25 % stiffer than its bearing (c as tabulated). B3's bearing
+/// damping force is under 1 % of its stiffness force, so the bearing force
+/// is the table's scaled by 1/1.25 to within the noise, and the pedestal
+/// equations are homogeneous in it: k, m and c all come out 1.25 times the
+/// truth and fit to the noise. Only the machine level (`--machine`, the
+/// rotor tying the absolute scale) can see it. Measured over seeds 1-5:
+/// B3 printed `ok` 25 % off (144 ±) in 2/5; the other 3 (seed 1 among
+/// them) are untrusted only by the spurious speed_in_rpm suspicion above.
+#[test]
+#[ignore = "issue 17: a tabulated stiff bearing's scale error is absorbed in B3's pedestal \
+            (k, m, c +25 %) with a perfect fit: ok in 2/5, the rest untrusted only by speed_in_rpm"]
+fn a_wrong_table_scale_is_not_printed_ok() {
+    let run = stored("table-scale");
+    let id = identify(&run);
+    assert!(suspected(&id).is_empty(), "{:?}", suspected(&id));
+    let wrong = ok_but_wrong(&run, &id, false);
+    assert!(wrong.is_empty(), "{wrong:?}");
+}
+
+/// One outlier speed at B3 (seed 1: 54.077 Hz). identify lists exactly
+/// that speed at B3, 5/5 runs; diagnose does not leave it out (it does for
+/// keyphasor flips), the gap at that one speed is taken for model error and
+/// `pedestal_sub_base` at B3 is named with the verdict trusted (gap 0.054 →
+/// 0.032) in 1/5 runs, seed 1 (`scripts/bench-unseen.sh --machine
+/// unseen-train 5 outlier`; diagnose takes ~4 min on this run, hence
+/// ignored in CI even when fixed).
+#[test]
+#[ignore = "issue 17: diagnose names pedestal_sub_base at B3 (trusted) on one outlier speed \
+            identify lists: 1/5 runs; ~4 min"]
+fn one_outlier_speed_names_nothing_in_diagnose() {
+    let run = stored("outlier");
+    let id = identify(&run);
+    assert_eq!(listed(&id, "B3").len(), 1, "{:?}", listed(&id, "B3"));
+    let d = diagnosis(&run);
+    assert!(named(&d).is_empty(), "{}", d.to_text());
+}
