@@ -170,10 +170,8 @@ fn a_worn_oil_film_is_named_as_bearing_coefficients_at_its_bearing() {
     assert!(d.trusted, "{:?}", d.trust_reasons);
 }
 
+/// Measured: RATE_PLACEHOLDER
 #[test]
-#[ignore = "issue 17: a tabulated bearing whose table is 25 % too stiff is named sensor_delay \
-            (with runout or a sub-base) at B1, untrusted, never bearing_coefficients: 0/5 right \
-            (scripts/bench-unseen.sh --machine unseen-overhung 5 table-scale)"]
 fn a_wrong_table_scale_is_named_as_bearing_coefficients_at_its_bearing() {
     let d = assert_named("table-scale", &[("bearing_coefficients", "B1")]);
     assert!(d.trusted, "{:?}", d.trust_reasons);
