@@ -436,7 +436,14 @@ fn correction_slots(state: &State) -> Vec<Slot> {
         .nonlinear
         .iter()
         .enumerate()
-        .filter(|(_, p)| matches!(p, Nonlinear::Delay { .. } | Nonlinear::Clearance { .. }))
+        .filter(|(_, p)| {
+            matches!(
+                p,
+                Nonlinear::Delay { .. }
+                    | Nonlinear::Clearance { .. }
+                    | Nonlinear::StiffnessRatio { .. }
+            )
+        })
         .map(|(k, _)| Slot::Nonlinear(k));
     terms.chain(nl).collect()
 }
@@ -457,7 +464,7 @@ fn set_slot(state: &mut State, s: Slot, v: f64) {
 
 /// Finite-difference step of a correcting parameter: 1 % of its value,
 /// at least a floor in its own unit (runout: 1e-3 of the largest runout
-/// value [m]; cross-stiffness 1e3 N/m; delay 1e-6 s; clearance δ 1e-3).
+/// value [m]; cross-stiffness 1e3 N/m; delay 1e-6 s; a table's δ 1e-3).
 fn slot_step(state: &State, s: Slot, runout_scale: f64) -> f64 {
     let v = slot_value(state, s).abs();
     let floor = match s {

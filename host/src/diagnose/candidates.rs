@@ -10,7 +10,7 @@
 //! | `pedestal_mass_anisotropy` | m split into m_y, m_z | m_y − m_z (= 0) |
 //! | `probe_runout` | F = K*·(rel − r), r constant | r_y, r_z complex, 4 real (= 0) |
 //! | `sensor_delay` | a delayed channel reads q·e^{−iΩτ}: on both pedestal channels (the simulator's definition), one of them, both rel probes or one | τ (= 0), profiled; six variants per bearing, each counted as a candidate |
-//! | `bearing_coefficients` | K* → K*_table + K*_film(ρ·c_w) − K*_film(c_w) (`super::bearing_table`; only for oil-film bearings whose geometry the machine file gives) | δ = ρ − 1 (= 0), profiled |
+//! | `bearing_coefficients` | K* → K*_table + K*_film(ρ·c_w) − K*_film(c_w) for an oil-film table whose geometry the machine file gives; K + iΩC → (1 + δ)·K + iΩC for any other table (`super::bearing_table`) | δ = ρ − 1 or k_scale − 1 (= 0), profiled |
 //!
 //! `foundation_coupling` is not a linear augmentation of one pedestal: the
 //! pedestals stand on a shared, unmeasured base whose motion couples them
@@ -158,6 +158,24 @@ pub fn library(model: &Model, n_bearings: usize) -> Vec<Candidate> {
                 Nonlinear::Clearance { bearing: b },
             ));
         }
+        // Any other table: its stiffness relative to its damping
+        // (`super::bearing_table::scale`).
+        let has_ratio = model
+            .nonlinear
+            .iter()
+            .any(|p| matches!(p, Nonlinear::StiffnessRatio { bearing } if *bearing == b));
+        if let (false, false, Some(effect)) = (
+            has_ratio,
+            model.tables.get(b).is_some_and(Option::is_some),
+            EffectKind::from_name(BEARING_COEFFICIENTS),
+        ) {
+            out.push(add_nonlinear(
+                model,
+                effect,
+                b,
+                Nonlinear::StiffnessRatio { bearing: b },
+            ));
+        }
         let has_delay = model
             .nonlinear
             .iter()
@@ -250,14 +268,11 @@ mod tests {
         let lib = library(&undamped, 2);
         // foundation_coupling is the base model of `super::foundation`, not
         // a linear augmentation of this library; pedestal_sub_base is the
-        // same model on one pedestal; a table correction needs the bearing's
-        // oil-film geometry.
+        // same model on one pedestal.
         for e in EffectKind::ALL.into_iter().filter(|e| {
             !matches!(
                 e,
-                EffectKind::FoundationCoupling
-                    | EffectKind::PedestalSubBase
-                    | EffectKind::BearingCoefficients
+                EffectKind::FoundationCoupling | EffectKind::PedestalSubBase
             )
         }) {
             assert!(lib.iter().any(|c| c.effect == e), "{}", e.name());
@@ -265,8 +280,9 @@ mod tests {
         // With damping in the base, pedestal damping is not a candidate.
         let lib = library(&paper_model(2), 2);
         assert!(lib.iter().all(|c| c.effect != EffectKind::PedestalDamping));
-        // Per bearing: loss, cross, mass, runout, 6 delays.
-        assert_eq!(lib.len(), 2 * 10);
+        // Per bearing: loss, cross, mass, runout, table stiffness ratio,
+        // 6 delays.
+        assert_eq!(lib.len(), 2 * 11);
     }
 
     #[test]
@@ -277,7 +293,13 @@ mod tests {
             .retain(|t| !matches!(t, Term::Damping { .. }));
         for c in library(&undamped, 2) {
             let names: Vec<&str> = c.parameters.iter().map(|(n, _)| n.as_str()).collect();
-            assert_eq!(names, c.effect.parameter_names(), "{}", c.effect.name());
+            if c.effect.name() == BEARING_COEFFICIENTS {
+                // Without an oil-film geometry: the stiffness ratio alone.
+                assert_eq!(names, ["k_scale"]);
+                assert!(c.effect.parameter_names().contains(&"k_scale"));
+            } else {
+                assert_eq!(names, c.effect.parameter_names(), "{}", c.effect.name());
+            }
         }
         // The clearance scalar is reported under its effects-module name.
         let film = crate::sim::oil_film::OilFilmBearing {
@@ -302,9 +324,18 @@ mod tests {
             .filter(|c| c.effect.name() == BEARING_COEFFICIENTS)
             .collect();
         if let Some(e) = EffectKind::from_name(BEARING_COEFFICIENTS) {
-            assert_eq!(c.len(), 1);
-            assert_eq!(c[0].bearing, 1);
-            assert!(e.parameter_names().contains(&c[0].parameters[0].0.as_str()));
+            // Bearing 0 (no geometry): the stiffness ratio; bearing 1: the
+            // clearance.
+            assert_eq!(c.len(), 2);
+            assert_eq!(
+                (c[0].bearing, c[0].parameters[0].0.as_str()),
+                (0, "k_scale")
+            );
+            assert_eq!(
+                (c[1].bearing, c[1].parameters[0].0.as_str()),
+                (1, "clearance_ratio")
+            );
+            assert!(e.parameter_names().contains(&c[1].parameters[0].0.as_str()));
         }
     }
 }

@@ -78,14 +78,13 @@ pub fn corrected_on(prep: &Prepared, state: &State, base: Option<&FoundationFit>
                             }
                         }
                     }
-                    Nonlinear::Clearance { bearing } if bearing == b => {
+                    Nonlinear::Clearance { bearing } | Nonlinear::StiffnessRatio { bearing }
+                        if bearing == b =>
+                    {
                         let corr = state
                             .model
-                            .tables
-                            .get(b)
-                            .copied()
-                            .flatten()
-                            .and_then(|t| t.correction(p.speed_hz, v));
+                            .table_correction(nl)
+                            .and_then(|t| t.correction(p.speed_hz, &p.kstar, v));
                         if let Some(corr) = corr {
                             for (k_row, c_row) in p.kstar.iter_mut().zip(corr) {
                                 for (k, c) in k_row.iter_mut().zip(c_row) {

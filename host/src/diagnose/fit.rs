@@ -214,9 +214,14 @@ pub fn fit_group(
 pub fn search_interval(prep: &Prepared, model: &Model, k: usize, group: &[usize]) -> (f64, f64) {
     match model.nonlinear[k] {
         super::model::Nonlinear::LossFactor { .. } => (0.0, 1.0),
-        super::model::Nonlinear::Clearance { .. } => {
-            (super::bearing_table::LOWEST, super::bearing_table::HIGHEST)
-        }
+        super::model::Nonlinear::Clearance { .. } => (
+            super::bearing_table::film::LOWEST,
+            super::bearing_table::film::HIGHEST,
+        ),
+        super::model::Nonlinear::StiffnessRatio { .. } => (
+            super::bearing_table::scale::LOWEST,
+            super::bearing_table::scale::HIGHEST,
+        ),
         super::model::Nonlinear::Delay { .. } => {
             let f_max = Model::group_speeds(prep, group)
                 .iter()

@@ -9,7 +9,8 @@
 //! pedestals on base elements of the simulator with the identified base
 //! parameters (`put_bases`); a table's clearance correction
 //! (`bearing_coefficients`) simulates that bearing as the oil film its table
-//! was written for at the corrected clearance. Sensor effects (runout, delays) are applied to the
+//! was written for at the corrected clearance, a table's stiffness ratio
+//! simulates it as its table with the stiffness × k_scale. Sensor effects (runout, delays) are applied to the
 //! simulated readings here, exactly as identified.
 //!
 //! What each measured pedestal stands on is the identified model's, not the
@@ -29,6 +30,7 @@ use crate::sim::base::Base;
 use crate::sim::{unbalance_response, BearingModel, EffectSet, Machine};
 use anyhow::{anyhow, Context, Result};
 use num_complex::Complex;
+use plinth_shared::bearing::BearingCoefficients;
 
 /// Predicted readings (rel, ped) per bearing and speed index [m].
 pub type Readings = Vec<Vec<Option<([Complex<f64>; 2], [Complex<f64>; 2])>>>;
@@ -141,6 +143,32 @@ pub fn resimulate(
             film.clearance *= 1.0 + state.params.nl[k];
             let i = machine.bearing_index(&prep.bearings[bearing])?;
             machine.bearings[i].model = BearingModel::OilFilm(film);
+        }
+    }
+    // A table's stiffness ratio: the bearing simulated as the table the data
+    // were fitted with (`bearings.csv` at the measured speeds), its
+    // stiffness × k_scale, its damping as written.
+    for (k, p) in state.model.nonlinear.iter().enumerate() {
+        if let Nonlinear::StiffnessRatio { bearing } = *p {
+            let delta = state.params.nl[k];
+            let rows: Vec<(f64, BearingCoefficients<f64>)> = prep.points[bearing]
+                .iter()
+                .flatten()
+                .map(|o| {
+                    let corr = super::bearing_table::scale::correction(&o.kstar, delta);
+                    let coefficients = BearingCoefficients {
+                        k: std::array::from_fn(|r| {
+                            std::array::from_fn(|c| o.kstar[r][c].re + corr[r][c].re)
+                        }),
+                        c: std::array::from_fn(|r| {
+                            std::array::from_fn(|c| o.kstar[r][c].im / o.omega())
+                        }),
+                    };
+                    (o.speed_hz, coefficients)
+                })
+                .collect();
+            let i = machine.bearing_index(&prep.bearings[bearing])?;
+            machine.bearings[i].model = BearingModel::Table(rows);
         }
     }
     // The identified model decides what each measured pedestal stands on:

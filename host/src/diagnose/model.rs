@@ -23,7 +23,7 @@
 //! delay τ (a delayed channel reads q·e^{−iΩτ}, so the model uses the
 //! measured value times e^{iΩτ}).
 
-use super::bearing_table::WrittenTable;
+use super::bearing_table::{TableCorrection, WrittenTable};
 use super::data::{Complex2x2, Prepared};
 use crate::estimate::Observation;
 use nalgebra::{DMatrix, DVector};
@@ -196,6 +196,12 @@ pub enum Nonlinear {
         /// Bearing index.
         bearing: usize,
     },
+    /// Stiffness ratio correction δ = k_scale − 1 [-] of a bearing table of
+    /// any origin, its damping as written (`super::bearing_table::scale`).
+    StiffnessRatio {
+        /// Bearing index.
+        bearing: usize,
+    },
 }
 
 impl Nonlinear {
@@ -204,17 +210,19 @@ impl Nonlinear {
         match *self {
             Nonlinear::LossFactor { bearing }
             | Nonlinear::Delay { bearing, .. }
-            | Nonlinear::Clearance { bearing } => bearing,
+            | Nonlinear::Clearance { bearing }
+            | Nonlinear::StiffnessRatio { bearing } => bearing,
         }
     }
 
-    /// Parameter name (`eta`, `tau`, as in `crate::effects`; the clearance
-    /// scalar is δ, reported as `clearance_ratio` = 1 + δ).
+    /// Parameter name (`eta`, `tau`, as in `crate::effects`; the table
+    /// scalars are δ, reported as `clearance_ratio` or `k_scale` = 1 + δ).
     pub fn name(&self) -> &'static str {
         match self {
             Nonlinear::LossFactor { .. } => "eta",
             Nonlinear::Delay { .. } => "tau",
             Nonlinear::Clearance { .. } => "clearance_ratio",
+            Nonlinear::StiffnessRatio { .. } => "k_scale",
         }
     }
 }
@@ -264,6 +272,21 @@ pub struct Assembled {
 }
 
 impl Model {
+    /// The table correction a nonlinear scalar stands for, if it is one
+    /// (a clearance needs its bearing's oil-film geometry in [`Model::tables`]).
+    pub fn table_correction(&self, p: &Nonlinear) -> Option<TableCorrection> {
+        match *p {
+            Nonlinear::Clearance { bearing } => self
+                .tables
+                .get(bearing)
+                .copied()
+                .flatten()
+                .map(TableCorrection::Film),
+            Nonlinear::StiffnessRatio { .. } => Some(TableCorrection::StiffnessRatio),
+            _ => None,
+        }
+    }
+
     /// The groups of pedestals that must be fitted together (connected by
     /// coupling terms), each sorted, in order of their first bearing.
     pub fn groups(&self, n_bearings: usize) -> Vec<Vec<usize>> {
@@ -353,9 +376,9 @@ impl Model {
             let Some(pb) = pos(p.bearing()) else { continue };
             match p {
                 Nonlinear::LossFactor { .. } => eta[pb] = nl[k],
-                Nonlinear::Clearance { bearing } => {
-                    let table = self.tables.get(*bearing).copied().flatten()?;
-                    let corr = table.correction(points[pb].speed_hz, nl[k])?;
+                Nonlinear::Clearance { .. } | Nonlinear::StiffnessRatio { .. } => {
+                    let table = self.table_correction(p)?;
+                    let corr = table.correction(points[pb].speed_hz, &kstar[pb], nl[k])?;
                     for (row, c_row) in kstar[pb].iter_mut().zip(corr) {
                         for (v, c) in row.iter_mut().zip(c_row) {
                             *v += c;

@@ -400,6 +400,12 @@ impl Diagnosis {
                     );
                 }
                 let _ = writeln!(s, "{ev}");
+                if st.parameters.iter().any(|p| p.name == "k_scale") {
+                    let _ = writeln!(
+                        s,
+                        "     k_scale: the table's stiffness relative to its damping (c_scale held at 1: pedestal data see only the ratio; the pedestal values assume the damping as written)"
+                    );
+                }
                 if let Some(g) = st.machine_gap_before {
                     let after = st
                         .machine_gap_after

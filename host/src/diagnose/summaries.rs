@@ -41,7 +41,9 @@ pub(super) fn summary(prep: &Prepared, e: &Evaluated, tried: usize) -> Candidate
 
 /// An effect's estimates as reported: the clearance scalar δ of
 /// `bearing_coefficients` as `clearance_ratio` = 1 + δ, with the written
-/// and the true clearance [m].
+/// and the true clearance [m]; its stiffness-ratio scalar δ as `k_scale` =
+/// 1 + δ (the table's stiffness relative to its damping, `c_scale` held at
+/// 1: `super::bearing_table`).
 pub(super) fn as_reported(
     model: &Model,
     bearing: usize,
@@ -51,12 +53,16 @@ pub(super) fn as_reported(
     if effect.name() != super::candidates::BEARING_COEFFICIENTS {
         return raw;
     }
-    let Some(table) = model.tables.get(bearing).copied().flatten() else {
-        return raw;
-    };
+    let table = model.tables.get(bearing).copied().flatten();
     let mut out = Vec::new();
     for e in raw {
-        if e.name == "clearance_ratio" {
+        if e.name == "k_scale" {
+            out.push(Estimate {
+                name: e.name,
+                value: 1.0 + e.value,
+                std_err: e.std_err,
+            });
+        } else if let (Some(table), "clearance_ratio") = (table, e.name.as_str()) {
             let c_w = table.film.clearance;
             out.push(Estimate {
                 name: e.name,

@@ -21,8 +21,12 @@ pub const PARAMETERS: [&str; 5] = ["k_y", "k_z", "m", "c_y", "c_z"];
 
 /// Display unit of a parameter and the factor from its SI value:
 /// stiffness (`k…`) in MN/m, mass (`m…`) in kg, damping (`c…`) in N·s/m;
-/// anything else in SI as is (label empty).
+/// ratios (`…_scale`, `…_ratio`) and anything else in SI as is (label empty).
 pub fn unit(name: &str) -> (&'static str, f64) {
+    // Ratios (`k_scale`, `clearance_ratio`) are dimensionless.
+    if name.ends_with("_scale") || name.ends_with("_ratio") {
+        return ("", 1.0);
+    }
     let first = name.chars().next().unwrap_or(' ');
     let subscript = name.len() == 1 || name.as_bytes().get(1) == Some(&b'_');
     match first {
