@@ -88,6 +88,7 @@ impl LocalRational {
         let mut basis: [Vec<f64>; NUMERATOR_TERMS] = std::array::from_fn(|_| vec![0.0; m]);
         let mut cols: [Vec<Complex<f64>>; DENOMINATOR_TERMS + 1] =
             std::array::from_fn(|_| vec![zero; m]);
+        let mut denominators = vec![zero; m];
         for _ in 0..ITERATIONS {
             // Orthonormal basis of the weighted numerator columns
             // row_weight·xᵗ (t < NUMERATOR_TERMS), the same for every
@@ -121,8 +122,11 @@ impl LocalRational {
             let mut rhs = [zero; DENOMINATOR_TERMS];
             for (c, &weight) in weights.iter().enumerate() {
                 for (t, v) in cols.iter_mut().enumerate() {
-                    for (k, z) in v.iter_mut().enumerate() {
-                        *z = points[k].1[c] * (weight * row_weight[k] * powers[k][t]);
+                    for (z, ((point, w), x)) in v
+                        .iter_mut()
+                        .zip(points.iter().zip(&row_weight).zip(&powers))
+                    {
+                        *z = point.1[c] * (weight * w * x[t]);
                     }
                     for b in &basis {
                         let dot: Complex<f64> = v.iter().zip(b).map(|(z, e)| z * e).sum();
@@ -132,7 +136,8 @@ impl LocalRational {
                     }
                 }
                 for i in 0..DENOMINATOR_TERMS {
-                    for j in 0..DENOMINATOR_TERMS {
+                    // The upper triangle: [`solve_hermitian_2`] reads no more.
+                    for j in i..DENOMINATOR_TERMS {
                         gram[i][j] += cols[i + 1]
                             .iter()
                             .zip(&cols[j + 1])
@@ -156,11 +161,14 @@ impl LocalRational {
                     .sum::<f64>()
             });
             let cholesky = normal.cholesky()?;
+            for (k, (f, _)) in points.iter().enumerate() {
+                denominators[k] = model.denominator(*f);
+            }
             for c in 0..4 {
                 let mut re = nalgebra::Vector3::zeros();
                 let mut im = nalgebra::Vector3::zeros();
                 for k in 0..m {
-                    let target = points[k].1[c] * model.denominator(points[k].0);
+                    let target = points[k].1[c] * denominators[k];
                     let w2 = row_weight[k] * row_weight[k];
                     for i in 0..NUMERATOR_TERMS {
                         re[i] += w2 * powers[k][i] * target.re;
@@ -172,8 +180,8 @@ impl LocalRational {
                     model.numerators[c][t] = Complex::new(re[t], im[t]);
                 }
             }
-            for (w, (f, _)) in row_weight.iter_mut().zip(points) {
-                let den = model.denominator(*f).norm();
+            for (w, den) in row_weight.iter_mut().zip(&denominators) {
+                let den = den.norm();
                 if !(den > 0.0 && den.is_finite()) {
                     return None;
                 }
