@@ -31,6 +31,10 @@ const DENOMINATOR_TERMS: usize = 2;
 /// equations for 14 complex unknowns).
 pub const MIN_POINTS: usize = 5;
 
+/// Points a fit holds in buffers on the stack (more go to the heap) [-]:
+/// the flip test's windows hold up to 10.
+const STACK_POINTS: usize = 16;
+
 /// Sanathanan–Koerner reweighting steps [-].
 const ITERATIONS: usize = 4;
 
@@ -70,31 +74,55 @@ impl LocalRational {
             d: [Complex::new(0.0, 0.0); DENOMINATOR_TERMS],
         };
         let m = points.len();
-        // Powers x⁰..x⁴ of each speed's x = (f − centre)/span.
-        let powers: Vec<[f64; 2 * NUMERATOR_TERMS - 1]> = points
-            .iter()
-            .map(|(f, _)| {
-                let x = (f - centre_hz) / span_hz;
-                let mut p = [1.0; 2 * NUMERATOR_TERMS - 1];
-                for t in 1..p.len() {
-                    p[t] = p[t - 1] * x;
-                }
-                p
-            })
-            .collect();
-        let mut row_weight = vec![1.0; m];
         let zero = Complex::new(0.0, 0.0);
-        // Buffers reused by every step (one fit per speed and bearing).
-        let mut basis: [Vec<f64>; NUMERATOR_TERMS] = std::array::from_fn(|_| vec![0.0; m]);
-        let mut cols: [Vec<Complex<f64>>; DENOMINATOR_TERMS + 1] =
-            std::array::from_fn(|_| vec![zero; m]);
-        let mut denominators = vec![zero; m];
+        // Buffers reused by every step, on the stack for a window of up to
+        // STACK_POINTS speeds (one fit per speed and bearing): each speed's
+        // powers x⁰..x⁴ of x = (f − centre)/span; the row weights and the
+        // numerators' basis; the denominator's columns and the
+        // denominators.
+        let mut stack_powers = [[0.0; 2 * NUMERATOR_TERMS - 1]; STACK_POINTS];
+        let mut stack_real = [0.0; (NUMERATOR_TERMS + 1) * STACK_POINTS];
+        let mut stack_complex = [zero; (DENOMINATOR_TERMS + 2) * STACK_POINTS];
+        let (mut heap_powers, mut heap_real, mut heap_complex);
+        let (powers, real, complex): (
+            &mut [[f64; 2 * NUMERATOR_TERMS - 1]],
+            &mut [f64],
+            &mut [Complex<f64>],
+        ) = if m <= STACK_POINTS {
+            (
+                &mut stack_powers[..m],
+                &mut stack_real[..(NUMERATOR_TERMS + 1) * m],
+                &mut stack_complex[..(DENOMINATOR_TERMS + 2) * m],
+            )
+        } else {
+            heap_powers = vec![[0.0; 2 * NUMERATOR_TERMS - 1]; m];
+            heap_real = vec![0.0; (NUMERATOR_TERMS + 1) * m];
+            heap_complex = vec![zero; (DENOMINATOR_TERMS + 2) * m];
+            (&mut heap_powers, &mut heap_real, &mut heap_complex)
+        };
+        for (p, (f, _)) in powers.iter_mut().zip(points) {
+            let x = (f - centre_hz) / span_hz;
+            p[0] = 1.0;
+            for t in 1..p.len() {
+                p[t] = p[t - 1] * x;
+            }
+        }
+        let powers: &[[f64; 2 * NUMERATOR_TERMS - 1]] = powers;
+        let (row_weight, basis_buffer) = real.split_at_mut(m);
+        row_weight.fill(1.0);
+        let mut chunks = basis_buffer.chunks_exact_mut(m);
+        let mut basis: [&mut [f64]; NUMERATOR_TERMS] =
+            std::array::from_fn(|_| chunks.next().unwrap_or_default());
+        let (denominators, cols_buffer) = complex.split_at_mut(m);
+        let mut chunks = cols_buffer.chunks_exact_mut(m);
+        let mut cols: [&mut [Complex<f64>]; DENOMINATOR_TERMS + 1] =
+            std::array::from_fn(|_| chunks.next().unwrap_or_default());
         for _ in 0..ITERATIONS {
             // Orthonormal basis of the weighted numerator columns
             // row_weight·xᵗ (t < NUMERATOR_TERMS), the same for every
             // channel: Gram–Schmidt, twice for orthogonality.
             for (t, column) in basis.iter_mut().enumerate() {
-                for (v, (w, p)) in column.iter_mut().zip(row_weight.iter().zip(&powers)) {
+                for (v, (w, p)) in column.iter_mut().zip(row_weight.iter().zip(powers)) {
                     *v = w * p[t];
                 }
             }
@@ -104,7 +132,7 @@ impl LocalRational {
                 for _ in 0..2 {
                     for earlier in done.iter() {
                         let dot: f64 = earlier.iter().zip(column.iter()).map(|(a, b)| a * b).sum();
-                        for (v, e) in column.iter_mut().zip(earlier) {
+                        for (v, e) in column.iter_mut().zip(earlier.iter()) {
                             *v -= dot * e;
                         }
                     }
@@ -124,13 +152,13 @@ impl LocalRational {
                 for (t, v) in cols.iter_mut().enumerate() {
                     for (z, ((point, w), x)) in v
                         .iter_mut()
-                        .zip(points.iter().zip(&row_weight).zip(&powers))
+                        .zip(points.iter().zip(row_weight.iter()).zip(powers))
                     {
                         *z = point.1[c] * (weight * w * x[t]);
                     }
                     for b in &basis {
-                        let dot: Complex<f64> = v.iter().zip(b).map(|(z, e)| z * e).sum();
-                        for (z, e) in v.iter_mut().zip(b) {
+                        let dot: Complex<f64> = v.iter().zip(b.iter()).map(|(z, e)| z * e).sum();
+                        for (z, e) in v.iter_mut().zip(b.iter()) {
                             *z -= dot * e;
                         }
                     }
@@ -140,13 +168,13 @@ impl LocalRational {
                     for j in i..DENOMINATOR_TERMS {
                         gram[i][j] += cols[i + 1]
                             .iter()
-                            .zip(&cols[j + 1])
+                            .zip(cols[j + 1].iter())
                             .map(|(a, b)| a.conj() * b)
                             .sum::<Complex<f64>>();
                     }
                     rhs[i] -= cols[i + 1]
                         .iter()
-                        .zip(&cols[0])
+                        .zip(cols[0].iter())
                         .map(|(a, b)| a.conj() * b)
                         .sum::<Complex<f64>>();
                 }
@@ -180,7 +208,7 @@ impl LocalRational {
                     model.numerators[c][t] = Complex::new(re[t], im[t]);
                 }
             }
-            for (w, den) in row_weight.iter_mut().zip(&denominators) {
+            for (w, den) in row_weight.iter_mut().zip(denominators.iter()) {
                 let den = den.norm();
                 if !(den > 0.0 && den.is_finite()) {
                     return None;
