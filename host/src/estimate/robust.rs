@@ -101,10 +101,23 @@ fn whitened_jacobian(
 ) -> Option<(DVector<f64>, DMatrix<f64>)> {
     let n = obs.len();
     let eq = Rigid::new(obs, weighting);
-    let factors: Vec<DMatrix<f64>> = (0..n)
-        .map(|s| gh::whitening(&eq, s, theta))
+    // Each speed's whitening at θ as a fixed-size factor (the residuals are
+    // whitened by it 1 + columns times per speed).
+    let factors: Vec<Matrix4<f64>> = (0..n)
+        .map(|s| {
+            let l = gh::whitening(&eq, s, theta)?;
+            (l.shape() == (4, 4)).then(|| Matrix4::from_fn(|r, c| l[(r, c)]))
+        })
         .collect::<Option<_>>()?;
-    let w = gh::whitened(&eq, theta, Some(&factors))?;
+    let whitened = |p: &[f64; PARAMETERS]| -> DVector<f64> {
+        let mut out = DVector::zeros(4 * n);
+        for (s, l) in factors.iter().enumerate() {
+            out.fixed_rows_mut::<4>(4 * s)
+                .copy_from(&eq.whitened_by(s, p, l));
+        }
+        out
+    };
+    let w = whitened(theta);
     // Difference steps: a millionth of the value, or of a 1e-3 loss factor
     // for a damping. The whitened residual is linear in θ with L_i held, so
     // a one-sided difference is exact but for rounding (about 1e-10 of the
@@ -118,14 +131,15 @@ fn whitened_jacobian(
         up[k] += h;
         // The step as represented (θ_k + h − θ_k), not as asked.
         let step = up[k] - theta[k];
-        let wu = gh::whitened(&eq, &up, Some(&factors))?;
-        if wu.len() != 4 * n || w.len() != 4 * n || step == 0.0 {
+        if step == 0.0 {
             return None;
         }
-        jac.set_column(c, &((wu - &w) / step));
+        jac.set_column(c, &((whitened(&up) - &w) / step));
     }
-    let sizes_agree = w.len() == 4 * n;
-    (sizes_agree && jac.iter().chain(w.iter()).all(|v| v.is_finite())).then_some((w, jac))
+    jac.iter()
+        .chain(w.iter())
+        .all(|v| v.is_finite())
+        .then_some((w, jac))
 }
 
 /// Sandwich standard errors [θ units: N/m, N/m, kg, N·s/m, N·s/m] of the
@@ -236,18 +250,28 @@ pub fn deleted_distances(
                 });
                 // The largest eigenvalue of the pull: the leverage h in the
                 // fit, h/(1 − h) left out.
-                let most = pull
-                    .symmetric_eigenvalues()
-                    .iter()
-                    .fold(0.0, |a: f64, &b| a.max(b));
                 let limit = if in_fit[i] {
                     MAX_LEVERAGE
                 } else {
                     MAX_LEVERAGE / (1.0 - MAX_LEVERAGE)
                 };
+                // The pull is positive semidefinite: no eigenvalue exceeds
+                // its trace, so a trace well within the limit (the typical
+                // speed, average leverage 5/n) settles it without the
+                // eigenvalues (the same verdict; the margin covers their
+                // rounding).
+                let trace = pull.trace();
+                let within =
+                    trace >= 0.0 && trace <= 0.5 * limit && pull.iter().all(|v| v.is_finite());
                 // Beyond the limit, or not a number: not judged.
-                if most.is_nan() || most > limit {
-                    return f64::NAN;
+                if !within {
+                    let most = pull
+                        .symmetric_eigenvalues()
+                        .iter()
+                        .fold(0.0, |a: f64, &b| a.max(b));
+                    if most.is_nan() || most > limit {
+                        return f64::NAN;
+                    }
                 }
                 let cov = if in_fit[i] {
                     Matrix4::identity() - pull
@@ -284,9 +308,43 @@ pub fn local_scales(v: &[f64], null_median: f64, half_window: usize) -> Vec<f64>
 /// ignored), the median of the entries within `half_window` speeds on each
 /// side [units of `v`].
 pub fn window_medians(v: &[f64], half_window: usize) -> Vec<f64> {
-    (0..v.len())
-        .map(|i| median(&v[i.saturating_sub(half_window)..(i + half_window + 1).min(v.len())]))
+    // The window's finite entries kept sorted as it slides (one insertion
+    // and one removal per speed instead of a selection over the window):
+    // the same order statistics as [`median`], so the same figures.
+    let n = v.len();
+    let mut sorted: Vec<f64> = Vec::with_capacity(2 * half_window + 1);
+    let (mut lo, mut hi) = (0, 0);
+    (0..n)
+        .map(|i| {
+            let (start, end) = (i.saturating_sub(half_window), (i + half_window + 1).min(n));
+            for &x in &v[hi..end] {
+                if x.is_finite() {
+                    let at = sorted.partition_point(|y| y.total_cmp(&x).is_lt());
+                    sorted.insert(at, x);
+                }
+            }
+            for &x in &v[lo..start] {
+                if x.is_finite() {
+                    let at = sorted.partition_point(|y| y.total_cmp(&x).is_lt());
+                    sorted.remove(at);
+                }
+            }
+            (lo, hi) = (start, end.max(hi));
+            sorted_median(&sorted)
+        })
         .collect()
+}
+
+/// The median of `sorted` (ascending in [`f64::total_cmp`], finite; NaN
+/// when empty): the middle entry, or the mean of the two middle ones, as
+/// [`median`] gives for the same entries in any order.
+fn sorted_median(sorted: &[f64]) -> f64 {
+    let k = sorted.len();
+    match k {
+        0 => f64::NAN,
+        _ if k % 2 == 1 => sorted[k / 2],
+        _ => 0.5 * (sorted[k / 2 - 1] + sorted[k / 2]),
+    }
 }
 
 /// Per speed (in speed order), the noise scale s² of the distances `d`
@@ -490,6 +548,28 @@ mod tests {
         let s = sandwich_std_errs(&obs, &start, &cols).expect("sandwich");
         assert_eq!((s[3], s[4]), (0.0, 0.0));
         assert!(sandwich_std_errs(&obs[..5], &start, &Parameter::ALL).is_none());
+    }
+
+    #[test]
+    fn sliding_window_medians_are_the_medians_of_the_windows() {
+        use rand::{rngs::StdRng, Rng, SeedableRng};
+        let mut rng = StdRng::seed_from_u64(5);
+        for (n, half) in [(0, 3), (1, 3), (7, 15), (200, 7), (300, 15), (50, 0)] {
+            let v: Vec<f64> = (0..n)
+                .map(|i| match i % 17 {
+                    3 => f64::NAN,
+                    5 => 0.0,
+                    9 => -0.0,
+                    11 => f64::INFINITY,
+                    _ => (rng.random::<f64>() * 10.0).round() - 3.0,
+                })
+                .collect();
+            let slid = window_medians(&v, half);
+            for (i, m) in slid.iter().enumerate() {
+                let direct = median(&v[i.saturating_sub(half)..(i + half + 1).min(n)]);
+                assert_eq!(m.to_bits(), direct.to_bits(), "n {n} half {half} at {i}");
+            }
+        }
     }
 
     #[test]

@@ -30,6 +30,9 @@ pub(super) struct Window {
     pub(super) range: std::ops::Range<usize>,
     /// Orthonormal columns: the Legendre polynomials over the window.
     pub(super) basis: DMatrix<f64>,
+    /// The same basis row by row (speed by speed, `basis.ncols()` values
+    /// each): what [`Window::explained_across`] reads once per shuffle.
+    by_row: Vec<f64>,
     /// Highest degree of the basis.
     pub(super) degree: usize,
 }
@@ -37,9 +40,11 @@ pub(super) struct Window {
 impl Window {
     pub(super) fn new(speeds_hz: &[f64], range: std::ops::Range<usize>, degree: usize) -> Self {
         let basis = legendre_basis(&speeds_hz[range.clone()], degree).qr().q();
+        let by_row = basis.transpose().as_slice().to_vec();
         Self {
             range,
             basis,
+            by_row,
             degree,
         }
     }
@@ -74,41 +79,19 @@ impl Window {
     /// sums in the same order as one column at a time: the same figures),
     /// so the rows and block ids are read once per window and shuffle.
     pub(super) fn explained_across(&self, w: &[[f64; 4]], ids: &[usize]) -> f64 {
-        const MOST: usize = MAX_DEGREE + 1;
         let rows = &w[self.range.clone()];
         let ids = &ids[self.range.clone()];
-        let columns = self.basis.ncols();
-        if columns > MOST {
-            // Windows are built with degree ≤ MAX_DEGREE (`windows`).
-            return f64::NAN;
+        // The number of columns as a constant: the sums stay in registers.
+        // Windows are built with degree ≤ MAX_DEGREE (`windows`).
+        match self.basis.ncols() {
+            1 => across::<1>(&self.by_row, rows, ids),
+            2 => across::<2>(&self.by_row, rows, ids),
+            3 => across::<3>(&self.by_row, rows, ids),
+            4 => across::<4>(&self.by_row, rows, ids),
+            5 => across::<5>(&self.by_row, rows, ids),
+            6 => across::<6>(&self.by_row, rows, ids),
+            _ => f64::NAN,
         }
-        let square = |v: &[f64; 4]| v.iter().map(|x| x * x).sum::<f64>();
-        let mut p = [[0.0; 4]; MOST];
-        let mut b = [[0.0; 4]; MOST];
-        let mut own = [0.0; MOST];
-        let mut id = usize::MAX;
-        for (i, (r, &k)) in rows.iter().zip(ids).enumerate() {
-            if k != id {
-                for d in 0..columns {
-                    own[d] += square(&b[d]);
-                    b[d] = [0.0; 4];
-                }
-                id = k;
-            }
-            for d in 0..columns {
-                let qd = self.basis[(i, d)];
-                for c in 0..4 {
-                    p[d][c] += qd * r[c];
-                    b[d][c] += qd * r[c];
-                }
-            }
-        }
-        (0..columns)
-            .map(|d| {
-                let own = own[d] + square(&b[d]);
-                square(&p[d]) - own
-            })
-            .sum()
     }
 
     /// The sum across blocks `x` ([`Window::explained_across`]) in units of
@@ -129,6 +112,39 @@ impl Window {
         let v = 2.0 / (9.0 * k);
         ((ss / (level * k)).cbrt() - (1.0 - v)) / v.sqrt()
     }
+}
+
+/// [`Window::explained_across`] of the window's `rows` and block `ids`
+/// over its basis of `C` columns stored row by row (`by_row`).
+fn across<const C: usize>(by_row: &[f64], rows: &[[f64; 4]], ids: &[usize]) -> f64 {
+    let square = |v: &[f64; 4]| v.iter().map(|x| x * x).sum::<f64>();
+    let mut p = [[0.0; 4]; C];
+    let mut b = [[0.0; 4]; C];
+    let mut own = [0.0; C];
+    let mut id = usize::MAX;
+    for ((q, r), &k) in by_row.chunks_exact(C).zip(rows).zip(ids) {
+        if k != id {
+            for d in 0..C {
+                own[d] += square(&b[d]);
+                b[d] = [0.0; 4];
+            }
+            id = k;
+        }
+        for d in 0..C {
+            let qd = q[d];
+            for c in 0..4 {
+                let v = qd * r[c];
+                p[d][c] += v;
+                b[d][c] += v;
+            }
+        }
+    }
+    (0..C)
+        .map(|d| {
+            let own = own[d] + square(&b[d]);
+            square(&p[d]) - own
+        })
+        .sum()
 }
 
 /// The windows of the scan over `n` speeds `speeds_hz` (in speed order):

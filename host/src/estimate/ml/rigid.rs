@@ -221,6 +221,15 @@ impl Rigid {
         Ok((cost, slope))
     }
 
+    /// The residual of speed `s` at `theta` whitened by a lower-triangular
+    /// factor `l` held fixed: L⁻¹e [-], the same figures as
+    /// [`gh::whitened`] with that factor frozen (the same substitution), in
+    /// fixed-size arithmetic.
+    pub(crate) fn whitened_by(&self, s: usize, theta: &[f64], l: &Matrix4<f64>) -> Vector4<f64> {
+        let sp = &self.speeds[s];
+        forward(l, &(sp.a * theta_vector(theta) - sp.b))
+    }
+
     /// RMS of the unweighted equation residuals e [N].
     pub(super) fn residual_rms(&self, theta: &[f64]) -> f64 {
         let sum: f64 = self

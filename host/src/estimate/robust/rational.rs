@@ -31,6 +31,10 @@ const DENOMINATOR_TERMS: usize = 2;
 /// equations for 14 complex unknowns).
 pub const MIN_POINTS: usize = 5;
 
+/// Points a fit holds in buffers on the stack (more go to the heap) [-]:
+/// the flip test's windows hold up to 10.
+const STACK_POINTS: usize = 16;
+
 /// Sanathanan–Koerner reweighting steps [-].
 const ITERATIONS: usize = 4;
 
@@ -70,30 +74,55 @@ impl LocalRational {
             d: [Complex::new(0.0, 0.0); DENOMINATOR_TERMS],
         };
         let m = points.len();
-        // Powers x⁰..x⁴ of each speed's x = (f − centre)/span.
-        let powers: Vec<[f64; 2 * NUMERATOR_TERMS - 1]> = points
-            .iter()
-            .map(|(f, _)| {
-                let x = (f - centre_hz) / span_hz;
-                let mut p = [1.0; 2 * NUMERATOR_TERMS - 1];
-                for t in 1..p.len() {
-                    p[t] = p[t - 1] * x;
-                }
-                p
-            })
-            .collect();
-        let mut row_weight = vec![1.0; m];
         let zero = Complex::new(0.0, 0.0);
-        // Buffers reused by every step (one fit per speed and bearing).
-        let mut basis: [Vec<f64>; NUMERATOR_TERMS] = std::array::from_fn(|_| vec![0.0; m]);
-        let mut cols: [Vec<Complex<f64>>; DENOMINATOR_TERMS + 1] =
-            std::array::from_fn(|_| vec![zero; m]);
+        // Buffers reused by every step, on the stack for a window of up to
+        // STACK_POINTS speeds (one fit per speed and bearing): each speed's
+        // powers x⁰..x⁴ of x = (f − centre)/span; the row weights and the
+        // numerators' basis; the denominator's columns and the
+        // denominators.
+        let mut stack_powers = [[0.0; 2 * NUMERATOR_TERMS - 1]; STACK_POINTS];
+        let mut stack_real = [0.0; (NUMERATOR_TERMS + 1) * STACK_POINTS];
+        let mut stack_complex = [zero; (DENOMINATOR_TERMS + 2) * STACK_POINTS];
+        let (mut heap_powers, mut heap_real, mut heap_complex);
+        let (powers, real, complex): (
+            &mut [[f64; 2 * NUMERATOR_TERMS - 1]],
+            &mut [f64],
+            &mut [Complex<f64>],
+        ) = if m <= STACK_POINTS {
+            (
+                &mut stack_powers[..m],
+                &mut stack_real[..(NUMERATOR_TERMS + 1) * m],
+                &mut stack_complex[..(DENOMINATOR_TERMS + 2) * m],
+            )
+        } else {
+            heap_powers = vec![[0.0; 2 * NUMERATOR_TERMS - 1]; m];
+            heap_real = vec![0.0; (NUMERATOR_TERMS + 1) * m];
+            heap_complex = vec![zero; (DENOMINATOR_TERMS + 2) * m];
+            (&mut heap_powers, &mut heap_real, &mut heap_complex)
+        };
+        for (p, (f, _)) in powers.iter_mut().zip(points) {
+            let x = (f - centre_hz) / span_hz;
+            p[0] = 1.0;
+            for t in 1..p.len() {
+                p[t] = p[t - 1] * x;
+            }
+        }
+        let powers: &[[f64; 2 * NUMERATOR_TERMS - 1]] = powers;
+        let (row_weight, basis_buffer) = real.split_at_mut(m);
+        row_weight.fill(1.0);
+        let mut chunks = basis_buffer.chunks_exact_mut(m);
+        let mut basis: [&mut [f64]; NUMERATOR_TERMS] =
+            std::array::from_fn(|_| chunks.next().unwrap_or_default());
+        let (denominators, cols_buffer) = complex.split_at_mut(m);
+        let mut chunks = cols_buffer.chunks_exact_mut(m);
+        let mut cols: [&mut [Complex<f64>]; DENOMINATOR_TERMS + 1] =
+            std::array::from_fn(|_| chunks.next().unwrap_or_default());
         for _ in 0..ITERATIONS {
             // Orthonormal basis of the weighted numerator columns
             // row_weight·xᵗ (t < NUMERATOR_TERMS), the same for every
             // channel: Gram–Schmidt, twice for orthogonality.
             for (t, column) in basis.iter_mut().enumerate() {
-                for (v, (w, p)) in column.iter_mut().zip(row_weight.iter().zip(&powers)) {
+                for (v, (w, p)) in column.iter_mut().zip(row_weight.iter().zip(powers)) {
                     *v = w * p[t];
                 }
             }
@@ -103,7 +132,7 @@ impl LocalRational {
                 for _ in 0..2 {
                     for earlier in done.iter() {
                         let dot: f64 = earlier.iter().zip(column.iter()).map(|(a, b)| a * b).sum();
-                        for (v, e) in column.iter_mut().zip(earlier) {
+                        for (v, e) in column.iter_mut().zip(earlier.iter()) {
                             *v -= dot * e;
                         }
                     }
@@ -121,27 +150,31 @@ impl LocalRational {
             let mut rhs = [zero; DENOMINATOR_TERMS];
             for (c, &weight) in weights.iter().enumerate() {
                 for (t, v) in cols.iter_mut().enumerate() {
-                    for (k, z) in v.iter_mut().enumerate() {
-                        *z = points[k].1[c] * (weight * row_weight[k] * powers[k][t]);
+                    for (z, ((point, w), x)) in v
+                        .iter_mut()
+                        .zip(points.iter().zip(row_weight.iter()).zip(powers))
+                    {
+                        *z = point.1[c] * (weight * w * x[t]);
                     }
                     for b in &basis {
-                        let dot: Complex<f64> = v.iter().zip(b).map(|(z, e)| z * e).sum();
-                        for (z, e) in v.iter_mut().zip(b) {
+                        let dot: Complex<f64> = v.iter().zip(b.iter()).map(|(z, e)| z * e).sum();
+                        for (z, e) in v.iter_mut().zip(b.iter()) {
                             *z -= dot * e;
                         }
                     }
                 }
                 for i in 0..DENOMINATOR_TERMS {
-                    for j in 0..DENOMINATOR_TERMS {
+                    // The upper triangle: [`solve_hermitian_2`] reads no more.
+                    for j in i..DENOMINATOR_TERMS {
                         gram[i][j] += cols[i + 1]
                             .iter()
-                            .zip(&cols[j + 1])
+                            .zip(cols[j + 1].iter())
                             .map(|(a, b)| a.conj() * b)
                             .sum::<Complex<f64>>();
                     }
                     rhs[i] -= cols[i + 1]
                         .iter()
-                        .zip(&cols[0])
+                        .zip(cols[0].iter())
                         .map(|(a, b)| a.conj() * b)
                         .sum::<Complex<f64>>();
                 }
@@ -156,11 +189,14 @@ impl LocalRational {
                     .sum::<f64>()
             });
             let cholesky = normal.cholesky()?;
+            for (k, (f, _)) in points.iter().enumerate() {
+                denominators[k] = model.denominator(*f);
+            }
             for c in 0..4 {
                 let mut re = nalgebra::Vector3::zeros();
                 let mut im = nalgebra::Vector3::zeros();
                 for k in 0..m {
-                    let target = points[k].1[c] * model.denominator(points[k].0);
+                    let target = points[k].1[c] * denominators[k];
                     let w2 = row_weight[k] * row_weight[k];
                     for i in 0..NUMERATOR_TERMS {
                         re[i] += w2 * powers[k][i] * target.re;
@@ -172,8 +208,8 @@ impl LocalRational {
                     model.numerators[c][t] = Complex::new(re[t], im[t]);
                 }
             }
-            for (w, (f, _)) in row_weight.iter_mut().zip(points) {
-                let den = model.denominator(*f).norm();
+            for (w, den) in row_weight.iter_mut().zip(denominators.iter()) {
+                let den = den.norm();
                 if !(den > 0.0 && den.is_finite()) {
                     return None;
                 }
