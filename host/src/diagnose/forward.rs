@@ -7,7 +7,7 @@ use super::data::Prepared;
 use super::fit::{fit_group, jacobian, profile, search_interval};
 use super::model::Params;
 use super::state::State;
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, bail, Result};
 use nalgebra::{DMatrix, DVector};
 
 /// A candidate fitted and tested.
@@ -64,6 +64,7 @@ pub fn evaluate(
         Some(k) => {
             let interval = search_interval(prep, model, k, &group);
             let (s, fit) = profile(prep, model, &nl, &state.weights, &group, k, interval)?;
+            at_an_edge(model, k, s, interval)?;
             nl[k] = s;
             fit
         }
@@ -105,6 +106,32 @@ pub fn evaluate(
         refs,
         evidence,
     })
+}
+
+/// A bearing-table correction (clearance, stiffness ratio) whose profile
+/// ends at an edge of its searched range is not an interior maximum of the
+/// likelihood: the data do not determine it there (e.g. a stiff, nearly
+/// undamped table, whose stiffness ratio is confounded with the pedestal's
+/// scale, fitted to the noise law's leverage), and its Wald statistic does
+/// not hold. The candidate is refused with the reason. Their nulls
+/// (δ = 0) lie inside the range; the delay's and loss factor's nulls are
+/// their edges and are not judged here.
+fn at_an_edge(model: &super::model::Model, k: usize, s: f64, (lo, hi): (f64, f64)) -> Result<()> {
+    use super::model::Nonlinear;
+    let table = matches!(
+        model.nonlinear[k],
+        Nonlinear::Clearance { .. } | Nonlinear::StiffnessRatio { .. }
+    );
+    let tolerance = 1e-6 * (hi - lo);
+    if table && (s - lo <= tolerance || hi - s <= tolerance) {
+        bail!(
+            "its fit ended at the edge of the searched range [{:.3}, {:.3}] of {} − 1: not determined by these data",
+            lo,
+            hi,
+            model.nonlinear[k].name()
+        );
+    }
+    Ok(())
 }
 
 /// The outcome of one step of the greedy search.
