@@ -89,20 +89,17 @@ fn digits_per_bearing_untrust_nothing_and_ok_means_right() {
     assert_ok_means_right(&run, &id, "clean-dmix");
 }
 
-/// The digits are counted per column of measurements.csv over every
-/// bearing (`estimate::noise::ColumnDigits`: the most digits in the
-/// column), so B1 (2 digits) and B2 (3) are given B3's 4-digit floor, it
-/// does not fit, and their noise falls back to one scatter level per
-/// channel; rounding to 3 digits is proportional to the amplitude, so B2's
-/// largest readings (the rotor's peak near 78 Hz) stand out as outliers.
-/// Measured: a clean speed listed at B2 in 16/30 runs (`python3
-/// scripts/bench_unseen.py --machine unseen-train target/release/plinth DIR
-/// 30 clean-dmix`); the stored seed 1 lists 77.257, 77.569 and 78.189 Hz.
-/// Nothing is untrusted and the pedestals stay right (1/30 runs with an
-/// `ok` value 3.0 ± off).
+/// Each bearing written with its own digits: none lists a clean speed.
+/// The digits were counted per column of measurements.csv over every
+/// bearing, so B1 (2 digits) and B2 (3) were given B3's 4-digit floor, it
+/// did not fit, their noise fell back to one scatter level per channel, and
+/// B2's 3-digit rounding at the rotor's 78 Hz peak was listed as outliers
+/// (16/30 runs). Counted per bearing (`ColumnDigits::of_rows`): a clean
+/// speed listed in 0/30 runs (identify only, `plinth identify --json` over
+/// seeds 1-30 of `scripts/ross_unseen.py --machine unseen-train DIR
+/// clean-dmix`); an `ok` value more than 3 ± off in 1/30 (B1 3.2 ±), as
+/// before (1/30, B1 3.0 ±).
 #[test]
-#[ignore = "issue 17: digits differing by bearing: clean speeds listed as outliers at B2 in \
-            16/30 runs (digits counted per column over all bearings)"]
 fn digits_per_bearing_list_no_clean_speed() {
     let id = identify(&stored("clean-dmix"));
     for b in BEARINGS {

@@ -133,7 +133,7 @@ impl Prepared {
                 &coefficients,
             ));
         }
-        let columns = ColumnDigits::of_run(&run.measurements);
+        let mut columns = Vec::with_capacity(bearings.len());
         let mut noises = Vec::with_capacity(bearings.len());
         let mut base_fits = Vec::with_capacity(bearings.len());
         for (b, name) in bearings.iter().enumerate() {
@@ -143,10 +143,11 @@ impl Prepared {
                 .filter(|m| &m.bearing == name)
                 .collect();
             rows.sort_by(|x, y| x.speed_hz.total_cmp(&y.speed_hz));
+            columns.push(ColumnDigits::of_rows(&rows));
             // The written digits cannot tell rounding from truncation: the
             // significance tests take truncation's mean square (ulp²/3), which
             // bounds both, so that a truncation bias is not named an effect.
-            let mut noise = BearingNoise::estimate(&rows, &columns, Quantisation::Truncation);
+            let mut noise = BearingNoise::estimate(&rows, &columns[b], Quantisation::Truncation);
             let schedule = schedules
                 .get(name)
                 .ok_or_else(|| anyhow!("bearings.csv has no coefficients for bearing {name}"))?;

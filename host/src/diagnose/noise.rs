@@ -38,8 +38,9 @@ use serde::Serialize;
 /// The noise model of a run: column digits and each bearing's noise.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NoiseModel {
-    /// Digits of each real column, in the order of [`CHANNELS`].
-    pub columns: [ColumnDigits; 8],
+    /// Per bearing (workflow order): the digits of each of its real
+    /// columns, in the order of [`CHANNELS`] ([`ColumnDigits::of_rows`]).
+    pub columns: Vec<[ColumnDigits; 8]>,
     /// Per bearing (workflow order): its noise, rows in speed order.
     pub bearings: Vec<BearingNoise>,
 }
@@ -53,12 +54,26 @@ pub struct BearingNoiseSummary {
     pub sd: std::collections::BTreeMap<String, f64>,
     /// The scatter law found per channel (between neighbouring speeds).
     pub scatter: std::collections::BTreeMap<String, Scatter>,
+    /// Significant digits this bearing writes each real column with, by
+    /// column name (a field instrument may write each bearing with its own
+    /// resolution).
+    pub digits: std::collections::BTreeMap<String, u32>,
+}
+
+/// Digits per real column, keyed by column name ([`CHANNELS`]).
+fn by_column(digits: [u32; 8]) -> std::collections::BTreeMap<String, u32> {
+    CHANNELS
+        .iter()
+        .zip(digits)
+        .map(|(c, d)| (c.to_string(), d))
+        .collect()
 }
 
 impl NoiseModel {
-    /// Fewest digits any column is written with (the coarsest column).
-    pub fn digits(&self) -> u32 {
-        self.columns.iter().map(|c| c.digits).min().unwrap_or(0)
+    /// The most significant digits any bearing writes each real column
+    /// with, by column name ([`CHANNELS`]).
+    pub fn digits(&self) -> std::collections::BTreeMap<String, u32> {
+        by_column(ColumnDigits::most_of(&self.columns))
     }
 
     /// The report's view of bearing `b`.
@@ -77,6 +92,11 @@ impl NoiseModel {
                 .zip(n.scatter)
                 .filter_map(|(c, s)| s.map(|s| (c.to_string(), s)))
                 .collect(),
+            digits: by_column(
+                self.columns
+                    .get(b)
+                    .map_or([0; 8], |c| std::array::from_fn(|k| c[k].digits)),
+            ),
         })
     }
 }

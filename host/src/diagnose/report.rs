@@ -333,13 +333,23 @@ impl Diagnosis {
                 self.machine_gap_floor.unwrap_or(0.0)
             ))
         );
-        let digits: Vec<String> = self
+        let list = |d: &BTreeMap<String, u32>| -> String {
+            let d: Vec<String> = d.iter().map(|(k, v)| format!("{k} {v}")).collect();
+            d.join(", ")
+        };
+        if self
             .noise
-            .digits
-            .iter()
-            .map(|(k, v)| format!("{k} {v}"))
-            .collect();
-        let _ = writeln!(s, "Digits written: {}", digits.join(", "));
+            .bearings
+            .values()
+            .all(|n| n.digits == self.noise.digits)
+        {
+            let _ = writeln!(s, "Digits written: {}", list(&self.noise.digits));
+        } else {
+            // Each bearing written with its own digits: say them per bearing.
+            for (bearing, n) in &self.noise.bearings {
+                let _ = writeln!(s, "Digits written at {bearing}: {}", list(&n.digits));
+            }
+        }
         for (bearing, n) in &self.noise.bearings {
             let sd: Vec<String> = n.sd.iter().map(|(k, v)| format!("{k} {v:.2e}")).collect();
             let _ = writeln!(

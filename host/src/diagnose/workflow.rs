@@ -19,7 +19,6 @@ pub use super::forward::{evaluate, step, Evaluated, StepOutcome};
 use super::foundation::{self, FoundationFit};
 use super::gap::Prediction;
 use super::locate::locate;
-use super::noise::CHANNELS;
 use super::report::{Diagnosis, NoiseSummary, Step};
 pub use super::state::{base_model, pedestals, GroupInference, State};
 use super::summaries::{effect_estimates, summary, wald_test};
@@ -455,10 +454,7 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
     } else {
         Vec::new()
     };
-    let mut digits = BTreeMap::new();
-    for (c, q) in prep.noise.columns.iter().enumerate() {
-        digits.insert(CHANNELS[c].to_string(), q.digits);
-    }
+    let digits = prep.noise.digits();
     let mut bearings_noise = BTreeMap::new();
     for (b, name) in prep.bearings.iter().enumerate() {
         if let Some(summary) = prep.noise.summary(b) {

@@ -167,9 +167,31 @@ impl ColumnDigits {
         }
     }
 
-    /// The digits of every real column ([`REAL_CHANNELS`] order) of a run.
-    pub fn of_run(measurements: &[Measurement]) -> [ColumnDigits; 8] {
-        std::array::from_fn(|c| Self::of_digits(measurements.iter().map(|m| digits_of(m, c))))
+    /// The digits of every real column ([`REAL_CHANNELS`] order) of one
+    /// bearing's `rows`. Counted per bearing, never over the whole run: a
+    /// field instrument writes each bearing's channels with its own
+    /// resolution, and a bearing written with fewer digits than another
+    /// would otherwise be given the other's finer floor.
+    pub fn of_rows(rows: &[&Measurement]) -> [ColumnDigits; 8] {
+        Self::of_digit_rows(
+            rows.iter()
+                .map(|m| -> [Option<(u32, i32)>; 8] { std::array::from_fn(|c| digits_of(m, c)) }),
+        )
+    }
+
+    /// [`ColumnDigits::of_rows`] from the [`digits_of`] of every number of
+    /// the rows (one array per row).
+    fn of_digit_rows(
+        rows: impl Iterator<Item = [Option<(u32, i32)>; 8]> + Clone,
+    ) -> [ColumnDigits; 8] {
+        std::array::from_fn(|c| Self::of_digits(rows.clone().map(|d| d[c])))
+    }
+
+    /// The most digits of each column over the per-bearing `columns`
+    /// ([`ColumnDigits::of_rows`] of each bearing): what a whole-run
+    /// summary of the digits reports.
+    pub fn most_of(columns: &[[ColumnDigits; 8]]) -> [u32; 8] {
+        std::array::from_fn(|c| columns.iter().map(|b| b[c].digits).max().unwrap_or(0))
     }
 
     /// [`ColumnDigits::ulp`] of real number `c` of a row of this column,
@@ -277,7 +299,7 @@ const MEDIAN_ABS_NORMAL: f64 = 0.674_489_750_196_081_7;
 
 impl BearingNoise {
     /// The noise of one bearing's `rows` (any order; each row one speed),
-    /// with the digits of the run's columns.
+    /// with the digits of its own columns ([`ColumnDigits::of_rows`]).
     pub fn estimate(
         rows: &[&Measurement],
         columns: &[ColumnDigits; 8],

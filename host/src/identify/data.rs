@@ -110,8 +110,17 @@ pub fn measured_bases(
             z.im
         }
     };
-    let digits: [ColumnDigits; 4] =
-        std::array::from_fn(|c| ColumnDigits::of(rows.iter().map(|r| part(r, c))));
+    // The digits of each base's columns, counted on its own rows (each
+    // base written with its own resolution, as each bearing).
+    let mut digits: Vec<(&str, [ColumnDigits; 4])> = Vec::new();
+    for r in rows {
+        if !digits.iter().any(|(name, _)| *name == r.base) {
+            let of_base = rows.iter().filter(|q| q.base == r.base);
+            let columns =
+                std::array::from_fn(|c| ColumnDigits::of(of_base.clone().map(|q| part(q, c))));
+            digits.push((&r.base, columns));
+        }
+    }
     let mut bases: Vec<MeasuredBase> = Vec::new();
     let mut on: Vec<(String, usize)> = Vec::new();
     for r in rows {
@@ -130,7 +139,11 @@ pub fn measured_bases(
             motion: r.motion,
             var: std::array::from_fn(|c| {
                 let sd = r.noise_sd.map(|sd| sd[c / 2]);
-                number_variance(quantisation, digits[c].ulp(part(r, c)), sd)
+                let ulp = digits
+                    .iter()
+                    .find(|(name, _)| *name == r.base)
+                    .map_or(0.0, |(_, d)| d[c].ulp(part(r, c)));
+                number_variance(quantisation, ulp, sd)
             }),
         });
         for b in &r.bearings {

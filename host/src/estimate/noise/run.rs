@@ -18,10 +18,10 @@ pub struct RunNoise {
 }
 
 impl RunNoise {
-    /// The noise of every measured bearing of `run`, with the digits of the
-    /// run's columns counted once.
+    /// The noise of every measured bearing of `run`, with the digits of
+    /// each bearing's columns counted on its own rows
+    /// ([`ColumnDigits::of_rows`]).
     pub fn estimate(run: &crate::rundir::RunDir, quantisation: Quantisation) -> Self {
-        let columns = ColumnDigits::of_run(&run.measurements);
         let bearings = run
             .measured_bearings()
             .into_iter()
@@ -30,6 +30,7 @@ impl RunNoise {
                     .filter(|&i| run.measurements[i].bearing == bearing)
                     .collect();
                 let rows: Vec<&Measurement> = index.iter().map(|&i| &run.measurements[i]).collect();
+                let columns = ColumnDigits::of_rows(&rows);
                 let noise = BearingNoise::estimate(&rows, &columns, quantisation);
                 (bearing.to_string(), index, noise)
             })
@@ -62,13 +63,13 @@ impl RunNoise {
         if !pristine {
             // [`RunNoise::estimate`] of `fixed`, its rows grouped as this
             // noise groups them (the same bearings, row for row).
-            let columns = ColumnDigits::of_run(fixed);
             let bearings = self
                 .bearings
                 .iter()
                 .map(|(name, index, _)| {
                     let rows: Vec<&Measurement> =
                         index.iter().filter_map(|&i| fixed.get(i)).collect();
+                    let columns = ColumnDigits::of_rows(&rows);
                     let noise = BearingNoise::estimate(&rows, &columns, self.quantisation);
                     (name.clone(), index.clone(), noise)
                 })
@@ -84,13 +85,13 @@ impl RunNoise {
             .iter()
             .map(|m| std::array::from_fn(|c| digits_of(m, c)))
             .collect();
-        let columns: [ColumnDigits; 8] =
-            std::array::from_fn(|c| ColumnDigits::of_digits(digits.iter().map(|d| d[c])));
         let bearings = self
             .bearings
             .iter()
             .map(|(name, index, noise)| {
                 let rows: Vec<&Measurement> = index.iter().map(|&i| &fixed[i]).collect();
+                // [`ColumnDigits::of_rows`] of this bearing's rows.
+                let columns = ColumnDigits::of_digit_rows(index.iter().map(|&i| digits[i]));
                 let noise = match noise.source {
                     NoiseSource::Columns => {
                         BearingNoise::estimate(&rows, &columns, self.quantisation)
