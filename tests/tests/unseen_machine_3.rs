@@ -111,21 +111,19 @@ fn digits_per_bearing_list_no_clean_speed() {
 /// reading the speeds as rpm (Ω/60, the table's speeds too) changes only
 /// B3's tiny bearing damping force and scales m by 3600 and c by 60: the
 /// two readings fit alike, and which one wins is the noise's choice. The
-/// rule compares them by ν·ln(r_b/r_a) of the unweighted relative residual
-/// (identify::convention::log_likelihood_ratio), a likelihood ratio only
-/// when every speed's equation error has the same variance; with the
-/// pick-ups' 2 % proportional noise a few resonance speeds carry the sum
-/// and a 4 % smaller r (1.46e-2 against 1.52e-2 on the stored run, whose
-/// noise-whitened χ²/ν is WORSE under rpm: 1.028 against 0.994) passes for
-/// decisive. Measured (`UNSEEN_RUNS=DIR scripts/bench-unseen.sh --machine
-/// unseen-train 30 clean-p2 clean-p2c`): B3 untrusted and exit 2 with
-/// "suspected convention error speed_in_rpm" (m = 3.06e5 kg) in 13/30
-/// clean runs with noise columns and 7/30 without, and on effect runs at
-/// B3 where nothing acts (runout seed 1).
+/// rule compared them by ν·ln(r_b/r_a) of the unweighted relative residual
+/// alone, a likelihood ratio only when every speed's equation error has the
+/// same variance; with the pick-ups' 2 % proportional noise a few resonance
+/// speeds carry the sum and a 4 % smaller r (1.46e-2 against 1.52e-2 on the
+/// stored run, whose noise-whitened χ²/ν is WORSE under rpm: 1.028 against
+/// 0.994) passed for decisive: B3 untrusted with "suspected convention
+/// error speed_in_rpm" (m = 3.06e5 kg) in 13/30 clean runs with noise
+/// columns and 7/30 without. Now the noise-weighted ratio ν·ln(χ²_b/χ²_a)
+/// must be decisive too and the named reading's χ² no worse than the data
+/// as found (identify::convention::decide): 0/30 and 0/30, identify on the
+/// runs of `UNSEEN_RUNS=DIR scripts/bench-unseen.sh --machine unseen-train
+/// 30 clean-p2c clean-p2`.
 #[test]
-#[ignore = "issue 17: clean data named speed_in_rpm at B3 (a stiff nearly undamped bearing): \
-            13/30 clean runs with noise columns, 7/30 without; the rule's likelihood ratio \
-            assumes equal-variance equation errors"]
 fn a_nearly_undamped_bearing_is_not_taken_for_speeds_in_rpm() {
     for case in ["clean-p2c", "runout"] {
         let id = identify(&stored(case));

@@ -46,12 +46,20 @@
 //!   forces (all readings have the same parameters). It does not depend on
 //!   the noise floor's shape, which the digits/scatter estimate can get badly
 //!   wrong (on sharp resonances with 1-3 % noise it can take σ for 30 % of
-//!   each phasor, and every χ² then looks alike).
+//!   each phasor, and every χ² then looks alike). But it is a likelihood
+//!   ratio only when every speed's error has the same variance: with
+//!   proportional noise a few resonance speeds dominate r, and a reading
+//!   can have a clearly smaller r and a worse χ² (clean data named
+//!   `speed_in_rpm`, docs/unseen.md "third machine"). So the named reading
+//!   must also have the smallest χ²: a weighted ratio ν·ln(χ²_b/χ²_a) ≥ 0.
+//!   (Asking it to be decisive as well loses a y-z swap on a simulated
+//!   machine with estimated noise, tests/tests/identify_conventions.rs.)
 //!
 //! A reading is named only when it is passive, fits to the noise floor, has
-//! the smallest r of the passive readings, and beats every other passive
-//! reading (the data as found included) by [`DECISIVE_DELTA_CHI2`];
-//! otherwise nothing is named.
+//! the smallest r of the passive readings, beats every other passive
+//! reading (the data as found included) by [`DECISIVE_DELTA_CHI2`] in r,
+//! and has a χ² no larger than that of every other passive reading and of
+//! the data as found (passive or not); otherwise nothing is named.
 //!
 //! Every reading is first fitted by the paper's OLS, whose relative residual
 //! bounds that of any estimate from below; only the readings that bound
@@ -495,17 +503,32 @@ fn decide<'a>(
         return None;
     }
     let others = || readings.iter().filter(|(r, _)| r != best);
+    // No worse a fit to the noise floor than `r` (with `rel_negated` the
+    // data as found and the correction fit alike, up to rounding).
+    let not_worse = |r: &Reading| best.chi2 <= r.chi2 * (1.0 + TIE_TOLERANCE) || r.chi2.is_nan();
     let decisive = others()
         .filter(|(r, _)| r.plausible)
-        .all(|(r, _)| log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2);
+        .all(|(r, _)| log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2 && not_worse(r));
+    // The data as found, passive or not, must not fit the noise better
+    // than the named reading.
+    let as_found = readings.iter().find(|(r, _)| r.convention.is_none());
+    let better_than_found = as_found.is_none_or(|(r, _)| r == best || not_worse(r));
     let runner_up = others().min_by(by_residual)?.0;
-    decisive.then_some((*best, runner_up, *fit))
+    (decisive && better_than_found).then_some((*best, runner_up, *fit))
 }
 
+/// Relative difference [-] of two χ² taken as a tie: readings that are the
+/// same fit up to a sign of every parameter (`rel_negated`) differ by
+/// rounding only.
+const TIE_TOLERANCE: f64 = 1e-6;
+
 /// −2·ln of the likelihood ratio of reading `b` against `a`, Gaussian
-/// equation errors with their variance profiled out of each (unknown noise
-/// scale): ν·ln(r_b/r_a) with r the relative residual. Free of the noise
-/// floor's shape, which the digits/scatter estimate can get badly wrong.
+/// equation errors of one common variance profiled out of each (unknown
+/// noise scale): ν·ln(r_b/r_a) with r the relative residual. Free of the
+/// noise floor's shape, which the digits/scatter estimate can get badly
+/// wrong; but a likelihood ratio only where every speed's error has the
+/// same variance, which proportional noise breaks (a few resonance speeds
+/// then dominate r), hence the χ² check of [`decide`].
 fn log_likelihood_ratio(a: &Reading, b: &Reading) -> f64 {
     a.dof as f64 * (b.relative_residual / a.relative_residual).ln()
 }

@@ -318,13 +318,31 @@ fn only_a_passive_decisive_reading_at_the_floor_is_named() {
         ]),
         None
     );
-    // 100·ln 1.2 = 18 > 13.8: decisive.
+    // 100·ln 1.2 = 18 > 13.8 in r, 100·ln(1.2/0.9) = 29 in χ²: decisive.
     assert_eq!(
         named(&[
             reading(conj, 0.9, 1.0e-3, true),
-            reading(swap, 1.0, 1.2e-3, true)
+            reading(swap, 1.2, 1.2e-3, true)
         ]),
         conj
+    );
+    // Decisive in r but a worse χ² (with proportional noise a few
+    // resonance speeds dominate r): nothing named.
+    assert_eq!(
+        named(&[
+            reading(conj, 1.1, 1.0e-3, true),
+            reading(swap, 1.0, 1.2e-3, true)
+        ]),
+        None
+    );
+    // A smaller r but a worse χ² than the data as found (not passive):
+    // nothing named (clean data named speed_in_rpm, docs/unseen.md).
+    assert_eq!(
+        named(&[
+            reading(None, 0.994, 1.04e-3, false),
+            reading(Some(Convention::SpeedInRpm), 1.028, 1.0e-3, true)
+        ]),
+        None
     );
     // The data as found are the best passive reading: nothing named.
     assert_eq!(
