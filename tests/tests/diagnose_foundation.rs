@@ -7,9 +7,12 @@
 //!   the speed range, with noise columns and 0.5 % noise: `foundation_coupling`
 //!   named, the gap falls to about its noise floor, pedestal k and m within
 //!   2 %, the base's identified parameters within 10 %;
-//! - out of the library (a bearing table 20 % off in stiffness, a second
-//!   base under part of the pedestals): no fix claimed, the disagreement is
-//!   said to be unexplained and the parameters untrusted;
+//! - out of the library (a second base under part of the pedestals): no
+//!   fix claimed, the disagreement is said to be unexplained and the
+//!   parameters untrusted;
+//! - a bearing table 20 % off in stiffness at both bearings (out of the
+//!   library until session 24): `bearing_coefficients` (`k_scale`) named at
+//!   both, the pedestals after it within 2 %;
 //! - rigid ground at 2, 3 and 12 digits, with noise, and with stiff
 //!   rolling-element bearings under noise: nothing named.
 
@@ -265,9 +268,17 @@ fn out_of_library_data_are_not_claimed_fixed() {
     m.validate().expect("valid machine");
     let run = run_dir(&m, &speeds(5.0, 120.0, 2.5), NOISY, 21);
     check_unexplained(&run, "second base under B3");
+}
 
-    // Rigid ground, but bearings.csv's stiffnesses 20 % high (damping
-    // right): the forces are wrong in a speed-dependent, complex way.
+/// Rigid ground, but bearings.csv's stiffnesses 20 % high (damping right):
+/// the forces are wrong in a speed-dependent, complex way. Until session
+/// 24 no library effect held it and this run was checked to be left
+/// unexplained; the table's stiffness relative to its damping
+/// (`bearing_coefficients`, `k_scale`, for a table no clearance of the
+/// file's oil film matches) now names it at both bearings, and the
+/// pedestals after the correction are the machine's.
+#[test]
+fn a_table_stiffness_off_at_both_bearings_is_named_at_both() {
     let rigid = on_rigid_ground(&machine(SKID, "two-pedestals-on-skid.toml"));
     let mut run = run_dir(&rigid, &speeds(5.0, 120.0, 2.0), NOISY, 22);
     for row in &mut run.bearings {
@@ -277,7 +288,42 @@ fn out_of_library_data_are_not_claimed_fixed() {
             }
         }
     }
-    check_unexplained(&run, "bearing table 20 % off");
+    let d = diagnose(&run, &Options::default())
+        .expect("diagnose")
+        .diagnosis;
+    let text = d.to_text();
+    let mut named: Vec<(&str, &str)> = d
+        .steps
+        .iter()
+        .filter(|s| s.dropped.is_none())
+        .map(|s| (s.effect.as_str(), s.bearing.as_str()))
+        .collect();
+    named.sort();
+    assert_eq!(
+        named,
+        [
+            ("bearing_coefficients", "left"),
+            ("bearing_coefficients", "right")
+        ],
+        "{text}"
+    );
+    for s in &d.steps {
+        let k = s
+            .parameters
+            .iter()
+            .find(|p| p.name == "k_scale")
+            .expect("k_scale");
+        let want = 1.0 / 1.2;
+        assert!(
+            (k.value / want - 1.0).abs() < 0.01 && (k.value - want).abs() < 4.0 * k.std_err,
+            "{}: k_scale {} ± {} vs {want}\n{text}",
+            s.bearing,
+            k.value,
+            k.std_err
+        );
+    }
+    assert!(d.trusted, "{:?}\n{text}", d.trust_reasons);
+    assert_pedestals_near_truth(&run, &d.pedestals_after, 0.02, "table 20 % stiff");
 }
 
 #[test]

@@ -120,10 +120,11 @@ impl WrittenTable {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn film() -> OilFilmBearing {
+    /// A short oil-film bearing (100 mm × 40 mm, 0.1 mm clearance, 5 kN).
+    pub(in crate::diagnose::bearing_table) fn film() -> OilFilmBearing {
         OilFilmBearing {
             diameter: 0.1,
             length: 0.04,

@@ -304,19 +304,9 @@ pub fn report_refits(
 
 #[cfg(test)]
 mod tests {
+    use super::film::tests::film;
     use super::*;
-    use crate::sim::oil_film::OilFilmBearing;
     use num_complex::Complex;
-
-    fn film() -> OilFilmBearing {
-        OilFilmBearing {
-            diameter: 0.1,
-            length: 0.04,
-            clearance: 1.0e-4,
-            viscosity: 0.02,
-            load: 5.0e3,
-        }
-    }
 
     /// A pedestal behind a bearing whose table was written for 85 % of its
     /// clearance, exact data (responses computed here from the film at the
