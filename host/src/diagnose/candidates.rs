@@ -24,6 +24,13 @@ use crate::effects::EffectKind;
 
 /// Name of the table-correction effect (`crate::effects`).
 pub const BEARING_COEFFICIENTS: &str = "bearing_coefficients";
+/// Whether a table's stiffness relative to its damping (`k_scale`,
+/// `super::bearing_table::scale`) is offered. Off since the end of session
+/// 24: on clean runs it was named (ROSS machine A at 2 digits, untrusted;
+/// the first unseen machine's clean-w1c at B1, k_scale 0.987 ± 0.008,
+/// trusted) although it names the second unseen machine's table-scale 5/5;
+/// it needs a calibrated acceptance rule before it is offered again.
+pub const OFFER_STIFFNESS_RATIO: bool = false;
 /// Name of the one-pedestal base effect (`crate::effects`).
 pub const PEDESTAL_SUB_BASE: &str = "pedestal_sub_base";
 
@@ -164,7 +171,8 @@ pub fn library(model: &Model, n_bearings: usize) -> Vec<Candidate> {
             .nonlinear
             .iter()
             .any(|p| matches!(p, Nonlinear::StiffnessRatio { bearing } if *bearing == b));
-        if let (false, false, Some(effect)) = (
+        if let (true, false, false, Some(effect)) = (
+            OFFER_STIFFNESS_RATIO,
             has_ratio,
             model.tables.get(b).is_some_and(Option::is_some),
             EffectKind::from_name(BEARING_COEFFICIENTS),
@@ -260,6 +268,7 @@ mod tests {
     }
 
     #[test]
+    #[ignore = "the table stiffness ratio is not offered (OFFER_STIFFNESS_RATIO, clean false alarms)"]
     fn library_covers_every_effect_name() {
         let mut undamped = paper_model(2);
         undamped
@@ -286,6 +295,7 @@ mod tests {
     }
 
     #[test]
+    #[ignore = "the table stiffness ratio is not offered (OFFER_STIFFNESS_RATIO, clean false alarms)"]
     fn effect_parameters_use_the_effects_module_names() {
         let mut undamped = paper_model(2);
         undamped
