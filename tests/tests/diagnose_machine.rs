@@ -163,42 +163,18 @@ fn clean_machine_runs_name_nothing() {
             (Some(12), None),
             (Some(12), Some(0.01)),
         ] {
-            // Measured apart (below, ignored): ROSS machine A at 2 digits.
-            if file == "ross-a" && digits == Some(2) && noise.is_none() {
-                continue;
-            }
-            check_clean(&m, file, digits, noise);
+            let noise = noise.map(|fraction| Noise { fraction, seed: 9 });
+            let run = run_dir(&m, &EffectSet::none(), digits, noise);
+            let d = diagnose(&run, &Options::default())
+                .expect("diagnose")
+                .diagnosis;
+            assert!(
+                d.effects_added.is_empty(),
+                "{file} {digits:?} {noise:?}: {}",
+                d.to_text()
+            );
         }
     }
-}
-
-/// ROSS machine A written at 2 digits, clean: since session 24's table
-/// stiffness ratio (`bearing_coefficients`, `k_scale`, offered for tables
-/// without geometry) the ratio is named at B1 (k_scale 0.871 ± 0.026, Wald
-/// adjusted p 2e-5) while the whitened χ² GREW 0.738 → 0.751; the verdict
-/// is untrusted ("the model got worse"), so not confidently wrong, but a
-/// false alarm. Open: the ratio's acceptance must not pass a step that
-/// makes the model worse (the ML refit `bearing_table::refine` moves it).
-#[test]
-#[ignore = "issue 17: clean ROSS machine A at 2 digits names bearing_coefficients (k_scale) at B1, untrusted (the whitened χ² grew)"]
-fn clean_ross_a_at_two_digits_names_nothing() {
-    let m = Machine::from_toml_str(ROSS_A, "ross-a").expect("machine");
-    check_clean(&m, "ross-a", Some(2), None);
-}
-
-/// Diagnoses a clean run of `m` at `digits` with `noise` (fraction of each
-/// channel's RMS) and asserts that nothing is named.
-fn check_clean(m: &Machine, file: &str, digits: Option<u32>, noise: Option<f64>) {
-    let noise = noise.map(|fraction| Noise { fraction, seed: 9 });
-    let run = run_dir(m, &EffectSet::none(), digits, noise);
-    let d = diagnose(&run, &Options::default())
-        .expect("diagnose")
-        .diagnosis;
-    assert!(
-        d.effects_added.is_empty(),
-        "{file} {digits:?} {noise:?}: {}",
-        d.to_text()
-    );
 }
 
 /// `plinth diagnose RUN --machine FILE` where FILE holds `text`: the
