@@ -114,7 +114,8 @@ fn a_stiff_undamped_table_is_said_to_scale_and_its_doubt_covers_its_error() {
 /// of error/± of all ten values (k_y, k_z, m, c_y, c_z of both pedestals)
 /// is 1 within its sampling spread (the draws of one run move together:
 /// about 40 independent values, RMS spread ~0.11); with the noise's ± alone
-/// it is many times larger. Measured RMS: see the assertion message.
+/// it is many times larger. Measured: 1.142 combined, 21.7 with the
+/// noise's ± alone (`-- --nocapture` prints them).
 #[test]
 fn the_combined_std_err_covers_tables_drawn_from_their_uncertainty() {
     const SD: f64 = 0.05;
