@@ -251,16 +251,28 @@ pub fn deleted_distances(
                     std::array::from_fn(|a| if a < p { jac[(4 * i + r, a)] } else { 0.0 })
                 });
                 let wi = Vector4::from_fn(|r, _| w[4 * i + r]);
-                // Σ_a Σ_b J_ra·H⁻¹_ab·J_cb, the terms in that order.
-                let pull = Matrix4::from_fn(|r, c| {
-                    let mut sum = 0.0;
-                    for (&ra, inv_a) in rows[r][..p].iter().zip(inv_rows) {
-                        for (&iab, &cb) in inv_a[..p].iter().zip(&rows[c][..p]) {
-                            sum += ra * iab * cb;
+                // J_i·H⁻¹ once (4 × p), then its products with J_i's rows:
+                // the lower triangle, mirrored (the pull is symmetric).
+                let jh: [[f64; PARAMETERS]; 4] = std::array::from_fn(|r| {
+                    std::array::from_fn(|b| {
+                        let mut sum = 0.0;
+                        for (&ra, inv_a) in rows[r][..p].iter().zip(inv_rows) {
+                            sum += ra * inv_a[b];
                         }
-                    }
-                    sum
+                        sum
+                    })
                 });
+                let mut pull = Matrix4::zeros();
+                for r in 0..4 {
+                    for c in 0..=r {
+                        let mut sum = 0.0;
+                        for (&x, &y) in jh[r][..p].iter().zip(&rows[c][..p]) {
+                            sum += x * y;
+                        }
+                        pull[(r, c)] = sum;
+                        pull[(c, r)] = sum;
+                    }
+                }
                 // The largest eigenvalue of the pull: the leverage h in the
                 // fit, h/(1 − h) left out.
                 let limit = if in_fit[i] {
