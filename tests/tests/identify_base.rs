@@ -128,6 +128,7 @@ fn identify(dir: &Path, groups: Option<&str>) -> anyhow::Result<(RunDir, Identif
         plots: None,
         figure_style: plinth::plots::StyleArgs::default(),
         speeds: None,
+        table_uncertainty: None,
     };
     identify_args(&args)
 }

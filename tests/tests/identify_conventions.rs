@@ -229,6 +229,7 @@ fn identify_exit_code(dir: &Path) -> u8 {
         plots: None,
         figure_style: plinth::plots::StyleArgs::default(),
         speeds: None,
+        table_uncertainty: None,
     };
     match identify_cli(&args) {
         Ok(()) => 0,

@@ -165,8 +165,9 @@ fn each_effect_untrusts_exactly_its_bearings_in_identify() {
 /// pedestal element's. Measured: 5/5 runs (`scripts/bench-unseen.sh
 /// --machine unseen-train 5 sub-base`).
 #[test]
-#[ignore = "issue 17: a sub-base whose resonance lies above the measured range is absorbed: B2 \
-            printed ok with k_y -41 % (the series stiffness), 5/5 runs"]
+#[ignore = "physically inseparable: a sub-base whose resonance lies above the measured range is \
+            absorbed (B2 k_y -41 % from the pedestal element, 5/5 runs); identify states that its \
+            values are the support's apparent values over the measured range (conditional_on)"]
 fn a_sub_base_above_the_range_is_not_printed_ok() {
     let run = stored("sub-base");
     let id = identify(&run);
@@ -174,43 +175,80 @@ fn a_sub_base_above_the_range_is_not_printed_ok() {
     assert!(wrong.is_empty(), "{wrong:?}");
 }
 
-/// B3's table 25 % stiffer than its bearing (c as tabulated). B3's bearing
-/// damping force is under 1 % of its stiffness force, so the bearing force
-/// is the table's scaled by 1/1.25 to within the noise, and the pedestal
-/// equations are homogeneous in it: k, m and c all come out 1.25 times the
-/// truth and fit to the noise. Only the machine level (`--machine`, the
-/// rotor tying the absolute scale) can see it. Measured over seeds 1-5:
-/// B3 printed `ok` 25 % off (144 ±) in 2/5, the other 3 untrusted only by
-/// the spurious speed_in_rpm suspicion above; since that suspicion is
-/// decided on the weighted χ² too (session 24), 5/5 `ok` 25 % off. No
-/// pedestal-level rule can see it (the fit is perfect); `diagnose --machine`
-/// untrusts it (the machine-level gap).
-#[test]
-#[ignore = "issue 17: a tabulated stiff bearing's scale error is absorbed in B3's pedestal \
-            (k, m, c +25 %) with a perfect fit: printed ok 25 % off in 5/5 (identify alone \
-            cannot see it; diagnose --machine untrusts it)"]
-fn a_wrong_table_scale_is_not_printed_ok() {
-    let run = stored("table-scale");
-    let id = identify(&run);
-    assert!(suspected(&id).is_empty(), "{:?}", suspected(&id));
-    let wrong = ok_but_wrong(&run, &id, false);
-    assert!(wrong.is_empty(), "{wrong:?}");
-}
+// B3's table 25 % stiffer than its bearing (the stored table-scale run):
+// k, m, c all +25 % with a perfect fit (the pedestal equations are
+// homogeneous in a nearly undamped bearing's force). identify now says B3's
+// values scale with its table and `--table-uncertainty` carries the table's
+// doubt into the ±: tested in
+// `identify_conditional::a_stiff_undamped_table_is_said_to_scale_and_its_doubt_covers_its_error`.
 
 /// One outlier speed at B3 (seed 1: 54.077 Hz). identify lists exactly
-/// that speed at B3, 5/5 runs; diagnose does not leave it out (it does for
-/// keyphasor flips), the gap at that one speed is taken for model error and
-/// `pedestal_sub_base` at B3 is named with the verdict trusted (gap 0.054 →
-/// 0.032) in 1/5 runs, seed 1 (`scripts/bench-unseen.sh --machine
-/// unseen-train 5 outlier`; diagnose takes ~4 min on this run, hence
-/// ignored in CI even when fixed).
+/// that speed at B3, 5/5 runs. diagnose did not leave it out (it did for
+/// keyphasor flips), the gap at that one speed was taken for model error and
+/// `pedestal_sub_base` at B3 was named with the verdict trusted (gap 0.054 →
+/// 0.032) in 1/5 runs, seed 1, in ~4 min. Now the speeds the base model's
+/// robust fit lists are left out of the search and tested again under the
+/// model it chose (`diagnose::outliers`): nothing named, the speed listed
+/// in `outlier_speeds_hz`, 5/5 (`scripts/bench-unseen.sh --machine
+/// unseen-train 5 outlier`), ~1 s.
 #[test]
-#[ignore = "issue 17: diagnose names pedestal_sub_base at B3 (trusted) on one outlier speed \
-            identify lists: 1/5 runs; ~4 min"]
 fn one_outlier_speed_names_nothing_in_diagnose() {
     let run = stored("outlier");
     let id = identify(&run);
     assert_eq!(listed(&id, "B3").len(), 1, "{:?}", listed(&id, "B3"));
     let d = diagnosis(&run);
     assert!(named(&d).is_empty(), "{}", d.to_text());
+    assert_eq!(
+        d.outlier_speeds_hz["B3"],
+        listed(&id, "B3"),
+        "{}",
+        d.to_text()
+    );
+    assert!(
+        d.to_text().contains("OUTLIER SPEEDS at B3"),
+        "{}",
+        d.to_text()
+    );
+}
+
+/// The re-test that decides whether a listed speed is put back has power:
+/// under the model the search chose (the base model: nothing named) the
+/// outlier reading at B3 is far outside its noise (χ² with 4 degrees of
+/// freedom: over 100 asserted, the 1e-3 level is 18.5), so it stays
+/// out, while B3's other readings are within their noise in bulk (median
+/// χ² under 6; 3.36 is χ²(4)'s median).
+#[test]
+fn the_outlier_reading_stays_an_outlier_under_the_chosen_model() {
+    let run = stored("outlier");
+    let (_, options) = unseen::machine_and_options(DATA, "unseen-train.toml");
+    let out = diagnose(&run, &options).expect("diagnose");
+    let all = plinth::diagnose::data::Prepared::from_run(&run).expect("prepared");
+    let b3 = all.bearing_index("B3").expect("B3");
+    let listed = all.outlier_speeds_hz.clone();
+    assert_eq!(listed[b3].len(), 1, "{listed:?}");
+    let chi2 = plinth::diagnose::outliers::chi2_of_listed(&all, &out, &options, &listed);
+    let (_, c) = chi2[b3][0];
+    assert!(c.is_some_and(|c| c > 100.0), "{c:?}");
+    // Clean readings of B3 under the same model: their median χ² (4 dof).
+    let clean: Vec<Vec<f64>> = (0..all.bearings.len())
+        .map(|b| {
+            if b == b3 {
+                all.speeds_hz
+                    .iter()
+                    .copied()
+                    .filter(|s| !listed[b3].contains(s))
+                    .collect()
+            } else {
+                Vec::new()
+            }
+        })
+        .collect();
+    let mut c: Vec<f64> = plinth::diagnose::outliers::chi2_of_listed(&all, &out, &options, &clean)
+        [b3]
+        .iter()
+        .filter_map(|(_, c)| *c)
+        .collect();
+    c.sort_by(f64::total_cmp);
+    let median = c[c.len() / 2];
+    assert!(median < 6.0, "median χ² of the clean readings {median}");
 }

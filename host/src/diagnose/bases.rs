@@ -108,7 +108,7 @@ pub(super) fn try_bases_on(
 
 /// The rigid pedestal model's prediction on the corrected data `cprep`:
 /// the state's pedestal values less its corrections.
-fn rigid_prediction(cprep: &Prepared, state: &State, base: &[Parameter]) -> Prediction {
+pub(super) fn rigid_prediction(cprep: &Prepared, state: &State, base: &[Parameter]) -> Prediction {
     let rigid = base_model(base, cprep.bearings.len());
     let params = Params {
         beta: carried_linear(&rigid, state),

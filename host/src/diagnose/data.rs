@@ -35,6 +35,12 @@ pub struct Prepared {
     /// identify` runs), ascending: left out of `points`, the noise and
     /// everything fitted, and reported.
     pub flipped_speeds_hz: Vec<Vec<f64>>,
+    /// Per bearing (aligned with `bearings`), the speeds [Hz] the robust
+    /// fit of that bearing's base model down-weights as outliers (`plinth
+    /// identify`'s `outlier_speeds_hz`, [`crate::estimate::robust`]),
+    /// ascending: still in `points` (what is done with them is the
+    /// workflow's, [`super::outliers`]).
+    pub outlier_speeds_hz: Vec<Vec<f64>>,
 }
 
 impl Prepared {
@@ -59,24 +65,43 @@ impl Prepared {
         if flipped.iter().all(Vec::is_empty) {
             return Ok(all);
         }
+        let all = Self {
+            flipped_speeds_hz: flipped,
+            ..all
+        };
+        all.leaving_out(run, &[]).context(
+            "the run without the speeds whose phasors look flipped by 180° (keyphasor flips)",
+        )
+    }
+
+    /// `run` arranged again ([`Self::arrange`]: the noise and the base fits
+    /// estimated afresh) without the readings of these data's keyphasor
+    /// flips and, per bearing of these data, of the speeds `speeds` [Hz].
+    /// The flips stay listed in `flipped_speeds_hz`; `outlier_speeds_hz`
+    /// is that of the data arranged again. Fails as [`Self::arrange`] does.
+    pub fn leaving_out(&self, run: &RunDir, speeds: &[Vec<f64>]) -> Result<Self> {
+        let out = |b: usize| {
+            self.flipped_speeds_hz
+                .get(b)
+                .into_iter()
+                .chain(speeds.get(b))
+                .flatten()
+        };
         let mut kept = run.clone();
         kept.measurements.retain(|m| {
-            all.bearing_index(&m.bearing)
-                .and_then(|b| flipped.get(b))
-                .is_none_or(|f| !f.contains(&m.speed_hz))
+            self.bearing_index(&m.bearing)
+                .is_none_or(|b| !out(b).any(|s| *s == m.speed_hz))
         });
-        let mut prep = Self::arrange(&kept).context(
-            "the run without the speeds whose phasors look flipped by 180° (keyphasor flips)",
-        )?;
+        let mut prep = Self::arrange(&kept)?;
         // `arrange` orders the bearings by first appearance: align the
-        // lists with its order (a bearing whose first rows were left out
+        // list with its order (a bearing whose first rows were left out
         // may move).
         prep.flipped_speeds_hz = prep
             .bearings
             .iter()
             .map(|name| {
-                all.bearing_index(name)
-                    .and_then(|b| flipped.get(b).cloned())
+                self.bearing_index(name)
+                    .and_then(|b| self.flipped_speeds_hz.get(b).cloned())
                     .unwrap_or_default()
             })
             .collect();
@@ -136,6 +161,7 @@ impl Prepared {
         let mut columns = Vec::with_capacity(bearings.len());
         let mut noises = Vec::with_capacity(bearings.len());
         let mut base_fits = Vec::with_capacity(bearings.len());
+        let mut outliers = Vec::with_capacity(bearings.len());
         for (b, name) in bearings.iter().enumerate() {
             let mut rows: Vec<&Measurement> = run
                 .measurements
@@ -157,8 +183,9 @@ impl Prepared {
                 quantisation: Quantisation::Truncation,
                 ..IdentifyOptions::default()
             };
-            let (fit, _) = fit_ml(name, &obs, &mut noise, &options)
+            let (fit, report) = fit_ml(name, &obs, &mut noise, &options)
                 .with_context(|| format!("fitting the base model of bearing {name}"))?;
+            outliers.push(report.outlier_speeds_hz);
             // The noise from the data alone (module docs of `noise`).
             unscale(&mut noise);
             for (m, var) in rows.iter().zip(&noise.var) {
@@ -192,6 +219,7 @@ impl Prepared {
             noise,
             base_fits,
             flipped_speeds_hz,
+            outlier_speeds_hz: outliers,
         })
     }
 

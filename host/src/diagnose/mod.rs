@@ -20,6 +20,8 @@
 //! - [`locate`]: where the disagreement lives;
 //! - [`state`]: a fitted model (the base model, joint refits) and its
 //!   parameter inference;
+//! - [`outliers`]: the base model's outlier speeds, left out of the search
+//!   and tested again under the model it chose;
 //! - [`forward`]: one forward step, every library candidate fitted and tested;
 //! - [`backward`]: chosen effects tested again in later joint refits;
 //! - [`bases`]: the two base candidates of a round on the corrected data;
@@ -51,6 +53,7 @@ pub mod locate;
 pub mod machine;
 pub mod model;
 pub mod noise;
+pub mod outliers;
 pub mod plots;
 pub mod report;
 pub mod state;

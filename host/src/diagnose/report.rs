@@ -269,6 +269,18 @@ pub struct Diagnosis {
     /// left out of the noise, every fit and every gap above. Only bearings
     /// with such speeds.
     pub flipped_speeds_hz: BTreeMap<String, Vec<f64>>,
+    /// Per bearing, the speeds [Hz] the robust fit of the base model lists
+    /// as outliers (`plinth identify`'s `outlier_speeds_hz`) that the final
+    /// model does not explain either, ascending: left out of the noise,
+    /// every fit and every gap above (`diagnose::outliers`). Only bearings
+    /// with such speeds.
+    pub outlier_speeds_hz: BTreeMap<String, Vec<f64>>,
+    /// Per bearing, the speeds [Hz] the robust fit of the base model lists
+    /// as outliers that the effects chosen without them explain: put back
+    /// into the data, the search run again with them. Only bearings with
+    /// such speeds.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub outliers_explained_hz: BTreeMap<String, Vec<f64>>,
 }
 
 /// The modal view of the pedestals by bearing, of the base and the final
@@ -320,6 +332,23 @@ impl Diagnosis {
                     hz_list(&every)
                 );
             }
+            let _ = writeln!(s);
+        }
+        for (bearing, speeds) in &self.outlier_speeds_hz {
+            let _ = writeln!(
+                s,
+                "OUTLIER SPEEDS at {bearing}: {} Hz, down-weighted by the base model's robust fit and not explained by the effects below either: left out of the noise, the fits and the gaps below",
+                hz_list(speeds)
+            );
+        }
+        for (bearing, speeds) in &self.outliers_explained_hz {
+            let _ = writeln!(
+                s,
+                "Outlier speeds of the base model at {bearing} ({} Hz) are explained by the effects below (chosen without them): kept in the data",
+                hz_list(speeds)
+            );
+        }
+        if !(self.outlier_speeds_hz.is_empty() && self.outliers_explained_hz.is_empty()) {
             let _ = writeln!(s);
         }
         let _ = writeln!(s, "Base model: {}", self.base_model.join(", "));

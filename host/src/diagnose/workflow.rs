@@ -25,7 +25,7 @@ use super::summaries::{effect_estimates, summary, wald_test};
 use super::trust::{as_pedestal_fit, conclude};
 use crate::rundir::RunDir;
 use crate::sim::oil_film::OilFilmBearing;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use plinth_shared::regression::Parameter;
 use std::collections::BTreeMap;
 
@@ -98,8 +98,52 @@ const MAX_REFITS: usize = 4;
 /// top of the base: each applied to the data, the base refitted, tested by
 /// the drop of the base's χ², with the backward check on the base
 /// ([`super::bases::correction_on_base`]).
+///
+/// The speeds the base model's robust fit lists as outliers are left out of
+/// the search and tested again under the model it chose
+/// ([`super::outliers`]): those the chosen effects explain are put back and
+/// the search run again with them, the others listed
+/// (`Diagnosis::outlier_speeds_hz`).
 pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
-    let prep = Prepared::from_run(run)?;
+    let all = Prepared::from_run(run)?;
+    let listed = all.outlier_speeds_hz.clone();
+    if listed.iter().all(Vec::is_empty) {
+        return search(run, all, opts);
+    }
+    let why = "the run without the speeds the base model's robust fit lists as outliers";
+    let prep = all.leaving_out(run, &listed).context(why)?;
+    let first = search(run, prep, opts)?;
+    let explained = super::outliers::explained(&all, &first, opts, &listed);
+    let mut out = first;
+    let mut left_out = listed.clone();
+    if explained.iter().any(|e| !e.is_empty()) {
+        let still = super::outliers::still_out(&listed, &explained);
+        let prep = all.leaving_out(run, &still).context(why)?;
+        let again = search(run, prep, opts)?;
+        // Put back only when the search with them still names an effect
+        // (the effects that explain them); otherwise they stay out.
+        if !again.diagnosis.effects_added.is_empty() {
+            out = again;
+            left_out = still;
+            out.diagnosis.outliers_explained_hz = by_name(&all, &explained);
+        }
+    }
+    out.diagnosis.outlier_speeds_hz = by_name(&all, &left_out);
+    Ok(out)
+}
+
+/// Per-bearing lists of `prep` by bearing name, only the non-empty ones.
+fn by_name(prep: &Prepared, lists: &[Vec<f64>]) -> BTreeMap<String, Vec<f64>> {
+    prep.bearings
+        .iter()
+        .zip(lists)
+        .filter(|(_, l)| !l.is_empty())
+        .map(|(b, l)| (b.clone(), l.clone()))
+        .collect()
+}
+
+/// The search of [`diagnose`] on the arranged data `prep` of `run`.
+fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
     let mut state = State::base(&prep, &opts.base)?;
     state.model.tables = written_tables(&prep, &opts.oil_films);
     let (pred0, gap0) = state.gap(&prep);
@@ -502,6 +546,8 @@ pub fn diagnose(run: &RunDir, opts: &Options) -> Result<Outcome> {
             .filter(|(_, f)| !f.is_empty())
             .map(|(b, f)| (b.clone(), f.clone()))
             .collect(),
+        outlier_speeds_hz: BTreeMap::new(),
+        outliers_explained_hz: BTreeMap::new(),
     };
     Ok(Outcome {
         diagnosis,

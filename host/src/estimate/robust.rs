@@ -41,7 +41,6 @@
 //! two ([`crate::identify::physical`]), so a wrong pattern does not make a
 //! zero damping significantly negative.
 
-use super::gauss_helmert as gh;
 use super::ml::{self, MlFit, Rigid, Weighting};
 use super::Observation;
 use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
@@ -101,23 +100,16 @@ fn whitened_jacobian(
 ) -> Option<(DVector<f64>, DMatrix<f64>)> {
     let n = obs.len();
     let eq = Rigid::new(obs, weighting);
-    // Each speed's whitening at θ as a fixed-size factor (the residuals are
-    // whitened by it 1 + columns times per speed).
+    // Each speed's whitening at θ as a fixed-size factor (gauss_helmert::whitening's
+    // figures; the residuals are whitened by it 1 + columns times per speed).
     let factors: Vec<Matrix4<f64>> = (0..n)
-        .map(|s| {
-            let l = gh::whitening(&eq, s, theta)?;
-            (l.shape() == (4, 4)).then(|| Matrix4::from_fn(|r, c| l[(r, c)]))
-        })
+        .map(|s| eq.generic_factor(s, theta))
         .collect::<Option<_>>()?;
-    let whitened = |p: &[f64; PARAMETERS]| -> DVector<f64> {
-        let mut out = DVector::zeros(4 * n);
-        for (s, l) in factors.iter().enumerate() {
-            out.fixed_rows_mut::<4>(4 * s)
-                .copy_from(&eq.whitened_by(s, p, l));
-        }
-        out
-    };
-    let w = whitened(theta);
+    let mut w = DVector::zeros(4 * n);
+    for (s, l) in factors.iter().enumerate() {
+        w.fixed_rows_mut::<4>(4 * s)
+            .copy_from(&eq.whitened_by(s, theta, l));
+    }
     // Difference steps: a millionth of the value, or of a 1e-3 loss factor
     // for a damping. The whitened residual is linear in θ with L_i held, so
     // a one-sided difference is exact but for rounding (about 1e-10 of the
@@ -134,7 +126,13 @@ fn whitened_jacobian(
         if step == 0.0 {
             return None;
         }
-        jac.set_column(c, &((whitened(&up) - &w) / step));
+        // (w(θ + step) − w)/step, speed by speed (no stacked copy).
+        for (s, l) in factors.iter().enumerate() {
+            let up = eq.whitened_by(s, &up, l);
+            for i in 0..4 {
+                jac[(4 * s + i, c)] = (up[i] - w[4 * s + i]) / step;
+            }
+        }
     }
     jac.iter()
         .chain(w.iter())
@@ -232,22 +230,49 @@ pub fn deleted_distances(
         hess += rows.tr_mul(&rows);
     }
     let inv = if p == 0 { hess } else { hess.try_inverse()? };
+    // H⁻¹ in a fixed-size array (read 16 times per speed); the columns
+    // are distinct parameters, at most PARAMETERS of them.
+    if p > PARAMETERS {
+        return None;
+    }
+    let mut inv_rows = [[0.0; PARAMETERS]; PARAMETERS];
+    for (a, row) in inv_rows.iter_mut().enumerate().take(p) {
+        for (b, v) in row.iter_mut().enumerate().take(p) {
+            *v = inv[(a, b)];
+        }
+    }
+    let inv_rows = &inv_rows[..p];
     Some(
         (0..n)
             .map(|i| {
                 // Fixed 4×4 algebra per speed (no allocation: one per speed
                 // and bearing, 20 000 speeds in a long run).
-                let rows = jac.rows(4 * i, 4);
-                let wi = Vector4::from_fn(|r, _| w[4 * i + r]);
-                let pull = Matrix4::from_fn(|r, c| {
-                    let mut sum = 0.0;
-                    for a in 0..p {
-                        for b in 0..p {
-                            sum += rows[(r, a)] * inv[(a, b)] * rows[(c, b)];
-                        }
-                    }
-                    sum
+                let rows: [[f64; PARAMETERS]; 4] = std::array::from_fn(|r| {
+                    std::array::from_fn(|a| if a < p { jac[(4 * i + r, a)] } else { 0.0 })
                 });
+                let wi = Vector4::from_fn(|r, _| w[4 * i + r]);
+                // J_i·H⁻¹ once (4 × p), then its products with J_i's rows:
+                // the lower triangle, mirrored (the pull is symmetric).
+                let jh: [[f64; PARAMETERS]; 4] = std::array::from_fn(|r| {
+                    std::array::from_fn(|b| {
+                        let mut sum = 0.0;
+                        for (&ra, inv_a) in rows[r][..p].iter().zip(inv_rows) {
+                            sum += ra * inv_a[b];
+                        }
+                        sum
+                    })
+                });
+                let mut pull = Matrix4::zeros();
+                for r in 0..4 {
+                    for c in 0..=r {
+                        let mut sum = 0.0;
+                        for (&x, &y) in jh[r][..p].iter().zip(&rows[c][..p]) {
+                            sum += x * y;
+                        }
+                        pull[(r, c)] = sum;
+                        pull[(c, r)] = sum;
+                    }
+                }
                 // The largest eigenvalue of the pull: the leverage h in the
                 // fit, h/(1 − h) left out.
                 let limit = if in_fit[i] {

@@ -119,6 +119,12 @@ pub struct Args {
     /// Fit only the speeds from LO to HI Hz (ends included), e.g. 20:120.
     #[arg(long, allow_negative_numbers = true, value_name = "LO:HI", value_parser = crate::args::speed_band)]
     pub speeds: Option<crate::args::SpeedBand>,
+    /// Relative standard uncertainty of each bearing table's common scale
+    /// [%], carried into every ± (σ² = (1 + s²)·σ_noise² + (s·θ)²; the
+    /// noise-only ± stays in the JSON as `std_err_noise`). Without it the ±
+    /// is conditional on the table being exact.
+    #[arg(long, value_name = "PCT", value_parser = super::conditional::parse_table_uncertainty)]
+    pub table_uncertainty: Option<f64>,
 }
 
 impl Args {
@@ -160,24 +166,39 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             super::mode_name(equations)
         );
     }
-    let (run, identification) = identify_args(args)?;
+    let (run, mut identification) = identify_args(args)?;
+    let table_sd = args.table_uncertainty.map(|pct| pct / 100.0);
+    let noise_only = table_sd.map(|sd| {
+        let noise = super::conditional::widen(&mut identification, sd);
+        crate::present::modal::attach(&mut identification);
+        noise
+    });
+    let conditional = super::conditional::of(&run, &identification, table_sd);
     for p in &identification.pedestals {
         for w in &p.warnings {
             eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
         }
     }
     let no_truth = (run.truth.as_ref()).map_or(Vec::new(), |t| bearings_without_truth(&run, t));
-    if args.json && !no_truth.is_empty() {
-        // Keys may be added (formats.md): the bearings truth.json lacks.
+    if args.json {
+        // Keys may be added (formats.md): the bearings truth.json lacks,
+        // what the values are conditional on, the noise-only ±.
         let mut json = serde_json::to_value(&identification)?;
-        json["bearings_without_truth"] = serde_json::json!(no_truth);
+        if !no_truth.is_empty() {
+            json["bearings_without_truth"] = serde_json::json!(no_truth);
+        }
+        json["conditional_on"] = serde_json::to_value(&conditional)?;
+        for (i, se) in noise_only.iter().flatten().enumerate() {
+            if let Some(p) = json["pedestals"].get_mut(i) {
+                p["std_err_noise"] = serde_json::to_value(se)?;
+            }
+        }
         println!("{}", serde_json::to_string_pretty(&json)?);
-    } else if args.json {
-        println!("{}", serde_json::to_string_pretty(&identification)?);
     } else {
         print!("{}", table(&identification, run.truth.as_ref()));
         print!("{}", super::on_base::describe(&identification.bases));
         print!("{}", untrusted_reasons(&identification));
+        print!("{}", conditional.to_text());
     }
     if let Some(dir) = &args.plots {
         let files = crate::report::fitted::write_identify_plots(

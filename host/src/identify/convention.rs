@@ -60,6 +60,16 @@
 //! reading (the data as found included) by [`DECISIVE_DELTA_CHI2`] in r,
 //! and has a χ² no larger than that of every other passive reading and of
 //! the data as found (passive or not); otherwise nothing is named.
+//! "Passive" here is also "plausible": a reading whose pedestal has values
+//! no pedestal has ([`super::plausibility`]: a mass of 1e-4 kg, a support
+//! sagging more than a quarter metre under its own weight) is not a
+//! candidate. A mistake made for the whole run ([`Convention::run_wide`]:
+//! the speeds' unit) must also be preferred by the whole run, the same
+//! rule on the log-likelihood ratio summed over the pedestals
+//! ([`decide::run_prefers`]): speeds in rpm only rescale a pedestal whose
+//! bearing force is almost all stiffness (m·3600, c·60), so that pedestal
+//! alone cannot tell the units apart, while the bearings with damping can
+//! (docs/unseen.md, third machine, item 3).
 //!
 //! Every reading is first fitted by the paper's OLS, whose relative residual
 //! bounds that of any estimate from below; only the readings that bound
@@ -104,7 +114,8 @@ pub struct Reading {
     pub dof: usize,
     /// Σ|e|²/Σ|F|² [-] ([`super::misfit::Misfit::relative_residual`]).
     pub relative_residual: f64,
-    /// Whether the estimate is a passive pedestal ([`is_plausible`]).
+    /// Whether the estimate is a passive pedestal ([`is_plausible`]) with
+    /// values a pedestal can have ([`super::plausibility::findings`]).
     pub plausible: bool,
 }
 
@@ -205,14 +216,25 @@ pub fn diagnose(
     );
     let schedules = run.bearing_schedules();
     let found_rows = rows::of_run(run, &schedules);
+    // Each bearing's stiffness, the yardstick of [`plausible`] (the same
+    // under every reading: no mistake tried rescales the table's values).
+    let bearing_stiffness: std::collections::BTreeMap<&str, Option<f64>> = identification
+        .pedestals
+        .iter()
+        .map(|p| {
+            let kb = super::plausibility::bearing_stiffness(run, &p.bearing);
+            (p.bearing.as_str(), kb)
+        })
+        .collect();
     let reading = |rows: &[rows::BearingRows], sigma: &[[f64; 4]], p: &PedestalFit, c| {
         let rows = rows.iter().find(|r| r.bearing == p.bearing)?;
+        let kb = bearing_stiffness.get(p.bearing.as_str()).copied().flatten();
         misfit_of(rows.with_sigma(sigma), p).map(|m| Reading {
             convention: c,
             chi2: m.chi2,
             dof: m.dof,
             relative_residual: m.relative_residual,
-            plausible: is_plausible(p),
+            plausible: plausible(p, kb),
         })
     };
     let ols = options.effective_estimator() == Estimator::Ols;
@@ -355,6 +377,22 @@ pub fn diagnose(
             let Some(convention) = best.convention else {
                 continue;
             };
+            if convention.run_wide() {
+                // The run's readings as found and with the mistake undone,
+                // pedestal by pedestal.
+                let pairs: Vec<(Reading, Reading)> = (0..pedestals.len())
+                    .filter_map(|i| {
+                        let readings = readings_of(i, &candidates)?;
+                        let c = readings
+                            .iter()
+                            .find(|(r, _)| r.convention == Some(convention))?;
+                        Some((readings[0].0, c.0))
+                    })
+                    .collect();
+                if !run_prefers(&pairs) {
+                    continue;
+                }
+            }
             let mut corrected = best;
             let mut corrected_fit = q.clone();
             if ols {
@@ -413,36 +451,6 @@ struct Candidate<'a> {
     bounds: Vec<Option<f64>>,
 }
 
-/// The relative residual [-] below which a reading not yet fitted could
-/// still change what [`decide`] makes of `readings`: be the best passive
-/// reading, come within the decisive margin of it, or be the runner-up;
-/// infinite while no reading is passive.
-fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
-    let Some(best) = readings
-        .iter()
-        .map(|(r, _)| r)
-        .filter(|r| r.plausible && r.relative_residual.is_finite())
-        .min_by(|a, b| a.relative_residual.total_cmp(&b.relative_residual))
-    else {
-        return f64::INFINITY;
-    };
-    let decisive = best.relative_residual
-        * (DECISIVE_DELTA_CHI2 / best.dof.max(1) as f64).exp()
-        * (1.0 + 1e-9);
-    // The runner-up is the best other reading, passive or not.
-    let runner_up = readings
-        .iter()
-        .map(|(r, _)| r)
-        .filter(|r| *r != best)
-        .map(|r| r.relative_residual)
-        .fold(f64::INFINITY, f64::min);
-    if runner_up.is_finite() {
-        decisive.max(runner_up * (1.0 + 1e-9))
-    } else {
-        decisive
-    }
-}
-
 /// The noise of `run` with mistake `c` undone (`fixed`), from the noise
 /// of the run as found: the same where the correction changes only signs
 /// (each channel's scatter and each column's digits are blind to them),
@@ -481,56 +489,6 @@ fn corrected_noise<'a>(c: Convention, noise: &'a RunNoise, run: &RunDir) -> Cow<
             noise.with_pedestal_of(&measured)
         }
     })
-}
-
-/// The decisive reading (module docs) with the runner-up and its fit, or
-/// `None` when no reading is passive, at the noise floor and decisively best.
-/// Only passive readings compete with it: one that is not passive cannot be
-/// what happened, however well it fits (negating `rel` and every parameter
-/// leaves every residual unchanged, for one). The runner-up reported is the
-/// best other reading, passive or not.
-fn decide<'a>(
-    readings: &[(Reading, &'a PedestalFit)],
-) -> Option<(Reading, Reading, &'a PedestalFit)> {
-    let by_residual = |a: &&(Reading, &PedestalFit), b: &&(Reading, &PedestalFit)| {
-        a.0.relative_residual.total_cmp(&b.0.relative_residual)
-    };
-    let (best, fit) = readings
-        .iter()
-        .filter(|(r, _)| r.plausible && r.relative_residual.is_finite())
-        .min_by(by_residual)?;
-    if best.chi2_per_dof().is_nan() || best.chi2_per_dof() > FLOOR_CHI2_PER_DOF {
-        return None;
-    }
-    let others = || readings.iter().filter(|(r, _)| r != best);
-    // No worse a fit to the noise floor than `r` (with `rel_negated` the
-    // data as found and the correction fit alike, up to rounding).
-    let not_worse = |r: &Reading| best.chi2 <= r.chi2 * (1.0 + TIE_TOLERANCE) || r.chi2.is_nan();
-    let decisive = others()
-        .filter(|(r, _)| r.plausible)
-        .all(|(r, _)| log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2 && not_worse(r));
-    // The data as found, passive or not, must not fit the noise better
-    // than the named reading.
-    let as_found = readings.iter().find(|(r, _)| r.convention.is_none());
-    let better_than_found = as_found.is_none_or(|(r, _)| r == best || not_worse(r));
-    let runner_up = others().min_by(by_residual)?.0;
-    (decisive && better_than_found).then_some((*best, runner_up, *fit))
-}
-
-/// Relative difference [-] of two χ² taken as a tie: readings that are the
-/// same fit up to a sign of every parameter (`rel_negated`) differ by
-/// rounding only.
-const TIE_TOLERANCE: f64 = 1e-6;
-
-/// −2·ln of the likelihood ratio of reading `b` against `a`, Gaussian
-/// equation errors of one common variance profiled out of each (unknown
-/// noise scale): ν·ln(r_b/r_a) with r the relative residual. Free of the
-/// noise floor's shape, which the digits/scatter estimate can get badly
-/// wrong; but a likelihood ratio only where every speed's error has the
-/// same variance, which proportional noise breaks (a few resonance speeds
-/// then dominate r), hence the χ² check of [`decide`].
-fn log_likelihood_ratio(a: &Reading, b: &Reading) -> f64 {
-    a.dof as f64 * (b.relative_residual / a.relative_residual).ln()
 }
 
 /// Marks every pedestal of `identification` that a [`Finding`] names: not
@@ -598,9 +556,12 @@ pub fn findings_for_run(
         .collect()
 }
 
+mod decide;
 mod mistake;
 mod rows;
 mod screen;
+
+use decide::{decide, plausible, relevance_limit, run_prefers};
 
 pub use mistake::Convention;
 #[cfg(test)]

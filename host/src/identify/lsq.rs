@@ -201,7 +201,9 @@ pub fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> LeastSquares {
 #[derive(Clone, Debug, PartialEq)]
 pub struct NormalEquations {
     p: usize,
-    /// AᵀA, row-major p×p.
+    /// AᵀA, row-major p×p, its upper triangle (i ≤ j) only: the lower one
+    /// would hold the same sums bit for bit (the same products in the same
+    /// order), so [`NormalEquations::solve`] reads the upper one mirrored.
     ata: Vec<f64>,
     /// Aᵀb.
     atb: Vec<f64>,
@@ -237,31 +239,27 @@ impl NormalEquations {
     /// adding ±0 leaves every sum as it is (the sums start at +0 and, in
     /// round-to-nearest, only −0 + −0 gives −0), so the result is the full
     /// loop's bit for bit at a third of its cost on eq. 4's rows (three of
-    /// five entries non-zero).
+    /// five entries non-zero). Only AᵀA's upper triangle is summed.
     pub fn add(&mut self, row: &[f64], rhs: f64) {
         let p = self.p;
-        if row.iter().take(p).all(|r| r.is_finite()) && rhs.is_finite() {
-            for (i, &ri) in row.iter().enumerate().take(p) {
-                if ri == 0.0 {
-                    continue;
-                }
-                for (j, &rj) in row.iter().enumerate().take(p) {
-                    if rj != 0.0 {
-                        self.ata[i * p + j] += ri * rj;
-                    }
-                }
-                self.atb[i] += ri * rhs;
-            }
-            self.rows += 1;
-            return;
-        }
+        let finite = row.iter().take(p).all(|r| r.is_finite()) && rhs.is_finite();
         for (i, &ri) in row.iter().enumerate().take(p) {
-            for (j, &rj) in row.iter().enumerate().take(p) {
-                self.ata[i * p + j] += ri * rj;
+            if finite && ri == 0.0 {
+                continue;
+            }
+            for (j, &rj) in row.iter().enumerate().take(p).skip(i) {
+                if !finite || rj != 0.0 {
+                    self.ata[i * p + j] += ri * rj;
+                }
             }
             self.atb[i] += ri * rhs;
         }
         self.rows += 1;
+    }
+
+    /// Entry (i, j) of AᵀA (from its upper triangle).
+    fn ata(&self, i: usize, j: usize) -> f64 {
+        self.ata[i.min(j) * self.p + i.max(j)]
     }
 
     /// Equations added.
@@ -279,11 +277,11 @@ impl NormalEquations {
         if p == 0 || self.rows <= p {
             return None;
         }
-        let d: Vec<f64> = (0..p).map(|j| self.ata[j * p + j].sqrt()).collect();
+        let d: Vec<f64> = (0..p).map(|j| self.ata(j, j).sqrt()).collect();
         if !d.iter().all(|&x| x > 0.0 && x.is_finite()) {
             return None;
         }
-        let m = DMatrix::from_fn(p, p, |i, j| self.ata[i * p + j] / (d[i] * d[j]));
+        let m = DMatrix::from_fn(p, p, |i, j| self.ata(i, j) / (d[i] * d[j]));
         let eigen = m.clone().symmetric_eigenvalues();
         let lo = eigen.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = eigen.iter().copied().fold(0.0, f64::max);

@@ -18,6 +18,7 @@
 pub mod base;
 mod checks;
 pub mod cli;
+pub mod conditional;
 pub mod convention;
 pub mod data;
 pub mod estimator;

@@ -14,6 +14,22 @@
 //! [`STIFFNESS_RANGE_N_PER_M`], [`NATURAL_FREQUENCY_RANGE_HZ`]) are never
 //! `ok`. A value counts as outside only when its 3σ interval is
 //! ([`SIGMAS`]), so a weakly determined mass is left to the other warnings.
+//!
+//! Gravity gives the one bound on the mass that no reading of the speeds
+//! can move: y is vertical (formats.md), so a pedestal of mass m on a
+//! vertical stiffness k_y sags at least m·g/k_y = g/ω_y² under its own
+//! weight (more with the bearing load on it). The softest supports rotating
+//! machines stand on, steel-spring isolators, are made for up to about
+//! 0.1 m of static deflection (a 1.6 Hz mount); a support that sags more
+//! than [`MAX_SAG_M`] (0.25 m: a vertical natural frequency under 1.0 Hz)
+//! cannot hold a shaft line, whatever its k and m are separately. The
+//! speeds read in the wrong unit are the case it is for: speeds in rpm read
+//! as Hz give the same pedestal with m·3600 and c·60 and an unchanged k
+//! (every frequency /60), and where the bearing force is almost all
+//! stiffness the two readings fit alike (an 85 kg bracket at 46 Hz reads
+//! as 3e5 kg sagging 0.42 m; docs/unseen.md, third machine). The
+//! convention check ([`super::convention`]) counts a reading with any
+//! finding here as not plausible, so it never names such a reading.
 //! Velocity declared as displacement and mixed phase conventions do change
 //! the fit, and are tried as convention mistakes ([`super::convention`]).
 
@@ -31,6 +47,27 @@ pub const NATURAL_FREQUENCY_RANGE_HZ: [f64; 2] = [0.5, 2.0e4];
 pub const BEARING_STIFFNESS_RATIO: f64 = 1.0e3;
 /// Standard errors a value must lie outside a range by [-].
 pub const SIGMAS: f64 = 3.0;
+/// Standard gravity [m/s²].
+pub const GRAVITY_M_PER_S2: f64 = 9.806_65;
+/// Largest static deflection m·g/k_y of a pedestal under its own weight [m]
+/// (module docs: 2.5 times the deepest spring isolators'; a vertical
+/// natural frequency of 1.0 Hz).
+pub const MAX_SAG_M: f64 = 0.25;
+
+/// The static deflection m·g/k_y [m] of `fit`'s pedestal under its own
+/// weight with its standard error [m] (`None` when k_y or m is not
+/// positive). The relative standard error is bounded by the sum of those
+/// of m and k_y (|ρ| ≤ 1), so the bound holds whatever their correlation.
+pub fn sag(fit: &PedestalFit) -> Option<(f64, f64)> {
+    let (k, m) = (fit.pedestal.k_y, fit.pedestal.m);
+    if !(k > 0.0 && m > 0.0) {
+        return None;
+    }
+    let finite = |s: f64| if s.is_finite() { s } else { f64::INFINITY };
+    let se = fit.std_err.theta();
+    let sag = m * GRAVITY_M_PER_S2 / k;
+    Some((sag, sag * (finite(se[2]) / m + finite(se[0]) / k)))
+}
 
 /// Why `fit` is implausible, one sentence each; `bearing_stiffness` is the
 /// geometric mean of the bearing's direct stiffnesses |k_yy|, |k_zz| over the
@@ -75,6 +112,14 @@ pub fn findings(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> Vec<String
                     "its natural frequency in {axis}, sqrt(k_{axis}/m)/2π = {f:.3e} Hz, is outside anything a pedestal can have ({lo} to {hi:.0e} Hz)"
                 ));
             }
+        }
+    }
+    if let Some((sag, se)) = sag(fit) {
+        if sag - SIGMAS * se > MAX_SAG_M {
+            out.push(format!(
+                "it would sag m·g/k_y = {sag:.3} ± {se:.1e} m under its own weight (vertical natural frequency {:.3} Hz), more than any support of a shaft line ({MAX_SAG_M} m): speeds in the wrong unit (rpm for Hz) give such a mass",
+                (GRAVITY_M_PER_S2 / sag).sqrt() / (2.0 * std::f64::consts::PI)
+            ));
         }
     }
     if let Some(kb) = bearing_stiffness.filter(|k| *k > 0.0 && k.is_finite()) {
@@ -122,7 +167,7 @@ fn unit_mismatch(ratio: f64) -> String {
 
 /// Geometric mean of the bearing's direct stiffnesses |k_yy|·|k_zz| over
 /// the speeds `bearing` was measured at [N/m].
-fn bearing_stiffness(run: &RunDir, bearing: &str) -> Option<f64> {
+pub(crate) fn bearing_stiffness(run: &RunDir, bearing: &str) -> Option<f64> {
     let schedules = run.bearing_schedules();
     let schedule = schedules.get(bearing)?;
     let logs: Vec<f64> = run
@@ -214,5 +259,23 @@ mod tests {
         let f = findings(&fit(1e151, 80.0), None).join(" | ");
         assert!(f.contains("k_y") && f.contains("natural frequency"), "{f}");
         assert!(!findings(&fit(1e7, 1e-4), None).is_empty());
+    }
+
+    #[test]
+    fn a_pedestal_that_would_sag_a_quarter_metre_is_never_ok() {
+        // An 85 kg bracket on 22 MN/m (f_y 81 Hz) read with its speeds in
+        // rpm: m·3600, the same k, f_y/60 = 1.35 Hz, sag 0.136 m: within
+        // what spring isolators allow, so not named here.
+        assert!(findings(&fit(2.2e7, 85.0 * 3600.0), Some(1.5e8)).is_empty());
+        // At 46 Hz (k 7.1 MN/m): 0.77 Hz, sag 0.42 m: named.
+        let f = findings(&fit(7.1e6, 85.0 * 3600.0), Some(1.5e8)).join(" | ");
+        assert!(f.contains("sag") && f.contains("rpm"), "{f}");
+        // A weakly determined mass (± 50 %) is left alone.
+        let mut weak = fit(7.1e6, 85.0 * 3600.0);
+        weak.std_err.m = 0.5 * weak.pedestal.m;
+        assert!(findings(&weak, Some(1.5e8)).is_empty());
+        // A spring-isolated pedestal at 1.6 Hz (0.1 m) is a machine.
+        let k = 1000.0 * (2.0 * std::f64::consts::PI * 1.6f64).powi(2);
+        assert!(findings(&fit(k, 1000.0), Some(10.0 * k)).is_empty());
     }
 }

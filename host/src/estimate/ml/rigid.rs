@@ -86,6 +86,23 @@ impl Speed {
         s * self.scale
     }
 
+    /// B = ∂e/∂(measured numbers) at θ (4×12: rel, ped, equation error),
+    /// what [`Equations::residual`] gives.
+    fn measured_jacobian(&self, theta: &[f64]) -> SMatrix<f64, 4, 12> {
+        let mut b = SMatrix::<f64, 4, 8>::zeros();
+        for (d, (re, im)) in self.stiffness(theta).into_iter().enumerate() {
+            put(&mut b, 2 * d, 4 + 2 * d, Complex::new(re, im));
+        }
+        let mut full = SMatrix::<f64, 4, 12>::zeros();
+        full.fixed_view_mut::<4, 4>(0, 0).copy_from(&self.b_rel);
+        full.fixed_view_mut::<4, 4>(0, 4)
+            .copy_from(&b.fixed_view::<4, 4>(0, 4));
+        for i in 0..4 {
+            full[(i, 8 + i)] = 1.0;
+        }
+        full
+    }
+
     /// Lower Cholesky factor of Σ(θ) with an equation error of variance `tau2` [N²].
     pub(super) fn factor(&self, theta: &[f64], tau2: f64) -> Result<Matrix4<f64>, MlError> {
         cholesky(self.sigma(theta, tau2), self.speed_hz)
@@ -230,6 +247,44 @@ impl Rigid {
         forward(l, &(sp.a * theta_vector(theta) - sp.b))
     }
 
+    /// [`gh::whitening`] of speed `s` at `theta` in fixed-size arithmetic:
+    /// Σ = B·D·Bᵀ from [`Equations::residual`]'s B and
+    /// [`Equations::variance`]'s D, each entry summed over the 12 measured
+    /// numbers in the order nalgebra's product sums them (B's entry times
+    /// its variance, times the other row's entry), its lower Cholesky
+    /// factor, regularised by 1e-12 of the mean diagonal when singular:
+    /// the same figures without allocation (one per speed in the outlier
+    /// test and the sandwich). `None` where [`gh::whitening`] gives `None`.
+    pub(crate) fn generic_factor(&self, s: usize, theta: &[f64]) -> Option<Matrix4<f64>> {
+        let b = self.speeds[s].measured_jacobian(theta);
+        let v = &self.var[s];
+        let mut sigma = Matrix4::zeros();
+        // The lower triangle and the diagonal: all the factorisation reads.
+        for i in 0..4 {
+            for j in 0..=i {
+                let mut sum = (b[(i, 0)] * v[0]) * b[(j, 0)];
+                for k in 1..12 {
+                    sum += (b[(i, k)] * v[k]) * b[(j, k)];
+                }
+                sigma[(i, j)] = sum;
+            }
+        }
+        let trace = sigma.trace();
+        if !(trace > 0.0 && trace.is_finite()) {
+            return None;
+        }
+        cholesky4(&sigma).or_else(|| {
+            // Σ + jitter·I as nalgebra adds it (+0 off the diagonal).
+            let jitter = 1e-12 * trace / 4.0;
+            for i in 0..4 {
+                for j in 0..=i {
+                    sigma[(i, j)] += if i == j { jitter } else { 0.0 };
+                }
+            }
+            cholesky4(&sigma)
+        })
+    }
+
     /// RMS of the unweighted equation residuals e [N].
     pub(super) fn residual_rms(&self, theta: &[f64]) -> f64 {
         let sum: f64 = self
@@ -274,18 +329,11 @@ impl Equations for Rigid {
     fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
         let sp = &self.speeds[s];
         let e = sp.a * theta_vector(p) - sp.b;
-        let mut b = SMatrix::<f64, 4, 8>::zeros();
-        for (d, (re, im)) in sp.stiffness(p).into_iter().enumerate() {
-            put(&mut b, 2 * d, 4 + 2 * d, Complex::new(re, im));
-        }
-        let mut full = DMatrix::zeros(4, 12);
-        full.view_mut((0, 0), (4, 4)).copy_from(&sp.b_rel);
-        full.view_mut((0, 4), (4, 4))
-            .copy_from(&b.fixed_view::<4, 4>(0, 4));
-        for i in 0..4 {
-            full[(i, 8 + i)] = 1.0;
-        }
-        (DVector::from_column_slice(e.as_slice()), full)
+        let full = sp.measured_jacobian(p);
+        (
+            DVector::from_column_slice(e.as_slice()),
+            DMatrix::from_column_slice(4, 12, full.as_slice()),
+        )
     }
 
     fn whiten(&self, p: &[f64], jacobian: Option<JacobianRequest<'_>>) -> Option<DVector<f64>> {

@@ -183,27 +183,35 @@ impl LocalRational {
             // The numerators for that denominator: per channel the weighted
             // least squares of N_c(x) against q_c·D(x) (3×3 normal
             // equations of the well-scaled monomials, x within ±1).
-            let normal = nalgebra::Matrix3::from_fn(|i, j| {
+            // Entry (i, j) depends on i + j alone: each sum once.
+            let moments: [f64; 2 * NUMERATOR_TERMS - 1] = std::array::from_fn(|t| {
                 (0..m)
-                    .map(|k| (row_weight[k] * row_weight[k]) * powers[k][i + j])
+                    .map(|k| (row_weight[k] * row_weight[k]) * powers[k][t])
                     .sum::<f64>()
             });
+            let normal = nalgebra::Matrix3::from_fn(|i, j| moments[i + j]);
             let cholesky = normal.cholesky()?;
             for (k, (f, _)) in points.iter().enumerate() {
                 denominators[k] = model.denominator(*f);
             }
-            for c in 0..4 {
-                let mut re = nalgebra::Vector3::zeros();
-                let mut im = nalgebra::Vector3::zeros();
-                for k in 0..m {
+            // Every channel's right-hand sides in one pass over the speeds
+            // (each sum over the speeds in the same order as one channel
+            // at a time), w²·xⁱ formed once per speed.
+            let mut re = [nalgebra::Vector3::<f64>::zeros(); 4];
+            let mut im = [nalgebra::Vector3::<f64>::zeros(); 4];
+            for k in 0..m {
+                let w2 = row_weight[k] * row_weight[k];
+                let wx: [f64; NUMERATOR_TERMS] = std::array::from_fn(|i| w2 * powers[k][i]);
+                for c in 0..4 {
                     let target = points[k].1[c] * denominators[k];
-                    let w2 = row_weight[k] * row_weight[k];
                     for i in 0..NUMERATOR_TERMS {
-                        re[i] += w2 * powers[k][i] * target.re;
-                        im[i] += w2 * powers[k][i] * target.im;
+                        re[c][i] += wx[i] * target.re;
+                        im[c][i] += wx[i] * target.im;
                     }
                 }
-                let (re, im) = (cholesky.solve(&re), cholesky.solve(&im));
+            }
+            for c in 0..4 {
+                let (re, im) = (cholesky.solve(&re[c]), cholesky.solve(&im[c]));
                 for t in 0..NUMERATOR_TERMS {
                     model.numerators[c][t] = Complex::new(re[t], im[t]);
                 }

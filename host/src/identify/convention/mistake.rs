@@ -39,6 +39,16 @@ impl Convention {
         Convention::PedVelocity,
     ];
 
+    /// True for a mistake that, when made, is made for the whole run: the
+    /// speeds are one column of measurements.csv, so their unit is the
+    /// same at every bearing (the sign and phase conventions can differ
+    /// from one transducer or bearing table to the next). Such a mistake is
+    /// named only when the run as a whole prefers it
+    /// ([`super::decide::run_prefers`]).
+    pub fn run_wide(self) -> bool {
+        matches!(self, Convention::SpeedInRpm)
+    }
+
     /// The name used in `--json` and messages.
     pub fn name(self) -> &'static str {
         match self {

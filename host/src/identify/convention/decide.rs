@@ -1,0 +1,117 @@
+//! How the readings of one pedestal (the data as found and each mistake
+//! undone) are judged against each other (the module docs of
+//! [`super`]): which readings can be what happened, which is decisively
+//! best, and, for a mistake made for the whole run, whether the run as a
+//! whole prefers it.
+
+use super::{is_plausible, PedestalFit, Reading, DECISIVE_DELTA_CHI2, FLOOR_CHI2_PER_DOF};
+
+/// Whether `fit` can be what happened: a passive pedestal
+/// ([`is_plausible`]) with values a pedestal can have
+/// ([`crate::identify::plausibility::findings`], `bearing_stiffness` its bearing's
+/// [N/m]): a reading that needs a pedestal sagging a quarter metre under its
+/// own weight is no more a candidate than one with a negative mass.
+pub(super) fn plausible(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> bool {
+    is_plausible(fit) && crate::identify::plausibility::findings(fit, bearing_stiffness).is_empty()
+}
+
+/// The relative residual [-] below which a reading not yet fitted could
+/// still change what [`decide`] makes of `readings`: be the best passive
+/// reading, come within the decisive margin of it, or be the runner-up;
+/// infinite while no reading is passive.
+pub(super) fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
+    let Some(best) = readings
+        .iter()
+        .map(|(r, _)| r)
+        .filter(|r| r.plausible && r.relative_residual.is_finite())
+        .min_by(|a, b| a.relative_residual.total_cmp(&b.relative_residual))
+    else {
+        return f64::INFINITY;
+    };
+    let decisive = best.relative_residual
+        * (DECISIVE_DELTA_CHI2 / best.dof.max(1) as f64).exp()
+        * (1.0 + 1e-9);
+    // The runner-up is the best other reading, passive or not.
+    let runner_up = readings
+        .iter()
+        .map(|(r, _)| r)
+        .filter(|r| *r != best)
+        .map(|r| r.relative_residual)
+        .fold(f64::INFINITY, f64::min);
+    if runner_up.is_finite() {
+        decisive.max(runner_up * (1.0 + 1e-9))
+    } else {
+        decisive
+    }
+}
+
+/// The decisive reading (module docs) with the runner-up and its fit, or
+/// `None` when no reading is passive, at the noise floor and decisively best.
+/// Only passive readings compete with it: one that is not passive cannot be
+/// what happened, however well it fits (negating `rel` and every parameter
+/// leaves every residual unchanged, for one). The runner-up reported is the
+/// best other reading, passive or not.
+pub(super) fn decide<'a>(
+    readings: &[(Reading, &'a PedestalFit)],
+) -> Option<(Reading, Reading, &'a PedestalFit)> {
+    let by_residual = |a: &&(Reading, &PedestalFit), b: &&(Reading, &PedestalFit)| {
+        a.0.relative_residual.total_cmp(&b.0.relative_residual)
+    };
+    let (best, fit) = readings
+        .iter()
+        .filter(|(r, _)| r.plausible && r.relative_residual.is_finite())
+        .min_by(by_residual)?;
+    if best.chi2_per_dof().is_nan() || best.chi2_per_dof() > FLOOR_CHI2_PER_DOF {
+        return None;
+    }
+    let others = || readings.iter().filter(|(r, _)| r != best);
+    // No worse a fit to the noise floor than `r` (with `rel_negated` the
+    // data as found and the correction fit alike, up to rounding).
+    let not_worse = |r: &Reading| best.chi2 <= r.chi2 * (1.0 + TIE_TOLERANCE) || r.chi2.is_nan();
+    let decisive = others()
+        .filter(|(r, _)| r.plausible)
+        .all(|(r, _)| log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2 && not_worse(r));
+    // The data as found, passive or not, must not fit the noise better
+    // than the named reading.
+    let as_found = readings.iter().find(|(r, _)| r.convention.is_none());
+    let better_than_found = as_found.is_none_or(|(r, _)| r == best || not_worse(r));
+    let runner_up = others().min_by(by_residual)?.0;
+    (decisive && better_than_found).then_some((*best, runner_up, *fit))
+}
+
+/// Relative difference [-] of two χ² taken as a tie: readings that are the
+/// same fit up to a sign of every parameter (`rel_negated`) differ by
+/// rounding only.
+const TIE_TOLERANCE: f64 = 1e-6;
+
+/// −2·ln of the likelihood ratio of reading `b` against `a`, Gaussian
+/// equation errors of one common variance profiled out of each (unknown
+/// noise scale): ν·ln(r_b/r_a) with r the relative residual. Free of the
+/// noise floor's shape, which the digits/scatter estimate can get badly
+/// wrong; but a likelihood ratio only where every speed's error has the
+/// same variance, which proportional noise breaks (a few resonance speeds
+/// then dominate r), hence the χ² check of [`decide`].
+pub(super) fn log_likelihood_ratio(a: &Reading, b: &Reading) -> f64 {
+    a.dof as f64 * (b.relative_residual / a.relative_residual).ln()
+}
+
+/// Whether the whole run prefers mistake `c` (a [`Convention::run_wide`]
+/// one) to the data as found, given per pedestal its readings as found and
+/// with `c` undone (`(as found, corrected)`, pedestals where either is
+/// missing left out). The pedestals' data are independent, so the run's
+/// log-likelihood ratio is the sum of theirs; a run-wide mistake has one
+/// value for the run, and the rule that names it at one pedestal is applied
+/// to that sum: ν·ln(r_found/r_c) summed decisive, and the summed χ² no
+/// worse with `c` undone. Where a bearing's force is almost all stiffness
+/// (ΩC_b ≪ K_b) the speeds' unit only rescales its pedestal (m·3600, c·60)
+/// and that pedestal's readings fit alike, by noise one way or the other;
+/// the bearings whose damping force is not negligible decide.
+pub(super) fn run_prefers(pairs: &[(Reading, Reading)]) -> bool {
+    let ratio: f64 = pairs
+        .iter()
+        .map(|(found, c)| log_likelihood_ratio(c, found))
+        .sum();
+    let chi2_found: f64 = pairs.iter().map(|(found, _)| found.chi2).sum();
+    let chi2_c: f64 = pairs.iter().map(|(_, c)| c.chi2).sum();
+    ratio >= DECISIVE_DELTA_CHI2 && chi2_c <= chi2_found * (1.0 + TIE_TOLERANCE)
+}
