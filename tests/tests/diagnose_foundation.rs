@@ -278,7 +278,6 @@ fn out_of_library_data_are_not_claimed_fixed() {
 /// file's oil film matches) now names it at both bearings, and the
 /// pedestals after the correction are the machine's.
 #[test]
-#[ignore = "issue 17: the table stiffness ratio is not offered since its clean false alarms (diagnose::candidates::OFFER_STIFFNESS_RATIO)"]
 fn a_table_stiffness_off_at_both_bearings_is_named_at_both() {
     let rigid = on_rigid_ground(&machine(SKID, "two-pedestals-on-skid.toml"));
     let mut run = run_dir(&rigid, &speeds(5.0, 120.0, 2.0), NOISY, 22);

@@ -25,7 +25,6 @@ const WRITTEN_STIFFNESS: f64 = 1.25;
 /// --noise 0.01 --seed 3 --speeds 5:100:1` and the left table's K × 1.25:
 /// k_scale 0.8020 ± 0.0013, runner-up sensor_delay ΔBIC 344 against 12 713.)
 #[test]
-#[ignore = "issue 17: the table stiffness ratio is not offered since its clean false alarms (diagnose::candidates::OFFER_STIFFNESS_RATIO)"]
 fn a_table_with_its_stiffness_off_is_named_as_bearing_coefficients() {
     let machine =
         Machine::from_toml_str(PAPER, "feng-hahn-1997-damped.toml").expect("paper machine");

@@ -174,7 +174,6 @@ fn a_worn_oil_film_is_named_as_bearing_coefficients_at_its_bearing() {
 /// 5/5, k_scale 0.80, worst pedestal k/m error after 0.81 %
 /// (`scripts/bench-unseen.sh --machine unseen-overhung 5 table-scale`).
 #[test]
-#[ignore = "issue 17: the table stiffness ratio is not offered since its clean false alarms (diagnose::candidates::OFFER_STIFFNESS_RATIO)"]
 fn a_wrong_table_scale_is_named_as_bearing_coefficients_at_its_bearing() {
     let d = assert_named("table-scale", &[("bearing_coefficients", "B1")]);
     assert!(d.trusted, "{:?}", d.trust_reasons);

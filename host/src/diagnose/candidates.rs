@@ -25,12 +25,13 @@ use crate::effects::EffectKind;
 /// Name of the table-correction effect (`crate::effects`).
 pub const BEARING_COEFFICIENTS: &str = "bearing_coefficients";
 /// Whether a table's stiffness relative to its damping (`k_scale`,
-/// `super::bearing_table::scale`) is offered. Off since the end of session
-/// 24: on clean runs it was named (ROSS machine A at 2 digits, untrusted;
-/// the first unseen machine's clean-w1c at B1, k_scale 0.987 ± 0.008,
-/// trusted) although it names the second unseen machine's table-scale 5/5;
-/// it needs a calibrated acceptance rule before it is offered again.
-pub const OFFER_STIFFNESS_RATIO: bool = false;
+/// `super::bearing_table::scale`) is offered. It was off at the end of
+/// session 24 (named on clean runs: ROSS machine A at 2 digits, the first
+/// unseen machine's clean-w1c at B1, trusted); on again since every table
+/// correction the search chooses must be confirmed by the
+/// maximum-likelihood refit's robust likelihood ratio
+/// (`super::bearing_table::confirmed`), which withdraws both.
+pub const OFFER_STIFFNESS_RATIO: bool = true;
 /// Name of the one-pedestal base effect (`crate::effects`).
 pub const PEDESTAL_SUB_BASE: &str = "pedestal_sub_base";
 

@@ -118,20 +118,7 @@ impl Inference {
                 *g += jn.row(i).transpose() * residual[i];
             }
         }
-        let bandwidth = andrews_bandwidth(&scores);
-        let mut s = DMatrix::zeros(p, p);
-        for g in &scores {
-            s += g * g.transpose();
-        }
-        let lags = bandwidth.floor() as usize;
-        for l in 1..=lags.min(scores.len().saturating_sub(1)) {
-            let w = 1.0 - l as f64 / (bandwidth + 1.0);
-            let mut gamma = DMatrix::zeros(p, p);
-            for t in l..scores.len() {
-                gamma += &scores[t] * scores[t - l].transpose();
-            }
-            s += (&gamma + gamma.transpose()) * w;
-        }
+        let (mut s, bandwidth) = long_run_covariance(&scores, p);
         s *= n as f64 / (n - p) as f64;
         let cov_robust = &a_inv * s * &a_inv;
         Ok(Self {
@@ -199,6 +186,29 @@ impl Inference {
             p_adjusted: (p_value * candidates.max(1) as f64).min(1.0),
         })
     }
+}
+
+/// The long-run (heteroskedasticity- and autocorrelation-robust) covariance
+/// Σ_t g_t g_tᵀ + Σ_l w_l (Γ_l + Γ_lᵀ) of a series of `p`-vector scores
+/// `scores` in speed order (zero mean at an estimate), Bartlett weights
+/// w_l = 1 − l/(S + 1) with Andrews' AR(1) plug-in bandwidth S (speeds),
+/// returned with S. In the scores' units squared.
+pub fn long_run_covariance(scores: &[DVector<f64>], p: usize) -> (DMatrix<f64>, f64) {
+    let bandwidth = andrews_bandwidth(scores);
+    let mut s = DMatrix::zeros(p, p);
+    for g in scores {
+        s += g * g.transpose();
+    }
+    let lags = bandwidth.floor() as usize;
+    for l in 1..=lags.min(scores.len().saturating_sub(1)) {
+        let w = 1.0 - l as f64 / (bandwidth + 1.0);
+        let mut gamma = DMatrix::zeros(p, p);
+        for t in l..scores.len() {
+            gamma += &scores[t] * scores[t - l].transpose();
+        }
+        s += (&gamma + gamma.transpose()) * w;
+    }
+    (s, bandwidth)
 }
 
 /// Upper tail P(χ²(q) > w).

@@ -431,11 +431,11 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
     // A table's clearance correction on rigid ground refitted by maximum
     // likelihood, the estimator of the base model (`super::bearing_table::refine`).
     let refits = if on_base.is_none() {
-        super::bearing_table::refine(&prep, &mut state, &mut steps)
+        super::bearing_table::refine(&prep, &mut state, &mut steps, opts.alpha)?
     } else {
         Vec::new()
     };
-    if !refits.is_empty() {
+    if on_base.is_none() {
         if let Some(last) = states.last_mut() {
             *last = state.clone();
         }
@@ -489,7 +489,13 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
             gap: gap1,
             ..pred1.agreement(base_prep.as_ref().unwrap_or(&prep))
         },
-        &steps,
+        // The effects kept: a step removed again (backward check, a table
+        // correction the ML refit did not confirm) is not in the model.
+        &steps
+            .iter()
+            .filter(|s| s.dropped.is_none())
+            .cloned()
+            .collect::<Vec<_>>(),
         &physical,
         &where_after,
     );
