@@ -27,6 +27,17 @@ pub fn machine_and_options(data: &str, file: &str) -> (Machine, Options) {
     (machine, options)
 }
 
+/// The convention mistakes identify suspected, as "bearing: mistake".
+pub fn suspected(id: &Identification) -> Vec<String> {
+    id.pedestals
+        .iter()
+        .filter_map(|p| {
+            p.suspected_convention_error
+                .map(|c| format!("{}: {}", p.bearing, c.name()))
+        })
+        .collect()
+}
+
 /// The effects diagnose kept, as (effect, bearing), sorted.
 pub fn named(d: &Diagnosis) -> Vec<(String, String)> {
     let mut v: Vec<(String, String)> = d

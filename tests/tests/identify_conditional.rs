@@ -14,29 +14,18 @@
 //!   stiffness is said to scale with its table.
 
 use plinth::identify::conditional;
-use plinth::identify::{identify_run, Identification, Options};
+use plinth::identify::{identify_run, Options};
 use plinth::rundir::RunDir;
 use plinth::sim::{EffectSet, Machine};
 use plinth_tests::rundown::identify;
 use plinth_tests::simulated::{simulated_run, speeds, Writing};
-use plinth_tests::unseen::{self, ok_but_wrong};
+use plinth_tests::unseen::{self, ok_but_wrong, suspected};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-3");
 const PAPER: &str = include_str!("../../examples/feng-hahn-1997-damped.toml");
-
-/// The convention mistakes identify suspected, as "bearing: mistake".
-fn suspected(id: &Identification) -> Vec<String> {
-    id.pedestals
-        .iter()
-        .filter_map(|p| {
-            p.suspected_convention_error
-                .map(|c| format!("{}: {}", p.bearing, c.name()))
-        })
-        .collect()
-}
 
 /// The third machine's flips case, seed 5 (stored as `flips-5`: every
 /// channel of the three bearings negated at three speeds). B3's bearing

@@ -21,7 +21,9 @@ use plinth::diagnose::report::Diagnosis;
 use plinth::identify::{Identification, WarningKind};
 use plinth::rundir::RunDir;
 use plinth_tests::rundown::identify;
-use plinth_tests::unseen::{self, assert_ok_means_right, named, ok_but_wrong, untrusted};
+use plinth_tests::unseen::{
+    self, assert_ok_means_right, named, ok_but_wrong, suspected, untrusted,
+};
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-3");
 const BEARINGS: [&str; 3] = ["B1", "B2", "B3"];
@@ -48,17 +50,6 @@ fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
     let mut v = id.noise[bearing].outlier_speeds_hz.clone();
     v.sort_by(f64::total_cmp);
     v
-}
-
-/// The convention mistakes identify suspected, as "bearing: mistake".
-fn suspected(id: &Identification) -> Vec<String> {
-    id.pedestals
-        .iter()
-        .filter_map(|p| {
-            p.suspected_convention_error
-                .map(|c| format!("{}: {}", p.bearing, c.name()))
-        })
-        .collect()
 }
 
 /// Clean data with a noise style the first two machines did not have: the
