@@ -539,13 +539,7 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
         trust_reasons: conclusion.reasons,
         unexplained,
         suspected_convention_errors: crate::identify::convention::findings_for_run(run, &opts.base),
-        flipped_speeds_hz: prep
-            .bearings
-            .iter()
-            .zip(&prep.flipped_speeds_hz)
-            .filter(|(_, f)| !f.is_empty())
-            .map(|(b, f)| (b.clone(), f.clone()))
-            .collect(),
+        flipped_speeds_hz: by_name(&prep, &prep.flipped_speeds_hz),
         outlier_speeds_hz: BTreeMap::new(),
         outliers_explained_hz: BTreeMap::new(),
     };
