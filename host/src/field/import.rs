@@ -14,7 +14,7 @@ use super::angle::{resolve, Rotation, View};
 use super::slow_roll::{subtract_slow_roll, SlowRollBand};
 use super::transducer::{angle_of, group_by_bearing, Placement, Quantity};
 use super::units::{reading_phasor, to_displacement, AmplitudeUnit, PhaseConvention, UNIT_HELP};
-use crate::rundir::{read_bearings, BearingRow, Measurement, RunDir};
+use crate::rundir::{read_bearings, round_to_digits, BearingRow, DigitsMode, Measurement, RunDir};
 use anyhow::{bail, Context, Result};
 use num_complex::Complex;
 use serde::Deserialize;
@@ -88,6 +88,11 @@ struct RawAmplitude {
 struct RawColumn {
     column: String,
 }
+
+/// Significant digits [-] of a speed converted to Hz (rpm / 60): far more
+/// than any tachometer gives, few enough to drop the conversion's binary
+/// residue.
+pub const SPEED_DIGITS: u32 = 12;
 
 /// A checked layout.
 #[derive(Clone, Debug)]
@@ -295,7 +300,15 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
             }
             Ok(v)
         };
-        let speed_hz = cell(speed_col, "speed")? * layout.speed_to_hz;
+        // Snapped to SPEED_DIGITS significant digits: an rpm column's
+        // 794.70/60 is 13.245000000000001 in binary, which matched no row of
+        // a bearing table written in Hz (13.245) and had every such speed
+        // interpolated with a warning listing 28 of 102 speeds.
+        let speed_hz = round_to_digits(
+            cell(speed_col, "speed")? * layout.speed_to_hz,
+            SPEED_DIGITS,
+            DigitsMode::Round,
+        );
         if speed_hz <= 0.0 {
             bail!(
                 "{file}:{line}:{}: column `{}`: the speed must be > 0 (a 1X phasor needs rotation)",
