@@ -7,6 +7,8 @@ Usage:
   python3 scripts/ross_unseen.py [--machine NAME] --cases   the case names
   python3 scripts/ross_unseen.py [--machine NAME] --repo    the stored runs
         (the machine's data directory/<case>/, seed 1 of its repo cases)
+  python3 scripts/ross_unseen.py --tilting-pad
+        unseen-flex's bearing table (TOML rows) from ROSS's TiltingPad
   python3 scripts/ross_unseen.py --compare RUN_A RUN_B
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
@@ -663,6 +665,36 @@ def write_field(out, speeds, names, data, written):
                 f.write(",".join([f"{s:.6g}", b] + [sig(written[b][j][k], 10) for k in KEYS]) + "\n")
 
 
+TILTING_PAD_SPEEDS = (12.0, 20.0, 30.0, 50.0, 70.0, 90.0, 120.0)  # [Hz], unseen-flex's table rows
+
+
+def tilting_pad_eccentricity(f):
+    """unseen-flex's operating line: the journal's eccentricity ratio [-] at
+    f [Hz], falling with speed (0.54 at 12 Hz, 0.45 at 30 Hz, 0.23 at
+    120 Hz); below 30 Hz a flatter law, so the low-speed matrices stay
+    positive definite."""
+    return 0.35 * (50.0 / f) ** (0.3 if f < 30.0 else 0.5)
+
+
+def tilting_pad_table():
+    """unseen-flex's bearing table rows (TOML) from ROSS's own THD
+    TiltingPad element, one solve per speed (about 1 s each), mapped to
+    Plinth's axes as respond() maps them (ROSS x, y = Plinth y, z)."""
+    from ross.bearings.tilting_pad import TiltingPad
+    from ross.units import Q_
+    for f in TILTING_PAD_SPEEDS:
+        b = TiltingPad(n=1, frequency=Q_([60 * f], "RPM"), equilibrium_type="match_eccentricity",
+                       journal_diameter=101.6e-3, radial_clearance=74.9e-6, pad_thickness=12.7e-3,
+                       pivot_angle=Q_([18, 90, 162, 234, 306], "deg"), pad_arc=Q_([60] * 5, "deg"),
+                       pad_axial_length=Q_([50.8e-3] * 5, "m"), pre_load=[0.5] * 5, offset=[0.5] * 5,
+                       lubricant="ISOVG32", oil_supply_temperature=Q_(40, "degC"),
+                       eccentricity=tilting_pad_eccentricity(f), attitude_angle=Q_(287.5, "deg"),
+                       load=[8.8405e+02, -2.6704e+03], nx=15, nz=10)
+        v = {k: float(getattr(b, r)[0]) for k, r in zip(KEYS, ("kxx", "kxy", "kyx", "kyy",
+                                                              "cxx", "cxy", "cyx", "cyy"))}
+        print(f"  {{ speed_hz = {f:.1f}, " + ", ".join(f"{k} = {v[k]:.4e}" for k in KEYS) + " },")
+
+
 def read_phasors(run):
     """{(speed text, bearing, channel): complex} of a run's measurements.csv."""
     import csv
@@ -692,6 +724,9 @@ def compare(a, b):
 
 def main():
     args = sys.argv[1:]
+    if args == ["--tilting-pad"]:
+        tilting_pad_table()
+        return
     if args[:1] == ["--compare"] and len(args) == 3:
         compare(args[1], args[2])
         return
