@@ -152,22 +152,16 @@ fn a_field_table_in_rpm_and_velocity_imports_onto_the_table_speeds_and_identifie
     }
 }
 
-/// The same clean field table must not be untrusted. `plinth import`
-/// writes the table's own rounding (3 digits, 0.1°: field::rounding) as
-/// the noise columns, and identify takes noise columns as the whole noise;
-/// a field instrument's vectors carry the sensors' noise as well (here
+/// The same clean field table must not be untrusted. Until session 26
+/// `plinth import` wrote the table's own rounding (3 digits, 0.1°) as the
+/// noise columns, and identify takes noise columns as the whole noise; a
+/// field instrument's vectors carry the sensors' noise as well (here
 /// 0.5-1 % of each phasor, 5-10 times the rounding), so the lack-of-fit
-/// test against the columns fails at every bearing (stored run: χ²/dof
-/// 34 912 at B1, 4 106 at B2) and diagnose names effects (untrusted) that
-/// are not there. Without the columns the same run is trusted and right
-/// (identify estimates the noise: scatter, χ²/dof 1.01). Measured: both
-/// bearings untrusted in 10/10 runs, diagnose named an effect in 4/10
-/// (`BENCH_JOBS=1 python3 scripts/bench_unseen.py --machine unseen-flex
-/// PLINTH DIR 10 clean-vel`). The rounding is a floor of the noise, not
-/// the noise (docs/unseen.md, fourth machine).
+/// test failed at every bearing (stored run: χ²/dof 34 912 at B1, 4 106 at
+/// B2; 10/10 runs untrusted, `BENCH_JOBS=1 python3 scripts/bench_unseen.py
+/// --machine unseen-flex PLINTH DIR 10 clean-vel`). import now writes no
+/// noise columns and identify estimates the noise from the data.
 #[test]
-#[ignore = "confident false alarm: plinth import writes the rounding floor as the noise columns; \
-            clean field tables untrusted at both bearings in 10/10 runs"]
 fn a_clean_field_table_is_not_untrusted() {
     let dir = tempfile::tempdir().expect("temporary directory");
     let run = imported(dir.path());
