@@ -3,6 +3,8 @@
 //! what their tests read off `identify` and `diagnose`: one definition for
 //! every such machine.
 
+use plinth::diagnose::diagnose;
+use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
 use plinth::diagnose::{cli::oil_films, Options};
 use plinth::identify::Identification;
@@ -25,6 +27,42 @@ pub fn machine_and_options(data: &str, file: &str) -> (Machine, Options) {
         ..Options::default()
     };
     (machine, options)
+}
+
+/// `plinth diagnose RUN --machine FILE` as the command line runs it (FILE
+/// under `data`): the search with the file's oil-film geometry, then the
+/// machine-level check applied to the verdict.
+pub fn diagnosis_with_machine_check(data: &str, file: &str, run: &RunDir) -> Diagnosis {
+    let (machine, options) = machine_and_options(data, file);
+    let out = diagnose(run, &options).expect("diagnose");
+    let check = MachineCheck::of(&machine, &out).expect("machine check");
+    let mut d = out.diagnosis;
+    check.apply(&mut d);
+    d
+}
+
+/// The speeds identify listed as outliers at `bearing` [Hz], sorted.
+pub fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
+    let mut v = id.noise[bearing].outlier_speeds_hz.clone();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+/// A clean run's promise: identify untrusts nothing, lists no speed at any
+/// bearing, and every `ok` value is right within 3 of its ±; diagnose (`d`)
+/// names nothing and is trusted.
+pub fn assert_flagged_by_nothing(run: &RunDir, id: &Identification, d: &Diagnosis, case: &str) {
+    assert!(untrusted(id).is_empty(), "{case}: {:?}", untrusted(id));
+    for bearing in id.noise.keys() {
+        assert!(
+            listed(id, bearing).is_empty(),
+            "{case}: {bearing} lists {:?}",
+            listed(id, bearing)
+        );
+    }
+    assert_ok_means_right(run, id, case);
+    assert!(named(d).is_empty(), "{case}: {}", d.to_text());
+    assert!(d.trusted, "{case}: {:?}\n{}", d.trust_reasons, d.to_text());
 }
 
 /// The convention mistakes identify suspected, as "bearing: mistake".

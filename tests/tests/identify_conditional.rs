@@ -97,6 +97,35 @@ fn a_stiff_undamped_table_is_said_to_scale_and_its_doubt_covers_its_error() {
     assert!(wrong.is_empty(), "{wrong:?}");
 }
 
+/// `machine` simulated by `plinth::sim` over `grid` [Hz] at 1 % noise with
+/// noise columns (generator seed `seed`), its bearings.csv written as the
+/// machine's bearing divided by s ~ N(1, `sd`²): the machine's bearing is
+/// s times its table.
+fn with_drawn_table(machine: &Machine, grid: &[f64], seed: u64, sd: f64) -> RunDir {
+    let writing = Writing {
+        digits: None,
+        noise: 0.01,
+        rel_noise: None,
+    };
+    let mut rng = StdRng::seed_from_u64(seed);
+    let s: f64 =
+        1.0 + sd * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
+    let mut normal = || StandardNormal.sample(&mut rng);
+    let mut run = simulated_run(machine, grid, &EffectSet::none(), writing, &mut normal);
+    for row in &mut run.bearings {
+        for v in row
+            .coefficients
+            .k
+            .iter_mut()
+            .chain(row.coefficients.c.iter_mut())
+            .flatten()
+        {
+            *v /= s;
+        }
+    }
+    run
+}
+
 /// Coverage of the combined ± on runs whose bearing tables were drawn from
 /// the stated uncertainty: the paper's damped machine simulated by
 /// `plinth::sim` (oil-film bearings computed there) at 1 % noise with noise
@@ -114,30 +143,9 @@ fn the_combined_std_err_covers_tables_drawn_from_their_uncertainty() {
     const DRAWS: u64 = 40;
     let machine = Machine::from_toml_str(PAPER, "feng-hahn-1997-damped.toml").expect("machine");
     let grid = speeds(5.0, 200.0, 2.5);
-    let writing = Writing {
-        digits: None,
-        noise: 0.01,
-        rel_noise: None,
-    };
     let (mut combined, mut noise_only, mut n) = (0.0, 0.0, 0usize);
     for draw in 0..DRAWS {
-        let mut rng = StdRng::seed_from_u64(1000 + draw);
-        let s: f64 =
-            1.0 + SD * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
-        let mut normal = || StandardNormal.sample(&mut rng);
-        let mut run: RunDir =
-            simulated_run(&machine, &grid, &EffectSet::none(), writing, &mut normal);
-        for row in &mut run.bearings {
-            for v in row
-                .coefficients
-                .k
-                .iter_mut()
-                .chain(row.coefficients.c.iter_mut())
-                .flatten()
-            {
-                *v /= s;
-            }
-        }
+        let run = with_drawn_table(&machine, &grid, 1000 + draw, SD);
         let mut id = identify_run(&run, &Options::default()).expect("identify");
         let noise = conditional::widen(&mut id, SD);
         let truth = run.truth.as_ref().expect("truth");
@@ -189,30 +197,9 @@ fn an_unmeasured_base_s_std_err_covers_tables_drawn_from_their_uncertainty() {
     const SKID: &str = include_str!("../../examples/two-pedestals-on-skid.toml");
     let machine = Machine::from_toml_str(SKID, "two-pedestals-on-skid.toml").expect("machine");
     let grid = speeds(5.0, 200.0, 2.0);
-    let writing = Writing {
-        digits: None,
-        noise: 0.01,
-        rel_noise: None,
-    };
     let (mut combined, mut noise_only, mut n) = (0.0, 0.0, 0usize);
     for draw in 0..DRAWS {
-        let mut rng = StdRng::seed_from_u64(2000 + draw);
-        let s: f64 =
-            1.0 + SD * <StandardNormal as Distribution<f64>>::sample(&StandardNormal, &mut rng);
-        let mut normal = || StandardNormal.sample(&mut rng);
-        let mut run: RunDir =
-            simulated_run(&machine, &grid, &EffectSet::none(), writing, &mut normal);
-        for row in &mut run.bearings {
-            for v in row
-                .coefficients
-                .k
-                .iter_mut()
-                .chain(row.coefficients.c.iter_mut())
-                .flatten()
-            {
-                *v /= s;
-            }
-        }
+        let run = with_drawn_table(&machine, &grid, 2000 + draw, SD);
         let options = Options::default();
         let mut id = fit_run(&run, &options).expect("rigid fits");
         let group: Vec<String> = run

@@ -17,18 +17,14 @@
 //! --machine unseen-flex` (docs/unseen.md). What does not work yet is
 //! written with the right assertion and ignored with the measured rate.
 
-use plinth::diagnose::diagnose;
-use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
 use plinth::field::import::{run as import, Args};
-use plinth::identify::Identification;
 use plinth::rundir::RunDir;
 use plinth_tests::rundown::identify;
 use plinth_tests::unseen::{self, assert_ok_means_right, named, untrusted};
 use std::path::Path;
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4");
-const BEARINGS: [&str; 2] = ["B1", "B2"];
 
 /// The stored run directory of `case` (seed 1).
 fn stored(case: &str) -> RunDir {
@@ -39,17 +35,7 @@ fn stored(case: &str) -> RunDir {
 /// runs it: the search, then the machine-level check applied to the
 /// verdict.
 fn diagnosis(run: &RunDir) -> Diagnosis {
-    let (machine, options) = unseen::machine_and_options(DATA, "unseen-flex.toml");
-    let out = diagnose(run, &options).expect("diagnose");
-    let check = MachineCheck::of(&machine, &out).expect("machine check");
-    let mut d = out.diagnosis;
-    check.apply(&mut d);
-    d
-}
-
-/// The speeds identify listed as outliers at `bearing`.
-fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
-    id.noise[bearing].outlier_speeds_hz.clone()
+    unseen::diagnosis_with_machine_check(DATA, "unseen-flex.toml", run)
 }
 
 /// The stored field case (`clean-vel/field/`: the vector table, its layout,
@@ -91,18 +77,7 @@ fn clean_runs_are_flagged_by_nothing_and_ok_means_right() {
     for case in ["clean-n1", "clean-d2"] {
         let run = stored(case);
         let id = identify(&run);
-        assert!(untrusted(&id).is_empty(), "{case}: {:?}", untrusted(&id));
-        for b in BEARINGS {
-            assert!(
-                listed(&id, b).is_empty(),
-                "{case}: {b} lists {:?}",
-                listed(&id, b)
-            );
-        }
-        assert_ok_means_right(&run, &id, case);
-        let d = diagnosis(&run);
-        assert!(named(&d).is_empty(), "{case}: {}", d.to_text());
-        assert!(d.trusted, "{case}: {:?}\n{}", d.trust_reasons, d.to_text());
+        unseen::assert_flagged_by_nothing(&run, &id, &diagnosis(&run), case);
     }
 }
 
