@@ -7,6 +7,7 @@ use plinth::diagnose::diagnose;
 use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
 use plinth::diagnose::{cli::oil_films, Options};
+use plinth::estimate::Pedestal;
 use plinth::identify::Identification;
 use plinth::rundir::RunDir;
 use plinth::sim::Machine;
@@ -97,6 +98,18 @@ pub fn untrusted(id: &Identification) -> Vec<String> {
         .collect()
 }
 
+/// The pedestal `bearing` of `run`'s truth.json (k [N/m], m [kg], c [N·s/m]).
+pub fn truth_of<'a>(run: &'a RunDir, bearing: &str) -> &'a Pedestal {
+    &run.truth
+        .as_ref()
+        .expect("truth")
+        .pedestals
+        .iter()
+        .find(|t| t.bearing == bearing)
+        .expect("truth of the bearing")
+        .pedestal
+}
+
 /// Every value of every pedestal identify printed as `ok`, against the
 /// truth: ("bearing parameter", estimate, ±, truth) for k_y, k_z and m, and
 /// c_y, c_z with `damping` (SI units).
@@ -105,15 +118,9 @@ pub fn printed_ok(
     id: &Identification,
     damping: bool,
 ) -> Vec<(String, f64, f64, f64)> {
-    let truth = run.truth.as_ref().expect("truth");
     let mut out = Vec::new();
     for p in id.pedestals.iter().filter(|p| p.trusted) {
-        let t = &truth
-            .pedestals
-            .iter()
-            .find(|t| t.bearing == p.bearing)
-            .expect("truth of the bearing")
-            .pedestal;
+        let t = truth_of(run, &p.bearing);
         let (f, e) = (&p.pedestal, &p.std_err);
         let mut values = vec![
             ("k_y", f.k_y, e.k_y, t.k_y),

@@ -105,14 +105,8 @@ fn a_field_table_in_rpm_and_velocity_imports_onto_the_table_speeds_and_identifie
         );
     }
     let id = identify(&run);
-    let truth = run.truth.as_ref().expect("truth");
     for p in &id.pedestals {
-        let t = &truth
-            .pedestals
-            .iter()
-            .find(|t| t.bearing == p.bearing)
-            .expect("truth of the bearing")
-            .pedestal;
+        let t = unseen::truth_of(&run, &p.bearing);
         for (name, got, se, want) in [
             ("k_y", p.pedestal.k_y, p.std_err.k_y, t.k_y),
             ("k_z", p.pedestal.k_z, p.std_err.k_z, t.k_z),
