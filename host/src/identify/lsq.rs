@@ -241,6 +241,7 @@ impl NormalEquations {
     /// skipping a finite row's zero entries bit for bit, without a branch
     /// per entry. Only AᵀA's upper triangle is summed; five unknowns (eq.
     /// 4's) take a loop of fixed length.
+    #[inline]
     pub fn add(&mut self, row: &[f64], rhs: f64) {
         if self.p == 5 {
             if let Some(row) = row.first_chunk::<5>() {
@@ -262,6 +263,7 @@ impl NormalEquations {
     /// [`NormalEquations::add`] with `P` unknowns known at compile time
     /// (the same products added to the same sums in the same order);
     /// false, adding nothing, when these equations do not have `P`.
+    #[inline]
     fn add_fixed<const P: usize>(&mut self, row: &[f64; P], rhs: f64) -> bool {
         if self.p != P {
             return false;
@@ -381,6 +383,42 @@ mod tests {
 
     /// The normal equations give the SVD's estimate and standard errors
     /// on a well-conditioned problem, and refuse a rank-deficient one.
+    /// Adding every product, zeros included, gives the sums of adding the
+    /// non-zero ones only, bit for bit (the rule `add` relies on): rows of
+    /// eq. 4's shape with +0, −0 and tiny entries, at five unknowns (the
+    /// fixed-length loop) and at three (the general one).
+    #[test]
+    fn dense_sums_equal_the_sums_of_non_zero_products() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(17);
+        for p in [3usize, 5] {
+            let mut ne = NormalEquations::new(p);
+            let (mut ata, mut atb) = (vec![0.0f64; p * p], vec![0.0f64; p]);
+            for _ in 0..2000 {
+                let row: Vec<f64> = (0..p)
+                    .map(|_| match rng.random_range(0..4) {
+                        0 => 0.0,
+                        1 => -0.0,
+                        2 => rng.random_range(-1e-300..1e-300),
+                        _ => rng.random_range(-1e3..1e3),
+                    })
+                    .collect();
+                let rhs =
+                    rng.random_range(-1.0..1.0) * if rng.random_bool(0.2) { 0.0 } else { 1.0 };
+                ne.add(&row, rhs);
+                for i in (0..p).filter(|&i| row[i] != 0.0) {
+                    for j in (i..p).filter(|&j| row[j] != 0.0) {
+                        ata[i * p + j] += row[i] * row[j];
+                    }
+                    atb[i] += row[i] * rhs;
+                }
+            }
+            for (a, b) in ne.ata.iter().zip(&ata).chain(ne.atb.iter().zip(&atb)) {
+                assert_eq!(a.to_bits(), b.to_bits(), "p = {p}");
+            }
+        }
+    }
+
     #[test]
     fn normal_equations_agree_with_the_svd() {
         let n = 200;

@@ -62,20 +62,23 @@ fn normal(
 ) -> Option<PedestalFit> {
     let options = options.ols();
     let columns = options.model().parameters();
-    let finite = |p: &&Observation| {
-        p.speed_hz.is_finite()
+    // The observations whose numbers are finite, with their bearing force.
+    let finite = points.iter().filter_map(|p| {
+        let force = p.force();
+        let finite = p.speed_hz.is_finite()
             && p.ped
                 .iter()
-                .chain(&p.force())
-                .all(|c| c.re.is_finite() && c.im.is_finite())
-    };
+                .chain(&force)
+                .all(|c| c.re.is_finite() && c.im.is_finite());
+        finite.then_some((p, force))
+    });
     let mut ne = NormalEquations::new(columns.len());
     // Each equation's row (the model's columns) and right-hand side, made
     // once for the sums and the residuals.
     let mut rows: Vec<([f64; PARAMETERS], f64)> = Vec::with_capacity(4 * points.len());
     let mut range = [f64::INFINITY, f64::NEG_INFINITY];
-    for p in points.iter().filter(finite) {
-        let (eqs, n) = equations_for_mode(options.mode, p.omega(), &p.ped, &p.force());
+    for (p, force) in finite {
+        let (eqs, n) = equations_for_mode(options.mode, p.omega(), &p.ped, &force);
         for eq in &eqs[..n] {
             let mut row = [0.0; PARAMETERS];
             for (r, &c) in row.iter_mut().zip(&columns) {
