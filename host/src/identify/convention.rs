@@ -77,6 +77,14 @@
 //! bounds that of any estimate from below; only the readings that bound
 //! leaves in contention are refitted with the estimator in use
 //! ([`diagnose`]), so that a clean run costs about two fits, not nine.
+//! A first pass refits only the readings that could beat the data as
+//! found; when the data as found stay the best passive reading of every
+//! pedestal nothing is named, whatever the other readings, and the pass's
+//! answer is the full rule's (`decide`'s premise, tested in
+//! `nothing_is_named_while_the_data_as_found_stay_best`); otherwise the
+//! full rule runs from the start with the fits made. With OLS the
+//! `ped_velocity` reading, whose noise is estimated anew, is skipped on
+//! the same ground when its screen leaves no pedestal passive.
 
 use super::misfit::misfit_of;
 #[cfg(test)]
