@@ -82,9 +82,9 @@
 //! pedestal nothing is named, whatever the other readings, and the pass's
 //! answer is the full rule's (`decide`'s premise, tested in
 //! `nothing_is_named_while_the_data_as_found_stay_best`); otherwise the
-//! full rule runs from the start with the fits made. With OLS the
-//! `ped_velocity` reading, whose noise is estimated anew, is skipped on
-//! the same ground when its screen leaves no pedestal passive.
+//! full rule runs from the start with the fits made. With OLS a reading
+//! whose screen leaves no pedestal passive is skipped on the same ground
+//! (its misfit, and `ped_velocity`'s noise estimated anew).
 
 use super::misfit::misfit_of;
 #[cfg(test)]
@@ -205,10 +205,10 @@ impl Finding {
 /// others cannot change what is named (with OLS the screen is the fit). The
 /// noise is estimated once and transformed as each correction transforms
 /// the data ([`corrected_noise`]).
-pub fn diagnose(
+pub fn diagnose<'n>(
     run: &RunDir,
     identification: &Identification,
-    noise: &RunNoise,
+    noise: &'n RunNoise,
     options: &Options,
 ) -> Vec<Finding> {
     // The noise floor of a reading (of `run` with a mistake undone, made
@@ -288,12 +288,41 @@ pub fn diagnose(
             bearing_stiffness.get(q.bearing.as_str()).copied().flatten(),
         )
     };
-    // Every correction with its OLS screen.
-    let mut candidates: Vec<Candidate> = Vec::new();
+    // A correction's reading from its screen: its noise and noise floor,
+    // and with OLS its readings (the screen is the fit), else the lower
+    // bounds of its refit's relative residual per pedestal (`None`: no
+    // bound, it is refitted).
+    let read = |k: &mut Candidate<'n>, rows: &[rows::BearingRows]| {
+        let c = k.convention;
+        k.noise = corrected_noise(c, noise, run);
+        let fixed = &mut k.fixed;
+        k.sigma = floor_of(
+            &mut || {
+                let f = fixed.get_or_insert_with(|| c.correct(run));
+                RunNoise::estimate(f, Quantisation::Rounding)
+            },
+            &k.noise,
+        );
+        let screened = readings_of_fits(k, rows, &k.screen);
+        if ols {
+            k.fit = Some(Some(k.screen.clone()));
+            k.readings = screened;
+            k.shown = true;
+        } else {
+            k.bounds = screened
+                .iter()
+                .map(|r| r.as_ref().map(|(r, _)| r.relative_residual * (1.0 - 1e-9)))
+                .collect();
+        }
+    };
+    // Every correction with its OLS screen. With OLS a correction whose
+    // screen leaves no pedestal passive is read only when it can matter:
+    // when the data as found are not the best passive reading of every
+    // pedestal without it (otherwise nothing is named, with or without it:
+    // [`decide::found_is_best`]). Its reading costs a misfit per pedestal,
+    // and `ped_velocity`'s its noise estimated anew.
+    let mut candidates: Vec<Candidate<'n>> = Vec::new();
     for c in Convention::ALL {
-        // The run with the mistake undone, made only where a reading needs
-        // more than its rows.
-        let mut fixed: Option<RunDir> = None;
         if !c.changes_with(run, &schedules) {
             continue; // the mistake changes nothing in these data
         }
@@ -301,53 +330,33 @@ pub fn diagnose(
         let Some(screen) = screen::screen(&rows, options, pedestals) else {
             continue;
         };
-        // With OLS the screen is the fit, and the one correction whose
-        // noise is estimated anew (the costly part of its reading) is read
-        // only when it can matter: when it leaves a pedestal passive, or
-        // the data as found are not the best passive reading of every
-        // pedestal without it (otherwise nothing is named, with or without
-        // it: [`decide::found_is_best`]). It is tried last.
-        if ols
-            && c == Convention::PedVelocity
-            && !screen.iter().any(plausible_fit)
-            && (0..pedestals.len())
-                .all(|j| readings_of(j, &candidates).is_none_or(|r| found_is_best(&r)))
-        {
-            continue;
-        }
-        let noise = corrected_noise(c, noise, run);
-        let sigma = floor_of(
-            &mut || {
-                let f = fixed.get_or_insert_with(|| c.correct(run));
-                RunNoise::estimate(f, Quantisation::Rounding)
-            },
-            &noise,
-        );
+        let deferred = ols && !screen.iter().any(plausible_fit);
         let mut k = Candidate {
             convention: c,
             fit: None,
             readings: Vec::new(),
-            shown: ols,
+            shown: false,
             bounds: Vec::new(),
             screen,
-            fixed,
-            noise,
-            sigma,
+            // The run with the mistake undone, made only where a reading
+            // needs more than its rows.
+            fixed: None,
+            noise: Cow::Borrowed(noise),
+            sigma: Vec::new(),
         };
-        let screened = readings_of_fits(&k, &rows, &k.screen);
-        if ols {
-            // With OLS the screen is the fit.
-            k.fit = Some(Some(k.screen.clone()));
-            k.readings = screened;
-        } else {
-            // The lower bound of the correction's relative residual per
-            // pedestal (`None`: no bound, it is refitted).
-            k.bounds = screened
-                .iter()
-                .map(|r| r.as_ref().map(|(r, _)| r.relative_residual * (1.0 - 1e-9)))
-                .collect();
+        if !deferred {
+            read(&mut k, &rows);
         }
         candidates.push(k);
+    }
+    if ols
+        && !(0..pedestals.len())
+            .all(|j| readings_of(j, &candidates).is_none_or(|r| found_is_best(&r)))
+    {
+        for k in candidates.iter_mut().filter(|k| !k.shown) {
+            let rows = rows_of(k.convention);
+            read(k, &rows);
+        }
     }
     // Refit, cheapest first, every correction the readings so far leave a
     // chance to matter. A first pass refits only what could name a mistake
@@ -355,11 +364,14 @@ pub fn diagnose(
     // passive reading of every pedestal, nothing is named, as with every
     // refit made. Otherwise the full rule runs from the start (the order of
     // the refits decides which readings are judged), with the fits made.
+    // (With OLS the screens are the fits: nothing is refitted.)
     for naming_only in [true, false] {
+        if ols {
+            break;
+        }
         if !naming_only {
-            if ols
-                || (0..pedestals.len())
-                    .all(|j| readings_of(j, &candidates).is_none_or(|r| found_is_best(&r)))
+            if (0..pedestals.len())
+                .all(|j| readings_of(j, &candidates).is_none_or(|r| found_is_best(&r)))
             {
                 break;
             }
