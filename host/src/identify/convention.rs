@@ -77,6 +77,14 @@
 //! bounds that of any estimate from below; only the readings that bound
 //! leaves in contention are refitted with the estimator in use
 //! ([`diagnose`]), so that a clean run costs about two fits, not nine.
+//! A first pass refits only the readings that could beat the data as
+//! found; when the data as found stay the best passive reading of every
+//! pedestal nothing is named, whatever the other readings, and the pass's
+//! answer is the full rule's (`decide`'s premise, tested in
+//! `nothing_is_named_while_the_data_as_found_stay_best`); otherwise the
+//! full rule runs from the start with the fits made. With OLS a reading
+//! whose screen leaves no pedestal passive is skipped on the same ground
+//! (its misfit, and `ped_velocity`'s noise estimated anew).
 
 use super::misfit::misfit_of;
 #[cfg(test)]
@@ -197,10 +205,10 @@ impl Finding {
 /// others cannot change what is named (with OLS the screen is the fit). The
 /// noise is estimated once and transformed as each correction transforms
 /// the data ([`corrected_noise`]).
-pub fn diagnose(
+pub fn diagnose<'n>(
     run: &RunDir,
     identification: &Identification,
-    noise: &RunNoise,
+    noise: &'n RunNoise,
     options: &Options,
 ) -> Vec<Finding> {
     // The noise floor of a reading (of `run` with a mistake undone, made
@@ -259,52 +267,6 @@ pub fn diagnose(
     // Each correction's rows are made when they are read, not kept: eight
     // copies of a long run's observations cost more to hold than to make.
     let rows_of = |c: Convention| rows::corrected(c, run, &found_rows, &schedules);
-    // Every correction with its OLS screen.
-    let mut candidates: Vec<Candidate> = Vec::new();
-    for c in Convention::ALL {
-        // The run with the mistake undone, made only where a reading needs
-        // more than its rows.
-        let mut fixed: Option<RunDir> = None;
-        if !c.changes_with(run, &schedules) {
-            continue; // the mistake changes nothing in these data
-        }
-        let rows = rows_of(c);
-        let Some(screen) = screen::screen(&rows, options, pedestals) else {
-            continue;
-        };
-        let noise = corrected_noise(c, noise, run);
-        let sigma = floor_of(
-            &mut || {
-                let f = fixed.get_or_insert_with(|| c.correct(run));
-                RunNoise::estimate(f, Quantisation::Rounding)
-            },
-            &noise,
-        );
-        let mut k = Candidate {
-            convention: c,
-            fit: None,
-            readings: Vec::new(),
-            bounds: Vec::new(),
-            screen,
-            fixed,
-            noise,
-            sigma,
-        };
-        let screened = readings_of_fits(&k, &rows, &k.screen);
-        if ols {
-            // With OLS the screen is the fit.
-            k.fit = Some(Some(k.screen.clone()));
-            k.readings = screened;
-        } else {
-            // The lower bound of the correction's relative residual per
-            // pedestal (`None`: no bound, it is refitted).
-            k.bounds = screened
-                .iter()
-                .map(|r| r.as_ref().map(|(r, _)| r.relative_residual * (1.0 - 1e-9)))
-                .collect();
-        }
-        candidates.push(k);
-    }
     let found: Vec<Option<(Reading, PedestalFit)>> = pedestals
         .iter()
         .map(|p| Some((reading(&found_rows, &sigma, p, None)?, p.clone())))
@@ -315,56 +277,158 @@ pub fn diagnose(
         readings.extend(
             candidates
                 .iter()
+                .filter(|k| k.shown)
                 .filter_map(|k| k.readings.get(j).cloned().flatten()),
         );
         Some(readings)
     };
-    // Refit, cheapest first, every correction the readings so far leave a
-    // chance to matter.
-    loop {
-        let mut wanted: Vec<usize> = Vec::new();
-        for j in 0..pedestals.len() {
-            let Some(readings) = readings_of(j, &candidates) else {
-                continue;
-            };
-            let limit = relevance_limit(&readings);
-            let open: Vec<(usize, f64)> = candidates
+    let plausible_fit = |q: &PedestalFit| {
+        plausible(
+            q,
+            bearing_stiffness.get(q.bearing.as_str()).copied().flatten(),
+        )
+    };
+    // A correction's reading from its screen: its noise and noise floor,
+    // and with OLS its readings (the screen is the fit), else the lower
+    // bounds of its refit's relative residual per pedestal (`None`: no
+    // bound, it is refitted).
+    let read = |k: &mut Candidate<'n>, rows: &[rows::BearingRows]| {
+        let c = k.convention;
+        k.noise = corrected_noise(c, noise, run);
+        let fixed = &mut k.fixed;
+        k.sigma = floor_of(
+            &mut || {
+                let f = fixed.get_or_insert_with(|| c.correct(run));
+                RunNoise::estimate(f, Quantisation::Rounding)
+            },
+            &k.noise,
+        );
+        let screened = readings_of_fits(k, rows, &k.screen);
+        if ols {
+            k.fit = Some(Some(k.screen.clone()));
+            k.readings = screened;
+            k.shown = true;
+        } else {
+            k.bounds = screened
                 .iter()
-                .enumerate()
-                .filter(|(_, k)| k.fit.is_none())
-                .map(|(i, k)| (i, k.bounds.get(j).copied().flatten().unwrap_or(0.0)))
-                .filter(|&(_, b)| b <= limit)
+                .map(|r| r.as_ref().map(|(r, _)| r.relative_residual * (1.0 - 1e-9)))
                 .collect();
-            if limit.is_finite() {
-                wanted.extend(open.iter().map(|&(i, _)| i));
-            } else if let Some(&(i, _)) = open.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
-                wanted.push(i);
-            }
         }
-        if wanted.is_empty() {
+    };
+    // Every correction with its OLS screen. With OLS a correction whose
+    // screen leaves no pedestal passive is read only when it can matter:
+    // when the data as found are not the best passive reading of every
+    // pedestal without it (otherwise nothing is named, with or without it:
+    // [`decide::found_is_best`]). Its reading costs a misfit per pedestal,
+    // and `ped_velocity`'s its noise estimated anew.
+    let mut candidates: Vec<Candidate<'n>> = Vec::new();
+    for c in Convention::ALL {
+        if !c.changes_with(run, &schedules) {
+            continue; // the mistake changes nothing in these data
+        }
+        let rows = rows_of(c);
+        let Some(screen) = screen::screen(&rows, options, pedestals) else {
+            continue;
+        };
+        let deferred = ols && !screen.iter().any(plausible_fit);
+        let mut k = Candidate {
+            convention: c,
+            fit: None,
+            readings: Vec::new(),
+            shown: false,
+            bounds: Vec::new(),
+            screen,
+            // The run with the mistake undone, made only where a reading
+            // needs more than its rows.
+            fixed: None,
+            noise: Cow::Borrowed(noise),
+            sigma: Vec::new(),
+        };
+        if !deferred {
+            read(&mut k, &rows);
+        }
+        candidates.push(k);
+    }
+    if ols
+        && !(0..pedestals.len())
+            .all(|j| readings_of(j, &candidates).is_none_or(|r| found_is_best(&r)))
+    {
+        for k in candidates.iter_mut().filter(|k| !k.shown) {
+            let rows = rows_of(k.convention);
+            read(k, &rows);
+        }
+    }
+    // Refit, cheapest first, every correction the readings so far leave a
+    // chance to matter. A first pass refits only what could name a mistake
+    // ([`decide::naming_limit`]); when it leaves the data as found the best
+    // passive reading of every pedestal, nothing is named, as with every
+    // refit made. Otherwise the full rule runs from the start (the order of
+    // the refits decides which readings are judged), with the fits made.
+    // (With OLS the screens are the fits: nothing is refitted.)
+    for naming_only in [true, false] {
+        if ols {
             break;
         }
-        for i in wanted {
-            if candidates[i].fit.is_none() {
-                let k = &mut candidates[i];
-                let c = k.convention;
-                let fixed = k.fixed.get_or_insert_with(|| c.correct(run));
-                // Readings need the estimates and their plausibility only.
-                let fits = super::fit_run_checked(
-                    fixed,
-                    &k.noise,
-                    options,
-                    super::estimator::Checks::Estimate,
-                )
-                .ok()
-                .map(|id| id.pedestals);
-                let rows = rows_of(c);
-                let k = &candidates[i];
-                let readings = fits
-                    .as_deref()
-                    .map_or_else(Vec::new, |f| readings_of_fits(k, &rows, f));
-                candidates[i].readings = readings;
-                candidates[i].fit = Some(fits);
+        if !naming_only {
+            if (0..pedestals.len())
+                .all(|j| readings_of(j, &candidates).is_none_or(|r| found_is_best(&r)))
+            {
+                break;
+            }
+            for k in &mut candidates {
+                k.shown = false;
+            }
+        }
+        loop {
+            let mut wanted: Vec<usize> = Vec::new();
+            for j in 0..pedestals.len() {
+                let Some(readings) = readings_of(j, &candidates) else {
+                    continue;
+                };
+                let limit = if naming_only {
+                    naming_limit(&readings)
+                } else {
+                    relevance_limit(&readings)
+                };
+                let open: Vec<(usize, f64)> = candidates
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, k)| !k.shown)
+                    .map(|(i, k)| (i, k.bounds.get(j).copied().flatten().unwrap_or(0.0)))
+                    .filter(|&(_, b)| b <= limit)
+                    .collect();
+                if limit.is_finite() {
+                    wanted.extend(open.iter().map(|&(i, _)| i));
+                } else if let Some(&(i, _)) = open.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+                    wanted.push(i);
+                }
+            }
+            if wanted.is_empty() {
+                break;
+            }
+            for i in wanted {
+                if candidates[i].fit.is_none() {
+                    let k = &mut candidates[i];
+                    let c = k.convention;
+                    let fixed = k.fixed.get_or_insert_with(|| c.correct(run));
+                    // Readings need the estimates and their plausibility only.
+                    let fits = super::fit_run_checked(
+                        fixed,
+                        &k.noise,
+                        options,
+                        super::estimator::Checks::Estimate,
+                    )
+                    .ok()
+                    .map(|id| id.pedestals);
+                    let rows = rows_of(c);
+                    let k = &candidates[i];
+                    let readings = fits
+                        .as_deref()
+                        .map_or_else(Vec::new, |f| readings_of_fits(k, &rows, f));
+                    candidates[i].readings = readings;
+                    candidates[i].fit = Some(fits);
+                }
+                candidates[i].shown = true;
             }
         }
     }
@@ -435,70 +499,6 @@ pub fn diagnose(
 /// Every bearing's coefficient schedule ([`RunDir::bearing_schedules`]).
 type Schedules = std::collections::BTreeMap<String, crate::rundir::BearingSchedule>;
 
-/// One correction of a run under examination by [`diagnose`].
-struct Candidate<'a> {
-    convention: Convention,
-    /// The run with the mistake undone, once a reading needed it (its
-    /// noise re-estimated, its ML refit).
-    fixed: Option<RunDir>,
-    /// Its noise (the quantisation of the options; the run's own where the
-    /// correction leaves it as it is).
-    noise: Cow<'a, RunNoise>,
-    /// Its noise floor ([`super::misfit::noise_floor`]).
-    sigma: Vec<[f64; 4]>,
-    /// Its OLS fits.
-    screen: Vec<PedestalFit>,
-    /// Its fits with the estimator of the options: `None` until refitted,
-    /// `Some(None)` when the refit failed.
-    fit: Option<Option<Vec<PedestalFit>>>,
-    /// Per pedestal of the identification (same order), the reading of
-    /// `fit` and the fit read: empty until fitted.
-    readings: Vec<Option<(Reading, PedestalFit)>>,
-    /// Per pedestal, the screen's lower bound on the relative residual of
-    /// `fit` (`None`: no bound); empty with OLS, where the screen is the fit.
-    bounds: Vec<Option<f64>>,
-}
-
-/// The noise of `run` with mistake `c` undone (`fixed`), from the noise
-/// of the run as found: the same where the correction changes only signs
-/// (each channel's scatter and each column's digits are blind to them),
-/// only the bearing table, or only the unit of the speeds (`speed_in_rpm`:
-/// the values, their digits and noise columns are unchanged, and the local
-/// fits that give the scatter see each speed relative to its window's span,
-/// which a change of unit leaves as it is); y and z exchanged for
-/// `swapped_yz`; estimated anew where it changes the pedestal phasors
-/// (only what that changes: [`RunNoise::with_pedestal_of`]).
-fn corrected_noise<'a>(c: Convention, noise: &'a RunNoise, run: &RunDir) -> Cow<'a, RunNoise> {
-    Cow::Owned(match c {
-        Convention::Conjugated
-        | Convention::RelNegated
-        | Convention::PedConjugated
-        | Convention::BearingTransposed
-        | Convention::CrossCouplingSign
-        | Convention::SpeedInRpm => return Cow::Borrowed(noise),
-        Convention::SwappedYz => noise.swapped_yz(),
-        Convention::PedVelocity => {
-            // The noise reads the values of the measurements only: their
-            // corrected copies without the bearing names are enough, and
-            // cheaper to make than the corrected run.
-            let mut measured: Vec<crate::rundir::Measurement> = run
-                .measurements
-                .iter()
-                .map(|m| crate::rundir::Measurement {
-                    speed_hz: m.speed_hz,
-                    bearing: String::new(),
-                    rel: m.rel,
-                    ped: m.ped,
-                    noise_sd: m.noise_sd,
-                    written: m.written,
-                })
-                .collect();
-            c.fix_measurements(&mut measured);
-            noise.with_pedestal_of(&measured)
-        }
-    })
-}
-
 /// Marks every pedestal of `identification` that a [`Finding`] names: not
 /// trusted, `suspected_convention_error` set, and a warning
 /// ([`WarningKind::SuspectedConventionError`]) with the evidence.
@@ -564,12 +564,14 @@ pub fn findings_for_run(
         .collect()
 }
 
+mod candidate;
 mod decide;
 mod mistake;
 mod rows;
 mod screen;
 
-use decide::{decide, plausible, relevance_limit, run_prefers};
+use candidate::{corrected_noise, Candidate};
+use decide::{decide, found_is_best, naming_limit, plausible, relevance_limit, run_prefers};
 
 pub use mistake::Convention;
 #[cfg(test)]

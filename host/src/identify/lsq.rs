@@ -235,26 +235,50 @@ impl NormalEquations {
 
     /// Adds one equation row·θ = rhs (`row` of length p).
     ///
-    /// A finite row's zero entries are skipped: their products are ±0, and
-    /// adding ±0 leaves every sum as it is (the sums start at +0 and, in
-    /// round-to-nearest, only −0 + −0 gives −0), so the result is the full
-    /// loop's bit for bit at a third of its cost on eq. 4's rows (three of
-    /// five entries non-zero). Only AᵀA's upper triangle is summed.
+    /// Every product is added, zeros included: a zero product leaves a sum
+    /// as it is (the sums start at +0 and, in round-to-nearest, only
+    /// −0 + −0 gives −0, so a sum is never −0), so the result is that of
+    /// skipping a finite row's zero entries bit for bit, without a branch
+    /// per entry. Only AᵀA's upper triangle is summed; five unknowns (eq.
+    /// 4's) take a loop of fixed length.
+    #[inline]
     pub fn add(&mut self, row: &[f64], rhs: f64) {
-        let p = self.p;
-        let finite = row.iter().take(p).all(|r| r.is_finite()) && rhs.is_finite();
-        for (i, &ri) in row.iter().enumerate().take(p) {
-            if finite && ri == 0.0 {
-                continue;
-            }
-            for (j, &rj) in row.iter().enumerate().take(p).skip(i) {
-                if !finite || rj != 0.0 {
-                    self.ata[i * p + j] += ri * rj;
+        if self.p == 5 {
+            if let Some(row) = row.first_chunk::<5>() {
+                if self.add_fixed(row, rhs) {
+                    return;
                 }
+            }
+        }
+        let p = self.p;
+        for (i, &ri) in row.iter().enumerate().take(p) {
+            for (j, &rj) in row.iter().enumerate().take(p).skip(i) {
+                self.ata[i * p + j] += ri * rj;
             }
             self.atb[i] += ri * rhs;
         }
         self.rows += 1;
+    }
+
+    /// [`NormalEquations::add`] with `P` unknowns known at compile time
+    /// (the same products added to the same sums in the same order);
+    /// false, adding nothing, when these equations do not have `P`.
+    #[inline]
+    fn add_fixed<const P: usize>(&mut self, row: &[f64; P], rhs: f64) -> bool {
+        if self.p != P {
+            return false;
+        }
+        let (Some(ata), Some(atb)) = (self.ata.get_mut(..P * P), self.atb.get_mut(..P)) else {
+            return false;
+        };
+        for (i, (&ri, atb_i)) in row.iter().zip(atb).enumerate() {
+            for (j, &rj) in row.iter().enumerate().skip(i) {
+                ata[i * P + j] += ri * rj;
+            }
+            *atb_i += ri * rhs;
+        }
+        self.rows += 1;
+        true
     }
 
     /// Entry (i, j) of AᵀA (from its upper triangle).
@@ -359,6 +383,42 @@ mod tests {
 
     /// The normal equations give the SVD's estimate and standard errors
     /// on a well-conditioned problem, and refuse a rank-deficient one.
+    /// Adding every product, zeros included, gives the sums of adding the
+    /// non-zero ones only, bit for bit (the rule `add` relies on): rows of
+    /// eq. 4's shape with +0, −0 and tiny entries, at five unknowns (the
+    /// fixed-length loop) and at three (the general one).
+    #[test]
+    fn dense_sums_equal_the_sums_of_non_zero_products() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(17);
+        for p in [3usize, 5] {
+            let mut ne = NormalEquations::new(p);
+            let (mut ata, mut atb) = (vec![0.0f64; p * p], vec![0.0f64; p]);
+            for _ in 0..2000 {
+                let row: Vec<f64> = (0..p)
+                    .map(|_| match rng.random_range(0..4) {
+                        0 => 0.0,
+                        1 => -0.0,
+                        2 => rng.random_range(-1e-300..1e-300),
+                        _ => rng.random_range(-1e3..1e3),
+                    })
+                    .collect();
+                let rhs =
+                    rng.random_range(-1.0..1.0) * if rng.random_bool(0.2) { 0.0 } else { 1.0 };
+                ne.add(&row, rhs);
+                for i in (0..p).filter(|&i| row[i] != 0.0) {
+                    for j in (i..p).filter(|&j| row[j] != 0.0) {
+                        ata[i * p + j] += row[i] * row[j];
+                    }
+                    atb[i] += row[i] * rhs;
+                }
+            }
+            for (a, b) in ne.ata.iter().zip(&ata).chain(ne.atb.iter().zip(&atb)) {
+                assert_eq!(a.to_bits(), b.to_bits(), "p = {p}");
+            }
+        }
+    }
+
     #[test]
     fn normal_equations_agree_with_the_svd() {
         let n = 200;

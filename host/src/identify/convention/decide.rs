@@ -20,12 +20,7 @@ pub(super) fn plausible(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> bo
 /// reading, come within the decisive margin of it, or be the runner-up;
 /// infinite while no reading is passive.
 pub(super) fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
-    let Some(best) = readings
-        .iter()
-        .map(|(r, _)| r)
-        .filter(|r| r.plausible && r.relative_residual.is_finite())
-        .min_by(|a, b| a.relative_residual.total_cmp(&b.relative_residual))
-    else {
+    let Some(best) = best_passive(readings) else {
         return f64::INFINITY;
     };
     let decisive = best.relative_residual
@@ -42,6 +37,38 @@ pub(super) fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
         decisive.max(runner_up * (1.0 + 1e-9))
     } else {
         decisive
+    }
+}
+
+/// The reading [`decide`] judges: the passive one with the smallest
+/// relative residual (the first of equals, so the data as found, listed
+/// first, win a tie); `None` when no reading is passive.
+pub(super) fn best_passive<F>(readings: &[(Reading, F)]) -> Option<&Reading> {
+    readings
+        .iter()
+        .map(|(r, _)| r)
+        .filter(|r| r.plausible && r.relative_residual.is_finite())
+        .min_by(|a, b| a.relative_residual.total_cmp(&b.relative_residual))
+}
+
+/// Whether [`decide`] names nothing in `readings` whatever the readings
+/// not among them: the best passive reading is the data as found (a
+/// reading not yet made that cannot beat it, its relative residual bounded
+/// below by the data's, changes nothing: [`decide`] names only a
+/// correction that is best) or no reading is passive and none is to come.
+pub(super) fn found_is_best<F>(readings: &[(Reading, F)]) -> bool {
+    best_passive(readings).is_some_and(|b| b.convention.is_none())
+}
+
+/// [`relevance_limit`] for a first pass that asks only what could name a
+/// mistake: while the data as found are the best passive reading, only a
+/// reading that could beat them (relative residual at most theirs) can
+/// change that, and [`decide`] names nothing while they stay best; the
+/// runner-up and the decisive margin then do not matter.
+pub(super) fn naming_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
+    match best_passive(readings) {
+        Some(best) if best.convention.is_none() => best.relative_residual,
+        _ => relevance_limit(readings),
     }
 }
 

@@ -62,25 +62,30 @@ fn normal(
 ) -> Option<PedestalFit> {
     let options = options.ols();
     let columns = options.model().parameters();
-    let finite = |p: &&Observation| {
-        p.speed_hz.is_finite()
+    // The observations whose numbers are finite, with their bearing force.
+    let finite = points.iter().filter_map(|p| {
+        let force = p.force();
+        let finite = p.speed_hz.is_finite()
             && p.ped
                 .iter()
-                .chain(&p.force())
-                .all(|c| c.re.is_finite() && c.im.is_finite())
-    };
+                .chain(&force)
+                .all(|c| c.re.is_finite() && c.im.is_finite());
+        finite.then_some((p, force))
+    });
     let mut ne = NormalEquations::new(columns.len());
-    let mut row = vec![0.0; columns.len()];
+    // Each equation's row (the model's columns) and right-hand side, made
+    // once for the sums and the residuals.
+    let mut rows: Vec<([f64; PARAMETERS], f64)> = Vec::with_capacity(4 * points.len());
     let mut range = [f64::INFINITY, f64::NEG_INFINITY];
-    let equations_of =
-        |p: &Observation| equations_for_mode(options.mode, p.omega(), &p.ped, &p.force());
-    for p in points.iter().filter(finite) {
-        let (eqs, n) = equations_of(p);
+    for (p, force) in finite {
+        let (eqs, n) = equations_for_mode(options.mode, p.omega(), &p.ped, &force);
         for eq in &eqs[..n] {
+            let mut row = [0.0; PARAMETERS];
             for (r, &c) in row.iter_mut().zip(&columns) {
                 *r = eq.row[c as usize];
             }
-            ne.add(&row, eq.rhs);
+            ne.add(&row[..columns.len()], eq.rhs);
+            rows.push((row, eq.rhs));
         }
         range = [range[0].min(p.speed_hz), range[1].max(p.speed_hz)];
     }
@@ -92,16 +97,14 @@ fn normal(
     // The residual sum of squares from the residuals themselves (no
     // cancellation when the fit is close).
     let mut rss = 0.0;
-    for p in points.iter().filter(finite) {
-        let (eqs, n) = equations_of(p);
-        for eq in &eqs[..n] {
-            let e: f64 = columns
-                .iter()
-                .map(|&c| eq.row[c as usize] * theta[c as usize])
-                .sum::<f64>()
-                - eq.rhs;
-            rss += e * e;
-        }
+    for (row, rhs) in &rows {
+        let e: f64 = row
+            .iter()
+            .zip(&solution.theta)
+            .map(|(r, t)| r * t)
+            .sum::<f64>()
+            - rhs;
+        rss += e * e;
     }
     let equations = ne.rows();
     let sigma2 = rss / (equations - columns.len()) as f64;

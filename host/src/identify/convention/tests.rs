@@ -252,9 +252,9 @@ fn reading(convention: Option<Convention>, q: f64, r: f64, plausible: bool) -> R
     }
 }
 
-#[test]
-fn only_a_passive_decisive_reading_at_the_floor_is_named() {
-    let fit = crate::identify::PedestalFit {
+/// A passive pedestal fit (its values do not matter to [`decide`]).
+fn passive_fit() -> PedestalFit {
+    crate::identify::PedestalFit {
         bearing: "left".into(),
         pedestal: crate::estimate::Pedestal {
             k_y: 1.0,
@@ -284,7 +284,54 @@ fn only_a_passive_decisive_reading_at_the_floor_is_named() {
         covariance: None,
         modal: None,
         ols: None,
-    };
+    }
+}
+
+/// What the first refit pass of [`diagnose`] relies on: while the data as
+/// found are the best passive reading, no reading that cannot beat them
+/// (relative residual at least theirs: passive or not, any χ²) makes
+/// [`decide`] name anything, and [`naming_limit`] asks only for readings
+/// that could beat them.
+#[test]
+fn nothing_is_named_while_the_data_as_found_stay_best() {
+    use rand::{Rng, SeedableRng};
+    let fit = passive_fit();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+    for _ in 0..500 {
+        let r_found = rng.random_range(1e-6..1e-2);
+        let mut readings = vec![(
+            reading(None, rng.random_range(0.1..20.0), r_found, true),
+            fit.clone(),
+        )];
+        for c in Convention::ALL {
+            if rng.random_bool(0.5) {
+                let r = r_found * rng.random_range(1.0..1e4);
+                let q = rng.random_range(0.01..20.0);
+                readings.push((reading(Some(c), q, r, rng.random_bool(0.5)), fit.clone()));
+            }
+        }
+        assert!(found_is_best(&readings));
+        assert_eq!(naming_limit(&readings), r_found);
+        let refs: Vec<(Reading, &PedestalFit)> = readings.iter().map(|(r, q)| (*r, q)).collect();
+        for law in [true, false] {
+            assert!(decide(&refs, law).is_none_or(|(best, _, _)| best.convention.is_none()));
+        }
+    }
+    // A passive correction that beats the data: the full rule's limit.
+    let readings = vec![
+        (reading(None, 1.0, 1e-3, true), fit.clone()),
+        (
+            reading(Some(Convention::Conjugated), 1.0, 1e-4, true),
+            fit.clone(),
+        ),
+    ];
+    assert!(!found_is_best(&readings));
+    assert_eq!(naming_limit(&readings), relevance_limit(&readings));
+}
+
+#[test]
+fn only_a_passive_decisive_reading_at_the_floor_is_named() {
+    let fit = passive_fit();
     let conj = Some(Convention::Conjugated);
     let swap = Some(Convention::SwappedYz);
     let named = |rs: &[Reading]| {
