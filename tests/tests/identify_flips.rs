@@ -50,12 +50,12 @@ fn flips_away_from_the_resonances_are_listed_exactly() {
 }
 
 #[test]
-#[ignore = "measured 2026-12-02: flips next to a resonance or two speeds apart are missed (unseen-flex flips listed exactly 2/5; docs/robustness.md)"]
 fn flips_next_to_a_resonance_and_two_speeds_apart_are_listed_exactly() {
-    // 13.2 Hz just below the 15.5 Hz mode (its right-hand neighbours swing
-    // with the mode, so the block test's smooth-around condition fails);
-    // 51.2 and 53.5 Hz two speeds apart before the recorder's gap (each
-    // flip spoils the other's neighbour).
+    // 13.2 Hz just below the 15.5 Hz mode (its right-hand neighbour swings
+    // with the mode: the local model is confirmed on the left only); 51.2
+    // and 53.5 Hz two speeds apart before the recorder's gap (each flip
+    // spoils the prediction of the speed between them). Both were missed
+    // before `robust::ONE_SIDED_RATIO` (main at 22df24b: nothing listed).
     let flipped = [13.245, 51.152, 53.486];
     let id = identify(&flipped_run("B1", &flipped));
     assert_eq!(lists(&id), (flipped.to_vec(), vec![]));
