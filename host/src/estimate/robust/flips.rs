@@ -415,8 +415,8 @@ pub const FLIP_RATIO: f64 = 0.5;
 /// the 15.5 Hz mode; 51.2/53.5 Hz two speeds apart) lower it to 0.002-0.08;
 /// the clean-run blocks of ROSS machine c's B2 at 45 Hz (a base resonance
 /// swinging the phase) that pass every other condition with one side
-/// confirmed stood at 0.22-0.27 (40 seeds, 1 % noise), those with neither
-/// side confirmed at 0.05-0.47.
+/// confirmed stood at 0.22-0.47 (4 of 40 seeds, 1 % noise), those with
+/// neither side confirmed at 0.05-0.33 (21 of 40).
 pub const ONE_SIDED_RATIO: f64 = 0.1;
 
 /// One speed of a bearing for [`keyphasor_flips`] and
