@@ -55,7 +55,7 @@ mod scales;
 pub use cross::{cross_bearing_flips, CROSS_MIN_BEARINGS, CROSS_SIDE};
 pub use flips::{
     jump_speeds, keyphasor_flips, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_NEIGHBOURS, FLIP_RATIO,
-    FLIP_SIDE, FLIP_WINDOW, MAX_TRIMMED, TRIM_FACTOR,
+    FLIP_SIDE, FLIP_WINDOW, MAX_TRIMMED, ONE_SIDED_RATIO, TRIM_FACTOR,
 };
 pub use rational::LocalRational;
 use scales::median;

@@ -1,0 +1,62 @@
+//! Keyphasor flips (issue 17 item 2, "bad speeds are found and named") on
+//! the fourth unseen machine's stored clean run
+//! (tests/data/ross-unseen-4/clean-n1: ROSS 2.3.0's phasors with the
+//! machine's noise, scripts/ross_unseen.py `--machine unseen-flex`, seed 1),
+//! every channel of B1 (rel and ped, y and z) negated at chosen speeds here:
+//! the flip is the only thing the test adds, the response and its noise are
+//! ROSS's and the script's. A run of two bearings gives no cross-bearing
+//! test (`robust::cross_bearing_flips` needs three): only the test in speed
+//! (`robust::keyphasor_flips`) judges. The rates over several seeds:
+//! `BENCH_JOBS=1 python3 scripts/bench_unseen.py --machine unseen-flex
+//! PLINTH DIR 5 flips` (docs/robustness.md, "Keyphasor flips on the fourth
+//! unseen machine").
+
+use plinth::identify::Identification;
+use plinth::rundir::RunDir;
+use plinth_tests::rundown::identify;
+use plinth_tests::unseen;
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4");
+
+/// The stored clean run with every channel of `bearing` negated at the
+/// speeds `flipped` [Hz] (each must be a measured speed of the run).
+fn flipped_run(bearing: &str, flipped: &[f64]) -> RunDir {
+    let mut r = unseen::stored(DATA, "clean-n1");
+    let mut hit = 0;
+    for row in &mut r.measurements {
+        if row.bearing == bearing && flipped.contains(&row.speed_hz) {
+            for z in row.rel.iter_mut().chain(row.ped.iter_mut()) {
+                *z = -*z;
+            }
+            hit += 1;
+        }
+    }
+    assert_eq!(hit, flipped.len(), "every flipped speed is a measured one");
+    r
+}
+
+/// What `id` lists per bearing: (B1, B2) [Hz].
+fn lists(id: &Identification) -> (Vec<f64>, Vec<f64>) {
+    (unseen::listed(id, "B1"), unseen::listed(id, "B2"))
+}
+
+#[test]
+fn flips_away_from_the_resonances_are_listed_exactly() {
+    // 31.7 Hz between the first two bending modes, 71.0 Hz on the rising
+    // flank of the 82 Hz peak, 106.3 Hz past it.
+    let flipped = [31.701, 70.971, 106.309];
+    let id = identify(&flipped_run("B1", &flipped));
+    assert_eq!(lists(&id), (flipped.to_vec(), vec![]));
+}
+
+#[test]
+fn flips_next_to_a_resonance_and_two_speeds_apart_are_listed_exactly() {
+    // 13.2 Hz just below the 15.5 Hz mode (its right-hand neighbour swings
+    // with the mode: the local model is confirmed on the left only); 51.2
+    // and 53.5 Hz two speeds apart before the recorder's gap (each flip
+    // spoils the prediction of the speed between them). Both were missed
+    // before `robust::ONE_SIDED_RATIO` (main at 22df24b: nothing listed).
+    let flipped = [13.245, 51.152, 53.486];
+    let id = identify(&flipped_run("B1", &flipped));
+    assert_eq!(lists(&id), (flipped.to_vec(), vec![]));
+}
