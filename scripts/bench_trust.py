@@ -16,8 +16,9 @@ resonant machines.
 
 Detections: the faults each rule is for: a pedestal on its own sub-base
 (three machines), three speeds with one bearing's phasors flipped by 180°,
-one bad reading, pedestal pick-ups in um against probes in m, only the
-pedestal phasors conjugated, absurd magnitudes.
+one bad reading, pedestal pick-ups in um or mm against probes in m (a
+refusal by the reader's bounds counts as named when it names the mix-up
+between channels), only the pedestal phasors conjugated, absurd magnitudes.
 
 Test data come from `plinth simulate` (the simulator's elements, its
 `pedestal_sub_base` effect and machine-file `sub_base`) and
@@ -33,6 +34,7 @@ usage: bench_trust.py PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
   no detections), e.g. "paper-undamped hetero".
 """
 import csv
+import json
 import math
 import os
 import random
@@ -208,34 +210,59 @@ def flips_and_outliers(plinth, n):
           f" {hits}/{n} runs", flush=True)
 
 
+def identify_or_refusal(plinth, run):
+    """(`plinth identify RUN --json` parsed or None, stderr): exit 1 (identify
+    refused the data, e.g. a phasor beyond any machine's) returns None with
+    the refusal's message; any exit but 0, 1, 2 raises."""
+    p = subprocess.run([plinth.binary, "identify", run, "--json"], capture_output=True,
+                       text=True)
+    if p.returncode == 1:
+        return None, p.stderr
+    if p.returncode not in (0, 2):
+        raise RuntimeError(f"identify {run}: exit {p.returncode}: {p.stderr}")
+    return json.loads(p.stdout), p.stderr
+
+
 def conventions(plinth):
-    """Unit and convention mistakes, absurd magnitudes: named at every pedestal."""
-    for label, args, test in [
-        ("ped in um, rel in m", ["--ped-scale", "1e6"],
-         lambda p: any(w["kind"] == "implausible" and "ped in µm" in w["message"]
-                       for w in p["warnings"])),
+    """Unit and convention mistakes, absurd magnitudes: named at every pedestal.
+    A unit mix-up may also be refused by the reader's bounds (a phasor beyond
+    any machine's, host/src/rundir/bounds.rs): that run counts as named at
+    every pedestal only when the refusal names the mix-up between channels
+    (`ped written in <unit>`, the unit first), else as missed."""
+    def unit(u):
+        return (lambda p: any(w["kind"] == "implausible" and f"ped in {u}" in w["message"]
+                              for w in p["warnings"]),
+                lambda err: f"ped written in {u}" in err)
+    for label, args, test, refusal in [
+        ("ped in um, rel in m", ["--ped-scale", "1e6"], *unit("µm")),
+        ("ped in mm, rel in m", ["--ped-scale", "1e3"], *unit("mm")),
         ("ped phasors conjugated", ["--ped-conjugate"],
-         lambda p: p.get("suspected_convention_error") == "ped_conjugated"),
-        ("ped x 1e-100 (absurd)", ["--ped-scale", "1e-100"], lambda p: not p["trusted"]),
+         lambda p: p.get("suspected_convention_error") == "ped_conjugated", None),
+        ("ped x 1e-100 (absurd)", ["--ped-scale", "1e-100"], lambda p: not p["trusted"], None),
     ]:
-        hit = tot = refused = 0
+        hit = tot = refused = named_refusals = 0
         for _, machine in (("paper", bc.PAPER), ("three-bearing", bc.THREE)):
             for digits in ("3", "12"):
                 exact = plinth.path("exact")
                 plinth.sim(machine, exact, "--digits", "12")
                 out = plinth.path("fault")
                 bc.data(exact, out, *args, "--digits", digits)
-                # The reader's bounds may refuse the data outright (a phasor
-                # beyond any machine's): never `ok`, counted apart.
-                ident, _ = plinth.identify(out, refusal_ok=True)
+                ident, err = identify_or_refusal(plinth, out)
                 if ident is None:
                     refused += 1
+                    with open(os.path.join(out, "measurements.csv")) as fh:
+                        pedestals = len({r["bearing"] for r in csv.DictReader(fh)})
+                    tot += pedestals
+                    if refusal is not None and refusal(err):
+                        hit += pedestals
+                        named_refusals += 1
                     continue
                 for p in ident["pedestals"]:
                     tot += 1
                     hit += bool(test(p))
         print(f"  {label:28s}: named at {hit}/{tot} pedestals (2 machines x digits 3, 12)"
-              + (f"; {refused} of the 4 runs refused by identify's bounds" if refused else ""),
+              + (f"; {refused} of the 4 runs refused by the reader's bounds, {named_refusals}"
+                 " of them naming the mix-up" if refused else ""),
               flush=True)
 
 

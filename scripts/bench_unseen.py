@@ -10,7 +10,8 @@ holds run directories CASE-SEED made by scripts/ross_unseen.py (ROSS
 grid). Every run goes through `plinth identify --json` and `plinth diagnose
 --json --machine FILE` (the machine's nominal file: rigid ground, the drawn
 clearances, the table as supplied; without --machine when
-$BENCH_DIAGNOSE_PLAIN=1), $BENCH_JOBS at a time (default 2).
+$BENCH_DIAGNOSE_PLAIN=1; not at all when $BENCH_IDENTIFY_ONLY=1), $BENCH_JOBS at a
+time (default 2).
 Prints per case:
 
 identify: runs exiting 2; per bearing how often untrusted; runs whose
@@ -19,6 +20,8 @@ identify: runs exiting 2; per bearing how often untrusted; runs whose
   from the ROSS truth (confidently wrong); flipped (and outlier) speeds
   listed exactly: every bearing lists exactly its flipped and outlier
   speeds.
+± coverage: RMS over the runs of (value − truth)/± of k_y, k_z, m, c_y, c_z
+  per bearing (about 1 when the ± mean what they say).
 diagnose: named right (exactly the expected effects, each at its bearing,
   a base at any bearing), named wrong (something else named, or an
   expected effect at another bearing), partly (a subset, nothing wrong),
@@ -78,7 +81,20 @@ EXPECT_TRAIN = {
     "base-runout": ([("foundation_coupling", ""), ("probe_runout", "B1")], {"B1", "B2", "B3"}),
     "cross-delay": ([("pedestal_cross_coupling", "B2"), ("sensor_delay", "B3")], {"B2", "B3"}),
 }
-EXPECT = {"unseen-four": EXPECT_FOUR, "unseen-overhung": EXPECT_OVERHUNG, "unseen-train": EXPECT_TRAIN}
+EXPECT_FLEX = {
+    "clean-w1": ([], set()),
+    "sub-base": ([("pedestal_sub_base", "B1")], {"B1"}),
+    "table-scale": ([("bearing_coefficients", "B2")], {"B2"}),
+    "cross": ([("pedestal_cross_coupling", "B2")], {"B2"}),
+    "runout": ([("probe_runout", "B1")], {"B1"}),
+    "delay": ([("sensor_delay", "B2")], {"B2"}),
+    "flips": ([], set()),
+    "outlier": ([], set()),
+    "delay-runout": ([("sensor_delay", "B1"), ("probe_runout", "B2")], {"B1", "B2"}),
+    "base": ([("foundation_coupling", "")], None),
+}
+EXPECT = {"unseen-four": EXPECT_FOUR, "unseen-overhung": EXPECT_OVERHUNG, "unseen-train": EXPECT_TRAIN,
+          "unseen-flex": EXPECT_FLEX}
 
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
@@ -118,19 +134,40 @@ def run_json(args):
     return json.loads(p.stdout), p.returncode, dt, []
 
 
+COVERED = ("k_y", "k_z", "m", "c_y", "c_z")  # the values whose ± coverage is measured
+
+
 def worst_rel(ped, truth, get):
     """Largest relative error of k_y, k_z, m against the truth."""
     t = next(t for t in truth["pedestals"] if t["bearing"] == ped["bearing"])
     return max(abs(get(ped, k) / t[k] - 1.0) for k in ("k_y", "k_z", "m"))
 
 
+def imported(b, run):
+    """A field case (RUN/field/: a 1X vector table, its layout and the
+    bearing table) goes through `plinth import` into RUN first, as a field
+    engineer's data would; returns the import's error lines (empty if
+    none)."""
+    field = os.path.join(run, "field")
+    if not os.path.isdir(field) or os.path.exists(os.path.join(run, "measurements.csv")):
+        return []
+    p = subprocess.run([b, "import", os.path.join(field, "vectors.csv"), "--layout",
+                        os.path.join(field, "layout.toml"), "--bearings", os.path.join(field, "bearings.csv"),
+                        "--out", run, "--force"], capture_output=True, text=True)
+    return [] if p.returncode == 0 else ["import: " + l for l in p.stderr.strip().splitlines()[-1:]]
+
+
 def one(b, run):
     with open(os.path.join(run, "truth.json")) as f:
         truth = json.load(f)
+    ierr0 = imported(b, run)
     ident, icode, it, ierr = run_json([b, "identify", run, "--json"])
-    diag, dcode, dt, derr = run_json([b, "diagnose", run, "--json"] + DIAGNOSE_MACHINE)
+    if os.environ.get("BENCH_IDENTIFY_ONLY", "0") == "1":
+        diag, dcode, dt, derr = None, None, 0.0, []
+    else:
+        diag, dcode, dt, derr = run_json([b, "diagnose", run, "--json"] + DIAGNOSE_MACHINE)
     r = {"run": run, "truth": truth, "icode": icode, "dcode": dcode, "it": it, "dt": dt,
-         "err": ierr + derr}
+         "err": ierr0 + ierr + derr}
     if ident is not None:
         r["untrusted"] = sorted(p["bearing"] for p in ident["pedestals"] if not p["trusted"])
         r["listed"] = {k: v.get("outlier_speeds_hz", []) for k, v in ident["noise"].items()}
@@ -142,6 +179,9 @@ def one(b, run):
                     for k in ("k_y", "k_z", "m"))
             rel = worst_rel(p, truth, lambda q, k: q[k])
             r.setdefault("ident_err", {})[p["bearing"]] = (rel, z, p["trusted"])
+            for k in COVERED:
+                if p["std_err"][k] > 0:
+                    r.setdefault("zs", {})[(p["bearing"], k)] = (p[k] - t[k]) / p["std_err"][k]
             if p["trusted"] and z > 3.0:
                 wrong.append(p["bearing"])
         r["ok_wrong"] = wrong
@@ -227,6 +267,20 @@ def main():
                 fl = f"(any listed: {listed})"
         print(f"| {case} | {n} | {ex2} | {per} | {exp}/{n} | {okw} {okw_b if okw_b else ''} | {fl} |")
     print()
+    print("± coverage: RMS over the runs of (identify's value − truth)/± (1 = the ± mean what they "
+          "say; every run, trusted or not):")
+    print(f"| case | {' | '.join(f'{bb} {k}' for bb in bearings for k in COVERED)} |")
+    print("|---|" + "---|" * (len(bearings) * len(COVERED)))
+    for case in cases:
+        cells = []
+        for bb in bearings:
+            for k in COVERED:
+                z = [r["zs"][(bb, k)] for r in by[case] if (bb, k) in r.get("zs", {})]
+                cells.append(f"{math.sqrt(sum(v * v for v in z) / len(z)):.2f}" if z else "-")
+        print(f"| {case} | {' | '.join(cells)} |")
+    print()
+    if os.environ.get("BENCH_IDENTIFY_ONLY", "0") == "1":
+        return
     how = " ".join(["--json"] + [os.path.basename(a) for a in DIAGNOSE_MACHINE])
     print(f"diagnose (plinth diagnose {how}):")
     print("| case | runs | named right | named wrong | wrong and trusted | partly | missed | untrusted "

@@ -4,11 +4,11 @@
 # x 6 data qualities (2, 3, 12 digits; 1 % and 3 % noise; 1 % noise at 3
 # digits), each mistake made in the CSV text by scripts/convention_mistake.py;
 # counts the pedestals whose mistake `plinth identify` names, and the clean
-# pedestals it flags.
+# pedestals it flags. PLINTH=<binary> uses that build instead of building one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release -q -p plinth
-B="${CARGO_TARGET_DIR:-target}/release/plinth"
+[ -n "${PLINTH:-}" ] || cargo build --release -q -p plinth
+B="${PLINTH:-${CARGO_TARGET_DIR:-target}/release/plinth}"
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 sed -n '/^const MACHINE_B: &str = r#"/,/^"#;/p' tests/tests/identify_conventions.rs | sed '1d;$d' > "$W/machine-b.toml"

@@ -7,10 +7,12 @@ Usage:
   python3 scripts/ross_unseen.py [--machine NAME] --cases   the case names
   python3 scripts/ross_unseen.py [--machine NAME] --repo    the stored runs
         (the machine's data directory/<case>/, seed 1 of its repo cases)
+  python3 scripts/ross_unseen.py --tilting-pad
+        unseen-flex's bearing table (TOML rows) from ROSS's TiltingPad
   python3 scripts/ross_unseen.py --compare RUN_A RUN_B
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
-NAME: unseen-four (default), unseen-overhung or unseen-train.
+NAME: unseen-four (default), unseen-overhung, unseen-train or unseen-flex.
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and
@@ -43,6 +45,18 @@ noise differs by kind of sensor: pedestal pick-ups sigma = 2 % of |phasor|
 (no floor), proximity probes a constant sigma of 0.5 % of the channel's
 RMS. Its digit case clean-dmix writes B1 at 2 significant digits, B2 at 3
 and B3 at 4.
+
+unseen-flex is tests/data/ross-unseen-4/unseen-flex.toml: a long flexible
+roll (3.45 m, three shell masses and an overhung hub) on two tilting-pad
+bearings whose table is ROSS's own THD TiltingPad element (symmetric
+cross terms, large damping, stiffness rising with speed), run through its
+bending modes (16, 37, 54, 75, 82 Hz peaks); B1's pedestal a block 30-50
+times stiffer than its bearing (its pick-ups near their floor), B2's a soft
+bracket with k_y = 3 k_z. Its speeds are a run-down sampled unevenly (steps
+0.3-1.7 of the mean, fixed), 110 Hz down to 12 Hz, with 55-61 Hz lost (a
+recorder drop-out); its noise is each sensor's own: probes 0.5 % of
+|phasor| + 0.05 um, pick-ups 1 % + a velocity floor of 1 um/s (largest at
+low speed).
 
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
@@ -131,6 +145,23 @@ def run_up_grid(bottom, top, n, skipped):
     return speeds
 
 
+def run_down_grid(top, bottom, n, gap, seed=4_404):
+    """A run-down recorded by an instrument that samples when it can: n
+    speeds from `top` down to `bottom` [Hz] (listed rising) with uneven
+    steps (each step 0.3-1.7 of the mean, fixed by `seed`, the same in every
+    run), the speeds inside the band `gap` = (lo, hi) [Hz] lost (a recorder
+    drop-out); the sampling shifted by a fraction of a mean step per seed in
+    the digit cases."""
+    u = np.random.default_rng(seed).uniform(0.3, 1.7, n - 1)
+    p = np.concatenate([[0.0], np.cumsum(u)]) / np.sum(u)
+    def speeds(shifted, s):
+        frac = (0.37 * (s - 1)) % 1.0 if shifted else 0.0
+        q = np.clip(p + frac * np.mean(u) / np.sum(u), 0.0, 1.0)
+        v = np.unique(np.round(bottom + (top - bottom) * q, 3))
+        return v[(v < gap[0]) | (v > gap[1])]
+    return speeds
+
+
 SUB_BASE_FOUR = {"bearing": "B3", "m_y": 180.0, "m_z": 160.0, "k_y": 2.4e7, "k_z": 2.0e7,
                  "c_y": 2500.0, "c_z": 2000.0}
 FRAME_FOUR = {"name": "frame", "bearings": ["B1", "B2"], "m_y": 350.0, "m_z": 350.0,
@@ -144,6 +175,11 @@ SUB_BASE_TRAIN = {"bearing": "B2", "m_y": 150.0, "m_z": 150.0, "k_y": 2.0e8, "k_
                   "c_y": 5000.0, "c_z": 3000.0}
 FRAME_TRAIN = {"name": "baseplate", "bearings": ["B2", "B3"], "m_y": 400.0, "m_z": 400.0,
                "k_y": 1.2e8, "k_z": 6.0e7, "c_y": 6000.0, "c_z": 4000.0}
+
+SUB_BASE_FLEX = {"bearing": "B1", "m_y": 600.0, "m_z": 600.0, "k_y": 4.0e8, "k_z": 3.0e8,
+                 "c_y": 2.0e4, "c_z": 1.5e4}
+FRAME_FLEX = {"name": "bedplate", "bearings": ["B1", "B2"], "m_y": 900.0, "m_z": 900.0,
+              "k_y": 3.0e8, "k_z": 1.5e8, "c_y": 2.0e4, "c_z": 1.2e4}
 
 # Per machine: its file and data directory, speed grid, noise (sigma = rel
 # |phasor| + floor RMS of the channel), the seed base of its random numbers,
@@ -222,17 +258,51 @@ MACHINES = {
                  "delay", "outlier", "base-runout"),
     },
 }
+MACHINES["unseen-flex"] = {
+    "data": os.path.join(ROOT, "tests", "data", "ross-unseen-4"),
+    "file": "unseen-flex.toml",
+    "grid": run_down_grid(110.0, 12.0, 110, (55.0, 61.0)),
+    # per kind of sensor, the sensor's own floor, not a fraction of the
+    # signal: proximity probes sigma = 0.5 % of |phasor| + 0.05 um; seismic
+    # pick-ups 1 % of |phasor| + a velocity floor of 1 um/s (1.3e-8 m at
+    # 12 Hz): B1's pick-ups on the stiff block read near it at low speed
+    "noise": {"rel": {"rel": 0.005, "floor": 0.0, "abs": 5e-8},
+              "ped": {"rel": 0.01, "floor": 0.0, "vel": 1e-6}},
+    "noisy": "n1",
+    "digits": ("d2", "d3", "d12"),
+    "rng": 26_000,
+    "effects": {
+        "sub-base": [("sub_base", SUB_BASE_FLEX)],
+        "table-scale": [("table_scale", "B2", 1.0 / 1.25, 1.0)],
+        "cross": [("cross", "B2", 0.2)],
+        "runout": [("runout", "B1")],
+        "delay": [("delay", "B2", 150e-6)],
+        "flips": [("flips", ["B1"])],
+        "outlier": [("outlier", "B2")],
+        "delay-runout": [("delay", "B1", 150e-6), ("runout", "B2")],
+        "base": [("frame", FRAME_FLEX)],
+    },
+    # clean-vel: the machine's noise, written as a field instrument's 1X
+    # vector table (FIELD_LAYOUT) for `plinth import`
+    "field": ("vel",),
+    "d3_effects": False,
+    "repo": ("clean-n1", "clean-vel", "clean-d2", "sub-base", "cross", "runout", "delay"),
+}
 DEFAULT = "unseen-four"
 
 
-def noise_sd(m, channel, v):
+def noise_sd(m, channel, v, speeds):
     """sigma [m] of each phasor of one channel: a fraction of |phasor| plus
     a floor (a fraction of the channel's RMS), per machine, or per kind of
-    channel (rel / ped) where the machine gives them apart."""
+    channel (rel / ped) where the machine gives them apart; plus, where the
+    law gives them, an absolute floor "abs" [m] and a velocity floor "vel"
+    [m/s] (a seismic pick-up's: vel / Omega in displacement, largest at low
+    speed) at `speeds` [Hz]."""
     law = m["noise"]
     if "rel" in law and isinstance(law["rel"], dict):
         law = law[channel.split("_")[0]]
-    return law["rel"] * np.abs(v) + law["floor"] * math.sqrt(float(np.mean(np.abs(v) ** 2)))
+    return (law["rel"] * np.abs(v) + law["floor"] * math.sqrt(float(np.mean(np.abs(v) ** 2)))
+            + law.get("abs", 0.0) + law.get("vel", 0.0) / (2 * math.pi * np.asarray(speeds)))
 
 
 def cases_of(machine=DEFAULT):
@@ -241,7 +311,8 @@ def cases_of(machine=DEFAULT):
     m = MACHINES[machine]
     clean = tuple(f"clean-{k}" for k in (m["noisy"], m["noisy"] + "c") + m["digits"])
     effects = tuple(m["effects"])
-    return clean + effects + (tuple(e + "-d3" for e in effects) if m["d3_effects"] else ())
+    field = tuple(f"clean-{k}" for k in m.get("field", ()))  # last: the others' seeds stay
+    return clean + effects + (tuple(e + "-d3" for e in effects) if m["d3_effects"] else ()) + field
 
 
 CASES = cases_of()
@@ -467,7 +538,7 @@ def make(out, case, seed, machine=DEFAULT):
         for c in CHANNELS:
             v = resp[b][c]
             if noisy:
-                s = noise_sd(m, c, v)
+                s = noise_sd(m, c, v, speeds)
             else:
                 s = np.zeros(len(v))
             sd[(b, c)] = s
@@ -489,7 +560,10 @@ def make(out, case, seed, machine=DEFAULT):
                 data[(e[1], c)][i] += OUTLIER * rms * np.exp(2j * math.pi * rng.random())
             details.append({"name": "outlier_speed", "bearing": e[1],
                             "parameters": {"speed_0_hz": float(speeds[i])}})
-    write(out, speeds, names, data, sd if columns else None, digits, written)
+    if noise_kind == "vel":
+        write_field(out, speeds, names, data, written)
+    else:
+        write(out, speeds, names, data, sd if columns else None, digits, written)
     truth = {"pedestals": nominal_truth(machine),
              "effects": [d["name"] for d in details if d["name"] not in ("keyphasor_flip", "outlier_speed")],
              "effect_details": details}
@@ -543,6 +617,84 @@ def write(out, speeds, names, data, sd, digits, written):
                 f.write(",".join([fmt(s), b] + [sig(written[b][j][k], 10) for k in KEYS]) + "\n")
 
 
+# A field instrument's transducers (formats.md "A 1X vector table"):
+# proximity probes at 45 deg either side of the vertical in um pp, seismic
+# pick-ups at 0 and 90 deg in mm/s 0-pk (velocity), phase as lag, speed in
+# rpm; amplitudes written to 3 significant digits, phases to 0.1 deg.
+FIELD_TRANSDUCERS = (("rel", 45.0, "um pp"), ("rel", -45.0, "um pp"),
+                     ("ped", 0.0, "mm/s pk"), ("ped", 90.0, "mm/s pk"))
+
+
+def write_field(out, speeds, names, data, written):
+    """OUT/field/: vectors.csv (the 1X vector table), layout.toml and
+    bearings.csv, for `plinth import OUT/field/vectors.csv --layout
+    OUT/field/layout.toml --bearings OUT/field/bearings.csv --out OUT`.
+    Each transducer reads the displacement along its axis, cos(a) y +
+    sin(a) z; a pick-up reads its velocity i Omega X; a reading of
+    amplitude A and lag phi is the phasor A e^{-i phi}."""
+    field = os.path.join(out, "field")
+    os.makedirs(field, exist_ok=True)
+    w = 2 * math.pi * np.asarray(speeds)
+    cols, layout = [], ['phase = "lag"', 'speed = { column = "Speed rpm", unit = "rpm" }', ""]
+    for b in names:
+        for q, a, unit in FIELD_TRANSDUCERS:
+            y, z = data[(b, f"{q}_y")], data[(b, f"{q}_z")]
+            x = math.cos(math.radians(a)) * y + math.sin(math.radians(a)) * z
+            if unit == "um pp":
+                amp = 2e6 * np.abs(x)
+            else:
+                x = 1j * w * x
+                amp = 1e3 * np.abs(x)
+            lag = np.mod(-np.degrees(np.angle(x)), 360.0)
+            name = f"{b} {q} {a:+.0f}"
+            cols.append((f"{name} amp", [f"{v:.3g}" for v in amp]))
+            cols.append((f"{name} ph", [f"{v:.1f}" for v in lag]))
+            layout += ["[[transducer]]", f'bearing = "{b}"', f'quantity = "{q}"', f"angle_deg = {a}",
+                       f'amplitude = {{ column = "{name} amp", unit = "{unit}" }}',
+                       f'phase = {{ column = "{name} ph" }}', ""]
+    with open(os.path.join(field, "vectors.csv"), "w") as f:
+        f.write("Speed rpm," + ",".join(c for c, _ in cols) + "\n")
+        for j, s in enumerate(speeds):
+            f.write(f"{60 * s:.2f}," + ",".join(v[j] for _, v in cols) + "\n")
+    with open(os.path.join(field, "layout.toml"), "w") as f:
+        f.write("\n".join(layout))
+    with open(os.path.join(field, "bearings.csv"), "w") as f:
+        f.write("speed_hz,bearing," + ",".join(KEYS) + "\n")
+        for j, s in enumerate(speeds):
+            for b in names:
+                f.write(",".join([f"{s:.6g}", b] + [sig(written[b][j][k], 10) for k in KEYS]) + "\n")
+
+
+TILTING_PAD_SPEEDS = (12.0, 20.0, 30.0, 50.0, 70.0, 90.0, 120.0)  # [Hz], unseen-flex's table rows
+
+
+def tilting_pad_eccentricity(f):
+    """unseen-flex's operating line: the journal's eccentricity ratio [-] at
+    f [Hz], falling with speed (0.54 at 12 Hz, 0.45 at 30 Hz, 0.23 at
+    120 Hz); below 30 Hz a flatter law, so the low-speed matrices stay
+    positive definite."""
+    return 0.35 * (50.0 / f) ** (0.3 if f < 30.0 else 0.5)
+
+
+def tilting_pad_table():
+    """unseen-flex's bearing table rows (TOML) from ROSS's own THD
+    TiltingPad element, one solve per speed (about 1 s each), mapped to
+    Plinth's axes as respond() maps them (ROSS x, y = Plinth y, z)."""
+    from ross.bearings.tilting_pad import TiltingPad
+    from ross.units import Q_
+    for f in TILTING_PAD_SPEEDS:
+        b = TiltingPad(n=1, frequency=Q_([60 * f], "RPM"), equilibrium_type="match_eccentricity",
+                       journal_diameter=101.6e-3, radial_clearance=74.9e-6, pad_thickness=12.7e-3,
+                       pivot_angle=Q_([18, 90, 162, 234, 306], "deg"), pad_arc=Q_([60] * 5, "deg"),
+                       pad_axial_length=Q_([50.8e-3] * 5, "m"), pre_load=[0.5] * 5, offset=[0.5] * 5,
+                       lubricant="ISOVG32", oil_supply_temperature=Q_(40, "degC"),
+                       eccentricity=tilting_pad_eccentricity(f), attitude_angle=Q_(287.5, "deg"),
+                       load=[8.8405e+02, -2.6704e+03], nx=15, nz=10)
+        v = {k: float(getattr(b, r)[0]) for k, r in zip(KEYS, ("kxx", "kxy", "kyx", "kyy",
+                                                              "cxx", "cxy", "cyx", "cyy"))}
+        print(f"  {{ speed_hz = {f:.1f}, " + ", ".join(f"{k} = {v[k]:.4e}" for k in KEYS) + " },")
+
+
 def read_phasors(run):
     """{(speed text, bearing, channel): complex} of a run's measurements.csv."""
     import csv
@@ -572,6 +724,9 @@ def compare(a, b):
 
 def main():
     args = sys.argv[1:]
+    if args == ["--tilting-pad"]:
+        tilting_pad_table()
+        return
     if args[:1] == ["--compare"] and len(args) == 3:
         compare(args[1], args[2])
         return

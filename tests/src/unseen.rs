@@ -3,8 +3,11 @@
 //! what their tests read off `identify` and `diagnose`: one definition for
 //! every such machine.
 
+use plinth::diagnose::diagnose;
+use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
 use plinth::diagnose::{cli::oil_films, Options};
+use plinth::estimate::Pedestal;
 use plinth::identify::Identification;
 use plinth::rundir::RunDir;
 use plinth::sim::Machine;
@@ -25,6 +28,42 @@ pub fn machine_and_options(data: &str, file: &str) -> (Machine, Options) {
         ..Options::default()
     };
     (machine, options)
+}
+
+/// `plinth diagnose RUN --machine FILE` as the command line runs it (FILE
+/// under `data`): the search with the file's oil-film geometry, then the
+/// machine-level check applied to the verdict.
+pub fn diagnosis_with_machine_check(data: &str, file: &str, run: &RunDir) -> Diagnosis {
+    let (machine, options) = machine_and_options(data, file);
+    let out = diagnose(run, &options).expect("diagnose");
+    let check = MachineCheck::of(&machine, &out).expect("machine check");
+    let mut d = out.diagnosis;
+    check.apply(&mut d);
+    d
+}
+
+/// The speeds identify listed as outliers at `bearing` [Hz], sorted.
+pub fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
+    let mut v = id.noise[bearing].outlier_speeds_hz.clone();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+/// A clean run's promise: identify untrusts nothing, lists no speed at any
+/// bearing, and every `ok` value is right within 3 of its ±; diagnose (`d`)
+/// names nothing and is trusted.
+pub fn assert_flagged_by_nothing(run: &RunDir, id: &Identification, d: &Diagnosis, case: &str) {
+    assert!(untrusted(id).is_empty(), "{case}: {:?}", untrusted(id));
+    for bearing in id.noise.keys() {
+        assert!(
+            listed(id, bearing).is_empty(),
+            "{case}: {bearing} lists {:?}",
+            listed(id, bearing)
+        );
+    }
+    assert_ok_means_right(run, id, case);
+    assert!(named(d).is_empty(), "{case}: {}", d.to_text());
+    assert!(d.trusted, "{case}: {:?}\n{}", d.trust_reasons, d.to_text());
 }
 
 /// The convention mistakes identify suspected, as "bearing: mistake".
@@ -59,6 +98,18 @@ pub fn untrusted(id: &Identification) -> Vec<String> {
         .collect()
 }
 
+/// The pedestal `bearing` of `run`'s truth.json (k [N/m], m [kg], c [N·s/m]).
+pub fn truth_of<'a>(run: &'a RunDir, bearing: &str) -> &'a Pedestal {
+    &run.truth
+        .as_ref()
+        .expect("truth")
+        .pedestals
+        .iter()
+        .find(|t| t.bearing == bearing)
+        .expect("truth of the bearing")
+        .pedestal
+}
+
 /// Every value of every pedestal identify printed as `ok`, against the
 /// truth: ("bearing parameter", estimate, ±, truth) for k_y, k_z and m, and
 /// c_y, c_z with `damping` (SI units).
@@ -67,15 +118,9 @@ pub fn printed_ok(
     id: &Identification,
     damping: bool,
 ) -> Vec<(String, f64, f64, f64)> {
-    let truth = run.truth.as_ref().expect("truth");
     let mut out = Vec::new();
     for p in id.pedestals.iter().filter(|p| p.trusted) {
-        let t = &truth
-            .pedestals
-            .iter()
-            .find(|t| t.bearing == p.bearing)
-            .expect("truth of the bearing")
-            .pedestal;
+        let t = truth_of(run, &p.bearing);
         let (f, e) = (&p.pedestal, &p.std_err);
         let mut values = vec![
             ("k_y", f.k_y, e.k_y, t.k_y),

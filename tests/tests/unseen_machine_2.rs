@@ -13,13 +13,11 @@
 //! What does not work yet is written with the right assertion and ignored
 //! with the measured rate, so it can be un-ignored when fixed.
 
-use plinth::diagnose::diagnose;
-use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
-use plinth::identify::{Identification, WarningKind};
+use plinth::identify::WarningKind;
 use plinth::rundir::RunDir;
 use plinth_tests::rundown::identify;
-use plinth_tests::unseen::{self, assert_ok_means_right, named, ok_but_wrong, untrusted};
+use plinth_tests::unseen::{self, assert_ok_means_right, listed, named, ok_but_wrong, untrusted};
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-2");
 
@@ -32,12 +30,7 @@ fn stored(case: &str) -> RunDir {
 /// runs it: the search with the file's oil-film geometry, then the
 /// machine-level check applied to the verdict.
 fn diagnosis(run: &RunDir) -> Diagnosis {
-    let (machine, options) = unseen::machine_and_options(DATA, "unseen-overhung.toml");
-    let out = diagnose(run, &options).expect("diagnose");
-    let check = MachineCheck::of(&machine, &out).expect("machine check");
-    let mut d = out.diagnosis;
-    check.apply(&mut d);
-    d
+    unseen::diagnosis_with_machine_check(DATA, "unseen-overhung.toml", run)
 }
 
 /// (effect, bearing) pairs as owned strings, sorted.
@@ -66,13 +59,6 @@ fn truth_speeds(run: &RunDir, effect: &str, bearing: &str) -> Vec<f64> {
     v
 }
 
-/// The speeds identify listed as outliers at `bearing`, sorted.
-fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
-    let mut v = id.noise[bearing].outlier_speeds_hz.clone();
-    v.sort_by(f64::total_cmp);
-    v
-}
-
 /// Diagnose names exactly `want` (a base at any bearing: "" matches all),
 /// and the pedestals after it lie within 2 % of ROSS's (k, m).
 fn assert_named(case: &str, want: &[(&str, &str)]) -> Diagnosis {
@@ -95,18 +81,7 @@ fn clean_runs_are_flagged_by_nothing_and_ok_means_right() {
     for case in ["clean-h1c", "clean-d3"] {
         let run = stored(case);
         let id = identify(&run);
-        assert!(untrusted(&id).is_empty(), "{case}: {:?}", untrusted(&id));
-        for b in ["B1", "B2"] {
-            assert!(
-                listed(&id, b).is_empty(),
-                "{case}: {b} lists {:?}",
-                listed(&id, b)
-            );
-        }
-        assert_ok_means_right(&run, &id, case);
-        let d = diagnosis(&run);
-        assert!(named(&d).is_empty(), "{case}: {}", d.to_text());
-        assert!(d.trusted, "{case}: {:?}\n{}", d.trust_reasons, d.to_text());
+        unseen::assert_flagged_by_nothing(&run, &id, &diagnosis(&run), case);
     }
 }
 

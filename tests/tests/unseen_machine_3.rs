@@ -16,13 +16,12 @@
 //! the measured rate, so it can be un-ignored when fixed.
 
 use plinth::diagnose::diagnose;
-use plinth::diagnose::machine::MachineCheck;
 use plinth::diagnose::report::Diagnosis;
-use plinth::identify::{Identification, WarningKind};
+use plinth::identify::WarningKind;
 use plinth::rundir::RunDir;
 use plinth_tests::rundown::identify;
 use plinth_tests::unseen::{
-    self, assert_ok_means_right, named, ok_but_wrong, suspected, untrusted,
+    self, assert_ok_means_right, listed, named, ok_but_wrong, suspected, untrusted,
 };
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-3");
@@ -37,19 +36,7 @@ fn stored(case: &str) -> RunDir {
 /// runs it: the search with the file's oil-film geometry, then the
 /// machine-level check applied to the verdict.
 fn diagnosis(run: &RunDir) -> Diagnosis {
-    let (machine, options) = unseen::machine_and_options(DATA, "unseen-train.toml");
-    let out = diagnose(run, &options).expect("diagnose");
-    let check = MachineCheck::of(&machine, &out).expect("machine check");
-    let mut d = out.diagnosis;
-    check.apply(&mut d);
-    d
-}
-
-/// The speeds identify listed as outliers at `bearing`, sorted.
-fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
-    let mut v = id.noise[bearing].outlier_speeds_hz.clone();
-    v.sort_by(f64::total_cmp);
-    v
+    unseen::diagnosis_with_machine_check(DATA, "unseen-train.toml", run)
 }
 
 /// Clean data with a noise style the first two machines did not have: the

@@ -14,7 +14,7 @@ use super::angle::{resolve, Rotation, View};
 use super::slow_roll::{subtract_slow_roll, SlowRollBand};
 use super::transducer::{angle_of, group_by_bearing, Placement, Quantity};
 use super::units::{reading_phasor, to_displacement, AmplitudeUnit, PhaseConvention, UNIT_HELP};
-use crate::rundir::{read_bearings, BearingRow, Measurement, RunDir};
+use crate::rundir::{read_bearings, round_to_digits, BearingRow, DigitsMode, Measurement, RunDir};
 use anyhow::{bail, Context, Result};
 use num_complex::Complex;
 use serde::Deserialize;
@@ -88,6 +88,11 @@ struct RawAmplitude {
 struct RawColumn {
     column: String,
 }
+
+/// Significant digits [-] of a speed converted to Hz (rpm / 60): far more
+/// than any tachometer gives, few enough to drop the conversion's binary
+/// residue.
+pub const SPEED_DIGITS: u32 = 12;
 
 /// A checked layout.
 #[derive(Clone, Debug)]
@@ -295,7 +300,15 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
             }
             Ok(v)
         };
-        let speed_hz = cell(speed_col, "speed")? * layout.speed_to_hz;
+        // Snapped to SPEED_DIGITS significant digits: an rpm column's
+        // 794.70/60 is 13.245000000000001 in binary, which matched no row of
+        // a bearing table written in Hz (13.245) and had every such speed
+        // interpolated with a warning listing 28 of 102 speeds.
+        let speed_hz = round_to_digits(
+            cell(speed_col, "speed")? * layout.speed_to_hz,
+            SPEED_DIGITS,
+            DigitsMode::Round,
+        );
         if speed_hz <= 0.0 {
             bail!(
                 "{file}:{line}:{}: column `{}`: the speed must be > 0 (a 1X phasor needs rotation)",
@@ -312,8 +325,6 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
         }
         let omega = std::f64::consts::TAU * speed_hz;
         let mut disp = Vec::with_capacity(cols.len());
-        // The noise of the table's own rounding per reading [m] (field::rounding).
-        let mut sd = Vec::with_capacity(cols.len());
         for ((t, &(ac, pc)), watch) in layout.transducers.iter().zip(&cols).zip(&mut watches) {
             let amplitude = cell(ac, "amplitude")?;
             if amplitude < 0.0 {
@@ -338,26 +349,14 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
             watch.push(amplitude, phase);
             let q = reading_phasor(si, phase, layout.phase);
             disp.push(to_displacement(t.unit.kind, q, omega));
-            let place = |c: usize| record.get(c).and_then(super::rounding::last_place);
-            sd.push(match (place(ac), place(pc)) {
-                (Some(ua), Some(up)) => {
-                    let scale = t.unit.to_si_zero_peak
-                        * to_displacement(t.unit.kind, Complex::new(1.0, 0.0), omega).norm();
-                    scale * super::rounding::reading_sd(amplitude, ua, up)
-                }
-                _ => f64::NAN,
-            });
         }
         for (bearing, [rel, ped]) in &groups {
-            let pick = |set: &[usize]| -> ([Complex<f64>; 2], [f64; 2]) {
+            let pick = |set: &[usize]| -> [Complex<f64>; 2] {
                 let angles: Vec<f64> = set.iter().map(|&i| placements[i].angle_deg).collect();
                 let q: Vec<Complex<f64>> = set.iter().map(|&i| disp[i]).collect();
-                let s: Vec<f64> = set.iter().map(|&i| sd[i]).collect();
-                let (yz, noise) = resolve(&angles, &q, Some(&s));
-                (yz, noise.unwrap_or([f64::NAN; 2]))
+                resolve(&angles, &q, None).0
             };
-            let ((rel, rel_sd), (ped, ped_sd)) = (pick(rel), pick(ped));
-            let noise = [rel_sd[0], rel_sd[1], ped_sd[0], ped_sd[1]];
+            let (rel, ped) = (pick(rel), pick(ped));
             rows.push(ImportedRow {
                 line,
                 speed_column: speed_col + 1,
@@ -366,11 +365,10 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
                     bearing: bearing.clone(),
                     rel,
                     ped,
-                    // A zero sd (exact readings) says nothing: leave the noise to identify.
-                    noise_sd: noise
-                        .iter()
-                        .all(|s| s.is_finite() && *s > 0.0)
-                        .then_some(noise),
+                    // No noise columns: the table's rounding is only a floor under
+                    // the sensors' own noise, which a vector table does not carry
+                    // (columns are taken as the whole noise); identify estimates it.
+                    noise_sd: None,
                     written: None,
                 },
             });

@@ -11,7 +11,6 @@ pub mod angle;
 pub mod import;
 pub mod plausible;
 pub mod plot;
-pub mod rounding;
 pub mod slow_roll;
 pub mod transducer;
 pub mod transducers_csv;

@@ -183,11 +183,15 @@ pub fn of(
 
 /// Folds a relative standard uncertainty `sd` [-] of every bearing table's
 /// common scale into each pedestal's `std_err` and `covariance` (module
-/// docs): Σ' = (1 + sd²)·Σ + sd²·θθᵀ. Returns each pedestal's standard
+/// docs): Σ' = (1 + sd²)·Σ + sd²·θθᵀ, and into the ± of every unmeasured
+/// base's own values ([`widen_base`]). Returns each pedestal's standard
 /// errors from the noise alone, in the pedestals' order. Parameters fixed
 /// by the model (θ = 0, σ = 0) stay 0; a standard error that is not finite
 /// stays as it is.
 pub fn widen(identification: &mut Identification, sd: f64) -> Vec<crate::estimate::Pedestal> {
+    for b in &mut identification.bases {
+        widen_base(b, sd);
+    }
     identification
         .pedestals
         .iter_mut()
@@ -195,19 +199,47 @@ pub fn widen(identification: &mut Identification, sd: f64) -> Vec<crate::estimat
         .collect()
 }
 
+/// The standard error [unit of `value`] of a value homogeneous of degree
+/// ±1 in the bearing tables' common scale s (its truth is s^±1 times the
+/// fit), noise standard error `se`, under a relative standard uncertainty
+/// `sd` [-] of s: sqrt((1 + sd²)·se² + (sd·value)²), to first order in sd²
+/// for degree −1 (1/s has mean 1 + O(sd²) and sd sd + O(sd³)).
+fn widened(value: f64, se: f64, sd: f64) -> f64 {
+    if se.is_finite() {
+        ((1.0 + sd * sd) * se * se + (sd * value).powi(2)).sqrt()
+    } else {
+        se
+    }
+}
+
+/// Folds the tables' scale doubt `sd` [-] into an unmeasured base's ±.
+/// The base is as homogeneous in the bearing force as its pedestals: with
+/// the bearings s times their tables, Z_i(θ_i)(ped_i − x_B) = s·K_b,i·rel_i
+/// at each pedestal and Z_B(θ_B)·x_B = Σ_i Z_i(θ_i)(ped_i − x_B) at the
+/// base, both linear in (θ_i, θ_B), so θ_i/s and θ_B/s fit the data with
+/// the tables as written exactly as the machine does, with the same base
+/// motion x_B. K_B, C_B, M_B (and a mass line's mass) are of degree 1 in
+/// s, the quasi-static compliance 1/K_B of degree −1, the base frequency
+/// √(K_B/M_B) of degree 0 (unchanged). A measured base has no values of
+/// its own (its pedestals are widened as on rigid ground).
+pub fn widen_base(report: &mut super::on_base::BaseReport, sd: f64) {
+    for d in [&mut report.y, &mut report.z].into_iter().flatten() {
+        for v in [&mut d.k, &mut d.c, &mut d.m, &mut d.compliance_m_per_n]
+            .into_iter()
+            .flatten()
+        {
+            v[1] = widened(v[0], v[1], sd);
+        }
+    }
+}
+
 fn widen_one(p: &mut PedestalFit, sd: f64) -> crate::estimate::Pedestal {
     let noise = p.std_err;
     let theta = p.pedestal.theta();
     let se = noise.theta();
     let grow = 1.0 + sd * sd;
-    let widened: [f64; 5] = std::array::from_fn(|i| {
-        if se[i].is_finite() {
-            (grow * se[i] * se[i] + (sd * theta[i]).powi(2)).sqrt()
-        } else {
-            se[i]
-        }
-    });
-    p.std_err = crate::estimate::Pedestal::from_theta(widened);
+    let wide: [f64; 5] = std::array::from_fn(|i| widened(theta[i], se[i], sd));
+    p.std_err = crate::estimate::Pedestal::from_theta(wide);
     if let Some(cov) = &mut p.covariance {
         for (i, row) in cov.iter_mut().enumerate() {
             for (j, v) in row.iter_mut().enumerate() {

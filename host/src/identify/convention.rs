@@ -54,6 +54,8 @@
 //!   must also have the smallest χ²: a weighted ratio ν·ln(χ²_b/χ²_a) ≥ 0.
 //!   (Asking it to be decisive as well loses a y-z swap on a simulated
 //!   machine with estimated noise, tests/tests/identify_conventions.rs.)
+//!   Only where the bearing's residuals leave the floor's law standing: a
+//!   law they reject weighs no likelihood ([`decide::decide`]).
 //!
 //! A reading is named only when it is passive, fits to the noise floor, has
 //! the smallest r of the passive readings, beats every other passive
@@ -373,7 +375,13 @@ pub fn diagnose(
         };
         let found = readings[0].0;
         let refs: Vec<(Reading, &PedestalFit)> = readings.iter().map(|(r, q)| (*r, q)).collect();
-        if let Some((best, runner_up, q)) = decide(&refs) {
+        // Whether the bearing's residuals left the noise floor's law
+        // standing ([`decide`]).
+        let floor_law_holds = identification
+            .noise
+            .get(&p.bearing)
+            .is_none_or(|n| n.variance_function.is_none());
+        if let Some((best, runner_up, q)) = decide(&refs, floor_law_holds) {
             let Some(convention) = best.convention else {
                 continue;
             };

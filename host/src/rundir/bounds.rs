@@ -29,6 +29,19 @@ pub const MAX_DISPLACEMENT: f64 = 1.0;
 /// 1e6 [m as written].
 const MAX_UNIT_MIX_UP: f64 = 1e7;
 
+/// The usual units a displacement channel is exported in by mistake, with
+/// the factor [m as written per m] each makes of a phasor in metres.
+const UNIT_MIX_UPS: [(&str, f64); 3] = [("mm", 1e3), ("mils", 1.0 / 25.4e-6), ("µm", 1e6)];
+
+/// The range of |ped|/|rel| at one speed (both phasor pairs' norms) that
+/// machines give [-]: |ped|/|rel| ≈ |K_b|/|Z_ped|, largest at a lightly
+/// damped pedestal resonance, smallest where the pedestal is far stiffer
+/// than its bearing. The bundled machines (examples/, tests/machines/,
+/// simulated at 12 digits) span 0.065 to 163 (the paper's undamped
+/// pedestals at resonance). A row outside is read as two channel groups in
+/// different units, and the units whose factor brings it inside are named.
+const PED_TO_REL_RANGE: [f64; 2] = [1e-2, 1e3];
+
 /// The bound of the eight numbers of a row of the table with `columns`
 /// (measurements: displacement phasor components [m]; bearings: four
 /// stiffness [N/m] then four damping coefficients [N·s/m]), with their
@@ -69,9 +82,11 @@ pub fn check(
             // smaller unit (µm, mils, mm): the commonest mix-up between a
             // proximity probe and a pedestal pick-up's instrument.
             let cause = if unit == "m" && v.abs() <= MAX_UNIT_MIX_UP {
-                "a unit mix-up (this column written in µm, mils or mm, where every phasor is in metres)?"
+                channel_mix_up(values, k).unwrap_or_else(|| {
+                    "a unit mix-up (this column written in µm, mils or mm, where every phasor is in metres)?".to_string()
+                })
             } else {
-                "a typo, or an overflowed export?"
+                "a typo, or an overflowed export?".to_string()
             };
             return Err(RunDirError::Csv {
                 file: path.to_path_buf(),
@@ -86,6 +101,55 @@ pub fn check(
         }
     }
     Ok(())
+}
+
+/// The unit mix-up between channels that a displacement row's values
+/// (`values`: rel y, z then ped y, z, real and imaginary parts [m as
+/// written]) point to when its component `k` is past its bound: the ratio
+/// |ped|/|rel| outside what machines give ([`PED_TO_REL_RANGE`]) on the
+/// side of `k`'s group, with the units ([`UNIT_MIX_UPS`]) whose factor
+/// brings it back inside, nearest the range's middle (in decades) first.
+/// `None` when the groups are in proportion (the whole row in another
+/// unit) or no usual unit explains the ratio.
+fn channel_mix_up(values: &[f64; 8], k: usize) -> Option<String> {
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let r = norm(&values[4..]) / norm(&values[..4]);
+    let [lo, hi] = PED_TO_REL_RANGE;
+    let ped = k >= 4;
+    if !(r.is_finite() && r > 0.0) || (ped && r <= hi) || (!ped && r >= lo) {
+        return None;
+    }
+    // |ped|/|rel| with the group of `k` read in unit factor f.
+    let undone = |f: f64| if ped { r / f } else { r * f };
+    let middle = (lo * hi).sqrt().log10();
+    let off = |f: f64| (undone(f).log10() - middle).abs();
+    let mut units: Vec<(&str, f64)> = UNIT_MIX_UPS
+        .iter()
+        .copied()
+        .filter(|&(_, f)| (lo..=hi).contains(&undone(f)))
+        .collect();
+    units.sort_by(|a, b| off(a.1).total_cmp(&off(b.1)));
+    let names: Vec<String> = units
+        .iter()
+        .map(|(u, f)| format!("{u} ({f:.1e})"))
+        .collect();
+    let (group, rest, said) = if ped {
+        (
+            "ped",
+            "rel",
+            format!(
+                "the pedestal readings (ped) of this row are {r:.1e} times the shaft probes' (rel)"
+            ),
+        )
+    } else {
+        ("rel", "ped", format!("the shaft probe readings (rel) of this row are {:.1e} times the pedestal pick-ups' (ped)", 1.0 / r))
+    };
+    (!names.is_empty()).then(|| {
+        format!(
+            "suspected unit mismatch between channels: {said}, beyond the {lo:.0e} to {hi:.0e} machines give: {group} written in {} while {rest} is in m? formats.md wants every phasor in m",
+            names.join(" or ")
+        )
+    })
 }
 
 #[cfg(test)]
@@ -130,6 +194,43 @@ mod tests {
         let e = check(p, 9, &MEASUREMENT_COLUMNS, &index, &m2)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("unit mix-up") && e.contains("µm"), "{e}");
+        // (this row's ped are 5e4 times its rel: a mix-up between channels)
+        assert!(e.contains("unit mismatch") && e.contains("µm"), "{e}");
+        // Pick-ups written in µm against probes in m (every ped ×1e6): the
+        // row's two groups 1e6 apart, named as such.
+        let mut mixed = m;
+        for v in &mut mixed[4..] {
+            *v = 3e-6 * 1e6;
+        }
+        for v in &mut mixed[..4] {
+            *v = 1e-6;
+        }
+        let e = check(p, 9, &MEASUREMENT_COLUMNS, &index, &mixed)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("ped written in µm (1.0e6)") && e.contains("column 7 (`ped_y_re`)"),
+            "{e}"
+        );
+        // The probes in mm against pick-ups in m.
+        let mut mixed = m;
+        for v in &mut mixed[..4] {
+            *v = 2e-3 * 1e3;
+        }
+        for v in &mut mixed[4..] {
+            *v = 1e-2;
+        }
+        let e = check(p, 9, &MEASUREMENT_COLUMNS, &index, &mixed)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("rel written in mm (1.0e3)"), "{e}");
+        // The whole row in µm: no mix-up between channels to name.
+        let e = check(p, 9, &MEASUREMENT_COLUMNS, &index, &[2.0; 8])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("every phasor is in metres") && !e.contains("between channels"),
+            "{e}"
+        );
     }
 }

@@ -117,32 +117,39 @@ pub fn text_digits(text: &str) -> Option<(u32, i32)> {
 fn counted_digits(text: &str) -> Option<(u32, i32)> {
     let t = text.trim();
     let t = t.strip_prefix(['-', '+']).unwrap_or(t);
-    // A byte search: 'e' and 'E' never occur inside a multi-byte character.
-    let (mantissa, exponent) = match t.bytes().position(|b| b == b'e' || b == b'E') {
-        Some(i) => (&t[..i], t[i + 1..].parse::<i32>().ok()?),
-        None => (t, 0),
-    };
-    let mut first: Option<i32> = None; // position of the first significant digit
+    // One pass over the bytes (this runs for every number of a measurements
+    // file), up to the exponent's 'e' ('e' and 'E' never occur inside a
+    // multi-byte character). Positions count digits only; −1: not seen.
+    let mut first = -1i32; // position of the first significant digit
     let mut last = 0i32; // position of the last non-zero digit
-    let mut point: Option<i32> = None;
+    let mut point = -1i32;
     let mut n = 0i32; // digits seen
-    for b in mantissa.bytes() {
-        match b {
-            b'.' if point.is_none() => point = Some(n),
-            b'0'..=b'9' => {
-                if b != b'0' {
-                    first.get_or_insert(n);
-                    last = n;
+    let mut exponent = 0i32;
+    for (i, &b) in t.as_bytes().iter().enumerate() {
+        let digit = b.wrapping_sub(b'0');
+        if digit < 10 {
+            if digit != 0 {
+                if first < 0 {
+                    first = n;
                 }
-                n += 1;
+                last = n;
             }
-            _ => return None,
+            n += 1;
+        } else if b == b'.' && point < 0 {
+            point = n;
+        } else if b == b'e' || b == b'E' {
+            exponent = t[i + 1..].parse::<i32>().ok()?;
+            break;
+        } else {
+            return None;
         }
     }
-    let first = first?;
+    if first < 0 {
+        return None;
+    }
     let digits = last - first + 1;
     // Decimal exponent of the digit at position `first`.
-    let point = point.unwrap_or(n);
+    let point = if point < 0 { n } else { point };
     Some((digits as u32, exponent + point - first - 1))
 }
 

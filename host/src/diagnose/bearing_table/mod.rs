@@ -250,20 +250,30 @@ fn theta_index(t: Term) -> Option<usize> {
     }
 }
 
-/// A bearing of the final state whose only effect is its table's
-/// correction: the nonlinear scalar's index `k` and identity, the
-/// correction, the base terms' indices in θ order, its observations.
+/// A bearing of the final state whose table correction [`refine`] refits:
+/// the nonlinear scalar's index `k` and identity, the correction, the base
+/// terms' indices in θ order, its observations (with the bearing's other
+/// corrections applied, held), and whether the table correction is the
+/// bearing's only effect.
 struct Refittable {
     k: usize,
     p: Nonlinear,
     table: TableCorrection,
     slots: [Option<usize>; PARAMETERS],
     points: Vec<Observation>,
+    only: bool,
 }
 
 /// Every bearing [`refine`] refits: the pedestal alone in its group, its
-/// five base terms, one nonlinear scalar (the clearance or the stiffness
-/// ratio).
+/// five base terms, one table scalar (the clearance or the stiffness
+/// ratio), and beside them at most corrections of its probes that leave
+/// each channel's noise as it is: probe runout (a constant subtracted from
+/// rel) and sensor delays (a phase turned). Those are applied to the data
+/// at the state's values and held ([`super::correct::corrected`], the
+/// table as written): the refit is then the pedestal's errors-in-variables
+/// fit on the data the other effects correct. A cross-coupled pedestal
+/// (its force mixes the channels and their noise) or one in a group is
+/// not refitted: the search's test decides there.
 fn refittable(prep: &Prepared, state: &State) -> Vec<Refittable> {
     let mut out = Vec::new();
     for k in 0..state.model.nonlinear.len() {
@@ -280,17 +290,38 @@ fn refittable(prep: &Prepared, state: &State) -> Vec<Refittable> {
                 slots[i] = Some(t);
             }
         }
-        let only_base = terms.len() == PARAMETERS && slots.iter().all(Option::is_some);
-        if !(alone && only_base && state.model.group_nonlinear(&[b]) == [k]) {
+        let others_runout = terms
+            .iter()
+            .filter(|t| !slots.contains(&Some(**t)))
+            .all(|&t| matches!(state.model.terms[t], Term::Runout { .. }));
+        let nonlinear = state.model.group_nonlinear(&[b]);
+        let others_delay = nonlinear
+            .iter()
+            .filter(|&&q| q != k)
+            .all(|&q| matches!(state.model.nonlinear[q], Nonlinear::Delay { .. }));
+        let base_terms = slots.iter().all(Option::is_some);
+        if !(alone && base_terms && others_runout && others_delay) {
             continue;
         }
-        let points = prep.points[b].iter().flatten().copied().collect();
+        let only = terms.len() == PARAMETERS && nonlinear == [k];
+        let points = if only {
+            prep.points[b].iter().flatten().copied().collect()
+        } else {
+            let mut held = state.clone();
+            held.params.nl[k] = 0.0;
+            super::correct::corrected(prep, &held).points[b]
+                .iter()
+                .flatten()
+                .copied()
+                .collect()
+        };
         out.push(Refittable {
             k,
             p,
             table,
             slots,
             points,
+            only,
         });
     }
     out
@@ -336,15 +367,19 @@ pub fn confirmed(
 }
 
 /// Refits by maximum likelihood ([`ml_corrected`]) every bearing of the
-/// final `state` whose only effect is its table's correction (the pedestal
-/// alone in its group, its five base terms, one nonlinear scalar: the
-/// clearance or the stiffness ratio), and keeps the correction only when
-/// that refit confirms it ([`confirmed`], at level `alpha`, Bonferroni over
-/// the step's candidates). A confirmed correction's values replace the
-/// least-squares ones in place (the state's values, what the gap, the
-/// verdict and `--machine` then use, and the `bearing_coefficients` step's
-/// estimates); one not confirmed, or whose refit fails, is withdrawn: its
-/// step marked dropped with the reason and the state refitted without it.
+/// final `state` with a table correction on rigid ground ([`refittable`]:
+/// the pedestal alone in its group, its five base terms, one nonlinear
+/// scalar, the clearance or the stiffness ratio, and beside them at most
+/// probe runout and sensor delays, held), and keeps the correction only
+/// when that refit confirms it ([`confirmed`], at level `alpha`, Bonferroni
+/// over the step's candidates). Where the correction is the bearing's only
+/// effect a confirmed correction's values replace the least-squares ones in
+/// place (the state's values, what the gap, the verdict and `--machine`
+/// then use, and the `bearing_coefficients` step's estimates); beside other
+/// effects the refit only confirms (the joint least-squares values are
+/// kept, the other effects' values were estimated with them). One not
+/// confirmed, or whose refit fails, is withdrawn: its step marked dropped
+/// with the reason and the state refitted without it.
 /// Returns the refits (bearing index, fit) for the pedestals reported
 /// ([`report_refits`]).
 pub fn refine(
@@ -403,7 +438,7 @@ pub fn refine(
         *state = State::fit(prep, model, nl)?;
     }
     let mut out = Vec::new();
-    for r in refittable(prep, state) {
+    for r in refittable(prep, state).into_iter().filter(|r| r.only) {
         let Some((_, fit)) = kept.iter().find(|(p, _)| *p == r.p) else {
             continue;
         };

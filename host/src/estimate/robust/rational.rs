@@ -32,8 +32,9 @@ const DENOMINATOR_TERMS: usize = 2;
 pub const MIN_POINTS: usize = 5;
 
 /// Points a fit holds in buffers on the stack (more go to the heap) [-]:
-/// the flip test's windows hold up to 10.
-const STACK_POINTS: usize = 16;
+/// the flip test's windows hold up to 10 (`flips::FLIP_SIDE` on each
+/// side). No larger: the buffers are zeroed on every fit.
+const STACK_POINTS: usize = 10;
 
 /// Sanathanan–Koerner reweighting steps [-].
 const ITERATIONS: usize = 4;
@@ -78,27 +79,31 @@ impl LocalRational {
         // Buffers reused by every step, on the stack for a window of up to
         // STACK_POINTS speeds (one fit per speed and bearing): each speed's
         // powers x⁰..x⁴ of x = (f − centre)/span; the row weights and the
-        // numerators' basis; the denominator's columns and the
-        // denominators.
+        // numerators' basis; the denominators; the denominator's columns,
+        // speed by speed with the four channels side by side ([`Lanes`]).
         let mut stack_powers = [[0.0; 2 * NUMERATOR_TERMS - 1]; STACK_POINTS];
         let mut stack_real = [0.0; (NUMERATOR_TERMS + 1) * STACK_POINTS];
-        let mut stack_complex = [zero; (DENOMINATOR_TERMS + 2) * STACK_POINTS];
-        let (mut heap_powers, mut heap_real, mut heap_complex);
-        let (powers, real, complex): (
-            &mut [[f64; 2 * NUMERATOR_TERMS - 1]],
-            &mut [f64],
-            &mut [Complex<f64>],
-        ) = if m <= STACK_POINTS {
+        let mut stack_complex = [zero; STACK_POINTS];
+        let mut stack_lanes = [[0.0; LANES]; (DENOMINATOR_TERMS + 1) * STACK_POINTS];
+        let (mut heap_powers, mut heap_real, mut heap_complex, mut heap_lanes);
+        let (powers, real, denominators, lanes): Buffers = if m <= STACK_POINTS {
             (
                 &mut stack_powers[..m],
                 &mut stack_real[..(NUMERATOR_TERMS + 1) * m],
-                &mut stack_complex[..(DENOMINATOR_TERMS + 2) * m],
+                &mut stack_complex[..m],
+                &mut stack_lanes[..(DENOMINATOR_TERMS + 1) * m],
             )
         } else {
             heap_powers = vec![[0.0; 2 * NUMERATOR_TERMS - 1]; m];
             heap_real = vec![0.0; (NUMERATOR_TERMS + 1) * m];
-            heap_complex = vec![zero; (DENOMINATOR_TERMS + 2) * m];
-            (&mut heap_powers, &mut heap_real, &mut heap_complex)
+            heap_complex = vec![zero; m];
+            heap_lanes = vec![[0.0; LANES]; (DENOMINATOR_TERMS + 1) * m];
+            (
+                &mut heap_powers,
+                &mut heap_real,
+                &mut heap_complex,
+                &mut heap_lanes,
+            )
         };
         for (p, (f, _)) in powers.iter_mut().zip(points) {
             let x = (f - centre_hz) / span_hz;
@@ -113,9 +118,8 @@ impl LocalRational {
         let mut chunks = basis_buffer.chunks_exact_mut(m);
         let mut basis: [&mut [f64]; NUMERATOR_TERMS] =
             std::array::from_fn(|_| chunks.next().unwrap_or_default());
-        let (denominators, cols_buffer) = complex.split_at_mut(m);
-        let mut chunks = cols_buffer.chunks_exact_mut(m);
-        let mut cols: [&mut [Complex<f64>]; DENOMINATOR_TERMS + 1] =
+        let mut chunks = lanes.chunks_exact_mut(m);
+        let mut cols: [&mut [Lanes]; DENOMINATOR_TERMS + 1] =
             std::array::from_fn(|_| chunks.next().unwrap_or_default());
         for _ in 0..ITERATIONS {
             // Orthonormal basis of the weighted numerator columns
@@ -145,38 +149,48 @@ impl LocalRational {
             }
             // Variable projection: with the numerators eliminated, the
             // denominator minimises Σ_c ‖r₀ + d₁r₁ + d₂r₂‖², r_t the part
-            // of channel c's weighted q·xᵗ no numerator can take.
-            let mut gram = [[zero; DENOMINATOR_TERMS]; DENOMINATOR_TERMS];
-            let mut rhs = [zero; DENOMINATOR_TERMS];
-            for (c, &weight) in weights.iter().enumerate() {
-                for (t, v) in cols.iter_mut().enumerate() {
-                    for (z, ((point, w), x)) in v
-                        .iter_mut()
-                        .zip(points.iter().zip(row_weight.iter()).zip(powers))
-                    {
-                        *z = point.1[c] * (weight * w * x[t]);
+            // of channel c's weighted q·xᵗ no numerator can take. The four
+            // channels side by side: each channel's figures are formed by
+            // the same operations in the same order as one channel at a
+            // time, in a quarter of the passes over the speeds.
+            for (t, v) in cols.iter_mut().enumerate() {
+                for (lane, ((point, w), x)) in v
+                    .iter_mut()
+                    .zip(points.iter().zip(row_weight.iter()).zip(powers))
+                {
+                    for (c, &weight) in weights.iter().enumerate() {
+                        let scale = weight * w * x[t];
+                        lane[2 * c] = point.1[c].re * scale;
+                        lane[2 * c + 1] = point.1[c].im * scale;
                     }
-                    for b in &basis {
-                        let dot: Complex<f64> = v.iter().zip(b.iter()).map(|(z, e)| z * e).sum();
-                        for (z, e) in v.iter_mut().zip(b.iter()) {
-                            *z -= dot * e;
+                }
+                for b in &basis {
+                    let mut dot = [0.0; LANES];
+                    for (lane, e) in v.iter().zip(b.iter()) {
+                        for (d, z) in dot.iter_mut().zip(lane) {
+                            *d += z * e;
+                        }
+                    }
+                    for (lane, e) in v.iter_mut().zip(b.iter()) {
+                        for (z, d) in lane.iter_mut().zip(&dot) {
+                            *z -= d * e;
                         }
                     }
                 }
-                for i in 0..DENOMINATOR_TERMS {
-                    // The upper triangle: [`solve_hermitian_2`] reads no more.
-                    for j in i..DENOMINATOR_TERMS {
-                        gram[i][j] += cols[i + 1]
-                            .iter()
-                            .zip(cols[j + 1].iter())
-                            .map(|(a, b)| a.conj() * b)
-                            .sum::<Complex<f64>>();
+            }
+            let mut gram = [[zero; DENOMINATOR_TERMS]; DENOMINATOR_TERMS];
+            let mut rhs = [zero; DENOMINATOR_TERMS];
+            for i in 0..DENOMINATOR_TERMS {
+                // The upper triangle: [`solve_hermitian_2`] reads no more.
+                for j in i..DENOMINATOR_TERMS {
+                    let sums = conj_dots(cols[i + 1], cols[j + 1]);
+                    for s in sums {
+                        gram[i][j] += s;
                     }
-                    rhs[i] -= cols[i + 1]
-                        .iter()
-                        .zip(cols[0].iter())
-                        .map(|(a, b)| a.conj() * b)
-                        .sum::<Complex<f64>>();
+                }
+                let sums = conj_dots(cols[i + 1], cols[0]);
+                for s in sums {
+                    rhs[i] -= s;
                 }
             }
             model.d = solve_hermitian_2(&gram, &rhs)?;
@@ -256,6 +270,38 @@ impl LocalRational {
             num / den
         }))
     }
+}
+
+/// Real numbers of one speed's four channels side by side (re, im of rel
+/// y, rel z, ped y, ped z) [-].
+const LANES: usize = 8;
+
+/// One speed's four complex channel values as [`LANES`] real numbers.
+type Lanes = [f64; LANES];
+
+/// A fit's working buffers: powers of x per speed, row weights and
+/// numerator basis, denominators, denominator columns ([`LocalRational::fit`]).
+type Buffers<'a> = (
+    &'a mut [[f64; 2 * NUMERATOR_TERMS - 1]],
+    &'a mut [f64],
+    &'a mut [Complex<f64>],
+    &'a mut [Lanes],
+);
+
+/// Per channel, Σ_k conj(a_k)·b_k over the speeds of the side-by-side
+/// columns `a`, `b` ([`Lanes`]), summed from zero in speed order (the
+/// figures of a complex dot product of each channel alone).
+fn conj_dots(a: &[Lanes], b: &[Lanes]) -> [Complex<f64>; 4] {
+    let mut re = [0.0; 4];
+    let mut im = [0.0; 4];
+    for (a, b) in a.iter().zip(b) {
+        for c in 0..4 {
+            let (ar, ai, br, bi) = (a[2 * c], a[2 * c + 1], b[2 * c], b[2 * c + 1]);
+            re[c] += ar * br + ai * bi;
+            im[c] += ar * bi - ai * br;
+        }
+    }
+    std::array::from_fn(|c| Complex::new(re[c], im[c]))
 }
 
 /// The least-squares solution of the 2×2 Hermitian positive semidefinite

@@ -51,8 +51,27 @@ pub(super) fn relevance_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
 /// what happened, however well it fits (negating `rel` and every parameter
 /// leaves every residual unchanged, for one). The runner-up reported is the
 /// best other reading, passive or not.
+///
+/// `floor_law_holds`: whether the bearing's residuals leave the noise
+/// floor's law standing. Where they reject it (the estimator's score test,
+/// p < 1e-3: it then fits under the variance function of its residuals,
+/// `noise.<B>.variance_function`), a χ² weighted by that floor is no
+/// likelihood and cannot veto the name: the unweighted ratio decides alone,
+/// with the floor check. A proportional scatter law on noise that is in
+/// fact one sd per channel gives the speeds of small amplitude nearly all
+/// the weight; five parameters fit those few speeds about as well under any
+/// reading, and a wrong reading can come out a little lower in χ². Seen on
+/// the cross-coupled machine of `scripts/convention-sweep.sh` (1 % noise,
+/// seed 3, 6 digits): at B1 `bearing_transposed` undone leaves 5.1e-4 of
+/// the bearing forces against 5.6e-2 for `cross_coupling_sign` undone (an
+/// unweighted ratio ν·ln(r_b/r_a) of 1313), while the rejected proportional
+/// floor (score test p 2e-10) gave χ²/ν 0.630 against 0.593 and vetoed the
+/// name. The variance function itself is no fairer yardstick there: fitted
+/// to the residuals of the data as found, it takes the mistake's misfit for
+/// noise (80 % of |rel| at B1).
 pub(super) fn decide<'a>(
     readings: &[(Reading, &'a PedestalFit)],
+    floor_law_holds: bool,
 ) -> Option<(Reading, Reading, &'a PedestalFit)> {
     let by_residual = |a: &&(Reading, &PedestalFit), b: &&(Reading, &PedestalFit)| {
         a.0.relative_residual.total_cmp(&b.0.relative_residual)
@@ -67,7 +86,9 @@ pub(super) fn decide<'a>(
     let others = || readings.iter().filter(|(r, _)| r != best);
     // No worse a fit to the noise floor than `r` (with `rel_negated` the
     // data as found and the correction fit alike, up to rounding).
-    let not_worse = |r: &Reading| best.chi2 <= r.chi2 * (1.0 + TIE_TOLERANCE) || r.chi2.is_nan();
+    let not_worse = |r: &Reading| {
+        !floor_law_holds || best.chi2 <= r.chi2 * (1.0 + TIE_TOLERANCE) || r.chi2.is_nan()
+    };
     let decisive = others()
         .filter(|(r, _)| r.plausible)
         .all(|(r, _)| log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2 && not_worse(r));

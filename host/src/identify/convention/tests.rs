@@ -296,7 +296,11 @@ fn only_a_passive_decisive_reading_at_the_floor_is_named() {
     let swap = Some(Convention::SwappedYz);
     let named = |rs: &[Reading]| {
         let v: Vec<(Reading, &PedestalFit)> = rs.iter().map(|r| (*r, &fit)).collect();
-        decide(&v).and_then(|(best, _, _)| best.convention)
+        decide(&v, true).and_then(|(best, _, _)| best.convention)
+    };
+    let named_law_rejected = |rs: &[Reading]| {
+        let v: Vec<(Reading, &PedestalFit)> = rs.iter().map(|r| (*r, &fit)).collect();
+        decide(&v, false).and_then(|(best, _, _)| best.convention)
     };
     // Decisive: as found not passive, the correction at the floor.
     assert_eq!(
@@ -339,6 +343,23 @@ fn only_a_passive_decisive_reading_at_the_floor_is_named() {
         named(&[
             reading(conj, 1.1, 1.0e-3, true),
             reading(swap, 1.0, 1.2e-3, true)
+        ]),
+        None
+    );
+    // ... unless the bearing's residuals rejected the floor's law: its χ²
+    // is then no likelihood, the unweighted ratio decides.
+    assert_eq!(
+        named_law_rejected(&[
+            reading(conj, 1.1, 1.0e-3, true),
+            reading(swap, 1.0, 1.2e-3, true)
+        ]),
+        conj
+    );
+    // Within the decisive margin in r, nothing named either way.
+    assert_eq!(
+        named_law_rejected(&[
+            reading(conj, 1.1, 1.0e-3, true),
+            reading(swap, 1.0, 1.02e-3, true)
         ]),
         None
     );

@@ -1,0 +1,192 @@
+//! Issue 17 on a fourth machine nobody tuned to, different in kind from the
+//! first three: a long flexible roll (3.45 m, three shell masses and an
+//! overhung hub; tests/data/ross-unseen-4/unseen-flex.toml) on two
+//! tilting-pad bearings whose table is ROSS's own thermo-hydrodynamic
+//! `TiltingPad` element (symmetric cross terms, damping of 2-5e5 N·s/m,
+//! stiffness rising with speed), run DOWN through its bending modes with
+//! uneven speed steps and a recorder drop-out (55-61 Hz lost); B1's pedestal
+//! a block 30-50 times stiffer than its bearing (its pick-ups read near
+//! their floor), B2's a soft bracket with k_y = 3 k_z; every sensor with its
+//! own noise law (probes 0.5 % + 0.05 µm, pick-ups 1 % + a velocity floor of
+//! 1 µm/s). One case is a field instrument's 1X vector table (probes at
+//! ±45° in µm pp, pick-ups in mm/s 0-pk, phase lag, speed in rpm, 3 digits)
+//! read by `plinth import`. Every phasor and the truth are ROSS 2.3.0's and
+//! scripts/ross_unseen.py's (`--machine unseen-flex`), seed 1 of each case
+//! kept in tests/data/ross-unseen-4/<case>/; only the reading is Plinth's.
+//! The rates over several seeds are measured by `scripts/bench_unseen.py
+//! --machine unseen-flex` (docs/unseen.md). What does not work yet is
+//! written with the right assertion and ignored with the measured rate.
+
+use plinth::diagnose::report::Diagnosis;
+use plinth::field::import::{run as import, Args};
+use plinth::rundir::RunDir;
+use plinth_tests::rundown::identify;
+use plinth_tests::unseen::{self, assert_ok_means_right, named, untrusted};
+use std::path::Path;
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4");
+
+/// The stored run directory of `case` (seed 1).
+fn stored(case: &str) -> RunDir {
+    unseen::stored(DATA, case)
+}
+
+/// `plinth diagnose RUN --machine unseen-flex.toml` as the command line
+/// runs it: the search, then the machine-level check applied to the
+/// verdict.
+fn diagnosis(run: &RunDir) -> Diagnosis {
+    unseen::diagnosis_with_machine_check(DATA, "unseen-flex.toml", run)
+}
+
+/// The stored field case (`clean-vel/field/`: the vector table, its layout,
+/// the bearing table) through `plinth import` into `dir`, with the case's
+/// truth.json beside it.
+fn imported(dir: &Path) -> RunDir {
+    let field = Path::new(DATA).join("clean-vel").join("field");
+    let out = dir.join("run");
+    import(&Args {
+        table: field.join("vectors.csv"),
+        layout: field.join("layout.toml"),
+        bearings: field.join("bearings.csv"),
+        out: out.clone(),
+        slow_roll: None,
+        plots: false,
+        force: false,
+    })
+    .expect("plinth import");
+    std::fs::copy(
+        Path::new(DATA).join("clean-vel").join("truth.json"),
+        out.join("truth.json"),
+    )
+    .expect("truth.json");
+    RunDir::read(&out).expect("imported run directory")
+}
+
+/// Clean data: each sensor's own noise law without the noise columns, and
+/// 2 significant digits without noise: nothing untrusted, no speed listed,
+/// every `ok` within 3 of its ± (identify); nothing named and trusted
+/// (diagnose). Measured over seeds 1-10 of these, of the same noise with
+/// the columns and of 3 and 12 digits (`BENCH_JOBS=1 python3
+/// scripts/bench_unseen.py --machine unseen-flex PLINTH DIR 10 clean-n1
+/// clean-n1c clean-d2 clean-d3 clean-d12`): 0/50 flagged in identify, 0/50
+/// named or untrusted in diagnose. (Without the columns a clean speed by
+/// B1's 82 Hz peak is listed as an outlier in 4/30 runs, seeds 11, 12, 16,
+/// 18; not seed 1.)
+#[test]
+fn clean_runs_are_flagged_by_nothing_and_ok_means_right() {
+    for case in ["clean-n1", "clean-d2"] {
+        let run = stored(case);
+        let id = identify(&run);
+        unseen::assert_flagged_by_nothing(&run, &id, &diagnosis(&run), case);
+    }
+}
+
+/// A field instrument's table with the speed in rpm: each speed converted
+/// to Hz lands on a row of the bearing table written in Hz. rpm/60 in
+/// binary (794.70/60 = 13.245000000000001) matched no row, and 28 of the
+/// 102 speeds were interpolated with a warning; `plinth import` now snaps
+/// the converted speed to `SPEED_DIGITS` significant digits. And the
+/// pick-ups' velocity (mm/s 0-pk) and the probes at ±45° (µm pp, lag) come
+/// out as the pedestal's displacement: every k and m within 3 of its ± (and
+/// 10 %) of ROSS's value, whether or not trusted (the trust is the next
+/// test's).
+#[test]
+fn a_field_table_in_rpm_and_velocity_imports_onto_the_table_speeds_and_identifies_right() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let run = imported(dir.path());
+    for m in &run.measurements {
+        assert!(
+            run.bearings
+                .iter()
+                .any(|r| r.bearing == m.bearing && r.speed_hz == m.speed_hz),
+            "{} at {} Hz: no row of the bearing table",
+            m.bearing,
+            m.speed_hz
+        );
+    }
+    let id = identify(&run);
+    for p in &id.pedestals {
+        let t = unseen::truth_of(&run, &p.bearing);
+        for (name, got, se, want) in [
+            ("k_y", p.pedestal.k_y, p.std_err.k_y, t.k_y),
+            ("k_z", p.pedestal.k_z, p.std_err.k_z, t.k_z),
+            ("m", p.pedestal.m, p.std_err.m, t.m),
+        ] {
+            assert!(
+                (got - want).abs() < 3.0 * se && (got / want - 1.0).abs() < 0.1,
+                "{} {name} = {got:.6e} ± {se:.2e}, truth {want:.6e}",
+                p.bearing
+            );
+        }
+    }
+}
+
+/// The same clean field table must not be untrusted. Until session 26
+/// `plinth import` wrote the table's own rounding (3 digits, 0.1°) as the
+/// noise columns, and identify takes noise columns as the whole noise; a
+/// field instrument's vectors carry the sensors' noise as well (here
+/// 0.5-1 % of each phasor, 5-10 times the rounding), so the lack-of-fit
+/// test failed at every bearing (stored run: χ²/dof 34 912 at B1, 4 106 at
+/// B2; 10/10 runs untrusted, `BENCH_JOBS=1 python3 scripts/bench_unseen.py
+/// --machine unseen-flex PLINTH DIR 10 clean-vel`). import now writes no
+/// noise columns and identify estimates the noise from the data.
+#[test]
+fn a_clean_field_table_is_not_untrusted() {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let run = imported(dir.path());
+    let id = identify(&run);
+    assert!(untrusted(&id).is_empty(), "{:?}", untrusted(&id));
+    assert_ok_means_right(&run, &id, "clean-vel");
+}
+
+/// Every effect untrusts exactly the bearing it acts on in identify, and the
+/// other bearing's `ok` values are right: pick-up-side cross-coupling, a
+/// delay and a table 25 % too stiff at the soft bracket B2, runout on the
+/// probes of the stiff block B1. Measured over seeds 1-5 (`BENCH_JOBS=1
+/// python3 scripts/bench_unseen.py --machine unseen-flex PLINTH DIR 5
+/// cross delay runout table-scale`): 20/20; diagnose named each right and
+/// trusted, 20/20 (not run here: 40-130 s a run).
+#[test]
+fn each_effect_untrusts_exactly_its_bearing_in_identify() {
+    for (case, bearings) in [
+        ("cross", &["B2"][..]),
+        ("delay", &["B2"]),
+        ("runout", &["B1"]),
+    ] {
+        let run = stored(case);
+        let id = identify(&run);
+        assert_eq!(untrusted(&id), bearings, "{case}");
+        assert_ok_means_right(&run, &id, case);
+    }
+}
+
+/// B1's stiff block (450 kg, 3.0/2.0 GN/m) stands on a soft sub-base
+/// (600 kg, 0.4/0.3 GN/m, its own resonance 130/112 Hz, above the 110 Hz
+/// top speed); together they have one resonance in range (about 92 Hz in y,
+/// 79 Hz in z) and the block's own far above it, so over 12-110 Hz the
+/// support moves as one mass-spring-damper of about the series stiffness
+/// and the two masses: identify prints B1 `ok` with its k and m 88 % low and
+/// 117 % high (4/5 runs; 1/5 untrusted), diagnose names nothing, trusted
+/// (3/5), or `probe_runout` at B1, trusted (2/5: seeds 3 and 4, a runout of
+/// 0.02 µm, a third of the probes' noise, that lowers the whitened χ² per
+/// real number 1.028 → 0.968 and leaves the gap as it was, or raises it,
+/// 0.106 → 0.107). Measured: `BENCH_JOBS=1 python3 scripts/bench_unseen.py
+/// --machine unseen-flex PLINTH DIR 5 sub-base`. The promise asserted is
+/// the issue's: the sub-base bearing untrusted in identify and named in
+/// diagnose; identify's `conditional_on` says its values are the support's
+/// apparent ones, as on the third machine.
+#[test]
+#[ignore = "confidently wrong: B1 on a sub-base printed ok 88-117 % off in 4/5 runs, diagnose \
+            names nothing (3/5) or probe_runout at B1 (2/5), trusted"]
+fn a_sub_base_under_the_stiff_block_is_untrusted_and_named() {
+    let run = stored("sub-base");
+    let id = identify(&run);
+    assert_eq!(untrusted(&id), ["B1"]);
+    let d = diagnosis(&run);
+    assert_eq!(
+        named(&d),
+        [("pedestal_sub_base".to_string(), "B1".to_string())],
+        "{}",
+        d.to_text()
+    );
+}
