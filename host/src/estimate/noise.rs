@@ -307,6 +307,11 @@ pub struct BearingNoise {
     /// The variances under the scatter law (floored by the digits), while
     /// the source is still the digits.
     pub scatter_var: Option<Vec<[f64; 8]>>,
+    /// Variance [m²] each real number has from its digits alone, row for
+    /// row ([`REAL_CHANNELS`] order): the floor of every noise law (no
+    /// reading is more precise than the digits it is written with), kept
+    /// when the source moves on. Never rescaled.
+    pub digits_var: Vec<[f64; 8]>,
     /// Factor the variances were multiplied by after the fit (1 until
     /// [`BearingNoise::rescale`]).
     pub variance_scale: f64,
@@ -338,6 +343,7 @@ impl BearingNoise {
             number_variance(quantisation, columns[c].ulp_of(m, c), sd)
         };
         let with_columns = !rows.is_empty() && rows.iter().all(|m| m.noise_sd.is_some());
+        let digits_var = digits_variances(rows, columns, quantisation);
         if with_columns {
             let var = rows
                 .iter()
@@ -352,10 +358,10 @@ impl BearingNoise {
                 var,
                 scatter: [None; 4],
                 scatter_var: None,
+                digits_var,
                 variance_scale: 1.0,
             };
         }
-        let digits_var = digits_variances(rows, columns, quantisation);
         Self::with_scatter(rows, digits_var, quantisation, [None; 4])
     }
 
@@ -406,9 +412,10 @@ impl BearingNoise {
         Self {
             source: NoiseSource::Digits,
             quantisation,
-            var: digits_var,
+            var: digits_var.clone(),
             scatter,
             scatter_var: Some(scatter_var),
+            digits_var,
             variance_scale: 1.0,
         }
     }
@@ -512,6 +519,7 @@ impl BearingNoise {
                 .scatter_var
                 .as_ref()
                 .map(|v| v.iter().map(swap).collect()),
+            digits_var: self.digits_var.iter().map(swap).collect(),
             ..self.clone()
         }
     }

@@ -186,6 +186,19 @@ pub(crate) fn fit_ml_checked(
         obs
     };
     let start = ols_fit.pedestal.theta();
+    // Each observation's digits' variances by speed: the floor of the
+    // variance function's variances (variance::variances).
+    let mut digits: Vec<(f64, [f64; 8])> = observations
+        .iter()
+        .zip(&noise.digits_var)
+        .map(|(o, d)| (o.speed_hz, *d))
+        .collect();
+    digits.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let floor = |o: &Observation| {
+        digits
+            .binary_search_by(|d| d.0.total_cmp(&o.speed_hz))
+            .map_or([0.0; 8], |i| digits[i].1)
+    };
     let mut obs = Vec::new();
     // The source (columns, digits or scatter): the one noise policy.
     let mut attempt = fit_under_noise(
@@ -208,7 +221,7 @@ pub(crate) fn fit_ml_checked(
     let mut function = None;
     if let Ok(f) = &attempt {
         if noise.source == NoiseSource::Scatter && f.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE {
-            function = variance::refit(&obs, &columns, f);
+            function = variance::refit(&obs, floor, &columns, f);
         }
         let (test_obs, test_fit) = match &function {
             Some(r) => (r.obs.as_slice(), &r.fit),
@@ -279,13 +292,18 @@ pub(crate) fn fit_ml_checked(
         // Computed above on these observations and this fit unless speeds
         // were left out since.
         let refit = if fresh {
-            variance::refit(&obs, &columns, &ml_fit)
+            variance::refit(&obs, floor, &columns, &ml_fit)
         } else {
             function
         };
         if let Some(r) = refit {
-            for (v, o) in noise.var.iter_mut().zip(observations) {
-                let w = variance::variances(o, &r.law);
+            for ((v, o), d) in noise
+                .var
+                .iter_mut()
+                .zip(observations)
+                .zip(&noise.digits_var)
+            {
+                let w = variance::variances(o, &r.law, d);
                 if w.iter().all(|x| *x > 0.0 && x.is_finite()) {
                     *v = w;
                 }

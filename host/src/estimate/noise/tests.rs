@@ -231,3 +231,53 @@ fn a_law_term_the_data_do_not_need_is_dropped() {
         }
     }
 }
+
+/// The undamped paper machine simulated by `plinth::sim` on `speeds`
+/// (`START:STOP:STEP` [Hz]), written with 12 significant digits (rounded)
+/// and read back as `plinth identify` reads it: the speeds listed as bad,
+/// per bearing.
+fn listed_on_exact_12_digit_paper_run(speeds: &str) -> Vec<(String, Vec<f64>)> {
+    use crate::rundir::{DigitsMode, RunDir, WriteOptions};
+    use crate::sim::{cli::parse_speeds, unbalance_response, EffectSet, Machine};
+    let machine = Machine::from_toml_path(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/feng-hahn-1997.toml"
+    ))
+    .expect("machine file");
+    let speeds = parse_speeds(speeds).expect("speeds");
+    let run = unbalance_response(&machine, &speeds, &EffectSet::none())
+        .expect("sim")
+        .to_run_dir(None)
+        .expect("run");
+    let dir = tempfile::tempdir().expect("temporary directory");
+    run.write_with(
+        dir.path(),
+        &WriteOptions {
+            digits: Some(12),
+            digits_mode: DigitsMode::Round,
+        },
+    )
+    .expect("written");
+    let read = RunDir::read(dir.path()).expect("read back");
+    let id = crate::identify::identify_run(&read, &crate::identify::Options::default())
+        .expect("identify");
+    id.noise
+        .into_iter()
+        .map(|(b, n)| (b, n.outlier_speeds_hz))
+        .collect()
+}
+
+/// Exact runs written with 12 digits carry only their rounding, ulp²/12 of
+/// each number's own ulp, which varies tenfold with the leading digits at
+/// one |X|. The variance function's one fraction per channel is below it
+/// where the leading digits are small (52.6 Hz on the right pedestal of
+/// these grids, bench_trust "paper-undamped digits 12" seeds 8 and 15): its
+/// variances are floored by the digits, and no speed is listed.
+#[test]
+fn an_exact_12_digit_run_lists_no_speed() {
+    for grid in ["5.5668:200:2.6156", "7.4131:200:2.3779"] {
+        for (bearing, listed) in listed_on_exact_12_digit_paper_run(grid) {
+            assert!(listed.is_empty(), "{grid}: {bearing} lists {listed:?}");
+        }
+    }
+}
