@@ -73,6 +73,9 @@ impl LocalFit {
     }
 }
 
+/// The powers of one speed's offset in a local fit (module docs).
+type Terms = nalgebra::SVector<f64, { DEGREE + 1 }>;
+
 /// The local polynomial fits of a series sampled at increasing `speeds`
 /// [Hz], one per point (`None` where the fit is singular or the point
 /// determines it): they depend on the speeds only, so one set serves every
@@ -92,28 +95,36 @@ pub fn local_fits(speeds: &[f64]) -> Vec<Option<LocalFit>> {
             let window = &speeds[start..start + w];
             let f0 = speeds[j];
             let span = (window[w - 1] - window[0]).abs().max(f64::MIN_POSITIVE);
-            // Powers 1, x, …, x^(terms−1) of each window point's offset.
-            let powers = |f: f64| {
+            // Powers 1, x, …, x^(terms−1) of each window point's offset, in
+            // fixed-size vectors (no allocation per point: the local fits of
+            // a 20 001-speed run are a hot path, docs/trust.md "Session 27");
+            // a term left out of a reduced fit is 0 here and 1 on XᵀX's
+            // diagonal, a block of its own that leaves the fit's block as
+            // it is.
+            let mut powers = [Terms::zeros(); WINDOW];
+            for (v, f) in powers.iter_mut().zip(window) {
                 let x = (f - f0) / span;
-                nalgebra::DVector::from_iterator(terms, (0..terms).map(|t| x.powi(t as i32)))
-            };
-            let mut xtx = nalgebra::DMatrix::<f64>::zeros(terms, terms);
-            for f in window {
-                let v = powers(*f);
-                xtx += &v * v.transpose();
+                for t in 0..terms {
+                    v[t] = x.powi(t as i32);
+                }
+            }
+            let mut xtx = nalgebra::SMatrix::<f64, { DEGREE + 1 }, { DEGREE + 1 }>::zeros();
+            for v in &powers[..w] {
+                xtx += v * v.transpose();
+            }
+            for t in terms..=DEGREE {
+                xtx[(t, t)] = 1.0;
             }
             // The smooth value at f0 is e₀ᵀ(XᵀX)⁻¹Xᵀy = Σ (x_r·h) y_r with
             // h = (XᵀX)⁻¹e₀, and its leverage is h₀.
-            let mut e0 = nalgebra::DVector::<f64>::zeros(terms);
-            e0[0] = 1.0;
-            let h = xtx.cholesky().map(|c| c.solve(&e0))?;
+            let h = xtx.cholesky().map(|c| c.solve(&Terms::x()))?;
             let leverage = h[0];
             if leverage.is_nan() || leverage >= 1.0 - 1e-9 {
                 return None;
             }
             let mut weights = [0.0; WINDOW];
-            for (wr, f) in weights.iter_mut().zip(window) {
-                *wr = powers(*f).dot(&h);
+            for (wr, v) in weights.iter_mut().zip(&powers[..w]) {
+                *wr = v.dot(&h);
             }
             Some(LocalFit {
                 start,
