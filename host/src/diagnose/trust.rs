@@ -360,12 +360,15 @@ pub fn judge_support(conclusion: &mut Conclusion, prep: &Prepared, steps: &[Step
     }
 }
 
-/// Whether step `s` acts at bearing `name` (a base names its bearings
-/// joined by '+', ',' or spaces).
+/// Whether step `s` acts at bearing `name`: its own bearing, or a bearing
+/// of a base it stands pedestals on (`foundation`'s groups).
 fn acts_at(s: &Step, name: &str) -> bool {
-    s.bearing
-        .split(|c: char| c == '+' || c == ',' || c.is_whitespace())
-        .any(|b| b == name)
+    s.bearing == name
+        || s.foundation.as_ref().is_some_and(|f| {
+            f.groups
+                .iter()
+                .any(|g| g.bearings.iter().any(|b| b == name))
+        })
 }
 
 /// (bearing, reason) for every bearing of `prep` whose base model fails the
