@@ -29,6 +29,12 @@
 //!   this filter keeps the family-wise rate (independent filtering:
 //!   Bourgon, Gentleman & Huber 2010, *PNAS* 107). A bearing whose fit is
 //!   inside its noise spends no share of the run's false-alarm rate.
+//! - **support mode** (noise columns only): the score test of an Ω⁴ term
+//!   on each direction's stiffness ([`crate::estimate::lack_of_fit::
+//!   support_mode`]: a support with a second mode above the speed range,
+//!   whose χ² excess the level test cannot see), χ²(2) below
+//!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (0/600 clean runs
+//!   with columns flagged by it, `scripts/bench-trust.sh 300 columns`).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
 //! machines, detections on a pedestal with its own sub-base): docs/trust.md.
