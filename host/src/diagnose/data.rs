@@ -5,6 +5,7 @@
 //! bearing and speed.
 
 use super::noise::{BearingNoise, ColumnDigits, NoiseModel};
+use crate::estimate::lack_of_fit::SupportMode;
 use crate::estimate::noise::Quantisation;
 use crate::estimate::pedestal::{data_alone_sd, unscale};
 use crate::estimate::Observation;
@@ -41,6 +42,11 @@ pub struct Prepared {
     /// ascending: still in `points` (what is done with them is the
     /// workflow's, [`super::outliers`]).
     pub outlier_speeds_hz: Vec<Vec<f64>>,
+    /// Per bearing (aligned with `bearings`), the support-mode test of its
+    /// base model (`plinth identify`'s, [`crate::estimate::lack_of_fit::
+    /// support_mode`]; `None` without noise columns), judged by
+    /// [`super::trust::judge_support`].
+    pub support_modes: Vec<Option<SupportMode>>,
 }
 
 impl Prepared {
@@ -162,6 +168,7 @@ impl Prepared {
         let mut noises = Vec::with_capacity(bearings.len());
         let mut base_fits = Vec::with_capacity(bearings.len());
         let mut outliers = Vec::with_capacity(bearings.len());
+        let mut support_modes = Vec::with_capacity(bearings.len());
         for (b, name) in bearings.iter().enumerate() {
             let mut rows: Vec<&Measurement> = run
                 .measurements
@@ -186,6 +193,7 @@ impl Prepared {
             let (fit, report) = fit_ml(name, &obs, &mut noise, &options)
                 .with_context(|| format!("fitting the base model of bearing {name}"))?;
             outliers.push(report.outlier_speeds_hz);
+            support_modes.push(report.lack_of_fit.and_then(|l| l.support_mode));
             // The noise from the data alone (module docs of `noise`).
             unscale(&mut noise);
             for (m, var) in rows.iter().zip(&noise.var) {
@@ -220,6 +228,7 @@ impl Prepared {
             base_fits,
             flipped_speeds_hz,
             outlier_speeds_hz: outliers,
+            support_modes,
         })
     }
 

@@ -486,6 +486,10 @@ pub struct MachineCheck {
     /// The machine file's bases the re-simulation replaced
     /// ([`replaced_bases`]), said in the verdict (text and JSON).
     pub replaced: Option<String>,
+    /// The bearings whose base model failed the support-mode test, with
+    /// the reason ([`super::trust::support_reasons`]): unexplained again
+    /// when the step at them does not lower the machine-level gap.
+    pub support: Vec<(String, String)>,
 }
 
 impl MachineCheck {
@@ -543,6 +547,7 @@ impl MachineCheck {
         let foundation = (outcome.after_steps.last()).is_some_and(|(_, b)| b.is_some());
         Ok(Self {
             replaced: replaced_bases(machine, &prep.bearings, foundation),
+            support: super::trust::support_reasons(prep),
             gap_before,
             gaps_after,
             floor,
@@ -573,6 +578,7 @@ impl MachineCheck {
             s.machine_gap_after = *after;
             before = *after;
         }
+        super::trust::judge_steps(d, &self.support);
         super::trust::judge_machine(d, self.gap_after(), self.floor);
         if let Some(note) = &self.replaced {
             d.verdict += &format!(" Note: {note}.");

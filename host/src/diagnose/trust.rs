@@ -334,3 +334,101 @@ pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
 
 #[cfg(test)]
 mod tests;
+
+/// A bearing whose base model fails the support-mode test (`plinth
+/// identify`'s, [`crate::estimate::lack_of_fit::support_mode`], at its
+/// family-wise rate [`crate::identify::trust::SUPPORT_FALSE_ALARM`] over
+/// the bearings tested) and at which no kept step acts makes the diagnosis
+/// untrusted, with the reason: its dynamic stiffness falls with speed as
+/// Ω⁴ beyond one mass on one spring, what a support with a second mode
+/// above the speed range does. Over such a range a pedestal on a sub-base
+/// shows, per direction, its series stiffness, an apparent mass and the Ω⁴
+/// coefficient (three numbers for the four of `pedestal_sub_base`), so the
+/// sub-base is not offered (`SUB_BASE_REL_SE`) and what is printed is the
+/// support's apparent k and m. `steps` are the kept steps.
+pub fn judge_support(conclusion: &mut Conclusion, prep: &Prepared, steps: &[Step]) {
+    for (name, why) in support_reasons(prep) {
+        let acted = steps.iter().any(|s| acts_at(s, &name));
+        if acted {
+            continue;
+        }
+        conclusion.verdict += &format!(
+            " But at bearing {name} the pedestal model does not describe the support (reasons below): the identified parameters are not to be trusted."
+        );
+        conclusion.reasons.push(why);
+        conclusion.trusted = false;
+    }
+}
+
+/// Whether step `s` acts at bearing `name`: its own bearing, or a bearing
+/// of a base it stands pedestals on (`foundation`'s groups).
+fn acts_at(s: &Step, name: &str) -> bool {
+    s.bearing == name
+        || s.foundation.as_ref().is_some_and(|f| {
+            f.groups
+                .iter()
+                .any(|g| g.bearings.iter().any(|b| b == name))
+        })
+}
+
+/// (bearing, reason) for every bearing of `prep` whose base model fails the
+/// support-mode test at its family-wise rate ([`judge_support`]).
+pub fn support_reasons(prep: &Prepared) -> Vec<(String, String)> {
+    use crate::identify::trust::SUPPORT_FALSE_ALARM;
+    let tested = prep.support_modes.iter().flatten().count();
+    let alpha = SUPPORT_FALSE_ALARM / tested.max(1) as f64;
+    prep.bearings
+        .iter()
+        .zip(&prep.support_modes)
+        .filter_map(|(name, t)| {
+            let t = t.filter(|t| t.p_value < alpha)?;
+            Some((name.clone(), format!(
+                "bearing {name}: its dynamic stiffness falls with speed faster than one mass on one spring allows (an Ω⁴ term explains {:.1} of the base model's whitened residuals, χ²(2) p = {:.1e}, limit {alpha:.1e}; Ω⁴Q at the top speed {:+.1} % (y), {:+.1} % (z) of the stiffness), as a support with a second mode above the speed range makes it (a sub-base, a frame: K − Ω²M − Ω⁴Q per direction below that mode); over this range only those three numbers per direction are seen, not the four of a pedestal on its sub-base, so `pedestal_sub_base` cannot be separated from the pedestal here and its k and m are the support's apparent values",
+                t.statistic,
+                t.p_value,
+                100.0 * t.drop_at_top[0],
+                100.0 * t.drop_at_top[1]
+            )))
+        })
+        .collect()
+}
+
+/// A kept step whose machine-level gap (`--machine`) did not fall makes the
+/// diagnosis untrusted: an effect that lowers the pedestal-level χ² but
+/// does not bring the re-simulated machine closer to the measurements is
+/// fitting something else (the fourth unseen machine's sub-base: a probe
+/// runout of 0.02 µm, a third of the probes' noise, named with the
+/// machine-level gap 0.0143 → 0.0145). Clean runs name nothing and are not
+/// touched; right effects lower the machine-level gap. A bearing such a
+/// step stood at whose support-mode test failed (`support`, as
+/// [`support_reasons`] gives them) is then unexplained, said with that
+/// reason ([`judge_support`]).
+pub fn judge_steps(d: &mut super::report::Diagnosis, support: &[(String, String)]) {
+    let mut unexplained = Vec::new();
+    for (i, s) in d.steps.iter().enumerate() {
+        if s.dropped.is_some() {
+            continue;
+        }
+        let (Some(before), Some(after)) = (s.machine_gap_before, s.machine_gap_after) else {
+            continue;
+        };
+        if after < before {
+            continue;
+        }
+        let why = format!(
+            "step {}, {} at {}, did not lower the machine-level gap ({before:.4} → {after:.4}): the re-simulated machine is no closer to the measurements with it, so the effect is not shown to be there",
+            i + 1,
+            s.effect,
+            s.bearing
+        );
+        d.verdict += &format!(" But {why}; the identified parameters are not to be trusted.");
+        d.trust_reasons.push(why);
+        d.trusted = false;
+        unexplained.extend(support.iter().filter(|(b, _)| acts_at(s, b)).cloned());
+    }
+    for (_, why) in unexplained {
+        if !d.trust_reasons.contains(&why) {
+            d.trust_reasons.push(why);
+        }
+    }
+}

@@ -480,7 +480,7 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
         .collect();
     // Judged on both yardsticks: the gap as reported, the χ² the fits
     // minimise for "the model got worse" (`super::trust::got_worse`).
-    let conclusion = conclude(
+    let mut conclusion = conclude(
         super::gap::Agreement {
             gap: gap0,
             ..pred0.agreement(&prep)
@@ -498,6 +498,15 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
             .collect::<Vec<_>>(),
         &physical,
         &where_after,
+    );
+    super::trust::judge_support(
+        &mut conclusion,
+        &prep,
+        &steps
+            .iter()
+            .filter(|s| s.dropped.is_none())
+            .cloned()
+            .collect::<Vec<_>>(),
     );
     let unexplained = if conclusion.verdict.contains(super::trust::UNEXPLAINED) {
         super::locate::unexplained(&where_after, super::trust::AT_THE_FLOOR)

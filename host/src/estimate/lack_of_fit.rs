@@ -43,11 +43,13 @@
 
 mod mean;
 mod structure;
+mod support;
 mod window;
 
 pub use structure::{
     structure, Structure, BLOCK, LEVEL_WINDOW, PERMUTATIONS, STOP_AFTER_EXCEEDANCES,
 };
+pub use support::{support_mode, SupportMode};
 pub use window::{LOCAL_DEGREE, MAX_DEGREE, MIN_WINDOW, SCALES};
 
 use super::gauss_helmert as gh;
@@ -82,14 +84,23 @@ pub struct LackOfFit {
     /// ([`crate::identify::physical`]); `None` when not estimable.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub damping_std_err_from_residuals: Option<[f64; 2]>,
+    /// The support-mode test ([`support_mode`]: an Ω⁴ fall of the
+    /// stiffness, a second support mode above the range), made when the
+    /// noise is known from noise columns (`None` otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support_mode: Option<SupportMode>,
 }
 
 /// The lack-of-fit evidence of a fit at `theta` (θ units) to `obs` whose
 /// variances are the noise model's level (before any χ² rescaling; a
 /// robust fit's down-weighting included, [`super::robust`]) over the
 /// estimated `columns`, with χ² = `chi2` on `dof`; `None` when the noise
-/// is known (digits or columns) and explains χ² (upper-tail p ≥ `p_limit`):
-/// then nothing could pass for noise.
+/// is known (digits or columns) and explains χ² (upper-tail p ≥ `p_limit`)
+/// and, for noise columns, the support-mode test cannot be made: then
+/// nothing could pass for noise. With noise columns the support-mode test
+/// is always made (a second support mode just above the range leaves a
+/// χ² excess the level test cannot see; its own test can); the structure
+/// scan only under the level gate above.
 pub fn assess(
     obs: &[Observation],
     theta: &[f64; PARAMETERS],
@@ -105,17 +116,26 @@ pub fn assess(
     let level_p = ChiSquared::new(dof as f64)
         .map(|d| 1.0 - d.cdf(chi2))
         .unwrap_or(f64::NAN);
-    if !source.scale_estimated() && level_p >= p_limit {
+    let eq = Rigid::new(obs, &Weighting::default());
+    let speeds: Vec<f64> = obs.iter().map(|o| o.speed_hz).collect();
+    let support_mode = (source == NoiseSource::Columns)
+        .then(|| support_mode(&eq, theta, &speeds))
+        .flatten();
+    let scanned = source.scale_estimated() || level_p < p_limit;
+    if !scanned && support_mode.is_none() {
         return None;
     }
-    let eq = Rigid::new(obs, &Weighting::default());
     let w = gh::whitened(&eq, theta, None)?;
     let rows: Vec<[f64; 4]> = (0..obs.len())
         .map(|j| std::array::from_fn(|c| w[4 * j + c]))
         .collect();
-    let speeds: Vec<f64> = obs.iter().map(|o| o.speed_hz).collect();
     Some(LackOfFit {
-        structure: structure(&speeds, &rows),
+        structure: if scanned {
+            structure(&speeds, &rows)
+        } else {
+            None
+        },
+        support_mode,
         level_from: source,
         level_ratio: chi2 / dof as f64,
         level_p,

@@ -29,6 +29,12 @@
 //!   this filter keeps the family-wise rate (independent filtering:
 //!   Bourgon, Gentleman & Huber 2010, *PNAS* 107). A bearing whose fit is
 //!   inside its noise spends no share of the run's false-alarm rate.
+//! - **support mode** (noise columns only): the score test of an Ω⁴ term
+//!   on each direction's stiffness ([`crate::estimate::lack_of_fit::
+//!   support_mode`]: a support with a second mode above the speed range,
+//!   whose χ² excess the level test cannot see), χ²(2) below
+//!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (0/600 clean runs
+//!   with columns flagged by it, `scripts/bench-trust.sh 300 columns`).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
 //! machines, detections on a pedestal with its own sub-base): docs/trust.md.
@@ -36,6 +42,7 @@
 use super::estimator::SCATTER_LEVEL_TOLERANCE;
 use super::{Identification, Warning, WarningKind};
 use crate::estimate::noise::NoiseSource;
+use crate::estimate::pedestal::CHI2_P_THRESHOLD;
 use crate::estimate::robust;
 use crate::estimate::Observation;
 
@@ -46,6 +53,11 @@ pub const FAMILY_FALSE_ALARM: f64 = 0.01;
 /// residuals is taken for model error [-].
 pub const STRUCTURE_LEVEL: f64 = 1.0;
 
+/// False-alarm rate per run of the support-mode test
+/// ([`crate::estimate::lack_of_fit::support_mode`], noise columns only),
+/// Bonferroni over the bearings tested [-].
+pub const SUPPORT_FALSE_ALARM: f64 = 0.001;
+
 /// Adds a [`WarningKind::LackOfFit`] warning to every pedestal whose fit
 /// shows model error (module docs), and updates `trusted`.
 pub fn mark_lack_of_fit(identification: &mut Identification) {
@@ -55,6 +67,10 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
         .filter(|n| n.lack_of_fit.is_some())
         .count();
     let alpha = FAMILY_FALSE_ALARM / judged.max(1) as f64;
+    // Noise columns' level test: at most the χ² limit beyond which the fit
+    // was judged before the support-mode test made every fit with columns
+    // judged (`lack_of_fit::assess`): the level rule is unchanged by it.
+    let level_alpha = alpha.min(CHI2_P_THRESHOLD);
     // The structure rule's share: over the bearings it can flag (module docs).
     let can_flag = identification
         .noise
@@ -63,6 +79,14 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
         .filter(|l| l.structure.is_some() && l.level_ratio > STRUCTURE_LEVEL)
         .count();
     let alpha_structure = FAMILY_FALSE_ALARM / can_flag.max(1) as f64;
+    // The support-mode test's share: over the bearings it was made at.
+    let support_tested = identification
+        .noise
+        .values()
+        .filter_map(|n| n.lack_of_fit)
+        .filter(|l| l.support_mode.is_some())
+        .count();
+    let alpha_support = SUPPORT_FALSE_ALARM / support_tested.max(1) as f64;
     let levels: Vec<(String, f64)> = identification
         .noise
         .iter()
@@ -79,8 +103,8 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
         };
         let mut reasons = Vec::new();
         match l.level_from {
-            NoiseSource::Columns if l.level_p < alpha => reasons.push(format!(
-                "χ²/dof = {:.3} against its noise columns (p = {:.1e}, limit {alpha:.1e})",
+            NoiseSource::Columns if l.level_p < level_alpha => reasons.push(format!(
+                "χ²/dof = {:.3} against its noise columns (p = {:.1e}, limit {level_alpha:.1e})",
                 l.level_ratio, l.level_p
             )),
             NoiseSource::Scatter | NoiseSource::Digits
@@ -122,6 +146,17 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
                     s.p_value,
                     s.shape_p_value,
                     s.mean_p_value
+                ));
+            }
+        }
+        if let Some(t) = l.support_mode {
+            if t.p_value < alpha_support {
+                reasons.push(format!(
+                    "its dynamic stiffness does not follow one mass on one spring over speed: an Ω⁴ term, what a support with a second mode above the speed range adds (a sub-base, a frame: per direction K − Ω²M − Ω⁴Q below that mode, Q > 0), explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model (χ²(2) p = {:.1e}, limit {alpha_support:.1e}: {SUPPORT_FALSE_ALARM} over the {support_tested} bearing(s) tested); Ω⁴Q at the top speed is {:+.1} % (y) and {:+.1} % (z) of the stiffness (positive: it falls faster than one mass allows); the k and m printed are then the support's apparent values, not the pedestal's",
+                    t.statistic,
+                    t.p_value,
+                    100.0 * t.drop_at_top[0],
+                    100.0 * t.drop_at_top[1]
                 ));
             }
         }
