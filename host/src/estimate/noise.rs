@@ -173,10 +173,13 @@ impl ColumnDigits {
     /// resolution, and a bearing written with fewer digits than another
     /// would otherwise be given the other's finer floor.
     pub fn of_rows(rows: &[&Measurement]) -> [ColumnDigits; 8] {
-        Self::of_digit_rows(
-            rows.iter()
-                .map(|m| -> [Option<(u32, i32)>; 8] { std::array::from_fn(|c| digits_of(m, c)) }),
-        )
+        // Each number's digits counted once: every column reads its own of
+        // each row, and an iterator would count all eight for each column.
+        let digits: Vec<[Option<(u32, i32)>; 8]> = rows
+            .iter()
+            .map(|m| std::array::from_fn(|c| digits_of(m, c)))
+            .collect();
+        Self::of_digit_rows(digits.iter().copied())
     }
 
     /// [`ColumnDigits::of_rows`] from the [`digits_of`] of every number of
