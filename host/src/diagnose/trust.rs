@@ -345,10 +345,13 @@ mod tests;
 /// shows, per direction, its series stiffness, an apparent mass and the Ω⁴
 /// coefficient (three numbers for the four of `pedestal_sub_base`), so the
 /// sub-base is not offered (`SUB_BASE_REL_SE`) and what is printed is the
-/// support's apparent k and m. `steps` are the kept steps.
+/// support's apparent k and m. `steps` are the search's steps (dropped ones
+/// act nowhere).
 pub fn judge_support(conclusion: &mut Conclusion, prep: &Prepared, steps: &[Step]) {
     for (name, why) in support_reasons(prep) {
-        let acted = steps.iter().any(|s| acts_at(s, &name));
+        let acted = steps
+            .iter()
+            .any(|s| s.dropped.is_none() && acts_at(s, &name));
         if acted {
             continue;
         }
@@ -374,9 +377,7 @@ fn acts_at(s: &Step, name: &str) -> bool {
 /// (bearing, reason) for every bearing of `prep` whose base model fails the
 /// support-mode test at its family-wise rate ([`judge_support`]).
 pub fn support_reasons(prep: &Prepared) -> Vec<(String, String)> {
-    use crate::identify::trust::SUPPORT_FALSE_ALARM;
-    let tested = prep.support_modes.iter().flatten().count();
-    let alpha = SUPPORT_FALSE_ALARM / tested.max(1) as f64;
+    let alpha = crate::identify::trust::support_limit(prep.support_modes.iter().flatten().count());
     prep.bearings
         .iter()
         .zip(&prep.support_modes)

@@ -499,15 +499,7 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
         &physical,
         &where_after,
     );
-    super::trust::judge_support(
-        &mut conclusion,
-        &prep,
-        &steps
-            .iter()
-            .filter(|s| s.dropped.is_none())
-            .cloned()
-            .collect::<Vec<_>>(),
-    );
+    super::trust::judge_support(&mut conclusion, &prep, &steps);
     let unexplained = if conclusion.verdict.contains(super::trust::UNEXPLAINED) {
         super::locate::unexplained(&where_after, super::trust::AT_THE_FLOOR)
     } else {

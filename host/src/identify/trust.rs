@@ -58,6 +58,13 @@ pub const STRUCTURE_LEVEL: f64 = 1.0;
 /// Bonferroni over the bearings tested [-].
 pub const SUPPORT_FALSE_ALARM: f64 = 0.001;
 
+/// The support-mode test's limit on one bearing's p-value when it was made
+/// at `tested` bearings of the run: [`SUPPORT_FALSE_ALARM`] shared among
+/// them (Bonferroni) [-]. One rule for identify and diagnose.
+pub fn support_limit(tested: usize) -> f64 {
+    SUPPORT_FALSE_ALARM / tested.max(1) as f64
+}
+
 /// Adds a [`WarningKind::LackOfFit`] warning to every pedestal whose fit
 /// shows model error (module docs), and updates `trusted`.
 pub fn mark_lack_of_fit(identification: &mut Identification) {
@@ -86,7 +93,7 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
         .filter_map(|n| n.lack_of_fit)
         .filter(|l| l.support_mode.is_some())
         .count();
-    let alpha_support = SUPPORT_FALSE_ALARM / support_tested.max(1) as f64;
+    let alpha_support = support_limit(support_tested);
     let levels: Vec<(String, f64)> = identification
         .noise
         .iter()
