@@ -204,6 +204,9 @@ fn a_sub_base_under_the_stiff_block_is_untrusted_and_named() {
 /// PLINTH DIR 5 sub-base`, session 27): identify B1 untrusted 5/5, ok but
 /// wrong 0/5; diagnose untrusted 5/5 (nothing named in 3, a runout at B1
 /// the machine-level check rejects in 2), wrong and trusted 0/5.
+/// Session 28: diagnose names `pedestal_sub_base` (above the range) at B1
+/// 5/5, and its reason (`diagnose::trust::above_range_reason`) says the same:
+/// the pedestal's and the sub-base's values cannot be separated.
 #[test]
 fn a_sub_base_under_the_stiff_block_is_untrusted_with_its_reason() {
     let run = stored("sub-base");
