@@ -13,8 +13,13 @@
 //! | `probe_runout` | a constant (speed-independent) 1X vector r added to the `rel` readings of one bearing | `r_y_re`, `r_y_im`, `r_z_re`, `r_z_im` [m] |
 //! | `sensor_delay` | a time delay τ on the pedestal (seismic) channels of one bearing: ped_meas = ped·e^{−iΩτ} | `tau` [s] |
 //! | `foundation_coupling` | the pedestals stand on a flexible base (a body of mass M_B on springs K_B and dampers C_B to ground, per direction, `sim::base`); the pedestals' k, c act between pedestal and base, so one pedestal moves under the others' forces, through a speed-dependent complex coupling (`estimate::base`) | `base_k_y`, `base_k_z` [N/m], `base_m_y`, `base_m_z` [kg], `base_c_y`, `base_c_z` [N·s/m] |
-//! | `pedestal_sub_base` | one pedestal stands on its own flexible sub-base (a body of mass M_S on springs K_S and dampers C_S to ground, per direction, `sim::base`): the pedestal's k, c act between pedestal and sub-base, a two-degree-of-freedom pedestal per direction; the sub-base is not measured | `sub_k_y`, `sub_k_z` [N/m], `sub_m_y`, `sub_m_z` [kg], `sub_c_y`, `sub_c_z` [N·s/m] |
+//! | `pedestal_sub_base` | one pedestal stands on its own flexible sub-base (a body of mass M_S on springs K_S and dampers C_S to ground, per direction, `sim::base`): the pedestal's k, c act between pedestal and sub-base, a two-degree-of-freedom pedestal per direction; the sub-base is not measured. When its mode lies above the speed range (variant `above_range`) only the first terms of its dynamic stiffness per direction, K − Ω²M − Ω⁴Q − …, are seen, and the effect is the Ω⁴ coefficient per direction on top of the pedestal's apparent k, m | `sub_k_y`, `sub_k_z` [N/m], `sub_m_y`, `sub_m_z` [kg], `sub_c_y`, `sub_c_z` [N·s/m]; above the range [`SUB_BASE_ABOVE_RANGE`]: `q_y`, `q_z` [N·s⁴/m] |
 //! | `bearing_coefficients` | the bearing table in `bearings.csv` does not describe the bearing in the machine. For an oil-film bearing (geometry in the machine file) the table is computed for another radial clearance; otherwise the table's K and C are scaled. The correction takes the written table to the true one | `clearance_ratio` = c_true / c_written [-] (oil film, which also records `clearance_true`, `clearance_written` [m]); `k_scale` = K_true / K_written, `c_scale` = C_true / C_written [-] (tables; for oil films the same ratios at the first speed, for reference) |
+
+/// Parameters of `pedestal_sub_base` when its mode lies above the speed
+/// range: the Ω⁴ coefficients q_y, q_z [N·s⁴/m] of the support's dynamic
+/// stiffness (module table).
+pub const SUB_BASE_ABOVE_RANGE: [&str; 2] = ["q_y", "q_z"];
 
 /// An effect the pedestal model may be missing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

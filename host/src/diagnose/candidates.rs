@@ -10,6 +10,7 @@
 //! | `pedestal_mass_anisotropy` | m split into m_y, m_z | m_y − m_z (= 0) |
 //! | `probe_runout` | F = K*·(rel − r), r constant | r_y, r_z complex, 4 real (= 0) |
 //! | `sensor_delay` | a delayed channel reads q·e^{−iΩτ}: on both pedestal channels (the simulator's definition), one of them, both rel probes or one | τ (= 0), profiled; six variants per bearing, each counted as a candidate |
+//! | `pedestal_sub_base`, variant `above_range` | −Ω⁴·q on each direction's stiffness: a support whose second mode lies above the speed range ([`ABOVE_RANGE`]) | q_y, q_z (= 0) |
 //! | `bearing_coefficients` | K* → K*_table + K*_film(ρ·c_w) − K*_film(c_w) for an oil-film table whose geometry the machine file gives; K + iΩC → (1 + δ)·K + iΩC for any other table (`super::bearing_table`) | δ = ρ − 1 or k_scale − 1 (= 0), profiled |
 //!
 //! `foundation_coupling` is not a linear augmentation of one pedestal: the
@@ -34,6 +35,17 @@ pub const BEARING_COEFFICIENTS: &str = "bearing_coefficients";
 pub const OFFER_STIFFNESS_RATIO: bool = true;
 /// Name of the one-pedestal base effect (`crate::effects`).
 pub const PEDESTAL_SUB_BASE: &str = "pedestal_sub_base";
+/// Variant of `pedestal_sub_base` whose sub-base mode lies above the speed
+/// range. Below that mode the two-mass support's dynamic stiffness per
+/// direction is K − Ω²M − Ω⁴Q − …, Q = m₂²r²/(k₁ + k₂) > 0
+/// (`crate::estimate::lack_of_fit::support`): the candidate adds −Ω⁴q_y,
+/// −Ω⁴q_z to the pedestal. The block's and the sub-base's own k and m are
+/// not separable from these (docs/diagnose.md, "pedestal_sub_base above
+/// the range": Cramér–Rao bounds of the full two-mass model, shared
+/// masses, on the fourth unseen machine: m ±132 %, k ±200-220 %), so the
+/// pedestal values stay the support's apparent ones and untrusted
+/// (`super::trust::judge_support`).
+pub const ABOVE_RANGE: &str = "above_range";
 
 /// A parameter of a model: a linear term or a nonlinear scalar, by index.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -156,6 +168,18 @@ fn library_offering(model: &Model, n_bearings: usize, stiffness_ratio: bool) -> 
                 })
                 .collect();
             out.push(add_terms(model, EffectKind::ProbeRunout, b, terms));
+        }
+        if !model
+            .terms
+            .iter()
+            .any(|t| matches!(t, Term::Quartic { bearing, .. } if *bearing == b))
+        {
+            let terms = (0..2)
+                .map(|dir| Term::Quartic { bearing: b, dir })
+                .collect();
+            let mut c = add_terms(model, EffectKind::PedestalSubBase, b, terms);
+            c.variant = Some(ABOVE_RANGE.to_string());
+            out.push(c);
         }
         let has_clearance = model
             .nonlinear
@@ -296,9 +320,9 @@ mod tests {
         // With damping in the base, pedestal damping is not a candidate.
         let lib = library_offering(&paper_model(2), 2, true);
         assert!(lib.iter().all(|c| c.effect != EffectKind::PedestalDamping));
-        // Per bearing: loss, cross, mass, runout, table stiffness ratio,
-        // 6 delays.
-        assert_eq!(lib.len(), 2 * 11);
+        // Per bearing: loss, cross, mass, runout, sub-base above the range,
+        // table stiffness ratio, 6 delays.
+        assert_eq!(lib.len(), 2 * 12);
     }
 
     #[test]
@@ -313,6 +337,9 @@ mod tests {
                 // Without an oil-film geometry: the stiffness ratio alone.
                 assert_eq!(names, ["k_scale"]);
                 assert!(c.effect.parameter_names().contains(&"k_scale"));
+            } else if c.variant.as_deref() == Some(ABOVE_RANGE) {
+                assert_eq!(c.effect, EffectKind::PedestalSubBase);
+                assert_eq!(names, crate::effects::SUB_BASE_ABOVE_RANGE);
             } else {
                 assert_eq!(names, c.effect.parameter_names(), "{}", c.effect.name());
             }

@@ -180,6 +180,24 @@ pub fn resimulate(
     if let Some(f) = foundation {
         put_bases(&mut machine, prep, f)?;
     }
+    let omega: Vec<f64> = prep
+        .speeds_hz
+        .iter()
+        .map(|f| std::f64::consts::TAU * f)
+        .collect();
+    for (b, name) in prep.bearings.iter().enumerate() {
+        let q: [Option<f64>; 2] =
+            std::array::from_fn(|dir| value(Term::Quartic { bearing: b, dir }));
+        if q.iter().all(Option::is_none) || foundation.is_some_and(|f| f.pedestal(b).is_some()) {
+            continue;
+        }
+        let i = machine.bearing_index(name)?;
+        let Some(p) = machine.bearings[i].pedestal else {
+            continue;
+        };
+        put_support(&mut machine, i, &p, q.map(|v| v.unwrap_or(0.0)), &omega)
+            .with_context(|| format!("the Ω⁴ support identified under bearing {name}"))?;
+    }
     let response = unbalance_response(&machine, &prep.speeds_hz, &effects)
         .map_err(|e| anyhow!("re-simulating the machine: {e}"))?;
     let mut out: Readings = vec![vec![None; prep.speeds_hz.len()]; nb];
@@ -272,6 +290,94 @@ pub fn replaced_bases(machine: &Machine, bearings: &[String], foundation: bool) 
             ""
         }
     ))
+}
+
+/// Stands bearing `i`'s pedestal `p` (its apparent k, m, c, as identified
+/// with the Ω⁴ terms q) on a sub-base of the simulator
+/// (`crate::sim::Bearing::sub_base`) whose chain has the same dynamic
+/// stiffness to order Ω⁴, K − Ω²M − Ω⁴q + iΩc per direction
+/// (`pedestal_sub_base` above the range, `super::candidates::ABOVE_RANGE`).
+/// The data fix only those three numbers per direction, so one chain of
+/// the family is chosen ([`support_chain`]): the share f of the apparent
+/// mass on the pedestal (m₁ = f·M) that keeps the chain closest to
+/// K − Ω²M − Ω⁴q over the speeds `omega` [rad/s] (the largest deviation
+/// relative to K, f on a grid of 0.02-0.90).
+fn put_support(
+    machine: &mut Machine,
+    i: usize,
+    p: &Pedestal,
+    q: [f64; 2],
+    omega: &[f64],
+) -> Result<()> {
+    let k = [p.k_y, p.k_z];
+    let c = [p.c_y.max(0.0), p.c_z.max(0.0)];
+    let deviation = |f: f64| -> Option<f64> {
+        let mut worst = 0.0f64;
+        for d in 0..2 {
+            let (k1, c1, k2, c2, m2) = support_chain(k[d], p.m, q[d], c[d], f)?;
+            for &w in omega {
+                let zp = Complex::new(k1, w * c1);
+                let zs = Complex::new(k2, w * c2);
+                let chain = zp - w * w * f * p.m - zp * zp / (zp + zs - w * w * m2);
+                let poly = Complex::new(k[d] - w * w * p.m - w.powi(4) * q[d], w * c[d]);
+                worst = worst.max((chain - poly).norm() / k[d]);
+            }
+        }
+        worst.is_finite().then_some(worst)
+    };
+    let f = (1..=45)
+        .map(|j| 0.02 * j as f64)
+        .filter_map(|f| deviation(f).map(|v| (f, v)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(f, _)| f)
+        .ok_or_else(|| anyhow!("apparent stiffness or mass not positive"))?;
+    let mut ped = *p;
+    let mut base = Base {
+        name: format!("{}.identified_support", machine.bearings[i].name),
+        m: [0.0; 2],
+        k: [0.0; 2],
+        c: [0.0; 2],
+        eta: 0.0,
+    };
+    for d in 0..2 {
+        let (k1, c1, k2, c2, m2) = support_chain(k[d], p.m, q[d], c[d], f)
+            .ok_or_else(|| anyhow!("apparent stiffness or mass not positive"))?;
+        if d == 0 {
+            (ped.k_y, ped.c_y) = (k1, c1);
+        } else {
+            (ped.k_z, ped.c_z) = (k1, c1);
+        }
+        (base.k[d], base.c[d], base.m[d]) = (k2, c2, m2);
+    }
+    ped.m = f * p.m;
+    base.check().map_err(|e| anyhow!("{e}"))?;
+    let name = machine.bearings[i].name.clone();
+    machine.set_pedestal(&name, Some(ped))?;
+    machine.bearings[i].base = None;
+    machine.bearings[i].sub_base = Some(base);
+    Ok(())
+}
+
+/// The chain (k₁ [N/m], c₁ [N·s/m], k₂ [N/m], c₂ [N·s/m], M_S [kg]) of a
+/// pedestal of mass f·M on a sub-base whose dynamic stiffness is
+/// K − Ω²M − Ω⁴q + iΩc to order Ω⁴ (K [N/m], M [kg], q [N·s⁴/m],
+/// c [N·s/m]): with A = (1 − f)·M the mass seen through the sub-base,
+/// r = 1/(1 + Kq/A²), S = k₁ + k₂ = A²/(q·r²), k₁ = r·S, k₂ = (1 − r)·S,
+/// M_S = A/r², so that K = r(1 − r)S, M = f·M + M_S·r² and
+/// q = M_S²r²/S; damping proportional to stiffness (c_i = c·k_i/K, the
+/// series c at low speed). A q not above 10⁻⁶·A²/K (none, or negative)
+/// is taken as that: a sub-base spring 10⁶ times stiffer than K. `None`
+/// when K or A is not positive.
+fn support_chain(k: f64, m: f64, q: f64, c: f64, f: f64) -> Option<(f64, f64, f64, f64, f64)> {
+    let a = (1.0 - f) * m;
+    if !(k > 0.0 && a > 0.0) {
+        return None;
+    }
+    let q = q.max(1e-6 * a * a / k);
+    let r = 1.0 / (1.0 + k * q / (a * a));
+    let s = a * a / (q * r * r);
+    let (k1, k2) = (r * s, (1.0 - r) * s);
+    Some((k1, c * k1 / k, k2, c * k2 / k, a / (r * r)))
 }
 
 /// Stands the pedestals of each identified base on a base element of the

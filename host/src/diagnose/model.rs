@@ -77,6 +77,16 @@ pub enum Term {
         /// Imaginary (true) or real (false) part.
         imag: bool,
     },
+    /// The Ω⁴ coefficient q [N·s⁴/m] of one direction's pedestal dynamic
+    /// stiffness, k − Ω²m − Ω⁴q + iΩc: a support whose second mode lies
+    /// above the speed range (`pedestal_sub_base` above the range,
+    /// `crate::estimate::lack_of_fit::support`).
+    Quartic {
+        /// Bearing index.
+        bearing: usize,
+        /// Direction.
+        dir: usize,
+    },
 }
 
 impl Term {
@@ -87,7 +97,8 @@ impl Term {
             | Term::Mass { bearing, .. }
             | Term::Damping { bearing, .. }
             | Term::CrossStiffness { bearing }
-            | Term::Runout { bearing, .. } => [Some(bearing), None],
+            | Term::Runout { bearing, .. }
+            | Term::Quartic { bearing, .. } => [Some(bearing), None],
         }
     }
 
@@ -110,6 +121,7 @@ impl Term {
             Term::Runout { dir, imag, .. } => {
                 format!("r_{}_{}", DIR_NAMES[dir], if imag { "im" } else { "re" })
             }
+            Term::Quartic { dir, .. } => format!("q_{}", DIR_NAMES[dir]),
         }
     }
 
@@ -447,6 +459,11 @@ impl Model {
                 Term::Damping { bearing, dir } => {
                     let p = pos(bearing)?;
                     entry(2 * p + dir, 2 * p + dir, Complex::new(0.0, omega), &mut col);
+                }
+                Term::Quartic { bearing, dir } => {
+                    let p = pos(bearing)?;
+                    let v = Complex::new(-omega.powi(4), 0.0);
+                    entry(2 * p + dir, 2 * p + dir, v, &mut col);
                 }
                 Term::CrossStiffness { bearing } => {
                     let p = pos(bearing)?;
