@@ -157,6 +157,13 @@ fn assert_same_but_rounding(a: &RunNoise, b: &RunNoise) {
             let same = match (x, y) {
                 (Some(Scatter::Absolute(x)), Some(Scatter::Absolute(y)))
                 | (Some(Scatter::Relative(x)), Some(Scatter::Relative(y))) => close(*x, *y),
+                (
+                    Some(Scatter::Mixed { fraction, floor }),
+                    Some(Scatter::Mixed {
+                        fraction: f,
+                        floor: g,
+                    }),
+                ) => close(*fraction, *f) && close(*floor, *g),
                 (None, None) => true,
                 _ => false,
             };
