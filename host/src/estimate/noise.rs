@@ -287,10 +287,16 @@ pub enum Scatter {
 impl Scatter {
     /// The sd [m] of each real part of a phasor of magnitude `magnitude` [m].
     pub fn sd(&self, magnitude: f64) -> f64 {
+        self.sd_with(|| magnitude)
+    }
+
+    /// [`Scatter::sd`] of the magnitude [m] `magnitude` gives, called only
+    /// by a law that reads it (not by [`Scatter::Absolute`]).
+    pub fn sd_with(&self, magnitude: impl FnOnce() -> f64) -> f64 {
         match *self {
             Scatter::Absolute(s) => s,
-            Scatter::Relative(f) => f * magnitude,
-            Scatter::Mixed { fraction, floor } => (fraction * magnitude).hypot(floor),
+            Scatter::Relative(f) => f * magnitude(),
+            Scatter::Mixed { fraction, floor } => (fraction * magnitude()).hypot(floor),
         }
     }
 }
@@ -388,13 +394,15 @@ impl BearingNoise {
             local_fits(&speeds)
         };
         let mut scatter = [None; 4];
+        // The channels' samples are at the same points as a rule: one set of windows.
+        let mut windows = WindowCache::default();
         for (ch, slot) in scatter.iter_mut().enumerate() {
             *slot = match known[ch] {
                 Some(law) => law,
                 None => {
                     let values: Vec<Complex<f64>> =
                         order.iter().map(|&i| complex_value(rows[i], ch)).collect();
-                    scatter_law_of(&fits, &values)
+                    scatter_law_with(&fits, &values, &mut windows)
                 }
             };
         }
@@ -404,7 +412,7 @@ impl BearingNoise {
             .map(|(m, dv)| {
                 // Each channel's sd once, for its real and imaginary part.
                 let sd: [f64; 4] = std::array::from_fn(|ch| {
-                    scatter[ch].map_or(0.0, |law| law.sd(complex_value(m, ch).norm()))
+                    scatter[ch].map_or(0.0, |law| law.sd_with(|| complex_value(m, ch).norm()))
                 });
                 std::array::from_fn(|c| {
                     let s = sd[c / 2];

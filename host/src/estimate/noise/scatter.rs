@@ -175,11 +175,40 @@ pub(super) fn scatter_law_of(
     fits: &[Option<LocalFit>],
     values: &[Complex<f64>],
 ) -> Option<Scatter> {
+    scatter_law_with(fits, values, &mut WindowCache::default())
+}
+
+/// The windows of one series' samples ([`windows_of`]) and the points those
+/// samples are at: the windows depend on the local fits and on which points
+/// have a sample only (a sample's `floor` is its fit's), so every channel of
+/// a bearing whose samples are at the same points shares them.
+#[derive(Default)]
+pub(super) struct WindowCache {
+    /// The points of the samples the windows were made for, and the windows.
+    made: Option<(Vec<usize>, Vec<Window>)>,
+}
+
+/// [`scatter_law_of`] with the windows taken from `cache` when the samples
+/// are at the points they were made for (the same `fits`), else made and
+/// kept there.
+pub(super) fn scatter_law_with(
+    fits: &[Option<LocalFit>],
+    values: &[Complex<f64>],
+    cache: &mut WindowCache,
+) -> Option<Scatter> {
     let samples = samples_of(fits, values);
     if samples.len() < 2 {
         return None;
     }
-    let windows = windows_of(fits, &samples);
+    let points: Vec<usize> = samples.iter().map(|s| s.point).collect();
+    let windows = match cache.made.take() {
+        Some((p, w)) if p == points => (p, w),
+        _ => {
+            let w = windows_of(fits, &samples);
+            (points, w)
+        }
+    };
+    let windows = &cache.made.insert(windows).1;
     // Start: one sd at every speed, from the median of the standardised
     // samples. From there a resonance's model error (residuals that grow
     // with |X|) is left out before a fraction of |X| is ever fitted; a
@@ -196,7 +225,7 @@ pub(super) fn scatter_law_of(
     }
     let (law, _) = settle(
         &samples,
-        &windows,
+        windows,
         Law {
             alpha: 0.0,
             beta: sd * sd,
@@ -242,11 +271,21 @@ struct Sample {
     point: usize,
     /// The residual y − smooth [m] (not standardised).
     e: Complex<f64>,
+    /// |e|² [m²].
+    nsq: f64,
     /// Σ c_r²·m_r² over the window [m²] (c_r: the residual's weight on
     /// point r, m_r its smooth magnitude).
     along: f64,
     /// Σ c_r² = 1 − leverage [-].
     floor: f64,
+}
+
+/// True when |z| = hypot(re, im) is positive, as `z.norm() > 0.0` says
+/// (an infinite part makes it +∞, else a NaN part NaN), without the hypot.
+pub(super) fn magnitude_positive(z: Complex<f64>) -> bool {
+    z.re.is_infinite()
+        || z.im.is_infinite()
+        || (!z.re.is_nan() && !z.im.is_nan() && (z.re != 0.0 || z.im != 0.0))
 }
 
 /// The samples of a series (one per point with a local fit and a finite,
@@ -275,7 +314,7 @@ fn samples_of(fits: &[Option<LocalFit>], values: &[Complex<f64>]) -> Vec<Sample>
                 .map(|r| fit.residual_weight(j, r).powi(2) * m2[fit.start + r])
                 .sum();
             let e = values[j] - s;
-            let ok = s.norm() > 0.0
+            let ok = magnitude_positive(s)
                 && along > 0.0
                 && along.is_finite()
                 && e.re.is_finite()
@@ -283,6 +322,7 @@ fn samples_of(fits: &[Option<LocalFit>], values: &[Complex<f64>]) -> Vec<Sample>
             ok.then_some(Sample {
                 point: j,
                 e,
+                nsq: e.norm_sqr(),
                 along,
                 floor: 1.0 - fit.leverage,
             })
@@ -383,7 +423,7 @@ fn adequate(samples: &[Sample], windows: &[Window], law: Law) -> Vec<bool> {
     prefix.push(0.0);
     let mut sum = 0.0;
     for s in samples {
-        sum += s.e.norm_sqr() / law.variance(s);
+        sum += s.nsq / law.variance(s);
         prefix.push(sum);
     }
     // +1 where a rejected window starts, −1 past its end.
@@ -414,7 +454,13 @@ struct Law {
 impl Law {
     /// Variance [m²] of each real part of a sample's residual.
     fn variance(&self, s: &Sample) -> f64 {
-        (self.alpha * s.along + self.beta * s.floor).max(f64::MIN_POSITIVE)
+        self.variance_at(s.along, s.floor)
+    }
+
+    /// Variance [m²] of each real part of a residual whose `along` [m²] and
+    /// `floor` [-] are given ([`Sample`]).
+    fn variance_at(&self, along: f64, floor: f64) -> f64 {
+        (self.alpha * along + self.beta * floor).max(f64::MIN_POSITIVE)
     }
 
     /// True when both terms moved by less than 1e-9 of their size.
@@ -430,7 +476,7 @@ impl Law {
             .iter()
             .map(|s| {
                 let v = self.variance(s);
-                2.0 * v.ln() + s.e.norm_sqr() / v
+                2.0 * v.ln() + s.nsq / v
             })
             .sum()
     }
@@ -472,21 +518,13 @@ fn fit_law(samples: &[&Sample], start: Law) -> Option<Law> {
     let n = samples.len() as f64;
     let floor_only = Law {
         alpha: 0.0,
-        beta: samples
-            .iter()
-            .map(|s| s.e.norm_sqr() / (2.0 * s.floor))
-            .sum::<f64>()
-            / n,
+        beta: samples.iter().map(|s| s.nsq / (2.0 * s.floor)).sum::<f64>() / n,
     };
     if !(floor_only.beta.is_finite()) {
         return None;
     }
     let fraction_only = Law {
-        alpha: samples
-            .iter()
-            .map(|s| s.e.norm_sqr() / (2.0 * s.along))
-            .sum::<f64>()
-            / n,
+        alpha: samples.iter().map(|s| s.nsq / (2.0 * s.along)).sum::<f64>() / n,
         beta: 0.0,
     };
     match two_terms(samples, start, floor_only, fraction_only) {
@@ -517,16 +555,22 @@ fn two_terms(samples: &[&Sample], start: Law, floor_only: Law, fraction_only: La
     if !(law.alpha.is_finite() && law.beta.is_finite()) {
         return None;
     }
+    // What every iteration reads of each sample, made once: along, floor,
+    // q = along/a_ref and y = |e|²/2 (the least-squares target).
+    let terms: Vec<[f64; 4]> = samples
+        .iter()
+        .map(|s| [s.along, s.floor, s.along / a_ref, 0.5 * s.nsq])
+        .collect();
     for _ in 0..LAW_ITERATIONS {
         let (mut saa, mut sab, mut sbb, mut ta, mut tb) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for s in samples {
-            let v = law.variance(s);
-            let (w, y, q) = (1.0 / (v * v), 0.5 * s.e.norm_sqr(), s.along / a_ref);
+        for &[along, floor, q, y] in &terms {
+            let v = law.variance_at(along, floor);
+            let w = 1.0 / (v * v);
             saa += w * q * q;
-            sab += w * q * s.floor;
-            sbb += w * s.floor * s.floor;
+            sab += w * q * floor;
+            sbb += w * floor * floor;
             ta += w * q * y;
-            tb += w * s.floor * y;
+            tb += w * floor * y;
         }
         let det = saa * sbb - sab * sab;
         let floor_alone = (0.0, tb / sbb);

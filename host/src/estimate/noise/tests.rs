@@ -281,3 +281,54 @@ fn an_exact_12_digit_run_lists_no_speed() {
         }
     }
 }
+
+#[test]
+fn magnitude_positive_says_what_the_hypot_says() {
+    let parts = [
+        0.0,
+        -0.0,
+        f64::MIN_POSITIVE,
+        5e-324,
+        -5e-324,
+        1.0,
+        -3.5e300,
+        f64::MAX,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+    ];
+    for re in parts {
+        for im in parts {
+            let z = Complex::new(re, im);
+            assert_eq!(magnitude_positive(z), z.norm() > 0.0, "{z}");
+        }
+    }
+}
+
+#[test]
+fn channels_sharing_windows_get_the_laws_each_gets_alone() {
+    // Two channels of one series of speeds, one with a point whose smooth
+    // value is zero (no sample there: other windows), sharing one cache.
+    let mut rng = rand::rngs::StdRng::seed_from_u64(27);
+    let speeds: Vec<f64> = (0..80).map(|i| 10.0 + 0.5 * i as f64).collect();
+    let fits = local_fits(&speeds);
+    let noisy = |rng: &mut rand::rngs::StdRng, scale: f64| -> Vec<Complex<f64>> {
+        speeds
+            .iter()
+            .map(|f| {
+                Complex::new(1e-6 / f, 2e-6 / (f * f))
+                    + scale * Complex::new(normal(rng), normal(rng))
+            })
+            .collect()
+    };
+    let a = noisy(&mut rng, 1e-9);
+    let mut b = noisy(&mut rng, 3e-9);
+    let c = noisy(&mut rng, 2e-9);
+    b[40..47].fill(Complex::new(0.0, 0.0));
+    let mut cache = WindowCache::default();
+    for values in [&a, &b, &c, &a] {
+        let alone = scatter_law_of(&fits, values);
+        assert!(alone.is_some());
+        assert_eq!(scatter_law_with(&fits, values, &mut cache), alone);
+    }
+}
