@@ -239,6 +239,9 @@ pub(super) fn scatter_law_with(
 /// points it keeps.
 fn settle(samples: &[Sample], windows: &[Window], mut law: Law) -> (Law, Vec<bool>) {
     let mut kept_before: Vec<bool> = Vec::new();
+    // The previous round's fit: the start it read (`None`: it read none,
+    // [`two_terms`] reads it only with both terms positive) and its law.
+    let mut fitted_before: Option<(Option<Law>, Law)> = None;
     for _ in 0..MAX_ROUNDS {
         let kept = adequate(samples, windows, law);
         let chosen: Vec<&Sample> = samples
@@ -249,9 +252,17 @@ fn settle(samples: &[Sample], windows: &[Window], mut law: Law) -> (Law, Vec<boo
         if chosen.len() < 2 {
             return (law, kept);
         }
-        let Some(next) = fit_law(&chosen, law) else {
-            return (law, kept);
+        let start = (law.alpha > 0.0 && law.beta > 0.0).then_some(law);
+        // The same points and the same start: the previous round's fit,
+        // which [`fit_law`] would repeat exactly.
+        let next = match fitted_before {
+            Some((read, fitted)) if kept == kept_before && read == start => fitted,
+            _ => match fit_law(&chosen, law) {
+                Some(next) => next,
+                None => return (law, kept),
+            },
         };
+        fitted_before = Some((start, next));
         let settled = kept == kept_before && next.close_to(law);
         law = next;
         kept_before = kept;
@@ -460,7 +471,14 @@ impl Law {
     /// Variance [m²] of each real part of a residual whose `along` [m²] and
     /// `floor` [-] are given ([`Sample`]).
     fn variance_at(&self, along: f64, floor: f64) -> f64 {
-        (self.alpha * along + self.beta * floor).max(f64::MIN_POSITIVE)
+        let v = self.alpha * along + self.beta * floor;
+        // `v.max(f64::MIN_POSITIVE)` for a v that is never NaN (α, β ≥ 0
+        // and finite, `along` and `floor` > 0 and finite), in one instruction.
+        if v < f64::MIN_POSITIVE {
+            f64::MIN_POSITIVE
+        } else {
+            v
+        }
     }
 
     /// True when both terms moved by less than 1e-9 of their size.
