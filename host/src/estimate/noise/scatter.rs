@@ -471,14 +471,7 @@ impl Law {
     /// Variance [m²] of each real part of a residual whose `along` [m²] and
     /// `floor` [-] are given ([`Sample`]).
     fn variance_at(&self, along: f64, floor: f64) -> f64 {
-        let v = self.alpha * along + self.beta * floor;
-        // `v.max(f64::MIN_POSITIVE)` for a v that is never NaN (α, β ≥ 0
-        // and finite, `along` and `floor` > 0 and finite), in one instruction.
-        if v < f64::MIN_POSITIVE {
-            f64::MIN_POSITIVE
-        } else {
-            v
-        }
+        (self.alpha * along + self.beta * floor).max(f64::MIN_POSITIVE)
     }
 
     /// True when both terms moved by less than 1e-9 of their size.
