@@ -11,7 +11,7 @@
 //! 1. `columns`: formats.md's `rel_y_sd, rel_z_sd, ped_y_sd, ped_z_sd`
 //!    (the scatter between the revolutions that made the phasor), split
 //!    equally: v_re = v_im = sd²/2. Never below the digits' variance.
-//! 2. `digits`: the digits each number carries. A number written with D
+//! 2. `digits`: the rounding each number carries. A number written with D
 //!    significant digits and decimal exponent e has ulp = 10^(e−D+1) (D is
 //!    the column's digit count, detected as the fewest digits that reproduce
 //!    every value of the column; a fixed-decimals column has an absolute ulp,
@@ -19,7 +19,13 @@
 //!    error uniform on ±ulp/2: variance ulp²/12. Truncation
 //!    ([`Quantisation::Truncation`], an option, e.g. the paper's data) leaves
 //!    an error uniform on [0, ulp) toward zero: its mean square ulp²/3 is
-//!    used (bias and scatter together).
+//!    used (bias and scatter together). A number converted from a table
+//!    that printed fewer digits (a field instrument's 1X vector table:
+//!    3-digit amplitudes, whole-degree phases, `plinth import`) carries
+//!    that table's rounding too, which its own digits (written in full
+//!    precision) no longer show: `resolution.csv` gives it per phasor
+//!    ([`table_variance`]), and each number's variance is the larger of
+//!    the two ([`rounding_variance`]). It is the floor of every source.
 //! 3. `scatter`: noise beyond the digits shows as scatter between
 //!    neighbouring speeds that a smooth response does not have. Per channel,
 //!    every point is compared with a quartic fitted over its 7 nearest
@@ -316,10 +322,11 @@ pub struct BearingNoise {
     /// The variances under the scatter law (floored by the digits), while
     /// the source is still the digits.
     pub scatter_var: Option<Vec<[f64; 8]>>,
-    /// Variance [m²] each real number has from its digits alone, row for
-    /// row ([`REAL_CHANNELS`] order): the floor of every noise law (no
-    /// reading is more precise than the digits it is written with), kept
-    /// when the source moves on. Never rescaled.
+    /// Variance [m²] each real number has from its rounding alone
+    /// ([`rounding_variance`]: its digits, or the table it was converted
+    /// from), row for row ([`REAL_CHANNELS`] order): the floor of every
+    /// noise law (no reading is more precise than the digits it is written
+    /// with), kept when the source moves on. Never rescaled.
     pub digits_var: Vec<[f64; 8]>,
     /// Factor the variances were multiplied by after the fit (1 until
     /// [`BearingNoise::rescale`]).
@@ -347,9 +354,10 @@ impl BearingNoise {
         columns: &[ColumnDigits; 8],
         quantisation: Quantisation,
     ) -> Self {
-        // Each number's variance: the one rule of `estimate::pedestal`.
+        // Each number's variance: the one rule of `estimate::pedestal`,
+        // never below the rounding the number carries.
         let variance = |m: &Measurement, c: usize, sd: Option<f64>| {
-            number_variance(quantisation, columns[c].ulp_of(m, c), sd)
+            number_variance(quantisation, columns[c].ulp_of(m, c), sd).max(table_variance(m, c))
         };
         let with_columns = !rows.is_empty() && rows.iter().all(|m| m.noise_sd.is_some());
         let digits_var = digits_variances(rows, columns, quantisation);
@@ -499,8 +507,8 @@ impl BearingNoise {
     }
 }
 
-/// The variance [m²] each real number of `rows` has from its digits alone,
-/// row for row ([`REAL_CHANNELS`] order).
+/// The variance [m²] each real number of `rows` has from its rounding
+/// alone, row for row ([`REAL_CHANNELS`] order): [`rounding_variance`].
 fn digits_variances(
     rows: &[&Measurement],
     columns: &[ColumnDigits; 8],
@@ -508,9 +516,30 @@ fn digits_variances(
 ) -> Vec<[f64; 8]> {
     rows.iter()
         .map(|m| {
-            std::array::from_fn(|c| number_variance(quantisation, columns[c].ulp_of(m, c), None))
+            std::array::from_fn(|c| rounding_variance(quantisation, columns[c].ulp_of(m, c), m, c))
         })
         .collect()
+}
+
+/// Variance [m²] of the rounding of real number `c` ([`REAL_CHANNELS`]
+/// order) of row `m`, written with unit in the last place `ulp` [m] and
+/// reduced by `quantisation`: the variance of its digits
+/// ([`number_variance`]), never below the rounding it carries from the
+/// table it was converted from ([`table_variance`]).
+pub fn rounding_variance(quantisation: Quantisation, ulp: f64, m: &Measurement, c: usize) -> f64 {
+    number_variance(quantisation, ulp, None).max(table_variance(m, c))
+}
+
+/// Variance [m²] of the rounding real number `c` ([`REAL_CHANNELS`] order)
+/// of row `m` carries from the table it was converted from: a vector
+/// table's amplitude digits and phase steps, propagated through the unit
+/// conversion and the angle transform by `plinth import` (`resolution.csv`,
+/// [`crate::rundir::resolution`]), half of its channel's complex variance;
+/// 0 when none is known or the number changed since it was read.
+pub fn table_variance(m: &Measurement, c: usize) -> f64 {
+    m.written
+        .as_ref()
+        .map_or(0.0, |w| w.floor_var_of(c, real_value(m, c)))
 }
 
 /// Real channels ([`REAL_CHANNELS`] order) with y and z exchanged.

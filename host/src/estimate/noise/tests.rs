@@ -332,3 +332,56 @@ fn channels_sharing_windows_get_the_laws_each_gets_alone() {
         assert_eq!(scatter_law_with(&fits, values, &mut cache), alone);
     }
 }
+
+/// A table's rounding (`resolution.csv`) is each number's floor: the
+/// digits' variance of numbers written in full precision is far below it,
+/// the scatter's law never takes them under it, and it follows a number
+/// through a sign change or a swap of channels (convention corrections),
+/// not through a changed value.
+#[test]
+fn a_tables_rounding_floors_every_source() {
+    let sd = [1e-9, 2e-9, 3e-9, 4e-9];
+    let rows: Vec<Measurement> = (10..=60)
+        .map(|f| {
+            let x = resonance(f as f64);
+            let mut m = Measurement {
+                speed_hz: f as f64,
+                bearing: "B".into(),
+                rel: [x, x * Complex::new(0.3, 0.7)],
+                ped: [x * 0.01, x * Complex::new(0.0, 0.02)],
+                noise_sd: None,
+                written: None,
+            };
+            m.set_resolution(sd);
+            m
+        })
+        .collect();
+    let refs: Vec<&Measurement> = rows.iter().collect();
+    let columns = ColumnDigits::of_rows(&refs);
+    let noise = BearingNoise::estimate(&refs, &columns, Quantisation::Rounding);
+    assert_eq!(noise.source, NoiseSource::Digits);
+    for (d, s) in noise
+        .digits_var
+        .iter()
+        .zip(noise.scatter_var.as_ref().unwrap())
+    {
+        for c in 0..8 {
+            let floor = 0.5 * sd[c / 2] * sd[c / 2];
+            assert!(
+                (d[c] - floor).abs() < 1e-12 * floor,
+                "{c}: {} vs {floor:e}",
+                d[c]
+            );
+            assert!(s[c] >= d[c]);
+        }
+    }
+    // Negated and swapped: the same floor, channel for channel.
+    let m = &rows[5];
+    let mut moved = m.clone();
+    moved.rel = [-m.rel[1], m.rel[0].conj()];
+    assert_eq!(table_variance(&moved, 0), 0.5 * sd[1] * sd[1]);
+    assert_eq!(table_variance(&moved, 3), 0.5 * sd[0] * sd[0]);
+    // A value changed since carries none.
+    moved.ped[0] *= 3.0;
+    assert_eq!(table_variance(&moved, 4), 0.0);
+}
