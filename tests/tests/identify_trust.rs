@@ -256,15 +256,21 @@ fn micrometres_against_metres_are_named() {
 #[test]
 fn a_local_model_error_inside_the_level_limit_is_found_by_the_scan() {
     // ROSS reference machine d, B1 on its own sub-base (motion not
-    // measured), 1 % noise: the fit leaves 2-4 times its scatter, inside the
-    // level rule's limit of 4, and the model error is local in speed (the
-    // sub-base's resonance). The scan over windows of speed finds it where
-    // the whole-run polynomial did not (scripts/bench-trust.sh, same seeds:
-    // 14/20 runs untrusted, was 7/20). Other pedestals are never flagged.
+    // measured), 1.5 % noise: the fit leaves 1.5-4 times the variance of its
+    // noise, inside the level rule's limit of 4, and the model error is
+    // local in speed (the sub-base's resonance). The scan over windows of
+    // speed finds it where the level rule cannot. Measured (2026-12-02,
+    // session 27, `plinth simulate tests/reference/ross/machine-d.toml
+    // --speeds 5:200:2.5 --noise 0.015 --seed S --digits 6`, S = 1..20):
+    // 16/20 by the scan alone, 17/20 untrusted, no other bearing flagged.
+    // At 1 % noise (this test's level before session 27) the scatter now
+    // measures the noise itself (quartic local fits), so B1 leaves 12-25
+    // times it in 18/20 runs and the level rule alone untrusts it: 20/20,
+    // and the scan is no longer what finds it there (seeds 1, 2 only).
     let m = machine("tests/reference/ross/machine-d.toml");
     let mut by_structure = Vec::new();
     for seed in 1..=20 {
-        let id = identify(&run(&m, Some((0.01, seed)), Some(6)));
+        let id = identify(&run(&m, Some((0.015, seed)), Some(6)));
         for p in &id.pedestals {
             let lof = p.warnings.iter().find(|w| w.kind == WarningKind::LackOfFit);
             if p.bearing != "B1" {
@@ -279,8 +285,8 @@ fn a_local_model_error_inside_the_level_limit_is_found_by_the_scan() {
             }
         }
     }
-    // Measured (2026-11-28): seeds 2, 4, 10, 11, 13, 16, 17, 18, 20; the
-    // whole-run polynomial before the scan: 10, 11.
+    // Measured at 1 % before session 27 (2026-11-28): seeds 2, 4, 10, 11,
+    // 13, 16, 17, 18, 20; the whole-run polynomial before the scan: 10, 11.
     assert!(
         by_structure.len() >= 6,
         "found by the scan alone: {by_structure:?}"

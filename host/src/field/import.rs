@@ -11,6 +11,7 @@
 //! LAYOUT.toml's key.
 
 use super::angle::{resolve, Rotation, View};
+use super::resolution::ReadingSteps;
 use super::slow_roll::{subtract_slow_roll, SlowRollBand};
 use super::transducer::{angle_of, group_by_bearing, Placement, Quantity};
 use super::units::{reading_phasor, to_displacement, AmplitudeUnit, PhaseConvention, UNIT_HELP};
@@ -197,6 +198,9 @@ pub struct ImportedRow {
     pub speed_column: usize,
     /// The phasors [m] at the row's speed [Hz].
     pub measurement: Measurement,
+    /// sd [m] of the rounding the table leaves on each phasor (rel y, rel
+    /// z, ped y, ped z; sqrt(E|n|²), [`super::resolution`]).
+    pub resolution: crate::rundir::NoiseSd,
 }
 
 /// Reads TABLE.csv through `layout`: one row per table row and bearing,
@@ -255,6 +259,9 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
     let groups = group_by_bearing(layout_file, &placements)?;
 
     let mut rows = Vec::new();
+    // Each table row's readings (amplitude, phase) per transducer and its
+    // Ω [rad/s], for the rounding floor once every column's steps are known.
+    let mut readings: Vec<(Vec<(f64, f64)>, f64)> = Vec::new();
     let mut seen: BTreeMap<u64, u64> = BTreeMap::new();
     let mut watches = vec![super::plausible::ReadingsWatch::default(); layout.transducers.len()];
     for record in records {
@@ -325,6 +332,7 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
         }
         let omega = std::f64::consts::TAU * speed_hz;
         let mut disp = Vec::with_capacity(cols.len());
+        let mut read = Vec::with_capacity(cols.len());
         for ((t, &(ac, pc)), watch) in layout.transducers.iter().zip(&cols).zip(&mut watches) {
             let amplitude = cell(ac, "amplitude")?;
             if amplitude < 0.0 {
@@ -347,6 +355,7 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
                 );
             }
             watch.push(amplitude, phase);
+            read.push((amplitude, phase));
             let q = reading_phasor(si, phase, layout.phase);
             disp.push(to_displacement(t.unit.kind, q, omega));
         }
@@ -371,11 +380,39 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
                     noise_sd: None,
                     written: None,
                 },
+                resolution: [0.0; 4],
             });
         }
+        readings.push((read, omega));
     }
     if rows.is_empty() {
         bail!("{file}: no data rows after the header");
+    }
+    // The table's rounding, propagated to each phasor (super::resolution).
+    let steps: Vec<ReadingSteps> = (0..cols.len())
+        .map(|t| {
+            let (a, p): (Vec<f64>, Vec<f64>) = readings.iter().map(|(r, _)| r[t]).unzip();
+            ReadingSteps::of(&a, &p)
+        })
+        .collect();
+    for (row, (read, omega)) in rows.chunks_mut(groups.len().max(1)).zip(&readings) {
+        let sd: Vec<f64> = layout
+            .transducers
+            .iter()
+            .zip(&steps)
+            .zip(read)
+            .map(|((t, s), &(a, p))| s.displacement_sd(&t.unit, a, p, *omega))
+            .collect();
+        for (r, (_, [rel, ped])) in row.iter_mut().zip(&groups) {
+            let pick = |set: &[usize]| -> [f64; 2] {
+                let angles: Vec<f64> = set.iter().map(|&i| placements[i].angle_deg).collect();
+                let sd: Vec<f64> = set.iter().map(|&i| sd[i]).collect();
+                let zero = vec![Complex::new(0.0, 0.0); set.len()];
+                resolve(&angles, &zero, Some(&sd)).1.unwrap_or([0.0; 2])
+            };
+            let ([ry, rz], [py, pz]) = (pick(rel), pick(ped));
+            r.resolution = [ry, rz, py, pz];
+        }
     }
     for ((t, &(ac, _)), watch) in layout.transducers.iter().zip(&cols).zip(&watches) {
         let what = format!(
@@ -498,7 +535,14 @@ pub fn run(args: &Args) -> Result<()> {
         &args.bearings.display().to_string(),
     )?;
     ticker.tick(2);
-    let rows: Vec<Measurement> = imported.into_iter().map(|r| r.measurement).collect();
+    let rows: Vec<Measurement> = imported
+        .into_iter()
+        .map(|r| {
+            let mut m = r.measurement;
+            m.set_resolution(r.resolution);
+            m
+        })
+        .collect();
     let n = rows.len();
     let placements: Vec<Placement> = layout
         .transducers

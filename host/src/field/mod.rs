@@ -11,6 +11,7 @@ pub mod angle;
 pub mod import;
 pub mod plausible;
 pub mod plot;
+pub mod resolution;
 pub mod slow_roll;
 pub mod transducer;
 pub mod transducers_csv;

@@ -138,8 +138,14 @@ pub fn subtract_slow_roll(rows: &mut [Measurement], band: SlowRollBand) -> Resul
             ));
         }
         for m in rows.iter_mut().filter(|m| m.bearing == b) {
+            // A table's rounding floor (`resolution.csv`) stays with the row:
+            // the vector subtracted is one offset per bearing, not noise.
+            let floor = m.resolution_sd();
             m.rel[0] -= mean[0];
             m.rel[1] -= mean[1];
+            if let Some(sd) = floor {
+                m.set_resolution(sd);
+            }
         }
         vectors.push(SlowRollVector {
             bearing: b,

@@ -186,6 +186,19 @@ pub(crate) fn fit_ml_checked(
         obs
     };
     let start = ols_fit.pedestal.theta();
+    // Each observation's digits' variances by speed: the floor of the
+    // variance function's variances (variance::variances).
+    let mut digits: Vec<(f64, [f64; 8])> = observations
+        .iter()
+        .zip(&noise.digits_var)
+        .map(|(o, d)| (o.speed_hz, *d))
+        .collect();
+    digits.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let floor = |o: &Observation| {
+        digits
+            .binary_search_by(|d| d.0.total_cmp(&o.speed_hz))
+            .map_or([0.0; 8], |i| digits[i].1)
+    };
     let mut obs = Vec::new();
     // The source (columns, digits or scatter): the one noise policy.
     let mut attempt = fit_under_noise(
@@ -198,20 +211,51 @@ pub(crate) fn fit_ml_checked(
         |f| (f.chi2, f.dof),
     );
     let mut outlier_speeds_hz = Vec::new();
+    // The variance function of the fit's residuals when they reject the
+    // scatter's law (see below), computed once: the outlier test reads it
+    // too. The scatter's law is measured where the local fits follow the
+    // response; at a resonance the speed steps do not resolve it is carried
+    // from elsewhere and may be far below the noise there, where the
+    // physical model's residuals (which follow the resonance) show it
+    // (docs/trust.md "Session 26").
+    let mut function = None;
     if let Ok(f) = &attempt {
+        if noise.source == NoiseSource::Scatter && f.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE {
+            function = variance::refit(&obs, floor, &columns, f);
+        }
+        let (test_obs, test_fit) = match &function {
+            Some(r) => (r.obs.as_slice(), &r.fit),
+            None => (obs.as_slice(), f),
+        };
         // Speeds are outliers only when the rest of the data fit the model:
         // when the fit without them still leaves more than the noise allows,
         // their residuals are model error (e.g. a base's resonance) and the
         // lack-of-fit test, not the outlier list, reports it.
-        if let Some(r) = robust::outlier_refit(&obs, f, &columns)
+        if let Some(r) = robust::outlier_refit(test_obs, test_fit, &columns)
             .filter(|r| r.fit.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE)
         {
-            // Confirmed outlier speeds are left out of everything that follows.
-            obs = r.kept;
-            outlier_speeds_hz = r.outlier_speeds_hz;
-            attempt = Ok(r.fit);
+            // Confirmed outlier speeds are left out of everything that
+            // follows, under the noise the fit goes on with.
+            if function.is_some() {
+                let kept: Vec<Observation> = obs
+                    .iter()
+                    .filter(|o| !r.outlier_speeds_hz.contains(&o.speed_hz))
+                    .copied()
+                    .collect();
+                if let Ok(fit) = ml::fit(&kept, &columns, &r.fit.theta) {
+                    obs = kept;
+                    outlier_speeds_hz = r.outlier_speeds_hz;
+                    attempt = Ok(fit);
+                    function = None;
+                }
+            } else {
+                obs = r.kept;
+                outlier_speeds_hz = r.outlier_speeds_hz;
+                attempt = Ok(r.fit);
+            }
         }
     }
+    let fresh = !outlier_speeds_hz.is_empty();
     let ml_fit = match attempt {
         Ok(f) if f.theta.iter().all(|v| v.is_finite()) => f,
         other => {
@@ -245,9 +289,21 @@ pub(crate) fn fit_ml_checked(
     // fit is then the start of the base fit that follows.
     let model_fits = ml_fit.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE;
     if noise.source == NoiseSource::Scatter && model_fits {
-        if let Some(r) = variance::refit(&obs, &columns, &ml_fit) {
-            for (v, o) in noise.var.iter_mut().zip(observations) {
-                let w = variance::variances(o, &r.law);
+        // Computed above on these observations and this fit unless speeds
+        // were left out since.
+        let refit = if fresh {
+            variance::refit(&obs, floor, &columns, &ml_fit)
+        } else {
+            function
+        };
+        if let Some(r) = refit {
+            for ((v, o), d) in noise
+                .var
+                .iter_mut()
+                .zip(observations)
+                .zip(&noise.digits_var)
+            {
+                let w = variance::variances(o, &r.law, d);
                 if w.iter().all(|x| *x > 0.0 && x.is_finite()) {
                     *v = w;
                 }

@@ -173,11 +173,20 @@ pub fn written_digits(v: f64) -> Option<(u32, i32)> {
 /// remembers the magnitude it describes, so a value changed since (a
 /// slow-roll subtraction) is not taken for its text, while a sign change or
 /// a swap of channels (convention corrections) still finds its digits.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+///
+/// It also carries the rounding the numbers had before they were written
+/// here, when a run directory says it (`resolution.csv`,
+/// [`super::resolution`]: a vector table's amplitude digits and phase
+/// steps, propagated by `plinth import`), as a variance per number, found
+/// the same way: by the magnitude it describes.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WrittenDigits {
     abs_bits: [u64; 8],
     digits: [u8; 8],
     exponent: [i16; 8],
+    /// Variance [m²] of each number's rounding before it was written here
+    /// (0: none known).
+    floor_var: [f64; 8],
 }
 
 impl WrittenDigits {
@@ -187,6 +196,7 @@ impl WrittenDigits {
             abs_bits: [0; 8],
             digits: [0; 8],
             exponent: [0; 8],
+            floor_var: [0.0; 8],
         };
         for k in 0..8 {
             let (d, e) = text_digits(texts[k])
@@ -197,6 +207,12 @@ impl WrittenDigits {
             out.exponent[k] = e.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
         }
         out
+    }
+
+    /// The digits of `values` counted from the values themselves (rows made
+    /// in memory, whose text is their shortest round-trip one).
+    pub fn of_values(values: [f64; 8]) -> Self {
+        Self::from_text([""; 8], values)
     }
 
     /// [`written_digits`] of `v` from the text when `v` is (up to its sign)
@@ -212,6 +228,75 @@ impl WrittenDigits {
             }
             _ => written_digits(v),
         }
+    }
+
+    /// The same row with the rounding of its complex channels before they
+    /// were written here: `sd` [m] per channel (rel y, rel z, ped y, ped z),
+    /// sqrt(E|n|²) of the complex rounding error, split equally between the
+    /// real and the imaginary part (as the noise columns are).
+    pub fn with_resolution(mut self, sd: super::NoiseSd) -> Self {
+        self.floor_var = std::array::from_fn(|k| 0.5 * sd[k / 2] * sd[k / 2]);
+        self
+    }
+
+    /// Variance [m²] of the earlier rounding of `v`, now the row's number
+    /// `k` (formats.md order), when `v` is (up to its sign) one of the row's
+    /// numbers as read (number `k` first: equal magnitudes, such as two
+    /// zeros, keep their own), else 0: a value changed since (a unit
+    /// conversion) is not taken for it.
+    pub fn floor_var_of(&self, k: usize, v: f64) -> f64 {
+        // Rows without one (every row not from a table): one test, no search.
+        if self.floor_var == [0.0; 8] {
+            return 0.0;
+        }
+        let bits = v.abs().to_bits();
+        if self.abs_bits.get(k) == Some(&bits) {
+            return self.floor_var[k];
+        }
+        self.abs_bits
+            .iter()
+            .position(|&b| b == bits)
+            .map_or(0.0, |j| self.floor_var[j])
+    }
+}
+
+impl super::Measurement {
+    /// The eight real numbers of the row, formats.md order (rel y re, rel y
+    /// im, rel z re, …, ped z im) [m].
+    pub fn reals(&self) -> [f64; 8] {
+        let [ry, rz] = self.rel;
+        let [py, pz] = self.ped;
+        [ry.re, ry.im, rz.re, rz.im, py.re, py.im, pz.re, pz.im]
+    }
+
+    /// Sets the rounding sd [m] of the row's phasors as they stand now
+    /// ([`WrittenDigits::with_resolution`]; per complex channel, rel y, rel
+    /// z, ped y, ped z), keeping the digits counted from its text when
+    /// they describe these numbers.
+    pub fn set_resolution(&mut self, sd: super::NoiseSd) {
+        let values = self.reals();
+        let written = match self.written {
+            Some(w) if (0..8).all(|k| w.abs_bits[k] == values[k].abs().to_bits()) => w,
+            _ => WrittenDigits::of_values(values),
+        };
+        self.written = Some(written.with_resolution(sd));
+    }
+
+    /// The rounding sd [m] (sqrt(E|n|²), per complex channel: rel y, rel z,
+    /// ped y, ped z) this row's phasors carry from before they were written
+    /// ([`WrittenDigits::with_resolution`]) as they stand now; `None` when
+    /// none is known for any of them.
+    pub fn resolution_sd(&self) -> Option<super::NoiseSd> {
+        let w = self.written.as_ref()?;
+        let values = [self.rel[0], self.rel[1], self.ped[0], self.ped[1]];
+        if w.floor_var.iter().all(|&v| v == 0.0) {
+            return None;
+        }
+        let sd: super::NoiseSd = std::array::from_fn(|ch| {
+            (w.floor_var_of(2 * ch, values[ch].re) + w.floor_var_of(2 * ch + 1, values[ch].im))
+                .sqrt()
+        });
+        sd.iter().any(|&s| s > 0.0).then_some(sd)
     }
 }
 

@@ -13,11 +13,13 @@ pub mod bounds;
 pub mod digits;
 pub mod matches;
 pub mod read;
+pub mod resolution;
 pub mod schedule;
 pub mod write;
 
 pub use digits::*;
 pub use read::*;
+pub use resolution::{RESOLUTION_COLUMNS, RESOLUTION_FILE};
 pub use schedule::*;
 
 use crate::estimate::Pedestal;

@@ -44,7 +44,8 @@ fn measurement(r: TableRow) -> Measurement {
 
 impl RunDir {
     /// Reads and checks a run directory: `measurements.csv` and
-    /// `bearings.csv` are required, `truth.json` is optional. Every
+    /// `bearings.csv` are required, `truth.json` and `resolution.csv`
+    /// ([`super::resolution`]) are optional. Every
     /// measurement's bearing must have rows in `bearings.csv` that cover its
     /// speed. Columns are found by header name; header columns Plinth does
     /// not know are ignored (formats.md allows new optional columns).
@@ -65,11 +66,12 @@ impl RunDir {
         let bearings = read_table(&b_path, &BEARING_COLUMNS, None, false, false, bearing_row)?.rows;
         check_noise_not_all_zero(&m_table, &m_path)?;
         let Table {
-            rows: measurements,
+            rows: mut measurements,
             lines,
             speed_column,
             bearing_column,
         } = m_table;
+        super::resolution::read_into(dir, &mut measurements, &m_path)?;
         let run = RunDir {
             measurements,
             bearings,

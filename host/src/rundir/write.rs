@@ -5,7 +5,9 @@ use super::*;
 
 impl RunDir {
     /// Writes the run directory (creating it if needed) with every number in
-    /// full round-trip precision; `truth.json` only when `truth` is set.
+    /// full round-trip precision; `truth.json` only when `truth` is set,
+    /// `resolution.csv` only when a row carries a rounding floor
+    /// ([`Measurement::resolution_sd`]).
     pub fn write(&self, dir: impl AsRef<Path>) -> Result<(), RunDirError> {
         self.write_with(dir, &WriteOptions::default())
     }
@@ -40,6 +42,8 @@ impl RunDir {
         });
         let extra: &[&'static str] = if with_noise { &NOISE_COLUMNS } else { &[] };
         write_table(&m_path, &MEASUREMENT_COLUMNS, extra, rows)?;
+        // The rounding the rows carry from a table they were converted from.
+        super::resolution::write(dir, &self.measurements)?;
 
         let b_path = dir.join(BEARINGS_FILE);
         let rows = self.bearings.iter().map(|b| {

@@ -106,7 +106,7 @@ impl RunNoise {
                                 std::array::from_fn(|c| {
                                     let ulp =
                                         columns[c].ulp_of_digits(digits[i][c], real_value(m, c));
-                                    number_variance(self.quantisation, ulp, None)
+                                    rounding_variance(self.quantisation, ulp, m, c)
                                 })
                             })
                             .collect();

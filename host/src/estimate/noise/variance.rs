@@ -146,12 +146,17 @@ pub fn magnitudes(o: &Observation) -> [f64; 4] {
 }
 
 /// The variance [m²] of each real number ([`super::REAL_CHANNELS`] order)
-/// of an observation under the variance function `p` ([`COMPONENTS`]).
-pub fn variances(o: &Observation, p: &[f64; COMPONENTS]) -> [f64; 8] {
+/// of an observation under the variance function `p` ([`COMPONENTS`]),
+/// never below `floor` [m²] (the number's digits,
+/// [`super::BearingNoise::digits_var`]): a number written with 12 digits
+/// carries its rounding, ulp²/12 of its own ulp, which varies tenfold with
+/// the mantissa at one |X|; the law's average fraction is up to 2.4× below
+/// it in sd where the leading digits are small (docs/trust.md "Session 27").
+pub fn variances(o: &Observation, p: &[f64; COMPONENTS], floor: &[f64; 8]) -> [f64; 8] {
     let magnitude = magnitudes(o);
     std::array::from_fn(|c| {
         let ch = c / 2;
-        p[2 * ch] * magnitude[ch].powi(2) + p[2 * ch + 1]
+        (p[2 * ch] * magnitude[ch].powi(2) + p[2 * ch + 1]).max(floor[c])
     })
 }
 
@@ -328,9 +333,15 @@ pub fn fit_variance_function(
 /// rejects the observations' own noise law: [`ROUNDS`] rounds of
 /// ([`fit_variance_function`], ML refit from the last estimate). Returns the
 /// last refit, its variance function, the score test's p-value [-] and the
-/// observations with its variances; `None` when the test does not reject or
-/// a step fails.
-pub fn refit(obs: &[Observation], columns: &[Parameter], fit: &MlFit) -> Option<Refit> {
+/// observations with its variances (each never below `floor` of the
+/// observation: its digits' variances [m²], [`variances`]); `None` when the
+/// test does not reject or a step fails.
+pub fn refit(
+    obs: &[Observation],
+    floor: impl Fn(&Observation) -> [f64; 8],
+    columns: &[Parameter],
+    fit: &MlFit,
+) -> Option<Refit> {
     let p_value = homoscedasticity_p(obs, &fit.theta)?;
     if p_value >= HETEROSCEDASTIC_P {
         return None;
@@ -341,7 +352,7 @@ pub fn refit(obs: &[Observation], columns: &[Parameter], fit: &MlFit) -> Option<
         let theta = current.as_ref().map_or(fit.theta, |c| c.0.theta);
         let p = fit_variance_function(&obs, &theta)?;
         for o in obs.iter_mut() {
-            o.var = variances(o, &p);
+            o.var = variances(o, &p, &floor(o));
         }
         if !obs
             .iter()

@@ -139,10 +139,13 @@ fn transformed_noise_is_the_noise_of_the_corrected_run() {
 }
 
 /// `a` and `b` alike in everything, their variances and scatter laws
-/// within 1e-12 relative.
+/// within 1e-10 relative: the scatter's local fits are quartics over 7
+/// speeds, whose powers of the abscissae carry the speeds' rounding with a
+/// gain of about 1e4 (1.9e-12 measured for `speed_in_rpm`, session 27; a
+/// real difference in the estimate is orders above this).
 fn assert_same_but_rounding(a: &RunNoise, b: &RunNoise) {
     use crate::estimate::noise::Scatter;
-    let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * x.abs().max(y.abs());
+    let close = |x: f64, y: f64| (x - y).abs() <= 1e-10 * x.abs().max(y.abs());
     assert_eq!(a.quantisation, b.quantisation);
     assert_eq!(a.bearings.len(), b.bearings.len());
     for ((na, ia, a), (nb, ib, b)) in a.bearings.iter().zip(&b.bearings) {
@@ -154,6 +157,13 @@ fn assert_same_but_rounding(a: &RunNoise, b: &RunNoise) {
             let same = match (x, y) {
                 (Some(Scatter::Absolute(x)), Some(Scatter::Absolute(y)))
                 | (Some(Scatter::Relative(x)), Some(Scatter::Relative(y))) => close(*x, *y),
+                (
+                    Some(Scatter::Mixed { fraction, floor }),
+                    Some(Scatter::Mixed {
+                        fraction: f,
+                        floor: g,
+                    }),
+                ) => close(*fraction, *f) && close(*floor, *g),
                 (None, None) => true,
                 _ => false,
             };
