@@ -96,7 +96,7 @@ impl<R: Read> Read for BoundedLines<R> {
         // byte-by-byte check, at a fraction of its cost on large tables).
         let mut rest = &buf[..n];
         while !rest.is_empty() {
-            let end = rest.iter().position(|&b| b == b'\n' || b == 0);
+            let end = line_end(rest);
             let bytes = end.unwrap_or(rest.len());
             if bytes > 0 {
                 if let Some((most, available)) = self.max_lines.filter(|_| self.run == 0) {
@@ -143,6 +143,32 @@ impl<R: Read> Read for BoundedLines<R> {
         }
         Ok(n)
     }
+}
+
+/// The position of the first line end or NUL byte of `bytes`: eight bytes
+/// at a time (a word has a zero byte when (x − 0x01…01) & !x & 0x80…80 is
+/// not zero; a line end is a zero byte of x ^ 0x0a…0a), the word that has
+/// one searched byte by byte. The same position as a byte-by-byte search.
+fn line_end(bytes: &[u8]) -> Option<usize> {
+    const ONES: u64 = u64::from_ne_bytes([0x01; 8]);
+    const HIGH: u64 = u64::from_ne_bytes([0x80; 8]);
+    const LINE_ENDS: u64 = u64::from_ne_bytes([b'\n'; 8]);
+    let has_zero = |x: u64| x.wrapping_sub(ONES) & !x & HIGH != 0;
+    let mut start = 0;
+    for word in bytes.chunks_exact(8) {
+        let Ok(word) = <[u8; 8]>::try_from(word) else {
+            break;
+        };
+        let x = u64::from_ne_bytes(word);
+        if has_zero(x) || has_zero(x ^ LINE_ENDS) {
+            break;
+        }
+        start += 8;
+    }
+    bytes[start..]
+        .iter()
+        .position(|&b| b == b'\n' || b == 0)
+        .map(|p| start + p)
 }
 
 /// Checks that no line of `text` is longer than [`MAX_LINE_BYTES`]; the
@@ -256,6 +282,36 @@ mod tests {
         let mut out = Vec::new();
         BoundedLines::new(bytes, max).read_to_end(&mut out)?;
         Ok(out)
+    }
+
+    #[test]
+    fn line_ends_are_found_where_a_byte_by_byte_search_finds_them() {
+        let mut text: Vec<u8> = (0..300u32).map(|i| b' ' + (i * 37 % 90) as u8).collect();
+        for end in [
+            None,
+            Some(0),
+            Some(1),
+            Some(7),
+            Some(8),
+            Some(9),
+            Some(63),
+            Some(299),
+        ] {
+            for mark in [b'\n', 0, 0x8a, 0x0b] {
+                let mut t = text.clone();
+                if let Some(at) = end {
+                    t[at] = mark;
+                }
+                for from in [0, 1, 5, 8, 13] {
+                    let slice = &t[from.min(t.len())..];
+                    let expected = slice.iter().position(|&b| b == b'\n' || b == 0);
+                    assert_eq!(line_end(slice), expected, "{end:?} {mark} {from}");
+                }
+            }
+        }
+        text.truncate(5);
+        assert_eq!(line_end(&text), None);
+        assert_eq!(line_end(b""), None);
     }
 
     #[test]

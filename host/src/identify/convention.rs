@@ -410,16 +410,22 @@ pub fn diagnose<'n>(
                 if candidates[i].fit.is_none() {
                     let k = &mut candidates[i];
                     let c = k.convention;
-                    let fixed = k.fixed.get_or_insert_with(|| c.correct(run));
-                    // Readings need the estimates and their plausibility only.
-                    let fits = super::fit_run_checked(
-                        fixed,
-                        &k.noise,
-                        options,
-                        super::estimator::Checks::Estimate,
-                    )
-                    .ok()
-                    .map(|id| id.pedestals);
+                    // Readings need the estimates and their plausibility
+                    // only; `rel_negated`'s are the fits as found, negated
+                    // ([`mistake::rel_negated_fits`]).
+                    let fits = if c == Convention::RelNegated {
+                        Some(mistake::rel_negated_fits(pedestals))
+                    } else {
+                        let fixed = k.fixed.get_or_insert_with(|| c.correct(run));
+                        super::fit_run_checked(
+                            fixed,
+                            &k.noise,
+                            options,
+                            super::estimator::Checks::Estimate,
+                        )
+                        .ok()
+                        .map(|id| id.pedestals)
+                    };
                     let rows = rows_of(c);
                     let k = &candidates[i];
                     let readings = fits
@@ -467,6 +473,28 @@ pub fn diagnose<'n>(
             }
             let mut corrected = best;
             let mut corrected_fit = q.clone();
+            if !ols && convention == Convention::RelNegated {
+                // Its readings came from the negated fits as found; the
+                // finding carries the refit itself (the same parameters).
+                if let Some(k) = candidates.iter_mut().find(|k| k.convention == convention) {
+                    let fixed = k.fixed.get_or_insert_with(|| convention.correct(run));
+                    let refit = super::fit_run_checked(
+                        fixed,
+                        &k.noise,
+                        options,
+                        super::estimator::Checks::Estimate,
+                    )
+                    .ok()
+                    .and_then(|id| id.pedestals.into_iter().find(|q| q.bearing == p.bearing));
+                    let rows = rows_of(convention);
+                    if let Some((r, q)) = refit
+                        .and_then(|q| Some((reading(&rows, &k.sigma, &q, Some(convention))?, q)))
+                    {
+                        corrected = r;
+                        corrected_fit = q;
+                    }
+                }
+            }
             if ols {
                 // The named reading with the full OLS fit, not its screen.
                 if let Some(k) = candidates.iter_mut().find(|k| k.convention == convention) {

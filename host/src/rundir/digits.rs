@@ -115,7 +115,7 @@ pub fn text_digits(text: &str) -> Option<(u32, i32)> {
 /// plain decimal number's text, however many digits it has (`None` for zero
 /// and for text that is not a plain decimal number).
 fn counted_digits(text: &str) -> Option<(u32, i32)> {
-    let t = text.trim();
+    let t = trimmed(text);
     let t = t.strip_prefix(['-', '+']).unwrap_or(t);
     // One pass over the bytes (this runs for every number of a measurements
     // file), up to the exponent's 'e' ('e' and 'E' never occur inside a
@@ -138,7 +138,7 @@ fn counted_digits(text: &str) -> Option<(u32, i32)> {
         } else if b == b'.' && point < 0 {
             point = n;
         } else if b == b'e' || b == b'E' {
-            exponent = t[i + 1..].parse::<i32>().ok()?;
+            exponent = exponent_of(&t.as_bytes()[i + 1..])?;
             break;
         } else {
             return None;
@@ -151,6 +151,51 @@ fn counted_digits(text: &str) -> Option<(u32, i32)> {
     // Decimal exponent of the digit at position `first`.
     let point = if point < 0 { n } else { point };
     Some((digits as u32, exponent + point - first - 1))
+}
+
+/// `text` without leading and trailing whitespace: `str::trim` (Unicode
+/// White_Space), returning at once when both ends are printable ASCII (all
+/// ASCII whitespace is at or below b' '), as every field of a plain CSV
+/// table is: this runs for every number of a measurements file.
+pub(crate) fn trimmed(text: &str) -> &str {
+    let plain = |b: Option<&u8>| b.is_some_and(|&b| b > b' ' && b.is_ascii());
+    let bytes = text.as_bytes();
+    if plain(bytes.first()) && plain(bytes.last()) {
+        text
+    } else {
+        text.trim()
+    }
+}
+
+/// The exponent after a number's `e`: what `str::parse::<i32>` gives for
+/// `bytes` (an optional sign, then one or more ASCII digits, within i32),
+/// without its generic machinery; `None` where it fails.
+fn exponent_of(bytes: &[u8]) -> Option<i32> {
+    let (negative, digits) = match bytes.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, bytes),
+    };
+    if digits.is_empty() {
+        return None;
+    }
+    // Accumulated on the side of the sign, so that i32::MIN is reached.
+    let mut value = 0i32;
+    for &b in digits {
+        let d = b.wrapping_sub(b'0');
+        if d >= 10 {
+            return None;
+        }
+        let d = i32::from(d);
+        value = value.checked_mul(10).and_then(|v| {
+            if negative {
+                v.checked_sub(d)
+            } else {
+                v.checked_add(d)
+            }
+        })?;
+    }
+    Some(value)
 }
 
 /// The fewest significant digits (1..=17) that reproduce `v` exactly when
@@ -386,6 +431,59 @@ mod tests {
             0.1 + 0.2,
         ] {
             assert_eq!(written_digits(v), Some(std_digits(v)), "{v:e}");
+        }
+    }
+
+    #[test]
+    fn exponents_and_trimming_are_those_of_the_standard_library() {
+        for text in [
+            "",
+            "+",
+            "-",
+            "0",
+            "-0",
+            "+0",
+            "7",
+            "-9",
+            "+12",
+            "007",
+            "-300",
+            "2147483647",
+            "2147483648",
+            "-2147483648",
+            "-2147483649",
+            "99999999999",
+            "1x",
+            "+-1",
+            "--1",
+            " 1",
+            "1 ",
+            "١",
+            "1.5",
+            "e5",
+        ] {
+            assert_eq!(
+                exponent_of(text.as_bytes()),
+                text.parse::<i32>().ok(),
+                "{text:?}"
+            );
+        }
+        for text in [
+            "",
+            " ",
+            "1",
+            " 1",
+            "1 ",
+            "\t1.5\r",
+            "\u{b}2\u{b}",
+            "\u{a0}3",
+            "4\u{2003}",
+            "a b",
+            "\u{85}",
+            "x",
+            "\u{1c}5",
+        ] {
+            assert_eq!(trimmed(text), text.trim(), "{text:?}");
         }
     }
 

@@ -453,7 +453,7 @@ fn read_table<T>(
                 expected: width,
             });
         }
-        let field = |col: usize| record.get(col).unwrap_or_default().trim();
+        let field = |col: usize| super::digits::trimmed(record.get(col).unwrap_or_default());
         let number_at = |col: usize, name: &'static str| -> Result<f64, RunDirError> {
             let text = field(col);
             let value: f64 = text.parse().map_err(|_| RunDirError::BadNumber {
