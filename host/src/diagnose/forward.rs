@@ -5,7 +5,7 @@ use super::candidates::{library, Candidate, ParamRef};
 use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
 use super::fit::{fit_group, jacobian, profile, search_interval};
-use super::model::Params;
+use super::model::{Params, Term};
 use super::state::State;
 use anyhow::{anyhow, bail, Result};
 use nalgebra::{DMatrix, DVector};
@@ -147,9 +147,21 @@ pub struct StepOutcome {
     pub accepted: bool,
 }
 
-/// Tries every candidate on `state` and ranks them.
+/// Tries every candidate on `state` and ranks them. Where the current
+/// state has a non-physical pedestal damping ([`non_physical_dampings`]),
+/// every candidate at that bearing that adds no damping is also tried with
+/// those dampings held at zero, the bound of a passive pedestal
+/// ([`held_at_zero`]); each such variant counts as a candidate.
 pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
-    let cands = library(&state.model, prep.bearings.len());
+    let mut cands = library(&state.model, prep.bearings.len());
+    let held = non_physical_dampings(prep, state);
+    if !held.is_empty() {
+        let variants: Vec<Candidate> = cands
+            .iter()
+            .filter_map(|c| held_at_zero(c, &held))
+            .collect();
+        cands.extend(variants);
+    }
     let tried = cands.len();
     let n_total: usize = (0..prep.bearings.len())
         .map(|b| 4 * prep.points[b].iter().flatten().count())
@@ -173,4 +185,118 @@ pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
         failed,
         accepted,
     }
+}
+
+/// The pedestal dampings of `state` that no passive pedestal can have:
+/// negative beyond [`crate::identify::physical::damping_sigmas`] standard
+/// errors for the family of every damping the model estimates (the rule
+/// `plinth identify` untrusts a pedestal by, 1 % family-wise per run) and
+/// materially so (loss factor Ω_max·|c|/k above
+/// [`crate::identify::physical::NEGLIGIBLE_LOSS_FACTOR`]).
+///
+/// Why: a channel effect can read exactly as a pedestal damping. A delay τ
+/// on a bearing's rel probes turns the measured bearing force F into
+/// F·e^{−iΩτ} ≈ F − iΩτ·(k − Ω²m + iΩc)·X: a damping −τ·k, plus terms
+/// Ω³τm and Ω²τc that are a few % of it on a pedestal much stiffer than
+/// its bearing (150 µs on a 3 GN/m block: −4.5e5 N·s/m against a true
+/// 3e4, the Ω³τm term 7 % of it at 110 Hz). With the damping free the delay
+/// adds nothing the damping cannot take (ΔBIC −2) and the pedestal is left
+/// with an impossible damping; held at the physical bound, the delay
+/// explains it.
+pub fn non_physical_dampings(prep: &Prepared, state: &State) -> Vec<Term> {
+    use crate::identify::physical::{damping_sigmas, NEGLIGIBLE_LOSS_FACTOR};
+    let family = state
+        .model
+        .terms
+        .iter()
+        .filter(|t| matches!(t, Term::Damping { .. }))
+        .count();
+    if family == 0 {
+        return Vec::new();
+    }
+    let sigmas = damping_sigmas(family);
+    let omega_max = 2.0 * std::f64::consts::PI * prep.speeds_hz.last().copied().unwrap_or(0.0);
+    let Ok(infs) = state.inference(prep) else {
+        return Vec::new();
+    };
+    let value = |t: &Term| {
+        let i = state.model.terms.iter().position(|u| u == t)?;
+        state.params.beta.get(i).copied()
+    };
+    let mut out = Vec::new();
+    for (_, inf, refs) in &infs {
+        for (i, r) in refs.iter().enumerate() {
+            let ParamRef::Term(k) = r else { continue };
+            let Some(&t) = state.model.terms.get(*k) else {
+                continue;
+            };
+            let Term::Damping { bearing, dir } = t else {
+                continue;
+            };
+            let c = inf.estimate[i];
+            let se = inf.std_err(i);
+            let stiffness = value(&Term::Stiffness { bearing, dir }).unwrap_or(0.0);
+            let material = omega_max * c.abs() > NEGLIGIBLE_LOSS_FACTOR * stiffness.abs();
+            if se.is_finite() && c < -sigmas * se && material {
+                out.push(t);
+            }
+        }
+    }
+    out
+}
+
+/// `candidate` with the dampings in `held` at its bearing removed from its
+/// model (held at zero), its parameter references moved with the terms;
+/// `None` when none of them is at its bearing or the candidate adds a
+/// damping itself (viscous or structural: holding the damping it adds at
+/// zero is no candidate).
+fn held_at_zero(candidate: &Candidate, held: &[Term]) -> Option<Candidate> {
+    use crate::effects::EffectKind;
+    if matches!(
+        candidate.effect,
+        EffectKind::PedestalDamping | EffectKind::StructuralDamping
+    ) {
+        return None;
+    }
+    let at: Vec<Term> = held
+        .iter()
+        .copied()
+        .filter(|t| t.bearings()[0] == Some(candidate.bearing))
+        .filter(|t| candidate.model.terms.contains(t))
+        .collect();
+    if at.is_empty() {
+        return None;
+    }
+    // New index of each old term (None: removed).
+    let mut moved = Vec::with_capacity(candidate.model.terms.len());
+    let mut next = 0;
+    for t in &candidate.model.terms {
+        if at.contains(t) {
+            moved.push(None);
+        } else {
+            moved.push(Some(next));
+            next += 1;
+        }
+    }
+    let remap = |r: &ParamRef| match *r {
+        ParamRef::Term(k) => moved.get(k).copied().flatten().map(ParamRef::Term),
+        ParamRef::Nonlinear(k) => Some(ParamRef::Nonlinear(k)),
+    };
+    let mut c = candidate.clone();
+    c.model.terms.retain(|t| !at.contains(t));
+    c.parameters = candidate
+        .parameters
+        .iter()
+        .map(|(n, r)| Some((n.clone(), remap(r)?)))
+        .collect::<Option<_>>()?;
+    c.null = candidate
+        .null
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|(r, v)| Some((remap(r)?, *v)))
+                .collect::<Option<Vec<_>>>()
+        })
+        .collect::<Option<_>>()?;
+    Some(c)
 }
