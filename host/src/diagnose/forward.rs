@@ -98,6 +98,7 @@ pub fn evaluate(
             c[(row, col)] = *coef;
         }
     }
+    softens(model, &refs, &inference)?;
     let evidence = inference.evidence(&c, tried, n_total)?;
     Ok(Evaluated {
         candidate,
@@ -106,6 +107,36 @@ pub fn evaluate(
         refs,
         evidence,
     })
+}
+
+/// Standard errors by which a fitted Ω⁴ coefficient may lie below zero
+/// before the fit is refused as non-physical (one-sided: 1.3e-3 per
+/// direction under a true q = 0, where the candidate is not chosen anyway).
+const SOFTENING_SIGMAS: f64 = 3.0;
+
+/// A support below its second mode softens with speed: expanding
+/// k_p − k_p²/(k_p + K_s − Ω²M_s) gives −Ω⁴·k_p²M_s²/(k_p + K_s)³, so the
+/// Ω⁴ coefficient q [N·s⁴/m] of `pedestal_sub_base` above the range is
+/// positive. A fit with q below zero by more than [`SOFTENING_SIGMAS`]
+/// standard errors follows something else that stiffens the reading with
+/// speed (a probe bracket's own resonance, a mode in the range) and is
+/// refused with the reason, as the issue asks of non-physical fits.
+fn softens(model: &super::model::Model, refs: &[ParamRef], inference: &Inference) -> Result<()> {
+    for (i, r) in refs.iter().enumerate() {
+        let ParamRef::Term(t) = r else { continue };
+        let Some(Term::Quartic { dir, .. }) = model.terms.get(*t) else {
+            continue;
+        };
+        let (q, s) = (inference.estimate[i], inference.std_err(i));
+        if q < -SOFTENING_SIGMAS * s {
+            bail!(
+                "its Ω⁴ coefficient q_{} = {q:.3e} ± {s:.2e} N·s⁴/m is negative by {:.1} standard errors: a support below its second mode softens with speed (q > 0), this one stiffens",
+                super::model::DIR_NAMES[*dir],
+                -q / s
+            );
+        }
+    }
+    Ok(())
 }
 
 /// A bearing-table correction (clearance, stiffness ratio) whose profile
