@@ -1,0 +1,247 @@
+//! The machine-level gap and its noise floor: the re-simulated readings
+//! ([`super::resimulate`]) against every measured channel, and what an exact
+//! model would leave (the measurement noise and the identified parameters'
+//! own uncertainty).
+
+use super::{replaced_bases, resimulate, Readings};
+use crate::diagnose::data::Prepared;
+use crate::diagnose::foundation::FoundationFit;
+use crate::diagnose::state::State;
+use crate::sim::Machine;
+use anyhow::{anyhow, Result};
+
+/// The machine-level gap (the definition of `crate::diagnose::gap`, over the rel and
+/// ped channels, y and z, of every bearing and speed) [-].
+pub fn machine_gap(prep: &Prepared, predicted: &Readings) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (b, row) in prep.points.iter().enumerate() {
+        for (j, p) in row.iter().enumerate() {
+            let Some(p) = p else { continue };
+            let pred = predicted[b][j];
+            for d in 0..2 {
+                den += p.rel[d].norm_sqr() + p.ped[d].norm_sqr();
+                match pred {
+                    Some((rel, ped)) => {
+                        num += (rel[d] - p.rel[d]).norm_sqr() + (ped[d] - p.ped[d]).norm_sqr();
+                    }
+                    None => num += p.rel[d].norm_sqr() + p.ped[d].norm_sqr(),
+                }
+            }
+        }
+    }
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        0.0
+    }
+}
+
+/// The machine-level gap's noise floor: the gap an exact model would leave
+/// [-]. Two parts, over the same numbers as [`machine_gap`]: the
+/// measurement noise, Σ σ² (σ of each real number,
+/// `crate::diagnose::data::Point::sigma`), and the identified parameters' own
+/// uncertainty carried through the re-simulation ([`parameter_variance`],
+/// and a chosen base's, [`crate::diagnose::base_floor::base_variance`]);
+/// the re-simulation is open-loop (unbalance to response), so near the
+/// machine's resonances a parameter error of a fraction of its ± moves the
+/// response more than the noise does. floor = sqrt((Σ σ² + Σ Var X̂) / Σ |X|²).
+pub fn machine_floor(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    foundation: Option<&FoundationFit>,
+    readings: &Readings,
+) -> Result<f64> {
+    let (mut var, mut den) = (0.0, 0.0);
+    for p in prep.points.iter().flatten().flatten() {
+        var += p.var.iter().sum::<f64>();
+        for d in 0..2 {
+            den += p.rel[d].norm_sqr() + p.ped[d].norm_sqr();
+        }
+    }
+    var += parameter_variance(machine, prep, state, foundation, readings)?;
+    var += crate::diagnose::base_floor::base_variance(machine, prep, state, foundation, readings)?;
+    Ok(if den > 0.0 { (var / den).sqrt() } else { 0.0 })
+}
+
+/// The re-simulated readings as real numbers (rel y, z then ped y, z, real
+/// and imaginary parts) in a fixed order; unmeasured points give none.
+pub(in crate::diagnose) fn flat(readings: &Readings) -> Vec<f64> {
+    let mut out = Vec::new();
+    for (rel, ped) in readings.iter().flatten().flatten() {
+        for z in rel.iter().chain(ped) {
+            out.push(z.re);
+            out.push(z.im);
+        }
+    }
+    out
+}
+
+/// Σ Var X̂ [m²] of the re-simulated readings `readings` from the state's
+/// parameter covariance (delta method: each reading's gradient by a
+/// forward difference of 1 % of the parameter's ±, through
+/// [`crate::diagnose::criterion::Inference::std_err_of`]). A chosen base's own
+/// parameters are [`crate::diagnose::base_floor::base_variance`]'s.
+pub fn parameter_variance(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    foundation: Option<&FoundationFit>,
+    readings: &Readings,
+) -> Result<f64> {
+    use crate::diagnose::candidates::ParamRef;
+    let x0 = flat(readings);
+    let mut total = 0.0;
+    for (_, inf, refs) in state.inference(prep)? {
+        let mut grads: Vec<Vec<f64>> = Vec::with_capacity(refs.len());
+        for (i, r) in refs.iter().enumerate() {
+            let se = inf.std_err(i);
+            let mut shifted = state.clone();
+            let h = 0.01 * se;
+            let value = match *r {
+                ParamRef::Term(k) => &mut shifted.params.beta[k],
+                ParamRef::Nonlinear(k) => &mut shifted.params.nl[k],
+            };
+            if !(h.is_finite() && h > 0.0) {
+                grads.push(vec![0.0; x0.len()]);
+                continue;
+            }
+            *value += h;
+            let x = flat(&resimulate(machine, prep, &shifted, foundation)?);
+            grads.push(x.iter().zip(&x0).map(|(a, b)| (a - b) / h).collect());
+        }
+        for o in 0..x0.len() {
+            let c: Vec<f64> = grads.iter().map(|g| g[o]).collect();
+            let se = inf.std_err_of(&c);
+            if se.is_finite() {
+                total += se * se;
+            }
+        }
+    }
+    Ok(total)
+}
+
+/// The machine-level check of a whole diagnosis (`--machine`): the
+/// re-simulated machine's gap with the base model and after each step.
+#[derive(Clone, Debug)]
+pub struct MachineCheck {
+    /// Gap of the base model; `None` where it cannot be simulated (a
+    /// pedestal mass below zero: the base model fitted on rigid ground to
+    /// pedestals that stand on something softer; the reason in `warnings`)
+    /// [-].
+    pub gap_before: Option<f64>,
+    /// Gap after each step (aligned with the diagnosis's steps: the model
+    /// after step i, a chosen base included); `None` where the identified
+    /// model cannot be simulated (the reason in `warnings`) [-].
+    pub gaps_after: Vec<Option<f64>>,
+    /// The final model's machine-level floor ([`machine_floor`]) [-].
+    pub floor: f64,
+    /// The base model's re-simulated readings (figures; every point `None`
+    /// when it cannot be simulated).
+    pub before: Readings,
+    /// The final model's, when it could be simulated (figures).
+    pub after: Option<Readings>,
+    /// Why a step's model could not be simulated.
+    pub warnings: Vec<String>,
+    /// The machine file's bases the re-simulation replaced
+    /// ([`replaced_bases`]), said in the verdict (text and JSON).
+    pub replaced: Option<String>,
+    /// The bearings whose base model failed the support-mode test, with
+    /// the reason ([`crate::diagnose::trust::support_reasons`]): unexplained again
+    /// when the step at them does not lower the machine-level gap.
+    pub support: Vec<(String, String)>,
+}
+
+impl MachineCheck {
+    /// Re-simulates `machine` with the base model and with the model after
+    /// each step of `outcome` (`Outcome::after_steps`).
+    pub fn of(machine: &Machine, outcome: &crate::diagnose::Outcome) -> Result<Self> {
+        let prep = &outcome.prep;
+        let first = outcome
+            .states
+            .first()
+            .ok_or_else(|| anyhow!("no fitted base model"))?;
+        let mut warnings = Vec::new();
+        // A base model the simulator cannot hold (a negative mass) is no
+        // reason to lose the whole diagnosis: its check is left out, said.
+        let simulated = match resimulate(machine, prep, first, None) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                warnings.push(format!("no machine-level check of the base model: {e:#}"));
+                None
+            }
+        };
+        let gap_before = simulated.as_ref().map(|r| machine_gap(prep, r));
+        let before = simulated
+            .unwrap_or_else(|| vec![vec![None; prep.speeds_hz.len()]; prep.bearings.len()]);
+        let mut gaps_after = Vec::new();
+        let mut after = None;
+        for (i, (state, base)) in outcome.after_steps.iter().enumerate() {
+            match resimulate(machine, prep, state, base.as_ref()) {
+                Ok(r) => {
+                    gaps_after.push(Some(machine_gap(prep, &r)));
+                    after = Some(r);
+                }
+                // A base the simulator cannot hold (negative stiffness:
+                // the diagnosis is then untrusted anyway).
+                Err(e) => {
+                    gaps_after.push(None);
+                    after = None;
+                    warnings.push(format!(
+                        "no machine-level check of the model after step {}: {e:#}",
+                        i + 1
+                    ));
+                }
+            }
+        }
+        // The floor of the final model (the base model's when nothing was
+        // added or the final model could not be simulated).
+        let floor = match (outcome.after_steps.last(), &after) {
+            (Some((state, base)), Some(r)) => {
+                machine_floor(machine, prep, state, base.as_ref(), r)?
+            }
+            _ if gap_before.is_some() => machine_floor(machine, prep, first, None, &before)?,
+            // Nothing simulated: no gap to judge, no floor.
+            _ => 0.0,
+        };
+        let foundation = (outcome.after_steps.last()).is_some_and(|(_, b)| b.is_some());
+        Ok(Self {
+            replaced: replaced_bases(machine, &prep.bearings, foundation),
+            support: crate::diagnose::trust::support_reasons(prep),
+            gap_before,
+            gaps_after,
+            floor,
+            before,
+            after,
+            warnings,
+        })
+    }
+
+    /// The final model's gap: the last step's, or the base model's when
+    /// nothing was added (`None`: the final model could not be simulated).
+    pub fn gap_after(&self) -> Option<f64> {
+        match self.gaps_after.last() {
+            Some(g) => *g,
+            None => self.gap_before,
+        }
+    }
+
+    /// Writes the gaps into `d` (per step and overall) and judges the final
+    /// one ([`crate::diagnose::trust::judge_machine`]).
+    pub fn apply(&self, d: &mut crate::diagnose::report::Diagnosis) {
+        d.machine_gap_before = self.gap_before;
+        d.machine_gap_after = self.gap_after();
+        d.machine_gap_floor = Some(self.floor);
+        let mut before = self.gap_before;
+        for (s, after) in d.steps.iter_mut().zip(&self.gaps_after) {
+            s.machine_gap_before = before;
+            s.machine_gap_after = *after;
+            before = *after;
+        }
+        crate::diagnose::trust::judge_steps(d, &self.support);
+        crate::diagnose::trust::judge_machine(d, self.gap_after(), self.floor);
+        if let Some(note) = &self.replaced {
+            d.verdict += &format!(" Note: {note}.");
+        }
+    }
+}
