@@ -220,10 +220,9 @@ pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
 
 /// The pedestal dampings of `state` that no passive pedestal can have:
 /// negative beyond [`crate::identify::physical::damping_sigmas`] standard
-/// errors for the family of every damping the model estimates (the rule
-/// `plinth identify` untrusts a pedestal by, 1 % family-wise per run) and
-/// materially so (loss factor Ω_max·|c|/k above
-/// [`crate::identify::physical::NEGLIGIBLE_LOSS_FACTOR`]).
+/// errors for the family of every damping the model estimates and
+/// materially so ([`crate::identify::physical::damping_impossible`], the
+/// rule `plinth identify` untrusts a pedestal by, 1 % family-wise per run).
 ///
 /// Why: a channel effect can read exactly as a pedestal damping. A delay τ
 /// on a bearing's rel probes turns the measured bearing force F into
@@ -235,7 +234,7 @@ pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
 /// with an impossible damping; held at the physical bound, the delay
 /// explains it.
 pub fn non_physical_dampings(prep: &Prepared, state: &State) -> Vec<Term> {
-    use crate::identify::physical::{damping_sigmas, NEGLIGIBLE_LOSS_FACTOR};
+    use crate::identify::physical::{damping_impossible, damping_sigmas};
     let family = state
         .model
         .terms
@@ -267,8 +266,7 @@ pub fn non_physical_dampings(prep: &Prepared, state: &State) -> Vec<Term> {
             let c = inf.estimate[i];
             let se = inf.std_err(i);
             let stiffness = value(&Term::Stiffness { bearing, dir }).unwrap_or(0.0);
-            let material = omega_max * c.abs() > NEGLIGIBLE_LOSS_FACTOR * stiffness.abs();
-            if se.is_finite() && c < -sigmas * se && material {
+            if damping_impossible(c, se, stiffness, omega_max, sigmas) {
                 out.push(t);
             }
         }

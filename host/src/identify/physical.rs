@@ -69,6 +69,17 @@ pub fn estimated_dampings(fit: &PedestalFit) -> usize {
 /// round-off. Real structures have loss factors of 1e-4 and more.
 pub const NEGLIGIBLE_LOSS_FACTOR: f64 = 1e-6;
 
+/// Whether a pedestal damping `c` ± `se` [N·s/m] is one no passive pedestal
+/// has: below zero by more than `sigmas` standard errors
+/// ([`damping_sigmas`] of its family) and material, its loss factor
+/// `omega_max`·|c|/`k` (`omega_max` [rad/s], `k` [N/m] the same direction's
+/// stiffness) above [`NEGLIGIBLE_LOSS_FACTOR`]. The one rule identify's
+/// warning and diagnose's held-at-zero candidates use.
+pub fn damping_impossible(c: f64, se: f64, k: f64, omega_max: f64, sigmas: f64) -> bool {
+    let material = omega_max * c.abs() > NEGLIGIBLE_LOSS_FACTOR * k.abs();
+    se.is_finite() && c < -sigmas * se && material
+}
+
 /// The physical impossibilities of `fit`, one warning
 /// ([`WarningKind::PhysicallyImpossible`]) per offending parameter; empty
 /// when the pedestal is passive. Parameters fixed by the model are 0 and
@@ -112,8 +123,7 @@ pub fn violations_in_family(
                 fit.pedestal.k_z
             };
             let omega_max = 2.0 * std::f64::consts::PI * fit.speed_range_hz[1];
-            let material = omega_max * value.abs() > NEGLIGIBLE_LOSS_FACTOR * k.abs();
-            (sigma.is_finite() && value < -sigmas * sigma && material).then(|| {
+            damping_impossible(value, sigma, k, omega_max, sigmas).then(|| {
                 format!(
                     "{} = {value:.4e} ± {sigma:.2e} {unit} is negative by {:.1} standard errors (more than the {sigmas:.2} that keep the run's {family} damping(s) at a {:.0} % family-wise false-alarm rate): a passive pedestal cannot have negative damping",
                     p.name(),
