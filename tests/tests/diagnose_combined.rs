@@ -284,3 +284,55 @@ fn the_unexplained_residual_is_located() {
     let json = serde_json::to_value(&d).expect("json");
     assert_eq!(json["unexplained"][0]["bearing"], "right");
 }
+
+/// A delay on the stiff block's rel probes reads as a pedestal damping
+/// −τ·k, so diagnose fits it with the block's dampings held at zero (free,
+/// they come out impossible) and τ is then short by the true damping's
+/// c/k. The report says which dampings are held and how much each 1 % of
+/// damping ratio adds to τ; with the truth's ζ that puts τ on the truth.
+/// Data: ROSS 2.3.0's run of the fourth machine (tests/data/ross-unseen-4/
+/// delay-runout: 150 µs on B1's rel probes, runout at B2; c/k 10 and
+/// 12.5 µs), not this crate's simulator.
+#[test]
+fn a_delay_held_against_a_zero_damping_is_reported_as_a_lower_bound() {
+    const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4");
+    let run = plinth_tests::unseen::stored(DATA, "delay-runout");
+    let d = plinth_tests::unseen::diagnosis_with_machine_check(DATA, "unseen-flex.toml", &run);
+    let step = d
+        .steps
+        .iter()
+        .find(|s| s.effect == "sensor_delay")
+        .unwrap_or_else(|| panic!("no delay named:\n{}", d.to_text()));
+    let tau = step
+        .parameters
+        .iter()
+        .find(|p| p.name == "tau")
+        .expect("tau");
+    let held = step.held.as_ref().expect("dampings held");
+    assert_eq!(held.dampings, ["c_y", "c_z"], "{}", d.to_text());
+    let text = d.to_text();
+    assert!(text.contains("tau is a lower bound"), "{text}");
+    let t = plinth_tests::unseen::truth_of(&run, "B1");
+    let tau_true = 150e-6;
+    assert!(
+        tau.value < tau_true,
+        "tau {} not below the truth",
+        tau.value
+    );
+    for (name, k, c) in [("c_y", t.k_y, t.c_y), ("c_z", t.k_z, t.c_z)] {
+        let per = held
+            .delay_per_percent_damping
+            .iter()
+            .find(|(n, _)| n == name)
+            .expect("per-percent delay")
+            .1;
+        let zeta_percent = 100.0 * c / (2.0 * (k * t.m).sqrt());
+        let corrected = tau.value + zeta_percent * per;
+        assert!(
+            (corrected - tau_true).abs() <= 3.0 * tau.std_err + 0.1 * zeta_percent * per,
+            "{name}: tau {:.3e} ± {:.1e} + ζ {zeta_percent:.2} % × {per:.2e} = {corrected:.3e}, truth {tau_true:.3e}",
+            tau.value,
+            tau.std_err
+        );
+    }
+}

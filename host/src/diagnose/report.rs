@@ -81,6 +81,11 @@ pub struct Step {
     /// (the backward check): the effect was removed again, with the reason.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub dropped: Option<String>,
+    /// Pedestal dampings at its bearing the effect was fitted with held at
+    /// zero (free, they came out impossible), and what that means for a
+    /// delay.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub held: Option<super::summaries::HeldDamping>,
 }
 
 /// The likelihood-ratio test of `foundation_coupling` (module docs of
@@ -450,6 +455,9 @@ impl Diagnosis {
                         .machine_gap_after
                         .map_or("not simulated".to_string(), |a| format!("{a:.4}"));
                     let _ = writeln!(s, "     machine-level gap {g:.4} -> {after}");
+                }
+                if let Some(h) = &st.held {
+                    h.write_text(&mut s, &st.bearing);
                 }
                 if let Some(why) = &st.dropped {
                     let _ = writeln!(s, "     REMOVED again: {why}");

@@ -107,3 +107,98 @@ pub(super) fn effect_estimates(
     }
     Ok(as_reported(&state.model, cand.bearing, cand.effect, out))
 }
+
+/// A step's pedestal dampings held at zero (`super::forward`'s
+/// held-at-zero variant of its candidate), and what holding them means for
+/// a delay.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct HeldDamping {
+    /// The held directions (`"c_y"`, `"c_z"`).
+    pub dampings: Vec<String>,
+    /// For a `sensor_delay` on the `rel` probes: per held direction, the
+    /// delay [s] each 1 % of pedestal damping ratio ζ would add to the
+    /// fitted τ. A delay τ reads as a damping −τ·k, so a true damping c
+    /// adds c/k = 2ζ/ω_n to it: with the damping held at zero, τ is a lower
+    /// bound (ω_n = √(k/m) [rad/s] from the step's refit).
+    pub delay_per_percent_damping: Vec<(String, f64)>,
+}
+
+/// What `cand` (the step's winner, refitted as `after`) holds at zero:
+/// dampings at its bearing that `before` estimated and its model lacks;
+/// `None` when it holds none.
+pub(super) fn held_dampings(
+    before: &State,
+    after: &State,
+    cand: &Candidate,
+) -> Option<HeldDamping> {
+    use super::model::Term;
+    let b = cand.bearing;
+    let dirs: Vec<usize> = (0..2)
+        .filter(|&dir| {
+            let t = Term::Damping { bearing: b, dir };
+            before.model.terms.contains(&t) && !after.model.terms.contains(&t)
+        })
+        .collect();
+    if dirs.is_empty() {
+        return None;
+    }
+    let name = |dir: usize| format!("c_{}", ["y", "z"][dir]);
+    let value = |t: Term| {
+        let i = after.model.terms.iter().position(|u| *u == t)?;
+        after.params.beta.get(i).copied()
+    };
+    let rel_delay = cand.effect == EffectKind::SensorDelay
+        && cand
+            .variant
+            .as_deref()
+            .is_some_and(|v| v.starts_with("rel"));
+    let delay_per_percent_damping = if rel_delay {
+        dirs.iter()
+            .filter_map(|&dir| {
+                let k = value(Term::Stiffness { bearing: b, dir })?;
+                let m = value(Term::Mass {
+                    bearing: b,
+                    dir: Some(dir),
+                })
+                .or_else(|| {
+                    value(Term::Mass {
+                        bearing: b,
+                        dir: None,
+                    })
+                })?;
+                let omega_n = (k / m).sqrt();
+                (omega_n.is_finite() && omega_n > 0.0).then(|| (name(dir), 2.0 * 0.01 / omega_n))
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    Some(HeldDamping {
+        dampings: dirs.into_iter().map(name).collect(),
+        delay_per_percent_damping,
+    })
+}
+
+impl HeldDamping {
+    /// The report's lines under the step (`bearing`: its name).
+    pub fn write_text(&self, s: &mut String, bearing: &str) {
+        use std::fmt::Write;
+        let _ = writeln!(
+            s,
+            "     {} at {bearing} held at 0 (free, impossible: a passive pedestal's bound)",
+            self.dampings.join(", ")
+        );
+        if !self.delay_per_percent_damping.is_empty() {
+            let per: Vec<String> = self
+                .delay_per_percent_damping
+                .iter()
+                .map(|(d, t)| format!("{:.2e} s per 1 % of ζ in {d}", t))
+                .collect();
+            let _ = writeln!(
+                s,
+                "     tau is a lower bound: a delay reads as a damping −tau·k, so a true pedestal damping adds c/k = 2ζ/ω_n to it ({})",
+                per.join(", ")
+            );
+        }
+    }
+}

@@ -21,7 +21,7 @@ use super::gap::Prediction;
 use super::locate::locate;
 use super::report::{Diagnosis, NoiseSummary, Step};
 pub use super::state::{base_model, pedestals, GroupInference, State};
-use super::summaries::{effect_estimates, summary, wald_test};
+use super::summaries::{effect_estimates, held_dampings, summary, wald_test};
 use super::trust::{as_pedestal_fit, conclude};
 use crate::rundir::RunDir;
 use crate::sim::oil_film::OilFilmBearing;
@@ -228,6 +228,7 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
                 candidates_tried: tried,
                 candidates_failed: outcome.failed.len(),
                 dropped: None,
+                held: held_dampings(&state, &next, &win.candidate),
             });
             chosen.push(Chosen::of(&win.candidate, steps.len() - 1));
             state = next;
@@ -354,6 +355,7 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
                     candidates_tried: outcome.tried + 2,
                     candidates_failed: outcome.failed.len(),
                     dropped: None,
+                    held: None,
                 });
                 on_base = Some(BaseOn::of(bases.prep, f));
                 after_steps.push((state.clone(), on_base.as_ref().map(|b| b.fit.clone())));
@@ -392,6 +394,7 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
             dropped: None,
+            held: held_dampings(&state, &next, &win.candidate),
         });
         chosen.push(Chosen::of(&win.candidate, steps.len() - 1));
         state = next;

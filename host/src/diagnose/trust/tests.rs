@@ -30,6 +30,7 @@ fn step(before: f64, after: f64) -> Step {
         candidates_tried: 20,
         candidates_failed: 0,
         dropped: None,
+        held: None,
     }
 }
 
