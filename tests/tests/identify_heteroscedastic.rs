@@ -23,6 +23,21 @@ use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
+/// The indices of each bearing's rows of `run`, bearings in name order.
+fn bearing_rows(run: &RunDir) -> Vec<Vec<usize>> {
+    let mut bearings: Vec<&String> = run.measurements.iter().map(|m| &m.bearing).collect();
+    bearings.sort();
+    bearings.dedup();
+    bearings
+        .into_iter()
+        .map(|b| {
+            (0..run.measurements.len())
+                .filter(|&i| &run.measurements[i].bearing == b)
+                .collect()
+        })
+        .collect()
+}
+
 /// The machine's exact run-down (5..=200 Hz in 2.5 Hz steps) with the
 /// mixed noise of the module docs drawn with `seed` (`relative` fraction of
 /// |phasor| plus `floor` of the channel's RMS), written with 7 digits and
@@ -33,13 +48,7 @@ fn mixed_noise_run(file: &str, relative: f64, floor: f64, seed: u64) -> RunDir {
     let response = unbalance_response(&m, &speeds, &EffectSet::none()).expect("simulation");
     let mut run = response.to_run_dir(None).expect("run directory");
     let mut rng = StdRng::seed_from_u64(seed);
-    let mut bearings: Vec<String> = run.measurements.iter().map(|m| m.bearing.clone()).collect();
-    bearings.sort();
-    bearings.dedup();
-    for b in &bearings {
-        let rows: Vec<usize> = (0..run.measurements.len())
-            .filter(|&i| &run.measurements[i].bearing == b)
-            .collect();
+    for rows in bearing_rows(&run) {
         for ch in 0..4 {
             let value = |m: &plinth::rundir::Measurement| {
                 if ch < 2 {
@@ -161,13 +170,7 @@ fn ross_true_columns() -> RunDir {
 /// per channel, as field instruments often write, while the noise grows
 /// with the amplitude at the resonances.
 fn constant_columns(mut run: RunDir) -> RunDir {
-    let mut bearings: Vec<String> = run.measurements.iter().map(|m| m.bearing.clone()).collect();
-    bearings.sort();
-    bearings.dedup();
-    for b in &bearings {
-        let rows: Vec<usize> = (0..run.measurements.len())
-            .filter(|&i| &run.measurements[i].bearing == b)
-            .collect();
+    for rows in bearing_rows(&run) {
         let rms: [f64; 4] = std::array::from_fn(|ch| {
             let sum: f64 = rows
                 .iter()
