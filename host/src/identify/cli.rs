@@ -367,11 +367,14 @@ pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
                 fit.bearing,
                 n.source.name(),
                 if n.variance_function.is_some() {
-                    " (variance function from the fit's residuals: the scatter's law rejected)"
+                    format!(
+                        " (variance function from the fit's residuals: {} rejected)",
+                        n.source.pattern_name()
+                    )
                 } else if n.scale_estimated {
-                    " (level from the fit's χ²)"
+                    " (level from the fit's χ²)".to_string()
                 } else {
-                    ""
+                    String::new()
                 },
                 sd.join(", "),
                 sig(n.chi2 / n.dof.max(1) as f64, 3)

@@ -7,7 +7,9 @@
 use super::{checks, ols_solution, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::{self, LackOfFit};
 use crate::estimate::ml::{self, MlFit};
-use crate::estimate::noise::{variance, BearingNoise, NoiseSource, Quantisation, CHANNELS};
+use crate::estimate::noise::{
+    columns, variance, BearingNoise, NoiseSource, Quantisation, CHANNELS,
+};
 use crate::estimate::pedestal::{fit_under_noise, noise_level, NoiseLevel};
 use crate::estimate::robust;
 use crate::estimate::Observation;
@@ -220,8 +222,8 @@ pub(crate) fn fit_ml_checked(
     // (docs/trust.md "Session 26").
     let mut function = None;
     if let Ok(f) = &attempt {
-        if noise.source == NoiseSource::Scatter && f.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE {
-            function = variance::refit(&obs, floor, &columns, f);
+        if noise.source.pattern_on_trial() && f.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE {
+            function = columns::refit(noise.source, &obs, floor, &columns, f);
         }
         let (test_obs, test_fit) = match &function {
             Some(r) => (r.obs.as_slice(), &r.fit),
@@ -288,11 +290,12 @@ pub(crate) fn fit_ml_checked(
     // ground) is model error, which no variance function describes, and this
     // fit is then the start of the base fit that follows.
     let model_fits = ml_fit.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE;
-    if noise.source == NoiseSource::Scatter && model_fits {
+    let mut columns_rejected = None;
+    if noise.source.pattern_on_trial() && model_fits {
         // Computed above on these observations and this fit unless speeds
         // were left out since.
         let refit = if fresh {
-            variance::refit(&obs, floor, &columns, &ml_fit)
+            columns::refit(noise.source, &obs, floor, &columns, &ml_fit)
         } else {
             function
         };
@@ -308,6 +311,9 @@ pub(crate) fn fit_ml_checked(
                     *v = w;
                 }
             }
+            if noise.source == NoiseSource::Columns {
+                columns_rejected = Some(columns::rejected(r.p_value, ml_fit.chi2_per_dof()));
+            }
             let scatter_obs = std::mem::replace(&mut obs, r.obs);
             let scatter_fit = std::mem::replace(&mut ml_fit, r.fit);
             lack_of_fit_input = Some((scatter_obs, scatter_fit));
@@ -317,7 +323,13 @@ pub(crate) fn fit_ml_checked(
     let chi2 = ml_fit.chi2;
     let dof = ml_fit.dof;
     let p_value = ml::chi2_two_sided_p(chi2, dof);
-    let mut extra = Vec::new();
+    let mut extra: Vec<Warning> = columns_rejected
+        .into_iter()
+        .map(|message| Warning {
+            kind: WarningKind::NoiseScaleMismatch,
+            message,
+        })
+        .collect();
     // The level: the one noise policy's verdict on χ².
     let variance_scale = match noise_level(chi2, dof, noise.source.scale_estimated()) {
         // A measured noise level (columns, digits, or the scatter's own
