@@ -260,6 +260,59 @@ impl NormalEquations {
         self.rows += 1;
     }
 
+    /// [`NormalEquations::add`] of a row whose entries outside `nonzero`
+    /// (positions, increasing) are +0 by construction (eq. 4's y and z
+    /// equations: three of five): only the products that can be non-zero
+    /// are added. Wherever AᵀA's diagonal stays finite (which
+    /// [`NormalEquations::solve`] requires) every entry and product is
+    /// finite, the skipped products are ±0, and the sums are those of
+    /// [`NormalEquations::add`] bit for bit (a sum starts at +0 and is
+    /// never −0: adding ±0 leaves it as it is).
+    #[inline]
+    pub fn add_sparse(&mut self, row: &[f64], nonzero: &[usize], rhs: f64) {
+        let p = self.p;
+        for (a, &i) in nonzero.iter().enumerate() {
+            let ri = row[i];
+            for &j in &nonzero[a..] {
+                self.ata[i * p + j] += ri * row[j];
+            }
+            self.atb[i] += ri * rhs;
+        }
+        self.rows += 1;
+    }
+
+    /// [`NormalEquations::add_sparse`] of five unknowns with the `N`
+    /// positions that can be non-zero known at compile time (eq. 4's y and
+    /// z equations of the full model: the same products added to the same
+    /// sums in the same order); false, adding nothing, when these equations
+    /// do not have five unknowns.
+    #[inline(always)]
+    pub fn add_sparse_fixed<const N: usize>(
+        &mut self,
+        row: &[f64; 5],
+        nonzero: [usize; N],
+        rhs: f64,
+    ) -> bool {
+        if self.p != 5 {
+            return false;
+        }
+        let (Some(ata), Some(atb)) = (
+            self.ata.first_chunk_mut::<25>(),
+            self.atb.first_chunk_mut::<5>(),
+        ) else {
+            return false;
+        };
+        for (a, &i) in nonzero.iter().enumerate() {
+            let ri = row[i];
+            for &j in &nonzero[a..] {
+                ata[i * 5 + j] += ri * row[j];
+            }
+            atb[i] += ri * rhs;
+        }
+        self.rows += 1;
+        true
+    }
+
     /// [`NormalEquations::add`] with `P` unknowns known at compile time
     /// (the same products added to the same sums in the same order);
     /// false, adding nothing, when these equations do not have `P`.
@@ -415,6 +468,76 @@ mod tests {
             }
             for (a, b) in ne.ata.iter().zip(&ata).chain(ne.atb.iter().zip(&atb)) {
                 assert_eq!(a.to_bits(), b.to_bits(), "p = {p}");
+            }
+        }
+    }
+
+    /// The sparse sums of eq. 4's rows (and, at five unknowns, those of the
+    /// fixed positions) are the dense ones bit for bit: every
+    /// equation mode, every subset of the five unknowns, ped phasors with
+    /// +0, −0, tiny and ordinary parts.
+    #[test]
+    fn sparse_sums_of_eq4_rows_equal_the_dense_sums() {
+        use plinth_shared::phasor::Complex;
+        use plinth_shared::regression::{equations_for_mode, EquationMode};
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(29);
+        let part = |rng: &mut rand::rngs::StdRng| match rng.random_range(0..5) {
+            0 => 0.0,
+            1 => -0.0,
+            2 => rng.random_range(-1e-300..1e-300),
+            _ => rng.random_range(-1e-6..1e-6),
+        };
+        for mode in [
+            EquationMode::RealAndImag,
+            EquationMode::RealPlusImag,
+            EquationMode::Real,
+            EquationMode::Imag,
+        ] {
+            for subset in 1u32..32 {
+                let columns: Vec<usize> = (0..5).filter(|c| subset & (1 << c) != 0).collect();
+                let p = columns.len();
+                let positions = |params: [usize; 3]| -> Vec<usize> {
+                    (0..p).filter(|&k| params.contains(&columns[k])).collect()
+                };
+                let (y, z) = (positions([0, 2, 3]), positions([1, 2, 4]));
+                let (mut dense, mut sparse) = (NormalEquations::new(p), NormalEquations::new(p));
+                let mut fixed = NormalEquations::new(p);
+                for _ in 0..300 {
+                    let mut c = || Complex::new(part(&mut rng), part(&mut rng));
+                    let ped = [c(), c()];
+                    let force = [c(), c()];
+                    let omega = rng.random_range(1.0..2000.0);
+                    let (eqs, n) = equations_for_mode(mode, omega, &ped, &force);
+                    for (i, eq) in eqs[..n].iter().enumerate() {
+                        let row: Vec<f64> = columns.iter().map(|&c| eq.row[c]).collect();
+                        dense.add(&row, eq.rhs);
+                        let nonzero = if i < n / 2 { &y } else { &z };
+                        sparse.add_sparse(&row, nonzero, eq.rhs);
+                        if let Ok(row) = <[f64; 5]>::try_from(row.as_slice()) {
+                            let added = if i < n / 2 {
+                                fixed.add_sparse_fixed(&row, [0, 2, 3], eq.rhs)
+                            } else {
+                                fixed.add_sparse_fixed(&row, [1, 2, 4], eq.rhs)
+                            };
+                            assert!(added);
+                        }
+                    }
+                }
+                let pairs = dense.ata.iter().zip(&sparse.ata);
+                for (a, b) in pairs.chain(dense.atb.iter().zip(&sparse.atb)) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{mode:?} {columns:?}");
+                }
+                assert_eq!(dense.rows(), sparse.rows());
+                if p == 5 {
+                    assert_eq!(y, [0, 2, 3]);
+                    assert_eq!(z, [1, 2, 4]);
+                    let pairs = dense.ata.iter().zip(&fixed.ata);
+                    for (a, b) in pairs.chain(dense.atb.iter().zip(&fixed.atb)) {
+                        assert_eq!(a.to_bits(), b.to_bits(), "{mode:?} fixed");
+                    }
+                    assert_eq!(dense.rows(), fixed.rows());
+                }
             }
         }
     }
