@@ -98,7 +98,7 @@ fn counted_digits(text: &str) -> Option<Counted> {
     let mut mantissa = running;
     if digits <= 19 {
         // `running` is exact (leading zeros add nothing to it).
-        while mantissa % 10 == 0 {
+        while mantissa.is_multiple_of(10) {
             mantissa /= 10;
             digits -= 1;
         }
