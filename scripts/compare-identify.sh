@@ -26,6 +26,10 @@ skid=examples/two-pedestals-on-skid.toml
 "$old" simulate "$skid" --speeds 5:200:1 --noise 0.01 --seed 2 --out "$work/skid" >/dev/null
 "$old" simulate "$skid" --speeds 5:200:1 --digits 4 --out "$work/skid_digits4" >/dev/null
 "$old" simulate "$damped" --speeds 5:200:1 --out "$work/clean" >/dev/null
+"$old" simulate "$damped" --speeds 5:200:1 --noise 0.005 --seed 7 --digits 2 --out "$work/digits2" >/dev/null
+"$old" simulate "$damped" --speeds 5:200:1 --digits 2 --truncate --out "$work/trunc2" >/dev/null
+"$old" simulate "$damped" --speeds 5:200:1 --noise 0.003 --seed 11 --digits 6 --out "$work/digits6" >/dev/null
+"$old" simulate "$skid" --speeds 5:200:1 --digits 2 --out "$work/skid_digits2" >/dev/null
 # The skid runs without their base.csv: the base not measured.
 for run in skid skid_digits4; do
   mkdir "$work/${run}_unmeasured"
@@ -79,7 +83,7 @@ EOF
 # Each convention mistake made in the text (scripts/convention_mistake.py)
 # of a noisy, a 3-digit and a skid run: the convention check's findings.
 mistakes="conjugated swapped_yz rel_negated bearing_transposed cross_coupling_sign speed_in_rpm"
-for run in noise digits3 skid; do
+for run in noise digits3 skid digits12 hetero columns; do
   for mistake in $mistakes; do
     python3 scripts/convention_mistake.py "$work/$run" "$work/${run}_$mistake" "$mistake"
   done
@@ -99,12 +103,25 @@ compare() {
     status=1
   fi
 }
-for run in noise digits3 trunc3 digits12 noise_digits12 hetero columns skid skid_digits4 clean; do
+runs=0
+for run in noise digits3 trunc3 digits12 noise_digits12 hetero columns skid skid_digits4 clean \
+  digits2 trunc2 digits6 skid_digits2; do
+  runs=$((runs + 1))
   for est in ml ols; do
     compare "identify $run $est" identify "$work/$run" --json --estimator "$est"
   done
 done
-for run in noise digits3 skid; do
+# Every stored run of the four unseen machines (ROSS: clean, outliers,
+# keyphasor flips, sub-bases, runout, delays, cross terms, tables).
+for dir in tests/data/ross-unseen*/*/; do
+  [ -f "$dir/measurements.csv" ] || continue
+  runs=$((runs + 1))
+  for est in ml ols; do
+    compare "identify ${dir%/} $est" identify "${dir%/}" --json --estimator "$est"
+  done
+done
+for run in noise digits3 skid digits12 hetero columns; do
+  runs=$((runs + 6))
   for mistake in $mistakes; do
     for est in ml ols; do
       compare "identify ${run}_$mistake $est" identify "$work/${run}_$mistake" --json --estimator "$est"
@@ -121,4 +138,5 @@ for run in noise digits3 columns hetero; do
 done
 compare "accuracy noise" accuracy "$damped" --noise 0.01 --draws 8 --json --quiet
 compare "accuracy digits" accuracy "$damped" --digits 3 --draws 8 --json --quiet
+echo "identify compared on $runs runs × 2 estimators"
 exit $status

@@ -86,13 +86,13 @@
 //! whose screen leaves no pedestal passive is skipped on the same ground
 //! (its misfit, and `ped_velocity`'s noise estimated anew).
 
-use super::misfit::misfit_of;
 #[cfg(test)]
 use super::misfit::noise_floor;
 use super::physical::is_plausible;
-use super::{Estimator, Identification, Options, PedestalFit, Warning, WarningKind};
-use crate::estimate::noise::{Quantisation, RunNoise};
-use crate::estimate::pedestal::floor_sd;
+use super::{Identification, Options, PedestalFit, Warning, WarningKind};
+#[cfg(test)]
+use crate::estimate::noise::Quantisation;
+use crate::estimate::noise::RunNoise;
 use crate::rundir::RunDir;
 use plinth_shared::bearing::BearingCoefficients;
 use plinth_shared::phasor::Phasor2;
@@ -205,242 +205,33 @@ impl Finding {
 /// others cannot change what is named (with OLS the screen is the fit). The
 /// noise is estimated once and transformed as each correction transforms
 /// the data ([`corrected_noise`]).
-pub fn diagnose<'n>(
+pub fn diagnose(
     run: &RunDir,
     identification: &Identification,
-    noise: &'n RunNoise,
+    noise: &RunNoise,
     options: &Options,
 ) -> Vec<Finding> {
-    // The noise floor of a reading (of `run` with a mistake undone, made
-    // when needed: only a truncated-digits run estimates it anew).
-    let floor_of = |fixed: &mut dyn FnMut() -> RunNoise, noise: &RunNoise| {
-        if noise.quantisation == Quantisation::Rounding {
-            floor_sd(noise, run.measurements.len())
-        } else {
-            floor_sd(&fixed(), run.measurements.len())
-        }
-    };
-    let sigma = floor_of(
-        &mut || RunNoise::estimate(run, Quantisation::Rounding),
-        noise,
-    );
-    let schedules = run.bearing_schedules();
-    let found_rows = rows::of_run(run, &schedules);
-    // Each bearing's stiffness, the yardstick of [`plausible`] (the same
-    // under every reading: no mistake tried rescales the table's values).
-    let bearing_stiffness: std::collections::BTreeMap<&str, Option<f64>> = identification
-        .pedestals
-        .iter()
-        .map(|p| {
-            let kb = super::plausibility::bearing_stiffness(run, &p.bearing);
-            (p.bearing.as_str(), kb)
-        })
-        .collect();
-    let reading = |rows: &[rows::BearingRows], sigma: &[[f64; 4]], p: &PedestalFit, c| {
-        let rows = rows.iter().find(|r| r.bearing == p.bearing)?;
-        let kb = bearing_stiffness.get(p.bearing.as_str()).copied().flatten();
-        misfit_of(rows.with_sigma(sigma), p).map(|m| Reading {
-            convention: c,
-            chi2: m.chi2,
-            dof: m.dof,
-            relative_residual: m.relative_residual,
-            plausible: plausible(p, kb),
-        })
-    };
-    let ols = options.effective_estimator() == Estimator::Ols;
-    let pedestals = &identification.pedestals;
-    // The reading of `fits` for each pedestal (same order), each misfit
-    // computed once and kept: the refit loop asks for them again and again.
-    let readings_of_fits = |k: &Candidate,
-                            rows: &[rows::BearingRows],
-                            fits: &[PedestalFit]|
-     -> Vec<Option<(Reading, PedestalFit)>> {
-        pedestals
-            .iter()
-            .map(|p| {
-                let q = fits.iter().find(|q| q.bearing == p.bearing)?;
-                let r = reading(rows, &k.sigma, q, Some(k.convention))?;
-                Some((r, q.clone()))
-            })
-            .collect()
-    };
-    // Each correction's rows are made when they are read, not kept: eight
-    // copies of a long run's observations cost more to hold than to make.
-    let rows_of = |c: Convention| rows::corrected(c, run, &found_rows, &schedules);
-    let found: Vec<Option<(Reading, PedestalFit)>> = pedestals
-        .iter()
-        .map(|p| Some((reading(&found_rows, &sigma, p, None)?, p.clone())))
-        .collect();
-    let readings_of = |j: usize, candidates: &[Candidate]| {
-        let found = found[j].clone()?;
-        let mut readings = vec![found];
-        readings.extend(
-            candidates
-                .iter()
-                .filter(|k| k.shown)
-                .filter_map(|k| k.readings.get(j).cloned().flatten()),
-        );
-        Some(readings)
-    };
-    let plausible_fit = |q: &PedestalFit| {
-        plausible(
-            q,
-            bearing_stiffness.get(q.bearing.as_str()).copied().flatten(),
-        )
-    };
-    // A correction's reading from its screen: its noise and noise floor,
-    // and with OLS its readings (the screen is the fit), else the lower
-    // bounds of its refit's relative residual per pedestal (`None`: no
-    // bound, it is refitted).
-    let read = |k: &mut Candidate<'n>, rows: &[rows::BearingRows]| {
-        let c = k.convention;
-        k.noise = corrected_noise(c, noise, run);
-        let fixed = &mut k.fixed;
-        k.sigma = floor_of(
-            &mut || {
-                let f = fixed.get_or_insert_with(|| c.correct(run));
-                RunNoise::estimate(f, Quantisation::Rounding)
-            },
-            &k.noise,
-        );
-        let screened = readings_of_fits(k, rows, &k.screen);
-        if ols {
-            k.fit = Some(Some(k.screen.clone()));
-            k.readings = screened;
-            k.shown = true;
-        } else {
-            k.bounds = screened
-                .iter()
-                .map(|r| r.as_ref().map(|(r, _)| r.relative_residual * (1.0 - 1e-9)))
-                .collect();
-        }
-    };
-    // Every correction with its OLS screen. With OLS a correction whose
-    // screen leaves no pedestal passive is read only when it can matter:
-    // when the data as found are not the best passive reading of every
-    // pedestal without it (otherwise nothing is named, with or without it:
-    // [`decide::found_is_best`]). Its reading costs a misfit per pedestal,
-    // and `ped_velocity`'s its noise estimated anew.
-    let mut candidates: Vec<Candidate<'n>> = Vec::new();
-    for c in Convention::ALL {
-        if !c.changes_with(run, &schedules) {
-            continue; // the mistake changes nothing in these data
-        }
-        let rows = rows_of(c);
-        let Some(screen) = screen::screen(&rows, options, pedestals) else {
-            continue;
-        };
-        let deferred = ols && !screen.iter().any(plausible_fit);
-        let mut k = Candidate {
-            convention: c,
-            fit: None,
-            readings: Vec::new(),
-            shown: false,
-            bounds: Vec::new(),
-            screen,
-            // The run with the mistake undone, made only where a reading
-            // needs more than its rows.
-            fixed: None,
-            noise: Cow::Borrowed(noise),
-            sigma: Vec::new(),
-        };
-        if !deferred {
-            read(&mut k, &rows);
-        }
-        candidates.push(k);
+    let judge = Judge::new(run, identification, noise, options);
+    let mut candidates = judge.candidates();
+    // With OLS the screens are the fits: nothing is refitted.
+    if !judge.ols {
+        refit::refit(&judge, &mut candidates);
     }
-    if ols
-        && !(0..pedestals.len())
-            .all(|j| readings_of(j, &candidates).is_none_or(|r| found_is_best(&r)))
-    {
-        for k in candidates.iter_mut().filter(|k| !k.shown) {
-            let rows = rows_of(k.convention);
-            read(k, &rows);
-        }
-    }
-    // Refit, cheapest first, every correction the readings so far leave a
-    // chance to matter. A first pass refits only what could name a mistake
-    // ([`decide::naming_limit`]); when it leaves the data as found the best
-    // passive reading of every pedestal, nothing is named, as with every
-    // refit made. Otherwise the full rule runs from the start (the order of
-    // the refits decides which readings are judged), with the fits made.
-    // (With OLS the screens are the fits: nothing is refitted.)
-    for naming_only in [true, false] {
-        if ols {
-            break;
-        }
-        if !naming_only {
-            if (0..pedestals.len())
-                .all(|j| readings_of(j, &candidates).is_none_or(|r| found_is_best(&r)))
-            {
-                break;
-            }
-            for k in &mut candidates {
-                k.shown = false;
-            }
-        }
-        loop {
-            let mut wanted: Vec<usize> = Vec::new();
-            for j in 0..pedestals.len() {
-                let Some(readings) = readings_of(j, &candidates) else {
-                    continue;
-                };
-                let limit = if naming_only {
-                    naming_limit(&readings)
-                } else {
-                    relevance_limit(&readings)
-                };
-                let open: Vec<(usize, f64)> = candidates
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, k)| !k.shown)
-                    .map(|(i, k)| (i, k.bounds.get(j).copied().flatten().unwrap_or(0.0)))
-                    .filter(|&(_, b)| b <= limit)
-                    .collect();
-                if limit.is_finite() {
-                    wanted.extend(open.iter().map(|&(i, _)| i));
-                } else if let Some(&(i, _)) = open.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
-                    wanted.push(i);
-                }
-            }
-            if wanted.is_empty() {
-                break;
-            }
-            for i in wanted {
-                if candidates[i].fit.is_none() {
-                    let k = &mut candidates[i];
-                    let c = k.convention;
-                    // Readings need the estimates and their plausibility
-                    // only; `rel_negated`'s are the fits as found, negated
-                    // ([`mistake::rel_negated_fits`]).
-                    let fits = if c == Convention::RelNegated {
-                        Some(mistake::rel_negated_fits(pedestals))
-                    } else {
-                        let fixed = k.fixed.get_or_insert_with(|| c.correct(run));
-                        super::fit_run_checked(
-                            fixed,
-                            &k.noise,
-                            options,
-                            super::estimator::Checks::Estimate,
-                        )
-                        .ok()
-                        .map(|id| id.pedestals)
-                    };
-                    let rows = rows_of(c);
-                    let k = &candidates[i];
-                    let readings = fits
-                        .as_deref()
-                        .map_or_else(Vec::new, |f| readings_of_fits(k, &rows, f));
-                    candidates[i].readings = readings;
-                    candidates[i].fit = Some(fits);
-                }
-                candidates[i].shown = true;
-            }
-        }
-    }
+    named(&judge, identification, &mut candidates)
+}
+
+/// The findings of `judge`'s run once `candidates` are read: per pedestal,
+/// the reading [`decide`] names, when it is a mistake (and, made for the
+/// whole run, the run prefers it), with the corrected fit made in full.
+fn named<'a>(
+    judge: &Judge<'a>,
+    identification: &Identification,
+    candidates: &mut [Candidate<'a>],
+) -> Vec<Finding> {
+    let (run, options, ols, pedestals) = (judge.run, judge.options, judge.ols, judge.pedestals);
     let mut findings = Vec::new();
     for (j, p) in pedestals.iter().enumerate() {
-        let Some(readings) = readings_of(j, &candidates) else {
+        let Some(readings) = judge.readings_of(j, candidates) else {
             continue;
         };
         let found = readings[0].0;
@@ -460,7 +251,7 @@ pub fn diagnose<'n>(
                 // pedestal by pedestal.
                 let pairs: Vec<(Reading, Reading)> = (0..pedestals.len())
                     .filter_map(|i| {
-                        let readings = readings_of(i, &candidates)?;
+                        let readings = judge.readings_of(i, candidates)?;
                         let c = readings
                             .iter()
                             .find(|(r, _)| r.convention == Some(convention))?;
@@ -486,10 +277,10 @@ pub fn diagnose<'n>(
                     )
                     .ok()
                     .and_then(|id| id.pedestals.into_iter().find(|q| q.bearing == p.bearing));
-                    let rows = rows_of(convention);
-                    if let Some((r, q)) = refit
-                        .and_then(|q| Some((reading(&rows, &k.sigma, &q, Some(convention))?, q)))
-                    {
+                    let rows = judge.rows_of(convention);
+                    if let Some((r, q)) = refit.and_then(|q| {
+                        Some((judge.reading(&rows, &k.sigma, &q, Some(convention))?, q))
+                    }) {
                         corrected = r;
                         corrected_fit = q;
                     }
@@ -498,14 +289,14 @@ pub fn diagnose<'n>(
             if ols {
                 // The named reading with the full OLS fit, not its screen.
                 if let Some(k) = candidates.iter_mut().find(|k| k.convention == convention) {
-                    let rows = rows_of(convention);
+                    let rows = judge.rows_of(convention);
                     let exact = rows
                         .iter()
                         .find(|r| r.bearing == p.bearing)
                         .and_then(|r| screen::exact(r.in_range()?, options, &p.bearing));
-                    if let Some((r, q)) = exact
-                        .and_then(|q| Some((reading(&rows, &k.sigma, &q, Some(convention))?, q)))
-                    {
+                    if let Some((r, q)) = exact.and_then(|q| {
+                        Some((judge.reading(&rows, &k.sigma, &q, Some(convention))?, q))
+                    }) {
                         corrected = r;
                         corrected_fit = q;
                     }
@@ -594,12 +385,15 @@ pub fn findings_for_run(
 
 mod candidate;
 mod decide;
+mod judge;
 mod mistake;
+mod refit;
 mod rows;
 mod screen;
 
-use candidate::{corrected_noise, Candidate};
-use decide::{decide, found_is_best, naming_limit, plausible, relevance_limit, run_prefers};
+use candidate::Candidate;
+use decide::{decide, run_prefers};
+use judge::Judge;
 
 pub use mistake::Convention;
 #[cfg(test)]

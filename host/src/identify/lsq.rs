@@ -3,6 +3,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
+mod normal;
+pub use normal::{NormalEquations, NormalSolution};
+
 /// The solution of min ‖A·θ − b‖₂ and what the data say about it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LeastSquares {
@@ -192,145 +195,6 @@ pub fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> LeastSquares {
     }
 }
 
-/// The normal equations AᵀA·θ = Aᵀb of a tall least-squares problem,
-/// accumulated row by row without storing A: p² + p numbers however many
-/// rows. Squaring A squares its condition number, so [`solve`] (an SVD of
-/// A) stays the estimate a fit reports; this is the cheap screen of many
-/// similar problems, solved only when the column-scaled A is well
-/// conditioned ([`NormalEquations::solve`]).
-#[derive(Clone, Debug, PartialEq)]
-pub struct NormalEquations {
-    p: usize,
-    /// AᵀA, row-major p×p, its upper triangle (i ≤ j) only: the lower one
-    /// would hold the same sums bit for bit (the same products in the same
-    /// order), so [`NormalEquations::solve`] reads the upper one mirrored.
-    ata: Vec<f64>,
-    /// Aᵀb.
-    atb: Vec<f64>,
-    /// Rows added.
-    rows: usize,
-}
-
-/// What [`NormalEquations::solve`] gives.
-#[derive(Clone, Debug, PartialEq)]
-pub struct NormalSolution {
-    /// The estimate θ.
-    pub theta: Vec<f64>,
-    /// (AᵀA)⁻¹, row-major p×p: σ² times it is θ's covariance.
-    pub inverse: Vec<f64>,
-    /// Condition number of A with unit-norm columns [-].
-    pub condition_number: f64,
-}
-
-impl NormalEquations {
-    /// Empty normal equations of `p` unknowns.
-    pub fn new(p: usize) -> Self {
-        Self {
-            p,
-            ata: vec![0.0; p * p],
-            atb: vec![0.0; p],
-            rows: 0,
-        }
-    }
-
-    /// Adds one equation row·θ = rhs (`row` of length p).
-    ///
-    /// Every product is added, zeros included: a zero product leaves a sum
-    /// as it is (the sums start at +0 and, in round-to-nearest, only
-    /// −0 + −0 gives −0, so a sum is never −0), so the result is that of
-    /// skipping a finite row's zero entries bit for bit, without a branch
-    /// per entry. Only AᵀA's upper triangle is summed; five unknowns (eq.
-    /// 4's) take a loop of fixed length.
-    #[inline]
-    pub fn add(&mut self, row: &[f64], rhs: f64) {
-        if self.p == 5 {
-            if let Some(row) = row.first_chunk::<5>() {
-                if self.add_fixed(row, rhs) {
-                    return;
-                }
-            }
-        }
-        let p = self.p;
-        for (i, &ri) in row.iter().enumerate().take(p) {
-            for (j, &rj) in row.iter().enumerate().take(p).skip(i) {
-                self.ata[i * p + j] += ri * rj;
-            }
-            self.atb[i] += ri * rhs;
-        }
-        self.rows += 1;
-    }
-
-    /// [`NormalEquations::add`] with `P` unknowns known at compile time
-    /// (the same products added to the same sums in the same order);
-    /// false, adding nothing, when these equations do not have `P`.
-    #[inline]
-    fn add_fixed<const P: usize>(&mut self, row: &[f64; P], rhs: f64) -> bool {
-        if self.p != P {
-            return false;
-        }
-        let (Some(ata), Some(atb)) = (self.ata.get_mut(..P * P), self.atb.get_mut(..P)) else {
-            return false;
-        };
-        for (i, (&ri, atb_i)) in row.iter().zip(atb).enumerate() {
-            for (j, &rj) in row.iter().enumerate().skip(i) {
-                ata[i * P + j] += ri * rj;
-            }
-            *atb_i += ri * rhs;
-        }
-        self.rows += 1;
-        true
-    }
-
-    /// Entry (i, j) of AᵀA (from its upper triangle).
-    fn ata(&self, i: usize, j: usize) -> f64 {
-        self.ata[i.min(j) * self.p + i.max(j)]
-    }
-
-    /// Equations added.
-    pub fn rows(&self) -> usize {
-        self.rows
-    }
-
-    /// The least-squares solution when A has more rows than unknowns and
-    /// its column-scaled condition number is at most `max_condition`
-    /// (then θ carries about max_condition²·ε of relative error); `None`
-    /// otherwise (rank deficient, ill conditioned or not finite: use
-    /// [`solve`]).
-    pub fn solve(&self, max_condition: f64) -> Option<NormalSolution> {
-        let p = self.p;
-        if p == 0 || self.rows <= p {
-            return None;
-        }
-        let d: Vec<f64> = (0..p).map(|j| self.ata(j, j).sqrt()).collect();
-        if !d.iter().all(|&x| x > 0.0 && x.is_finite()) {
-            return None;
-        }
-        let m = DMatrix::from_fn(p, p, |i, j| self.ata(i, j) / (d[i] * d[j]));
-        let eigen = m.clone().symmetric_eigenvalues();
-        let lo = eigen.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = eigen.iter().copied().fold(0.0, f64::max);
-        let condition_number = (hi / lo).sqrt();
-        if !(lo > 0.0 && condition_number <= max_condition) {
-            return None;
-        }
-        let inverse_scaled = m.cholesky()?.inverse();
-        let inverse: Vec<f64> = (0..p * p)
-            .map(|k| inverse_scaled[(k / p, k % p)] / (d[k / p] * d[k % p]))
-            .collect();
-        let theta: Vec<f64> = (0..p)
-            .map(|i| (0..p).map(|j| inverse[i * p + j] * self.atb[j]).sum())
-            .collect();
-        theta
-            .iter()
-            .all(|t| t.is_finite())
-            .then_some(NormalSolution {
-                theta,
-                inverse,
-                condition_number,
-            })
-    }
-}
-
 fn degenerate(n: usize, p: usize) -> LeastSquares {
     LeastSquares {
         theta: vec![f64::NAN; p],
@@ -387,73 +251,6 @@ mod tests {
     /// non-zero ones only, bit for bit (the rule `add` relies on): rows of
     /// eq. 4's shape with +0, −0 and tiny entries, at five unknowns (the
     /// fixed-length loop) and at three (the general one).
-    #[test]
-    fn dense_sums_equal_the_sums_of_non_zero_products() {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand::rngs::StdRng::seed_from_u64(17);
-        for p in [3usize, 5] {
-            let mut ne = NormalEquations::new(p);
-            let (mut ata, mut atb) = (vec![0.0f64; p * p], vec![0.0f64; p]);
-            for _ in 0..2000 {
-                let row: Vec<f64> = (0..p)
-                    .map(|_| match rng.random_range(0..4) {
-                        0 => 0.0,
-                        1 => -0.0,
-                        2 => rng.random_range(-1e-300..1e-300),
-                        _ => rng.random_range(-1e3..1e3),
-                    })
-                    .collect();
-                let rhs =
-                    rng.random_range(-1.0..1.0) * if rng.random_bool(0.2) { 0.0 } else { 1.0 };
-                ne.add(&row, rhs);
-                for i in (0..p).filter(|&i| row[i] != 0.0) {
-                    for j in (i..p).filter(|&j| row[j] != 0.0) {
-                        ata[i * p + j] += row[i] * row[j];
-                    }
-                    atb[i] += row[i] * rhs;
-                }
-            }
-            for (a, b) in ne.ata.iter().zip(&ata).chain(ne.atb.iter().zip(&atb)) {
-                assert_eq!(a.to_bits(), b.to_bits(), "p = {p}");
-            }
-        }
-    }
-
-    #[test]
-    fn normal_equations_agree_with_the_svd() {
-        let n = 200;
-        let rows: Vec<[f64; 3]> = (0..n)
-            .map(|i| {
-                let x = i as f64 / n as f64;
-                [1.0, 1e6 * x, 1e-3 * (7.0 * x).sin()]
-            })
-            .collect();
-        let b: Vec<f64> = (0..n)
-            .map(|i| {
-                2.0 - 3e-6 * rows[i][1] + 5e3 * rows[i][2] + 1e-3 * ((i * 37 % 11) as f64 - 5.0)
-            })
-            .collect();
-        let a = DMatrix::from_fn(n, 3, |i, j| rows[i][j]);
-        let svd = solve(&a, &DVector::from_vec(b.clone()));
-        let mut ne = NormalEquations::new(3);
-        for (r, &y) in rows.iter().zip(&b) {
-            ne.add(r, y);
-        }
-        let s = ne.solve(1e4).unwrap();
-        let sigma2 = svd.rss / (n - 3) as f64;
-        for (j, (&t, &t_svd)) in s.theta.iter().zip(&svd.theta).enumerate() {
-            assert!((t - t_svd).abs() <= 1e-10 * t_svd.abs(), "{j}");
-            let se = (sigma2 * s.inverse[j * 3 + j]).sqrt();
-            assert!((se - svd.std_err[j]).abs() <= 1e-9 * svd.std_err[j], "{j}");
-        }
-        assert!((s.condition_number - svd.condition_number).abs() < 1e-9 * svd.condition_number);
-        let mut collinear = NormalEquations::new(2);
-        for i in 0..10 {
-            collinear.add(&[i as f64, 2.0 * i as f64], 1.0);
-        }
-        assert_eq!(collinear.solve(1e4), None);
-    }
-
     #[test]
     fn collinear_columns_are_rank_deficient() {
         let a = DMatrix::from_row_slice(4, 2, &[1.0, 2.0, 2.0, 4.0, 3.0, 6.0, 4.0, 8.0]);

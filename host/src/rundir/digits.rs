@@ -99,118 +99,10 @@ pub fn round_to_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
     s.parse().unwrap_or(x)
 }
 
-/// The significant digits and decimal exponent of the first significant
-/// digit of a number as written in `text` (e.g. `-1.230e-6` → (3, −6):
-/// trailing zeros carry no digit, as for the value), counted from the text;
-/// `None` for zero, text that is not a plain decimal number, or more than 15
-/// significant digits (beyond 15 two decimals may read as the same f64, so
-/// the value decides: [`written_digits`]). Up to 15 digits this is exactly
-/// [`written_digits`] of the parsed value: a decimal of at most 15 digits is
-/// the shortest text of its f64.
-pub fn text_digits(text: &str) -> Option<(u32, i32)> {
-    counted_digits(text).filter(|&(d, _)| d <= 15)
-}
+pub(crate) use count::trimmed;
+pub use count::{text_digits, written_digits};
 
-/// The significant digits and the decimal exponent of the first one of a
-/// plain decimal number's text, however many digits it has (`None` for zero
-/// and for text that is not a plain decimal number).
-fn counted_digits(text: &str) -> Option<(u32, i32)> {
-    let t = trimmed(text);
-    let t = t.strip_prefix(['-', '+']).unwrap_or(t);
-    // One pass over the bytes (this runs for every number of a measurements
-    // file), up to the exponent's 'e' ('e' and 'E' never occur inside a
-    // multi-byte character). Positions count digits only; −1: not seen.
-    let mut first = -1i32; // position of the first significant digit
-    let mut last = 0i32; // position of the last non-zero digit
-    let mut point = -1i32;
-    let mut n = 0i32; // digits seen
-    let mut exponent = 0i32;
-    for (i, &b) in t.as_bytes().iter().enumerate() {
-        let digit = b.wrapping_sub(b'0');
-        if digit < 10 {
-            if digit != 0 {
-                if first < 0 {
-                    first = n;
-                }
-                last = n;
-            }
-            n += 1;
-        } else if b == b'.' && point < 0 {
-            point = n;
-        } else if b == b'e' || b == b'E' {
-            exponent = exponent_of(&t.as_bytes()[i + 1..])?;
-            break;
-        } else {
-            return None;
-        }
-    }
-    if first < 0 {
-        return None;
-    }
-    let digits = last - first + 1;
-    // Decimal exponent of the digit at position `first`.
-    let point = if point < 0 { n } else { point };
-    Some((digits as u32, exponent + point - first - 1))
-}
-
-/// `text` without leading and trailing whitespace: `str::trim` (Unicode
-/// White_Space), returning at once when both ends are printable ASCII (all
-/// ASCII whitespace is at or below b' '), as every field of a plain CSV
-/// table is: this runs for every number of a measurements file.
-pub(crate) fn trimmed(text: &str) -> &str {
-    let plain = |b: Option<&u8>| b.is_some_and(|&b| b > b' ' && b.is_ascii());
-    let bytes = text.as_bytes();
-    if plain(bytes.first()) && plain(bytes.last()) {
-        text
-    } else {
-        text.trim()
-    }
-}
-
-/// The exponent after a number's `e`: what `str::parse::<i32>` gives for
-/// `bytes` (an optional sign, then one or more ASCII digits, within i32),
-/// without its generic machinery; `None` where it fails.
-fn exponent_of(bytes: &[u8]) -> Option<i32> {
-    let (negative, digits) = match bytes.split_first() {
-        Some((b'-', rest)) => (true, rest),
-        Some((b'+', rest)) => (false, rest),
-        _ => (false, bytes),
-    };
-    if digits.is_empty() {
-        return None;
-    }
-    // Accumulated on the side of the sign, so that i32::MIN is reached.
-    let mut value = 0i32;
-    for &b in digits {
-        let d = b.wrapping_sub(b'0');
-        if d >= 10 {
-            return None;
-        }
-        let d = i32::from(d);
-        value = value.checked_mul(10).and_then(|v| {
-            if negative {
-                v.checked_sub(d)
-            } else {
-                v.checked_add(d)
-            }
-        })?;
-    }
-    Some(value)
-}
-
-/// The fewest significant digits (1..=17) that reproduce `v` exactly when
-/// printed in scientific notation and parsed back, with the decimal exponent
-/// of that printing; `None` for zero and non-finite values. Counted on the
-/// shortest text that reads back as `v` (Ryū's, on the stack; the same
-/// digits as Rust's `{:e}`, which is unique in length and, being the
-/// closest of the shortest, in its leading digit's place).
-pub fn written_digits(v: f64) -> Option<(u32, i32)> {
-    if v == 0.0 || !v.is_finite() {
-        return None;
-    }
-    let mut buf = ryu::Buffer::new();
-    counted_digits(buf.format_finite(v.abs()))
-}
+mod count;
 
 /// How the eight real numbers of a `measurements.csv` row (formats.md
 /// order: rel y re, rel y im, rel z re, rel z im, ped y re, …) were written:
@@ -235,7 +127,9 @@ pub struct WrittenDigits {
 }
 
 impl WrittenDigits {
-    /// The digits of `values` parsed from `texts` (same order).
+    /// The digits of `values` parsed from `texts` (same order):
+    /// [`written_digits`] of each value, counted from its text where that
+    /// is the value's shortest text.
     pub fn from_text(texts: [&str; 8], values: [f64; 8]) -> Self {
         let mut out = Self {
             abs_bits: [0; 8],
@@ -244,9 +138,7 @@ impl WrittenDigits {
             floor_var: [0.0; 8],
         };
         for k in 0..8 {
-            let (d, e) = text_digits(texts[k])
-                .or_else(|| written_digits(values[k]))
-                .unwrap_or((0, 0));
+            let (d, e) = count::digits_of_text(texts[k], values[k]).unwrap_or((0, 0));
             out.abs_bits[k] = values[k].abs().to_bits();
             out.digits[k] = d as u8;
             out.exponent[k] = e.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
@@ -348,144 +240,6 @@ impl super::Measurement {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The digits counted from the text are the value's: every text a
-    /// writer may produce, and random values at every digit count.
-    #[test]
-    fn text_digits_agree_with_the_value() {
-        for text in [
-            "1.23e-6",
-            "-4.5e-9",
-            "1",
-            "1.0",
-            "0.00012",
-            "-0.000120",
-            "120",
-            "1.2E+3",
-            "+7.25e2",
-            "9.99999999999999e0",
-            "123456789012345",
-            "6.935303281509727e-9",
-            "0.5",
-            ".5",
-            "5.",
-        ] {
-            let v: f64 = text.parse().unwrap();
-            match text_digits(text) {
-                Some(d) => assert_eq!(Some(d), written_digits(v), "{text}"),
-                None => assert!(text.len() > 16, "{text}"),
-            }
-        }
-        assert_eq!(text_digits("0"), None);
-        assert_eq!(text_digits("0.000"), None);
-        assert_eq!(text_digits("1e5x"), None);
-        let mut x = 0.123_456_789_f64;
-        for d in 1..=17u32 {
-            for scale in [1e-12, 1e-3, 1.0, 7e5] {
-                let v = round_to_digits(x * scale, d, DigitsMode::Round);
-                let text = format!("{:.*e}", (d - 1) as usize, v);
-                let parsed: f64 = text.parse().unwrap();
-                if let Some(t) = text_digits(&text) {
-                    assert_eq!(Some(t), written_digits(parsed), "{text}");
-                }
-            }
-            x = x * 7.3 % 1.0 + 0.1;
-        }
-        assert_eq!(written_digits(1.23e-6), Some((3, -6)));
-        assert_eq!(written_digits(-4.5e-9), Some((2, -9)));
-        assert_eq!(written_digits(1.0), Some((1, 0)));
-        assert_eq!(written_digits(0.0), None);
-    }
-
-    /// The digits counted on Ryū's text are those of Rust's own shortest
-    /// `{:e}` printing, at every magnitude and digit count.
-    #[test]
-    fn written_digits_are_those_of_the_shortest_printing() {
-        let std_digits = |v: f64| {
-            let text = format!("{:e}", v.abs());
-            let (mantissa, exponent) = text.split_once('e').unwrap();
-            let digits = mantissa.bytes().filter(u8::is_ascii_digit).count() as u32;
-            (digits, exponent.parse::<i32>().unwrap())
-        };
-        let mut x = 0.123_456_789_012_345_67_f64;
-        for k in 0..20_000 {
-            let scale = 10f64.powi(k % 600 - 300);
-            for v in [
-                x * scale,
-                -x * scale,
-                round_to_digits(x * scale, 1 + k as u32 % 17, DigitsMode::Round),
-            ] {
-                if v != 0.0 && v.is_finite() {
-                    assert_eq!(written_digits(v), Some(std_digits(v)), "{v:e}");
-                }
-            }
-            x = (x * 7.389_056_098_930_65 + 0.377_123_456) % 1.0 + 1e-3;
-        }
-        for v in [
-            1.0,
-            9.999_999_999_999_999,
-            1e16,
-            123.0,
-            5e-324,
-            f64::MAX,
-            0.1 + 0.2,
-        ] {
-            assert_eq!(written_digits(v), Some(std_digits(v)), "{v:e}");
-        }
-    }
-
-    #[test]
-    fn exponents_and_trimming_are_those_of_the_standard_library() {
-        for text in [
-            "",
-            "+",
-            "-",
-            "0",
-            "-0",
-            "+0",
-            "7",
-            "-9",
-            "+12",
-            "007",
-            "-300",
-            "2147483647",
-            "2147483648",
-            "-2147483648",
-            "-2147483649",
-            "99999999999",
-            "1x",
-            "+-1",
-            "--1",
-            " 1",
-            "1 ",
-            "١",
-            "1.5",
-            "e5",
-        ] {
-            assert_eq!(
-                exponent_of(text.as_bytes()),
-                text.parse::<i32>().ok(),
-                "{text:?}"
-            );
-        }
-        for text in [
-            "",
-            " ",
-            "1",
-            " 1",
-            "1 ",
-            "\t1.5\r",
-            "\u{b}2\u{b}",
-            "\u{a0}3",
-            "4\u{2003}",
-            "a b",
-            "\u{85}",
-            "x",
-            "\u{1c}5",
-        ] {
-            assert_eq!(trimmed(text), text.trim(), "{text:?}");
-        }
-    }
 
     #[test]
     fn written_digits_follow_their_values() {

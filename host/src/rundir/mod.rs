@@ -451,19 +451,37 @@ impl RunDir {
         &self,
         speed: impl Fn(f64) -> f64,
     ) -> BTreeMap<String, BearingSchedule> {
-        let mut rows: BTreeMap<String, Vec<(f64, BearingCoefficients<f64>)>> = BTreeMap::new();
+        // Each row's bearing (an index into `names`, in order of first
+        // appearance; a row usually has the previous row's bearing, tried
+        // first), then each bearing's rows in the table's order, with room
+        // for all of them at once.
+        let mut names: Vec<&str> = Vec::new();
+        let mut counts: Vec<usize> = Vec::new();
+        let mut of_row: Vec<usize> = Vec::with_capacity(self.bearings.len());
+        let mut last = 0;
         for b in &self.bearings {
-            let row = (speed(b.speed_hz), b.coefficients);
-            // The name is copied once per bearing, not once per row.
-            match rows.get_mut(&b.bearing) {
-                Some(r) => r.push(row),
-                None => {
-                    rows.insert(b.bearing.clone(), vec![row]);
-                }
+            if names.get(last) != Some(&b.bearing.as_str()) {
+                last = match names.iter().position(|n| *n == b.bearing) {
+                    Some(k) => k,
+                    None => {
+                        names.push(&b.bearing);
+                        counts.push(0);
+                        names.len() - 1
+                    }
+                };
             }
+            counts[last] += 1;
+            of_row.push(last);
         }
-        rows.into_iter()
-            .map(|(name, r)| (name, BearingSchedule::new(r)))
+        let mut rows: Vec<Vec<(f64, BearingCoefficients<f64>)>> =
+            counts.into_iter().map(Vec::with_capacity).collect();
+        for (b, &k) in self.bearings.iter().zip(&of_row) {
+            rows[k].push((speed(b.speed_hz), b.coefficients));
+        }
+        names
+            .into_iter()
+            .zip(rows)
+            .map(|(name, r)| (name.to_string(), BearingSchedule::new(r)))
             .collect()
     }
 }

@@ -16,7 +16,7 @@ use super::super::physical::violations;
 use super::super::{Options, PedestalFit};
 use super::rows::BearingRows;
 use crate::estimate::Observation;
-use plinth_shared::regression::{equations_for_mode, PARAMETERS};
+use plinth_shared::regression::{equations_for_mode, Parameter, PARAMETERS};
 
 /// Largest condition number of the column-scaled design matrix [-] at
 /// which the normal equations are solved (θ then carries at most about
@@ -72,6 +72,18 @@ fn normal(
                 .all(|c| c.re.is_finite() && c.im.is_finite());
         finite.then_some((p, force))
     });
+    // The columns a y and a z equation of eq. 4 can have non-zero (k_y, m,
+    // c_y and k_z, m, c_z), as positions in `columns`: only their products
+    // are summed ([`NormalEquations::add_sparse`]; the same sums).
+    let positions = |params: [Parameter; 3]| -> Vec<usize> {
+        (0..columns.len())
+            .filter(|&k| params.contains(&columns[k]))
+            .collect()
+    };
+    let y = positions([Parameter::Ky, Parameter::M, Parameter::Cy]);
+    let z = positions([Parameter::Kz, Parameter::M, Parameter::Cz]);
+    // The full model: the positions known at compile time, rows as made.
+    let full = columns.len() == PARAMETERS && y == [0, 2, 3] && z == [1, 2, 4];
     let mut ne = NormalEquations::new(columns.len());
     // Each equation's row (the model's columns) and right-hand side, made
     // once for the sums and the residuals.
@@ -79,12 +91,28 @@ fn normal(
     let mut range = [f64::INFINITY, f64::NEG_INFINITY];
     for (p, force) in finite {
         let (eqs, n) = equations_for_mode(options.mode, p.omega(), &p.ped, &force);
-        for eq in &eqs[..n] {
-            let mut row = [0.0; PARAMETERS];
-            for (r, &c) in row.iter_mut().zip(&columns) {
-                *r = eq.row[c as usize];
+        // The y equations come first, then as many z ones.
+        for (i, eq) in eqs[..n].iter().enumerate() {
+            let y_equation = i < n / 2;
+            let row = if full {
+                eq.row
+            } else {
+                let mut row = [0.0; PARAMETERS];
+                for (r, &c) in row.iter_mut().zip(&columns) {
+                    *r = eq.row[c as usize];
+                }
+                row
+            };
+            let added = full
+                && if y_equation {
+                    ne.add_sparse_fixed(&row, [0, 2, 3], eq.rhs)
+                } else {
+                    ne.add_sparse_fixed(&row, [1, 2, 4], eq.rhs)
+                };
+            if !added {
+                let nonzero = if y_equation { &y } else { &z };
+                ne.add_sparse(&row[..columns.len()], nonzero, eq.rhs);
             }
-            ne.add(&row[..columns.len()], eq.rhs);
             rows.push((row, eq.rhs));
         }
         range = [range[0].min(p.speed_hz), range[1].max(p.speed_hz)];

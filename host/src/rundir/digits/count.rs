@@ -1,0 +1,581 @@
+//! Counting the significant digits of a number: from its text as written
+//! (one pass over the bytes) or from its value (the shortest text that
+//! reads back as it, Ryū's), and deciding from the text alone, with exact
+//! integer arithmetic, when a text of more than 15 digits is itself that
+//! shortest text (as every full-precision writer's is), so that the value
+//! need not be printed.
+
+/// The significant digits and decimal exponent of the first significant
+/// digit of a number as written in `text` (e.g. `-1.230e-6` → (3, −6):
+/// trailing zeros carry no digit, as for the value), counted from the text;
+/// `None` for zero, text that is not a plain decimal number, or more than 15
+/// significant digits (beyond 15 two decimals may read as the same f64, so
+/// the value decides: [`written_digits`]). Up to 15 digits this is exactly
+/// [`written_digits`] of the parsed value: a decimal of at most 15 digits is
+/// the shortest text of its f64.
+pub fn text_digits(text: &str) -> Option<(u32, i32)> {
+    counted_digits(text)
+        .map(|c| (c.digits, c.exponent))
+        .filter(|&(d, _)| d <= 15)
+}
+
+/// [`written_digits`] of `value`, the number `text` reads as: counted from
+/// the text when it is the shortest text of `value` (up to 15 digits
+/// always; beyond, when no decimal of fewer digits reads as `value`:
+/// [`Counted::is_shortest_of`]), else from the value.
+pub fn digits_of_text(text: &str, value: f64) -> Option<(u32, i32)> {
+    match counted_digits(text) {
+        Some(c) if c.digits <= 15 || c.is_shortest_of(value) => Some((c.digits, c.exponent)),
+        _ => written_digits(value),
+    }
+}
+
+/// A plain decimal number's text as counted: `mantissa`·10^(`exponent` −
+/// `digits` + 1) is its magnitude.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Counted {
+    /// Significant digits (first to last non-zero digit).
+    digits: u32,
+    /// Decimal exponent of the first significant digit.
+    exponent: i32,
+    /// The significant digits as an integer (wrapped, meaningless, beyond
+    /// 19 digits).
+    mantissa: u64,
+}
+
+/// The significant digits, the decimal exponent of the first one and their
+/// integer of a plain decimal number's text, however many digits it has
+/// (`None` for zero and for text that is not a plain decimal number).
+fn counted_digits(text: &str) -> Option<Counted> {
+    let t = trimmed(text);
+    let t = t.strip_prefix(['-', '+']).unwrap_or(t);
+    let bytes = t.as_bytes();
+    // One pass over the digits and the point (this runs for every number
+    // of a measurements file), up to the exponent's 'e' ('e' and 'E' never
+    // occur inside a multi-byte character). Positions count digits only.
+    let mut n = 0i32; // digits seen
+    let mut point = -1i32; // digits before the point (−1: no point yet)
+    let mut i = 0;
+    // Leading zeros (and the point among them) first: what follows them
+    // is significant.
+    while let Some(&b) = bytes.get(i) {
+        if b == b'0' {
+            n += 1;
+        } else if b == b'.' && point < 0 {
+            point = n;
+        } else {
+            break;
+        }
+        i += 1;
+    }
+    let zeros = n;
+    let mut running = 0u64; // the significant digits as an integer (wrapping)
+    while let Some(&b) = bytes.get(i) {
+        let digit = b.wrapping_sub(b'0');
+        if digit < 10 {
+            running = running.wrapping_mul(10).wrapping_add(u64::from(digit));
+            n += 1;
+        } else if b == b'.' && point < 0 {
+            point = n;
+        } else {
+            break;
+        }
+        i += 1;
+    }
+    let end = i;
+    let exponent = match bytes.get(end) {
+        None => 0,
+        Some(b'e' | b'E') => exponent_of(&bytes[end + 1..])?,
+        Some(_) => return None,
+    };
+    // The first digit after the leading zeros is a non-zero one.
+    if n == zeros {
+        return None;
+    }
+    let point = if point < 0 { n } else { point };
+    // Significant digits, the trailing zeros taken off.
+    let mut digits = n - zeros;
+    let mut mantissa = running;
+    if digits <= 19 {
+        // `running` is exact (leading zeros add nothing to it).
+        while mantissa.is_multiple_of(10) {
+            mantissa /= 10;
+            digits -= 1;
+        }
+    } else {
+        // Counted again from the text (more than 19 digits: rare).
+        let text = &bytes[..end];
+        let trailing = text
+            .iter()
+            .rev()
+            .filter(|&&b| b != b'.')
+            .take_while(|&&b| b == b'0')
+            .count() as i32;
+        digits -= trailing;
+        mantissa = text
+            .iter()
+            .filter(|b| b.is_ascii_digit())
+            .skip(zeros as usize)
+            .take(digits as usize)
+            .fold(0u64, |m, &b| {
+                m.wrapping_mul(10).wrapping_add(u64::from(b - b'0'))
+            });
+    }
+    Some(Counted {
+        digits: digits as u32,
+        exponent: exponent + point - zeros - 1,
+        mantissa,
+    })
+}
+
+/// 5^k for k in 0..32: 5^31 < 2^72.
+const POW5: [u128; 32] = {
+    let mut table = [1u128; 32];
+    let mut k = 1;
+    while k < 32 {
+        table[k] = table[k - 1] * 5;
+        k += 1;
+    }
+    table
+};
+
+/// The powers 10^k the exact comparisons below take, k in
+/// `POW10_RANGE`: every product they form fits in 128 bits (a mantissa of
+/// ≤ 19 digits times 5^27 < 2^63, or a rounding limit < 2^56 times 5^31 <
+/// 2^72).
+const POW10_RANGE: std::ops::RangeInclusive<i32> = -31..=27;
+
+impl Counted {
+    /// Whether this text (read as a positive number) is the shortest text
+    /// of `value` ([`written_digits`]'s): it reads as `|value|` and no
+    /// decimal of one digit fewer does. Such a decimal, when there is one,
+    /// lies between the text and `value`'s rounding limits; the nearest ones
+    /// on either side of the text (its mantissa without the last digit,
+    /// rounded down and up) then do, as does 10^(first digit's exponent),
+    /// the only shorter decimal of another first exponent that could. The
+    /// shortest text of `value` then has as many digits as this one and the
+    /// same first exponent (a different one would put a one-digit power of
+    /// ten between them). Decided with exact integer arithmetic; `false`
+    /// (the value decides) for more than 19 digits, a subnormal, infinite
+    /// or zero value, or powers of ten outside [`POW10_RANGE`].
+    fn is_shortest_of(&self, value: f64) -> bool {
+        if !(2..=19).contains(&self.digits) {
+            return false;
+        }
+        let Some(limits) = RoundingLimits::of(value.abs()) else {
+            return false;
+        };
+        // 10^k: the unit of the last digit; 10^(k+1), of the shorter
+        // decimals.
+        let k = self.exponent - self.digits as i32 + 1;
+        let (Some(own), Some(shorter)) = (limits.at(k), limits.at(k + 1)) else {
+            return false;
+        };
+        let c = u128::from(self.mantissa / 10);
+        own.reads(u128::from(self.mantissa)) && !shorter.reads(c) && !shorter.reads(c + 1)
+    }
+}
+
+/// The decimals that read as a positive normal f64 v = m·2^e: those
+/// strictly between its rounding limits (the midpoints to its neighbours,
+/// `low`·2^`shift` and `high`·2^`shift`), and the limits themselves when m
+/// is even (round half to even).
+#[derive(Clone, Copy)]
+struct RoundingLimits {
+    low: u128,
+    high: u128,
+    shift: i32,
+    inclusive: bool,
+}
+
+impl RoundingLimits {
+    /// The limits of positive normal `v`; `None` otherwise.
+    fn of(v: f64) -> Option<Self> {
+        if !v.is_normal() || v < 0.0 {
+            return None;
+        }
+        let bits = v.to_bits();
+        let biased = ((bits >> 52) & 0x7ff) as i32;
+        let fraction = bits & ((1 << 52) - 1);
+        let m = u128::from(fraction | (1 << 52));
+        // v = m·2^e = 4m·2^(e−2); the neighbour above is (m+1)·2^e, the one
+        // below (m−1)·2^e, or (2m−1)·2^(e−1) when m is the binade's first
+        // (v a power of two above the smallest normal).
+        let e = biased - 1075;
+        let low = if fraction == 0 && biased > 1 {
+            4 * m - 1
+        } else {
+            4 * m - 2
+        };
+        Some(Self {
+            low,
+            high: 4 * m + 2,
+            shift: e - 2,
+            inclusive: m % 2 == 0,
+        })
+    }
+
+    /// The limits for decimals c·10^k (c < 10^19); `None` when k is
+    /// outside [`POW10_RANGE`] (the products would not fit).
+    fn at(&self, k: i32) -> Option<DecimalLimits> {
+        if !POW10_RANGE.contains(&k) {
+            return None;
+        }
+        let five = POW5[k.unsigned_abs() as usize];
+        // c·10^k = c·5^k·2^k against n·2^shift: c·5^k·2^(k−shift) against
+        // n, or c·2^(k−shift) against n·5^−k.
+        let (scale, low, high) = if k >= 0 {
+            (five, self.low, self.high)
+        } else {
+            (1, self.low * five, self.high * five)
+        };
+        Some(DecimalLimits {
+            scale,
+            shift: k - self.shift,
+            low,
+            high,
+            inclusive: self.inclusive,
+        })
+    }
+}
+
+/// [`RoundingLimits`] for the decimals c·10^k of one k: c reads as the
+/// value when c·`scale`·2^`shift` is strictly between `low` and `high`,
+/// or equal to either and `inclusive`.
+struct DecimalLimits {
+    scale: u128,
+    shift: i32,
+    low: u128,
+    high: u128,
+    inclusive: bool,
+}
+
+impl DecimalLimits {
+    /// Whether c·10^k reads as the value.
+    #[inline]
+    fn reads(&self, c: u128) -> bool {
+        use std::cmp::Ordering::{Equal, Greater, Less};
+        let a = if self.scale == 1 { c } else { c * self.scale };
+        let above_low = match compare_shifted(a, self.shift, self.low) {
+            Greater => true,
+            Equal => self.inclusive,
+            Less => false,
+        };
+        above_low
+            && match compare_shifted(a, self.shift, self.high) {
+                Less => true,
+                Equal => self.inclusive,
+                Greater => false,
+            }
+    }
+}
+
+/// a·2^s compared with b, exactly (s of either sign).
+#[inline]
+fn compare_shifted(a: u128, s: i32, b: u128) -> std::cmp::Ordering {
+    if s < 0 {
+        return compare_shifted(b, -s, a).reverse();
+    }
+    if a == 0 {
+        return 0.cmp(&b);
+    }
+    if s > a.leading_zeros() as i32 {
+        // a·2^s ≥ 2^128 > b.
+        return std::cmp::Ordering::Greater;
+    }
+    (a << s).cmp(&b)
+}
+
+/// `text` without leading and trailing whitespace: `str::trim` (Unicode
+/// White_Space), returning at once when both ends are printable ASCII (all
+/// ASCII whitespace is at or below b' '), as every field of a plain CSV
+/// table is: this runs for every number of a measurements file.
+pub(crate) fn trimmed(text: &str) -> &str {
+    let plain = |b: Option<&u8>| b.is_some_and(|&b| b > b' ' && b.is_ascii());
+    let bytes = text.as_bytes();
+    if plain(bytes.first()) && plain(bytes.last()) {
+        text
+    } else {
+        text.trim()
+    }
+}
+
+/// The exponent after a number's `e`: what `str::parse::<i32>` gives for
+/// `bytes` (an optional sign, then one or more ASCII digits, within i32),
+/// without its generic machinery; `None` where it fails.
+fn exponent_of(bytes: &[u8]) -> Option<i32> {
+    let (negative, digits) = match bytes.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, bytes),
+    };
+    if digits.is_empty() {
+        return None;
+    }
+    // Accumulated on the side of the sign, so that i32::MIN is reached.
+    let mut value = 0i32;
+    for &b in digits {
+        let d = b.wrapping_sub(b'0');
+        if d >= 10 {
+            return None;
+        }
+        let d = i32::from(d);
+        value = value.checked_mul(10).and_then(|v| {
+            if negative {
+                v.checked_sub(d)
+            } else {
+                v.checked_add(d)
+            }
+        })?;
+    }
+    Some(value)
+}
+
+/// The fewest significant digits (1..=17) that reproduce `v` exactly when
+/// printed in scientific notation and parsed back, with the decimal exponent
+/// of that printing; `None` for zero and non-finite values. Counted on the
+/// shortest text that reads back as `v` (Ryū's, on the stack; the same
+/// digits as Rust's `{:e}`, which is unique in length and, being the
+/// closest of the shortest, in its leading digit's place).
+pub fn written_digits(v: f64) -> Option<(u32, i32)> {
+    if v == 0.0 || !v.is_finite() {
+        return None;
+    }
+    let mut buf = ryu::Buffer::new();
+    counted_digits(buf.format_finite(v.abs())).map(|c| (c.digits, c.exponent))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{round_to_digits, DigitsMode};
+    use super::*;
+
+    /// The digits counted from the text are the value's: every text a
+    /// writer may produce, and random values at every digit count.
+    #[test]
+    fn text_digits_agree_with_the_value() {
+        for text in [
+            "1.23e-6",
+            "-4.5e-9",
+            "1",
+            "1.0",
+            "0.00012",
+            "-0.000120",
+            "120",
+            "1.2E+3",
+            "+7.25e2",
+            "9.99999999999999e0",
+            "123456789012345",
+            "6.935303281509727e-9",
+            "0.5",
+            ".5",
+            "5.",
+        ] {
+            let v: f64 = text.parse().unwrap();
+            match text_digits(text) {
+                Some(d) => assert_eq!(Some(d), written_digits(v), "{text}"),
+                None => assert!(text.len() > 16, "{text}"),
+            }
+        }
+        assert_eq!(text_digits("0"), None);
+        assert_eq!(text_digits("0.000"), None);
+        assert_eq!(text_digits("1e5x"), None);
+        let mut x = 0.123_456_789_f64;
+        for d in 1..=17u32 {
+            for scale in [1e-12, 1e-3, 1.0, 7e5] {
+                let v = round_to_digits(x * scale, d, DigitsMode::Round);
+                let text = format!("{:.*e}", (d - 1) as usize, v);
+                let parsed: f64 = text.parse().unwrap();
+                if let Some(t) = text_digits(&text) {
+                    assert_eq!(Some(t), written_digits(parsed), "{text}");
+                }
+            }
+            x = x * 7.3 % 1.0 + 0.1;
+        }
+        assert_eq!(written_digits(1.23e-6), Some((3, -6)));
+        assert_eq!(written_digits(-4.5e-9), Some((2, -9)));
+        assert_eq!(written_digits(1.0), Some((1, 0)));
+        assert_eq!(written_digits(0.0), None);
+    }
+
+    /// The digits counted on Ryū's text are those of Rust's own shortest
+    /// `{:e}` printing, at every magnitude and digit count.
+    #[test]
+    fn written_digits_are_those_of_the_shortest_printing() {
+        let std_digits = |v: f64| {
+            let text = format!("{:e}", v.abs());
+            let (mantissa, exponent) = text.split_once('e').unwrap();
+            let digits = mantissa.bytes().filter(u8::is_ascii_digit).count() as u32;
+            (digits, exponent.parse::<i32>().unwrap())
+        };
+        let mut x = 0.123_456_789_012_345_67_f64;
+        for k in 0..20_000 {
+            let scale = 10f64.powi(k % 600 - 300);
+            for v in [
+                x * scale,
+                -x * scale,
+                round_to_digits(x * scale, 1 + k as u32 % 17, DigitsMode::Round),
+            ] {
+                if v != 0.0 && v.is_finite() {
+                    assert_eq!(written_digits(v), Some(std_digits(v)), "{v:e}");
+                }
+            }
+            x = (x * 7.389_056_098_930_65 + 0.377_123_456) % 1.0 + 1e-3;
+        }
+        for v in [
+            1.0,
+            9.999_999_999_999_999,
+            1e16,
+            123.0,
+            5e-324,
+            f64::MAX,
+            0.1 + 0.2,
+        ] {
+            assert_eq!(written_digits(v), Some(std_digits(v)), "{v:e}");
+        }
+    }
+
+    #[test]
+    fn exponents_and_trimming_are_those_of_the_standard_library() {
+        for text in [
+            "",
+            "+",
+            "-",
+            "0",
+            "-0",
+            "+0",
+            "7",
+            "-9",
+            "+12",
+            "007",
+            "-300",
+            "2147483647",
+            "2147483648",
+            "-2147483648",
+            "-2147483649",
+            "99999999999",
+            "1x",
+            "+-1",
+            "--1",
+            " 1",
+            "1 ",
+            "١",
+            "1.5",
+            "e5",
+        ] {
+            assert_eq!(
+                exponent_of(text.as_bytes()),
+                text.parse::<i32>().ok(),
+                "{text:?}"
+            );
+        }
+        for text in [
+            "",
+            " ",
+            "1",
+            " 1",
+            "1 ",
+            "\t1.5\r",
+            "\u{b}2\u{b}",
+            "\u{a0}3",
+            "4\u{2003}",
+            "a b",
+            "\u{85}",
+            "x",
+            "\u{1c}5",
+        ] {
+            assert_eq!(trimmed(text), text.trim(), "{text:?}");
+        }
+    }
+
+    /// The digits counted from a text of any length are those of its value,
+    /// at every magnitude: shortest texts of 16 and 17 digits, longer
+    /// texts of the same values, their neighbours one unit of the last
+    /// digit away, and decimals of up to 19 digits at and around the
+    /// rounding limits of large integers (exact midpoints: ties).
+    #[test]
+    fn digits_from_long_texts_are_those_of_the_value() {
+        let check = |text: &str| {
+            let v: f64 = text.parse().unwrap();
+            assert_eq!(digits_of_text(text, v), written_digits(v), "{text}");
+        };
+        let mut x = 0.123_456_789_012_345_67_f64;
+        let mut fast = 0;
+        for k in 0..40_000 {
+            let scale = 10f64.powi(k % 80 - 40);
+            let v = x * scale;
+            let shortest = format!("{v:e}");
+            check(&shortest);
+            if counted_digits(&shortest).is_some_and(|c| c.is_shortest_of(v)) {
+                fast += 1;
+            }
+            for d in 15..=20usize {
+                let long = format!("{:.*e}", d - 1, v);
+                check(&long);
+                let c = counted_digits(&long).unwrap();
+                if c.digits <= 19 {
+                    // One unit of the last digit either way.
+                    for m in [c.mantissa - 1, c.mantissa + 1] {
+                        let text = format!("{m}e{}", c.exponent - c.digits as i32 + 1);
+                        check(&text);
+                    }
+                }
+            }
+            x = (x * 7.389_056_098_930_65 + 0.377_123_456) % 1.0 + 1e-3;
+        }
+        // Most shortest texts are decided without the value's printing.
+        assert!(fast > 22_000, "{fast}");
+        // Large integers: their rounding limits are integers of ≤ 19 digits.
+        let mut n = 0x0012_3456_789a_bcdfu64;
+        for _ in 0..20_000 {
+            for shift in [1u32, 2, 5, 9] {
+                let v = ((n << shift) as f64).max(1.0);
+                let ulp = (v.to_bits() >> 52).saturating_sub(1075).min(60);
+                let base = v as u64;
+                for delta in [-3i64, -2, -1, 0, 1, 2, 3] {
+                    for half in [0u64, 1u64 << ulp.saturating_sub(1)] {
+                        let m = (base as i128 + delta as i128 + half as i128) as u64;
+                        check(&m.to_string());
+                        check(&format!("{m}0"));
+                    }
+                }
+            }
+            n = n.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1) >> 11;
+        }
+        for text in [
+            "1.0000000000000001",
+            "0.30000000000000004",
+            "0.3000000000000000444",
+            "9.9999999999999999e-1",
+            "9007199254740993",
+            "9007199254740995",
+            "18014398509481986",
+            "4503599627370496.5",
+            "1.7976931348623157e308",
+            "2.2250738585072014e-308",
+            "4.9406564584124654e-324",
+            "123456789012345678901234",
+            "1e-9",
+            "5.000000000000000e-9",
+        ] {
+            check(text);
+        }
+    }
+
+    /// The exact comparison of a·2^s with b, against floating point on
+    /// small numbers and at the edges of the 128 bits.
+    #[test]
+    fn shifted_comparisons_are_exact() {
+        use std::cmp::Ordering::{Equal, Greater, Less};
+        assert_eq!(compare_shifted(3, 1, 6), Equal);
+        assert_eq!(compare_shifted(3, 1, 7), Less);
+        assert_eq!(compare_shifted(6, -1, 3), Equal);
+        assert_eq!(compare_shifted(7, -1, 3), Greater);
+        assert_eq!(compare_shifted(0, 500, 0), Equal);
+        assert_eq!(compare_shifted(0, 500, 1), Less);
+        assert_eq!(compare_shifted(1, 127, u128::MAX), Less);
+        assert_eq!(compare_shifted(1, 128, u128::MAX), Greater);
+        assert_eq!(compare_shifted(u128::MAX, -200, 0), Greater);
+        assert_eq!(compare_shifted(u128::MAX, -200, 1), Less);
+    }
+}
