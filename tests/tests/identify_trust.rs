@@ -323,3 +323,44 @@ fn a_pedestal_on_its_own_sub_base_is_untrusted_at_one_percent_noise() {
     eprintln!("mid untrusted in {}/20: {untrusted:?}", untrusted.len());
     assert!(untrusted.len() >= 19, "mid untrusted in {untrusted:?}");
 }
+
+#[test]
+fn a_sub_base_resonance_in_range_is_untrusted_at_two_and_three_percent_noise() {
+    // ROSS reference machine d, B1 on its own sub-base (motion not
+    // measured; the pedestal/sub-base modes inside the range), 2 % and 3 %
+    // noise, no noise columns. The scatter's level follows much of the
+    // resonance's smooth model error and its variance law takes part of the
+    // rest, so the fit leaves only 1-4 times its measured level and the
+    // scan's power falls with the noise: B1 untrusted 11/20 (2 %), 7/20
+    // (3 %) before session 29. The support-mode test's F form (an Ω⁴ fall
+    // of the stiffness judged against the residual variance of the fit
+    // that includes it, not against a level the model error bends) finds
+    // it: measured 20/20 and 19/20 (`plinth simulate
+    // tests/reference/ross/machine-d.toml --speeds 5:200:2.5 --noise N
+    // --seed S --digits 6`, S = 1..20); no other bearing flagged.
+    let m = machine("tests/reference/ross/machine-d.toml");
+    for (noise, at_least) in [(0.02, 19), (0.03, 18)] {
+        let mut untrusted = Vec::new();
+        for seed in 1..=20 {
+            let id = identify(&run(&m, Some((noise, seed)), Some(6)));
+            for p in &id.pedestals {
+                let lof = p.warnings.iter().any(|w| w.kind == WarningKind::LackOfFit);
+                if p.bearing == "B1" {
+                    if lof && !p.trusted {
+                        untrusted.push(seed);
+                    }
+                } else {
+                    assert!(!lof, "{noise} seed {seed} {}: {:?}", p.bearing, p.warnings);
+                }
+            }
+        }
+        eprintln!(
+            "noise {noise}: B1 untrusted {}/20: {untrusted:?}",
+            untrusted.len()
+        );
+        assert!(
+            untrusted.len() >= at_least,
+            "noise {noise}: B1 untrusted in {untrusted:?}"
+        );
+    }
+}

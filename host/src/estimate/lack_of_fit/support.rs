@@ -170,7 +170,7 @@ pub fn support_mode<E: Equations + ?Sized>(
         }
         Level::Estimated => {
             let s2 = (w_out.norm_squared() - two_sided) / nu;
-            if !(s2 > 0.0) {
+            if s2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
                 return None;
             }
             let t = one_sided / s2;
