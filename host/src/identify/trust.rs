@@ -33,8 +33,7 @@
 //!   direction's stiffness ([`crate::estimate::lack_of_fit::
 //!   support_mode`]: a support with a second mode above the speed range,
 //!   whose χ² excess the level test cannot see; q ≥ 0, chi-bar-squared),
-//!   against the noise columns, or without them against the extended
-//!   fit's own residual variance (F form), p below
+//!   against the noise columns (made only with them), p below
 //!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (docs/trust.md,
 //!   session 29, for its measured rates).
 //!

@@ -58,7 +58,10 @@ pub enum Level {
     /// The noise itself (noise columns): T̄ against chi-bar-squared.
     Known,
     /// An estimate (scatter, a digits floor the fit exceeds): T̄ over the
-    /// extended fit's residual variance, against the F form.
+    /// extended fit's residual variance, against the F form. Not made by
+    /// identify (session 29: calibrated on white noise, but it flags a
+    /// clean field table whose rounding errors are correlated over speed;
+    /// docs/trust.md).
     Estimated,
 }
 
