@@ -44,7 +44,7 @@ pub struct Prepared {
     pub outlier_speeds_hz: Vec<Vec<f64>>,
     /// Per bearing (aligned with `bearings`), the support-mode test of its
     /// base model (`plinth identify`'s, [`crate::estimate::lack_of_fit::
-    /// support_mode`]; `None` without noise columns), judged by
+    /// support_mode`]; `None` where identify does not make it), judged by
     /// [`super::trust::judge_support`].
     pub support_modes: Vec<Option<SupportMode>>,
 }

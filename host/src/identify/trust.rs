@@ -29,18 +29,20 @@
 //!   this filter keeps the family-wise rate (independent filtering:
 //!   Bourgon, Gentleman & Huber 2010, *PNAS* 107). A bearing whose fit is
 //!   inside its noise spends no share of the run's false-alarm rate.
-//! - **support mode** (noise columns only): the score test of an Ω⁴ term
-//!   on each direction's stiffness ([`crate::estimate::lack_of_fit::
+//! - **support mode**: the one-sided score test of an Ω⁴ fall of each
+//!   direction's stiffness ([`crate::estimate::lack_of_fit::
 //!   support_mode`]: a support with a second mode above the speed range,
-//!   whose χ² excess the level test cannot see), χ²(2) below
-//!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (0/600 clean runs
-//!   with columns flagged by it, `scripts/bench-trust.sh 300 columns`).
+//!   whose χ² excess the level test cannot see; q ≥ 0, chi-bar-squared),
+//!   against the noise columns (made only with them), p below
+//!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (docs/trust.md,
+//!   session 29, for its measured rates).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
 //! machines, detections on a pedestal with its own sub-base): docs/trust.md.
 
 use super::estimator::SCATTER_LEVEL_TOLERANCE;
 use super::{Identification, Warning, WarningKind};
+use crate::estimate::lack_of_fit::SupportMode;
 use crate::estimate::noise::NoiseSource;
 use crate::estimate::pedestal::CHI2_P_THRESHOLD;
 use crate::estimate::robust;
@@ -51,11 +53,11 @@ pub const FAMILY_FALSE_ALARM: f64 = 0.01;
 
 /// χ²/dof against the measured level above which structure in the
 /// residuals is taken for model error [-].
-pub const STRUCTURE_LEVEL: f64 = 1.0;
+pub const STRUCTURE_LEVEL: f64 = crate::estimate::lack_of_fit::EXCESS_LEVEL;
 
 /// False-alarm rate per run of the support-mode test
-/// ([`crate::estimate::lack_of_fit::support_mode`], noise columns only),
-/// Bonferroni over the bearings tested [-].
+/// ([`crate::estimate::lack_of_fit::support_mode`]), Bonferroni over the
+/// bearings tested [-].
 pub const SUPPORT_FALSE_ALARM: f64 = 0.001;
 
 /// The support-mode test's limit on one bearing's p-value when it was made
@@ -63,6 +65,17 @@ pub const SUPPORT_FALSE_ALARM: f64 = 0.001;
 /// them (Bonferroni) [-]. One rule for identify and diagnose.
 pub fn support_limit(tested: usize) -> f64 {
     SUPPORT_FALSE_ALARM / tested.max(1) as f64
+}
+
+/// The unit the support-mode score `t` is in, as a reason says it: the
+/// noise columns, or the extended fit's residual variance.
+pub fn support_unit(t: &SupportMode) -> String {
+    match t.residual_variance {
+        None => "in units of its noise columns".to_string(),
+        Some(s2) => format!(
+            "in units of the residual variance of the fit with the Ω⁴ terms, {s2:.3} times its measured level"
+        ),
+    }
 }
 
 /// Adds a [`WarningKind::LackOfFit`] warning to every pedestal whose fit
@@ -159,8 +172,9 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
         if let Some(t) = l.support_mode {
             if t.p_value < alpha_support {
                 reasons.push(format!(
-                    "its dynamic stiffness does not follow one mass on one spring over speed: an Ω⁴ term, what a support with a second mode above the speed range adds (a sub-base, a frame: per direction K − Ω²M − Ω⁴Q below that mode, Q > 0), explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model (χ²(2) p = {:.1e}, limit {alpha_support:.1e}: {SUPPORT_FALSE_ALARM} over the {support_tested} bearing(s) tested); Ω⁴Q at the top speed is {:+.1} % (y) and {:+.1} % (z) of the stiffness (positive: it falls faster than one mass allows); the k and m printed are then the support's apparent values, not the pedestal's",
+                    "its dynamic stiffness does not follow one mass on one spring over speed: an Ω⁴ term, what a support with a second mode above the speed range adds (a sub-base, a frame: per direction K − Ω²M − Ω⁴Q below that mode, Q > 0), explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model ({}; one-sided, Ω⁴Q ≥ 0: p = {:.1e}, limit {alpha_support:.1e}: {SUPPORT_FALSE_ALARM} over the {support_tested} bearing(s) tested); Ω⁴Q at the top speed is {:+.1} % (y) and {:+.1} % (z) of the stiffness (positive: it falls faster than one mass allows); the k and m printed are then the support's apparent values, not the pedestal's",
                     t.statistic,
+                    support_unit(&t),
                     t.p_value,
                     100.0 * t.drop_at_top[0],
                     100.0 * t.drop_at_top[1]
