@@ -1,0 +1,135 @@
+//! Flips the test in speed could not confirm, judged against the other
+//! bearings at the same speeds ([`confirmed_across`]).
+//!
+//! At a resonance's peak or on its flank the local model in speed
+//! ([`super::keyphasor_flips`]) misses a reading by more than the noise
+//! there, negated or not: a flip and a true swing of the phase look alike
+//! in speed. The other bearings tell them apart. A machine mode moves every
+//! bearing: through a sharp peak (an undamped pedestal's true 180° turn
+//! included) all bearings' phasors turn together and stay in the subspace
+//! their neighbouring speeds span ([`super::cross`]); a keyphasor fault of
+//! one bearing's channels negates that bearing alone, out of the subspace.
+//! Across bearings only the relative sign is seen (negating one bearing of
+//! two is negating the other up to a common sign), so the test in speed
+//! says which bearing it is, and the test across bearings whether it is a
+//! flip. Measured on the fourth unseen machine (two bearings, B1 flipped at
+//! the top of the 82 Hz peak, seed 4 of `scripts/ross_unseen.py
+//! --machine unseen-flex ... flips`): Σ r/s 38 800 as read, 15 negated
+//! (limit 35); at 14.65 Hz on the 15.5 Hz mode's flank (seed 3): 52 and 4.
+//! The undamped paper machine's true turn between 44.1 and 46.7 Hz (all
+//! channels of both bearings, exact data): 19 as read, 2 200 negated.
+
+use super::cross::{screened_scales, window, Limits, Stack, Subspace, CROSS_SIDE, SCREEN_GAP};
+use super::Observation;
+
+/// Per bearing (in the order of `bearings`, each bearing's observations in
+/// any order, phasors [m]), the speeds [Hz] of its `unconfirmed` blocks
+/// (per bearing, [`super::FlipSearch::unconfirmed_hz`]) that the other
+/// bearings confirm as flipped, ascending. Two bearings or more. The
+/// readings are stacked as [`super::cross_bearing_flips`] stacks them:
+/// speeds in `listed` (per bearing [Hz], outliers) left out for every
+/// bearing, speeds in `flipped` (per bearing [Hz], flips already named)
+/// negated back for that bearing.
+///
+/// A block held by the bearings S (every bearing whose unconfirmed blocks
+/// hold exactly those speeds) is named for each of them when, against the
+/// subspace of the window around the block, negating S's channels passes
+/// [`super::cross_bearing_flips`]'s three conditions (as read beyond the
+/// noise, Bonferroni over the speeds; negated, each speed consistent and
+/// the more likely; Σ r/s lowered below [`super::FLIP_RATIO`]). When S is
+/// every bearing the test is blind (a common sign) and nothing is named.
+/// Each block is judged on the readings as stacked, alone.
+pub fn confirmed_across(
+    bearings: &[&[Observation]],
+    listed: &[&[f64]],
+    flipped: &[&[f64]],
+    unconfirmed: &[&[Vec<f64>]],
+) -> Vec<Vec<f64>> {
+    let nb = bearings.len();
+    let mut found = vec![Vec::new(); nb];
+    if nb < 2
+        || listed.len() != nb
+        || flipped.len() != nb
+        || unconfirmed.len() != nb
+        || unconfirmed.iter().all(|u| u.is_empty())
+    {
+        return found;
+    }
+    let stack = Stack::of(bearings, listed, flipped);
+    let dims = 2 * nb;
+    let side = CROSS_SIDE.max(dims);
+    let n = stack.ys.len();
+    if n < 2 * side + 2 * SCREEN_GAP + 1 {
+        return found;
+    }
+    let Some(limits) = Limits::new(nb, n) else {
+        return found;
+    };
+    // Each block (indices of the stack) with the bearings that hold it.
+    let mut hypotheses: Vec<(std::ops::Range<usize>, Vec<usize>)> = Vec::new();
+    for (b, blocks) in unconfirmed.iter().enumerate() {
+        for block in blocks.iter() {
+            let Some(range) = indices(&stack.speeds, block) else {
+                continue;
+            };
+            match hypotheses.iter_mut().find(|(r, _)| *r == range) {
+                Some((_, which)) if !which.contains(&b) => which.push(b),
+                Some(_) => {}
+                None => hypotheses.push((range, vec![b])),
+            }
+        }
+    }
+    let at: Vec<usize> = {
+        let mut at: Vec<usize> = hypotheses.iter().flat_map(|(r, _)| r.clone()).collect();
+        at.sort_unstable();
+        at.dedup();
+        at
+    };
+    let (_, scale, scale_s) = screened_scales(&stack.ys, &at, side, dims, limits.null_median);
+    for (block, which) in hypotheses {
+        if which.len() == nb {
+            continue;
+        }
+        let Some(u) = Subspace::of(&stack.ys, &window(n, block.clone(), side), dims) else {
+            continue;
+        };
+        if limits
+            .judge(&u, &stack.ys, block.clone(), &which, &scale, &scale_s)
+            .is_some()
+        {
+            for &b in &which {
+                found[b].extend(block.clone().map(|i| stack.speeds[i]));
+            }
+        }
+    }
+    for f in &mut found {
+        f.sort_by(f64::total_cmp);
+        f.dedup();
+    }
+    found
+}
+
+/// The consecutive indices of `speeds` (ascending) that hold exactly the
+/// speeds `block` [Hz] (ascending); `None` when one is missing or they are
+/// not consecutive.
+fn indices(speeds: &[f64], block: &[f64]) -> Option<std::ops::Range<usize>> {
+    let target = *block.first()?;
+    let first = speeds.binary_search_by(|x| x.total_cmp(&target)).ok()?;
+    let range = first..first + block.len();
+    (range.end <= speeds.len() && speeds[range.clone()] == *block).then_some(range)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_are_found_by_their_speeds() {
+        let speeds = [1.0, 2.0, 3.0, 5.0];
+        assert_eq!(indices(&speeds, &[2.0, 3.0]), Some(1..3));
+        assert_eq!(indices(&speeds, &[5.0]), Some(3..4));
+        assert_eq!(indices(&speeds, &[3.0, 4.0]), None);
+        assert_eq!(indices(&speeds, &[5.0, 6.0]), None);
+        assert_eq!(indices(&speeds, &[]), None);
+    }
+}
