@@ -117,7 +117,24 @@ pub fn mark_cross_bearing_flips(
                 .then_some((b.bearing.as_str(), obs))
         })
         .collect();
-    if usable.len() < 2 {
+    // The test in speed's findings, taken from each ML fit's report (not
+    // reported); without them (an OLS fit) the test in speed is run again
+    // where the test across bearings alone can name (three bearings), and
+    // nothing is confirmed.
+    let stored: Vec<Option<robust::FlipSearch>> = usable
+        .iter()
+        .map(|(name, _)| {
+            identification
+                .noise
+                .get_mut(*name)
+                .and_then(|n| n.flip_search.take())
+        })
+        .collect();
+    for report in identification.noise.values_mut() {
+        report.flip_search = None;
+    }
+    let complete = stored.iter().all(Option::is_some);
+    if usable.len() < 2 || (usable.len() < robust::CROSS_MIN_BEARINGS && !complete) {
         return;
     }
     let listed: Vec<Vec<f64>> = usable
@@ -131,12 +148,12 @@ pub fn mark_cross_bearing_flips(
         })
         .collect();
     let observations: Vec<&[Observation]> = usable.iter().map(|(_, o)| *o).collect();
-    // The flips each bearing's fit found in speed (the same test, run
-    // again: the report merges them with the outliers) are negated back,
-    // the outliers left out.
-    let searches: Vec<robust::FlipSearch> = observations
-        .iter()
-        .map(|o| robust::flip_search(o))
+    // The flips each bearing's fit found in speed (the report merges them
+    // with the outliers) are negated back, the outliers left out.
+    let searches: Vec<robust::FlipSearch> = stored
+        .into_iter()
+        .zip(&observations)
+        .map(|(s, o)| s.unwrap_or_else(|| robust::flip_search(o)))
         .collect();
     let mut flipped: Vec<Vec<f64>> = searches.iter().map(|s| s.flipped_hz.clone()).collect();
     let outliers: Vec<Vec<f64>> = listed
@@ -148,7 +165,11 @@ pub fn mark_cross_bearing_flips(
     let flipped_refs: Vec<&[f64]> = flipped.iter().map(Vec::as_slice).collect();
     let found = robust::cross_bearing_flips(&observations, &outlier_refs, &flipped_refs);
     merge(&mut flipped, found.clone());
-    let confirmed = confirmed(&observations, &searches, &outlier_refs, &flipped);
+    let confirmed = if complete {
+        confirmed(&observations, &searches, &outlier_refs, &flipped)
+    } else {
+        vec![Vec::new(); usable.len()]
+    };
     for ((name, _), speeds) in usable.iter().zip(found) {
         add_flips(
             identification,
