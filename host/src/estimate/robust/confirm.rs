@@ -122,6 +122,106 @@ fn indices(speeds: &[f64], block: &[f64]) -> Option<std::ops::Range<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use num_complex::Complex;
+
+    /// Two bearings over 80 speeds, 5-202.5 Hz, whose eight phasors are
+    /// three modes (0.5 % damping; 41 Hz between two speeds, where the
+    /// 2.5 Hz steps resolve nothing) with fixed complex shapes, plus complex
+    /// noise of sd 1 % of each channel's RMS; every channel of bearing
+    /// `flip.0` negated at the speed indices `flip.1`.
+    fn machine(flip: (usize, &[usize]), seed: u64) -> Vec<Vec<Observation>> {
+        use rand::{rngs::StdRng, Rng, SeedableRng};
+        use rand_distr::StandardNormal;
+        let mut rng = StdRng::seed_from_u64(seed);
+        let modes = [41.1, 70.0, 110.0];
+        let shape = |m: usize, ch: usize| -> Complex<f64> {
+            let k = (7 * m + 3 * ch) as f64;
+            Complex::from_polar(1.0 + 0.5 * (k * 0.37).sin(), k * 1.3)
+        };
+        let clean: Vec<[Complex<f64>; 8]> = (0..80)
+            .map(|i| {
+                let f = 5.0 + 2.5 * i as f64;
+                std::array::from_fn(|ch| {
+                    modes
+                        .iter()
+                        .enumerate()
+                        .map(|(m, &f0)| {
+                            let r = f / f0;
+                            shape(m, ch) * (1e-7 * r * r) / Complex::new(1.0 - r * r, 0.01 * r)
+                        })
+                        .sum()
+                })
+            })
+            .collect();
+        let rms: Vec<f64> = (0..8)
+            .map(|ch| (clean.iter().map(|q| q[ch].norm_sqr()).sum::<f64>() / 80.0).sqrt())
+            .collect();
+        (0..2)
+            .map(|b| {
+                clean
+                    .iter()
+                    .enumerate()
+                    .map(|(i, q)| {
+                        let mut z: [Complex<f64>; 4] = std::array::from_fn(|c| {
+                            let sd = 0.01 * rms[4 * b + c] / 2f64.sqrt();
+                            q[4 * b + c]
+                                + Complex::new(
+                                    rng.sample::<f64, _>(StandardNormal),
+                                    rng.sample::<f64, _>(StandardNormal),
+                                ) * sd
+                        });
+                        if flip.0 == b && flip.1.contains(&i) {
+                            z.iter_mut().for_each(|v| *v = -*v);
+                        }
+                        Observation {
+                            speed_hz: 5.0 + 2.5 * i as f64,
+                            rel: [z[0], z[1]],
+                            ped: [z[2], z[3]],
+                            kstar: [[Complex::new(1e7, 0.0), Complex::new(0.0, 0.0)]; 2],
+                            var: [1e-20; 8],
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_flip_at_a_peak_is_confirmed_at_its_bearing_and_a_true_turn_is_not() {
+        // 40 and 42.5 Hz straddle the 41.1 Hz mode: every channel turns
+        // by nearly 180° between them. Offered as unconfirmed blocks, the
+        // clean readings are never named; bearing 1 flipped at 42.5 Hz is
+        // named at bearing 1; offered at both bearings (a common sign),
+        // nothing is.
+        let none: [&[f64]; 2] = [&[], &[]];
+        let offer = |b: usize, f: f64| -> Vec<Vec<Vec<f64>>> {
+            let mut u = vec![Vec::new(), Vec::new()];
+            u[b].push(vec![f]);
+            u
+        };
+        let run = |obs: &[Vec<Observation>], u: &[Vec<Vec<f64>>]| {
+            let refs: Vec<&[Observation]> = obs.iter().map(Vec::as_slice).collect();
+            let u: Vec<&[Vec<f64>]> = u.iter().map(Vec::as_slice).collect();
+            confirmed_across(&refs, &none, &none, &u)
+        };
+        for seed in 0..10 {
+            let clean = machine((1, &[]), seed);
+            for f in [40.0, 42.5] {
+                for b in 0..2 {
+                    let found = run(&clean, &offer(b, f));
+                    assert!(found.iter().all(Vec::is_empty), "{seed} {f} {b}: {found:?}");
+                }
+            }
+            let flipped = machine((1, &[15]), seed);
+            assert_eq!(
+                run(&flipped, &offer(1, 42.5)),
+                vec![vec![], vec![42.5]],
+                "{seed}"
+            );
+            let both = vec![vec![vec![42.5]], vec![vec![42.5]]];
+            assert!(run(&flipped, &both).iter().all(Vec::is_empty), "{seed}");
+        }
+    }
 
     #[test]
     fn blocks_are_found_by_their_speeds() {
