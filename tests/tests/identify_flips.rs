@@ -6,7 +6,8 @@
 //! the flip is the only thing the test adds, the response and its noise are
 //! ROSS's and the script's. A run of two bearings gives no cross-bearing
 //! test (`robust::cross_bearing_flips` needs three): only the test in speed
-//! (`robust::keyphasor_flips`) judges. The rates over several seeds:
+//! (`robust::keyphasor_flips`) judges, and what it cannot confirm the other
+//! bearing judges (`robust::confirmed_across`). The rates over several seeds:
 //! `BENCH_JOBS=1 python3 scripts/bench_unseen.py --machine unseen-flex
 //! PLINTH DIR 5 flips` (docs/robustness.md, "Keyphasor flips on the fourth
 //! unseen machine").
@@ -59,4 +60,54 @@ fn flips_next_to_a_resonance_and_two_speeds_apart_are_listed_exactly() {
     let flipped = [13.245, 51.152, 53.486];
     let id = identify(&flipped_run("B1", &flipped));
     assert_eq!(lists(&id), (flipped.to_vec(), vec![]));
+}
+
+#[test]
+fn flips_at_a_peak_and_on_a_flank_are_confirmed_by_the_other_bearing() {
+    // 81.988 Hz at the top of the 82 Hz peak and 14.65 Hz on the 15.5 Hz
+    // mode's flank: there the local model in speed misses a reading by more
+    // than the noise, negated too, and the test in speed alone names
+    // nothing (main at 2f157a4: nothing listed). B2 at the same speeds
+    // tells a flip (B1 alone negated) from the machine's true phase swing
+    // (every bearing turns together) (`robust::confirmed_across`). Either
+    // bearing flipped is named at that bearing; both flipped together is a
+    // common sign, which the other bearing cannot see: nothing listed.
+    let flipped = [14.65, 81.988];
+    let id = identify(&flipped_run("B1", &flipped));
+    assert_eq!(lists(&id), (flipped.to_vec(), vec![]));
+    let warned = id
+        .pedestals
+        .iter()
+        .find(|p| p.bearing == "B1")
+        .is_some_and(|p| {
+            p.warnings.iter().any(|w| {
+                w.message
+                    .contains("at a resonance's peak or flank at 14.65, 81.988 Hz")
+            })
+        });
+    assert!(warned, "{:?}", id.pedestals[0].warnings);
+    let id = identify(&flipped_run("B2", &flipped));
+    assert_eq!(lists(&id), (vec![], flipped.to_vec()));
+    let mut both = flipped_run("B1", &flipped);
+    for row in &mut both.measurements {
+        if row.bearing == "B2" && flipped.contains(&row.speed_hz) {
+            for z in row.rel.iter_mut().chain(row.ped.iter_mut()) {
+                *z = -*z;
+            }
+        }
+    }
+    assert_eq!(lists(&identify(&both)), (vec![], vec![]));
+}
+
+#[test]
+fn diagnose_leaves_out_the_flips_the_other_bearing_confirms() {
+    // The same flips through `plinth diagnose`'s own call of the tests
+    // (`identify::flips::flipped_speeds`, before it fits anything).
+    let flipped = [14.65, 81.988];
+    let run = flipped_run("B1", &flipped);
+    let d = plinth::diagnose::diagnose(&run, &plinth::diagnose::Options::default())
+        .expect("diagnose")
+        .diagnosis;
+    assert_eq!(d.flipped_speeds_hz.len(), 1, "{:?}", d.flipped_speeds_hz);
+    assert_eq!(d.flipped_speeds_hz["B1"], flipped);
 }

@@ -47,16 +47,20 @@ use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
+mod confirm;
 mod cross;
 mod flips;
+mod jumps;
 mod rational;
 mod scales;
 
+pub use confirm::confirmed_across;
 pub use cross::{cross_bearing_flips, CROSS_MIN_BEARINGS, CROSS_SIDE};
 pub use flips::{
-    jump_speeds, keyphasor_flips, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_NEIGHBOURS, FLIP_RATIO,
+    flip_search, keyphasor_flips, FlipSearch, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_RATIO,
     FLIP_SIDE, FLIP_WINDOW, MAX_TRIMMED, ONE_SIDED_RATIO, TRIM_FACTOR,
 };
+pub use jumps::{jump_speeds, FLIP_NEIGHBOURS};
 pub use rational::LocalRational;
 use scales::median;
 pub use scales::{local_scales, window_medians, OUTLIER_WINDOW};

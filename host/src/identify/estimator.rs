@@ -84,6 +84,12 @@ pub struct NoiseReport {
     /// standard errors are those under it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variance_function: Option<VarianceLaw>,
+    /// What the ML fit's test in speed found ([`robust::flip_search`]),
+    /// for the test across bearings that follows it
+    /// ([`super::flips::mark_cross_bearing_flips`], which takes it): not
+    /// reported.
+    #[serde(skip)]
+    pub flip_search: Option<robust::FlipSearch>,
 }
 
 /// A variance function per channel as reported: complex noise sd
@@ -424,11 +430,11 @@ pub(crate) fn fit_ml_checked(
         });
     }
     fit.warnings.extend(extra);
+    let mut flip_search = None;
     if checks == Checks::All {
-        fit.warnings.extend(super::trust::bad_speeds(
-            observations,
-            &mut outlier_speeds_hz,
-        ));
+        let (warnings, search) = super::trust::bad_speeds(observations, &mut outlier_speeds_hz);
+        fit.warnings.extend(warnings);
+        flip_search = Some(search);
     }
     super::physical::check_finite(&fit)?;
     fit.warnings.extend(super::physical::violations(&fit));
@@ -444,6 +450,7 @@ pub(crate) fn fit_ml_checked(
     }
     let mut report = report(noise, chi2, dof, variance_scale, ml_fit.equation_var.sqrt());
     report.outlier_speeds_hz = outlier_speeds_hz;
+    report.flip_search = flip_search;
     report.variance_function = law.map(|(p, p_value)| VarianceLaw::of(&p, variance_scale, p_value));
     // The lack-of-fit tests see the fit under the scatter's law: its
     // residuals, χ² and dof (before any equation error), as without a
@@ -508,6 +515,7 @@ pub(crate) fn report(
         lack_of_fit: None,
         outlier_speeds_hz: Vec::new(),
         variance_function: None,
+        flip_search: None,
     }
 }
 

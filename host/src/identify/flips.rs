@@ -20,28 +20,66 @@ use crate::estimate::{robust, Observation};
 /// Per bearing (in the order of `bearings`, each bearing's observations in
 /// any order, phasors [m]), the speeds [Hz] at which its channels look
 /// negated, ascending: the test in speed of each bearing
-/// ([`robust::keyphasor_flips`]), then, with those speeds left out, the
+/// ([`robust::flip_search`]), then, with those speeds negated back, the
 /// test against the other bearings at the same speed
-/// ([`robust::cross_bearing_flips`], three bearings or more). What
+/// ([`robust::cross_bearing_flips`], three bearings or more), then the
+/// blocks the test in speed could not confirm, judged against the other
+/// bearings ([`robust::confirmed_across`], two bearings or more). What
 /// `plinth identify` names, for a caller without a fit (`plinth diagnose`
 /// leaves these speeds out before it fits anything); identify runs the
-/// same two tests, the first inside each bearing's fit
-/// ([`super::trust::bad_speeds`], with the outlier speeds), the second in
+/// same tests, the first inside each bearing's fit
+/// ([`super::trust::bad_speeds`], with the outlier speeds), the others in
 /// [`mark_cross_bearing_flips`].
 pub fn flipped_speeds(bearings: &[&[Observation]]) -> Vec<Vec<f64>> {
-    let mut found: Vec<Vec<f64>> = bearings
+    let searches: Vec<robust::FlipSearch> = bearings
         .iter()
-        .map(|obs| robust::keyphasor_flips(obs))
+        .map(|obs| robust::flip_search(obs))
         .collect();
+    let mut found: Vec<Vec<f64>> = searches.iter().map(|s| s.flipped_hz.clone()).collect();
     let flipped: Vec<&[f64]> = found.iter().map(Vec::as_slice).collect();
     let none = vec![&[][..]; bearings.len()];
     let across = robust::cross_bearing_flips(bearings, &none, &flipped);
-    for (speeds, more) in found.iter_mut().zip(across) {
+    merge(&mut found, across);
+    let confirmed = confirmed(bearings, &searches, &none, &found);
+    merge(&mut found, confirmed);
+    found
+}
+
+/// Adds `more` (per bearing, [Hz]) to `found` (per bearing, ascending, no
+/// repeats).
+fn merge(found: &mut [Vec<f64>], more: Vec<Vec<f64>>) {
+    for (speeds, more) in found.iter_mut().zip(more) {
         speeds.extend(more);
         speeds.sort_by(f64::total_cmp);
         speeds.dedup();
     }
-    found
+}
+
+/// Per bearing, the speeds [Hz] of the blocks the test in speed could not
+/// confirm (`searches`, per bearing) that the other bearings confirm
+/// ([`robust::confirmed_across`]): `outliers` (per bearing [Hz]) left
+/// out, the flips named so far (`flipped`, per bearing [Hz]) negated back;
+/// a block that holds a speed already named for its bearing is not judged.
+fn confirmed(
+    bearings: &[&[Observation]],
+    searches: &[robust::FlipSearch],
+    outliers: &[&[f64]],
+    flipped: &[Vec<f64>],
+) -> Vec<Vec<f64>> {
+    let unconfirmed: Vec<Vec<Vec<f64>>> = searches
+        .iter()
+        .zip(flipped)
+        .map(|(s, named)| {
+            s.unconfirmed_hz
+                .iter()
+                .filter(|block| !block.iter().any(|f| named.contains(f)))
+                .cloned()
+                .collect()
+        })
+        .collect();
+    let unconfirmed_refs: Vec<&[Vec<f64>]> = unconfirmed.iter().map(Vec::as_slice).collect();
+    let flipped_refs: Vec<&[f64]> = flipped.iter().map(Vec::as_slice).collect();
+    robust::confirmed_across(bearings, outliers, &flipped_refs, &unconfirmed_refs)
 }
 
 /// The speeds [Hz] every one of `listed` (per bearing, two bearings or
@@ -61,7 +99,10 @@ pub fn listed_by_every_bearing(listed: &[Vec<f64>]) -> Vec<f64> {
 /// Adds to `identification` the keyphasor flips of its bearings found
 /// against the other bearings (`bearings`: the observations it was fitted
 /// to; speeds already listed for any bearing are not judged again: the
-/// outliers left out, the flips found in speed negated back).
+/// outliers left out, the flips found in speed negated back): those the
+/// test across bearings names alone (three bearings or more) and those the
+/// test in speed could not confirm and the other bearings do (two bearings
+/// or more).
 pub fn mark_cross_bearing_flips(
     bearings: &[BearingObservations],
     identification: &mut Identification,
@@ -76,7 +117,24 @@ pub fn mark_cross_bearing_flips(
                 .then_some((b.bearing.as_str(), obs))
         })
         .collect();
-    if usable.len() < robust::CROSS_MIN_BEARINGS {
+    // The test in speed's findings, taken from each ML fit's report (not
+    // reported); without them (an OLS fit) the test in speed is run again
+    // where the test across bearings alone can name (three bearings), and
+    // nothing is confirmed.
+    let stored: Vec<Option<robust::FlipSearch>> = usable
+        .iter()
+        .map(|(name, _)| {
+            identification
+                .noise
+                .get_mut(*name)
+                .and_then(|n| n.flip_search.take())
+        })
+        .collect();
+    for report in identification.noise.values_mut() {
+        report.flip_search = None;
+    }
+    let complete = stored.iter().all(Option::is_some);
+    if usable.len() < 2 || (usable.len() < robust::CROSS_MIN_BEARINGS && !complete) {
         return;
     }
     let listed: Vec<Vec<f64>> = usable
@@ -90,23 +148,58 @@ pub fn mark_cross_bearing_flips(
         })
         .collect();
     let observations: Vec<&[Observation]> = usable.iter().map(|(_, o)| *o).collect();
-    // The flips each bearing's fit found in speed (the same test, run
-    // again: the report merges them with the outliers) are negated back,
-    // the outliers left out.
-    let in_speed: Vec<Vec<f64>> = observations
-        .iter()
-        .map(|o| robust::keyphasor_flips(o))
+    // The flips each bearing's fit found in speed (the report merges them
+    // with the outliers) are negated back, the outliers left out.
+    let searches: Vec<robust::FlipSearch> = stored
+        .into_iter()
+        .zip(&observations)
+        .map(|(s, o)| s.unwrap_or_else(|| robust::flip_search(o)))
         .collect();
+    let mut flipped: Vec<Vec<f64>> = searches.iter().map(|s| s.flipped_hz.clone()).collect();
     let outliers: Vec<Vec<f64>> = listed
         .iter()
-        .zip(&in_speed)
+        .zip(&flipped)
         .map(|(l, f)| l.iter().copied().filter(|s| !f.contains(s)).collect())
         .collect();
     let outlier_refs: Vec<&[f64]> = outliers.iter().map(Vec::as_slice).collect();
-    let flipped_refs: Vec<&[f64]> = in_speed.iter().map(Vec::as_slice).collect();
+    let flipped_refs: Vec<&[f64]> = flipped.iter().map(Vec::as_slice).collect();
     let found = robust::cross_bearing_flips(&observations, &outlier_refs, &flipped_refs);
-    // Speeds every bearing listed before this test.
-    let everywhere = listed_by_every_bearing(&listed);
+    merge(&mut flipped, found.clone());
+    let confirmed = if complete {
+        confirmed(&observations, &searches, &outlier_refs, &flipped)
+    } else {
+        vec![Vec::new(); usable.len()]
+    };
+    for ((name, _), speeds) in usable.iter().zip(found) {
+        add_flips(
+            identification,
+            name,
+            &speeds,
+            "against the other bearings at the same speed",
+            "the machine's modes fix how the bearings' phasors relate; this bearing's agree only negated",
+        );
+    }
+    for ((name, _), speeds) in usable.iter().zip(confirmed) {
+        add_flips(
+            identification,
+            name,
+            &speeds,
+            "at a resonance's peak or flank",
+            "negated, they fit the neighbouring speeds far better, though the local model in speed misses there by more than the noise; and against the other bearings at the same speed they agree only negated: the machine's modes move every bearing together, a flip moves one bearing alone",
+        );
+    }
+    // Speeds every bearing lists.
+    let now: Vec<Vec<f64>> = usable
+        .iter()
+        .map(|(name, _)| {
+            identification
+                .noise
+                .get(*name)
+                .map(|n| n.outlier_speeds_hz.clone())
+                .unwrap_or_default()
+        })
+        .collect();
+    let everywhere = listed_by_every_bearing(&now);
     if !everywhere.is_empty() {
         let list: Vec<String> = everywhere.iter().map(|s| format!("{s}")).collect();
         for p in identification
@@ -123,28 +216,38 @@ pub fn mark_cross_bearing_flips(
             });
         }
     }
-    for ((name, _), speeds) in usable.iter().zip(found) {
-        if speeds.is_empty() {
-            continue;
-        }
-        if let Some(report) = identification.noise.get_mut(*name) {
-            report.outlier_speeds_hz.extend(&speeds);
-            report.outlier_speeds_hz.sort_by(f64::total_cmp);
-            report.outlier_speeds_hz.dedup();
-        }
-        let list: Vec<String> = speeds.iter().map(|s| format!("{s}")).collect();
-        if let Some(p) = identification
-            .pedestals
-            .iter_mut()
-            .find(|p| p.bearing == *name)
-        {
-            p.warnings.push(Warning {
-                kind: WarningKind::KeyphasorFlip,
-                message: format!(
-                    "every channel (rel and ped, y and z) is flipped by 180° against the other bearings at the same speed at {} Hz (the machine's modes fix how the bearings' phasors relate; this bearing's agree only negated): a likely keyphasor fault of this bearing's channels; the pedestal equation is blind to it (rel and ped flip together), but check those speeds",
-                    list.join(", ")
-                ),
-            });
-        }
+}
+
+/// Adds the flipped `speeds` [Hz] of bearing `name` to its
+/// `outlier_speeds_hz` and a `keyphasor_flip` warning saying `where` they
+/// were found and `why` (nothing when `speeds` is empty).
+fn add_flips(
+    identification: &mut Identification,
+    name: &str,
+    speeds: &[f64],
+    place: &str,
+    why: &str,
+) {
+    if speeds.is_empty() {
+        return;
+    }
+    if let Some(report) = identification.noise.get_mut(name) {
+        report.outlier_speeds_hz.extend(speeds);
+        report.outlier_speeds_hz.sort_by(f64::total_cmp);
+        report.outlier_speeds_hz.dedup();
+    }
+    let list: Vec<String> = speeds.iter().map(|s| format!("{s}")).collect();
+    if let Some(p) = identification
+        .pedestals
+        .iter_mut()
+        .find(|p| p.bearing == name)
+    {
+        p.warnings.push(Warning {
+            kind: WarningKind::KeyphasorFlip,
+            message: format!(
+                "every channel (rel and ped, y and z) is flipped by 180° {place} at {} Hz ({why}): a likely keyphasor fault of this bearing's channels; the pedestal equation is blind to it (rel and ped flip together), but check those speeds",
+                list.join(", ")
+            ),
+        });
     }
 }

@@ -212,8 +212,13 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
 /// `outliers` [Hz] left out of its fit ([`robust::outlier_refit`]) and the
 /// speeds at which every channel of its `observations` looks flipped by
 /// 180° ([`robust::keyphasor_flips`]), which are added to `outliers`
-/// (ascending, no repeats).
-pub fn bad_speeds(observations: &[Observation], outliers: &mut Vec<f64>) -> Vec<Warning> {
+/// (ascending, no repeats); with the test in speed's findings
+/// ([`robust::flip_search`], for the test across bearings:
+/// [`super::flips::mark_cross_bearing_flips`]).
+pub fn bad_speeds(
+    observations: &[Observation],
+    outliers: &mut Vec<f64>,
+) -> (Vec<Warning>, robust::FlipSearch) {
     let mut warnings = Vec::new();
     if !outliers.is_empty() {
         warnings.push(Warning {
@@ -225,7 +230,8 @@ pub fn bad_speeds(observations: &[Observation], outliers: &mut Vec<f64>) -> Vec<
             ),
         });
     }
-    let flips = robust::keyphasor_flips(observations);
+    let search = robust::flip_search(observations);
+    let flips = search.flipped_hz.clone();
     if !flips.is_empty() {
         warnings.push(Warning {
             kind: WarningKind::KeyphasorFlip,
@@ -238,7 +244,7 @@ pub fn bad_speeds(observations: &[Observation], outliers: &mut Vec<f64>) -> Vec<
         outliers.sort_by(f64::total_cmp);
         outliers.dedup();
     }
-    warnings
+    (warnings, search)
 }
 
 /// Speeds [Hz] as a comma-separated list (the one wording of identify's

@@ -33,7 +33,7 @@ pub const CROSS_SIDE: usize = 6;
 /// Speeds on each side of a screened speed left out of its window [-]:
 /// every other member of a block of up to [`FLIP_BLOCK`] flipped speeds
 /// that holds it (adjacent flips must not explain each other).
-const SCREEN_GAP: usize = FLIP_BLOCK - 1;
+pub(super) const SCREEN_GAP: usize = FLIP_BLOCK - 1;
 
 /// Speeds [Hz] per bearing (in the order of `bearings`, each bearing's
 /// observations in any order, phasors [m]) at which every channel of that
@@ -87,86 +87,27 @@ pub fn cross_bearing_flips(
     if nb < CROSS_MIN_BEARINGS || listed.len() != nb || flipped.len() != nb {
         return found;
     }
-    let per_bearing: Vec<_> = bearings.iter().map(|o| readings(o)).collect();
-    let weights: Vec<[f64; 4]> = per_bearing.iter().map(|s| channel_weights(s)).collect();
-    // The speeds every bearing has and none lists, with each bearing's
-    // weighted phasors there.
-    let is_listed = |f: f64| listed.iter().any(|l| l.contains(&f));
-    let mut speeds = Vec::new();
-    let mut ys: Vec<Vec<Complex<f64>>> = Vec::new();
-    // Speeds some bearing is known flipped at (negated back, not judged).
-    let mut known = Vec::new();
-    for r in &per_bearing[0] {
-        if is_listed(r.speed_hz) {
-            continue;
-        }
-        let mut y = Vec::with_capacity(4 * nb);
-        let mut any_flipped = false;
-        for ((s, w), f) in per_bearing.iter().zip(&weights).zip(flipped) {
-            let Ok(k) = s.binary_search_by(|x| x.speed_hz.total_cmp(&r.speed_hz)) else {
-                break;
-            };
-            let sign = if f.contains(&r.speed_hz) {
-                any_flipped = true;
-                -1.0
-            } else {
-                1.0
-            };
-            y.extend((0..4).map(|c| s[k].q[c] * (w[c] * sign)));
-        }
-        if y.len() == 4 * nb {
-            speeds.push(r.speed_hz);
-            ys.push(y);
-            known.push(any_flipped);
-        }
-    }
+    let Stack { speeds, ys, known } = Stack::of(bearings, listed, flipped);
     let dims = 2 * nb;
     let side = CROSS_SIDE.max(dims);
     let n = ys.len();
     if n < 2 * side + 2 * SCREEN_GAP + 1 {
         return found;
     }
-    let dof = (2 * (4 * nb - dims)) as f64;
-    let Ok(chi2) = ChiSquared::new(dof) else {
+    let Some(limits) = Limits::new(nb, n) else {
         return found;
     };
-    let null_median = chi2.inverse_cdf(0.5);
-    let screen = chi2.inverse_cdf(SCREEN_QUANTILE);
-    let consistent = chi2.inverse_cdf(CONSISTENT_QUANTILE);
-    let block_limit: Vec<f64> = (0..=FLIP_BLOCK)
-        .map(|l| {
-            ChiSquared::new(dof * l.max(1) as f64).map_or(f64::INFINITY, |d| {
-                d.inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / n as f64)
-            })
-        })
-        .collect();
     // Which bearing is negated at each speed (at most one).
     let mut negated: Vec<Option<usize>> = vec![None; n];
     for _ in 0..n / 4 {
-        let y: Vec<Vec<Complex<f64>>> = (0..n).map(|i| signed(&ys[i], negated[i])).collect();
-        // Each speed against the window around it, its neighbours within
-        // SCREEN_GAP left out.
-        let screened: Vec<Option<(f64, f64)>> = (0..n)
-            .map(|i| {
-                let gap = i.saturating_sub(SCREEN_GAP)..(i + SCREEN_GAP + 1).min(n);
-                Subspace::of(&y, &window(n, gap, side), dims).map(|u| u.residual(&y[i]))
-            })
+        let y: Vec<Vec<Complex<f64>>> = (0..n)
+            .map(|i| signed(&ys[i], negated[i].as_slice()))
             .collect();
-        let plain: Vec<f64> = screened
-            .iter()
-            .map(|r| r.map_or(f64::NAN, |r| r.0))
-            .collect();
-        let studentised: Vec<f64> = screened
-            .iter()
-            .map(|r| r.map_or(f64::NAN, |(r, l)| r / (1.0 + l)))
-            .collect();
-        let scale = scales(&plain, null_median);
-        let scale_s = scales(&studentised, null_median);
+        let all: Vec<usize> = (0..n).collect();
+        let (plain, scale, scale_s) = screened_scales(&y, &all, side, dims, limits.null_median);
         let candidate: Vec<bool> = (0..n)
-            .map(|i| !known[i] && negated[i].is_none() && plain[i] / scale[i] > screen)
+            .map(|i| !known[i] && negated[i].is_none() && plain[i] / scale[i] > limits.screen)
             .collect();
-        // −2 ln L of a reading (r, ℓ) at speed j, up to a constant.
-        let nll = |(r, l): (f64, f64), j: usize| r / ((1.0 + l) * scale_s[j]) + dof * l.ln_1p();
         let mut best: Option<(usize, std::ops::Range<usize>, f64)> = None;
         for start in 0..n {
             for end in start + 1..=(start + FLIP_BLOCK).min(n) {
@@ -178,24 +119,11 @@ pub fn cross_bearing_flips(
                     continue;
                 };
                 for b in 0..nb {
-                    let (mut before, mut after, mut gain) = (0.0, 0.0, 0.0);
-                    let mut agrees = true;
-                    for j in block.clone() {
-                        let read = u.residual(&y[j]);
-                        let flipped = u.residual(&signed(&y[j], Some(b)));
-                        before += read.0 / scale[j];
-                        after += flipped.0 / scale[j];
-                        let (l_read, l_flipped) = (nll(read, j), nll(flipped, j));
-                        agrees &= flipped.0 / ((1.0 + flipped.1) * scale_s[j]) <= consistent
-                            && l_flipped < l_read;
-                        gain += l_read - l_flipped;
-                    }
-                    let named = before > block_limit[block.len()]
-                        && agrees
-                        && after < FLIP_RATIO * before
-                        && gain.is_finite();
-                    if named && best.as_ref().is_none_or(|(_, _, g)| gain > *g) {
-                        best = Some((b, block.clone(), gain));
+                    let judged = limits.judge(&u, &y, block.clone(), &[b], &scale, &scale_s);
+                    if let Some(gain) = judged {
+                        if best.as_ref().is_none_or(|(_, _, g)| gain > *g) {
+                            best = Some((b, block.clone(), gain));
+                        }
                     }
                 }
             }
@@ -213,10 +141,187 @@ pub fn cross_bearing_flips(
     found
 }
 
-/// `y` with the four channels of bearing `b` negated (none when `None`).
-fn signed(y: &[Complex<f64>], b: Option<usize>) -> Vec<Complex<f64>> {
+/// All bearings' weighted phasors at the speeds every bearing has and none
+/// lists ([`cross_bearing_flips`]'s `listed`), each bearing's known flips
+/// negated back.
+pub(super) struct Stack {
+    /// The speeds [Hz], ascending.
+    pub(super) speeds: Vec<f64>,
+    /// Per speed, the 4·B channels (bearing by bearing: rel y, rel z, ped
+    /// y, ped z), each weighted by one over its noise-and-interpolation
+    /// scale (`channel_weights` of [`super::flips`]) [-].
+    pub(super) ys: Vec<Vec<Complex<f64>>>,
+    /// Per speed, whether some bearing is known flipped there.
+    pub(super) known: Vec<bool>,
+}
+
+impl Stack {
+    /// The stack of `bearings` (each bearing's observations in any order,
+    /// phasors [m]) without the speeds in `listed` (per bearing [Hz]: left
+    /// out for every bearing) or that some bearing lacks, the speeds in
+    /// `flipped` (per bearing [Hz]) negated for that bearing.
+    pub(super) fn of(bearings: &[&[Observation]], listed: &[&[f64]], flipped: &[&[f64]]) -> Self {
+        let nb = bearings.len();
+        let per_bearing: Vec<_> = bearings.iter().map(|o| readings(o)).collect();
+        let weights: Vec<[f64; 4]> = per_bearing.iter().map(|s| channel_weights(s)).collect();
+        let is_listed = |f: f64| listed.iter().any(|l| l.contains(&f));
+        let mut stack = Stack {
+            speeds: Vec::new(),
+            ys: Vec::new(),
+            known: Vec::new(),
+        };
+        let Some(first) = per_bearing.first() else {
+            return stack;
+        };
+        for r in first {
+            if is_listed(r.speed_hz) {
+                continue;
+            }
+            let mut y = Vec::with_capacity(4 * nb);
+            let mut any_flipped = false;
+            for ((s, w), f) in per_bearing.iter().zip(&weights).zip(flipped) {
+                let Ok(k) = s.binary_search_by(|x| x.speed_hz.total_cmp(&r.speed_hz)) else {
+                    break;
+                };
+                let sign = if f.contains(&r.speed_hz) {
+                    any_flipped = true;
+                    -1.0
+                } else {
+                    1.0
+                };
+                y.extend((0..4).map(|c| s[k].q[c] * (w[c] * sign)));
+            }
+            if y.len() == 4 * nb {
+                stack.speeds.push(r.speed_hz);
+                stack.ys.push(y);
+                stack.known.push(any_flipped);
+            }
+        }
+        stack
+    }
+}
+
+/// The χ² figures of the test across bearings for B bearings and n speeds
+/// ([`cross_bearing_flips`]).
+pub(super) struct Limits {
+    /// Degrees of freedom of a good reading's r/s, 2(C − D) [-].
+    dof: f64,
+    /// Median of χ²(dof) [-].
+    pub(super) null_median: f64,
+    /// Its [`SCREEN_QUANTILE`] [-].
+    screen: f64,
+    /// Its [`CONSISTENT_QUANTILE`] [-].
+    consistent: f64,
+    /// Per block length L (index), the χ²(dof·L) quantile at
+    /// [`OUTLIER_FAMILY_RATE`]/n [-].
+    block_limit: Vec<f64>,
+}
+
+impl Limits {
+    /// The figures for `nb` bearings and `n` speeds; `None` when they
+    /// leave no degree of freedom.
+    pub(super) fn new(nb: usize, n: usize) -> Option<Self> {
+        let dof = (2 * (4 * nb).saturating_sub(2 * nb)) as f64;
+        let chi2 = ChiSquared::new(dof).ok()?;
+        Some(Limits {
+            dof,
+            null_median: chi2.inverse_cdf(0.5),
+            screen: chi2.inverse_cdf(SCREEN_QUANTILE),
+            consistent: chi2.inverse_cdf(CONSISTENT_QUANTILE),
+            block_limit: (0..=FLIP_BLOCK)
+                .map(|l| {
+                    ChiSquared::new(dof * l.max(1) as f64).map_or(f64::INFINITY, |d| {
+                        d.inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / n.max(1) as f64)
+                    })
+                })
+                .collect(),
+        })
+    }
+
+    /// The hypothesis "the bearings `which` are negated at the speeds
+    /// `block`" against the subspace `u` of the window around the block,
+    /// the weighted phasors `y` (per speed), the scales `scale` of r and
+    /// `scale_s` of the studentised r (per speed): `Some(gain)` (the gain
+    /// of −2 ln L) when it is named by [`cross_bearing_flips`]'s three
+    /// conditions, else `None`.
+    pub(super) fn judge(
+        &self,
+        u: &Subspace,
+        y: &[Vec<Complex<f64>>],
+        block: std::ops::Range<usize>,
+        which: &[usize],
+        scale: &[f64],
+        scale_s: &[f64],
+    ) -> Option<f64> {
+        // −2 ln L of a reading (r, ℓ) at speed j, up to a constant.
+        let nll =
+            |(r, l): (f64, f64), j: usize| r / ((1.0 + l) * scale_s[j]) + self.dof * l.ln_1p();
+        let (mut before, mut after, mut gain) = (0.0, 0.0, 0.0);
+        let mut agrees = true;
+        for j in block.clone() {
+            let read = u.residual(&y[j]);
+            let flipped = u.residual(&signed(&y[j], which));
+            before += read.0 / scale[j];
+            after += flipped.0 / scale[j];
+            let (l_read, l_flipped) = (nll(read, j), nll(flipped, j));
+            agrees &= flipped.0 / ((1.0 + flipped.1) * scale_s[j]) <= self.consistent
+                && l_flipped < l_read;
+            gain += l_read - l_flipped;
+        }
+        let named = before > self.block_limit[block.len()]
+            && agrees
+            && after < FLIP_RATIO * before
+            && gain.is_finite();
+        named.then_some(gain)
+    }
+}
+
+/// The scales of the test across bearings at the speeds `at` (indices of
+/// `y`, ascending): each speed of `y` within [`FLIP_WINDOW`] of one of them
+/// against the subspace of the window around it (`side` speeds on each
+/// side, `dims` dimensions), its neighbours within SCREEN_GAP left out; per
+/// speed of `y` (NaN elsewhere), r, and the median of r and of the
+/// studentised r/(1 + ℓ) over [`FLIP_WINDOW`] speeds on each side over
+/// `null_median` ([`scales`]). The same figures at the speeds `at` whether
+/// `at` holds every speed or a few.
+pub(super) fn screened_scales(
+    y: &[Vec<Complex<f64>>],
+    at: &[usize],
+    side: usize,
+    dims: usize,
+    null_median: f64,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let n = y.len();
+    let mut needed = vec![false; n];
+    for &i in at {
+        needed[i.saturating_sub(FLIP_WINDOW)..(i + FLIP_WINDOW + 1).min(n)].fill(true);
+    }
+    let screened: Vec<Option<(f64, f64)>> = (0..n)
+        .map(|i| {
+            if !needed[i] {
+                return None;
+            }
+            let gap = i.saturating_sub(SCREEN_GAP)..(i + SCREEN_GAP + 1).min(n);
+            Subspace::of(y, &window(n, gap, side), dims).map(|u| u.residual(&y[i]))
+        })
+        .collect();
+    let plain: Vec<f64> = screened
+        .iter()
+        .map(|r| r.map_or(f64::NAN, |r| r.0))
+        .collect();
+    let studentised: Vec<f64> = screened
+        .iter()
+        .map(|r| r.map_or(f64::NAN, |(r, l)| r / (1.0 + l)))
+        .collect();
+    let scale = scales(&plain, null_median);
+    let scale_s = scales(&studentised, null_median);
+    (plain, scale, scale_s)
+}
+
+/// `y` with the four channels of each bearing in `which` negated.
+fn signed(y: &[Complex<f64>], which: &[usize]) -> Vec<Complex<f64>> {
     let mut out = y.to_vec();
-    if let Some(b) = b {
+    for &b in which {
         out[4 * b..4 * b + 4].iter_mut().for_each(|z| *z = -*z);
     }
     out
@@ -234,7 +339,7 @@ fn scales(v: &[f64], null_median: f64) -> Vec<f64> {
 
 /// The indices of `2·side` speeds of `n` around the speeds `gap` (fewer
 /// when `n` is short; more on one side at the run's ends), `gap` left out.
-fn window(n: usize, gap: std::ops::Range<usize>, side: usize) -> Vec<usize> {
+pub(super) fn window(n: usize, gap: std::ops::Range<usize>, side: usize) -> Vec<usize> {
     let (mut lo, mut hi) = (gap.start.saturating_sub(side), (gap.end + side).min(n));
     while hi - lo - gap.len() < 2 * side && (lo > 0 || hi < n) {
         if lo > 0 && gap.start - lo <= hi - gap.end || hi == n {
@@ -247,7 +352,7 @@ fn window(n: usize, gap: std::ops::Range<usize>, side: usize) -> Vec<usize> {
 }
 
 /// The leading eigenvectors of a window's Σ y yᴴ and their eigenvalues.
-struct Subspace {
+pub(super) struct Subspace {
     /// Unit eigenvectors, one per column.
     vectors: DMatrix<Complex<f64>>,
     /// Their eigenvalues (positive).
@@ -258,7 +363,7 @@ impl Subspace {
     /// The `dims` leading eigenpairs of Σ_{j ∈ window} y_j y_jᴴ (only those
     /// with a positive eigenvalue); `None` when the window is empty or the
     /// decomposition is not finite.
-    fn of(y: &[Vec<Complex<f64>>], window: &[usize], dims: usize) -> Option<Self> {
+    pub(super) fn of(y: &[Vec<Complex<f64>>], window: &[usize], dims: usize) -> Option<Self> {
         let c = y.first()?.len();
         if window.is_empty() {
             return None;

@@ -1,18 +1,13 @@
-//! Readings against their neighbouring speeds: the jumps that confirm an
-//! outlier speed ([`jump_speeds`]) and the keyphasor flips
-//! ([`keyphasor_flips`]) of [`super`]'s module docs. The response is smooth
-//! in speed: for the jumps each reading is compared with the quadratic
-//! through its neighbouring speeds, for the flips with the local rational
-//! model of [`super::rational`] (which follows a resonance).
+//! The keyphasor flips of [`super`]'s module docs found in speed
+//! ([`keyphasor_flips`], [`flip_search`]): each reading is compared with the
+//! local rational model of [`super::rational`] through its neighbouring
+//! speeds (which follows a resonance; the response is smooth in speed).
 
+use super::jumps::{neighbours, prediction_errors};
 use super::rational::{self, LocalRational, Point};
-use super::{local_scales, window_medians, Observation, OUTLIER_FAMILY_RATE};
-use nalgebra::DMatrix;
+use super::{window_medians, Observation, OUTLIER_FAMILY_RATE};
 use num_complex::Complex;
 use statrs::distribution::{ChiSquared, ContinuousCDF};
-
-/// Speeds on each side a flip test predicts from.
-pub const FLIP_NEIGHBOURS: usize = 3;
 
 /// Speeds on each side of a speed whose median sets its local scale in the
 /// flip detection.
@@ -55,12 +50,38 @@ pub const FLIP_WINDOW: usize = 15;
 /// the block with the largest drop of Σ a is negated first, the scales are
 /// measured again with it negated, and so on until no block qualifies. The
 /// two speeds at each end of the run are not judged (a prediction there
-/// would be an extrapolation).
+/// would be an extrapolation). [`flip_search`]'s `flipped_hz`.
 pub fn keyphasor_flips(obs: &[Observation]) -> Vec<f64> {
+    flip_search(obs).flipped_hz
+}
+
+/// What the test in speed ([`keyphasor_flips`]) finds in one bearing's
+/// readings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FlipSearch {
+    /// The speeds named flipped [Hz], ascending.
+    pub flipped_hz: Vec<f64>,
+    /// Blocks of speeds [Hz] (each ascending, up to [`FLIP_BLOCK`]
+    /// consecutive ones) that look negated but that the local model in
+    /// speed cannot confirm: as read beyond the noise and negation lowers
+    /// their misfit below [`FLIP_RATIO`] of what it was, but a negated
+    /// reading still misses its prediction by more than the noise, or the
+    /// speeds around the block do (a flip at a resonance's peak or on its
+    /// flank, where the local model misses by more than the noise; or a
+    /// true swing of the phase there). Measured with the named flips
+    /// negated; left for the other bearings at the same speeds to judge
+    /// ([`super::confirmed_across`]).
+    pub unconfirmed_hz: Vec<Vec<f64>>,
+}
+
+/// [`keyphasor_flips`] with the blocks it could not confirm
+/// ([`FlipSearch`]).
+pub fn flip_search(obs: &[Observation]) -> FlipSearch {
     let s = readings(obs);
     let n = s.len();
+    let mut search = FlipSearch::default();
     if n < 2 * FLIP_SIDE + 1 {
-        return Vec::new();
+        return search;
     }
     // The χ²(8L) limit of a block of L speeds, Bonferroni over the speeds.
     let block_limit: Vec<f64> = (0..=FLIP_BLOCK)
@@ -91,6 +112,7 @@ pub fn keyphasor_flips(obs: &[Observation]) -> Vec<f64> {
             .map(|i| !negated[i] && loo[i].is_some_and(|e| a(&e, i) > screen))
             .collect();
         let mut best: Option<(std::ops::Range<usize>, f64)> = None;
+        let mut unconfirmed = Vec::new();
         for start in 0..n {
             for end in start + 1..=(start + FLIP_BLOCK).min(n) {
                 if !beyond[end - 1] {
@@ -117,7 +139,11 @@ pub fn keyphasor_flips(obs: &[Observation]) -> Vec<f64> {
                 // The block as read is beyond the noise (χ²(8L), Bonferroni
                 // over the speeds); negated, each reading agrees.
                 let beyond_noise = before > block_limit[block.len()];
-                if !beyond_noise || !agrees || after >= FLIP_RATIO * before {
+                if !beyond_noise || after >= FLIP_RATIO * before {
+                    continue;
+                }
+                if !agrees {
+                    unconfirmed.push(block);
                     continue;
                 }
                 // The speeds on either side of the block, predicted without
@@ -138,20 +164,29 @@ pub fn keyphasor_flips(obs: &[Observation]) -> Vec<f64> {
                 let smooth_around = smooth.iter().all(|&b| b)
                     || (smooth.contains(&true) && after <= ONE_SIDED_RATIO * before);
                 let gain = before - after;
-                if smooth_around && best.as_ref().is_none_or(|(_, g)| gain > *g) {
+                if !smooth_around {
+                    unconfirmed.push(block);
+                } else if best.as_ref().is_none_or(|(_, g)| gain > *g) {
                     best = Some((block, gain));
                 }
             }
         }
         match best {
             Some((block, _)) => negated[block].fill(true),
-            None => break,
+            None => {
+                search.unconfirmed_hz = unconfirmed
+                    .into_iter()
+                    .map(|b| b.map(|i| s[i].speed_hz).collect())
+                    .collect();
+                break;
+            }
         }
     }
-    (0..n)
+    search.flipped_hz = (0..n)
         .filter(|&i| negated[i])
         .map(|i| s[i].speed_hz)
-        .collect()
+        .collect();
+    search
 }
 
 /// Speeds on each side of a gap whose readings predict it ([`rational`]) [-].
@@ -304,28 +339,6 @@ fn predict(
     targets.iter().map(|&j| model.at(s[j].speed_hz)).collect()
 }
 
-/// Speeds [Hz] at which a bearing's readings `obs` (any order) jump away
-/// from the quadratic through their neighbouring speeds by more than the
-/// noise allows: a(i) ([`keyphasor_flips`]) beyond the χ²(8) quantile at
-/// [`OUTLIER_FAMILY_RATE`]/n. A model-free check on the phasors themselves:
-/// a bad reading jumps, while a noise level the noise model's pattern misses
-/// or a model error (both smooth in speed) does not.
-pub fn jump_speeds(obs: &[Observation]) -> Vec<f64> {
-    let s = readings(obs);
-    let n = s.len();
-    if n < FLIP_NEIGHBOURS + 1 {
-        return Vec::new();
-    }
-    let limit = chi2_8().inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / n as f64);
-    let near: Vec<Vec<usize>> = (0..n).map(|i| neighbours(n, i)).collect();
-    let negated = vec![false; n];
-    let scale = channel_scales(&s, &near, &negated);
-    (0..n)
-        .filter(|&j| smoothness(&s, &near, &negated, &scale, j).is_some_and(|a| a > limit))
-        .map(|j| s[j].speed_hz)
-        .collect()
-}
-
 /// The finite readings of `obs`, in speed order.
 pub(super) fn readings(obs: &[Observation]) -> Vec<Reading> {
     let mut s: Vec<Reading> = obs
@@ -342,65 +355,12 @@ pub(super) fn readings(obs: &[Observation]) -> Vec<Reading> {
     s
 }
 
-/// Per speed and channel, the local scale of |q−p|² [m²] (noise and
-/// interpolation error, [`local_scales`] over [`FLIP_WINDOW`]) with the
-/// speeds in `negated` negated.
-fn channel_scales(s: &[Reading], near: &[Vec<usize>], negated: &[bool]) -> Vec<[f64; 4]> {
-    let n = s.len();
-    let errors: Vec<Option<[f64; 4]>> = (0..n)
-        .map(|i| prediction_errors(s, &near[i], negated, i))
-        .collect();
-    let per_channel: [Vec<f64>; 4] = std::array::from_fn(|c| {
-        let e: Vec<f64> = errors
-            .iter()
-            .map(|e| e.map_or(f64::NAN, |e| e[c]))
-            .collect();
-        local_scales(&e, std::f64::consts::LN_2, FLIP_WINDOW)
-    });
-    (0..n)
-        .map(|i| std::array::from_fn(|c| per_channel[c][i].max(f64::MIN_POSITIVE)))
-        .collect()
-}
-
-/// a(j) = Σ_c 2|q−p|²/scale_c of speed `j` against its neighbours `near[j]`
-/// (about χ²(8) for a good reading) [-], the speeds in `negated` negated.
-fn smoothness(
-    s: &[Reading],
-    near: &[Vec<usize>],
-    negated: &[bool],
-    scale: &[[f64; 4]],
-    j: usize,
-) -> Option<f64> {
-    let e = prediction_errors(s, &near[j], negated, j)?;
-    let a: f64 = (0..4).map(|c| 2.0 * e[c] / scale[j][c]).sum();
-    a.is_finite().then_some(a)
-}
-
 /// Quantile of χ²(8) within which a negated reading agrees with its
 /// neighbours [-].
 pub const CONSISTENT_QUANTILE: f64 = 0.999;
 
 /// Most consecutive speeds negated together ([`keyphasor_flips`]).
 pub const FLIP_BLOCK: usize = 4;
-
-/// The [`FLIP_NEIGHBOURS`]·2 speeds nearest to speed `i` of `n` by index
-/// (both sides where there are), ascending distance.
-fn neighbours(n: usize, i: usize) -> Vec<usize> {
-    // Outward from i, the lower index first at each distance: the order of
-    // a sort by (distance, index), in O(FLIP_NEIGHBOURS) instead of O(n log n).
-    let mut near = Vec::with_capacity(2 * FLIP_NEIGHBOURS);
-    let mut d = 1;
-    while near.len() < 2 * FLIP_NEIGHBOURS && (d <= i || i + d < n) {
-        if d <= i {
-            near.push(i - d);
-        }
-        if i + d < n && near.len() < 2 * FLIP_NEIGHBOURS {
-            near.push(i + d);
-        }
-        d += 1;
-    }
-    near
-}
 
 /// Factor by which negating a flipped speed must lower the prediction
 /// errors of the speeds around it [-].
@@ -429,43 +389,8 @@ pub(super) struct Reading {
     pub(super) q: [Complex<f64>; 4],
 }
 
-fn chi2_8() -> ChiSquared {
+pub(super) fn chi2_8() -> ChiSquared {
     ChiSquared::new(8.0).expect("8 degrees of freedom")
-}
-
-/// |q−p|² per channel [m²] of speed `i` against the quadratic (prediction
-/// p) through the speeds `near` ([`neighbours`]), with the speeds in
-/// `negated` negated; `None` when it cannot be formed.
-fn prediction_errors(
-    s: &[Reading],
-    near: &[usize],
-    negated: &[bool],
-    i: usize,
-) -> Option<[f64; 4]> {
-    if near.len() < 4 {
-        return None;
-    }
-    let sign = |j: usize| if negated[j] { -1.0 } else { 1.0 };
-    let x0 = s[i].speed_hz;
-    let span = near
-        .iter()
-        .map(|&j| (s[j].speed_hz - x0).abs())
-        .fold(0.0, f64::max)
-        .max(f64::MIN_POSITIVE);
-    let a = DMatrix::from_fn(near.len(), 3, |r, c| {
-        ((s[near[r]].speed_hz - x0) / span).powi(c as i32)
-    });
-    // The prediction at x0 is gᵀy with g the first row of (AᵀA)⁻¹Aᵀ.
-    let ata = (a.transpose() * &a).try_inverse()?;
-    let g = (ata.row(0) * a.transpose()).transpose();
-    Some(std::array::from_fn(|ch| {
-        let p: Complex<f64> = near
-            .iter()
-            .zip(g.iter())
-            .map(|(&j, &gj)| s[j].q[ch] * (gj * sign(j)))
-            .sum();
-        (s[i].q[ch] * sign(i) - p).norm_sqr()
-    }))
 }
 
 #[cfg(test)]
