@@ -96,6 +96,23 @@ pub fn listed_by_every_bearing(listed: &[Vec<f64>]) -> Vec<f64> {
     }
 }
 
+/// The speeds each of `usable`'s bearings lists (outliers and flips) [Hz].
+fn listed_speeds(
+    identification: &Identification,
+    usable: &[(&str, &[Observation])],
+) -> Vec<Vec<f64>> {
+    usable
+        .iter()
+        .map(|(name, _)| {
+            identification
+                .noise
+                .get(*name)
+                .map(|n| n.outlier_speeds_hz.clone())
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
 /// Adds to `identification` the keyphasor flips of its bearings found
 /// against the other bearings (`bearings`: the observations it was fitted
 /// to; speeds already listed for any bearing are not judged again: the
@@ -137,16 +154,7 @@ pub fn mark_cross_bearing_flips(
     if usable.len() < 2 || (usable.len() < robust::CROSS_MIN_BEARINGS && !complete) {
         return;
     }
-    let listed: Vec<Vec<f64>> = usable
-        .iter()
-        .map(|(name, _)| {
-            identification
-                .noise
-                .get(*name)
-                .map(|n| n.outlier_speeds_hz.clone())
-                .unwrap_or_default()
-        })
-        .collect();
+    let listed = listed_speeds(identification, &usable);
     let observations: Vec<&[Observation]> = usable.iter().map(|(_, o)| *o).collect();
     // The flips each bearing's fit found in speed (the report merges them
     // with the outliers) are negated back, the outliers left out.
@@ -189,16 +197,7 @@ pub fn mark_cross_bearing_flips(
         );
     }
     // Speeds every bearing lists.
-    let now: Vec<Vec<f64>> = usable
-        .iter()
-        .map(|(name, _)| {
-            identification
-                .noise
-                .get(*name)
-                .map(|n| n.outlier_speeds_hz.clone())
-                .unwrap_or_default()
-        })
-        .collect();
+    let now = listed_speeds(identification, &usable);
     let everywhere = listed_by_every_bearing(&now);
     if !everywhere.is_empty() {
         let list: Vec<String> = everywhere.iter().map(|s| format!("{s}")).collect();

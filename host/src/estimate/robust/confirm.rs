@@ -122,68 +122,12 @@ fn indices(speeds: &[f64], block: &[f64]) -> Option<std::ops::Range<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use num_complex::Complex;
 
-    /// Two bearings over 80 speeds, 5-202.5 Hz, whose eight phasors are
-    /// three modes (0.5 % damping; 41 Hz between two speeds, where the
-    /// 2.5 Hz steps resolve nothing) with fixed complex shapes, plus complex
-    /// noise of sd 1 % of each channel's RMS; every channel of bearing
-    /// `flip.0` negated at the speed indices `flip.1`.
+    /// Two bearings, three modes (41.1 Hz between two speeds, where the
+    /// 2.5 Hz steps resolve nothing), noise 1 % of each channel's RMS
+    /// (`super::super::cross`'s test machine).
     fn machine(flip: (usize, &[usize]), seed: u64) -> Vec<Vec<Observation>> {
-        use rand::{rngs::StdRng, Rng, SeedableRng};
-        use rand_distr::StandardNormal;
-        let mut rng = StdRng::seed_from_u64(seed);
-        let modes = [41.1, 70.0, 110.0];
-        let shape = |m: usize, ch: usize| -> Complex<f64> {
-            let k = (7 * m + 3 * ch) as f64;
-            Complex::from_polar(1.0 + 0.5 * (k * 0.37).sin(), k * 1.3)
-        };
-        let clean: Vec<[Complex<f64>; 8]> = (0..80)
-            .map(|i| {
-                let f = 5.0 + 2.5 * i as f64;
-                std::array::from_fn(|ch| {
-                    modes
-                        .iter()
-                        .enumerate()
-                        .map(|(m, &f0)| {
-                            let r = f / f0;
-                            shape(m, ch) * (1e-7 * r * r) / Complex::new(1.0 - r * r, 0.01 * r)
-                        })
-                        .sum()
-                })
-            })
-            .collect();
-        let rms: Vec<f64> = (0..8)
-            .map(|ch| (clean.iter().map(|q| q[ch].norm_sqr()).sum::<f64>() / 80.0).sqrt())
-            .collect();
-        (0..2)
-            .map(|b| {
-                clean
-                    .iter()
-                    .enumerate()
-                    .map(|(i, q)| {
-                        let mut z: [Complex<f64>; 4] = std::array::from_fn(|c| {
-                            let sd = 0.01 * rms[4 * b + c] / 2f64.sqrt();
-                            q[4 * b + c]
-                                + Complex::new(
-                                    rng.sample::<f64, _>(StandardNormal),
-                                    rng.sample::<f64, _>(StandardNormal),
-                                ) * sd
-                        });
-                        if flip.0 == b && flip.1.contains(&i) {
-                            z.iter_mut().for_each(|v| *v = -*v);
-                        }
-                        Observation {
-                            speed_hz: 5.0 + 2.5 * i as f64,
-                            rel: [z[0], z[1]],
-                            ped: [z[2], z[3]],
-                            kstar: [[Complex::new(1e7, 0.0), Complex::new(0.0, 0.0)]; 2],
-                            var: [1e-20; 8],
-                        }
-                    })
-                    .collect()
-            })
-            .collect()
+        super::super::cross::tests::modal_machine(&[41.1, 70.0, 110.0], 2, flip, 0.01, seed)
     }
 
     #[test]

@@ -410,42 +410,50 @@ impl Subspace {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    /// Three bearings over 80 speeds, 5-202.5 Hz, whose twelve phasors are
-    /// four sharp modes (0.5 % damping, two between 35 and 47 Hz, where
-    /// the 2.5 Hz steps resolve nothing) with fixed complex shapes, plus
-    /// complex noise of sd `noise` × each channel's RMS; every channel of
-    /// bearing `flip.0` negated at the speed indices `flip.1`.
-    fn machine(flip: (usize, &[usize]), noise: f64, seed: u64) -> Vec<Vec<Observation>> {
+    /// Bearings over 80 speeds, 5-202.5 Hz, whose phasors (four per
+    /// bearing) are sharp `modes` [Hz] (0.5 % damping) with fixed complex
+    /// shapes, plus complex noise of sd `noise` × each channel's RMS; every
+    /// channel of bearing `flip.0` negated at the speed indices `flip.1`.
+    /// Shared with `super::super::confirm`'s tests.
+    pub(in crate::estimate::robust) fn modal_machine(
+        modes: &[f64],
+        bearings: usize,
+        flip: (usize, &[usize]),
+        noise: f64,
+        seed: u64,
+    ) -> Vec<Vec<Observation>> {
         use rand::{rngs::StdRng, Rng, SeedableRng};
         use rand_distr::StandardNormal;
         let mut rng = StdRng::seed_from_u64(seed);
-        let modes = [36.3, 41.1, 70.0, 110.0];
+        let channels = 4 * bearings;
         let shape = |m: usize, ch: usize| -> Complex<f64> {
             let k = (7 * m + 3 * ch) as f64;
             Complex::from_polar(1.0 + 0.5 * (k * 0.37).sin(), k * 1.3)
         };
-        let clean: Vec<[Complex<f64>; 12]> = (0..80)
+        let clean: Vec<Vec<Complex<f64>>> = (0..80)
             .map(|i| {
                 let f = 5.0 + 2.5 * i as f64;
-                std::array::from_fn(|ch| {
-                    modes
-                        .iter()
-                        .enumerate()
-                        .map(|(m, &f0)| {
-                            let r = f / f0;
-                            shape(m, ch) * (1e-7 * r * r) / Complex::new(1.0 - r * r, 0.01 * r)
-                        })
-                        .sum()
-                })
+                (0..channels)
+                    .map(|ch| {
+                        modes
+                            .iter()
+                            .enumerate()
+                            .map(|(m, &f0)| {
+                                let r = f / f0;
+                                shape(m, ch) * (1e-7 * r * r) / Complex::new(1.0 - r * r, 0.01 * r)
+                            })
+                            .sum()
+                    })
+                    .collect()
             })
             .collect();
-        let rms: Vec<f64> = (0..12)
+        let rms: Vec<f64> = (0..channels)
             .map(|ch| (clean.iter().map(|q| q[ch].norm_sqr()).sum::<f64>() / 80.0).sqrt())
             .collect();
-        (0..3)
+        (0..bearings)
             .map(|b| {
                 clean
                     .iter()
@@ -473,6 +481,12 @@ mod tests {
                     .collect()
             })
             .collect()
+    }
+
+    /// Three bearings, four modes (two between 35 and 47 Hz, where the
+    /// 2.5 Hz steps resolve nothing).
+    fn machine(flip: (usize, &[usize]), noise: f64, seed: u64) -> Vec<Vec<Observation>> {
+        modal_machine(&[36.3, 41.1, 70.0, 110.0], 3, flip, noise, seed)
     }
 
     fn run(obs: &[Vec<Observation>], listed: &[Vec<f64>]) -> Vec<Vec<f64>> {
