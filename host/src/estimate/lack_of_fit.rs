@@ -49,7 +49,7 @@ mod window;
 pub use structure::{
     structure, Structure, BLOCK, LEVEL_WINDOW, PERMUTATIONS, STOP_AFTER_EXCEEDANCES,
 };
-pub use support::{support_mode, Level, SupportMode};
+pub use support::{support_mode, SupportMode};
 pub use window::{LOCAL_DEGREE, MAX_DEGREE, MIN_WINDOW, SCALES};
 
 use super::gauss_helmert as gh;
@@ -125,14 +125,15 @@ pub fn assess(
     let eq = Rigid::new(obs, &Weighting::default());
     let speeds: Vec<f64> = obs.iter().map(|o| o.speed_hz).collect();
     let scanned = source.scale_estimated() || level_p < p_limit;
-    // With noise columns only. Without them the F form (`Level::Estimated`)
-    // was measured and is not made: on the fourth machine's clean field
-    // table (3 digits, 0.1°, through `plinth import`) it flagged B1 at
-    // p = 7e-5 (docs/trust.md, session 29): neighbouring speeds' rounding
-    // errors are alike, a smooth Ω⁴ column collects them, and s² does not
-    // see that correlation (the structure scan's block shuffles do).
+    // With noise columns only. A form without them (the score over the
+    // extended fit's residual variance) was measured and is not made: on
+    // the fourth machine's clean field table (3 digits, 0.1°, through
+    // `plinth import`) it flagged B1 at p = 7e-5 (docs/trust.md, session
+    // 29): neighbouring speeds' rounding errors are alike, a smooth Ω⁴
+    // column collects them, and a residual variance does not see that
+    // correlation (the structure scan's block shuffles do).
     let support_mode = (source == NoiseSource::Columns)
-        .then(|| support_mode(&eq, theta, &speeds, Level::Known))
+        .then(|| support_mode(&eq, theta, &speeds))
         .flatten();
     if !scanned && support_mode.is_none() {
         return None;

@@ -42,7 +42,6 @@
 
 use super::estimator::SCATTER_LEVEL_TOLERANCE;
 use super::{Identification, Warning, WarningKind};
-use crate::estimate::lack_of_fit::SupportMode;
 use crate::estimate::noise::NoiseSource;
 use crate::estimate::pedestal::CHI2_P_THRESHOLD;
 use crate::estimate::robust;
@@ -65,17 +64,6 @@ pub const SUPPORT_FALSE_ALARM: f64 = 0.001;
 /// them (Bonferroni) [-]. One rule for identify and diagnose.
 pub fn support_limit(tested: usize) -> f64 {
     SUPPORT_FALSE_ALARM / tested.max(1) as f64
-}
-
-/// The unit the support-mode score `t` is in, as a reason says it: the
-/// noise columns, or the extended fit's residual variance.
-pub fn support_unit(t: &SupportMode) -> String {
-    match t.residual_variance {
-        None => "in units of its noise columns".to_string(),
-        Some(s2) => format!(
-            "in units of the residual variance of the fit with the Ω⁴ terms, {s2:.3} times its measured level"
-        ),
-    }
 }
 
 /// Adds a [`WarningKind::LackOfFit`] warning to every pedestal whose fit
@@ -172,9 +160,8 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
         if let Some(t) = l.support_mode {
             if t.p_value < alpha_support {
                 reasons.push(format!(
-                    "its dynamic stiffness does not follow one mass on one spring over speed: an Ω⁴ term, what a support with a second mode above the speed range adds (a sub-base, a frame: per direction K − Ω²M − Ω⁴Q below that mode, Q > 0), explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model ({}; one-sided, Ω⁴Q ≥ 0: p = {:.1e}, limit {alpha_support:.1e}: {SUPPORT_FALSE_ALARM} over the {support_tested} bearing(s) tested); Ω⁴Q at the top speed is {:+.1} % (y) and {:+.1} % (z) of the stiffness (positive: it falls faster than one mass allows); the k and m printed are then the support's apparent values, not the pedestal's",
+                    "its dynamic stiffness does not follow one mass on one spring over speed: an Ω⁴ term, what a support with a second mode above the speed range adds (a sub-base, a frame: per direction K − Ω²M − Ω⁴Q below that mode, Q > 0), explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model (in units of its noise columns; one-sided, Ω⁴Q ≥ 0: p = {:.1e}, limit {alpha_support:.1e}: {SUPPORT_FALSE_ALARM} over the {support_tested} bearing(s) tested); Ω⁴Q at the top speed is {:+.1} % (y) and {:+.1} % (z) of the stiffness (positive: it falls faster than one mass allows); the k and m printed are then the support's apparent values, not the pedestal's",
                     t.statistic,
-                    support_unit(&t),
                     t.p_value,
                     100.0 * t.drop_at_top[0],
                     100.0 * t.drop_at_top[1]
