@@ -35,8 +35,12 @@
 //!
 //! **Remedy.** When the residuals reject the columns' shape the pedestal is
 //! refitted under the variance function of its residuals
-//! ([`super::variance::refit`]: its level and shape both from the
-//! residuals, floored by the digits), its ± are those of that fit, and the
+//! ([`super::variance::refit_under`]: its level and shape both from the
+//! residuals, floored by the digits; a fraction of |X|, a floor and a
+//! velocity pick-up's floor ∝ 1/Ω per channel, [`Family::VelocityFloor`],
+//! as columns written flat over a pick-up's floor need), its ± are those of
+//! that fit widened to the residuals' where these give more
+//! ([`widen_to_residuals`]: the variance function is itself estimated), and the
 //! fit says so ([`rejected`], warning `noise_scale_mismatch`; `--json`:
 //! `noise.<bearing>.variance_function`). The lack-of-fit tests keep the
 //! columns and the fit under them, as they keep the scatter's law: their
@@ -54,10 +58,13 @@ use plinth_shared::regression::{Parameter, PARAMETERS};
 pub const COLUMNS_P: f64 = 1e-12;
 
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
-/// function of its residuals ([`variance::refit`]) when they reject the
-/// pattern of its noise `source` ([`NoiseSource::pattern_on_trial`]): the
-/// scatter's law at [`variance::HETEROSCEDASTIC_P`], noise columns' shape at
-/// [`COLUMNS_P`]; `floor` gives each observation's digits' variances [m²].
+/// function of its residuals when they reject the pattern of its noise
+/// `source` ([`NoiseSource::pattern_on_trial`]): the scatter's law at
+/// [`variance::HETEROSCEDASTIC_P`] ([`variance::refit`]); noise columns'
+/// shape at [`COLUMNS_P`] (the same test), refitted under
+/// [`Family::VelocityFloor`] ([`variance::refit_under`]) with ± never
+/// below the residuals' ([`widen_to_residuals`]); `floor` gives each
+/// observation's digits' variances [m²].
 /// `None` when the source is not on trial, the test does not reject or a
 /// step fails.
 pub fn refit(
@@ -68,10 +75,18 @@ pub fn refit(
     fit: &MlFit,
 ) -> Option<Refit> {
     match source {
-        NoiseSource::Scatter => variance::refit(obs, floor, columns, fit, Family::FractionFloor),
+        NoiseSource::Scatter => variance::refit(obs, floor, columns, fit),
         NoiseSource::Columns => {
-            if homoscedasticity_p(obs, &fit.theta, Family::VelocityFloor)? < COLUMNS_P {
-                let mut r = variance::refit(obs, floor, columns, fit, Family::VelocityFloor)?;
+            let p_value = homoscedasticity_p(obs, &fit.theta, Family::FractionFloor)?;
+            if p_value < COLUMNS_P {
+                let mut r = variance::refit_under(
+                    obs,
+                    floor,
+                    columns,
+                    fit,
+                    Family::VelocityFloor,
+                    p_value,
+                )?;
                 widen_to_residuals(&mut r, columns);
                 Some(r)
             } else {

@@ -144,7 +144,7 @@ fn factor(k: usize, magnitude_sq: &[f64; 4], inv_omega_sq: f64) -> f64 {
 
 /// 1/Ω² [s²] of an observation (Ω = 2π·speed [rad/s]); 0 at no speed.
 fn inv_omega_sq(o: &Observation) -> f64 {
-    let omega = 2.0 * std::f64::consts::PI * o.speed_hz;
+    let omega = o.omega();
     if omega > 0.0 {
         1.0 / (omega * omega)
     } else {
@@ -403,25 +403,38 @@ pub fn fit_variance_function(
 }
 
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
-/// function (`family`) of its residuals when the score test
+/// function ([`Family::FractionFloor`]) of its residuals when the score test
 /// ([`homoscedasticity_p`]) rejects the observations' own noise law at
-/// [`HETEROSCEDASTIC_P`]: [`ROUNDS`] rounds of
-/// ([`fit_variance_function`], ML refit from the last estimate). Returns the
-/// last refit, its variance function, the score test's p-value [-] and the
-/// observations with its variances (each never below `floor` of the
-/// observation: its digits' variances [m²], [`variances`]); `None` when the
-/// test does not reject or a step fails.
+/// [`HETEROSCEDASTIC_P`] ([`refit_under`]); `None` when the test does not
+/// reject or a step fails.
 pub fn refit(
     obs: &[Observation],
     floor: impl Fn(&Observation) -> [f64; 8],
     columns: &[Parameter],
     fit: &MlFit,
-    family: Family,
 ) -> Option<Refit> {
-    let p_value = homoscedasticity_p(obs, &fit.theta, family)?;
+    let p_value = homoscedasticity_p(obs, &fit.theta, Family::FractionFloor)?;
     if p_value >= HETEROSCEDASTIC_P {
         return None;
     }
+    refit_under(obs, floor, columns, fit, Family::FractionFloor, p_value)
+}
+
+/// The fit `fit` of `obs` (parameters `columns`) redone under the variance
+/// function (`family`) of its residuals, after a score test rejected the
+/// observations' own law at `p_value` [-]: [`ROUNDS`] rounds of
+/// ([`fit_variance_function`], ML refit from the last estimate). Returns the
+/// last refit, its variance function, `p_value` and the observations with
+/// its variances (each never below `floor` of the observation: its digits'
+/// variances [m²], [`variances`]); `None` when a step fails.
+pub fn refit_under(
+    obs: &[Observation],
+    floor: impl Fn(&Observation) -> [f64; 8],
+    columns: &[Parameter],
+    fit: &MlFit,
+    family: Family,
+    p_value: f64,
+) -> Option<Refit> {
     let mut obs = obs.to_vec();
     let mut current: Option<(MlFit, [f64; COMPONENTS])> = None;
     for _ in 0..ROUNDS {
@@ -464,3 +477,6 @@ pub struct Refit {
     /// The observations with the variance function's variances.
     pub obs: Vec<Observation>,
 }
+
+#[cfg(test)]
+mod tests;
