@@ -19,7 +19,10 @@ fn at(speed_hz: f64, mag: [f64; 4]) -> Observation {
 fn the_fraction_and_floor_family_frees_no_velocity_floor() {
     let fraction = Family::FractionFloor.components();
     assert_eq!(fraction, vec![0, 1, 3, 4, 6, 7, 9, 10]);
-    assert_eq!(Family::VelocityFloor.components(), (0..COMPONENTS).collect::<Vec<_>>());
+    assert_eq!(
+        Family::VelocityFloor.components(),
+        (0..COMPONENTS).collect::<Vec<_>>()
+    );
 }
 
 #[test]
@@ -36,7 +39,11 @@ fn a_velocity_floor_falls_as_one_over_omega_squared_in_variance() {
         let want = 1e-4 * 4e-14 + 1e-18 + 1e-12 / (omega * omega);
         let v = variances(&o, &p, &[0.0; 8]);
         for c in [4, 5] {
-            assert!((v[c] / want - 1.0).abs() < 1e-12, "{f} Hz: {:e} vs {want:e}", v[c]);
+            assert!(
+                (v[c] / want - 1.0).abs() < 1e-12,
+                "{f} Hz: {:e} vs {want:e}",
+                v[c]
+            );
         }
         assert_eq!(v[0], 0.0);
         // The digits still floor it.
