@@ -43,10 +43,24 @@ fn bearing_rows(run: &RunDir) -> Vec<Vec<usize>> {
 /// |phasor| plus `floor` of the channel's RMS), written with 7 digits and
 /// read back.
 fn mixed_noise_run(file: &str, relative: f64, floor: f64, seed: u64) -> RunDir {
+    noise_run(file, relative, floor, 0.0, seed).0
+}
+
+/// [`mixed_noise_run`] with a seismic pick-up's velocity floor `velocity`
+/// [m/s] on the pedestal channels (complex sd velocity/Ω in displacement,
+/// added to the sd), and the true complex sd [m] of every row and channel.
+fn noise_run(
+    file: &str,
+    relative: f64,
+    floor: f64,
+    velocity: f64,
+    seed: u64,
+) -> (RunDir, Vec<[f64; 4]>) {
     let m = machine(file);
     let speeds: Vec<f64> = (0..=78).map(|i| 5.0 + 2.5 * i as f64).collect();
     let response = unbalance_response(&m, &speeds, &EffectSet::none()).expect("simulation");
     let mut run = response.to_run_dir(None).expect("run directory");
+    let mut sds = vec![[0.0; 4]; run.measurements.len()];
     let mut rng = StdRng::seed_from_u64(seed);
     for rows in bearing_rows(&run) {
         for ch in 0..4 {
@@ -65,7 +79,10 @@ fn mixed_noise_run(file: &str, relative: f64, floor: f64, seed: u64) -> RunDir {
                 .sqrt();
             for &i in &rows {
                 let x = value(&run.measurements[i]);
-                let sd = (relative * x.norm() + floor * rms) / 2f64.sqrt();
+                let omega = 2.0 * std::f64::consts::PI * run.measurements[i].speed_hz;
+                let pick_up = if ch < 2 { 0.0 } else { velocity / omega };
+                sds[i][ch] = relative * x.norm() + floor * rms + pick_up;
+                let sd = sds[i][ch] / 2f64.sqrt();
                 let re: f64 = StandardNormal.sample(&mut rng);
                 let im: f64 = StandardNormal.sample(&mut rng);
                 let noisy = x + num_complex::Complex::new(re * sd, im * sd);
@@ -79,7 +96,7 @@ fn mixed_noise_run(file: &str, relative: f64, floor: f64, seed: u64) -> RunDir {
         }
     }
     let dir = write_run(&run, Some(7));
-    RunDir::read(dir.path()).expect("read back")
+    (RunDir::read(dir.path()).expect("read back"), sds)
 }
 
 /// (estimate − truth)/± of every parameter of every pedestal printed `ok`.
@@ -236,5 +253,54 @@ fn noise_columns_with_the_wrong_shape_are_rejected_and_the_pm_stay_honest() {
     }
     for (name, v, se, t) in printed_ok(&run, &id, false) {
         assert!(((v - t) / se).abs() < 3.0, "{name}: {v} ± {se}, truth {t}");
+    }
+}
+
+/// A seismic pick-up's velocity floor (1 µm/s, scripts/ross_unseen.py's
+/// unseen-flex pick-ups: sd 1 µm/s / Ω in displacement, largest at low
+/// speed) on the pedestal channels of the simulator's feng-hahn damped
+/// machine, on top of 1 % of |phasor| + 0.1 % of the channel's RMS, the
+/// noise columns written flat (each bearing-channel's RMS of the true sd).
+/// The columns' shape is rejected, the variance function the fit reports
+/// has the pick-ups' floor (RMS over the two pedestal channels within a
+/// factor 2 of 1 µm/s: the equation residuals tell the channels' shares
+/// apart less well than their sum, one channel's share can fall to 0; a
+/// fraction of |X| and a floor cannot take it; main reported no velocity
+/// floor), and no value printed `ok` is beyond 4 of its ±.
+#[test]
+fn flat_columns_over_a_pick_ups_velocity_floor_give_that_floor() {
+    const VELOCITY: f64 = 1e-6;
+    for seed in 1..=3 {
+        let (mut run, sds) = noise_run(
+            "examples/feng-hahn-1997-damped.toml",
+            0.01,
+            0.001,
+            VELOCITY,
+            seed,
+        );
+        for rows in bearing_rows(&run) {
+            let rms: [f64; 4] = std::array::from_fn(|ch| {
+                let sum: f64 = rows.iter().map(|&i| sds[i][ch].powi(2)).sum();
+                (sum / rows.len() as f64).sqrt()
+            });
+            for &i in &rows {
+                run.measurements[i].noise_sd = Some(rms);
+            }
+        }
+        let dir = write_run(&run, Some(7));
+        let run = RunDir::read(dir.path()).expect("read back");
+        let id = identify(&run);
+        for (b, n) in &id.noise {
+            let law = serde_json::to_value(&n.variance_function).expect("json");
+            assert!(!law.is_null(), "seed {seed} {b}: flat columns not rejected");
+            let floor = |ch: &str| law["velocity_floor_sd"][ch].as_f64().unwrap_or(0.0);
+            let (y, z) = (floor("ped_y"), floor("ped_z"));
+            let v = ((y * y + z * z) / 2.0).sqrt();
+            assert!(
+                (0.5 * VELOCITY..2.0 * VELOCITY).contains(&v),
+                "seed {seed} {b}: pick-ups' velocity floor {v:.3e} m/s (RMS of y {y:.3e}, z {z:.3e}), truth {VELOCITY:e}"
+            );
+        }
+        checked_z_scores(&run, &id, seed);
     }
 }

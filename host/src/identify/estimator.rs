@@ -100,25 +100,36 @@ pub struct VarianceLaw {
     pub fraction: BTreeMap<String, f64>,
     /// The floor per channel [m].
     pub floor_sd: BTreeMap<String, f64>,
+    /// A velocity pick-up's floor per channel, complex sd in velocity
+    /// [m/s] (sd floor/Ω in displacement): only where the fit freed it
+    /// (noise columns on trial, [`variance::Family::VelocityFloor`]).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub velocity_floor_sd: BTreeMap<String, f64>,
     /// p-value of the score test that rejected the scatter's law [-].
     pub p_value: f64,
 }
 
 impl VarianceLaw {
     /// The report of [`variance::COMPONENTS`] `p` (per real part α [-], β
-    /// [m²]) whose variances were scaled by `scale` [-] after the fit, chosen
+    /// [m²], γ [m²/s²]) whose variances were scaled by `scale` [-] after the fit, chosen
     /// at the score test's `p_value` [-].
     fn of(p: &[f64; variance::COMPONENTS], scale: f64, p_value: f64) -> Self {
         let per = |offset: usize| {
             CHANNELS
                 .iter()
                 .enumerate()
-                .map(|(ch, n)| (n.to_string(), (2.0 * scale * p[2 * ch + offset]).sqrt()))
-                .collect()
+                .map(|(ch, n)| (n.to_string(), (2.0 * scale * p[3 * ch + offset]).sqrt()))
+                .collect::<BTreeMap<String, f64>>()
         };
+        let velocity = per(2);
         Self {
             fraction: per(0),
             floor_sd: per(1),
+            velocity_floor_sd: if velocity.values().any(|v| *v > 0.0) {
+                velocity
+            } else {
+                BTreeMap::new()
+            },
             p_value,
         }
     }

@@ -14,7 +14,10 @@
 //!
 //! **Model.** Per complex channel ch (rel y, rel z, ped y, ped z) each real
 //! part has the variance v = α_ch·|X_ch|² + β_ch [m²] (α [-], β [m²], both ≥ 0),
-//! which contains both scatter laws. At a converged fit θ̂ the residual e_s
+//! which contains both scatter laws; the [`Family::VelocityFloor`] adds
+//! γ_ch/Ω² (γ [m²/s²], Ω [rad/s]): a velocity pick-up's floor integrated to
+//! displacement, largest at low speed, which neither α nor β can take
+//! (noise columns on trial, [`super::columns`]). At a converged fit θ̂ the residual e_s
 //! of a speed's four real equations has the covariance
 //! Σ_s = Σ_ch (α_ch·|X_ch,s|² + β_ch)·G_s,ch, where G_s,ch is the covariance
 //! the unit variance of channel ch's two real numbers gives the equations
@@ -36,12 +39,42 @@
 
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::Observation;
-use nalgebra::{Matrix4, SMatrix, SVector, Vector4};
+use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
-/// Parameters of the variance function: (α, β) of each of the four complex
-/// channels, in the order α_rel_y, β_rel_y, α_rel_z, …
-pub const COMPONENTS: usize = 8;
+/// Parameters of the variance function: (α, β, γ) of each of the four
+/// complex channels, in the order α_rel_y, β_rel_y, γ_rel_y, α_rel_z, …
+/// (a [`Family`] says which are free; the others stay 0).
+pub const COMPONENTS: usize = 12;
+
+/// Components per channel (α, β, γ) [-].
+const PER_CHANNEL: usize = 3;
+
+/// Which components of the variance function a test and a fit free.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    /// α|X|² + β per channel: a fraction of the amplitude plus a floor (the
+    /// scatter's two laws and their mix).
+    FractionFloor,
+    /// α|X|² + β + γ/Ω² per channel: also a velocity pick-up's floor in
+    /// displacement (1/Ω in sd).
+    VelocityFloor,
+}
+
+impl Family {
+    /// Whether component `k` ([`COMPONENTS`] order) is free.
+    fn free(self, k: usize) -> bool {
+        match self {
+            Family::FractionFloor => k % PER_CHANNEL != 2,
+            Family::VelocityFloor => true,
+        }
+    }
+
+    /// The free components, in [`COMPONENTS`] order.
+    fn components(self) -> Vec<usize> {
+        (0..COMPONENTS).filter(|&k| self.free(k)).collect()
+    }
+}
 
 /// p-value of the score test below which the fit's noise law is rejected
 /// for the variance function [-].
@@ -73,6 +106,8 @@ struct Speed {
     g: [Matrix4<f64>; 4],
     /// |X_ch|² [m²] of the four channels.
     magnitude_sq: [f64; 4],
+    /// 1/Ω² [s²] at the speed.
+    inv_omega_sq: f64,
     /// Σ under the observation's own variances [N²].
     own: Matrix4<f64>,
 }
@@ -81,17 +116,39 @@ impl Speed {
     /// Σ [N²] under the variance function `p` ([`COMPONENTS`]).
     fn sigma(&self, p: &[f64; COMPONENTS]) -> Matrix4<f64> {
         (0..4)
-            .map(|ch| self.g[ch] * (p[2 * ch] * self.magnitude_sq[ch] + p[2 * ch + 1]))
+            .map(|ch| {
+                let v: f64 = (0..PER_CHANNEL)
+                    .map(|j| p[PER_CHANNEL * ch + j] * self.factor(PER_CHANNEL * ch + j))
+                    .sum();
+                self.g[ch] * v
+            })
             .sum()
     }
 
-    /// Factor [m² or 1] component k's covariance is of its channel's G.
+    /// Factor [m², 1 or s²] component k's covariance is of its channel's G.
     fn factor(&self, k: usize) -> f64 {
-        if k.is_multiple_of(2) {
-            self.magnitude_sq[k / 2]
-        } else {
-            1.0
-        }
+        factor(k, &self.magnitude_sq, self.inv_omega_sq)
+    }
+}
+
+/// Factor of component `k` ([`COMPONENTS`] order) at a speed of squared
+/// magnitudes `magnitude_sq` [m²] and 1/Ω² `inv_omega_sq` [s²]: |X_ch|² for
+/// α, 1 for β, 1/Ω² for γ.
+fn factor(k: usize, magnitude_sq: &[f64; 4], inv_omega_sq: f64) -> f64 {
+    match k % PER_CHANNEL {
+        0 => magnitude_sq[k / PER_CHANNEL],
+        1 => 1.0,
+        _ => inv_omega_sq,
+    }
+}
+
+/// 1/Ω² [s²] of an observation (Ω = 2π·speed [rad/s]); 0 at no speed.
+fn inv_omega_sq(o: &Observation) -> f64 {
+    let omega = o.omega();
+    if omega > 0.0 {
+        1.0 / (omega * omega)
+    } else {
+        0.0
     }
 }
 
@@ -122,6 +179,7 @@ fn speeds<'a>(
             e: ml::equation_residual(o, theta),
             g,
             magnitude_sq: magnitude.map(|m| m * m),
+            inv_omega_sq: inv_omega_sq(o),
             own,
         };
         let finite = speed.e.iter().all(|v| v.is_finite())
@@ -153,18 +211,27 @@ pub fn magnitudes(o: &Observation) -> [f64; 4] {
 /// the mantissa at one |X|; the law's average fraction is up to 2.4× below
 /// it in sd where the leading digits are small (docs/trust.md "Session 27").
 pub fn variances(o: &Observation, p: &[f64; COMPONENTS], floor: &[f64; 8]) -> [f64; 8] {
-    let magnitude = magnitudes(o);
+    let magnitude_sq = magnitudes(o).map(|m| m * m);
+    let inv = inv_omega_sq(o);
     std::array::from_fn(|c| {
         let ch = c / 2;
-        (p[2 * ch] * magnitude[ch].powi(2) + p[2 * ch + 1]).max(floor[c])
+        let v: f64 = (0..PER_CHANNEL)
+            .map(|j| p[PER_CHANNEL * ch + j] * factor(PER_CHANNEL * ch + j, &magnitude_sq, inv))
+            .sum();
+        v.max(floor[c])
     })
 }
 
 /// p-value [-] of the score test that the residuals of the fit `theta` on
 /// `obs` have the covariance of the observations' own variances times one
-/// scale, against the variance function of the module docs; `None` when a
-/// speed's numbers are not finite or its covariance is singular.
-pub fn homoscedasticity_p(obs: &[Observation], theta: &[f64; PARAMETERS]) -> Option<f64> {
+/// scale, against the variance function of the module docs (its `family`'s
+/// components); `None` when a speed's numbers are not finite or its
+/// covariance is singular.
+pub fn homoscedasticity_p(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    family: Family,
+) -> Option<f64> {
     let stride = obs.len().div_ceil(MAX_TEST_SPEEDS).max(1);
     let speeds = speeds(obs.iter().step_by(stride), theta)?;
     if speeds.is_empty() {
@@ -182,15 +249,18 @@ pub fn homoscedasticity_p(obs: &[Observation], theta: &[f64; PARAMETERS]) -> Opt
     if !(scale > 0.0 && scale.is_finite()) {
         return None;
     }
-    // Score U and information I of the components and of the null's scale
-    // (index COMPONENTS, direction Σ_own), at Σ0 = scale·Σ_own. Component k
-    // adds f_k·G_ch (f_k = |X_ch|² for α, 1 for β): with B_ch = Σ0⁻¹G_ch,
+    // Score U and information I of the family's components and of the
+    // null's scale (last index, direction Σ_own), at Σ0 = scale·Σ_own.
+    // Component k adds f_k·G_ch (f_k = |X_ch|² for α, 1 for β, 1/Ω² for γ):
+    // with B_ch = Σ0⁻¹G_ch,
     // U_k = ½f_k(wᵀG_ch·w − tr B_ch), I_kl = ½f_k·f_l·tr(B_ch·B_ch'), and
     // the scale's direction gives Σ0⁻¹Σ_own = I/scale: one product per
     // channel and ten channel pairs per speed.
-    const N: usize = COMPONENTS + 1;
-    let mut u = SVector::<f64, N>::zeros();
-    let mut info = SMatrix::<f64, N, N>::zeros();
+    let free = family.components();
+    let m = free.len();
+    let n = m + 1;
+    let mut u = DVector::<f64>::zeros(n);
+    let mut info = DMatrix::<f64>::zeros(n, n);
     for (s, a) in speeds.iter().zip(&inverses) {
         let a0 = a / scale;
         let w = a0 * s.e;
@@ -207,24 +277,24 @@ pub fn homoscedasticity_p(obs: &[Observation], theta: &[f64; PARAMETERS]) -> Opt
                 pair[other][ch] = pair[ch][other];
             }
         }
-        for k in 0..COMPONENTS {
-            let (ch, fk) = (k / 2, s.factor(k));
-            u[k] += 0.5 * fk * excess[ch];
-            for l in k..COMPONENTS {
-                info[(k, l)] += 0.5 * fk * s.factor(l) * pair[ch][l / 2];
+        for (i, &k) in free.iter().enumerate() {
+            let (ch, fk) = (k / PER_CHANNEL, s.factor(k));
+            u[i] += 0.5 * fk * excess[ch];
+            for (j, &l) in free.iter().enumerate().skip(i) {
+                info[(i, j)] += 0.5 * fk * s.factor(l) * pair[ch][l / PER_CHANNEL];
             }
-            info[(k, COMPONENTS)] += 0.5 * fk * trace[ch] / scale;
+            info[(i, m)] += 0.5 * fk * trace[ch] / scale;
         }
-        u[COMPONENTS] += 0.5 * ((w.transpose() * s.own * w)[0] - 4.0 / scale);
-        info[(COMPONENTS, COMPONENTS)] += 2.0 / (scale * scale);
+        u[m] += 0.5 * ((w.transpose() * s.own * w)[0] - 4.0 / scale);
+        info[(m, m)] += 2.0 / (scale * scale);
     }
-    for k in 0..N {
+    for k in 0..n {
         for l in 0..k {
             info[(k, l)] = info[(l, k)];
         }
     }
     // Jacobi scaling: the components' units differ by many decades.
-    let d = SVector::<f64, N>::from_fn(|k, _| {
+    let d = DVector::<f64>::from_fn(n, |k, _| {
         let x = info[(k, k)];
         if x > 0.0 {
             1.0 / x.sqrt()
@@ -232,19 +302,17 @@ pub fn homoscedasticity_p(obs: &[Observation], theta: &[f64; PARAMETERS]) -> Opt
             0.0
         }
     });
-    let info = SMatrix::<f64, N, N>::from_fn(|k, l| d[k] * info[(k, l)] * d[l]);
+    let info = DMatrix::<f64>::from_fn(n, n, |k, l| d[k] * info[(k, l)] * d[l]);
     let u = u.component_mul(&d);
     // The efficient information of the components, the scale profiled out.
-    let phi = info[(COMPONENTS, COMPONENTS)];
+    let phi = info[(m, m)];
     if phi.is_nan() || phi <= 0.0 {
         return None;
     }
-    let eff = SMatrix::<f64, COMPONENTS, COMPONENTS>::from_fn(|k, l| {
-        info[(k, l)] - info[(k, COMPONENTS)] * info[(COMPONENTS, l)] / phi
+    let eff = DMatrix::<f64>::from_fn(m, m, |k, l| {
+        info[(k, l)] - info[(k, m)] * info[(m, l)] / phi
     });
-    let ue = SVector::<f64, COMPONENTS>::from_fn(|k, _| {
-        u[k] - info[(k, COMPONENTS)] * u[COMPONENTS] / phi
-    });
+    let ue = DVector::<f64>::from_fn(m, |k, _| u[k] - info[(k, m)] * u[m] / phi);
     let eig = eff.symmetric_eigen();
     let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
     if !(top > 0.0 && top.is_finite()) {
@@ -267,19 +335,23 @@ pub fn homoscedasticity_p(obs: &[Observation], theta: &[f64; PARAMETERS]) -> Opt
 }
 
 /// The variance function (α, β per channel, module docs) maximising the
-/// Gaussian pseudo-likelihood of the residuals of the fit `theta` on `obs`,
-/// started from the observations' own noise; `None` when a speed's numbers
-/// are not finite or the iteration leaves the finite numbers.
+/// Gaussian pseudo-likelihood of the residuals of the fit `theta` on `obs`
+/// over the `family`'s components (the others 0), started from the
+/// observations' own noise; `None` when a speed's numbers are not finite or
+/// the iteration leaves the finite numbers.
 pub fn fit_variance_function(
     obs: &[Observation],
     theta: &[f64; PARAMETERS],
+    family: Family,
 ) -> Option<[f64; COMPONENTS]> {
     let speeds = speeds(obs.iter(), theta)?;
     if speeds.is_empty() {
         return None;
     }
-    // Start: each channel's mean variance, half from each term.
+    // Start: each channel's mean variance, an equal share from each free
+    // term (the mean of its factor over the speeds given that share).
     let n = obs.len() as f64;
+    let share = 1.0 / (0..PER_CHANNEL).filter(|&j| family.free(j)).count() as f64;
     let mut p = [0.0; COMPONENTS];
     for ch in 0..4 {
         let mean_var = obs
@@ -287,13 +359,15 @@ pub fn fit_variance_function(
             .map(|o| 0.5 * (o.var[2 * ch] + o.var[2 * ch + 1]))
             .sum::<f64>()
             / n;
-        let mean_sq = obs.iter().map(|o| magnitudes(o)[ch].powi(2)).sum::<f64>() / n;
-        p[2 * ch] = if mean_sq > 0.0 {
-            0.5 * mean_var / mean_sq
-        } else {
-            0.0
-        };
-        p[2 * ch + 1] = 0.5 * mean_var;
+        for j in (0..PER_CHANNEL).filter(|&j| family.free(j)) {
+            let k = PER_CHANNEL * ch + j;
+            let mean_factor = speeds.iter().map(|s| s.factor(k)).sum::<f64>() / n;
+            p[k] = if mean_factor > 0.0 {
+                share * mean_var / mean_factor
+            } else {
+                0.0
+            };
+        }
     }
     for _ in 0..MAX_ITERATIONS {
         let mut num = [0.0; COMPONENTS];
@@ -304,7 +378,7 @@ pub fn fit_variance_function(
             for ch in 0..4 {
                 let quadratic = (w.transpose() * s.g[ch] * w)[0];
                 let trace = (a * s.g[ch]).trace();
-                for k in [2 * ch, 2 * ch + 1] {
+                for k in PER_CHANNEL * ch..PER_CHANNEL * (ch + 1) {
                     num[k] += s.factor(k) * quadratic;
                     den[k] += s.factor(k) * trace;
                 }
@@ -329,28 +403,43 @@ pub fn fit_variance_function(
 }
 
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
-/// function of its residuals when the score test ([`homoscedasticity_p`])
-/// rejects the observations' own noise law: [`ROUNDS`] rounds of
-/// ([`fit_variance_function`], ML refit from the last estimate). Returns the
-/// last refit, its variance function, the score test's p-value [-] and the
-/// observations with its variances (each never below `floor` of the
-/// observation: its digits' variances [m²], [`variances`]); `None` when the
-/// test does not reject or a step fails.
+/// function ([`Family::FractionFloor`]) of its residuals when the score test
+/// ([`homoscedasticity_p`]) rejects the observations' own noise law at
+/// [`HETEROSCEDASTIC_P`] ([`refit_under`]); `None` when the test does not
+/// reject or a step fails.
 pub fn refit(
     obs: &[Observation],
     floor: impl Fn(&Observation) -> [f64; 8],
     columns: &[Parameter],
     fit: &MlFit,
 ) -> Option<Refit> {
-    let p_value = homoscedasticity_p(obs, &fit.theta)?;
+    let p_value = homoscedasticity_p(obs, &fit.theta, Family::FractionFloor)?;
     if p_value >= HETEROSCEDASTIC_P {
         return None;
     }
+    refit_under(obs, floor, columns, fit, Family::FractionFloor, p_value)
+}
+
+/// The fit `fit` of `obs` (parameters `columns`) redone under the variance
+/// function (`family`) of its residuals, after a score test rejected the
+/// observations' own law at `p_value` [-]: [`ROUNDS`] rounds of
+/// ([`fit_variance_function`], ML refit from the last estimate). Returns the
+/// last refit, its variance function, `p_value` and the observations with
+/// its variances (each never below `floor` of the observation: its digits'
+/// variances [m²], [`variances`]); `None` when a step fails.
+pub fn refit_under(
+    obs: &[Observation],
+    floor: impl Fn(&Observation) -> [f64; 8],
+    columns: &[Parameter],
+    fit: &MlFit,
+    family: Family,
+    p_value: f64,
+) -> Option<Refit> {
     let mut obs = obs.to_vec();
     let mut current: Option<(MlFit, [f64; COMPONENTS])> = None;
     for _ in 0..ROUNDS {
         let theta = current.as_ref().map_or(fit.theta, |c| c.0.theta);
-        let p = fit_variance_function(&obs, &theta)?;
+        let p = fit_variance_function(&obs, &theta, family)?;
         for o in obs.iter_mut() {
             o.var = variances(o, &p, &floor(o));
         }
@@ -380,10 +469,14 @@ pub fn refit(
 pub struct Refit {
     /// The ML fit under the variance function.
     pub fit: MlFit,
-    /// The variance function (α [-], β [m²] per channel, module docs).
+    /// The variance function (α [-], β [m²], γ [m²/s²] per channel, module
+    /// docs).
     pub law: [f64; COMPONENTS],
     /// p-value of the score test that rejected the observations' own law [-].
     pub p_value: f64,
     /// The observations with the variance function's variances.
     pub obs: Vec<Observation>,
 }
+
+#[cfg(test)]
+mod tests;
