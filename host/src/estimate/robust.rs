@@ -54,7 +54,7 @@ mod jumps;
 mod rational;
 mod scales;
 
-pub use confirm::confirmed_across;
+pub use confirm::{confirmed_across, followed_flips};
 pub use cross::{cross_bearing_flips, CROSS_MIN_BEARINGS, CROSS_SIDE};
 pub use flips::{
     flip_search, keyphasor_flips, FlipSearch, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_RATIO,

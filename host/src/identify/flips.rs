@@ -42,6 +42,8 @@ pub fn flipped_speeds(bearings: &[&[Observation]]) -> Vec<Vec<f64>> {
     merge(&mut found, across);
     let confirmed = confirmed(bearings, &searches, &none, &found);
     merge(&mut found, confirmed);
+    let followed = followed(bearings, &searches, &none, &found);
+    merge(&mut found, followed);
     found
 }
 
@@ -80,6 +82,22 @@ fn confirmed(
     let unconfirmed_refs: Vec<&[Vec<f64>]> = unconfirmed.iter().map(Vec::as_slice).collect();
     let flipped_refs: Vec<&[f64]> = flipped.iter().map(Vec::as_slice).collect();
     robust::confirmed_across(bearings, outliers, &flipped_refs, &unconfirmed_refs)
+}
+
+/// Per bearing, the speeds [Hz] another bearing's test in speed named
+/// flipped (`searches`, per bearing) at which the other bearings confirm
+/// this bearing flipped with it ([`robust::followed_flips`]): `outliers`
+/// (per bearing [Hz]) left out, the flips named so far (`flipped`, per
+/// bearing [Hz]) negated back.
+fn followed(
+    bearings: &[&[Observation]],
+    searches: &[robust::FlipSearch],
+    outliers: &[&[f64]],
+    flipped: &[Vec<f64>],
+) -> Vec<Vec<f64>> {
+    let named: Vec<&[f64]> = searches.iter().map(|s| s.flipped_hz.as_slice()).collect();
+    let flipped: Vec<&[f64]> = flipped.iter().map(Vec::as_slice).collect();
+    robust::followed_flips(bearings, outliers, &flipped, &named)
 }
 
 /// The speeds [Hz] every one of `listed` (per bearing, two bearings or
@@ -178,6 +196,12 @@ pub fn mark_cross_bearing_flips(
     } else {
         vec![Vec::new(); usable.len()]
     };
+    let followed = if complete {
+        merge(&mut flipped, confirmed.clone());
+        followed(&observations, &searches, &outlier_refs, &flipped)
+    } else {
+        vec![Vec::new(); usable.len()]
+    };
     for ((name, _), speeds) in usable.iter().zip(found) {
         add_flips(
             identification,
@@ -194,6 +218,15 @@ pub fn mark_cross_bearing_flips(
             &speeds,
             "at a resonance's peak or flank",
             "negated, they fit the neighbouring speeds far better, though the local model in speed misses there by more than the noise; and against the other bearings at the same speed they agree only negated: the machine's modes move every bearing together, a flip moves one bearing alone",
+        );
+    }
+    for ((name, _), speeds) in usable.iter().zip(followed) {
+        add_flips(
+            identification,
+            name,
+            &speeds,
+            "where another bearing's channels are flipped (found in speed)",
+            "with that bearing's flip negated back, this bearing's readings agree with the machine's modes only negated: both flipped together, as when the machine's keyphasor triggers half a revolution off",
         );
     }
     // Speeds every bearing lists.

@@ -109,6 +109,45 @@ pub fn confirmed_across(
     found
 }
 
+/// Per bearing (in the order of `bearings`, phasors [m]), the speeds [Hz]
+/// another bearing names flipped in speed (`named`, per bearing [Hz]) at
+/// which the other bearings confirm that this bearing flipped with it: the
+/// machine's keyphasor negating every bearing at once, ascending.
+///
+/// The test across bearings sees only relative signs: a common sign is
+/// invisible to it, and at a resonance's peak or flank the test in speed of
+/// some bearings cannot confirm the flip their readings carry (nor hold it
+/// as an unconfirmed block). A flip one bearing names in speed fixes the
+/// keyphasor's phase at that speed: with it negated back (it is in
+/// `flipped`, per bearing [Hz], the flips named so far), a bearing that
+/// flipped with it is negated against it and its modes. Each named speed
+/// is offered alone, as a block held by every bearing that does not name
+/// it, to [`confirmed_across`] (its three conditions, no other threshold);
+/// `listed` (per bearing [Hz], outliers) left out.
+pub fn followed_flips(
+    bearings: &[&[Observation]],
+    listed: &[&[f64]],
+    flipped: &[&[f64]],
+    named: &[&[f64]],
+) -> Vec<Vec<f64>> {
+    let mut offered: Vec<Vec<Vec<f64>>> = vec![Vec::new(); bearings.len()];
+    for (b, speeds) in named.iter().enumerate() {
+        for &f in speeds.iter() {
+            for (other, blocks) in offered.iter_mut().enumerate() {
+                let block = vec![f];
+                if other != b
+                    && !flipped.get(other).is_some_and(|n| n.contains(&f))
+                    && !blocks.contains(&block)
+                {
+                    blocks.push(block);
+                }
+            }
+        }
+    }
+    let offered: Vec<&[Vec<f64>]> = offered.iter().map(Vec::as_slice).collect();
+    confirmed_across(bearings, listed, flipped, &offered)
+}
+
 /// The consecutive indices of `speeds` (ascending) that hold exactly the
 /// speeds `block` [Hz] (ascending); `None` when one is missing or they are
 /// not consecutive.
@@ -164,6 +203,38 @@ mod tests {
             );
             let both = vec![vec![vec![42.5]], vec![vec![42.5]]];
             assert!(run(&flipped, &both).iter().all(Vec::is_empty), "{seed}");
+        }
+    }
+
+    #[test]
+    fn a_flip_named_at_one_bearing_is_followed_where_every_bearing_flipped() {
+        // 42.5 Hz just past the 41.1 Hz mode. Every bearing flipped there,
+        // bearing 0 naming it in speed: bearing 1 is named with it. Bearing
+        // 0 flipped alone and naming it: bearing 1 is not. A speed named
+        // at no bearing offers nothing.
+        let none: [&[f64]; 2] = [&[], &[]];
+        let run = |obs: &[Vec<Observation>], flipped: [&[f64]; 2], named: [&[f64]; 2]| {
+            let refs: Vec<&[Observation]> = obs.iter().map(Vec::as_slice).collect();
+            followed_flips(&refs, &none, &flipped, &named)
+        };
+        for seed in 0..10 {
+            let mut every = machine((1, &[15]), seed);
+            for o in every[0].iter_mut().filter(|o| o.speed_hz == 42.5) {
+                o.rel = o.rel.map(|z| -z);
+                o.ped = o.ped.map(|z| -z);
+            }
+            let named: [&[f64]; 2] = [&[42.5], &[]];
+            assert_eq!(
+                run(&every, named, named),
+                vec![vec![], vec![42.5]],
+                "{seed}"
+            );
+            assert!(run(&every, none, none).iter().all(Vec::is_empty), "{seed}");
+            let alone = machine((0, &[15]), seed);
+            assert!(
+                run(&alone, named, named).iter().all(Vec::is_empty),
+                "{seed}"
+            );
         }
     }
 
