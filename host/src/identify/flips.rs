@@ -277,7 +277,7 @@ fn add_flips(
         p.warnings.push(Warning {
             kind: WarningKind::KeyphasorFlip,
             message: format!(
-                "every channel (rel and ped, y and z) is flipped by 180° {place} at {} Hz ({why}): a likely keyphasor fault of this bearing's channels; the pedestal equation is blind to it (rel and ped flip together), but check those speeds",
+                "every channel (rel and ped, y and z) is flipped by 180° {place} at {} Hz ({why}): a likely keyphasor fault (of this bearing's channels, or of the machine's keyphasor where other bearings list the same speeds); the pedestal equation is blind to it (rel and ped flip together), but check those speeds",
                 list.join(", ")
             ),
         });
