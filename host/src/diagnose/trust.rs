@@ -25,7 +25,6 @@ use super::data::Prepared;
 use super::gap::Agreement;
 use super::locate::Location;
 use super::report::{Pedestal, Step};
-use crate::estimate::lack_of_fit::{SupportNull, BLOCK};
 use crate::identify::{physical, PedestalFit};
 use plinth_shared::regression::Parameter;
 
@@ -425,12 +424,8 @@ pub fn support_reasons(prep: &Prepared) -> Vec<(String, String)> {
         .zip(&prep.support_modes)
         .filter_map(|(name, t)| {
             let t = t.filter(|t| t.p_value < alpha)?;
-            let against = match t.null {
-                SupportNull::Columns => "in units of its noise columns, one-sided Ω⁴Q ≥ 0".to_string(),
-                SupportNull::NegatedBlocks => format!("in units of their local level, one-sided Ω⁴Q ≥ 0, against the same score with blocks of {BLOCK} speeds negated at random"),
-            };
             Some((name.clone(), format!(
-                "bearing {name}: its dynamic stiffness falls with speed faster than one mass on one spring allows (an Ω⁴ term explains {:.1} of the base model's whitened residuals {against} p = {:.1e}, limit {alpha:.1e}; Ω⁴Q at the top speed {:+.1} % (y), {:+.1} % (z) of the stiffness), as a support with a second mode above the speed range makes it (a sub-base, a frame: K − Ω²M − Ω⁴Q per direction below that mode); over this range only those three numbers per direction are seen, not the four of a pedestal on its sub-base, so `pedestal_sub_base` cannot be separated from the pedestal here and its k and m are the support's apparent values",
+                "bearing {name}: its dynamic stiffness falls with speed faster than one mass on one spring allows (an Ω⁴ term explains {:.1} of the base model's whitened residuals in units of its noise columns, one-sided Ω⁴Q ≥ 0 p = {:.1e}, limit {alpha:.1e}; Ω⁴Q at the top speed {:+.1} % (y), {:+.1} % (z) of the stiffness), as a support with a second mode above the speed range makes it (a sub-base, a frame: K − Ω²M − Ω⁴Q per direction below that mode); over this range only those three numbers per direction are seen, not the four of a pedestal on its sub-base, so `pedestal_sub_base` cannot be separated from the pedestal here and its k and m are the support's apparent values",
                 t.statistic,
                 t.p_value,
                 100.0 * t.drop_at_top[0],

@@ -49,7 +49,7 @@ mod window;
 pub use structure::{
     structure, Structure, BLOCK, LEVEL_WINDOW, PERMUTATIONS, STOP_AFTER_EXCEEDANCES,
 };
-pub use support::{support_mode, SupportMode, SupportNull};
+pub use support::{support_mode, SupportMode};
 pub use window::{LOCAL_DEGREE, MAX_DEGREE, MIN_WINDOW, SCALES};
 
 use super::gauss_helmert as gh;
@@ -92,9 +92,7 @@ pub struct LackOfFit {
     pub damping_std_err_from_residuals: Option<[f64; 2]>,
     /// The support-mode test ([`support_mode`]: an Ω⁴ fall of the
     /// stiffness, a second support mode above the range), made when the
-    /// noise is known from noise columns (against them) or when the fit
-    /// leaves more than its scatter or digits level (against blocks of
-    /// speeds negated at random); `None` otherwise.
+    /// noise is known from noise columns (`None` otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support_mode: Option<SupportMode>,
 }
@@ -127,20 +125,16 @@ pub fn assess(
     let eq = Rigid::new(obs, &Weighting::default());
     let speeds: Vec<f64> = obs.iter().map(|o| o.speed_hz).collect();
     let scanned = source.scale_estimated() || level_p < p_limit;
-    // With noise columns, against them (chi-bar-squared). Without them,
-    // only where the fit leaves more than its measured level (the structure
-    // rule's filter, [`EXCESS_LEVEL`]: the score's null is a function of the
-    // residuals' direction alone, so the filter keeps its rate) and against
-    // blocks of speeds negated at random: neighbouring speeds' rounding
-    // errors are alike and a smooth Ω⁴ column collects them, which a residual
-    // variance does not see (session 29's F form flagged the fourth
-    // machine's clean field table at p = 7e-5; docs/trust.md).
-    let null = match source {
-        NoiseSource::Columns => Some(SupportNull::Columns),
-        _ if chi2 / dof as f64 > EXCESS_LEVEL => Some(SupportNull::NegatedBlocks),
-        _ => None,
-    };
-    let support_mode = null.and_then(|null| support_mode(&eq, theta, &speeds, null));
+    // With noise columns only. A form without them (the score over the
+    // extended fit's residual variance) was measured and is not made: on
+    // the fourth machine's clean field table (3 digits, 0.1°, through
+    // `plinth import`) it flagged B1 at p = 7e-5 (docs/trust.md, session
+    // 29): neighbouring speeds' rounding errors are alike, a smooth Ω⁴
+    // column collects them, and a residual variance does not see that
+    // correlation (the structure scan's block shuffles do).
+    let support_mode = (source == NoiseSource::Columns)
+        .then(|| support_mode(&eq, theta, &speeds))
+        .flatten();
     if !scanned && support_mode.is_none() {
         return None;
     }

@@ -32,18 +32,16 @@
 //! - **support mode**: the one-sided score test of an Ω⁴ fall of each
 //!   direction's stiffness ([`crate::estimate::lack_of_fit::
 //!   support_mode`]: a support with a second mode above the speed range,
-//!   whose χ² excess the level test cannot see; q ≥ 0), against the noise
-//!   columns (chi-bar-squared) or, without them and where the fit leaves
-//!   more than its scatter or digits level, against blocks of speeds
-//!   negated at random; p below [`SUPPORT_FALSE_ALARM`]/U, U the bearings
-//!   tested (docs/trust.md, sessions 29 and 30, for its measured rates).
+//!   whose χ² excess the level test cannot see; q ≥ 0, chi-bar-squared),
+//!   against the noise columns (made only with them), p below
+//!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (docs/trust.md,
+//!   session 29, for its measured rates).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
 //! machines, detections on a pedestal with its own sub-base): docs/trust.md.
 
 use super::estimator::SCATTER_LEVEL_TOLERANCE;
 use super::{Identification, Warning, WarningKind};
-use crate::estimate::lack_of_fit::{SupportNull, BLOCK};
 use crate::estimate::noise::NoiseSource;
 use crate::estimate::pedestal::CHI2_P_THRESHOLD;
 use crate::estimate::robust;
@@ -161,16 +159,8 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
         }
         if let Some(t) = l.support_mode {
             if t.p_value < alpha_support {
-                let against = match t.null {
-                    SupportNull::Columns => "in units of its noise columns; one-sided, Ω⁴Q ≥ 0".to_string(),
-                    SupportNull::NegatedBlocks => format!(
-                        "in units of the residuals' local level, its fit leaving {:.3} times its {} level; one-sided, Ω⁴Q ≥ 0, against the same score with blocks of {BLOCK} speeds negated at random",
-                        l.level_ratio,
-                        l.level_from.name()
-                    ),
-                };
                 reasons.push(format!(
-                    "its dynamic stiffness does not follow one mass on one spring over speed: an Ω⁴ term, what a support with a second mode above the speed range adds (a sub-base, a frame: per direction K − Ω²M − Ω⁴Q below that mode, Q > 0), explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model ({against}: p = {:.1e}, limit {alpha_support:.1e}: {SUPPORT_FALSE_ALARM} over the {support_tested} bearing(s) tested); Ω⁴Q at the top speed is {:+.1} % (y) and {:+.1} % (z) of the stiffness (positive: it falls faster than one mass allows); the k and m printed are then the support's apparent values, not the pedestal's",
+                    "its dynamic stiffness does not follow one mass on one spring over speed: an Ω⁴ term, what a support with a second mode above the speed range adds (a sub-base, a frame: per direction K − Ω²M − Ω⁴Q below that mode, Q > 0), explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model (in units of its noise columns; one-sided, Ω⁴Q ≥ 0: p = {:.1e}, limit {alpha_support:.1e}: {SUPPORT_FALSE_ALARM} over the {support_tested} bearing(s) tested); Ω⁴Q at the top speed is {:+.1} % (y) and {:+.1} % (z) of the stiffness (positive: it falls faster than one mass allows); the k and m printed are then the support's apparent values, not the pedestal's",
                     t.statistic,
                     t.p_value,
                     100.0 * t.drop_at_top[0],

@@ -67,64 +67,25 @@ pub(super) fn mean_test(w: &[[f64; 4]]) -> Option<MeanTest> {
     let own: f64 = sums.iter().map(square).sum();
     let level = total / (4 * n) as f64;
     let unit = n as f64 * level * 8f64.sqrt();
-    // Σ_b |B_b|² is the same under every negation, so |S|² alone orders them.
-    let mut negated = negations(&sums, square, 0x3ea7_51a9);
-    let (observed, p_value, done) = (negated.observed, negated.p_value, negated.null.len());
-    let null = &mut negated.null;
-    null.sort_by(f64::total_cmp);
-    Some(MeanTest {
-        statistic: (observed - own) / unit,
-        null_median: (null[done / 2] - own) / unit,
-        explained: observed / n as f64 / total,
-        p_value,
-    })
-}
-
-/// What [`negations`] gives: the score of the block sums as they are, the
-/// scores of the negations made, and the share scoring at least as high.
-#[derive(Clone, Debug, PartialEq)]
-pub(super) struct Negated {
-    /// The score of Σ_b B_b (no block negated) [the score's units].
-    pub observed: f64,
-    /// The scores of the negations made, in the order drawn [the score's units].
-    pub null: Vec<f64>,
-    /// Share of negations scoring at least as high as `observed` (Besag &
-    /// Clifford, as the scan: [`super::STOP_AFTER_EXCEEDANCES`] of at most
-    /// [`NEGATIONS`]) [-].
-    pub p_value: f64,
-}
-
-/// The block negation null shared by the mean test and the support-mode
-/// test without noise columns ([`super::support`]): `score` of Σ_b s_b·B_b
-/// over the per-block sums `sums` (one D-vector per block of consecutive
-/// speeds) with signs s_b = ±1 drawn at random ([`NEGATIONS`] times, the
-/// generator seeded by `seed`), against the same with every s_b = 1.
-/// Noise symmetric about zero and independent between blocks gives every
-/// sign pattern the same law, whatever its level at each speed and its
-/// correlation inside a block.
-pub(super) fn negations<const D: usize>(
-    sums: &[[f64; D]],
-    score: impl Fn(&[f64; D]) -> f64,
-    seed: u64,
-) -> Negated {
-    // Σ s_b B_b over signs s_b = ±1 (bit b of `bits`).
+    // |Σ s_b B_b|² over signs s_b = ±1 (bit b of `bits`); Σ_b |B_b|² is the
+    // same under every negation, so |S|² alone orders them.
     let signed = |bits: &[u64]| -> f64 {
-        let mut s = [0.0; D];
+        let mut s = [0.0; 4];
         for (b, v) in sums.iter().enumerate() {
             let k = if bits[b / 64] >> (b % 64) & 1 == 1 {
                 -1.0
             } else {
                 1.0
             };
-            for c in 0..D {
+            for c in 0..4 {
                 s[c] += k * v[c];
             }
         }
-        score(&s)
+        square(&s)
     };
     let mut bits = vec![0u64; sums.len().div_ceil(64)];
     let observed = signed(&bits);
-    let mut rng = StdRng::seed_from_u64(seed);
+    let mut rng = StdRng::seed_from_u64(0x3ea7_51a9);
     let mut null = Vec::with_capacity(NEGATIONS);
     let mut above = 0;
     for _ in 0..NEGATIONS {
@@ -140,16 +101,19 @@ pub(super) fn negations<const D: usize>(
             }
         }
     }
+    let done = null.len();
     let p_value = if above == super::STOP_AFTER_EXCEEDANCES {
-        above as f64 / null.len() as f64
+        above as f64 / done as f64
     } else {
         (1 + above) as f64 / (1 + NEGATIONS) as f64
     };
-    Negated {
-        observed,
-        null,
+    null.sort_by(f64::total_cmp);
+    Some(MeanTest {
+        statistic: (observed - own) / unit,
+        null_median: (null[done / 2] - own) / unit,
+        explained: observed / n as f64 / total,
         p_value,
-    }
+    })
 }
 
 #[cfg(test)]

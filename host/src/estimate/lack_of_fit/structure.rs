@@ -228,27 +228,13 @@ pub const LEVEL_WINDOW: usize = 2 * BLOCK;
 /// run, say) cannot pass for a trend. A smooth model error keeps its sign
 /// pattern, which is what the test sees.
 fn locally_standardised(w: &[[f64; 4]]) -> Vec<[f64; 4]> {
-    w.iter()
-        .zip(local_scales(w))
-        .map(|(r, k)| r.map(|v| v * k))
-        .collect()
-}
-
-/// The factor [`locally_standardised`] multiplies each row of `w` (in speed
-/// order) by: one over the RMS of the rows within [`LEVEL_WINDOW`] speeds
-/// of it (0 where they are all zero) [1/the rows' units]. A function of the
-/// rows' squares only: negating rows leaves it unchanged.
-pub(super) fn local_scales(w: &[[f64; 4]]) -> Vec<f64> {
     let n = w.len();
     (0..n)
         .map(|i| {
             let near = &w[i.saturating_sub(LEVEL_WINDOW)..(i + LEVEL_WINDOW + 1).min(n)];
             let ms = near.iter().flatten().map(|v| v * v).sum::<f64>() / (4 * near.len()) as f64;
-            if ms > 0.0 {
-                1.0 / ms.sqrt()
-            } else {
-                0.0
-            }
+            let k = if ms > 0.0 { 1.0 / ms.sqrt() } else { 0.0 };
+            w[i].map(|v| v * k)
         })
         .collect()
 }

@@ -44,22 +44,12 @@
 //! machine.
 
 use super::super::gauss_helmert::{self as gh, Equations};
-use super::mean::negations;
-use super::structure::{local_scales, BLOCK};
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Degrees of freedom of the extension (one Ω⁴ term per direction) [-].
 pub const EXTRA: usize = 2;
-
-/// Fewest blocks of [`BLOCK`] speeds the test without noise columns is
-/// made on (as the structure scan's) [-].
-pub const MIN_BLOCKS: usize = 4;
-
-/// Seed of the block negations of the test without noise columns (fixed:
-/// identify gives the same answer on the same data).
-const NEGATION_SEED: u64 = 0x5afe_0d4e;
 
 /// The support-mode test's figures ([`support_mode`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -73,25 +63,6 @@ pub struct SupportMode {
     /// fraction of the fitted stiffness at the top speed: Ω_max⁴q/k [-]
     /// (positive: the stiffness falls faster than one mass allows).
     pub drop_at_top: [f64; 2],
-    /// What `p_value` is judged against ([`SupportNull`]); absent in
-    /// output written before session 30: the noise columns.
-    #[serde(default)]
-    pub null: SupportNull,
-}
-
-/// The null the support-mode score is judged against.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SupportNull {
-    /// The noise columns: the whitened residuals are in their units and T̄
-    /// is chi-bar-squared.
-    #[default]
-    Columns,
-    /// No known level (scatter, digits): T̄ against the same score with
-    /// blocks of [`BLOCK`] consecutive speeds negated at random
-    /// ([`super::mean::negations`]), which keeps any level of the noise
-    /// over speed and the correlation of rounding errors inside a block.
-    NegatedBlocks,
 }
 
 /// The test on the equations `eq` at the fitted parameters `theta` (model
@@ -103,7 +74,6 @@ pub fn support_mode<E: Equations + ?Sized>(
     eq: &E,
     theta: &[f64],
     speeds_hz: &[f64],
-    null: SupportNull,
 ) -> Option<SupportMode> {
     let n = eq.speeds();
     let np = theta.len();
@@ -136,24 +106,6 @@ pub fn support_mode<E: Equations + ?Sized>(
             }
         }
     }
-    if null == SupportNull::NegatedBlocks {
-        // Without a known level: every speed's rows weighted by one over
-        // the local RMS of the whitened residuals (the structure scan's
-        // standardisation), so that a level the noise model's pattern
-        // misses does not weight a few speeds' residuals into the score.
-        // The factors are functions of the residuals' squares: the block
-        // negations leave them unchanged.
-        let rows: Vec<[f64; 4]> = (0..n)
-            .map(|s| std::array::from_fn(|c| w[4 * s + c]))
-            .collect();
-        for (s, k) in local_scales(&rows).into_iter().enumerate() {
-            for r in 4 * s..4 * s + 4 {
-                w[r] *= k;
-                x.row_mut(r).scale_mut(k);
-                x2.row_mut(r).scale_mut(k);
-            }
-        }
-    }
     // The one-mass columns' span (orthonormal, columns scaled first: their
     // units differ by many orders), and what lies outside it.
     let norms: Vec<f64> = x.column_iter().map(|c| c.norm()).collect();
@@ -174,40 +126,29 @@ pub fn support_mode<E: Equations + ?Sized>(
     let x2_out = &x2 - &u * (u.transpose() * &x2);
     let g: Matrix2<f64> = Matrix2::from_fn(|i, j| x2_out.column(i).dot(&x2_out.column(j)));
     let b = Vector2::from_fn(|i, _| x2_out.column(i).dot(&w_out));
-    let g_inv = g.try_inverse()?;
-    let gamma = g_inv * b;
-    let statistic = one_sided(&b, &g, &g_inv);
-    let p_value = match null {
-        SupportNull::Columns => {
-            let rho = (-g[(0, 1)] / (g[(0, 0)] * g[(1, 1)]).sqrt()).clamp(-1.0, 1.0);
-            let w2 = 0.25 + rho.asin() / std::f64::consts::TAU;
-            let c1 = ChiSquared::new(1.0).ok()?;
-            let c2 = ChiSquared::new(2.0).ok()?;
-            let tails = (1.0 - c1.cdf(statistic), 1.0 - c2.cdf(statistic));
-            if statistic > 0.0 {
-                (0.5 * tails.0 + w2 * tails.1).min(1.0)
-            } else {
-                1.0
-            }
-        }
-        SupportNull::NegatedBlocks => {
-            // b = Σ_s X₂⊥ₛᵀw⊥ₛ, summed per block of speeds: each block's
-            // share of the score, negated at random in the null.
-            if n < MIN_BLOCKS * BLOCK {
-                return None;
-            }
-            let sums: Vec<[f64; EXTRA]> = (0..n)
-                .step_by(BLOCK)
-                .map(|a| {
-                    let rows = 4 * a..4 * (a + BLOCK).min(n);
-                    std::array::from_fn(|d| {
-                        rows.clone().map(|r| x2_out[(r, d)] * w_out[r]).sum::<f64>()
-                    })
-                })
-                .collect();
-            let score = |v: &[f64; EXTRA]| one_sided(&Vector2::new(v[0], v[1]), &g, &g_inv);
-            negations(&sums, score, NEGATION_SEED).p_value
-        }
+    let gamma = g.try_inverse()? * b;
+    let two_sided = b.dot(&gamma).max(0.0);
+    // The extension's coefficient is −γ (a Gauss-Newton step: w ≈ Xβ is the
+    // residual the parameters' change −β removes), Ω_max⁴q in the
+    // stiffness's units: admissible when ≥ 0 in both directions.
+    let one_sided = if gamma.iter().all(|&c| c <= 0.0) {
+        two_sided
+    } else {
+        (0..EXTRA)
+            .filter(|&d| g[(d, d)] > 0.0 && b[d] <= 0.0)
+            .map(|d| b[d] * b[d] / g[(d, d)])
+            .fold(0.0, f64::max)
+    };
+    let rho = (-g[(0, 1)] / (g[(0, 0)] * g[(1, 1)]).sqrt()).clamp(-1.0, 1.0);
+    let w2 = 0.25 + rho.asin() / std::f64::consts::TAU;
+    let statistic = one_sided;
+    let c1 = ChiSquared::new(1.0).ok()?;
+    let c2 = ChiSquared::new(2.0).ok()?;
+    let tails = (1.0 - c1.cdf(statistic), 1.0 - c2.cdf(statistic));
+    let p_value = if statistic > 0.0 {
+        (0.5 * tails.0 + w2 * tails.1).min(1.0)
+    } else {
+        1.0
     };
     // The refitted stiffness θ − β: its change is the one-mass columns'
     // coefficient once the extension is taken out of w.
@@ -234,27 +175,7 @@ pub fn support_mode<E: Equations + ?Sized>(
         statistic,
         p_value,
         drop_at_top,
-        null,
     })
-}
-
-/// The one-sided likelihood ratio T̄ of the extension's score `b` = X₂⊥ᵀw
-/// with Gram matrix `g` = X₂⊥ᵀX₂⊥ (inverse `g_inv`), in the whitened
-/// residuals' units squared: both coefficients free when both are
-/// admissible, else the larger admissible single one, else 0.
-fn one_sided(b: &Vector2<f64>, g: &Matrix2<f64>, g_inv: &Matrix2<f64>) -> f64 {
-    let gamma = g_inv * b;
-    // The extension's coefficient is −γ (a Gauss-Newton step: w ≈ Xβ is the
-    // residual the parameters' change −β removes), Ω_max⁴q in the
-    // stiffness's units: admissible when ≥ 0 in both directions.
-    if gamma.iter().all(|&c| c <= 0.0) {
-        b.dot(&gamma).max(0.0)
-    } else {
-        (0..EXTRA)
-            .filter(|&d| g[(d, d)] > 0.0 && b[d] <= 0.0)
-            .map(|d| b[d] * b[d] / g[(d, d)])
-            .fold(0.0, f64::max)
-    }
 }
 
 #[cfg(test)]
@@ -378,7 +299,7 @@ mod tests {
         let q = [1e-3, 5e-4];
         let eq = pedestal(q, 1e-9, 1.0, None);
         let hz = speeds_hz(&eq);
-        let t = support_mode(&eq, &THETA, &hz, SupportNull::Columns).expect("test");
+        let t = support_mode(&eq, &THETA, &hz).expect("test");
         let top = eq.omega.iter().copied().fold(0.0, f64::max);
         for d in 0..2 {
             let want = top.powi(4) * q[d] / THETA[d];
@@ -432,7 +353,7 @@ mod tests {
         let (mut below5, mut below20) = (0, 0);
         for _ in 0..runs {
             let eq = pedestal([0.0; 2], 2e-8, 20.0, Some(&mut rng));
-            let t = support_mode(&eq, &THETA, &speeds_hz(&eq), SupportNull::Columns).expect("test");
+            let t = support_mode(&eq, &THETA, &speeds_hz(&eq)).expect("test");
             below5 += usize::from(t.p_value < 0.05);
             below20 += usize::from(t.p_value < 0.2);
         }
@@ -458,7 +379,7 @@ mod tests {
         let mut rng = rand::rngs::StdRng::seed_from_u64(11);
         let eq = pedestal([-2e-6, -1e-6], 2e-10, 0.2, Some(&mut rng));
         let hz = speeds_hz(&eq);
-        let t = support_mode(&eq, &THETA, &hz, SupportNull::Columns).expect("test");
+        let t = support_mode(&eq, &THETA, &hz).expect("test");
         assert!(t.drop_at_top.iter().all(|&d| d < 0.0), "{t:?}");
         // Noise can leave one direction's single coefficient admissible
         // (measured: T̄ 0.08, p 0.79); never a flag.
@@ -467,7 +388,7 @@ mod tests {
         // forces known to 0.1 % (at [2e-6, 1e-6] the term is 2e-4 of k,
         // below what 24 speeds resolve).
         let eq = pedestal([2e-4, 2e-4], 2e-10, 0.2, Some(&mut rng));
-        let t = support_mode(&eq, &THETA, &hz, SupportNull::Columns).expect("test");
+        let t = support_mode(&eq, &THETA, &hz).expect("test");
         assert!(t.p_value < 1e-6, "{t:?}");
     }
 }
