@@ -99,7 +99,7 @@ pub fn round_to_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
     s.parse().unwrap_or(x)
 }
 
-pub(crate) use count::{read_number, trimmed};
+pub(crate) use count::trimmed;
 pub use count::{text_digits, written_digits};
 
 mod count;
@@ -131,16 +131,6 @@ impl WrittenDigits {
     /// [`written_digits`] of each value, counted from its text where that
     /// is the value's shortest text.
     pub fn from_text(texts: [&str; 8], values: [f64; 8]) -> Self {
-        Self::from_digits(
-            std::array::from_fn(|k| count::digits_of_text(texts[k], values[k])),
-            values,
-        )
-    }
-
-    /// The row of `values` with their digits and first exponents as
-    /// [`written_digits`] gives them (`None`: zero, not known), e.g. from
-    /// [`read_number`].
-    pub(crate) fn from_digits(digits: [Option<(u32, i32)>; 8], values: [f64; 8]) -> Self {
         let mut out = Self {
             abs_bits: [0; 8],
             digits: [0; 8],
@@ -148,7 +138,7 @@ impl WrittenDigits {
             floor_var: [0.0; 8],
         };
         for k in 0..8 {
-            let (d, e) = digits[k].unwrap_or((0, 0));
+            let (d, e) = count::digits_of_text(texts[k], values[k]).unwrap_or((0, 0));
             out.abs_bits[k] = values[k].abs().to_bits();
             out.digits[k] = d as u8;
             out.exponent[k] = e.clamp(i16::MIN as i32, i16::MAX as i32) as i16;

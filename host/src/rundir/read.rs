@@ -454,14 +454,9 @@ fn read_table<T>(
             });
         }
         let field = |col: usize| super::digits::trimmed(record.get(col).unwrap_or_default());
-        // The value and, with `count`, its digits.
-        let counted_at = |col: usize,
-                          name: &'static str,
-                          count: bool|
-         -> Result<(f64, Option<(u32, i32)>), RunDirError> {
+        let number_at = |col: usize, name: &'static str| -> Result<f64, RunDirError> {
             let text = field(col);
-            let (parsed, digits) = super::digits::read_number(text, count);
-            let value = parsed.map_err(|_| RunDirError::BadNumber {
+            let value: f64 = text.parse().map_err(|_| RunDirError::BadNumber {
                 file: file(),
                 line,
                 column: col + 1,
@@ -477,10 +472,8 @@ fn read_table<T>(
                     text: text.to_string(),
                 });
             }
-            Ok((value, digits))
+            Ok(value)
         };
-        let number_at =
-            |col: usize, name: &'static str| counted_at(col, name, false).map(|(v, _)| v);
         let number = |k: usize| number_at(index[k], columns[k]);
         let speed_hz = number(0)?;
         let speed_ok = if positive_speed {
@@ -524,12 +517,13 @@ fn read_table<T>(
             });
         }
         let mut values = [0.0; 8];
-        let mut digits = [None; 8];
-        for (k, (v, d)) in values.iter_mut().zip(&mut digits).enumerate() {
-            (*v, *d) = counted_at(index[k + 2], columns[k + 2], count_digits)?;
+        for (k, v) in values.iter_mut().enumerate() {
+            *v = number(k + 2)?;
         }
         super::bounds::check(path, line, columns, &index, &values)?;
-        let written = count_digits.then(|| super::WrittenDigits::from_digits(digits, values));
+        let written = count_digits.then(|| {
+            super::WrittenDigits::from_text(std::array::from_fn(|k| field(index[k + 2])), values)
+        });
         let noise_sd = match (noise_index, optional) {
             (Some(cols), Some(names)) => {
                 let mut sd = [0.0; 4];

@@ -24,49 +24,10 @@ pub fn text_digits(text: &str) -> Option<(u32, i32)> {
 /// always; beyond, when no decimal of fewer digits reads as `value`:
 /// [`Counted::is_shortest_of`]), else from the value.
 pub fn digits_of_text(text: &str, value: f64) -> Option<(u32, i32)> {
-    digits_of_counted(counted_digits(text), value)
-}
-
-/// [`digits_of_text`] of a text already counted.
-fn digits_of_counted(counted: Option<Counted>, value: f64) -> Option<(u32, i32)> {
-    match counted {
+    match counted_digits(text) {
         Some(c) if c.digits <= 15 || c.is_shortest_of(value) => Some((c.digits, c.exponent)),
         _ => written_digits(value),
     }
-}
-
-/// A number field as read, in one pass over its bytes: what
-/// `str::parse::<f64>` gives for `text` (value or error, bit for bit) and,
-/// with `count`, [`digits_of_text`] of it (`None` without, or for an
-/// error). The value of a plain decimal of at most 19 significant digits
-/// is found from the counted digits and shown exact
-/// ([`Counted::value`], whose rounding limits then also decide whether a
-/// long text is the value's shortest); anything else (zero, `inf`, `NaN`,
-/// malformed text, more digits, extreme exponents) is the standard
-/// parser's.
-pub(crate) fn read_number(
-    text: &str,
-    count: bool,
-) -> (Result<f64, std::num::ParseFloatError>, Option<(u32, i32)>) {
-    let counted = counted_plain(text);
-    if let Some(c) = counted {
-        if let Some((value, limits)) = c.value() {
-            let digits = if !count {
-                None
-            } else if c.digits <= 15 || c.none_shorter_reads(&limits) {
-                Some((c.digits, c.exponent))
-            } else {
-                written_digits(value)
-            };
-            return (Ok(value), digits);
-        }
-    }
-    let parsed = text.parse::<f64>();
-    let digits = match parsed {
-        Ok(value) if count => digits_of_counted(counted, value),
-        _ => None,
-    };
-    (parsed, digits)
 }
 
 /// A plain decimal number's text as counted: `mantissa`·10^(`exponent` −
@@ -80,8 +41,6 @@ struct Counted {
     /// The significant digits as an integer (wrapped, meaningless, beyond
     /// 19 digits).
     mantissa: u64,
-    /// Whether the text starts with a minus sign.
-    negative: bool,
 }
 
 /// The significant digits, the decimal exponent of the first one and their
@@ -94,14 +53,9 @@ fn counted_digits(text: &str) -> Option<Counted> {
 /// [`counted_digits`] of a text as it stands (no whitespace taken off):
 /// an optional sign, digits with at most one point, at least one of them
 /// non-zero, then an optional exponent (`e` or `E`, an optional sign,
-/// digits, within i32). Every such text is one `str::parse::<f64>`
-/// accepts.
+/// digits, within i32).
 fn counted_plain(t: &str) -> Option<Counted> {
-    let (negative, t) = match t.as_bytes().first() {
-        Some(b'-') => (true, &t[1..]),
-        Some(b'+') => (false, &t[1..]),
-        _ => (false, t),
-    };
+    let t = t.strip_prefix(['-', '+']).unwrap_or(t);
     let bytes = t.as_bytes();
     // One pass over the digits and the point (this runs for every number
     // of a table), up to the exponent's 'e' ('e' and 'E' never occur
@@ -171,37 +125,28 @@ fn counted_plain(t: &str) -> Option<Counted> {
         digits: digits as u32,
         exponent: exponent + point - zeros - 1,
         mantissa,
-        negative,
     })
 }
 
 /// The number of ASCII digits `bytes` starts with, added to `running`
-/// (times ten per digit, wrapping), a word of eight bytes at a time where
-/// eight follow (as the standard library's parser does; the digits before
-/// the first other byte of a word at once).
+/// (times ten per digit, wrapping): a word of eight bytes at a time while
+/// eight digits follow (as the standard library's parser does), then byte
+/// by byte.
 fn digit_run(bytes: &[u8], running: &mut u64) -> usize {
     let mut i = 0;
     while let Some(Ok(word)) = bytes.get(i..i + 8).map(<[u8; 8]>::try_from) {
         let v = u64::from_le_bytes(word);
-        // A byte outside b'0'..=b'9' sets its top bit in v + 0x46.. or
-        // v − 0x30..; the first such byte gets no carry or borrow from the
-        // digits below it, so the lowest top bit set is its own.
+        // A byte outside b'0'..=b'9' sets a top bit in v + 0x46.. or in
+        // v − 0x30.. (the standard library's test).
         let above = v.wrapping_add(0x4646_4646_4646_4646);
         let below = v.wrapping_sub(0x3030_3030_3030_3030);
-        let other = (above | below) & 0x8080_8080_8080_8080;
-        let count = (other.trailing_zeros() / 8) as usize;
-        if count > 0 {
-            // The first `count` digits, moved to the end of the word with
-            // zeros before them.
-            let digits = below << (8 * (8 - count));
-            *running = running
-                .wrapping_mul(POW10_U64[count])
-                .wrapping_add(eight_digits(digits));
-            i += count;
+        if (above | below) & 0x8080_8080_8080_8080 != 0 {
+            break;
         }
-        if count < 8 {
-            return i;
-        }
+        *running = running
+            .wrapping_mul(100_000_000)
+            .wrapping_add(eight_digits(below));
+        i += 8;
     }
     while let Some(&b) = bytes.get(i) {
         let digit = b.wrapping_sub(b'0');
@@ -213,19 +158,6 @@ fn digit_run(bytes: &[u8], running: &mut u64) -> usize {
     }
     i
 }
-
-/// 10^k for k in 0..=8.
-const POW10_U64: [u64; 9] = [
-    1,
-    10,
-    100,
-    1_000,
-    10_000,
-    100_000,
-    1_000_000,
-    10_000_000,
-    100_000_000,
-];
 
 /// The integer of eight decimal digits, one per byte (values 0..=9, the
 /// first digit in the lowest byte): pairs, then fours, then all eight.
@@ -517,25 +449,25 @@ mod tests {
         }
     }
 
-    /// `read_number` gives what `str::parse::<f64>` gives, bit for bit and
-    /// error for error: random texts over the characters of a number
-    /// (most malformed), shortest and long texts of random values at every
-    /// magnitude, exact midpoints between doubles (ties to even), and
-    /// hostile fields (no number, NaN and infinities, a BOM, whitespace,
-    /// huge digit strings and exponents).
+    /// The digits counted from any text are its value's: random texts
+    /// over the characters of a number (most of them malformed: no count),
+    /// long digit strings (the word-at-a-time scan, more than 19 digits),
+    /// exact midpoints between doubles, and hostile fields.
     #[test]
-    fn numbers_read_are_those_of_the_standard_parser() {
+    fn digits_of_random_texts_are_those_of_their_value() {
         let same = |text: &str| {
-            let (ours, digits) = read_number(text, true);
-            let std = text.parse::<f64>();
-            assert_eq!(
-                ours.map(f64::to_bits),
-                std.clone().map(f64::to_bits),
-                "{text:?}"
-            );
-            let want = std.ok().and_then(|v| digits_of_text(text, v));
-            assert_eq!(digits, want, "{text:?}");
-            assert_eq!(read_number(text, false).1, None);
+            if let Ok(v) = text.parse::<f64>() {
+                if v != 0.0 && v.is_finite() {
+                    assert_eq!(digits_of_text(text, v), written_digits(v), "{text:?}");
+                    if let Some(d) = text_digits(text) {
+                        assert_eq!(Some(d), written_digits(v), "{text:?}");
+                    }
+                }
+            } else if text.trim() == text {
+                // What the parser refuses is not counted as a plain decimal
+                // (whitespace aside: the count trims it, the parser not).
+                assert_eq!(counted_digits(text), None, "{text:?}");
+            }
         };
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut next = || {
@@ -546,50 +478,19 @@ mod tests {
         };
         let alphabet = b"0123456789.eE+-";
         for _ in 0..200_000 {
-            let len = next() % 12;
+            let len = next() % 24;
             let text: String = (0..len)
                 .map(|_| char::from(alphabet[(next() % alphabet.len() as u64) as usize]))
                 .collect();
             same(&text);
         }
-        let mut x = 0.123_456_789_012_345_67_f64;
-        let mut fast = 0;
-        for k in 0..40_000 {
-            let v = x * 10f64.powi(k % 90 - 45);
-            same(&format!("{v:e}"));
-            if counted_plain(&format!("{v:e}"))
-                .and_then(|c| c.value())
-                .map(|f| f.0)
-                == Some(v)
-            {
-                fast += 1;
-            }
-            same(&format!("{}", -v));
-            for d in [1usize, 3, 8, 15, 16, 17, 18, 19, 20, 25] {
-                same(&format!("{:.*e}", d - 1, v));
-            }
-            x = (x * 7.389_056_098_930_65 + 0.377_123_456) % 1.0 + 1e-3;
-        }
-        // Full-precision texts of the magnitudes whose powers of ten the
-        // exact test takes (1e-15 to 1e43 for 17 digits: about 60 % of
-        // these) are read without the standard parser.
-        assert!(fast > 22_000, "{fast}");
-        // Midpoints between neighbouring doubles above 2^53 (integers):
-        // ties go to the even mantissa.
         let mut n = 0x0020_0000_0000_0001u64;
         for _ in 0..20_000 {
-            for m in [
-                n,
-                n + 1,
-                n + 2,
-                n << 1 | 1,
-                (n << 3) + 4,
-                (n << 3) + 3,
-                (n << 3) + 5,
-            ] {
+            for m in [n, n + 1, n + 2, n << 1 | 1, (n << 3) + 4, (n << 3) + 3] {
                 same(&m.to_string());
                 same(&format!("{m}e-30"));
-                same(&format!("{m}e10"));
+                same(&format!("0.000{m}"));
+                same(&format!("{m}.{m}e10"));
             }
             n = (n.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1) >> 11) | (1 << 53);
         }
@@ -600,56 +501,38 @@ mod tests {
             "+",
             "e5",
             ".e5",
-            "-.",
             "1e",
             "1e+",
-            "1e-",
             "1.2.3",
             "--1",
             "+-1",
-            "1-",
             "0x10",
             "1_000",
             " 1",
             "1 ",
             "\u{feff}1",
             "1\r",
-            "١",
             "inf",
-            "-inf",
-            "infinity",
             "NaN",
-            "nan",
             "1e308",
-            "1.7976931348623157e308",
-            "1.8e308",
-            "2.2250738585072014e-308",
-            "2.2250738585072011e-308",
             "5e-324",
             "1e-400",
             "1e99999999999",
-            "1e-99999999999",
             "0",
             "-0",
             "0.000",
-            "-0e5",
             "5.",
             ".5",
             "5.e3",
             "+.5e-3",
-            "1E+3",
             "00000000000000000000001",
             "12345678901234567890",
             "18446744073709551616",
-            "18446744073709551616e-20",
-            "9007199254740993",
-            "9007199254740995",
+            "0.00000000018446744073709551616",
             "1000000000000000000000000000000000000000001",
             "0.30000000000000004",
-            "0.1",
-            "1e23",
-            "8.589973e9",
-            "4.9406564584124654e-324",
+            "12345678.12345678e-9",
+            "1234567812345678",
         ] {
             same(text);
         }

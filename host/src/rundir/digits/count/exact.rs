@@ -1,8 +1,7 @@
 //! Exact decisions about a decimal text c·10^k and a double, in integer
 //! arithmetic: whether the text reads as the double (the double's rounding
-//! limits), whether a shorter decimal does (the text is then not the
-//! double's shortest), and the double a text reads as, found from an
-//! estimate that these limits show correct.
+//! limits) and whether a shorter decimal does (the text is then not the
+//! double's shortest).
 
 use super::Counted;
 
@@ -49,7 +48,7 @@ impl Counted {
     /// The second half of [`Counted::is_shortest_of`], for a text known to
     /// read as the value of `limits`: no decimal of one digit fewer does
     /// (`false` outside 2..=19 digits or [`POW10_RANGE`]).
-    pub(super) fn none_shorter_reads(&self, limits: &RoundingLimits) -> bool {
+    fn none_shorter_reads(&self, limits: &RoundingLimits) -> bool {
         if !(2..=19).contains(&self.digits) {
             return false;
         }
@@ -72,7 +71,7 @@ impl Counted {
 /// `low`·2^`shift` and `high`·2^`shift`), and the limits themselves when m
 /// is even (round half to even).
 #[derive(Clone, Copy)]
-pub(super) struct RoundingLimits {
+struct RoundingLimits {
     low: u128,
     high: u128,
     shift: i32,
@@ -182,49 +181,6 @@ fn shifted_above(a: u128, s: u32, b: u128) -> std::cmp::Ordering {
         return std::cmp::Ordering::Greater;
     }
     (a << s).cmp(&b)
-}
-
-/// 10^k as f64 for k in 0..32: exact up to 10^22, correctly rounded above
-/// (the literals are).
-const POW10_F64: [f64; 32] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22, 1e23, 1e24, 1e25, 1e26, 1e27, 1e28, 1e29, 1e30, 1e31,
-];
-
-impl Counted {
-    /// The double this text reads as (round half to even: what
-    /// `str::parse::<f64>` gives), when it is found without the standard
-    /// parser: the mantissa (≤ 19 digits) times or over 10^|k| in floating
-    /// point is within two units in the last place of it, and the
-    /// estimate or a neighbour up to two units away whose rounding limits
-    /// hold the decimal exactly ([`DecimalLimits::reads`]) is that double
-    /// (the limits of neighbouring doubles do not overlap). `None` (the
-    /// standard parser decides) for more than 19 digits, powers of ten
-    /// outside [`POW10_RANGE`], or a value that is not a normal double.
-    /// With it, the rounding limits of its magnitude.
-    pub(super) fn value(&self) -> Option<(f64, RoundingLimits)> {
-        if self.digits > 19 {
-            return None;
-        }
-        let k = self.exponent - self.digits as i32 + 1;
-        if !POW10_RANGE.contains(&k) {
-            return None;
-        }
-        let m = self.mantissa as f64;
-        let estimate = if k >= 0 {
-            m * POW10_F64[k.unsigned_abs() as usize]
-        } else {
-            m / POW10_F64[k.unsigned_abs() as usize]
-        };
-        let bits = estimate.to_bits();
-        let c = u128::from(self.mantissa);
-        let (found, limits) = [0i64, 1, -1, 2, -2].into_iter().find_map(|step| {
-            let v = f64::from_bits(bits.wrapping_add_signed(step));
-            let limits = RoundingLimits::of(v)?;
-            limits.at(k)?.reads(c).then_some((v, limits))
-        })?;
-        Some((if self.negative { -found } else { found }, limits))
-    }
 }
 
 #[cfg(test)]
