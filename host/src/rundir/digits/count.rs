@@ -47,52 +47,52 @@ struct Counted {
 /// integer of a plain decimal number's text, however many digits it has
 /// (`None` for zero and for text that is not a plain decimal number).
 fn counted_digits(text: &str) -> Option<Counted> {
-    let t = trimmed(text);
+    counted_plain(trimmed(text))
+}
+
+/// [`counted_digits`] of a text as it stands (no whitespace taken off):
+/// an optional sign, digits with at most one point, at least one of them
+/// non-zero, then an optional exponent (`e` or `E`, an optional sign,
+/// digits, within i32).
+fn counted_plain(t: &str) -> Option<Counted> {
     let t = t.strip_prefix(['-', '+']).unwrap_or(t);
     let bytes = t.as_bytes();
     // One pass over the digits and the point (this runs for every number
-    // of a measurements file), up to the exponent's 'e' ('e' and 'E' never
-    // occur inside a multi-byte character). Positions count digits only.
-    let mut n = 0i32; // digits seen
-    let mut point = -1i32; // digits before the point (−1: no point yet)
-    let mut i = 0;
-    // Leading zeros (and the point among them) first: what follows them
-    // is significant.
-    while let Some(&b) = bytes.get(i) {
-        if b == b'0' {
-            n += 1;
-        } else if b == b'.' && point < 0 {
-            point = n;
-        } else {
-            break;
+    // of a table), up to the exponent's 'e' ('e' and 'E' never occur
+    // inside a multi-byte character). Positions count digits only.
+    let mut running = 0u64; // the digits as an integer (wrapping)
+    let whole = digit_run(bytes, &mut running);
+    let (n, point, end) = match bytes.get(whole) {
+        Some(b'.') => {
+            let fraction = digit_run(&bytes[whole + 1..], &mut running);
+            (whole + fraction, whole, whole + 1 + fraction)
         }
-        i += 1;
-    }
-    let zeros = n;
-    let mut running = 0u64; // the significant digits as an integer (wrapping)
-    while let Some(&b) = bytes.get(i) {
-        let digit = b.wrapping_sub(b'0');
-        if digit < 10 {
-            running = running.wrapping_mul(10).wrapping_add(u64::from(digit));
-            n += 1;
-        } else if b == b'.' && point < 0 {
-            point = n;
-        } else {
-            break;
-        }
-        i += 1;
-    }
-    let end = i;
+        _ => (whole, whole, whole),
+    };
     let exponent = match bytes.get(end) {
         None => 0,
         Some(b'e' | b'E') => exponent_of(&bytes[end + 1..])?,
         Some(_) => return None,
     };
-    // The first digit after the leading zeros is a non-zero one.
-    if n == zeros {
-        return None;
-    }
-    let point = if point < 0 { n } else { point };
+    // Leading zeros: up to 19 digits `running` is exact and has the
+    // others; beyond, counted on the text (rare).
+    let zeros = if n <= 19 {
+        match running.checked_ilog10() {
+            Some(log) => n - log as usize - 1,
+            None => return None, // zero
+        }
+    } else {
+        let zeros = bytes[..end]
+            .iter()
+            .filter(|&&b| b != b'.')
+            .take_while(|&&b| b == b'0')
+            .count();
+        if zeros == n {
+            return None;
+        }
+        zeros
+    };
+    let (n, point, zeros) = (n as i32, point as i32, zeros as i32);
     // Significant digits, the trailing zeros taken off.
     let mut digits = n - zeros;
     let mut mantissa = running;
@@ -128,163 +128,48 @@ fn counted_digits(text: &str) -> Option<Counted> {
     })
 }
 
-/// 5^k for k in 0..32: 5^31 < 2^72.
-const POW5: [u128; 32] = {
-    let mut table = [1u128; 32];
-    let mut k = 1;
-    while k < 32 {
-        table[k] = table[k - 1] * 5;
-        k += 1;
-    }
-    table
-};
-
-/// The powers 10^k the exact comparisons below take, k in
-/// `POW10_RANGE`: every product they form fits in 128 bits (a mantissa of
-/// ≤ 19 digits times 5^27 < 2^63, or a rounding limit < 2^56 times 5^31 <
-/// 2^72).
-const POW10_RANGE: std::ops::RangeInclusive<i32> = -31..=27;
-
-impl Counted {
-    /// Whether this text (read as a positive number) is the shortest text
-    /// of `value` ([`written_digits`]'s): it reads as `|value|` and no
-    /// decimal of one digit fewer does. Such a decimal, when there is one,
-    /// lies between the text and `value`'s rounding limits; the nearest ones
-    /// on either side of the text (its mantissa without the last digit,
-    /// rounded down and up) then do, as does 10^(first digit's exponent),
-    /// the only shorter decimal of another first exponent that could. The
-    /// shortest text of `value` then has as many digits as this one and the
-    /// same first exponent (a different one would put a one-digit power of
-    /// ten between them). Decided with exact integer arithmetic; `false`
-    /// (the value decides) for more than 19 digits, a subnormal, infinite
-    /// or zero value, or powers of ten outside [`POW10_RANGE`].
-    fn is_shortest_of(&self, value: f64) -> bool {
-        if !(2..=19).contains(&self.digits) {
-            return false;
+/// The number of ASCII digits `bytes` starts with, added to `running`
+/// (times ten per digit, wrapping): a word of eight bytes at a time while
+/// eight digits follow (as the standard library's parser does), then byte
+/// by byte.
+fn digit_run(bytes: &[u8], running: &mut u64) -> usize {
+    let mut i = 0;
+    while let Some(Ok(word)) = bytes.get(i..i + 8).map(<[u8; 8]>::try_from) {
+        let v = u64::from_le_bytes(word);
+        // A byte outside b'0'..=b'9' sets a top bit in v + 0x46.. or in
+        // v − 0x30.. (the standard library's test).
+        let above = v.wrapping_add(0x4646_4646_4646_4646);
+        let below = v.wrapping_sub(0x3030_3030_3030_3030);
+        if (above | below) & 0x8080_8080_8080_8080 != 0 {
+            break;
         }
-        let Some(limits) = RoundingLimits::of(value.abs()) else {
-            return false;
-        };
-        // 10^k: the unit of the last digit; 10^(k+1), of the shorter
-        // decimals.
-        let k = self.exponent - self.digits as i32 + 1;
-        let (Some(own), Some(shorter)) = (limits.at(k), limits.at(k + 1)) else {
-            return false;
-        };
-        let c = u128::from(self.mantissa / 10);
-        own.reads(u128::from(self.mantissa)) && !shorter.reads(c) && !shorter.reads(c + 1)
+        *running = running
+            .wrapping_mul(100_000_000)
+            .wrapping_add(eight_digits(below));
+        i += 8;
     }
-}
-
-/// The decimals that read as a positive normal f64 v = m·2^e: those
-/// strictly between its rounding limits (the midpoints to its neighbours,
-/// `low`·2^`shift` and `high`·2^`shift`), and the limits themselves when m
-/// is even (round half to even).
-#[derive(Clone, Copy)]
-struct RoundingLimits {
-    low: u128,
-    high: u128,
-    shift: i32,
-    inclusive: bool,
-}
-
-impl RoundingLimits {
-    /// The limits of positive normal `v`; `None` otherwise.
-    fn of(v: f64) -> Option<Self> {
-        if !v.is_normal() || v < 0.0 {
-            return None;
+    while let Some(&b) = bytes.get(i) {
+        let digit = b.wrapping_sub(b'0');
+        if digit >= 10 {
+            break;
         }
-        let bits = v.to_bits();
-        let biased = ((bits >> 52) & 0x7ff) as i32;
-        let fraction = bits & ((1 << 52) - 1);
-        let m = u128::from(fraction | (1 << 52));
-        // v = m·2^e = 4m·2^(e−2); the neighbour above is (m+1)·2^e, the one
-        // below (m−1)·2^e, or (2m−1)·2^(e−1) when m is the binade's first
-        // (v a power of two above the smallest normal).
-        let e = biased - 1075;
-        let low = if fraction == 0 && biased > 1 {
-            4 * m - 1
-        } else {
-            4 * m - 2
-        };
-        Some(Self {
-            low,
-            high: 4 * m + 2,
-            shift: e - 2,
-            inclusive: m % 2 == 0,
-        })
+        *running = running.wrapping_mul(10).wrapping_add(u64::from(digit));
+        i += 1;
     }
-
-    /// The limits for decimals c·10^k (c < 10^19); `None` when k is
-    /// outside [`POW10_RANGE`] (the products would not fit).
-    fn at(&self, k: i32) -> Option<DecimalLimits> {
-        if !POW10_RANGE.contains(&k) {
-            return None;
-        }
-        let five = POW5[k.unsigned_abs() as usize];
-        // c·10^k = c·5^k·2^k against n·2^shift: c·5^k·2^(k−shift) against
-        // n, or c·2^(k−shift) against n·5^−k.
-        let (scale, low, high) = if k >= 0 {
-            (five, self.low, self.high)
-        } else {
-            (1, self.low * five, self.high * five)
-        };
-        Some(DecimalLimits {
-            scale,
-            shift: k - self.shift,
-            low,
-            high,
-            inclusive: self.inclusive,
-        })
-    }
+    i
 }
 
-/// [`RoundingLimits`] for the decimals c·10^k of one k: c reads as the
-/// value when c·`scale`·2^`shift` is strictly between `low` and `high`,
-/// or equal to either and `inclusive`.
-struct DecimalLimits {
-    scale: u128,
-    shift: i32,
-    low: u128,
-    high: u128,
-    inclusive: bool,
+/// The integer of eight decimal digits, one per byte (values 0..=9, the
+/// first digit in the lowest byte): pairs, then fours, then all eight.
+fn eight_digits(v: u64) -> u64 {
+    let v = v.wrapping_mul(10).wrapping_add(v >> 8);
+    let mask = 0x0000_00ff_0000_00ff;
+    let pairs_high = (v & mask).wrapping_mul(0x000f_4240_0000_0064);
+    let pairs_low = ((v >> 16) & mask).wrapping_mul(0x0000_2710_0000_0001);
+    u64::from((pairs_high.wrapping_add(pairs_low) >> 32) as u32)
 }
 
-impl DecimalLimits {
-    /// Whether c·10^k reads as the value.
-    #[inline]
-    fn reads(&self, c: u128) -> bool {
-        use std::cmp::Ordering::{Equal, Greater, Less};
-        let a = if self.scale == 1 { c } else { c * self.scale };
-        let above_low = match compare_shifted(a, self.shift, self.low) {
-            Greater => true,
-            Equal => self.inclusive,
-            Less => false,
-        };
-        above_low
-            && match compare_shifted(a, self.shift, self.high) {
-                Less => true,
-                Equal => self.inclusive,
-                Greater => false,
-            }
-    }
-}
-
-/// a·2^s compared with b, exactly (s of either sign).
-#[inline]
-fn compare_shifted(a: u128, s: i32, b: u128) -> std::cmp::Ordering {
-    if s < 0 {
-        return compare_shifted(b, -s, a).reverse();
-    }
-    if a == 0 {
-        return 0.cmp(&b);
-    }
-    if s > a.leading_zeros() as i32 {
-        // a·2^s ≥ 2^128 > b.
-        return std::cmp::Ordering::Greater;
-    }
-    (a << s).cmp(&b)
-}
+mod exact;
 
 /// `text` without leading and trailing whitespace: `str::trim` (Unicode
 /// White_Space), returning at once when both ends are printable ASCII (all
@@ -555,6 +440,8 @@ mod tests {
             "2.2250738585072014e-308",
             "4.9406564584124654e-324",
             "123456789012345678901234",
+            "18446744073709551616",
+            "0.000018446744073709551616",
             "1e-9",
             "5.000000000000000e-9",
         ] {
@@ -562,20 +449,92 @@ mod tests {
         }
     }
 
-    /// The exact comparison of a·2^s with b, against floating point on
-    /// small numbers and at the edges of the 128 bits.
+    /// The digits counted from any text are its value's: random texts
+    /// over the characters of a number (most of them malformed: no count),
+    /// long digit strings (the word-at-a-time scan, more than 19 digits),
+    /// exact midpoints between doubles, and hostile fields.
     #[test]
-    fn shifted_comparisons_are_exact() {
-        use std::cmp::Ordering::{Equal, Greater, Less};
-        assert_eq!(compare_shifted(3, 1, 6), Equal);
-        assert_eq!(compare_shifted(3, 1, 7), Less);
-        assert_eq!(compare_shifted(6, -1, 3), Equal);
-        assert_eq!(compare_shifted(7, -1, 3), Greater);
-        assert_eq!(compare_shifted(0, 500, 0), Equal);
-        assert_eq!(compare_shifted(0, 500, 1), Less);
-        assert_eq!(compare_shifted(1, 127, u128::MAX), Less);
-        assert_eq!(compare_shifted(1, 128, u128::MAX), Greater);
-        assert_eq!(compare_shifted(u128::MAX, -200, 0), Greater);
-        assert_eq!(compare_shifted(u128::MAX, -200, 1), Less);
+    fn digits_of_random_texts_are_those_of_their_value() {
+        let same = |text: &str| {
+            if let Ok(v) = text.parse::<f64>() {
+                if v != 0.0 && v.is_finite() {
+                    assert_eq!(digits_of_text(text, v), written_digits(v), "{text:?}");
+                    if let Some(d) = text_digits(text) {
+                        assert_eq!(Some(d), written_digits(v), "{text:?}");
+                    }
+                }
+            } else if text.trim() == text {
+                // What the parser refuses is not counted as a plain decimal
+                // (whitespace aside: the count trims it, the parser not).
+                assert_eq!(counted_digits(text), None, "{text:?}");
+            }
+        };
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let alphabet = b"0123456789.eE+-";
+        for _ in 0..200_000 {
+            let len = next() % 24;
+            let text: String = (0..len)
+                .map(|_| char::from(alphabet[(next() % alphabet.len() as u64) as usize]))
+                .collect();
+            same(&text);
+        }
+        let mut n = 0x0020_0000_0000_0001u64;
+        for _ in 0..20_000 {
+            for m in [n, n + 1, n + 2, n << 1 | 1, (n << 3) + 4, (n << 3) + 3] {
+                same(&m.to_string());
+                same(&format!("{m}e-30"));
+                same(&format!("0.000{m}"));
+                same(&format!("{m}.{m}e10"));
+            }
+            n = (n.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1) >> 11) | (1 << 53);
+        }
+        for text in [
+            "",
+            ".",
+            "-",
+            "+",
+            "e5",
+            ".e5",
+            "1e",
+            "1e+",
+            "1.2.3",
+            "--1",
+            "+-1",
+            "0x10",
+            "1_000",
+            " 1",
+            "1 ",
+            "\u{feff}1",
+            "1\r",
+            "inf",
+            "NaN",
+            "1e308",
+            "5e-324",
+            "1e-400",
+            "1e99999999999",
+            "0",
+            "-0",
+            "0.000",
+            "5.",
+            ".5",
+            "5.e3",
+            "+.5e-3",
+            "00000000000000000000001",
+            "12345678901234567890",
+            "18446744073709551616",
+            "0.00000000018446744073709551616",
+            "1000000000000000000000000000000000000000001",
+            "0.30000000000000004",
+            "12345678.12345678e-9",
+            "1234567812345678",
+        ] {
+            same(text);
+        }
     }
 }
