@@ -28,6 +28,9 @@ const GRID_FREQUENCIES: usize = 24;
 const GRID_DAMPING: f64 = 0.05;
 /// Largest relative standard error of μ = 1/Ω_B² for a full identification.
 const MODE_REL_SE: f64 = 1.0 / 3.0;
+/// Stiff-pedestal starts (`starts`) fitted to the end, the best by J
+/// after the short fits.
+const STIFF_FINAL_FITS: usize = 3;
 /// Largest |μ|·Ω_max² of a negative base mass still read as
 /// quasi-static (the mass changes the base's receptance by under 10 % at
 /// the top speed) [-].
@@ -149,22 +152,31 @@ pub fn fit_on_unmeasured_base(
     // Its basin and the profile's are apart (a nearly flat valley between
     // them, where the short fits' costs do not rank the basins' ends):
     // both are fitted to the end and the lower χ² is kept.
-    let mut stiff: Option<gh::Minimum> = None;
-    for p in starts::stiff_pedestal_starts(&rigid.p, n) {
-        if let Some(m) = gh::fit(&eq, &p, &scale, &all, Some(&refrozen), GRID_ITERATIONS) {
-            if stiff.as_ref().is_none_or(|s| m.cost < s.cost) {
-                stiff = Some(m);
-            }
-        }
-    }
+    let mut stiff: Vec<gh::Minimum> = starts::stiff_pedestal_starts(&rigid.p, n)
+        .into_iter()
+        .filter_map(|p| gh::fit(&eq, &p, &scale, &all, Some(&refrozen), GRID_ITERATIONS))
+        .collect();
+    stiff.sort_by(|a, b| a.cost.total_cmp(&b.cost));
 
-    // Everything free, with the likelihood's own weights.
+    // Everything free, with the likelihood's own weights: the profile's
+    // best and the few best stiff-pedestal starts. Among their ends the
+    // lowest J of those without a negative base mass that matters
+    // ([`negative_mass_matters`]: ML under M_B ≥ 0), else the lowest J.
     let full = gh::fit(&eq, &best, &scale, &all, None, FINAL_ITERATIONS)
         .ok_or(BaseFitError::NotEvaluable)?;
-    let full = match stiff.and_then(|s| gh::fit(&eq, &s.p, &scale, &all, None, FINAL_ITERATIONS)) {
-        Some(m) if m.cost < full.cost => m,
-        _ => full,
-    };
+    let non_physical =
+        |m: &gh::Minimum| (0..2).any(|d| negative_mass_matters(m.p[base_at(n, d) + 1], w_hi));
+    let full = stiff
+        .iter()
+        .take(STIFF_FINAL_FITS)
+        .filter_map(|s| gh::fit(&eq, &s.p, &scale, &all, None, FINAL_ITERATIONS))
+        .fold(full, |a, b| {
+            if (non_physical(&b), b.cost) < (non_physical(&a), a.cost) {
+                b
+            } else {
+                a
+            }
+        });
     let full = polish(&eq, full, &scale, &all);
     let full = if full.cost <= rigid.cost {
         full

@@ -132,7 +132,7 @@ mod tests {
         let hat = [2.0, 2.0];
         assert_eq!(set.spread(&hat, |p| p[0]), 2.0);
         assert_eq!(set.spread(&hat, |p| p[1]), 3.0);
-        assert_eq!(set.spread(&hat, |p| p[0] + p[1]), 3.0);
+        assert_eq!(set.spread(&hat, |p| p[0] + p[1]), 2.0);
         let empty = Profile {
             points: vec![],
             open: true,
