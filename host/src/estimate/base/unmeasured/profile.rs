@@ -72,7 +72,7 @@ pub(super) struct End<'a> {
 /// parameter was not free or `se` is not a positive number.
 pub(super) fn along(eq: &Unmeasured, end: &End, k: usize, se: f64) -> Option<Profile> {
     let (p_hat, j_hat) = (end.p, end.j);
-    if !end.free.get(k).copied().unwrap_or(false) || !(se > 0.0 && se.is_finite()) {
+    if !(end.free.get(k).copied().unwrap_or(false) && se > 0.0 && se.is_finite()) {
         return None;
     }
     let se_m = se;
