@@ -216,6 +216,9 @@ def judge(case, r):
 def main():
     global MACHINE
     args = sys.argv[1:]
+    if args[:1] in (["-h"], ["--help"]):
+        print(__doc__)
+        return
     if args[:1] == ["--machine"] and len(args) >= 2:
         MACHINE, args = args[1], args[2:]
     if MACHINE not in ross_unseen.MACHINES:
@@ -223,8 +226,13 @@ def main():
     global DIAGNOSE_MACHINE
     if os.environ.get("BENCH_DIAGNOSE_PLAIN", "0") != "1":
         DIAGNOSE_MACHINE = ["--machine", ross_unseen.machine_file(MACHINE)]
+    if len(args) < 2:
+        sys.exit("usage: bench_unseen.py [--machine NAME] PLINTH RUNS_DIR [SEEDS [CASES...]] (--help for more)")
     b, runs = args[0], args[1]
-    seeds = int(args[2]) if len(args) > 2 else 5
+    try:
+        seeds = int(args[2]) if len(args) > 2 else 5
+    except ValueError:
+        sys.exit(f"SEEDS: {args[2]!r} is not a whole number")
     cases = args[3:] or list(ross_unseen.cases_of(MACHINE))
     bearings = [t["bearing"] for t in ross_unseen.nominal_truth(MACHINE)]
     todo, make = [], {}

@@ -63,6 +63,8 @@ fn noise_run(
     let mut sds = vec![[0.0; 4]; run.measurements.len()];
     let mut rng = StdRng::seed_from_u64(seed);
     for rows in bearing_rows(&run) {
+        // `ch` names a channel (rel y/z, ped y/z) in the run and in `sds` alike.
+        #[allow(clippy::needless_range_loop)]
         for ch in 0..4 {
             let value = |m: &plinth::rundir::Measurement| {
                 if ch < 2 {
