@@ -2,6 +2,7 @@
 //! read row by row: every number checked where it stands, duplicates named
 //! with the line of their first appearance.
 
+use super::digits::{read_counted, read_number};
 use super::*;
 use header::Columns;
 
@@ -150,9 +151,10 @@ pub(super) fn read_table<T>(
             });
         }
         let field = |col: usize| super::digits::trimmed(record.get(col).unwrap_or_default());
-        let number_at = |col: usize, name: &'static str| -> Result<f64, RunDirError> {
+        // A number as read (`None`: not a number) checked at its column.
+        let located = |col: usize, name: &'static str, value: Option<f64>| {
             let text = field(col);
-            let value: f64 = text.parse().map_err(|_| RunDirError::BadNumber {
+            let value = value.ok_or_else(|| RunDirError::BadNumber {
                 file: file(),
                 line,
                 column: col + 1,
@@ -170,6 +172,7 @@ pub(super) fn read_table<T>(
             }
             Ok(value)
         };
+        let number_at = |col: usize, name| located(col, name, read_number(field(col)));
         let number = |k: usize| number_at(index[k], columns[k]);
         let speed_hz = number(0)?;
         let speed_ok = if positive_speed {
@@ -212,14 +215,21 @@ pub(super) fn read_table<T>(
                 name: bearing.to_string(),
             });
         }
+        // The eight numbers, with the digits of each counted in the same
+        // scan when they are wanted.
         let mut values = [0.0; 8];
-        for (k, v) in values.iter_mut().enumerate() {
-            *v = number(k + 2)?;
+        let mut counted = [None; 8];
+        for k in 0..8 {
+            values[k] = if count_digits {
+                let (col, read) = (index[k + 2], read_counted(field(index[k + 2])));
+                counted[k] = read.and_then(|(_, d)| d);
+                located(col, columns[k + 2], read.map(|(v, _)| v))?
+            } else {
+                number(k + 2)?
+            };
         }
         super::bounds::check(path, line, columns, &index, &values)?;
-        let written = count_digits.then(|| {
-            super::WrittenDigits::from_text(std::array::from_fn(|k| field(index[k + 2])), values)
-        });
+        let written = count_digits.then(|| super::WrittenDigits::from_counted(values, counted));
         let noise_sd = match (noise_index, optional) {
             (Some(cols), Some(names)) => {
                 let mut sd = [0.0; 4];
