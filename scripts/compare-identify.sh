@@ -7,7 +7,10 @@
 # the six convention mistakes of scripts/convention_mistake.py made in three
 # of them (the convention check's findings). For
 # refactors that must not change a number (issue 19, "one engine").
-#   scripts/compare-identify.sh OLD_PLINTH NEW_PLINTH
+# Stdout, stderr and the exit code are compared. With HOSTILE=1 the hostile
+# inputs are compared instead (scripts/hostile_inputs.py: one number of
+# either table replaced by text a reader may meet, whole files broken).
+#   [HOSTILE=1] scripts/compare-identify.sh OLD_PLINTH NEW_PLINTH
 # Prints one line per case (same / DIFFERENT) and exits 1 on any difference.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,6 +20,39 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 damped=examples/feng-hahn-1997-damped.toml
 skid=examples/two-pedestals-on-skid.toml
+
+status=0
+compare() {
+  local name=$1
+  shift
+  local code=0
+  "$old" "$@" >"$work/old.out" 2>"$work/old.err" || code=$?
+  echo "exit $code" >>"$work/old.err"
+  code=0
+  "$new" "$@" >"$work/new.out" 2>"$work/new.err" || code=$?
+  echo "exit $code" >>"$work/new.err"
+  if cmp -s "$work/old.out" "$work/new.out" && cmp -s "$work/old.err" "$work/new.err"; then
+    printf "same       %s (%s bytes)\n" "$name" "$(wc -c <"$work/new.out")"
+  else
+    printf "DIFFERENT  %s\n" "$name"
+    diff "$work/old.out" "$work/new.out" | head -8 || true
+    status=1
+  fi
+}
+
+if [ "${HOSTILE:-0}" = 1 ]; then
+  "$old" simulate "$damped" --speeds 5:200:5 --noise 0.01 --out "$work/base" >/dev/null
+  python3 scripts/hostile_inputs.py "$work/base" "$work/hostile"
+  runs=0
+  for dir in "$work"/hostile/*/; do
+    runs=$((runs + 1))
+    for est in ml ols; do
+      compare "identify hostile $(basename "$dir") $est" identify "${dir%/}" --json --estimator "$est"
+    done
+  done
+  echo "identify compared on $runs hostile runs × 2 estimators"
+  exit $status
+fi
 
 "$old" simulate "$damped" --speeds 5:200:1 --noise 0.01 --out "$work/noise" >/dev/null
 "$old" simulate "$damped" --speeds 5:200:1 --digits 3 --out "$work/digits3" >/dev/null
@@ -89,20 +125,6 @@ for run in noise digits3 skid digits12 hetero columns; do
   done
 done
 
-status=0
-compare() {
-  local name=$1
-  shift
-  "$old" "$@" >"$work/old.out" 2>"$work/old.err" || true
-  "$new" "$@" >"$work/new.out" 2>"$work/new.err" || true
-  if cmp -s "$work/old.out" "$work/new.out" && cmp -s "$work/old.err" "$work/new.err"; then
-    printf "same       %s (%s bytes)\n" "$name" "$(wc -c <"$work/new.out")"
-  else
-    printf "DIFFERENT  %s\n" "$name"
-    diff "$work/old.out" "$work/new.out" | head -8 || true
-    status=1
-  fi
-}
 runs=0
 for run in noise digits3 trunc3 digits12 noise_digits12 hetero columns skid skid_digits4 clean \
   digits2 trunc2 digits6 skid_digits2; do

@@ -99,10 +99,11 @@ pub fn round_to_digits(x: f64, digits: u32, mode: DigitsMode) -> f64 {
     s.parse().unwrap_or(x)
 }
 
-pub(crate) use count::trimmed;
+pub(crate) use count::{read_counted, read_number, trimmed};
 pub use count::{text_digits, written_digits};
 
 mod count;
+mod nearest;
 
 /// How the eight real numbers of a `measurements.csv` row (formats.md
 /// order: rel y re, rel y im, rel z re, rel z im, ped y re, …) were written:
@@ -131,6 +132,15 @@ impl WrittenDigits {
     /// [`written_digits`] of each value, counted from its text where that
     /// is the value's shortest text.
     pub fn from_text(texts: [&str; 8], values: [f64; 8]) -> Self {
+        Self::from_counted(
+            values,
+            std::array::from_fn(|k| count::digits_of_text(texts[k], values[k])),
+        )
+    }
+
+    /// `values` with the digits already counted for each
+    /// ([`written_digits`] of the value, or `None`: see [`Self::from_text`]).
+    pub(crate) fn from_counted(values: [f64; 8], counted: [Option<(u32, i32)>; 8]) -> Self {
         let mut out = Self {
             abs_bits: [0; 8],
             digits: [0; 8],
@@ -138,7 +148,7 @@ impl WrittenDigits {
             floor_var: [0.0; 8],
         };
         for k in 0..8 {
-            let (d, e) = count::digits_of_text(texts[k], values[k]).unwrap_or((0, 0));
+            let (d, e) = counted[k].unwrap_or((0, 0));
             out.abs_bits[k] = values[k].abs().to_bits();
             out.digits[k] = d as u8;
             out.exponent[k] = e.clamp(i16::MIN as i32, i16::MAX as i32) as i16;

@@ -4,7 +4,8 @@
 //! data sets and the identification. Readers reject anything that breaks the
 //! contract with an error naming the file, line and column.
 //!
-//! Modules: [`read`] (the readers, every fault located), [`write`] (the
+//! Modules: [`read`] (the readers, every fault located; one table at a
+//! time in `table`), [`write`] (the
 //! writers, digits reduced on writing), [`digits`] (significant-digit
 //! reduction and the shortest round-trip number text), [`schedule`]
 //! (bearing coefficients over speed). Everything is re-exported here.
@@ -15,6 +16,7 @@ pub mod matches;
 pub mod read;
 pub mod resolution;
 pub mod schedule;
+mod table;
 pub mod write;
 
 pub use digits::*;

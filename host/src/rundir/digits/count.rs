@@ -24,8 +24,23 @@ pub fn text_digits(text: &str) -> Option<(u32, i32)> {
 /// always; beyond, when no decimal of fewer digits reads as `value`:
 /// [`Counted::is_shortest_of`]), else from the value.
 pub fn digits_of_text(text: &str, value: f64) -> Option<(u32, i32)> {
-    match counted_digits(text) {
-        Some(c) if c.digits <= 15 || c.is_shortest_of(value) => Some((c.digits, c.exponent)),
+    digits_of(counted_digits(text), value, false)
+}
+
+/// [`digits_of_text`] of a text counted as `counted` ([`counted_digits`]);
+/// `nearest`: `value` is known to be the text's nearest double (the
+/// standard parser's value of it), so that it need not be tested to read
+/// as it.
+fn digits_of(counted: Option<Counted>, value: f64, nearest: bool) -> Option<(u32, i32)> {
+    let shortest = |c: &Counted| {
+        if nearest {
+            c.is_shortest_of_its_value(value)
+        } else {
+            c.is_shortest_of(value)
+        }
+    };
+    match counted {
+        Some(c) if c.digits <= 15 || shortest(&c) => Some((c.digits, c.exponent)),
         _ => written_digits(value),
     }
 }
@@ -123,7 +138,9 @@ fn counted_plain(t: &str) -> Option<Counted> {
     }
     Some(Counted {
         digits: digits as u32,
-        exponent: exponent + point - zeros - 1,
+        // An exponent near i32's limits that would leave them: not a
+        // plain number here (the standard parser reads it as 0 or ∞).
+        exponent: exponent.checked_add(point - zeros - 1)?,
         mantissa,
     })
 }
@@ -170,6 +187,9 @@ fn eight_digits(v: u64) -> u64 {
 }
 
 mod exact;
+mod number;
+
+pub(crate) use number::{read_counted, read_number};
 
 /// `text` without leading and trailing whitespace: `str::trim` (Unicode
 /// White_Space), returning at once when both ends are printable ASCII (all

@@ -45,6 +45,16 @@ impl Counted {
         reads && self.none_shorter_reads(&limits)
     }
 
+    /// [`Counted::is_shortest_of`] for a text known to read as `value`
+    /// (`value` is the text's nearest double): the same decision without
+    /// testing that again.
+    pub(super) fn is_shortest_of_its_value(&self, value: f64) -> bool {
+        let Some(limits) = RoundingLimits::of(value.abs()) else {
+            return false;
+        };
+        self.limits_at(&limits, 0).is_some() && self.none_shorter_reads(&limits)
+    }
+
     /// The second half of [`Counted::is_shortest_of`], for a text known to
     /// read as the value of `limits`: no decimal of one digit fewer does
     /// (`false` outside 2..=19 digits or [`POW10_RANGE`]).
