@@ -406,7 +406,7 @@ pub fn above_range_reason(s: &Step) -> Option<String> {
 
 /// Whether step `s` acts at bearing `name`: its own bearing, or a bearing
 /// of a base it stands pedestals on (`foundation`'s groups).
-fn acts_at(s: &Step, name: &str) -> bool {
+pub(crate) fn acts_at(s: &Step, name: &str) -> bool {
     s.bearing == name
         || s.foundation.as_ref().is_some_and(|f| {
             f.groups

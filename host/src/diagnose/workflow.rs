@@ -286,6 +286,25 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
                 break;
             }
         }
+        // No library candidate significant: the above-range sub-base where
+        // the support-mode test found it (`foundation::sub_base::above_range`).
+        let mut by_support = None;
+        if winner.is_none() {
+            if let Some(n) =
+                foundation::sub_base::above_range::named_by_support(&prep, &steps, &outcome)
+            {
+                let e = &outcome.ranked[n.index];
+                let next = State::fit(&prep, e.candidate.model.clone(), e.params.nl.clone())?;
+                if next
+                    .negative_pedestal_terms()
+                    .iter()
+                    .all(|t| negative_now.contains(t))
+                {
+                    winner = Some((n.index, next));
+                    by_support = Some(n);
+                }
+            }
+        }
         let to_beat = match &winner {
             Some((i, next)) => criterion(
                 &Prediction::new(&prep, &next.model, &next.params),
@@ -382,9 +401,11 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
             machine_gap_after: None,
             channels: win.candidate.variant.clone(),
             parameters,
-            test: wald_test(outcome.tried),
+            test: by_support
+                .as_ref()
+                .map_or_else(|| wald_test(outcome.tried), |n| n.test.clone()),
             foundation: None,
-            evidence: win.evidence,
+            evidence: by_support.as_ref().map_or(win.evidence, |n| n.evidence),
             runner_up: outcome
                 .ranked
                 .iter()

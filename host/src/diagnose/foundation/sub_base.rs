@@ -55,6 +55,8 @@ use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
 use std::f64::consts::TAU;
 
+pub mod above_range;
+
 type C = Complex<f64>;
 
 /// Parameters of the fit, in this order: the pedestal θ (k_y, k_z, m, c_y,
