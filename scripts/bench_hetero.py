@@ -6,7 +6,8 @@ Usage: bench_hetero.py PLINTH RUNS_DIR SEEDS [VARIANTS] -> per variant: ok-but-w
 RMS and mean of (estimate - truth)/std_err per parameter, and how often the fit's residuals
 rejected the noise columns' shape (host/src/estimate/noise/columns.rs: `variance_function`
 under source `columns`; on h1c a false alarm, on h1c-const a detection). Variants: h1 (no
-columns), h1c (true-law columns), h1c-const (each bearing-channel's RMS sd as a constant column), h1c-mixW (each
+columns), h1c (true-law columns), h1t (h1's readings with their true columns, taken from clean-h1c seed 1: the same
+noise draws under known weights), h1c-const (each bearing-channel's RMS sd as a constant column), h1c-mixW (each
 column W of the way in sd from that RMS to the true one: h1c-mix0.5 half-way); needing
 clean-d12 seed 1 in RUNS_DIR: h1v (the machine's noise plus a pick-up's velocity floor
 1 um/s / Omega on the pedestal channels, true columns), h1v-const (its RMS sd as constant
@@ -62,6 +63,9 @@ if len(sys.argv) > 2 and sys.argv[1] in ("--rejections", "--rejections-sim"):
         finally:
             pl.close()
     sys.exit(0)
+if len(sys.argv) < 4 or sys.argv[1] in ("-h", "--help"):
+    print(__doc__)
+    sys.exit(0 if len(sys.argv) > 1 and sys.argv[1] in ("-h", "--help") else 2)
 plinth, runs, seeds = sys.argv[1], sys.argv[2], int(sys.argv[3])
 
 def const_copy(src, dst):
@@ -102,6 +106,36 @@ def constd(s):
         const_copy(os.path.join(runs, f"clean-h1c-{s}"), d)
     return d
 variants["h1c-const"] = constd
+
+
+def true_columns_copy(src, cols, dst):
+    """src (a clean-h1 run: readings, no columns) with the *_sd columns of cols (clean-h1c
+    seed 1): the same noise draw under its true law. The true sd depends only on the noiseless
+    response and the speed grid, which clean-h1 and clean-h1c share at every seed."""
+    os.makedirs(dst, exist_ok=True)
+    for f in ("bearings.csv", "truth.json"):
+        shutil.copy(os.path.join(src, f), dst)
+    rows = list(csv.DictReader(open(os.path.join(src, "measurements.csv"))))
+    crow = list(csv.DictReader(open(os.path.join(cols, "measurements.csv"))))
+    sdc = [c for c in crow[0] if c.endswith("_sd")]
+    with open(os.path.join(dst, "measurements.csv"), "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]) + sdc)
+        w.writeheader()
+        for r, c in zip(rows, crow):
+            if (r["speed_hz"], r["bearing"]) != (c["speed_hz"], c["bearing"]):
+                sys.exit(f"{src} and {cols}: rows differ ({r['speed_hz']} {r['bearing']})")
+            r.update({k: c[k] for k in sdc})
+            w.writerow(r)
+
+
+def h1t(s):
+    d = os.path.join(runs, f"clean-h1t-{s}")
+    if not os.path.isdir(d):
+        true_columns_copy(os.path.join(runs, f"clean-h1-{s}"), os.path.join(runs, "clean-h1c-1"), d)
+    return d
+# h1's own noise draws with their true columns: what the scatter path's variance function
+# costs against known weights, draw for draw (needs clean-h1c seed 1 in RUNS).
+variants["h1t"] = h1t
 
 # Noise of another shape than the variance function's family (a fraction of |X| plus a
 # floor): the machine's noise plus a seismic pick-up's velocity floor on the pedestal
