@@ -132,8 +132,15 @@ pub struct BaseFitResult {
     /// θ = (k_y [N/m], k_z [N/m], m [kg], c_y, c_z [N·s/m]) per bearing of
     /// the group, in the group's order.
     pub pedestals: Vec<[f64; 5]>,
-    /// Standard errors of `pedestals`, same units.
+    /// Standard errors of `pedestals`, same units: the Fisher ones, widened
+    /// to the spread along the pedestal's mass split where that is larger
+    /// (the profile likelihood, `unmeasured/profile.rs`).
     pub pedestal_std_err: Vec<[f64; 5]>,
+    /// Per pedestal (group order): true when the profile of J along its
+    /// mass split between pedestal and base did not rise by 1 within 16
+    /// Fisher standard errors on a side (or reached zero mass): the split
+    /// is not resolved by the data and the ± are lower bounds.
+    pub split_unresolved: Vec<bool>,
     /// Covariance of each pedestal's θ (group order; θ's units, zero rows
     /// and columns for fixed parameters), from the Fisher information at
     /// the estimate: f_n and ζ get their ± from it (`present::modal`).

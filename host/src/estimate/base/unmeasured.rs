@@ -13,6 +13,8 @@ use std::f64::consts::TAU;
 
 mod equations;
 mod predict;
+mod profile;
+mod starts;
 
 use equations::{base_at, common_speeds, Unmeasured};
 pub use predict::{chi2, predict, Prediction};
@@ -26,6 +28,13 @@ const GRID_FREQUENCIES: usize = 24;
 const GRID_DAMPING: f64 = 0.05;
 /// Largest relative standard error of μ = 1/Ω_B² for a full identification.
 const MODE_REL_SE: f64 = 1.0 / 3.0;
+/// Stiff-pedestal starts (`starts`) fitted to the end, the best by J
+/// after the short fits.
+const STIFF_FINAL_FITS: usize = 3;
+/// Largest |μ|·Ω_max² of a negative base mass still read as
+/// quasi-static (the mass changes the base's receptance by under 10 % at
+/// the top speed) [-].
+const NEGATIVE_MASS_EFFECT: f64 = 0.1;
 /// Likelihood-ratio threshold (J_rigid − J) for base motion in one
 /// direction: the 1e-3 upper point of χ²(3) (three base parameters).
 pub const DETECTION_THRESHOLD: f64 = 16.27;
@@ -138,9 +147,37 @@ pub fn fit_on_unmeasured_base(
         }
     }
 
-    // Everything free, with the likelihood's own weights.
+    // Each pedestal stiffer than the base, part of its apparent mass in
+    // the base (`starts`): the best of these after the same short fits.
+    // Its basin and the profile's are apart (a nearly flat valley between
+    // them, where the short fits' costs do not rank the basins' ends):
+    // both are fitted to the end and the lower χ² is kept.
+    let mut stiff: Vec<gh::Minimum> = starts::stiff_pedestal_starts(&rigid.p, n)
+        .into_iter()
+        .filter_map(|p| gh::fit(&eq, &p, &scale, &all, Some(&refrozen), GRID_ITERATIONS))
+        .collect();
+    stiff.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+
+    // Everything free, with the likelihood's own weights: the profile's
+    // best and the few best stiff-pedestal starts. Among their ends the
+    // lowest J of those without a negative base mass that matters
+    // ([`negative_mass_matters`]: ML under M_B ≥ 0), else the lowest J.
     let full = gh::fit(&eq, &best, &scale, &all, None, FINAL_ITERATIONS)
         .ok_or(BaseFitError::NotEvaluable)?;
+    let non_physical =
+        |m: &gh::Minimum| (0..2).any(|d| negative_mass_matters(m.p[base_at(n, d) + 1], w_hi));
+    let full = stiff
+        .iter()
+        .take(STIFF_FINAL_FITS)
+        .filter_map(|s| gh::fit(&eq, &s.p, &scale, &all, None, FINAL_ITERATIONS))
+        .fold(full, |a, b| {
+            if (non_physical(&b), b.cost) < (non_physical(&a), a.cost) {
+                b
+            } else {
+                a
+            }
+        });
+    let full = polish(&eq, full, &scale, &all);
     let full = if full.cost <= rigid.cost {
         full
     } else {
@@ -170,7 +207,12 @@ pub fn fit_on_unmeasured_base(
         } else {
             f64::INFINITY
         };
-        *slot = if w_b < w_lo {
+        *slot = if negative_mass_matters(mu, w_hi) {
+            // No mode above the range: a negative base mass that shapes
+            // the receptance. Kept as fitted (M_B < 0), which
+            // `diagnose::foundation::physical` rejects.
+            BaseIdentifiability::Full
+        } else if w_b < w_lo {
             BaseIdentifiability::MassLine {
                 mass_kg: mu / kappa,
                 std_err: f64::NAN,
@@ -267,16 +309,55 @@ pub fn fit_on_unmeasured_base(
             _ => {}
         }
     }
+    // The ± along each pedestal's mass split (`profile`): never below
+    // the Fisher ±, wider where the valley reaches further.
+    let mut pedestal_std_err: Vec<[f64; 5]> = (0..n)
+        .map(|i| std::array::from_fn(|k| se(5 * i + k)))
+        .collect();
+    let mut split_open = vec![false; n];
+    let chi2_per_dof = fin.cost / (n_eq - idx.len()).max(1) as f64;
+    let at_end: Vec<f64> = p.iter().zip(&scale).map(|(v, s)| v.abs().max(*s)).collect();
+    let end = profile::End {
+        p: &p,
+        j: fin.cost,
+        scale: &at_end,
+        free: &free,
+        chi2_per_dof,
+    };
+    for i in 0..n {
+        // k_y, k_z and m: the values a pedestal is judged by.
+        for k in 0..3 {
+            let Some(prof) = profile::along(&eq, &end, 5 * i + k, se(5 * i + k)) else {
+                continue;
+            };
+            split_open[i] |= prof.open;
+            for (a, v) in pedestal_std_err[i].iter_mut().enumerate() {
+                *v = v.max(prof.spread(&p, |q| q[5 * i + a]));
+            }
+        }
+    }
+    // The covariance with each standard error widened, correlations kept.
+    let widen = |i: usize, a: usize| {
+        let f = se(5 * i + a);
+        if f > 0.0 {
+            pedestal_std_err[i][a] / f
+        } else {
+            1.0
+        }
+    };
     Ok(BaseFitResult {
         pedestals: (0..n)
             .map(|i| std::array::from_fn(|k| p[5 * i + k]))
             .collect(),
-        pedestal_std_err: (0..n)
-            .map(|i| std::array::from_fn(|k| se(5 * i + k)))
-            .collect(),
         pedestal_covariance: (0..n)
-            .map(|i| std::array::from_fn(|a| std::array::from_fn(|b| cov[(5 * i + a, 5 * i + b)])))
+            .map(|i| {
+                std::array::from_fn(|a| {
+                    std::array::from_fn(|b| cov[(5 * i + a, 5 * i + b)] * widen(i, a) * widen(i, b))
+                })
+            })
             .collect(),
+        pedestal_std_err,
+        split_unresolved: split_open,
         base,
         base_std_err: base_se,
         base_frequency_hz,
@@ -297,6 +378,37 @@ pub fn fit_on_unmeasured_base(
         iterations: fin.iterations,
         speeds_hz: eq.speeds.iter().map(|s| s.omega / TAU).collect(),
     })
+}
+
+/// Whether a fitted μ = M_B/K_B [s²] is a negative base mass that matters
+/// at the top speed `w_hi` [rad/s]: |μ|·Ω_max² ≥ [`NEGATIVE_MASS_EFFECT`].
+/// The base's receptance is G = κ/(1 − Ω²μ + iΩγ); with μ < 0 it has no
+/// mode at all, and only where |μ|Ω² is small is it the quasi-static
+/// compliance κ the `quasi_static` reading reports. Beyond that the fit
+/// has used a negative mass to shape G over the range: non-physical.
+pub(crate) fn negative_mass_matters(mu: f64, w_hi: f64) -> bool {
+    mu < 0.0 && -mu * w_hi * w_hi >= NEGATIVE_MASS_EFFECT
+}
+
+/// A final fit that stopped short of its convergence test, run on once
+/// from where it stopped with the parameters scaled to their values there
+/// (the scale made from the rigid-ground start can be a decade off when the
+/// fit moved a pedestal's stiffness and mass into a base, and the search
+/// then crawls along the valley between them). Kept when it lowers J.
+fn polish(eq: &Unmeasured, fit: gh::Minimum, scale: &[f64], free: &[bool]) -> gh::Minimum {
+    if fit.converged {
+        return fit;
+    }
+    let rescaled: Vec<f64> = fit
+        .p
+        .iter()
+        .zip(scale)
+        .map(|(p, s)| p.abs().max(*s))
+        .collect();
+    match gh::fit(eq, &fit.p, &rescaled, free, None, FINAL_ITERATIONS) {
+        Some(m) if m.cost <= fit.cost => m,
+        _ => fit,
+    }
 }
 
 #[cfg(test)]
@@ -357,6 +469,16 @@ mod tests {
         let j = chi2(&obs, &group, &theta, &base).unwrap();
         let rigid = chi2(&obs, &group, &theta, &BaseParams::RIGID).unwrap();
         assert!(j < 1e-12 * rigid, "χ² {j:e} (rigid ground {rigid:e})");
+    }
+
+    #[test]
+    fn a_negative_base_mass_that_shapes_the_receptance_is_not_quasi_static() {
+        let w_hi = TAU * 110.0;
+        // Session 29's fit end on the bedplate: |μ|Ω² = 2.5 at the top speed.
+        assert!(negative_mass_matters(-2.5 / (w_hi * w_hi), w_hi));
+        assert!(!negative_mass_matters(-0.05 / (w_hi * w_hi), w_hi));
+        assert!(!negative_mass_matters(1.0 / (w_hi * w_hi), w_hi));
+        assert!(!negative_mass_matters(0.0, w_hi));
     }
 
     #[test]
