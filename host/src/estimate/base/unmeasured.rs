@@ -18,6 +18,7 @@ mod starts;
 
 use equations::{base_at, common_speeds, Unmeasured};
 pub use predict::{chi2, predict, Prediction};
+pub use profile::{widen_by_profile, Misfit};
 
 /// Most iterations of a profiling fit and of the final fit.
 const GRID_ITERATIONS: usize = 8;
@@ -29,8 +30,13 @@ const GRID_DAMPING: f64 = 0.05;
 /// Largest relative standard error of μ = 1/Ω_B² for a full identification.
 const MODE_REL_SE: f64 = 1.0 / 3.0;
 /// Stiff-pedestal starts (`starts`) fitted to the end, the best by J
-/// after the short fits.
+/// after the short fits, and the most iterations of each (the one kept is
+/// polished on, [`polish`]).
 const STIFF_FINAL_FITS: usize = 3;
+const STIFF_ITERATIONS: usize = 50;
+/// Likelihood ratio J_rigid − J above which the data show a base at all:
+/// the 1e-3 upper point of χ²(6) (the base's six parameters) [-].
+const BASE_SHOWN: f64 = 22.46;
 /// Largest |μ|·Ω_max² of a negative base mass still read as
 /// quasi-static (the mass changes the base's receptance by under 10 % at
 /// the top speed) [-].
@@ -61,26 +67,13 @@ pub fn fit_on_unmeasured_base(
     let (w_lo, w_hi) = (speeds[0].omega, speeds[speeds.len() - 1].omega);
     let w_mid = (w_lo * w_hi).sqrt();
     let eq = Unmeasured { speeds };
-    let mut p0 = vec![0.0; n_par];
-    let mut scale = vec![1.0; n_par];
-    let mut k_sum = 0.0;
-    for (i, &b) in group.bearings.iter().enumerate() {
-        let th = start.get(b).copied().unwrap_or([0.0; 5]);
-        p0[5 * i..5 * i + 5].copy_from_slice(&th);
-        let k = th[0].abs().max(th[1].abs()).max(1.0);
-        k_sum += k;
-        scale[5 * i] = th[0].abs().max(1e-3 * k);
-        scale[5 * i + 1] = th[1].abs().max(1e-3 * k);
-        scale[5 * i + 2] = th[2].abs().max(1e-3 * k / (w_mid * w_mid));
-        scale[5 * i + 3] = th[3].abs().max(1e-3 * k / w_mid);
-        scale[5 * i + 4] = th[4].abs().max(1e-3 * k / w_mid);
-    }
-    for d in 0..2 {
-        let o = base_at(n, d);
-        scale[o] = 1.0 / k_sum;
-        scale[o + 1] = 1.0 / (w_mid * w_mid);
-        scale[o + 2] = 1.0 / w_mid;
-    }
+    let theta: Vec<[f64; 5]> = group
+        .bearings
+        .iter()
+        .map(|&b| start.get(b).copied().unwrap_or([0.0; 5]))
+        .collect();
+    let p0: Vec<f64> = theta.iter().flatten().copied().chain([0.0; 6]).collect();
+    let scale = scales(&theta, w_mid);
     let pedestal_free: Vec<bool> = (0..n_par).map(|k| k < 5 * n).collect();
     let frozen: Vec<DMatrix<f64>> = (0..eq.speeds())
         .map(|s| gh::whitening(&eq, s, &p0))
@@ -147,36 +140,48 @@ pub fn fit_on_unmeasured_base(
         }
     }
 
-    // Each pedestal stiffer than the base, part of its apparent mass in
-    // the base (`starts`): the best of these after the same short fits.
-    // Its basin and the profile's are apart (a nearly flat valley between
-    // them, where the short fits' costs do not rank the basins' ends):
-    // both are fitted to the end and the lower χ² is kept.
-    let mut stiff: Vec<gh::Minimum> = starts::stiff_pedestal_starts(&rigid.p, n)
-        .into_iter()
-        .filter_map(|p| gh::fit(&eq, &p, &scale, &all, Some(&refrozen), GRID_ITERATIONS))
-        .collect();
-    stiff.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-
-    // Everything free, with the likelihood's own weights: the profile's
-    // best and the few best stiff-pedestal starts. Among their ends the
-    // lowest J of those without a negative base mass that matters
-    // ([`negative_mass_matters`]: ML under M_B ≥ 0), else the lowest J.
+    // Everything free, with the likelihood's own weights, from the
+    // profile's best.
     let full = gh::fit(&eq, &best, &scale, &all, None, FINAL_ITERATIONS)
         .ok_or(BaseFitError::NotEvaluable)?;
-    let non_physical =
-        |m: &gh::Minimum| (0..2).any(|d| negative_mass_matters(m.p[base_at(n, d) + 1], w_hi));
-    let full = stiff
-        .iter()
-        .take(STIFF_FINAL_FITS)
-        .filter_map(|s| gh::fit(&eq, &s.p, &scale, &all, None, FINAL_ITERATIONS))
-        .fold(full, |a, b| {
-            if (non_physical(&b), b.cost) < (non_physical(&a), a.cost) {
-                b
-            } else {
-                a
-            }
-        });
+    // An end outside physics (a negative base mass that matters,
+    // [`negative_mass_matters`], or a pedestal stiffness or mass ≤ 0) where
+    // the data show a base (J_rigid − J above [`BASE_SHOWN`]) says the
+    // search ended in the wrong basin. (Where they show none, as in the
+    // bootstrap's rigid-ground replicates, a non-physical end is the noise
+    // fitted: there is no basin to find.) Then each pedestal stiffer than
+    // the base, part of its apparent mass in the base (`starts`), is tried
+    // too: the best few after the same short fits are fitted to the end
+    // (their basin and the profile's are apart, a nearly flat valley
+    // between them, where the short fits' costs do not rank the basins'
+    // ends; at most [`STIFF_ITERATIONS`] each, the one kept is polished
+    // on), and the lowest J of the ends inside physics is kept (ML under
+    // M_B ≥ 0), else the lowest J. A physical end is kept as it is: these
+    // fits are most of a base fit's cost.
+    let non_physical = |m: &gh::Minimum| {
+        (0..2).any(|d| negative_mass_matters(m.p[base_at(n, d) + 1], w_hi))
+            || (0..n).any(|i| m.p[5 * i..5 * i + 3].iter().any(|v| *v <= 0.0))
+    };
+    let full = if non_physical(&full) && rigid.cost - full.cost >= BASE_SHOWN {
+        let mut stiff: Vec<gh::Minimum> = starts::stiff_pedestal_starts(&rigid.p, n)
+            .into_iter()
+            .filter_map(|p| gh::fit(&eq, &p, &scale, &all, Some(&refrozen), GRID_ITERATIONS))
+            .collect();
+        stiff.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+        stiff
+            .iter()
+            .take(STIFF_FINAL_FITS)
+            .filter_map(|s| gh::fit(&eq, &s.p, &scale, &all, None, STIFF_ITERATIONS))
+            .fold(full, |a, b| {
+                if (non_physical(&b), b.cost) < (non_physical(&a), a.cost) {
+                    b
+                } else {
+                    a
+                }
+            })
+    } else {
+        full
+    };
     let full = polish(&eq, full, &scale, &all);
     let full = if full.cost <= rigid.cost {
         full
@@ -309,55 +314,17 @@ pub fn fit_on_unmeasured_base(
             _ => {}
         }
     }
-    // The ± along each pedestal's mass split (`profile`): never below
-    // the Fisher ±, wider where the valley reaches further.
-    let mut pedestal_std_err: Vec<[f64; 5]> = (0..n)
-        .map(|i| std::array::from_fn(|k| se(5 * i + k)))
-        .collect();
-    let mut split_open = vec![false; n];
-    let chi2_per_dof = fin.cost / (n_eq - idx.len()).max(1) as f64;
-    let at_end: Vec<f64> = p.iter().zip(&scale).map(|(v, s)| v.abs().max(*s)).collect();
-    let end = profile::End {
-        p: &p,
-        j: fin.cost,
-        scale: &at_end,
-        free: &free,
-        chi2_per_dof,
-    };
-    for i in 0..n {
-        // k_y, k_z and m: the values a pedestal is judged by.
-        for k in 0..3 {
-            let Some(prof) = profile::along(&eq, &end, 5 * i + k, se(5 * i + k)) else {
-                continue;
-            };
-            split_open[i] |= prof.open;
-            for (a, v) in pedestal_std_err[i].iter_mut().enumerate() {
-                *v = v.max(prof.spread(&p, |q| q[5 * i + a]));
-            }
-        }
-    }
-    // The covariance with each standard error widened, correlations kept.
-    let widen = |i: usize, a: usize| {
-        let f = se(5 * i + a);
-        if f > 0.0 {
-            pedestal_std_err[i][a] / f
-        } else {
-            1.0
-        }
-    };
     Ok(BaseFitResult {
         pedestals: (0..n)
             .map(|i| std::array::from_fn(|k| p[5 * i + k]))
             .collect(),
         pedestal_covariance: (0..n)
-            .map(|i| {
-                std::array::from_fn(|a| {
-                    std::array::from_fn(|b| cov[(5 * i + a, 5 * i + b)] * widen(i, a) * widen(i, b))
-                })
-            })
+            .map(|i| std::array::from_fn(|a| std::array::from_fn(|b| cov[(5 * i + a, 5 * i + b)])))
             .collect(),
-        pedestal_std_err,
-        split_unresolved: split_open,
+        pedestal_std_err: (0..n)
+            .map(|i| std::array::from_fn(|k| se(5 * i + k)))
+            .collect(),
+        split_unresolved: vec![false; n],
         base,
         base_std_err: base_se,
         base_frequency_hz,
@@ -388,6 +355,32 @@ pub fn fit_on_unmeasured_base(
 /// has used a negative mass to shape G over the range: non-physical.
 pub(crate) fn negative_mass_matters(mu: f64, w_hi: f64) -> bool {
     mu < 0.0 && -mu * w_hi * w_hi >= NEGATIVE_MASS_EFFECT
+}
+
+/// Scale of every parameter of a group's fit (model units: the pedestals'
+/// θ, then κ, μ, γ of y and z) for pedestal values `theta` (group order)
+/// and the range's geometric-mean speed `w_mid` [rad/s]: the steps and the
+/// information are taken relative to these.
+fn scales(theta: &[[f64; 5]], w_mid: f64) -> Vec<f64> {
+    let n = theta.len();
+    let mut scale = vec![1.0; 5 * n + 6];
+    let mut k_sum = 0.0;
+    for (i, th) in theta.iter().enumerate() {
+        let k = th[0].abs().max(th[1].abs()).max(1.0);
+        k_sum += k;
+        scale[5 * i] = th[0].abs().max(1e-3 * k);
+        scale[5 * i + 1] = th[1].abs().max(1e-3 * k);
+        scale[5 * i + 2] = th[2].abs().max(1e-3 * k / (w_mid * w_mid));
+        scale[5 * i + 3] = th[3].abs().max(1e-3 * k / w_mid);
+        scale[5 * i + 4] = th[4].abs().max(1e-3 * k / w_mid);
+    }
+    for d in 0..2 {
+        let o = base_at(n, d);
+        scale[o] = 1.0 / k_sum;
+        scale[o + 1] = 1.0 / (w_mid * w_mid);
+        scale[o + 2] = 1.0 / w_mid;
+    }
+    scale
 }
 
 /// A final fit that stopped short of its convergence test, run on once

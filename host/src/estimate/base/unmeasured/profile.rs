@@ -17,8 +17,117 @@
 //! interpolated between the last point inside and the first outside) is
 //! its ± along them.
 
-use super::equations::Unmeasured;
+use super::equations::{base_at, common_speeds, Unmeasured};
+use super::scales;
+use crate::estimate::base::{BaseFitResult, BaseGroup, BaseIdentifiability};
 use crate::estimate::gauss_helmert as gh;
+use crate::estimate::Observation;
+
+/// How the profile reads a misfit (χ²/dof above 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Misfit {
+    /// ΔJ is divided by χ²/dof when above 1 (the noise may be
+    /// understated): for a caller that reports the ± as they come.
+    Scaled,
+    /// ΔJ as it is: for a caller that scales every ± by √(χ²/dof) itself
+    /// (`plinth identify`), which would otherwise count the misfit twice.
+    AsIs,
+}
+
+/// Widens the pedestal ± of `fit`, a fit of `group` on `obs` by
+/// [`super::fit_on_unmeasured_base`], to the profile likelihood's (module
+/// docs): each pedestal's k_y, k_z and m is profiled, every pedestal
+/// parameter's ± becomes the larger of its Fisher ± and its largest
+/// distance from the estimate over the three one-standard-error sets, the
+/// covariance is widened with it (correlations kept), and
+/// `split_unresolved` is set where a profile stayed open. Costs up to
+/// 3 × 2 × 7 refits per pedestal, seconds on a long run: call it once, on
+/// the fit that is reported, not on every candidate fit. A fit that does
+/// not belong to `group` and `obs` is left as it is.
+pub fn widen_by_profile(
+    obs: &[Vec<Observation>],
+    group: &BaseGroup,
+    fit: &mut BaseFitResult,
+    misfit: Misfit,
+) {
+    let n = group.bearings.len();
+    let Ok(speeds) = common_speeds(obs, group) else {
+        return;
+    };
+    if fit.pedestals.len() != n || fit.pedestal_std_err.len() != n || speeds.is_empty() {
+        return;
+    }
+    let w_mid = (speeds[0].omega * speeds[speeds.len() - 1].omega).sqrt();
+    let n_eq = 4 * n * speeds.len();
+    let eq = Unmeasured { speeds };
+    // The fit's end in model units: θ per pedestal, then κ = 1/K,
+    // μ = M/K, γ = C/K per direction where the base moves.
+    let mut p: Vec<f64> = fit.pedestals.iter().flatten().copied().collect();
+    let mut free = vec![true; 5 * n];
+    for d in 0..2 {
+        let moves = fit.identifiability[d] != BaseIdentifiability::NotDetected;
+        let kappa = 1.0 / fit.base.k[d];
+        let at = if moves && kappa.is_finite() {
+            [kappa, fit.base.m[d] * kappa, fit.base.c[d] * kappa]
+        } else {
+            [0.0; 3]
+        };
+        p.extend(at);
+        free.extend([moves; 3]);
+    }
+    debug_assert_eq!(p.len(), base_at(n, 1) + 3);
+    let Some(j) = gh::cost(&eq, &p) else {
+        return;
+    };
+    let dof = n_eq
+        .saturating_sub(free.iter().filter(|f| **f).count())
+        .max(1);
+    let chi2_per_dof = match misfit {
+        Misfit::Scaled => j / dof as f64,
+        Misfit::AsIs => 1.0,
+    };
+    let scale: Vec<f64> = p
+        .iter()
+        .zip(scales(&fit.pedestals, w_mid))
+        .map(|(v, s)| v.abs().max(s))
+        .collect();
+    let end = End {
+        p: &p,
+        j,
+        scale: &scale,
+        free: &free,
+        chi2_per_dof,
+    };
+    let fisher = fit.pedestal_std_err.clone();
+    for i in 0..n {
+        // k_y, k_z and m: the values a pedestal is judged by.
+        for k in 0..3 {
+            let Some(prof) = along(&eq, &end, 5 * i + k, fisher[i][k]) else {
+                continue;
+            };
+            if let Some(open) = fit.split_unresolved.get_mut(i) {
+                *open |= prof.open;
+            }
+            for (a, v) in fit.pedestal_std_err[i].iter_mut().enumerate() {
+                *v = v.max(prof.spread(&p, |q| q[5 * i + a]));
+            }
+        }
+        let widen: [f64; 5] = std::array::from_fn(|a| {
+            if fisher[i][a] > 0.0 {
+                fit.pedestal_std_err[i][a] / fisher[i][a]
+            } else {
+                1.0
+            }
+        });
+        if let Some(c) = fit.pedestal_covariance.get_mut(i) {
+            for (a, row) in c.iter_mut().enumerate() {
+                for (b, v) in row.iter_mut().enumerate() {
+                    *v *= widen[a] * widen[b];
+                }
+            }
+        }
+    }
+}
 
 /// Steps of the profile on each side of the estimate, in Fisher standard
 /// errors of the profiled parameter [-].
