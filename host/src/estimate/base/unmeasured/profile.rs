@@ -99,10 +99,10 @@ pub fn widen_by_profile(
         chi2_per_dof,
     };
     let fisher = fit.pedestal_std_err.clone();
-    for i in 0..n {
+    for (i, fisher_i) in fisher.iter().enumerate() {
         // k_y, k_z and m: the values a pedestal is judged by.
-        for k in 0..3 {
-            let Some(prof) = along(&eq, &end, 5 * i + k, fisher[i][k]) else {
+        for (k, se) in fisher_i.iter().take(3).enumerate() {
+            let Some(prof) = along(&eq, &end, 5 * i + k, *se) else {
                 continue;
             };
             if let Some(open) = fit.split_unresolved.get_mut(i) {
@@ -113,8 +113,8 @@ pub fn widen_by_profile(
             }
         }
         let widen: [f64; 5] = std::array::from_fn(|a| {
-            if fisher[i][a] > 0.0 {
-                fit.pedestal_std_err[i][a] / fisher[i][a]
+            if fisher_i[a] > 0.0 {
+                fit.pedestal_std_err[i][a] / fisher_i[a]
             } else {
                 1.0
             }
