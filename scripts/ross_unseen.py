@@ -286,7 +286,7 @@ MACHINES["unseen-flex"] = {
     # vector table (FIELD_LAYOUT) for `plinth import`
     "field": ("vel",),
     "d3_effects": False,
-    "repo": ("clean-n1", "clean-vel", "clean-d2", "sub-base", "cross", "runout", "delay", "delay-runout"),
+    "repo": ("clean-n1", "clean-vel", "clean-d2", "sub-base", "cross", "runout", "delay", "delay-runout", "base"),
 }
 DEFAULT = "unseen-four"
 

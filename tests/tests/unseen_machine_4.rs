@@ -278,3 +278,80 @@ fn a_delay_at_the_stiff_block_and_runout_at_the_bracket_are_both_named() {
         }
     }
 }
+
+/// Both pedestals on the shared bedplate (900 kg, 3.0e8 / 1.5e8 N/m; B1's
+/// block ten times stiffer than it): the shared base is named and the
+/// pedestals after it are the machine's. Before session 29 the base fit
+/// ended in a local minimum (χ² 989 where the true parameters give 847):
+/// the bedplate's mass in B1's block (2604 kg for 450, k_y 16.7 GN/m for
+/// 3.0) and a negative base mass taken for a mode above the range; the
+/// machine-level gap rose (0.67 → 1.35). The fit now also starts with each
+/// pedestal stiffer than its base (`estimate/base/unmeasured/starts.rs`):
+/// χ² 836, both base modes inside the range. Measured on this run: k within
+/// 0.5 of their ±, B1's m 470.6 kg (the block/bedplate mass split is the one
+/// weakly seen direction, the sum 1349 kg of 1350); m is held to 10 % here,
+/// k to 3 ±; the ± themselves are the next test's. Seeds 1-5 in
+/// docs/bases.md.
+#[test]
+fn a_shared_bedplate_under_the_stiff_block_is_named_with_the_right_pedestals() {
+    let run = stored("base");
+    let d = diagnosis(&run);
+    assert_eq!(
+        named(&d),
+        [("foundation_coupling".to_string(), "B1".to_string())],
+        "{}",
+        d.to_text()
+    );
+    let (before, after) = (
+        d.machine_gap_before.expect("gap before"),
+        d.machine_gap_after.expect("gap after"),
+    );
+    assert!(after < before, "machine-level gap {before} -> {after}");
+    for b in ["B1", "B2"] {
+        let t = unseen::truth_of(&run, b);
+        let p = d
+            .pedestals_after
+            .iter()
+            .find(|p| p.bearing == b)
+            .expect("pedestal");
+        for (name, want) in [("k_y", t.k_y), ("k_z", t.k_z)] {
+            let (got, se) = (p.values[name], p.std_err[name]);
+            assert!(
+                (got - want).abs() <= 3.0 * se,
+                "{b} {name} {got:.4e} ± {se:.2e}, truth {want:.4e}"
+            );
+        }
+        let m = p.values["m"];
+        assert!((m - t.m).abs() <= 0.1 * t.m, "{b} m {m:.1}, truth {}", t.m);
+    }
+}
+
+/// The same run: what is printed trusted is right within 3 of its ±.
+/// Session 29's fit gave B1's block m 470.6 ± 6.2 kg for 450 (3.3 ± off,
+/// trusted): the Fisher ± at the fit's end, where J rose by only 0.054 at
+/// one such ± along the block/bedplate mass split. The ± of a pedestal on
+/// an unmeasured base now come from the profile likelihood
+/// (`estimate/base/unmeasured/profile.rs`): B1 m ± 26.8 kg, k_y ± 187,
+/// k_z ± 197 MN/m (Fisher 59 / 65). Main names the base untrusted with the
+/// pedestals 5-11 times off.
+#[test]
+fn the_stiff_block_on_the_bedplate_is_trusted_only_within_its_likelihood_error() {
+    let run = stored("base");
+    let d = diagnosis(&run);
+    assert!(d.trusted, "{}", d.to_text());
+    for b in ["B1", "B2"] {
+        let t = unseen::truth_of(&run, b);
+        let p = d
+            .pedestals_after
+            .iter()
+            .find(|p| p.bearing == b)
+            .expect("pedestal");
+        for (name, want) in [("k_y", t.k_y), ("k_z", t.k_z), ("m", t.m)] {
+            let (got, se) = (p.values[name], p.std_err[name]);
+            assert!(
+                (got - want).abs() <= 3.0 * se,
+                "{b} {name} {got:.4e} ± {se:.2e}, truth {want:.4e} (trusted)"
+            );
+        }
+    }
+}

@@ -54,7 +54,7 @@ use super::report::FoundationTest;
 /// its floor).
 pub const TRY_ABOVE_FLOOR: f64 = 1.5;
 use crate::estimate::base::{
-    fit_on_unmeasured_base, BaseFitResult, BaseGroup, BaseIdentifiability,
+    fit_on_unmeasured_base, widen_by_profile, BaseFitResult, BaseGroup, BaseIdentifiability, Misfit,
 };
 use crate::estimate::Observation;
 use anyhow::Result;
@@ -491,6 +491,28 @@ impl FoundationFit {
             gap,
             obs,
         })
+    }
+}
+
+impl FoundationFit {
+    /// This fit with every pedestal's ± widened to the profile likelihood's
+    /// along its mass split with the base ([`widen_by_profile`]; ΔJ read
+    /// against χ²/dof where the misfit is above 1). Run on the fit the
+    /// diagnosis reports only: it refits each base up to 42 times per
+    /// pedestal, and no choice of effects depends on the pedestals' ±.
+    pub fn with_profile_errors(mut self) -> FoundationFit {
+        for (g, f) in self
+            .grouping
+            .groups
+            .iter()
+            .zip(self.grouping.fits.iter_mut())
+        {
+            let group = BaseGroup {
+                bearings: g.clone(),
+            };
+            widen_by_profile(&self.obs, &group, f, Misfit::Scaled);
+        }
+        self
     }
 }
 

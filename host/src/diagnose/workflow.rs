@@ -468,7 +468,8 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
         }
     }
     let (chosen_foundation, base_prep) = match on_base {
-        Some(b) => (Some(b.fit), Some(b.prep)),
+        // The reported bases' pedestals get their profile ± here, once.
+        Some(b) => (Some(b.fit.with_profile_errors()), Some(b.prep)),
         None => (None, None),
     };
     let (pred1, gap1) = match &chosen_foundation {

@@ -11,7 +11,8 @@ use super::data::Prepared;
 use super::estimator::{fit_ml, report};
 use super::{physical, Identification, IdentifyError, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::base::{
-    fit_on_measured_base, fit_on_unmeasured_base, BaseFitResult, BaseGroup, BaseIdentifiability,
+    fit_on_measured_base, fit_on_unmeasured_base, widen_by_profile, BaseFitResult, BaseGroup,
+    BaseIdentifiability, Misfit,
 };
 use crate::estimate::noise::BearingNoise;
 use crate::estimate::pedestal::{fit_under_noise, noise_level};
@@ -346,6 +347,16 @@ pub fn apply_unmeasured_bases_prepared(
             |f| (f.chi2, f.dof),
         )
         .map_err(failed)?;
+        // The pedestals' ± along their mass split (profile likelihood),
+        // under the noise the counted fit used; ΔJ as it is: the ± are
+        // scaled by √(χ²/dof) below.
+        let mut fit = fit;
+        let weighted: Vec<Vec<Observation>> = obs
+            .iter()
+            .zip(&noises)
+            .map(|(o, n)| with_noise(o, n))
+            .collect();
+        widen_by_profile(&weighted, &group, &mut fit, Misfit::AsIs);
         let estimated = noises.iter().any(|n| n.source.scale_estimated());
         let scale = variance_scale(fit.chi2, fit.dof, estimated);
         for (k, n) in names.iter().enumerate() {

@@ -459,6 +459,7 @@ pub fn fit_from_receptance(
     Some(BaseFitResult {
         pedestals: vec![theta],
         pedestal_std_err: vec![std::array::from_fn(se_of)],
+        split_unresolved: vec![false],
         pedestal_covariance: vec![pedestal_covariance],
         base,
         base_std_err: base_se,

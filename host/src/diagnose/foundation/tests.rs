@@ -29,6 +29,7 @@ fn fit_with(ident: [BaseIdentifiability; 2], k: [f64; 2], m: [f64; 2], se: f64) 
     BaseFitResult {
         pedestals: vec![[8e6, 8e6, 80.0, 300.0, 250.0]],
         pedestal_std_err: vec![[1e3, 1e3, 0.1, 1.0, 1.0]],
+        split_unresolved: vec![false],
         pedestal_covariance: vec![],
         base: crate::estimate::base::BaseParams { k, c: [1e3; 2], m },
         base_std_err: crate::estimate::base::BaseParams {

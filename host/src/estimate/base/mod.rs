@@ -42,7 +42,10 @@ mod measured;
 mod unmeasured;
 
 pub use measured::{fit_on_measured_base, BaseObservation, MeasuredBaseError};
-pub use unmeasured::{chi2, fit_on_unmeasured_base, predict, Prediction, DETECTION_THRESHOLD};
+pub use unmeasured::{
+    chi2, fit_on_unmeasured_base, predict, widen_by_profile, Misfit, Prediction,
+    DETECTION_THRESHOLD,
+};
 
 use nalgebra::DMatrix;
 use num_complex::Complex;
@@ -132,11 +135,22 @@ pub struct BaseFitResult {
     /// θ = (k_y [N/m], k_z [N/m], m [kg], c_y, c_z [N·s/m]) per bearing of
     /// the group, in the group's order.
     pub pedestals: Vec<[f64; 5]>,
-    /// Standard errors of `pedestals`, same units.
+    /// Standard errors of `pedestals`, same units: the Fisher ones, widened
+    /// to the spread along the pedestal's mass split where that is larger
+    /// once [`widen_by_profile`] has run on the fit (the profile
+    /// likelihood, `unmeasured/profile.rs`; the reported fit only: it costs
+    /// seconds).
     pub pedestal_std_err: Vec<[f64; 5]>,
+    /// Per pedestal (group order): true when the profile of J along its
+    /// mass split between pedestal and base did not rise by 1 within 16
+    /// Fisher standard errors on a side (or reached zero mass): the split
+    /// is not resolved by the data and the ± are lower bounds. False until
+    /// [`widen_by_profile`] has run.
+    pub split_unresolved: Vec<bool>,
     /// Covariance of each pedestal's θ (group order; θ's units, zero rows
     /// and columns for fixed parameters), from the Fisher information at
-    /// the estimate: f_n and ζ get their ± from it (`present::modal`).
+    /// the estimate, each row and column scaled like its ± by
+    /// [`widen_by_profile`]: f_n and ζ get their ± from it (`present::modal`).
     pub pedestal_covariance: Vec<[[f64; 5]; 5]>,
     /// The base (meaningful as far as `identifiability` says).
     pub base: BaseParams,
