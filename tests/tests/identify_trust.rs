@@ -272,16 +272,24 @@ fn a_local_model_error_inside_the_level_limit_is_found_by_the_scan() {
     for seed in 1..=20 {
         let id = identify(&run(&m, Some((0.015, seed)), Some(6)));
         for p in &id.pedestals {
-            let lof = p.warnings.iter().find(|w| w.kind == WarningKind::LackOfFit);
+            let mut lof = p
+                .warnings
+                .iter()
+                .filter(|w| w.kind == WarningKind::LackOfFit);
             if p.bearing != "B1" {
-                assert!(lof.is_none(), "seed {seed} {}: {:?}", p.bearing, p.warnings);
+                assert!(
+                    lof.next().is_none(),
+                    "seed {seed} {}: {:?}",
+                    p.bearing,
+                    p.warnings
+                );
                 continue;
             }
+            // (Session 31: the run of outlier speeds at the resonance is a
+            // lack-of-fit warning of its own; the scan's is another.)
             let level = id.noise["B1"].lack_of_fit.map(|l| l.level_ratio);
-            if let Some(w) = lof {
-                if w.message.contains("scan score") && level.is_some_and(|l| l <= 4.0) {
-                    by_structure.push(seed);
-                }
+            if lof.any(|w| w.message.contains("scan score")) && level.is_some_and(|l| l <= 4.0) {
+                by_structure.push(seed);
             }
         }
     }
@@ -291,6 +299,45 @@ fn a_local_model_error_inside_the_level_limit_is_found_by_the_scan() {
         by_structure.len() >= 6,
         "found by the scan alone: {by_structure:?}"
     );
+}
+
+#[test]
+fn a_resonance_left_out_as_outlier_speeds_is_a_lack_of_fit() {
+    // ROSS reference machine d, B1 on its own sub-base (motion not
+    // measured): the sub-base's resonance at 75-82.5 Hz is narrower than
+    // the scan's windows, and the outlier test takes its 3-4 speeds out as
+    // outliers; the fit without them is clean, and B1 was printed `ok` in
+    // 3/20 runs at 1.5 % noise and 13/20 at 3 % (main e51e245: untrusted
+    // 17/20 and 7/20). Neighbouring outlier speeds are a lack of fit
+    // (`identify::trust::ADJACENT_OUTLIERS`). Measured (2026-12-03, session
+    // 31, `plinth simulate tests/reference/ross/machine-d.toml --speeds
+    // 5:200:2.5 --noise N --seed S --digits 6`, S = 1..20): untrusted 20/20
+    // and 19/20, no other bearing flagged.
+    let m = machine("tests/reference/ross/machine-d.toml");
+    for (noise, least) in [(0.015, 20), (0.03, 18)] {
+        let mut untrusted = Vec::new();
+        for seed in 1..=20 {
+            let id = identify(&run(&m, Some((noise, seed)), Some(6)));
+            for p in &id.pedestals {
+                let lof = p.warnings.iter().any(|w| w.kind == WarningKind::LackOfFit);
+                if p.bearing == "B1" {
+                    if lof && !p.trusted {
+                        untrusted.push(seed);
+                    }
+                } else {
+                    assert!(
+                        !lof,
+                        "noise {noise} seed {seed} {}: {:?}",
+                        p.bearing, p.warnings
+                    );
+                }
+            }
+        }
+        assert!(
+            untrusted.len() >= least,
+            "noise {noise}: B1 untrusted in {untrusted:?}"
+        );
+    }
 }
 
 #[test]

@@ -217,6 +217,17 @@ pub fn bad_speeds(
             ),
         });
     }
+    let grid: Vec<f64> = observations.iter().map(|o| o.speed_hz).collect();
+    if let Some(run) = adjacent_run(&grid, outliers) {
+        warnings.push(Warning {
+            kind: WarningKind::LackOfFit,
+            message: format!(
+                "lack of fit: {} adjacent speeds ({} Hz) were left out as outliers; bad readings (a glitch, a mis-trigger) strike speeds one by one, a run of {ADJACENT_OUTLIERS} or more neighbours is a change in speed the model lacks (a narrow resonance of a sub-base or a bracket, or a burst of bad data), which leaving them out hides. Its ± count noise only and exclude this: try `plinth diagnose`",
+                run.len(),
+                hz_list(&run)
+            ),
+        });
+    }
     let search = robust::flip_search(observations);
     let flips = search.flipped_hz.clone();
     if !flips.is_empty() {
@@ -234,6 +245,34 @@ pub fn bad_speeds(
     (warnings, search)
 }
 
+/// Fewest neighbouring speeds of the run's grid left out as outliers that
+/// make a lack of fit, not outliers: a speed's bad reading may spill into
+/// the next speed's averaging, not into a third (docs/trust.md, session
+/// 31: ROSS machine-d's sub-base resonance, 3-4 speeds, was listed as
+/// outliers and its bearing printed `ok`).
+pub const ADJACENT_OUTLIERS: usize = 3;
+
+/// The longest run of neighbouring speeds of the grid `speeds_hz` [Hz]
+/// among `outliers` [Hz], when it is [`ADJACENT_OUTLIERS`] long or longer.
+fn adjacent_run(speeds_hz: &[f64], outliers: &[f64]) -> Option<Vec<f64>> {
+    let mut grid = speeds_hz.to_vec();
+    grid.sort_by(f64::total_cmp);
+    grid.dedup();
+    let mut best: Vec<f64> = Vec::new();
+    let mut run: Vec<f64> = Vec::new();
+    for f in grid {
+        if outliers.contains(&f) {
+            run.push(f);
+            if run.len() > best.len() {
+                best.clone_from(&run);
+            }
+        } else {
+            run.clear();
+        }
+    }
+    (best.len() >= ADJACENT_OUTLIERS).then_some(best)
+}
+
 /// Speeds [Hz] as a comma-separated list (the one wording of identify's
 /// and diagnose's speed lists).
 pub(crate) fn hz_list(speeds_hz: &[f64]) -> String {
@@ -242,4 +281,31 @@ pub(crate) fn hz_list(speeds_hz: &[f64]) -> String {
         .map(|s| format!("{s}"))
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_run_of_neighbouring_outlier_speeds_is_found_and_scattered_ones_are_not() {
+        // A 2.5 Hz grid from 5 to 52.5 Hz, descending (a run directory may
+        // hold a run-down in time order).
+        let grid: Vec<f64> = (0..20).rev().map(|i| 5.0 + 2.5 * i as f64).collect();
+        // Scattered outliers, and two neighbours: outliers.
+        assert_eq!(adjacent_run(&grid, &[5.0, 12.5, 50.0]), None);
+        assert_eq!(adjacent_run(&grid, &[20.0, 22.5, 30.0]), None);
+        // Three neighbours given in any order; the longest run.
+        assert_eq!(
+            adjacent_run(&grid, &[22.5, 20.0, 25.0, 10.0, 12.5]),
+            Some(vec![20.0, 22.5, 25.0])
+        );
+        assert_eq!(
+            adjacent_run(&grid, &[5.0, 7.5, 10.0, 30.0, 32.5, 35.0, 37.5]),
+            Some(vec![30.0, 32.5, 35.0, 37.5])
+        );
+        // A speed not on the grid makes no run.
+        assert_eq!(adjacent_run(&grid, &[21.0, 22.0, 23.0]), None);
+        assert_eq!(adjacent_run(&[], &[1.0, 2.0, 3.0]), None);
+    }
 }
