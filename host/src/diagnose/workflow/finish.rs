@@ -1,0 +1,160 @@
+//! The end of the search: the table-clearance refit on rigid ground, the
+//! chosen bases' profile ±, the pedestals after, the trust verdict and the
+//! report.
+
+use super::by_name;
+use super::search::{Before, Search};
+use crate::diagnose::bearing_table;
+use crate::diagnose::foundation::FoundationFit;
+use crate::diagnose::gap::Agreement;
+use crate::diagnose::locate::{locate, unexplained};
+use crate::diagnose::report::{Diagnosis, NoiseSummary};
+use crate::diagnose::state::{pedestals, State};
+use crate::diagnose::trust::{self, as_pedestal_fit, conclude};
+use crate::rundir::RunDir;
+use anyhow::Result;
+use plinth_shared::regression::Parameter;
+use std::collections::BTreeMap;
+
+/// What the search found, for [`super::Outcome`] (which also owns the data).
+pub(super) struct Found {
+    /// The report.
+    pub(super) diagnosis: Diagnosis,
+    /// The base model's fit, then the fit after each step.
+    pub(super) states: Vec<State>,
+    /// The chosen bases, with their pedestals' profile ±.
+    pub(super) foundation: Option<FoundationFit>,
+    /// The whole model after each step.
+    pub(super) after_steps: Vec<(State, Option<FoundationFit>)>,
+}
+
+impl Search<'_> {
+    /// The report of the search on `run`, compared with the base model
+    /// `before`.
+    pub(super) fn finish(mut self, run: &RunDir, before: Before) -> Result<Found> {
+        let prep = self.prep;
+        let opts = self.opts;
+        // A table's clearance correction on rigid ground refitted by maximum
+        // likelihood, the estimator of the base model (`bearing_table::refine`).
+        let refits = if self.on_base.is_none() {
+            let refits = bearing_table::refine(prep, &mut self.state, &mut self.steps, opts.alpha)?;
+            if let Some(last) = self.states.last_mut() {
+                *last = self.state.clone();
+            }
+            if let Some(last) = self.after_steps.last_mut() {
+                last.0 = self.state.clone();
+            }
+            refits
+        } else {
+            Vec::new()
+        };
+        let (foundation, base_prep) = match self.on_base {
+            // The reported bases' pedestals get their profile ± here, once.
+            Some(b) => (Some(b.fit.with_profile_errors()), Some(b.prep)),
+            None => (None, None),
+        };
+        let state = &self.state;
+        let (pred1, gap1) = match &foundation {
+            Some(f) => (f.prediction.clone(), f.gap),
+            None => state.gap(prep),
+        };
+        let where_after = locate(
+            base_prep.as_ref().unwrap_or(prep),
+            &state.model,
+            &state.params,
+            &pred1,
+        );
+        let mut pedestals_after = pedestals(prep, state)?;
+        bearing_table::report_refits(prep, &refits, &mut pedestals_after);
+        if let Some(f) = &foundation {
+            for (b, p) in pedestals_after.iter_mut().enumerate() {
+                if let Some((theta, se)) = f.pedestal(b) {
+                    for (k, q) in Parameter::ALL.iter().enumerate() {
+                        p.values.insert(q.name().to_string(), theta[k]);
+                        p.std_err.insert(q.name().to_string(), se[k]);
+                    }
+                }
+            }
+        }
+        // The effects kept: a step removed again (backward check, a table
+        // correction the ML refit did not confirm) is not in the model.
+        let kept: Vec<_> = self
+            .steps
+            .iter()
+            .filter(|s| s.dropped.is_none())
+            .cloned()
+            .collect();
+        let effects_added: Vec<String> = kept.iter().map(|s| s.effect.clone()).collect();
+        let physical: Vec<_> = pedestals_after
+            .iter()
+            .filter_map(|p| as_pedestal_fit(prep, p))
+            .collect();
+        // Judged on both yardsticks: the gap as reported, the χ² the fits
+        // minimise for "the model got worse" (`trust::got_worse`).
+        let mut conclusion = conclude(
+            Agreement {
+                gap: before.gap,
+                ..before.prediction.agreement(prep)
+            },
+            Agreement {
+                gap: gap1,
+                ..pred1.agreement(base_prep.as_ref().unwrap_or(prep))
+            },
+            &kept,
+            &physical,
+            &where_after,
+        );
+        trust::judge_support(&mut conclusion, prep, &self.steps);
+        let unexplained = if conclusion.verdict.contains(trust::UNEXPLAINED) {
+            unexplained(&where_after, trust::AT_THE_FLOOR)
+        } else {
+            Vec::new()
+        };
+        let mut bearings_noise = BTreeMap::new();
+        for (b, name) in prep.bearings.iter().enumerate() {
+            if let Some(summary) = prep.noise.summary(b) {
+                bearings_noise.insert(name.clone(), summary);
+            }
+        }
+        let diagnosis = Diagnosis {
+            base_model: opts.base.iter().map(|p| p.name().to_string()).collect(),
+            steps: self.steps,
+            effects_added,
+            gap_before: before.gap.gap,
+            gap_after: gap1.gap,
+            machine_gap_before: None,
+            machine_gap_after: None,
+            machine_gap_floor: None,
+            machine_check_informative: None,
+            noise: NoiseSummary {
+                digits: prep.noise.digits(),
+                bearings: bearings_noise,
+                gap_floor_before: before.gap.floor,
+                gap_floor_after: gap1.floor,
+            },
+            where_before: before.located,
+            where_after,
+            pedestals_before: before.pedestals,
+            pedestals_after,
+            best_rejected: self.best_rejected,
+            foundation: self.foundation_tried.as_ref().map(|f| f.report(prep)),
+            significance_level: opts.alpha,
+            verdict: conclusion.verdict,
+            trusted: conclusion.trusted,
+            trust_reasons: conclusion.reasons,
+            unexplained,
+            suspected_convention_errors: crate::identify::convention::findings_for_run(
+                run, &opts.base,
+            ),
+            flipped_speeds_hz: by_name(prep, &prep.flipped_speeds_hz),
+            outlier_speeds_hz: BTreeMap::new(),
+            outliers_explained_hz: BTreeMap::new(),
+        };
+        Ok(Found {
+            diagnosis,
+            states: self.states,
+            foundation,
+            after_steps: self.after_steps,
+        })
+    }
+}
