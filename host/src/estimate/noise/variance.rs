@@ -405,9 +405,8 @@ pub fn fit_variance_function(
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
 /// function ([`Family::FractionFloor`]) of its residuals when the score test
 /// ([`homoscedasticity_p`]) rejects the observations' own noise law at
-/// [`HETEROSCEDASTIC_P`] ([`refit_under`]), its covariance widened by the
-/// cost of estimating the law (Kenward–Roger, [`estimated`]); `None` when
-/// the test does not reject or a step fails.
+/// [`HETEROSCEDASTIC_P`] ([`refit_under`]); `None` when the test does not
+/// reject or a step fails.
 pub fn refit(
     obs: &[Observation],
     floor: impl Fn(&Observation) -> [f64; 8],
@@ -418,24 +417,7 @@ pub fn refit(
     if p_value >= HETEROSCEDASTIC_P {
         return None;
     }
-    let mut r = refit_under(obs, floor, columns, fit, Family::FractionFloor, p_value)?;
-    // Kenward–Roger: Φ̂ + 2Λ̂ (the estimated law's own cost, and Φ(p̂)'s
-    // bias as an estimate of Φ(p): another Λ for Σ linear in p).
-    if let Some(l) = estimated::kackar_harville(
-        &r.obs,
-        &r.fit.theta,
-        &r.fit.covariance,
-        &r.law,
-        Family::FractionFloor,
-        columns,
-    ) {
-        for (row, lr) in r.fit.covariance.iter_mut().zip(l) {
-            for (v, x) in row.iter_mut().zip(lr) {
-                *v += 2.0 * x;
-            }
-        }
-    }
-    Some(r)
+    refit_under(obs, floor, columns, fit, Family::FractionFloor, p_value)
 }
 
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
@@ -495,8 +477,6 @@ pub struct Refit {
     /// The observations with the variance function's variances.
     pub obs: Vec<Observation>,
 }
-
-mod estimated;
 
 #[cfg(test)]
 mod tests;
