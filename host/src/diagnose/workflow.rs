@@ -537,7 +537,7 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
             bearings_noise.insert(name.clone(), summary);
         }
     }
-    let diagnosis = Diagnosis {
+    let mut diagnosis = Diagnosis {
         base_model: opts.base.iter().map(|p| p.name().to_string()).collect(),
         steps,
         effects_added,
@@ -569,6 +569,9 @@ fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
         outlier_speeds_hz: BTreeMap::new(),
         outliers_explained_hz: BTreeMap::new(),
     };
+    if let Some(f) = &chosen_foundation {
+        f.report_into(&mut diagnosis, &prep);
+    }
     Ok(Outcome {
         diagnosis,
         prep,
