@@ -459,7 +459,8 @@ pub fn fit_from_receptance(
     Some(BaseFitResult {
         pedestals: vec![theta],
         pedestal_std_err: vec![std::array::from_fn(se_of)],
-        split_unresolved: vec![false],
+        split_unresolved: vec![[false; 3]],
+        base_unresolved: [[false; 3]; 2],
         pedestal_covariance: vec![pedestal_covariance],
         base,
         base_std_err: base_se,

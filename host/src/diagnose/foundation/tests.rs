@@ -29,7 +29,8 @@ fn fit_with(ident: [BaseIdentifiability; 2], k: [f64; 2], m: [f64; 2], se: f64) 
     BaseFitResult {
         pedestals: vec![[8e6, 8e6, 80.0, 300.0, 250.0]],
         pedestal_std_err: vec![[1e3, 1e3, 0.1, 1.0, 1.0]],
-        split_unresolved: vec![false],
+        split_unresolved: vec![[false; 3]],
+        base_unresolved: [[false; 3]; 2],
         pedestal_covariance: vec![],
         base: crate::estimate::base::BaseParams { k, c: [1e3; 2], m },
         base_std_err: crate::estimate::base::BaseParams {
@@ -188,6 +189,38 @@ fn the_sub_base_fit_from_the_receptance_reaches_the_physical_optimum() {
         for d in 0..2 {
             let (a, b) = (fit.base_std_err.k[d], direct.base_std_err.k[d]);
             assert!((a / b - 1.0).abs() < 0.05, "σ(K_S) {a} vs {b}");
+        }
+    }
+}
+
+/// Where the likelihood is nearly quadratic (a sub-base inside the range,
+/// exact data), the profile's ± of the base's own K, M, C are the Fisher
+/// ones to within the profile's interpolation, never below, and no
+/// profile stays open.
+#[test]
+fn the_profile_gives_a_well_determined_base_its_fisher_errors() {
+    let prep = exact_sub_base_run();
+    let obs = observations(&prep);
+    let b = prep.bearing_index("right").expect("right");
+    let start = rigid_start(&prep).expect("rigid fits");
+    let group = BaseGroup { bearings: vec![b] };
+    let fisher = fit_on_unmeasured_base(&obs, &group, &start).expect("base fit");
+    let mut fit = fisher.clone();
+    crate::estimate::base::widen_by_profile(
+        &obs,
+        &group,
+        &mut fit,
+        crate::estimate::base::Misfit::Scaled,
+    );
+    assert_eq!(fit.base_unresolved, [[false; 3]; 2], "{fit:?}");
+    assert_eq!(fit.split_unresolved, vec![[false; 3]], "{fit:?}");
+    let (e, f) = (&fit.base_std_err, &fisher.base_std_err);
+    for d in 0..2 {
+        for (got, was) in [(e.k[d], f.k[d]), (e.m[d], f.m[d]), (e.c[d], f.c[d])] {
+            assert!(
+                got >= was && got <= 1.2 * was,
+                "{d}: {got:e} vs Fisher {was:e}"
+            );
         }
     }
 }

@@ -116,7 +116,7 @@ impl Search<'_> {
                 bearings_noise.insert(name.clone(), summary);
             }
         }
-        let diagnosis = Diagnosis {
+        let mut diagnosis = Diagnosis {
             base_model: opts.base.iter().map(|p| p.name().to_string()).collect(),
             steps: self.steps,
             effects_added,
@@ -150,6 +150,12 @@ impl Search<'_> {
             outlier_speeds_hz: BTreeMap::new(),
             outliers_explained_hz: BTreeMap::new(),
         };
+        // The profiled base (values after the joint refit, profile ±, a
+        // parameter the data do not bound) into the step that chose it and
+        // the foundation entry, both written before the profile ran.
+        if let Some(f) = &foundation {
+            f.report_into(&mut diagnosis, prep);
+        }
         Ok(Found {
             diagnosis,
             states: self.states,

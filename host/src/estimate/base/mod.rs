@@ -141,12 +141,19 @@ pub struct BaseFitResult {
     /// likelihood, `unmeasured/profile.rs`; the reported fit only: it costs
     /// seconds).
     pub pedestal_std_err: Vec<[f64; 5]>,
-    /// Per pedestal (group order): true when the profile of J along its
-    /// mass split between pedestal and base did not rise by 1 within 16
-    /// Fisher standard errors on a side (or reached zero mass): the split
-    /// is not resolved by the data and the ± are lower bounds. False until
+    /// Per pedestal (group order) and parameter (k_y, k_z, m): true when
+    /// the profile of J along it did not rise by 1 within 16 Fisher
+    /// standard errors on a side (or reached zero): the data do not bound
+    /// it there (its split with the base is not resolved) and its ± is a
+    /// lower bound. False until [`widen_by_profile`] has run.
+    pub split_unresolved: Vec<[bool; 3]>,
+    /// Per direction (y, z) and base parameter (K_B, M_B, C_B): true when
+    /// the profile of J along the base's own parameter (κ = 1/K_B,
+    /// μ = M_B/K_B, γ = C_B/K_B) did not rise by 1 within 16 Fisher
+    /// standard errors on a side (or reached zero): the data do not bound
+    /// it there, and its ± is a lower bound. False until
     /// [`widen_by_profile`] has run.
-    pub split_unresolved: Vec<bool>,
+    pub base_unresolved: [[bool; 3]; 2],
     /// Covariance of each pedestal's θ (group order; θ's units, zero rows
     /// and columns for fixed parameters), from the Fisher information at
     /// the estimate, each row and column scaled like its ± by
@@ -154,7 +161,9 @@ pub struct BaseFitResult {
     pub pedestal_covariance: Vec<[[f64; 5]; 5]>,
     /// The base (meaningful as far as `identifiability` says).
     pub base: BaseParams,
-    /// Standard errors of `base`, same units (∞ when not determined).
+    /// Standard errors of `base`, same units (∞ when not determined): the
+    /// Fisher ones by the delta method, widened to the profile
+    /// likelihood's once [`widen_by_profile`] has run on the fit.
     pub base_std_err: BaseParams,
     /// Base natural frequency sqrt(K_B/M_B)/2π (y, z) [Hz] (NaN when M_B ≤ 0).
     pub base_frequency_hz: [f64; 2],

@@ -238,16 +238,8 @@ pub fn fit_on_unmeasured_base(
         full
     };
     let p = fin.p.clone();
-    let idx: Vec<usize> = (0..n_par).filter(|&k| free[k]).collect();
-    let f_all = gh::fisher(&eq, &p, &scale).ok_or(BaseFitError::NotEvaluable)?;
-    let f = DMatrix::from_fn(idx.len(), idx.len(), |r, c| f_all[(idx[r], idx[c])]);
-    let mut cov = DMatrix::from_element(n_par, n_par, 0.0);
-    let inv = gh::inverse_psd(&f);
-    for (r, &a) in idx.iter().enumerate() {
-        for (c, &b) in idx.iter().enumerate() {
-            cov[(a, b)] = inv[(r, c)];
-        }
-    }
+    let (cov, f) = covariance(&eq, &p, &scale, &free).ok_or(BaseFitError::NotEvaluable)?;
+    let n_free = f.nrows();
     let se = |k: usize| cov[(k, k)].max(0.0).sqrt();
     // Delta method: variance of g(p) with gradient `grad` over indices `at`.
     let delta = |at: &[usize], grad: &[f64]| -> f64 {
@@ -324,13 +316,14 @@ pub fn fit_on_unmeasured_base(
         pedestal_std_err: (0..n)
             .map(|i| std::array::from_fn(|k| se(5 * i + k)))
             .collect(),
-        split_unresolved: vec![false; n],
+        split_unresolved: vec![[false; 3]; n],
+        base_unresolved: [[false; 3]; 2],
         base,
         base_std_err: base_se,
         base_frequency_hz,
         identifiability: ident,
         chi2: fin.cost,
-        dof: n_eq - idx.len(),
+        dof: n_eq - n_free,
         chi2_rigid: rigid.cost,
         pedestal_residual_rms: (0..n)
             .map(|i| {
@@ -355,6 +348,29 @@ pub fn fit_on_unmeasured_base(
 /// has used a negative mass to shape G over the range: non-physical.
 pub(crate) fn negative_mass_matters(mu: f64, w_hi: f64) -> bool {
     mu < 0.0 && -mu * w_hi * w_hi >= NEGATIVE_MASS_EFFECT
+}
+
+/// The Fisher covariance of a group's fit at `p` (model units, full size:
+/// zero rows and columns for the parameters not `free`; `scale` as for
+/// [`gh::fisher`]) and the information of the free parameters it inverts
+/// (for the condition number). `None` when J cannot be evaluated.
+fn covariance(
+    eq: &Unmeasured,
+    p: &[f64],
+    scale: &[f64],
+    free: &[bool],
+) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
+    let idx: Vec<usize> = (0..p.len()).filter(|&k| free[k]).collect();
+    let f_all = gh::fisher(eq, p, scale)?;
+    let f = DMatrix::from_fn(idx.len(), idx.len(), |r, c| f_all[(idx[r], idx[c])]);
+    let mut cov = DMatrix::from_element(p.len(), p.len(), 0.0);
+    let inv = gh::inverse_psd(&f);
+    for (r, &a) in idx.iter().enumerate() {
+        for (c, &b) in idx.iter().enumerate() {
+            cov[(a, b)] = inv[(r, c)];
+        }
+    }
+    Some((cov, f))
 }
 
 /// Scale of every parameter of a group's fit (model units: the pedestals'

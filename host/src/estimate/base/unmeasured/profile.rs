@@ -18,7 +18,7 @@
 //! its ± along them.
 
 use super::equations::{base_at, common_speeds, Unmeasured};
-use super::scales;
+use super::{covariance, scales};
 use crate::estimate::base::{BaseFitResult, BaseGroup, BaseIdentifiability};
 use crate::estimate::gauss_helmert as gh;
 use crate::estimate::Observation;
@@ -34,16 +34,21 @@ pub enum Misfit {
     AsIs,
 }
 
-/// Widens the pedestal ± of `fit`, a fit of `group` on `obs` by
+/// Widens the ± of `fit`, a fit of `group` on `obs` by
 /// [`super::fit_on_unmeasured_base`], to the profile likelihood's (module
-/// docs): each pedestal's k_y, k_z and m is profiled, every pedestal
-/// parameter's ± becomes the larger of its Fisher ± and its largest
-/// distance from the estimate over the three one-standard-error sets, the
-/// covariance is widened with it (correlations kept), and
-/// `split_unresolved` is set where a profile stayed open. Costs up to
-/// 3 × 2 × 7 refits per pedestal, seconds on a long run: call it once, on
-/// the fit that is reported, not on every candidate fit. A fit that does
-/// not belong to `group` and `obs` is left as it is.
+/// docs): each pedestal's k_y, k_z and m is profiled, and the base's own
+/// κ = 1/K_B, μ = M_B/K_B and γ = C_B/K_B in each direction where it
+/// moves; every pedestal parameter's ± and the base's K_B, M_B, C_B ±
+/// become the larger of their Fisher ± and their largest distance from the
+/// estimate over all these one-standard-error sets (each set lies inside
+/// the joint ΔJ ≤ 1 region, so its spread is a lower bound of the
+/// quantity's own profile interval); the pedestal covariance is widened
+/// with its ± (correlations kept), and `split_unresolved` and
+/// `base_unresolved` are set where a profile stayed open. Costs up to
+/// 2 × 7 refits per profile (3 per pedestal, 3 per moving direction),
+/// seconds on a long run: call it once, on the fit that is reported, not
+/// on every candidate fit. A fit that does not belong to `group` and `obs`
+/// is left as it is.
 pub fn widen_by_profile(
     obs: &[Vec<Observation>],
     group: &BaseGroup,
@@ -73,7 +78,7 @@ pub fn widen_by_profile(
             [0.0; 3]
         };
         p.extend(at);
-        free.extend([moves; 3]);
+        free.extend([moves && kappa.is_finite(); 3]);
     }
     debug_assert_eq!(p.len(), base_at(n, 1) + 3);
     let Some(j) = gh::cost(&eq, &p) else {
@@ -91,6 +96,11 @@ pub fn widen_by_profile(
         .zip(scales(&fit.pedestals, w_mid))
         .map(|(v, s)| v.abs().max(s))
         .collect();
+    // The Fisher ± of every parameter in model units: the steps of the
+    // base's own profiles (a pedestal's are its reported Fisher ±).
+    let Some((cov, _)) = covariance(&eq, &p, &scale, &free) else {
+        return;
+    };
     let end = End {
         p: &p,
         j,
@@ -99,18 +109,33 @@ pub fn widen_by_profile(
         chi2_per_dof,
     };
     let fisher = fit.pedestal_std_err.clone();
+    let mut sets = Vec::new();
     for (i, fisher_i) in fisher.iter().enumerate() {
         // k_y, k_z and m: the values a pedestal is judged by.
         for (k, se) in fisher_i.iter().take(3).enumerate() {
-            let Some(prof) = along(&eq, &end, 5 * i + k, *se) else {
-                continue;
-            };
-            if let Some(open) = fit.split_unresolved.get_mut(i) {
-                *open |= prof.open;
+            if let Some(prof) = along(&eq, &end, 5 * i + k, *se) {
+                if let Some(open) = fit.split_unresolved.get_mut(i) {
+                    open[k] |= prof.open;
+                }
+                sets.push(prof);
             }
-            for (a, v) in fit.pedestal_std_err[i].iter_mut().enumerate() {
-                *v = v.max(prof.spread(&p, |q| q[5 * i + a]));
+        }
+    }
+    for d in 0..2 {
+        let o = base_at(n, d);
+        for w in 0..3 {
+            let se = cov[(o + w, o + w)].max(0.0).sqrt();
+            if let Some(prof) = along(&eq, &end, o + w, se) {
+                fit.base_unresolved[d][w] |= prof.open;
+                sets.push(prof);
             }
+        }
+    }
+    let spread =
+        |g: &dyn Fn(&[f64]) -> f64| sets.iter().map(|s| s.spread(&p, g)).fold(0.0, f64::max);
+    for (i, fisher_i) in fisher.iter().enumerate() {
+        for (a, v) in fit.pedestal_std_err[i].iter_mut().enumerate() {
+            *v = v.max(spread(&|q| q[5 * i + a]));
         }
         let widen: [f64; 5] = std::array::from_fn(|a| {
             if fisher_i[a] > 0.0 {
@@ -125,6 +150,20 @@ pub fn widen_by_profile(
                     *v *= widen[a] * widen[b];
                 }
             }
+        }
+    }
+    for d in (0..2).filter(|&d| free[base_at(n, d)]) {
+        let o = base_at(n, d);
+        let e = &mut fit.base_std_err;
+        e.k[d] = e.k[d].max(spread(&|q| 1.0 / q[o]));
+        e.m[d] = e.m[d].max(spread(&|q| q[o + 1] / q[o]));
+        e.c[d] = e.c[d].max(spread(&|q| q[o + 2] / q[o]));
+        match &mut fit.identifiability[d] {
+            BaseIdentifiability::QuasiStatic { std_err, .. } => {
+                *std_err = std_err.max(spread(&|q| q[o]));
+            }
+            BaseIdentifiability::MassLine { std_err, .. } => *std_err = e.m[d],
+            _ => {}
         }
     }
 }
