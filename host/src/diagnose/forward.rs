@@ -274,6 +274,41 @@ pub fn non_physical_dampings(prep: &Prepared, state: &State) -> Vec<Term> {
     out
 }
 
+/// `next`, the joint refit with a step's winner at `bearing`, with the
+/// pedestal dampings it held at zero ([`held_at_zero`]: dampings at
+/// `bearing` that `before` estimated and `next` lacks) freed again when
+/// the refit with them free leaves none of them impossible
+/// ([`non_physical_dampings`]); else `next` unchanged.
+///
+/// Why: those dampings are the base model's own parameters, held at the
+/// passive bound only because, without the effect, their free values were
+/// impossible (a runout or a delay the model lacked read as a negative
+/// damping). With the effect in the model, a physical free value says the
+/// damping itself was never wrong; left held at zero, the next step frees
+/// it again and names it a `pedestal_damping` effect, which is only the
+/// base model restored (a ROSS overhung runout: c_z 1257 ± 145 N·s/m
+/// against a true 1300, named as an effect and trusted).
+pub fn freed_held(prep: &Prepared, before: &State, next: State, bearing: usize) -> State {
+    let held: Vec<Term> = (0..2)
+        .map(|dir| Term::Damping { bearing, dir })
+        .filter(|t| before.model.terms.contains(t) && !next.model.terms.contains(t))
+        .collect();
+    if held.is_empty() {
+        return next;
+    }
+    // Appended: the winner's parameter references stay valid.
+    let mut model = next.model.clone();
+    model.terms.extend(held.iter().copied());
+    let Ok(freed) = State::fit(prep, model, next.params.nl.clone()) else {
+        return next;
+    };
+    let impossible = non_physical_dampings(prep, &freed);
+    if held.iter().any(|t| impossible.contains(t)) {
+        return next;
+    }
+    freed
+}
+
 /// `candidate` with the dampings in `held` at its bearing removed from its
 /// model (held at zero), its parameter references moved with the terms;
 /// `None` when none of them is at its bearing or the candidate adds a

@@ -11,7 +11,7 @@ use crate::diagnose::bases::{carried_nonlinear, try_bases_on, BaseOn};
 use crate::diagnose::correct::corrections_only;
 use crate::diagnose::criterion::Evidence;
 use crate::diagnose::data::Prepared;
-use crate::diagnose::forward::StepOutcome;
+use crate::diagnose::forward::{freed_held, StepOutcome};
 use crate::diagnose::foundation::{self, sub_base::above_range, FoundationFit};
 use crate::diagnose::gap::{Gap, Prediction};
 use crate::diagnose::report::Step;
@@ -108,6 +108,7 @@ impl Search<'_> {
                 continue;
             }
             let next = State::fit(prep, e.candidate.model.clone(), e.params.nl.clone())?;
+            let next = freed_held(prep, &self.state, next, e.candidate.bearing);
             if keeps_physical(&next) {
                 return Ok(Some(Winner {
                     index: i,
