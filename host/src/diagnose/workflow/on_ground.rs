@@ -108,7 +108,13 @@ impl Search<'_> {
                 continue;
             }
             let next = State::fit(prep, e.candidate.model.clone(), e.params.nl.clone())?;
-            let next = freed_held(prep, &self.state, next, e.candidate.bearing);
+            let next = freed_held(
+                prep,
+                &self.state,
+                next,
+                e.candidate.bearing,
+                self.opts.alpha,
+            );
             if keeps_physical(&next) {
                 return Ok(Some(Winner {
                     index: i,
