@@ -50,6 +50,14 @@ pub struct Prepared {
 }
 
 impl Prepared {
+    /// Number of real pedestal-level equations (four per bearing and speed
+    /// measured: y and z, real and imaginary): the N of every BIC penalty.
+    pub fn real_equations(&self) -> usize {
+        (0..self.bearings.len())
+            .map(|b| 4 * self.points[b].iter().flatten().count())
+            .sum()
+    }
+
     /// Arranges a run directory ([`Self::arrange`]) without the readings
     /// of the keyphasor flips `plinth identify` finds in it
     /// ([`crate::identify::flips::flipped_speeds`] of every bearing's

@@ -194,9 +194,7 @@ pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
         cands.extend(variants);
     }
     let tried = cands.len();
-    let n_total: usize = (0..prep.bearings.len())
-        .map(|b| 4 * prep.points[b].iter().flatten().count())
-        .sum();
+    let n_total = prep.real_equations();
     let mut ranked = Vec::new();
     let mut failed = Vec::new();
     for c in cands {
@@ -342,9 +340,7 @@ fn terms_evidence(
             .position(|r| matches!(r, ParamRef::Term(k) if state.model.terms[*k] == *t))?;
         c[(row, col)] = 1.0;
     }
-    let n_total: usize = (0..prep.bearings.len())
-        .map(|b| 4 * prep.points[b].iter().flatten().count())
-        .sum();
+    let n_total = prep.real_equations();
     inf.evidence(&c, 1, n_total).ok()
 }
 

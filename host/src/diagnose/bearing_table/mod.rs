@@ -388,9 +388,7 @@ pub fn refine(
     steps: &mut [Step],
     alpha: f64,
 ) -> anyhow::Result<Vec<(usize, MlCorrection)>> {
-    let n_total: usize = (0..prep.bearings.len())
-        .map(|b| 4 * prep.points[b].iter().flatten().count())
-        .sum();
+    let n_total = prep.real_equations();
     let mut kept = Vec::new();
     let mut withdrawn = Vec::new();
     for r in refittable(prep, state) {

@@ -270,9 +270,7 @@ impl Search<'_> {
     /// removed and the model refitted without it.
     fn backward_check(&mut self) -> Result<()> {
         let prep = self.prep;
-        let n_total: usize = (0..prep.bearings.len())
-            .map(|b| 4 * prep.points[b].iter().flatten().count())
-            .sum();
+        let n_total = prep.real_equations();
         let earlier = self.chosen.len() - 1;
         let mut weakest: Option<(usize, Evidence)> = None;
         for (i, c) in self.chosen[..earlier].iter().enumerate() {
