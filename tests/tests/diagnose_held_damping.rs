@@ -3,9 +3,10 @@
 //! delay the base model lacks makes a pedestal's free damping impossible,
 //! the step's winner is fitted with that damping held at zero (the passive
 //! bound); once the effect is in, the damping is freed again in the same
-//! refit if its value is physical, instead of being named by the next step
-//! as a `pedestal_damping` effect (which also left a delay fitted with the
-//! damping at zero: τ a lower bound, less than half the true one).
+//! refit if its value is physical and the data support it, instead of
+//! being named by the next step as a `pedestal_damping` effect (which also
+//! left a delay fitted with the damping at zero: τ a lower bound, less than
+//! half the true one).
 //!
 //! Runs made by ROSS 2.3.0 with scripts/ross_unseen.py (seeds 52 and 51,
 //! kept under tests/data/ross-unseen-2/runout-52 and

@@ -58,22 +58,7 @@ impl Chosen {
         checked: usize,
         n_total: usize,
     ) -> Option<Evidence> {
-        let infs = state.inference(prep).ok()?;
-        let (_, inf, refs) = infs.iter().find(|(g, _, _)| g.contains(&self.bearing))?;
-        let position = |p: &Param| {
-            refs.iter().position(|r| match (*r, p) {
-                (ParamRef::Term(k), Param::Term(t)) => state.model.terms[k] == *t,
-                (ParamRef::Nonlinear(k), Param::Nonlinear(n)) => state.model.nonlinear[k] == *n,
-                _ => false,
-            })
-        };
-        let mut c = DMatrix::zeros(self.null.len(), refs.len());
-        for (row, constraint) in self.null.iter().enumerate() {
-            for (p, coef) in constraint {
-                c[(row, position(p)?)] = *coef;
-            }
-        }
-        inf.evidence(&c, checked, n_total).ok()
+        evidence_against(prep, state, self.bearing, &self.null, checked, n_total)
     }
 
     /// Number of constraints of its null hypothesis (its q).
@@ -99,4 +84,34 @@ impl Chosen {
         }
         m
     }
+}
+
+/// The evidence in `state`'s joint fit against the constraints `null` (one
+/// row of (parameter, coefficient) per constraint) on the parameters of
+/// the group holding `bearing` (`checked`: the Bonferroni count, `n_total`
+/// the BIC's N); `None` when they cannot be tested.
+pub(super) fn evidence_against(
+    prep: &Prepared,
+    state: &State,
+    bearing: usize,
+    null: &[Vec<(Param, f64)>],
+    checked: usize,
+    n_total: usize,
+) -> Option<Evidence> {
+    let infs = state.inference(prep).ok()?;
+    let (_, inf, refs) = infs.iter().find(|(g, _, _)| g.contains(&bearing))?;
+    let position = |p: &Param| {
+        refs.iter().position(|r| match (*r, p) {
+            (ParamRef::Term(k), Param::Term(t)) => state.model.terms[k] == *t,
+            (ParamRef::Nonlinear(k), Param::Nonlinear(n)) => state.model.nonlinear[k] == *n,
+            _ => false,
+        })
+    };
+    let mut c = DMatrix::zeros(null.len(), refs.len());
+    for (row, constraint) in null.iter().enumerate() {
+        for (p, coef) in constraint {
+            c[(row, position(p)?)] = *coef;
+        }
+    }
+    inf.evidence(&c, checked, n_total).ok()
 }

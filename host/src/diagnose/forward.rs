@@ -1,6 +1,7 @@
 //! One forward step of the search: every library candidate fitted on top of
 //! the current state, tested (Wald, Bonferroni over the step) and ranked.
 
+use super::backward::{evidence_against, Param};
 use super::candidates::{library, Candidate, ParamRef};
 use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
@@ -316,32 +317,11 @@ pub fn freed_held(
     if held.iter().any(|t| impossible.contains(t)) {
         return next;
     }
-    match terms_evidence(prep, &freed, bearing, &held) {
+    let null: Vec<_> = held.iter().map(|t| vec![(Param::Term(*t), 1.0)]).collect();
+    match evidence_against(prep, &freed, bearing, &null, 1, prep.real_equations()) {
         Some(ev) if ev.delta_bic > 0.0 && ev.p_value < alpha => freed,
         _ => next,
     }
-}
-
-/// The evidence in `state`'s fit that the model terms `terms` (of the
-/// group holding `bearing`) are not zero; `None` when they cannot be
-/// tested.
-fn terms_evidence(
-    prep: &Prepared,
-    state: &State,
-    bearing: usize,
-    terms: &[Term],
-) -> Option<Evidence> {
-    let infs = state.inference(prep).ok()?;
-    let (_, inf, refs) = infs.iter().find(|(g, _, _)| g.contains(&bearing))?;
-    let mut c = DMatrix::zeros(terms.len(), refs.len());
-    for (row, t) in terms.iter().enumerate() {
-        let col = refs
-            .iter()
-            .position(|r| matches!(r, ParamRef::Term(k) if state.model.terms[*k] == *t))?;
-        c[(row, col)] = 1.0;
-    }
-    let n_total = prep.real_equations();
-    inf.evidence(&c, 1, n_total).ok()
 }
 
 /// `candidate` with the dampings in `held` at its bearing removed from its
