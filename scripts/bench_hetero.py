@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 17, heteroscedastic noise without noise columns (docs/trust.md): Monte-Carlo
+"""Issue 17, heteroscedastic noise without noise columns (docs/trust-noise-law.md): Monte-Carlo
 of identify on ROSS unseen-overhung clean-h1 / clean-h1c runs made by
 `scripts/ross_unseen.py --machine unseen-overhung RUNS clean-h1,clean-h1c 1 ... N`.
 Usage: bench_hetero.py PLINTH RUNS_DIR SEEDS [VARIANTS] -> per variant: ok-but-wrong counts,

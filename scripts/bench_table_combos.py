@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """A wrong bearing table on a base, or beside another effect at its bearing
-(issue 17; docs/diagnose.md "The table correction beside other effects").
+(issue 17; docs/diagnose-bearing-table.md "The table correction beside other effects").
 
 Usage: python3 scripts/bench_table_combos.py PLINTH RUNS_DIR [SEEDS [CASES...]]
 

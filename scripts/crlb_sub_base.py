@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Cramér–Rao bounds of a pedestal on its own sub-base, from one run's speeds,
-bearing table and noise columns (docs/diagnose.md, "pedestal_sub_base above
+bearing table and noise columns (docs/diagnose-sub-base.md, "pedestal_sub_base above
 the range").
 
 Usage: python3 scripts/crlb_sub_base.py RUN BEARING m_p M_s k_py k_pz K_sy K_sz c_py c_pz C_sy C_sz

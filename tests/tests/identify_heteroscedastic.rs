@@ -2,7 +2,7 @@
 //! noise is a fraction of the signal plus a floor; the scatter between
 //! neighbouring speeds knows only one sd per channel or one fraction of the
 //! magnitude, and under the fraction alone the readings of small amplitude
-//! look nearly exact (docs/trust.md, "Heteroscedastic noise without noise
+//! look nearly exact (docs/trust-noise-law.md, "Heteroscedastic noise without noise
 //! columns"). The fit's residuals then reject the scatter's law and the
 //! pedestal is refitted under the variance function they give
 //! (host/src/estimate/noise/variance.rs).
@@ -161,7 +161,7 @@ fn a_fraction_plus_a_floor_without_columns_keeps_its_promise() {
 
 /// Noise of one sd per channel (no fraction) is in the scatter's own law;
 /// the score test may still reject its estimated channel ratios (measured in
-/// docs/trust.md), and either way the ± keep their promise.
+/// docs/trust-noise-law.md), and either way the ± keep their promise.
 #[test]
 fn one_sd_per_channel_keeps_its_promise_with_or_without_the_variance_function() {
     let mut all = Vec::new();

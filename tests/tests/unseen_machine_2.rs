@@ -90,7 +90,7 @@ fn clean_runs_are_flagged_by_nothing_and_ok_means_right() {
 /// (`scripts/bench-unseen.sh --machine unseen-overhung 30 clean-h1`,
 /// session 24): identify prints no k or m `ok` more than 3 of its ± off
 /// (session 23: 22/30 before the variance function), but untrusts B1 for
-/// lack of fit in 4/30 and lists a speed (77.1 Hz) in 6/30 (docs/trust.md,
+/// lack of fit in 4/30 and lists a speed (77.1 Hz) in 6/30 (docs/trust-noise-law.md,
 /// "Session 24"); diagnose names nothing in 30/30, all trusted (session 23:
 /// 21/30 named). The stored seed 1 is one of the clean 26.
 #[test]

@@ -169,7 +169,7 @@ fn each_effect_untrusts_exactly_its_bearing_in_identify() {
 /// low and 117 % high until session 27). The Cramér–Rao bounds of the full
 /// two-mass model on this machine's speeds and noise, with the block's and
 /// the sub-base's masses each one number for y and z, are m ±132 %,
-/// k_y/k_z ±220/200 %, sub-base K ±30 %, M ±69 % (docs/diagnose.md,
+/// k_y/k_z ±220/200 %, sub-base K ±30 %, M ±69 % (docs/diagnose-sub-base.md,
 /// "`pedestal_sub_base` above the range"): the bodies are not separable, so
 /// diagnose names `pedestal_sub_base` (variant `above_range`) at B1 with
 /// the Ω⁴ coefficient per direction and its ±, and leaves B1's values

@@ -40,7 +40,7 @@ pub const PEDESTAL_SUB_BASE: &str = "pedestal_sub_base";
 /// direction is K − Ω²M − Ω⁴Q − …, Q = m₂²r²/(k₁ + k₂) > 0
 /// (`crate::estimate::lack_of_fit::support`): the candidate adds −Ω⁴q_y,
 /// −Ω⁴q_z to the pedestal. The block's and the sub-base's own k and m are
-/// not separable from these (docs/diagnose.md, "pedestal_sub_base above
+/// not separable from these (docs/diagnose-sub-base.md, "pedestal_sub_base above
 /// the range": Cramér–Rao bounds of the full two-mass model, shared
 /// masses, on the fourth unseen machine: m ±132 %, k ±200-220 %), so the
 /// pedestal values stay the support's apparent ones and untrusted

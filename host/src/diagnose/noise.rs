@@ -15,7 +15,7 @@
 //! missing effect from noise, so its noise must come from the data alone
 //! (the local fits), never from the misfit of the model under test.
 //!
-//! Not yet kept everywhere (issue 17, docs/trust.md "Session 24"): where
+//! Not yet kept everywhere (issue 17, docs/trust-noise-law.md "Session 24"): where
 //! the base fit takes identify's variance function
 //! ([`crate::estimate::noise::variance`]: the scatter's law rejected by the
 //! fit's residuals while the model fits within the scatter level's

@@ -382,7 +382,7 @@ pub fn judge_support(conclusion: &mut Conclusion, prep: &Prepared, steps: &[Step
 /// bearing's values untrusted; `None` for any other step. What the data
 /// hold there is the Ω⁴ coefficient per direction (the step's q_y, q_z with
 /// their ±) on top of the apparent stiffness and mass; the block's and the
-/// sub-base's own values are not separable (docs/diagnose.md,
+/// sub-base's own values are not separable (docs/diagnose-sub-base.md,
 /// "`pedestal_sub_base` above the range": Cramér–Rao bounds of the full
 /// two-mass model with shared masses on the fourth unseen machine, m ±132 %,
 /// k ±200-220 %, sub-base K ±30 %, M ±69 %).

@@ -39,7 +39,7 @@
 //!
 //! The rule built on them ([`crate::identify::trust`]) and its false-alarm
 //! and detection rates (measured by `scripts/bench-trust.sh`) are in
-//! docs/trust.md.
+//! docs/trust-lack-of-fit.md.
 
 mod mean;
 mod structure;
@@ -128,7 +128,7 @@ pub fn assess(
     // With noise columns only. A form without them (the score over the
     // extended fit's residual variance) was measured and is not made: on
     // the fourth machine's clean field table (3 digits, 0.1°, through
-    // `plinth import`) it flagged B1 at p = 7e-5 (docs/trust.md, session
+    // `plinth import`) it flagged B1 at p = 7e-5 (docs/trust-support-mode.md, session
     // 29): neighbouring speeds' rounding errors are alike, a smooth Ω⁴
     // column collects them, and a residual variance does not see that
     // correlation (the structure scan's block shuffles do).

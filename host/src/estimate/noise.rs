@@ -50,7 +50,7 @@
 //!    starting from one sd keeps it out instead of letting α take it up.
 //!    What this cannot see: the noise of a resonance that is never
 //!    resolved (its few points left out, the law carried there from the
-//!    rest of the run). docs/trust.md "Session 26" has the measurements.
+//!    rest of the run). docs/trust-noise-law.md "Session 26" has the measurements.
 //!
 //! Without noise columns the model starts from the digits, and the fit
 //! decides: when its χ² says the data scatter significantly more than their

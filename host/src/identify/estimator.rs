@@ -236,7 +236,7 @@ pub(crate) fn fit_ml_checked(
     // response; at a resonance the speed steps do not resolve it is carried
     // from elsewhere and may be far below the noise there, where the
     // physical model's residuals (which follow the resonance) show it
-    // (docs/trust.md "Session 26").
+    // (docs/trust-noise-law.md "Session 26").
     let mut function = None;
     if let Ok(f) = &attempt {
         if noise.source.pattern_on_trial() && f.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE {

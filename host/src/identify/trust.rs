@@ -34,7 +34,7 @@
 //!   support_mode`]: a support with a second mode above the speed range,
 //!   whose χ² excess the level test cannot see; q ≥ 0, chi-bar-squared),
 //!   against the noise columns (made only with them), p below
-//!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (docs/trust.md,
+//!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (docs/trust-support-mode.md,
 //!   session 29, for its measured rates).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
@@ -247,7 +247,7 @@ pub fn bad_speeds(
 
 /// Fewest neighbouring speeds of the run's grid left out as outliers that
 /// make a lack of fit, not outliers: a speed's bad reading may spill into
-/// the next speed's averaging, not into a third (docs/trust.md, session
+/// the next speed's averaging, not into a third (docs/trust-lack-of-fit.md, session
 /// 31: ROSS machine-d's sub-base resonance, 3-4 speeds, was listed as
 /// outliers and its bearing printed `ok`).
 pub const ADJACENT_OUTLIERS: usize = 3;

@@ -1,6 +1,6 @@
 //! The structure test of [`super`]: a scan of a fit's whitened residuals
 //! for a smooth trend in speed, calibrated by shuffling blocks of speeds
-//! (the module docs of [`super`] and docs/trust.md).
+//! (the module docs of [`super`] and docs/trust-lack-of-fit.md).
 
 use super::window::{windows, SCALES};
 use rand::{rngs::StdRng, seq::SliceRandom, SeedableRng};

@@ -40,7 +40,7 @@
 //! (T̄ over the extended fit's residual variance, an F test) was measured in
 //! session 29 and not kept: calibrated on white noise, it flagged the
 //! fourth machine's clean field table, whose rounding errors are alike at
-//! neighbouring speeds (docs/trust.md). Nothing in the test is tuned to a
+//! neighbouring speeds (docs/trust-support-mode.md). Nothing in the test is tuned to a
 //! machine.
 
 use super::super::gauss_helmert::{self as gh, Equations};

@@ -107,7 +107,7 @@ pub fn local_fits(speeds: &[f64]) -> Vec<Option<LocalFit>> {
             let span = (window[w - 1] - window[0]).abs().max(f64::MIN_POSITIVE);
             // Powers 1, x, …, x^(terms−1) of each window point's offset, in
             // fixed-size vectors (no allocation per point: the local fits of
-            // a 20 001-speed run are a hot path, docs/trust.md "Session 27");
+            // a 20 001-speed run are a hot path, docs/trust-noise-law.md "Session 27");
             // a term left out of a reduced fit is 0 here and 1 on XᵀX's
             // diagonal, a block of its own that leaves the fit's block as
             // it is.
@@ -224,7 +224,7 @@ pub(super) fn scatter_law_with(
     // with |X|) is left out before a fraction of |X| is ever fitted; a
     // start that admits it lets α take it up (branch `mixedlaw`, session
     // 25). Measured, a relative start chosen by likelihood on the points
-    // both starts keep did worse on mixed noise (docs/trust.md "Session 26").
+    // both starts keep did worse on mixed noise (docs/trust-noise-law.md "Session 26").
     let mut u: Vec<f64> = samples
         .iter()
         .flat_map(|s| [s.e.re.abs(), s.e.im.abs()].map(|x| x / s.floor.sqrt()))

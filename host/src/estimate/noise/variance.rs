@@ -10,7 +10,7 @@
 //! readings of small amplitude (far from a resonance, where a channel's
 //! magnitude falls by 100–1000×) are given a noise far below their floor: the
 //! fit treats them as nearly exact, and its ± are too small (issue 17,
-//! docs/trust.md "Heteroscedastic noise without noise columns").
+//! docs/trust-noise-law.md "Heteroscedastic noise without noise columns").
 //!
 //! **Model.** Per complex channel ch (rel y, rel z, ped y, ped z) each real
 //! part has the variance v = α_ch·|X_ch|² + β_ch [m²] (α [-], β [m²], both ≥ 0),
@@ -209,7 +209,7 @@ pub fn magnitudes(o: &Observation) -> [f64; 4] {
 /// [`super::BearingNoise::digits_var`]): a number written with 12 digits
 /// carries its rounding, ulp²/12 of its own ulp, which varies tenfold with
 /// the mantissa at one |X|; the law's average fraction is up to 2.4× below
-/// it in sd where the leading digits are small (docs/trust.md "Session 27").
+/// it in sd where the leading digits are small (docs/trust-noise-law.md "Session 27").
 pub fn variances(o: &Observation, p: &[f64; COMPONENTS], floor: &[f64; 8]) -> [f64; 8] {
     let magnitude_sq = magnitudes(o).map(|m| m * m);
     let inv = inv_omega_sq(o);

@@ -74,7 +74,7 @@ const LAW_ITERATIONS: usize = 200;
 /// leaves residuals that grow with |X|, which α would take up). The floor
 /// is never dropped by the test (only where the maximum puts it at zero):
 /// a law without it makes the readings of small |X| nearly exact (the
-/// session-23 failure, docs/trust.md). `start` seeds the iteration. `None`
+/// session-23 failure, docs/trust-noise-law.md). `start` seeds the iteration. `None`
 /// when nothing is finite.
 pub(super) fn fit_law(samples: &[&Sample], start: Law) -> Option<Law> {
     let n = samples.len() as f64;
