@@ -1,6 +1,6 @@
 //! What identify's values and ± are conditional on (issue 17: "a pedestal
 //! value printed as `ok` is right within its ±, also when the model is
-//! wrong"; docs/unseen.md, third machine, items 1-3), tested on data made
+//! wrong"; docs/unseen-train.md, third machine, items 1-3), tested on data made
 //! by ROSS (the third unseen machine's stored runs, scripts/ross_unseen.py
 //! --machine unseen-train) and by the simulator's elements (`plinth::sim`),
 //! never by the estimator:

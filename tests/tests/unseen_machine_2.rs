@@ -9,7 +9,7 @@
 //! scripts/ross_unseen.py's (`--machine unseen-overhung`), seed 1 of each
 //! case kept in tests/data/ross-unseen-2/<case>/; only the reading is
 //! Plinth's. The rates over several seeds are measured by
-//! `scripts/bench-unseen.sh --machine unseen-overhung` (docs/unseen.md).
+//! `scripts/bench-unseen.sh --machine unseen-overhung` (docs/unseen-overhung.md).
 //! What does not work yet is written with the right assertion and ignored
 //! with the measured rate, so it can be un-ignored when fixed.
 

@@ -11,7 +11,7 @@
 //! ROSS 2.3.0's and scripts/ross_unseen.py's (`--machine unseen-train`),
 //! seed 1 of each case kept in tests/data/ross-unseen-3/<case>/; only the
 //! reading is Plinth's. The rates over several seeds are measured by
-//! `scripts/bench-unseen.sh --machine unseen-train` (docs/unseen.md). What
+//! `scripts/bench-unseen.sh --machine unseen-train` (docs/unseen-train.md). What
 //! does not work yet is written with the right assertion and ignored with
 //! the measured rate, so it can be un-ignored when fixed.
 

@@ -14,7 +14,7 @@
 //! scripts/ross_unseen.py's (`--machine unseen-flex`), seed 1 of each case
 //! kept in tests/data/ross-unseen-4/<case>/; only the reading is Plinth's.
 //! The rates over several seeds are measured by `scripts/bench_unseen.py
-//! --machine unseen-flex` (docs/unseen.md). What does not work yet is
+//! --machine unseen-flex` (docs/unseen-flex.md). What does not work yet is
 //! written with the right assertion and ignored with the measured rate.
 
 use plinth::diagnose::report::Diagnosis;

@@ -275,7 +275,7 @@ pub fn profile(
     // through the bearing force) counts as misfit, and the minimum moves
     // towards the value that carries less of it: a clearance ratio of
     // 1.011-1.014 (~3 ± off 1) at an oil film under the third unseen
-    // machine's noise where the true ratio is 1 (docs/unseen.md, item 6).
+    // machine's noise where the true ratio is 1 (docs/unseen-train.md, item 6).
     let objective = |s: f64| -> Result<f64> {
         let mut at = nl.to_vec();
         at[k] = s;

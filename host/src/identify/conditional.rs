@@ -3,7 +3,7 @@
 //! the ± when the user gives it (`--table-uncertainty PCT`).
 //!
 //! Two things no reading of the data can check, both honest fits of the
-//! model (docs/unseen.md, third machine, items 1 and 2):
+//! model (docs/unseen-train.md, third machine, items 1 and 2):
 //!
 //! - The values are the support's **apparent** (equivalent) k, c, m over
 //!   the measured speeds. A support with more inside it (a sub-base, a

@@ -50,7 +50,7 @@
 //!   ratio only when every speed's error has the same variance: with
 //!   proportional noise a few resonance speeds dominate r, and a reading
 //!   can have a clearly smaller r and a worse χ² (clean data named
-//!   `speed_in_rpm`, docs/unseen.md "third machine"). So the named reading
+//!   `speed_in_rpm`, docs/unseen-train.md "third machine"). So the named reading
 //!   must also have the smallest χ²: a weighted ratio ν·ln(χ²_b/χ²_a) ≥ 0.
 //!   (Asking it to be decisive as well loses a y-z swap on a simulated
 //!   machine with estimated noise, tests/tests/identify_conventions.rs.)
@@ -71,7 +71,7 @@
 //! ([`decide::run_prefers`]): speeds in rpm only rescale a pedestal whose
 //! bearing force is almost all stiffness (m·3600, c·60), so that pedestal
 //! alone cannot tell the units apart, while the bearings with damping can
-//! (docs/unseen.md, third machine, item 3).
+//! (docs/unseen-train.md, third machine, item 3).
 //!
 //! Every reading is first fitted by the paper's OLS, whose relative residual
 //! bounds that of any estimate from below; only the readings that bound

@@ -27,7 +27,7 @@
 //! as Hz give the same pedestal with m·3600 and c·60 and an unchanged k
 //! (every frequency /60), and where the bearing force is almost all
 //! stiffness the two readings fit alike (an 85 kg bracket at 46 Hz reads
-//! as 3e5 kg sagging 0.42 m; docs/unseen.md, third machine). The
+//! as 3e5 kg sagging 0.42 m; docs/unseen-train.md, third machine). The
 //! convention check ([`super::convention`]) counts a reading with any
 //! finding here as not plausible, so it never names such a reading.
 //! Velocity declared as displacement and mixed phase conventions do change

@@ -418,7 +418,7 @@ fn only_a_passive_decisive_reading_at_the_floor_is_named() {
         None
     );
     // A smaller r but a worse χ² than the data as found (not passive):
-    // nothing named (clean data named speed_in_rpm, docs/unseen.md).
+    // nothing named (clean data named speed_in_rpm, docs/unseen-train.md).
     assert_eq!(
         named(&[
             reading(None, 0.994, 1.04e-3, false),
