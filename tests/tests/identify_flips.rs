@@ -9,7 +9,7 @@
 //! (`robust::keyphasor_flips`) judges, and what it cannot confirm the other
 //! bearing judges (`robust::confirmed_across`). The rates over several seeds:
 //! `BENCH_JOBS=1 python3 scripts/bench_unseen.py --machine unseen-flex
-//! PLINTH DIR 5 flips` (docs/robustness.md, "Keyphasor flips on the fourth
+//! PLINTH DIR 5 flips` (docs/trust-flips.md, "Keyphasor flips on the fourth
 //! unseen machine").
 
 use plinth::identify::Identification;
