@@ -283,7 +283,7 @@ impl fmt::Display for Convention {
 /// of negated terms is the negated sum, exactly): every step of the fit
 /// (the OLS start, the ML iteration, the noise level, the variance law,
 /// the outliers, the equation error) is the negation of the step as found.
-/// Measured (docs/engine.md, session 28): on 57 runs the ML fit of the
+/// Measured (docs/engine-instructions.md, session 28): on 57 runs the ML fit of the
 /// data with `rel` negated is the fit as found with k, m, c negated and the
 /// same standard errors, bit for bit. A reading reads the parameters, the
 /// standard errors, the speed range and the fixed parameters only; a named
