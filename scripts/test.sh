@@ -52,4 +52,6 @@ step "cross-build: plinth-box, the board image (STM32F407G-DISC1 + AD7606)"
 bash scripts/build-box.sh
 
 step "tests (host, simulated hardware, QEMU end to end)"
-cargo test --workspace --release
+# `cargo test --workspace --release`, two test binaries at a time (the
+# script says why; TEST_JOBS sets how many).
+bash scripts/run-tests.sh
