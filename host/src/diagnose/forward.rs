@@ -6,7 +6,7 @@ use super::candidates::{library, Candidate, ParamRef};
 use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
 use super::fit::{fit_group, jacobian, profile, search_interval};
-use super::model::{Params, Term};
+use super::model::{Model, Params, Term};
 use super::state::State;
 use anyhow::{anyhow, bail, Result};
 use nalgebra::{DMatrix, DVector};
@@ -300,10 +300,7 @@ pub fn freed_held(
     bearing: usize,
     alpha: f64,
 ) -> State {
-    let held: Vec<Term> = (0..2)
-        .map(|dir| Term::Damping { bearing, dir })
-        .filter(|t| before.model.terms.contains(t) && !next.model.terms.contains(t))
-        .collect();
+    let held = held_terms(&before.model, &next.model, bearing);
     if held.is_empty() {
         return next;
     }
@@ -322,6 +319,15 @@ pub fn freed_held(
         Some(ev) if ev.delta_bic > 0.0 && ev.p_value < alpha => freed,
         _ => next,
     }
+}
+
+/// The pedestal dampings at `bearing` that `before` estimates and `after`
+/// lacks: those a held variant ([`held_at_zero`]) holds at zero.
+pub fn held_terms(before: &Model, after: &Model, bearing: usize) -> Vec<Term> {
+    (0..2)
+        .map(|dir| Term::Damping { bearing, dir })
+        .filter(|t| before.terms.contains(t) && !after.terms.contains(t))
+        .collect()
 }
 
 /// `candidate` with the dampings in `held` at its bearing removed from its
@@ -379,3 +385,6 @@ fn held_at_zero(candidate: &Candidate, held: &[Term]) -> Option<Candidate> {
         .collect::<Option<_>>()?;
     Some(c)
 }
+
+#[cfg(test)]
+mod tests;

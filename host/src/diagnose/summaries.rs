@@ -133,10 +133,11 @@ pub(super) fn held_dampings(
 ) -> Option<HeldDamping> {
     use super::model::Term;
     let b = cand.bearing;
-    let dirs: Vec<usize> = (0..2)
-        .filter(|&dir| {
-            let t = Term::Damping { bearing: b, dir };
-            before.model.terms.contains(&t) && !after.model.terms.contains(&t)
+    let dirs: Vec<usize> = super::forward::held_terms(&before.model, &after.model, b)
+        .iter()
+        .filter_map(|t| match *t {
+            Term::Damping { dir, .. } => Some(dir),
+            _ => None,
         })
         .collect();
     if dirs.is_empty() {
