@@ -36,9 +36,63 @@ pub fn read_to_string(path: &Path) -> std::io::Result<String> {
             ),
         ));
     }
-    let text = std::fs::read_to_string(path)?;
+    let text = utf8_text(std::fs::read(path)?)?;
     check_line_lengths(&text)?;
     Ok(text)
+}
+
+/// The UTF-8 byte-order mark, which editors on Windows write at the start
+/// of a text file; formats.md's files are UTF-8 with or without it.
+pub const UTF8_BOM: &[u8] = &[0xEF, 0xBB, 0xBF];
+
+/// `bytes` as UTF-8 text without its byte-order mark (JSON readers refuse
+/// one at "line 1 column 1"). UTF-16 ([`utf16_found`]) is named as such;
+/// any other byte that is not UTF-8 is named by its line and column
+/// [1-based] and value, never echoing the line: a Latin-1 or Windows-1252
+/// file (an accented name) otherwise failed with "stream did not contain
+/// valid UTF-8" and no place.
+pub fn utf8_text(mut bytes: Vec<u8>) -> std::io::Result<String> {
+    if let Some(found) = utf16_found(&bytes) {
+        return Err(Error::new(
+            ErrorKind::InvalidData,
+            format!("{found}; expected UTF-8 text: convert it (iconv -f UTF-16 -t UTF-8)"),
+        ));
+    }
+    if bytes.starts_with(UTF8_BOM) {
+        bytes.drain(..UTF8_BOM.len());
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let good = String::from_utf8_lossy(&bytes[..at]);
+        let line = good.matches('\n').count() + 1;
+        let column = good.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        Error::new(
+            ErrorKind::InvalidData,
+            format!(
+                "line {line}, column {column}: byte 0x{:02X} is not UTF-8 (a Latin-1 or Windows-1252 file?): save it as UTF-8 (iconv -f WINDOWS-1252 -t UTF-8)",
+                bytes[at]
+            ),
+        )
+    })
+}
+
+/// What the first bytes of a file say if it is UTF-16 text: its byte-order
+/// mark, or NUL bytes between its characters (a quarter or more of its first
+/// 200 bytes); `None` otherwise. The phrase names what was found, for the
+/// caller to add what is expected.
+pub fn utf16_found(head: &[u8]) -> Option<String> {
+    if head.starts_with(&[0xFF, 0xFE]) || head.starts_with(&[0xFE, 0xFF]) {
+        let order = if head[0] == 0xFF { "little" } else { "big" };
+        return Some(format!(
+            "the file is UTF-16 text ({order}-endian byte-order mark {:02X} {:02X})",
+            head[0], head[1]
+        ));
+    }
+    let zeros = head.iter().take(200).filter(|&&b| b == 0).count();
+    (zeros > 0 && zeros * 4 >= head.len().min(200)).then(|| {
+        "the file has NUL bytes between its characters (UTF-16 without a byte-order mark?)".into()
+    })
 }
 
 /// The largest text file [`read_to_string`] reads whole [bytes]: 64 MiB

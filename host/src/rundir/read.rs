@@ -190,6 +190,23 @@ fn check_truth_bearings(
     truth: &Truth,
     path: &Path,
 ) -> Result<Option<String>, RunDirError> {
+    if let Some(twice) = truth.pedestals.iter().enumerate().find_map(|(i, p)| {
+        truth.pedestals[..i]
+            .iter()
+            .any(|q| q.bearing == p.bearing)
+            .then_some(p)
+    }) {
+        let (line, column) = place_in(path, &twice.bearing, 2);
+        return Err(RunDirError::Truth {
+            file: path.to_path_buf(),
+            line,
+            column,
+            message: format!(
+                "pedestal `{}` is listed twice: one bearing has one pedestal (which of the two values is the truth?)",
+                twice.bearing
+            ),
+        });
+    }
     let measured = run.measured_bearings();
     let Some(p) = truth
         .pedestals
@@ -214,13 +231,7 @@ fn check_truth_bearings(
             )
         }));
     };
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let needle = format!("\"{}\"", p.bearing);
-    let (line, column) = text
-        .lines()
-        .enumerate()
-        .find_map(|(i, l)| l.find(&needle).map(|c| (i + 1, c + 1)))
-        .unwrap_or((1, 1));
+    let (line, column) = place_in(path, &p.bearing, 1);
     Err(RunDirError::Truth {
         file: path.to_path_buf(),
         line,
@@ -235,4 +246,20 @@ fn check_truth_bearings(
                 .join(", ")
         ),
     })
+}
+
+/// The line and column [1-based] of the `nth` (1-based) place where the JSON
+/// file at `path` writes the string `name` (quoted), or (1, 1): serde's
+/// values carry no position, so an error about a value is placed by its text.
+fn place_in(path: &Path, name: &str, nth: usize) -> (usize, usize) {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let needle = format!("\"{name}\"");
+    text.lines()
+        .enumerate()
+        .flat_map(|(i, l)| {
+            l.match_indices(&needle)
+                .map(move |(c, _)| (i + 1, l[..c].chars().count() + 1))
+        })
+        .nth(nth.saturating_sub(1))
+        .unwrap_or((1, 1))
 }
