@@ -285,6 +285,23 @@ mod tests {
     use super::*;
 
     #[test]
+    fn text_that_is_not_utf8_is_named_by_line_column_and_byte() {
+        let text = |b: &[u8]| utf8_text(b.to_vec()).map_err(|e| e.to_string());
+        assert_eq!(text(b"\xEF\xBB\xBFa = 1\n").unwrap(), "a = 1\n");
+        assert_eq!(text("µ = 1\n".as_bytes()).unwrap(), "µ = 1\n");
+        let e = text(b"a = 1\nname = \"l\xE9ft\"\n").unwrap_err();
+        assert!(
+            e.starts_with("line 2, column 10: byte 0xE9 is not UTF-8"),
+            "{e}"
+        );
+        let e = text(b"\xFF\xFEa\0=\0").unwrap_err();
+        assert!(e.contains("UTF-16 text (little-endian"), "{e}");
+        let e = text(b"a\0 \0=\0 \01\0").unwrap_err();
+        assert!(e.contains("NUL bytes between its characters"), "{e}");
+        assert!(utf16_found(b"a = 1\n").is_none());
+    }
+
+    #[test]
     fn toml_errors_name_line_and_column_without_the_whole_line() {
         #[derive(serde::Deserialize, Debug)]
         #[allow(dead_code)]
