@@ -115,3 +115,23 @@ fn a_machine_file_in_latin_1_or_utf_16_is_named_with_its_place() {
     let read = Machine::from_toml_path(&bom).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(read.bearings.len(), plain.bearings.len());
 }
+
+#[test]
+fn a_speed_listed_twice_is_refused_before_a_run_no_reader_takes_is_written() {
+    // `simulate --speeds 5,5,10` wrote two rows per bearing at 5 Hz, which
+    // every reader then refused ("duplicate row for speed 5 Hz"); `accuracy`
+    // counted the speed twice. The option is refused, naming the speed.
+    for list in ["5,5,10", "10,5,5.0", "65536:65536.00001:5e-12"] {
+        let e = plinth::sim::cli::parse_speeds(list)
+            .expect_err(list)
+            .to_string();
+        assert!(
+            e.starts_with("--speeds ") && e.contains("Hz comes twice"),
+            "{e}"
+        );
+    }
+    assert_eq!(
+        plinth::sim::cli::parse_speeds("10,5").unwrap(),
+        vec![10.0, 5.0]
+    );
+}
