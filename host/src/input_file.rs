@@ -77,6 +77,31 @@ pub fn utf8_text(mut bytes: Vec<u8>) -> std::io::Result<String> {
     })
 }
 
+/// The line and column [1-based] of the `nth` (1-based) place where the
+/// JSON file at `path` writes `"key": "value"`, at the value, or (1, 1):
+/// serde's values carry no position, so an error about a value (a bearing
+/// listed twice) is placed by its text.
+pub fn json_value_place(path: &Path, key: &str, value: &str, nth: usize) -> (usize, usize) {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let (key, value) = (format!("\"{key}\""), format!("\"{value}\""));
+    let at = text
+        .match_indices(&key)
+        .filter_map(|(k, _)| {
+            let rest = text[k + key.len()..].trim_start().strip_prefix(':')?;
+            let v = rest.trim_start();
+            v.starts_with(&value).then(|| text.len() - v.len())
+        })
+        .nth(nth.saturating_sub(1));
+    at.map_or((1, 1), |at| {
+        let before = &text[..at];
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        (
+            before.matches('\n').count() + 1,
+            before[line_start..].chars().count() + 1,
+        )
+    })
+}
+
 /// What the first bytes of a file say if it is UTF-16 text: its byte-order
 /// mark, or NUL bytes between its characters (a quarter or more of its first
 /// 200 bytes); `None` otherwise. The phrase names what was found, for the
@@ -283,6 +308,18 @@ pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_json_value_is_placed_at_its_nth_key_value_pair_only() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("id.json");
+        let text = "{\"noise\": {\"left\": 1},\n \"p\": [{\"bearing\": \"left\"},\n  {\"bearing\":\n   \"left\"}]}";
+        std::fs::write(&path, text).unwrap();
+        assert_eq!(json_value_place(&path, "bearing", "left", 1), (2, 20));
+        assert_eq!(json_value_place(&path, "bearing", "left", 2), (4, 4));
+        assert_eq!(json_value_place(&path, "bearing", "left", 3), (1, 1));
+        assert_eq!(json_value_place(&path, "bearing", "right", 1), (1, 1));
+    }
 
     #[test]
     fn text_that_is_not_utf8_is_named_by_line_column_and_byte() {

@@ -135,3 +135,34 @@ fn a_speed_listed_twice_is_refused_before_a_run_no_reader_takes_is_written() {
         vec![10.0, 5.0]
     );
 }
+
+#[test]
+fn an_identification_listing_a_pedestal_twice_is_refused_by_predict() {
+    // Two identifications pasted into one file: `predict` applied the
+    // last `left` without a word (its gap went from 7 % to 26 % on the
+    // example). Placed at the second `"bearing": "left"`, not at the
+    // noise section's `"left"` key.
+    let t = tempfile::tempdir().unwrap();
+    let path = t.path().join("id.json");
+    let one = serde_json::json!({"bearing": "left", "k_y": 1e7, "k_z": 8e6, "m": 80.0,
+                                 "c_y": 100.0, "c_z": 90.0, "trusted": true});
+    let mut other = one.clone();
+    other["k_y"] = serde_json::json!(2e7);
+    let file = serde_json::json!({"noise": {"left": {"sd": 1e-9}}, "pedestals": [one, other]});
+    let text = serde_json::to_string_pretty(&file).unwrap();
+    std::fs::write(&path, &text).unwrap();
+    let second = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.contains("\"bearing\": \"left\""))
+        .nth(1)
+        .map(|(i, _)| i + 1)
+        .unwrap();
+    let e = plinth::sim::predict::read_identified(&path)
+        .expect_err("a pedestal twice")
+        .to_string();
+    assert!(
+        e.contains(&format!("id.json:{second}:")) && e.contains("\"left\" is listed twice"),
+        "{e}"
+    );
+}

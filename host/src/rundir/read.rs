@@ -196,7 +196,8 @@ fn check_truth_bearings(
             .any(|q| q.bearing == p.bearing)
             .then_some(p)
     }) {
-        let (line, column) = place_in(path, &twice.bearing, 2);
+        let (line, column) =
+            crate::input_file::json_value_place(path, "bearing", &twice.bearing, 2);
         return Err(RunDirError::Truth {
             file: path.to_path_buf(),
             line,
@@ -231,7 +232,7 @@ fn check_truth_bearings(
             )
         }));
     };
-    let (line, column) = place_in(path, &p.bearing, 1);
+    let (line, column) = crate::input_file::json_value_place(path, "bearing", &p.bearing, 1);
     Err(RunDirError::Truth {
         file: path.to_path_buf(),
         line,
@@ -246,20 +247,4 @@ fn check_truth_bearings(
                 .join(", ")
         ),
     })
-}
-
-/// The line and column [1-based] of the `nth` (1-based) place where the JSON
-/// file at `path` writes the string `name` (quoted), or (1, 1): serde's
-/// values carry no position, so an error about a value is placed by its text.
-fn place_in(path: &Path, name: &str, nth: usize) -> (usize, usize) {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let needle = format!("\"{name}\"");
-    text.lines()
-        .enumerate()
-        .flat_map(|(i, l)| {
-            l.match_indices(&needle)
-                .map(move |(c, _)| (i + 1, l[..c].chars().count() + 1))
-        })
-        .nth(nth.saturating_sub(1))
-        .unwrap_or((1, 1))
 }
