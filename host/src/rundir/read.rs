@@ -190,12 +190,12 @@ fn check_truth_bearings(
     truth: &Truth,
     path: &Path,
 ) -> Result<Option<String>, RunDirError> {
-    if let Some(twice) = truth.pedestals.iter().enumerate().find_map(|(i, p)| {
-        truth.pedestals[..i]
-            .iter()
-            .any(|q| q.bearing == p.bearing)
-            .then_some(p)
-    }) {
+    let mut seen = std::collections::HashSet::new();
+    if let Some(twice) = truth
+        .pedestals
+        .iter()
+        .find(|p| !seen.insert(p.bearing.as_str()))
+    {
         let (line, column) =
             crate::input_file::json_value_place(path, "bearing", &twice.bearing, 2);
         return Err(RunDirError::Truth {

@@ -148,8 +148,9 @@ pub fn read_identified(path: &Path) -> anyhow::Result<Vec<IdentifiedPedestal>> {
     }
     // One bearing has one pedestal: a file listing one twice (two
     // identifications pasted together) would be applied last-one-wins.
-    for (i, p) in file.pedestals.iter().enumerate() {
-        if file.pedestals[..i].iter().any(|q| q.bearing == p.bearing) {
+    let mut seen = std::collections::HashSet::new();
+    for p in &file.pedestals {
+        if !seen.insert(p.bearing.as_str()) {
             let (line, column) =
                 crate::input_file::json_value_place(path, "bearing", &p.bearing, 2);
             bail!(
