@@ -333,7 +333,7 @@ mod tests {
         );
         let e = text(b"\xFF\xFEa\0=\0").unwrap_err();
         assert!(e.contains("UTF-16 text (little-endian"), "{e}");
-        let e = text(b"a\0 \0=\0 \01\0").unwrap_err();
+        let e = text(b"a\0 \0=\0 \0\x31\0").unwrap_err();
         assert!(e.contains("NUL bytes between its characters"), "{e}");
         assert!(utf16_found(b"a = 1\n").is_none());
     }
