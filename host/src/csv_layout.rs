@@ -74,21 +74,13 @@ pub fn open_stream(
 /// [`check`] on the first bytes of a file.
 pub fn describe(head: &[u8], expected: &str) -> Result<Layout, LayoutError> {
     let at1 = |m: String| Err(LayoutError::At(1, m));
-    if head.starts_with(&[0xFF, 0xFE]) || head.starts_with(&[0xFE, 0xFF]) {
-        let order = if head[0] == 0xFF { "little" } else { "big" };
+    if let Some(found) = crate::input_file::utf16_found(head) {
         return at1(format!(
-            "the file is UTF-16 text ({order}-endian byte-order mark {:02X} {:02X}); expected UTF-8: save it as \"CSV UTF-8\" (Excel) or convert it (iconv -f UTF-16 -t UTF-8)",
-            head[0], head[1]
+            "{found}; expected UTF-8: save it as \"CSV UTF-8\" (Excel) or convert it (iconv -f UTF-16 -t UTF-8)"
         ));
     }
-    let zeros = head.iter().take(200).filter(|&&b| b == 0).count();
-    if zeros > 0 && zeros * 4 >= head.len().min(200) {
-        return at1(
-            "the file has NUL bytes between its characters (UTF-16 without a byte-order mark?); expected UTF-8 text: convert it (iconv -f UTF-16 -t UTF-8)".into(),
-        );
-    }
-    let skip = if head.starts_with(&[0xEF, 0xBB, 0xBF]) {
-        3
+    let skip = if head.starts_with(crate::input_file::UTF8_BOM) {
+        crate::input_file::UTF8_BOM.len()
     } else {
         0
     };

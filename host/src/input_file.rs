@@ -36,9 +36,88 @@ pub fn read_to_string(path: &Path) -> std::io::Result<String> {
             ),
         ));
     }
-    let text = std::fs::read_to_string(path)?;
+    let text = utf8_text(std::fs::read(path)?)?;
     check_line_lengths(&text)?;
     Ok(text)
+}
+
+/// The UTF-8 byte-order mark, which editors on Windows write at the start
+/// of a text file; formats.md's files are UTF-8 with or without it.
+pub const UTF8_BOM: &[u8] = &[0xEF, 0xBB, 0xBF];
+
+/// `bytes` as UTF-8 text without its byte-order mark (JSON readers refuse
+/// one at "line 1 column 1"). UTF-16 ([`utf16_found`]) is named as such;
+/// any other byte that is not UTF-8 is named by its line and column
+/// [1-based] and value, never echoing the line: a Latin-1 or Windows-1252
+/// file (an accented name) otherwise failed with "stream did not contain
+/// valid UTF-8" and no place.
+pub fn utf8_text(mut bytes: Vec<u8>) -> std::io::Result<String> {
+    if let Some(found) = utf16_found(&bytes) {
+        return Err(Error::new(
+            ErrorKind::InvalidData,
+            format!("{found}; expected UTF-8 text: convert it (iconv -f UTF-16 -t UTF-8)"),
+        ));
+    }
+    if bytes.starts_with(UTF8_BOM) {
+        bytes.drain(..UTF8_BOM.len());
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let good = String::from_utf8_lossy(&bytes[..at]);
+        let line = good.matches('\n').count() + 1;
+        let column = good.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        Error::new(
+            ErrorKind::InvalidData,
+            format!(
+                "line {line}, column {column}: byte 0x{:02X} is not UTF-8 (a Latin-1 or Windows-1252 file?): save it as UTF-8 (iconv -f WINDOWS-1252 -t UTF-8)",
+                bytes[at]
+            ),
+        )
+    })
+}
+
+/// The line and column [1-based] of the `nth` (1-based) place where the
+/// JSON file at `path` writes `"key": "value"`, at the value, or (1, 1):
+/// serde's values carry no position, so an error about a value (a bearing
+/// listed twice) is placed by its text.
+pub fn json_value_place(path: &Path, key: &str, value: &str, nth: usize) -> (usize, usize) {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let (key, value) = (format!("\"{key}\""), format!("\"{value}\""));
+    let at = text
+        .match_indices(&key)
+        .filter_map(|(k, _)| {
+            let rest = text[k + key.len()..].trim_start().strip_prefix(':')?;
+            let v = rest.trim_start();
+            v.starts_with(&value).then(|| text.len() - v.len())
+        })
+        .nth(nth.saturating_sub(1));
+    at.map_or((1, 1), |at| {
+        let before = &text[..at];
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        (
+            before.matches('\n').count() + 1,
+            before[line_start..].chars().count() + 1,
+        )
+    })
+}
+
+/// What the first bytes of a file say if it is UTF-16 text: its byte-order
+/// mark, or NUL bytes between its characters (a quarter or more of its first
+/// 200 bytes); `None` otherwise. The phrase names what was found, for the
+/// caller to add what is expected.
+pub fn utf16_found(head: &[u8]) -> Option<String> {
+    if head.starts_with(&[0xFF, 0xFE]) || head.starts_with(&[0xFE, 0xFF]) {
+        let order = if head[0] == 0xFF { "little" } else { "big" };
+        return Some(format!(
+            "the file is UTF-16 text ({order}-endian byte-order mark {:02X} {:02X})",
+            head[0], head[1]
+        ));
+    }
+    let zeros = head.iter().take(200).filter(|&&b| b == 0).count();
+    (zeros > 0 && zeros * 4 >= head.len().min(200)).then(|| {
+        "the file has NUL bytes between its characters (UTF-16 without a byte-order mark?)".into()
+    })
 }
 
 /// The largest text file [`read_to_string`] reads whole [bytes]: 64 MiB
@@ -229,6 +308,35 @@ pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_json_value_is_placed_at_its_nth_key_value_pair_only() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("id.json");
+        let text = "{\"noise\": {\"left\": 1},\n \"p\": [{\"bearing\": \"left\"},\n  {\"bearing\":\n   \"left\"}]}";
+        std::fs::write(&path, text).unwrap();
+        assert_eq!(json_value_place(&path, "bearing", "left", 1), (2, 20));
+        assert_eq!(json_value_place(&path, "bearing", "left", 2), (4, 4));
+        assert_eq!(json_value_place(&path, "bearing", "left", 3), (1, 1));
+        assert_eq!(json_value_place(&path, "bearing", "right", 1), (1, 1));
+    }
+
+    #[test]
+    fn text_that_is_not_utf8_is_named_by_line_column_and_byte() {
+        let text = |b: &[u8]| utf8_text(b.to_vec()).map_err(|e| e.to_string());
+        assert_eq!(text(b"\xEF\xBB\xBFa = 1\n").unwrap(), "a = 1\n");
+        assert_eq!(text("µ = 1\n".as_bytes()).unwrap(), "µ = 1\n");
+        let e = text(b"a = 1\nname = \"l\xE9ft\"\n").unwrap_err();
+        assert!(
+            e.starts_with("line 2, column 10: byte 0xE9 is not UTF-8"),
+            "{e}"
+        );
+        let e = text(b"\xFF\xFEa\0=\0").unwrap_err();
+        assert!(e.contains("UTF-16 text (little-endian"), "{e}");
+        let e = text(b"a\0 \0=\0 \0\x31\0").unwrap_err();
+        assert!(e.contains("NUL bytes between its characters"), "{e}");
+        assert!(utf16_found(b"a = 1\n").is_none());
+    }
 
     #[test]
     fn toml_errors_name_line_and_column_without_the_whole_line() {

@@ -441,6 +441,7 @@ pub fn reproduce_with(
             bearing: fit.bearing.clone(),
             pedestal: fit.pedestal,
             std_err: None,
+            trusted: None,
         };
         machine
             .set_pedestal(&p.bearing, Some(p.params()?))

@@ -190,6 +190,24 @@ fn check_truth_bearings(
     truth: &Truth,
     path: &Path,
 ) -> Result<Option<String>, RunDirError> {
+    let mut seen = std::collections::HashSet::new();
+    if let Some(twice) = truth
+        .pedestals
+        .iter()
+        .find(|p| !seen.insert(p.bearing.as_str()))
+    {
+        let (line, column) =
+            crate::input_file::json_value_place(path, "bearing", &twice.bearing, 2);
+        return Err(RunDirError::Truth {
+            file: path.to_path_buf(),
+            line,
+            column,
+            message: format!(
+                "pedestal `{}` is listed twice: one bearing has one pedestal (which of the two values is the truth?)",
+                twice.bearing
+            ),
+        });
+    }
     let measured = run.measured_bearings();
     let Some(p) = truth
         .pedestals
@@ -214,13 +232,7 @@ fn check_truth_bearings(
             )
         }));
     };
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let needle = format!("\"{}\"", p.bearing);
-    let (line, column) = text
-        .lines()
-        .enumerate()
-        .find_map(|(i, l)| l.find(&needle).map(|c| (i + 1, c + 1)))
-        .unwrap_or((1, 1));
+    let (line, column) = crate::input_file::json_value_place(path, "bearing", &p.bearing, 1);
     Err(RunDirError::Truth {
         file: path.to_path_buf(),
         line,

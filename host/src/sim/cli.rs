@@ -115,6 +115,17 @@ pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
     if speeds.is_empty() {
         bail!("--speeds {text}: no speeds");
     }
+    // formats.md: the same (speed_hz, bearing) twice is an error, so a
+    // repeated speed (listed twice, or a STEP below the doubles' spacing at
+    // START) would give a run every reader refuses.
+    let mut sorted = speeds.clone();
+    sorted.sort_by(f64::total_cmp);
+    if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+        bail!(
+            "--speeds {text}: {} Hz comes twice (a run has one row per speed and bearing)",
+            crate::rundir::format_number(w[0])
+        );
+    }
     Ok(speeds)
 }
 
@@ -222,5 +233,9 @@ mod tests {
         assert_eq!(parse_speeds("1.5, 2").unwrap(), vec![1.5, 2.0]);
         assert!(parse_speeds("5:1:1").is_err());
         assert!(parse_speeds("a:b").is_err());
+        let twice = |t: &str| parse_speeds(t).unwrap_err().to_string();
+        assert!(twice("5,10,5.0").contains("5 Hz comes twice"));
+        assert!(twice("65536:65536.00001:5e-12").contains("comes twice"));
+        assert_eq!(parse_speeds("10,5").unwrap(), vec![10.0, 5.0]);
     }
 }

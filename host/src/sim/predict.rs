@@ -42,6 +42,10 @@ pub struct IdentifiedPedestal {
         deserialize_with = "crate::estimate::params::optional_std_err"
     )]
     pub std_err: Option<Pedestal>,
+    /// `false` when the identification says its numbers must not be used
+    /// as they are (formats.md `trusted`); absent in older files.
+    #[serde(default)]
+    pub trusted: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -142,18 +146,52 @@ pub fn read_identified(path: &Path) -> anyhow::Result<Vec<IdentifiedPedestal>> {
     if file.pedestals.is_empty() {
         bail!("{}: no pedestals", path.display());
     }
+    // One bearing has one pedestal: a file listing one twice (two
+    // identifications pasted together) would be applied last-one-wins.
+    let mut seen = std::collections::HashSet::new();
+    for p in &file.pedestals {
+        if !seen.insert(p.bearing.as_str()) {
+            let (line, column) =
+                crate::input_file::json_value_place(path, "bearing", &p.bearing, 2);
+            bail!(
+                "{}:{line}:{column}: pedestal {:?} is listed twice: one bearing has one pedestal (two identifications in one file?)",
+                path.display(),
+                p.bearing
+            );
+        }
+    }
     Ok(file.pedestals)
 }
 
 /// Replaces the machine's pedestals with the identified ones (by bearing).
+/// A pedestal the identification marks untrusted is used with a warning; a
+/// machine bearing the identification does not list keeps the machine
+/// file's pedestal, said in a note.
 pub fn apply_identified(
     machine: &mut Machine,
     pedestals: &[IdentifiedPedestal],
 ) -> anyhow::Result<()> {
+    for name in machine.bearing_names() {
+        let kept = machine
+            .bearings
+            .iter()
+            .any(|b| b.name == name && b.pedestal.is_some());
+        if kept && !pedestals.iter().any(|p| p.bearing == name) {
+            eprintln!(
+                "note: bearing {name:?} has no identified pedestal: re-predicted with the machine file's"
+            );
+        }
+    }
     for p in pedestals {
         let (params, notes) = p.params_with_notes()?;
         for n in notes {
             eprintln!("note: {n}");
+        }
+        if p.trusted == Some(false) {
+            eprintln!(
+                "warning: pedestal {:?} is UNTRUSTED in the identification (its `warnings` say why): the prediction uses numbers that must not be used as they are",
+                p.bearing
+            );
         }
         machine
             .set_pedestal(&p.bearing, Some(params))
@@ -396,6 +434,7 @@ mod tests {
             bearing: "left".into(),
             pedestal: Pedestal::from_theta([1e7, 1e7, 100.0, -1.0, 0.0]),
             std_err: None,
+            trusted: None,
         };
         assert!(p.params().unwrap_err().to_string().contains("c_y"));
         // Within two standard errors of zero: zero, and said so.
