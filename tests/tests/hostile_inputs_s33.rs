@@ -1,4 +1,4 @@
-//! Inputs found wanting by the session-33 hostile probe (docs/session33-probe11.md):
+//! Inputs found wanting by the session-33 hostile probe (docs/robustness-hostile.md):
 //! a TOML or JSON file that is not UTF-8 failed with "stream did not contain
 //! valid UTF-8" and no place, a `truth.json` saved with a byte-order mark
 //! failed at "line 1 column 1", and a `truth.json` listing one bearing's
