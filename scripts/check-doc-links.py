@@ -9,6 +9,7 @@
    scripts) names a page that exists, and a heading of it that starts with the quoted
    text (case and backticks ignored). A quote that is no heading of the page (a bold
    paragraph's title, a table's row) is listed as a warning, not a failure.
+3. Every bare path `docs/PAGE.md` in those files names a page that exists.
 
 Usage: python3 scripts/check-doc-links.py [--quiet]
 """
@@ -76,6 +77,10 @@ def check_links(failures):
 MENTION = re.compile(r"((?:docs/)?[\w.-]+\.md)\)?,?\s+\"([^\"]{3,120})\"")
 
 
+# A bare path of a page in docs/ (`docs/trust.md`), wherever it is written.
+BARE = re.compile(r"(?<![\w/.-])(docs/[\w.-]+\.md)")
+
+
 def mentions(text):
     """(page, quote) pairs of `PAGE.md "Heading"` mentions, comment prefixes joined."""
     joined = re.sub(r"\n\s*(?://[/!]?|#)?\s*", " ", text)
@@ -93,6 +98,9 @@ def check_mentions(failures, warnings):
             text = f.read_text()
         except UnicodeDecodeError:
             continue
+        for path in set(BARE.findall(text)):
+            if not (ROOT / path).is_file():
+                failures.append(f"{f.relative_to(ROOT)}: {path}: no such page")
         for name, quote in mentions(text):
             name = name.removeprefix("docs/")
             page = ROOT / "docs" / name if name != "README.md" else ROOT / "README.md"
