@@ -99,9 +99,20 @@ fn train_delay_named_alone(case: &str) -> Diagnosis {
 /// (clearance ratio 0.975), then a 16 µs delay and mass anisotropy,
 /// untrusted. A held winner must now also beat the state on the search's
 /// one yardstick (χ² with the BIC's penalty): the delay alone, τ in its
-/// error, trusted.
+/// error, trusted; the table correction, ranked above it, is said to be
+/// passed over and why (in the JSON and the text).
 #[test]
 fn train_delay_beats_a_held_table_correction() {
     let d = train_delay_named_alone("delay-55");
     assert!(d.trusted, "{}", d.to_text());
+    let passed = &d.steps[0].passed_over;
+    assert!(
+        passed.iter().any(|p| p.effect == "bearing_coefficients"
+            && p.bearing == "B2"
+            && p.reason.contains("fits worse")),
+        "{passed:?}"
+    );
+    assert!(d
+        .to_text()
+        .contains("passed over: bearing_coefficients at B2"));
 }

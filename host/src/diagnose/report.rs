@@ -73,6 +73,11 @@ pub struct Step {
     pub evidence: Evidence,
     /// The next-best candidate of the step.
     pub runner_up: Option<CandidateSummary>,
+    /// Significant candidates ranked above this effect whose joint refit
+    /// was rejected, each with why: the reason a runner-up can show a
+    /// larger ΔBIC than the effect chosen.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub passed_over: Vec<PassedOver>,
     /// Candidates tried in the step (the Bonferroni count).
     pub candidates_tried: usize,
     /// Candidates that could not be fitted (not identifiable from these data).
@@ -86,6 +91,17 @@ pub struct Step {
     /// delay.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub held: Option<super::summaries::HeldDamping>,
+}
+
+/// A significant candidate ranked above a step's effect and not chosen.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PassedOver {
+    /// Effect name (formats.md).
+    pub effect: String,
+    /// Bearing it acts on.
+    pub bearing: String,
+    /// Why its joint refit was rejected.
+    pub reason: String,
 }
 
 /// The likelihood-ratio test of `foundation_coupling` (module docs of
@@ -444,6 +460,13 @@ impl Diagnosis {
                     );
                 }
                 let _ = writeln!(s, "{ev}");
+                for p in &st.passed_over {
+                    let _ = writeln!(
+                        s,
+                        "     passed over: {} at {} (ranked above it): {}",
+                        p.effect, p.bearing, p.reason
+                    );
+                }
                 if st.parameters.iter().any(|p| p.name == "k_scale") {
                     let _ = writeln!(
                         s,

@@ -27,6 +27,7 @@ fn step(before: f64, after: f64) -> Step {
             p_adjusted: 1e-8,
         },
         runner_up: None,
+        passed_over: Vec::new(),
         candidates_tried: 20,
         candidates_failed: 0,
         dropped: None,

@@ -61,6 +61,7 @@ impl Search<'_> {
             foundation: None,
             evidence,
             runner_up: None,
+            passed_over: Vec::new(),
             candidates_tried: tried,
             candidates_failed: outcome.failed.len(),
             dropped: None,

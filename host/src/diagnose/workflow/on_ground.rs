@@ -15,7 +15,7 @@ use crate::diagnose::data::Prepared;
 use crate::diagnose::forward::{freed_held, held_terms, StepOutcome};
 use crate::diagnose::foundation::{self, sub_base::above_range, FoundationFit};
 use crate::diagnose::gap::{Gap, Prediction};
-use crate::diagnose::report::Step;
+use crate::diagnose::report::{PassedOver, Step};
 use crate::diagnose::state::State;
 use crate::diagnose::summaries::{effect_estimates, held_dampings, summary, wald_test};
 use anyhow::Result;
@@ -42,6 +42,8 @@ struct Winner {
     /// Named by the support-mode test (an above-range sub-base), not by
     /// the library's Wald test.
     by_support: Option<above_range::NamedBySupport>,
+    /// Significant candidates ranked above it, rejected, with why.
+    passed_over: Vec<PassedOver>,
 }
 
 impl Search<'_> {
@@ -104,6 +106,7 @@ impl Search<'_> {
                 .iter()
                 .all(|t| negative_now.contains(t))
         };
+        let mut passed_over = Vec::new();
         for (i, e) in outcome.ranked.iter().enumerate().take(MAX_REFITS) {
             if !(e.evidence.delta_bic > 0.0 && e.evidence.p_adjusted < self.opts.alpha) {
                 continue;
@@ -116,13 +119,23 @@ impl Search<'_> {
                 e.candidate.bearing,
                 self.opts.alpha,
             );
-            if keeps_physical(&next) && self.improves_on_state(&next, &e.candidate) {
+            let reason = if !keeps_physical(&next) {
+                "its joint refit turns a pedestal stiffness or mass negative"
+            } else if !self.improves_on_state(&next, &e.candidate) {
+                "fitted with pedestal dampings held at zero, its joint refit fits worse than the model it would replace (pedestal-level χ² with the BIC penalty)"
+            } else {
                 return Ok(Some(Winner {
                     index: i,
                     next,
                     by_support: None,
+                    passed_over,
                 }));
-            }
+            };
+            passed_over.push(PassedOver {
+                effect: e.candidate.effect.name().to_string(),
+                bearing: prep.bearings[e.candidate.bearing].clone(),
+                reason: reason.to_string(),
+            });
         }
         let Some(n) = above_range::named_by_support(prep, &self.steps, outcome) else {
             return Ok(None);
@@ -133,6 +146,7 @@ impl Search<'_> {
             index: n.index,
             next,
             by_support: Some(n),
+            passed_over,
         }))
     }
 
@@ -236,6 +250,7 @@ impl Search<'_> {
                 .ranked
                 .first()
                 .map(|e| summary(prep, e, outcome.tried)),
+            passed_over: Vec::new(),
             candidates_tried: outcome.tried + 2,
             candidates_failed: outcome.failed.len(),
             dropped: None,
@@ -277,6 +292,7 @@ impl Search<'_> {
                 .enumerate()
                 .find(|(i, _)| *i != wi)
                 .map(|(_, e)| summary(prep, e, outcome.tried)),
+            passed_over: w.passed_over,
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
             dropped: None,
