@@ -502,10 +502,19 @@ impl Diagnosis {
             );
         }
         if let Some(r) = &self.best_rejected {
+            // Said as its own evidence says: a candidate that passed its
+            // test can still be left out (its joint refit rejected, or on a
+            // base its correction not significant there).
+            let e = &r.evidence;
+            let why = if e.delta_bic > 0.0 && e.p_adjusted < self.significance_level {
+                "not added (its test passed, its joint refit was rejected)"
+            } else {
+                "not significant"
+            };
             let _ = writeln!(
                 s,
-                "Best remaining candidate, not significant: {} at {} (ΔBIC {:.1}, adjusted p {:.2e}, level {})",
-                r.effect, r.bearing, r.evidence.delta_bic, r.evidence.p_adjusted, self.significance_level
+                "Best remaining candidate, {why}: {} at {} (ΔBIC {:.1}, adjusted p {:.2e}, level {})",
+                r.effect, r.bearing, e.delta_bic, e.p_adjusted, self.significance_level
             );
         }
         // The shared printer (present::table): base model, then final model.
