@@ -9,6 +9,7 @@
 //! identify_trust.rs (rates: scripts/bench-trust.sh, docs/trust.md).
 use plinth::identify::physical::NotPhysical;
 use plinth::identify::{Identification, WarningKind};
+use plinth::rundir::RunDir;
 use plinth_tests::rundown::{self, identify, machine, run};
 
 /// The trust rules (untrusting or exit 2) this file checks.
@@ -88,4 +89,49 @@ fn pedestal_phasors_alone_conjugated_are_named() {
         "{named:?}"
     );
     assert!(id.pedestals.iter().all(|p| !p.trusted));
+}
+
+#[test]
+fn every_probe_in_the_wrong_unit_untrusts_every_pedestal() {
+    // ROSS's third machine (tests/data/ross-unseen-3/clean-p2c, made by
+    // scripts/ross_unseen.py, not by Plinth), every shaft probe read 1000
+    // times too large (an import whose probes were all set to mm for
+    // µm-sized numbers: one instrument, one unit setting). B1 and B2 come
+    // out 2e3-1e4 times their bearings' stiffness and name the mismatch;
+    // B3, 22 MN/m on a stiff table, reads 1.1e2 times its bearing, which
+    // some machine could have, and was printed `ok` at 1000 times its
+    // stiffness and mass before the run-level suspicion.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-3/clean-p2c");
+    let mut r = RunDir::read(std::path::Path::new(path)).expect("stored run");
+    for row in &mut r.measurements {
+        for z in &mut row.rel {
+            *z *= 1e3;
+        }
+        // The probes' noise columns (rel_y_sd, rel_z_sd) in the same unit.
+        if let Some(sd) = &mut row.noise_sd {
+            sd[0] *= 1e3;
+            sd[1] *= 1e3;
+        }
+    }
+    let id = identify(&r);
+    for p in &id.pedestals {
+        assert!(!p.trusted, "{} trusted", p.bearing);
+    }
+    let b3 = id.pedestals.iter().find(|p| p.bearing == "B3").expect("B3");
+    let w = b3
+        .warnings
+        .iter()
+        .find(|w| w.kind == WarningKind::Implausible)
+        .expect("B3 implausible");
+    assert!(w.message.contains("B1, B2"), "{}", w.message);
+    // The same run read right is not flagged by any plausibility rule.
+    let clean = identify(&RunDir::read(std::path::Path::new(path)).expect("stored run"));
+    assert!(
+        clean.pedestals.iter().all(|p| p
+            .warnings
+            .iter()
+            .all(|w| w.kind != WarningKind::Implausible)),
+        "{:?}",
+        flags(&clean)
+    );
 }

@@ -122,32 +122,100 @@ pub fn findings(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> Vec<String
             ));
         }
     }
-    if let Some(kb) = bearing_stiffness.filter(|k| *k > 0.0 && k.is_finite()) {
-        if fit.pedestal.k_y > 0.0 && fit.pedestal.k_z > 0.0 {
-            let ratio = (fit.pedestal.k_y * fit.pedestal.k_z).sqrt() / kb;
-            if !(1.0 / BEARING_STIFFNESS_RATIO..=BEARING_STIFFNESS_RATIO).contains(&ratio) {
-                out.push(format!(
-                    "its stiffness is {ratio:.1e} times its bearing's ({kb:.2e} N/m): {}",
-                    unit_mismatch(ratio)
-                ));
-            }
+    if let Some(ratio) = stiffness_ratio(fit, bearing_stiffness) {
+        if !within_ratio(ratio) {
+            out.push(format!(
+                "its stiffness is {ratio:.1e} times its bearing's ({:.2e} N/m): {}",
+                (fit.pedestal.k_y * fit.pedestal.k_z).sqrt() / ratio,
+                unit_mismatch(ratio)
+            ));
         }
     }
     out
 }
 
-/// The unit mistake a pedestal/bearing stiffness ratio points to.
-fn unit_mismatch(ratio: f64) -> String {
+/// The pedestal's stiffness √(k_y·k_z) over its bearing's `bearing_stiffness`
+/// [N/m] ([`bearing_stiffness`]), [-]; `None` when either is unknown or not
+/// positive.
+fn stiffness_ratio(fit: &PedestalFit, bearing_stiffness: Option<f64>) -> Option<f64> {
+    let kb = bearing_stiffness.filter(|k| *k > 0.0 && k.is_finite())?;
+    (fit.pedestal.k_y > 0.0 && fit.pedestal.k_z > 0.0)
+        .then(|| (fit.pedestal.k_y * fit.pedestal.k_z).sqrt() / kb)
+        .filter(|r| r.is_finite())
+}
+
+/// Whether a pedestal/bearing stiffness ratio [-] is one machines are built
+/// with ([`BEARING_STIFFNESS_RATIO`] either way).
+fn within_ratio(ratio: f64) -> bool {
+    (1.0 / BEARING_STIFFNESS_RATIO..=BEARING_STIFFNESS_RATIO).contains(&ratio)
+}
+
+/// The run-level suspicion a named unit mismatch casts on the run's other
+/// pedestals: `ratios` holds each pedestal's bearing name and stiffness
+/// ratio ([`stiffness_ratio`]). A pedestal whose ratio points to a power of
+/// 1000 names a unit mistake between the probes and the pick-ups; the same
+/// mistake made on every probe (one instrument, one unit setting) scales
+/// another pedestal's k, m, c alike with its fit still exact, and only its
+/// ratio can argue against it. So a pedestal whose ratio is plausible as
+/// read AND would still be plausible with the named mistake undone is
+/// suspect too (one with its undone ratio outside the band is cleared by
+/// its bearing). Returns, per pedestal, the sentence saying so (`None`:
+/// not suspect). On a run with no named mistake nothing is said: clean
+/// runs cannot trip it unless they trip the per-pedestal rule.
+fn shared_unit_suspicion(ratios: &[(String, Option<f64>)]) -> Vec<Option<String>> {
+    let named: Vec<(&str, i32)> = ratios
+        .iter()
+        .filter_map(|(b, r)| {
+            let r = (*r)?;
+            (!within_ratio(r))
+                .then(|| thousands_off(r))
+                .flatten()
+                .map(|t| (b.as_str(), t))
+        })
+        .collect();
+    ratios
+        .iter()
+        .map(|(bearing, r)| {
+            let r = (*r).filter(|r| within_ratio(*r))?;
+            let (others, undone): (Vec<&str>, Vec<f64>) = named
+                .iter()
+                .filter(|(b, _)| b != bearing)
+                .filter_map(|(b, t)| {
+                    let undone = r * 10f64.powi(3 * t);
+                    within_ratio(undone).then_some((*b, undone))
+                })
+                .unzip();
+            let first = *undone.first()?;
+            Some(format!(
+                "the pedestal{} at {} of this run read{} as a unit mismatch between channels; with the same mistake on this bearing's channels its k, m, c would be off by the same factor with the fit still exact, and its stiffness ({r:.1e} times its bearing's as read, {first:.1e} with the mistake undone) is plausible either way: check the units of every channel",
+                if others.len() > 1 { "s" } else { "" },
+                others.join(", "),
+                if others.len() > 1 { "" } else { "s" },
+            ))
+        })
+        .collect()
+}
+
+/// The power of 1000 a pedestal/bearing stiffness ratio [-] points to: `t`
+/// when the ratio lies within 1.5 decades of 1000^(−t), t ≠ 0 (t > 0: the
+/// pedestal readings 1000^t too large against the probes; t < 0: the
+/// probes too large), else `None`.
+fn thousands_off(ratio: f64) -> Option<i32> {
     // ped too large by F makes k, m, c too small by F.
     let decades = -ratio.log10();
     let thousands = (decades / 3.0).round() as i32;
+    (thousands != 0 && (decades - 3.0 * thousands as f64).abs() <= 1.5).then_some(thousands)
+}
+
+/// The unit mistake a pedestal/bearing stiffness ratio points to.
+fn unit_mismatch(ratio: f64) -> String {
     let name = |e: i32| match e {
         1 => "mm",
         2 => "µm",
         3 => "nm",
         _ => "another unit",
     };
-    if thousands != 0 && (decades - 3.0 * thousands as f64).abs() <= 1.5 {
+    if let Some(thousands) = thousands_off(ratio) {
         let factor = format!("1e{}", 3 * thousands.abs());
         if thousands > 0 {
             format!(
@@ -183,9 +251,30 @@ pub(crate) fn bearing_stiffness(run: &RunDir, bearing: &str) -> Option<f64> {
 
 /// Adds a [`WarningKind::Implausible`] warning to every implausible pedestal
 /// of `identification` (identified from `run`) and updates `trusted`.
+/// A pedestal plausible on its own is marked too when another pedestal of
+/// the run names a unit mismatch its numbers could share
+/// ([`shared_unit_suspicion`]).
 pub fn mark(run: &RunDir, identification: &mut Identification) {
-    for p in &mut identification.pedestals {
-        let found = findings(p, bearing_stiffness(run, &p.bearing));
+    let stiffness: Vec<Option<f64>> = identification
+        .pedestals
+        .iter()
+        .map(|p| bearing_stiffness(run, &p.bearing))
+        .collect();
+    let ratios: Vec<(String, Option<f64>)> = identification
+        .pedestals
+        .iter()
+        .zip(&stiffness)
+        .map(|(p, kb)| (p.bearing.clone(), stiffness_ratio(p, *kb)))
+        .collect();
+    let shared = shared_unit_suspicion(&ratios);
+    for ((p, kb), shared) in identification
+        .pedestals
+        .iter_mut()
+        .zip(stiffness)
+        .zip(shared)
+    {
+        let mut found = findings(p, kb);
+        found.extend(shared);
         if found.is_empty() {
             continue;
         }
@@ -252,6 +341,35 @@ mod tests {
         // rel in µm instead: the pedestal looks 1e6 too stiff.
         let f = findings(&fit(1e13, 8e7), Some(2e7)).join(" | ");
         assert!(f.contains("rel in µm"), "{f}");
+    }
+
+    #[test]
+    fn a_unit_mismatch_named_at_one_bearing_is_suspected_at_the_others() {
+        let r = |b: &str, x: f64| (b.to_string(), Some(x));
+        // Every probe in mm for µm-sized numbers (rel 1e3 too large): B1 and
+        // B2 show it, B3 (truly 0.02 of its bearing) reads 20 and would be
+        // 0.02 undone: suspect. B4 (truly 2) reads 2 here: undone 2e-3 is
+        // still plausible, so it is suspect too; B5 at 0.5 would be 5e-4
+        // undone, which no machine has: cleared.
+        let said = shared_unit_suspicion(&[
+            r("B1", 1.2e4),
+            r("B2", 2.0e3),
+            r("B3", 20.0),
+            r("B4", 2.0),
+            r("B5", 0.5),
+            ("B6".to_string(), None),
+        ]);
+        assert!(said[0].is_none() && said[1].is_none(), "{said:?}");
+        let b3 = said[2].as_deref().unwrap_or_default();
+        assert!(
+            b3.contains("pedestals at B1, B2") && b3.contains("2.0e-2"),
+            "{b3}"
+        );
+        assert!(said[3].is_some() && said[4].is_none() && said[5].is_none());
+        // No named mistake, nothing said.
+        assert!(shared_unit_suspicion(&[r("B1", 5.0), r("B2", 0.01)])
+            .iter()
+            .all(Option::is_none));
     }
 
     #[test]
