@@ -260,8 +260,14 @@ pub struct Diagnosis {
     pub pedestals_before: Vec<Pedestal>,
     /// Identified pedestals with the final model.
     pub pedestals_after: Vec<Pedestal>,
-    /// The best candidate left when the search stopped (not significant).
+    /// The best candidate left when the search stopped (not significant,
+    /// or significant with its joint refit rejected).
     pub best_rejected: Option<CandidateSummary>,
+    /// The significant candidates of the round that stopped the search,
+    /// each with why its joint refit was rejected (a pedestal made
+    /// negative, or held dampings and a worse fit than the final model).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub passed_over_at_stop: Vec<PassedOver>,
     /// `foundation_coupling` as tried on the base model (its bases and
     /// test), whether chosen or not; absent when not tried (one bearing, a
     /// reduced `--base`, or a base model already at the noise floor).
@@ -515,6 +521,13 @@ impl Diagnosis {
                 s,
                 "Best remaining candidate, {why}: {} at {} (ΔBIC {:.1}, adjusted p {:.2e}, level {})",
                 r.effect, r.bearing, e.delta_bic, e.p_adjusted, self.significance_level
+            );
+        }
+        for p in &self.passed_over_at_stop {
+            let _ = writeln!(
+                s,
+                "  passed over (significant, not added): {} at {}: {}",
+                p.effect, p.bearing, p.reason
             );
         }
         // The shared printer (present::table): base model, then final model.

@@ -137,6 +137,7 @@ impl Search<'_> {
             pedestals_before: before.pedestals,
             pedestals_after,
             best_rejected: self.best_rejected,
+            passed_over_at_stop: self.passed_over_at_stop,
             foundation: self.foundation_tried.as_ref().map(|f| f.report(prep)),
             significance_level: opts.alpha,
             verdict: conclusion.verdict,

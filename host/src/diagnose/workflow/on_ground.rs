@@ -42,7 +42,13 @@ struct Winner {
     /// Named by the support-mode test (an above-range sub-base), not by
     /// the library's Wald test.
     by_support: Option<above_range::NamedBySupport>,
-    /// Significant candidates ranked above it, rejected, with why.
+}
+
+/// What a round's library search found: the winner, if any, and the
+/// significant candidates ranked above it (all of them, when none won)
+/// whose joint refit was rejected, with why.
+struct Choice {
+    winner: Option<Winner>,
     passed_over: Vec<PassedOver>,
 }
 
@@ -58,7 +64,10 @@ impl Search<'_> {
     ) -> Result<Round> {
         let prep = self.prep;
         let (before_pred, before) = self.state.gap(prep);
-        let winner = self.library_winner(outcome)?;
+        let Choice {
+            winner,
+            passed_over,
+        } = self.library_winner(outcome, &before_pred)?;
         // What a base must beat: the library's best significant candidate
         // (refitted), or the current state when none is significant.
         let to_beat = match &winner {
@@ -67,11 +76,7 @@ impl Search<'_> {
                 prep,
                 outcome.ranked[w.index].candidate.null.len(),
             ),
-            None => criterion(
-                &Prediction::new(prep, &self.state.model, &self.state.params),
-                prep,
-                0,
-            ),
+            None => criterion(&before_pred, prep, 0),
         };
         if try_bases && corrections_only(&self.state.model) {
             let base = self.try_bases(first, &before_pred, before, to_beat)?;
@@ -85,9 +90,10 @@ impl Search<'_> {
                 .ranked
                 .first()
                 .map(|e| summary(prep, e, outcome.tried));
+            self.passed_over_at_stop = passed_over;
             return Ok(Round::Stop);
         };
-        self.add_effect(outcome, before, w)?;
+        self.add_effect(outcome, before, w, passed_over)?;
         Ok(Round::Added)
     }
 
@@ -97,8 +103,8 @@ impl Search<'_> {
     /// One that turns a positive pedestal stiffness or mass negative is
     /// rejected, as non-physical base fits are: it "explains" the gap with
     /// an impossible pedestal (a sensor delay bent to mimic a sub-base's
-    /// second mode).
-    fn library_winner(&self, outcome: &StepOutcome) -> Result<Option<Winner>> {
+    /// second mode). `now` is the current state's prediction.
+    fn library_winner(&self, outcome: &StepOutcome, now: &Prediction) -> Result<Choice> {
         let prep = self.prep;
         let negative_now = self.state.negative_pedestal_terms();
         let keeps_physical = |next: &State| {
@@ -121,15 +127,17 @@ impl Search<'_> {
             );
             let reason = if !keeps_physical(&next) {
                 "its joint refit turns a pedestal stiffness or mass negative"
-            } else if !self.improves_on_state(&next, &e.candidate) {
+            } else if !self.improves_on_state(&next, &e.candidate, now) {
                 "fitted with pedestal dampings held at zero, its joint refit fits worse than the model it would replace (pedestal-level χ² with the BIC penalty)"
             } else {
-                return Ok(Some(Winner {
-                    index: i,
-                    next,
-                    by_support: None,
+                return Ok(Choice {
+                    winner: Some(Winner {
+                        index: i,
+                        next,
+                        by_support: None,
+                    }),
                     passed_over,
-                }));
+                });
             };
             passed_over.push(PassedOver {
                 effect: e.candidate.effect.name().to_string(),
@@ -138,22 +146,28 @@ impl Search<'_> {
             });
         }
         let Some(n) = above_range::named_by_support(prep, &self.steps, outcome) else {
-            return Ok(None);
+            return Ok(Choice {
+                winner: None,
+                passed_over,
+            });
         };
         let e = &outcome.ranked[n.index];
         let next = State::fit(prep, e.candidate.model.clone(), e.params.nl.clone())?;
-        Ok(keeps_physical(&next).then_some(Winner {
-            index: n.index,
-            next,
-            by_support: Some(n),
+        Ok(Choice {
+            winner: keeps_physical(&next).then_some(Winner {
+                index: n.index,
+                next,
+                by_support: Some(n),
+            }),
             passed_over,
-        }))
+        })
     }
 
     /// Whether `next`, the joint refit with `cand`, fits better than the
     /// current state on the one yardstick ([`criterion`]) when it still
     /// holds dampings of the state at zero ([`held_terms`]); always true
-    /// for one that holds none.
+    /// for one that holds none. `now` is the current state's prediction
+    /// (made once per round).
     ///
     /// Why: a candidate's Wald test is against its own null. For an
     /// ordinary candidate that null is the current state; for a held
@@ -166,15 +180,14 @@ impl Search<'_> {
     /// above the delay whose freed refit gives 1575). Penalised as the BIC
     /// counts: the held variant has its `q` parameters and lacks the held
     /// ones.
-    fn improves_on_state(&self, next: &State, cand: &Candidate) -> bool {
+    fn improves_on_state(&self, next: &State, cand: &Candidate, now: &Prediction) -> bool {
         let held = held_terms(&self.state.model, &next.model, cand.bearing).len();
         if held == 0 {
             return true;
         }
         let prep = self.prep;
-        let now = Prediction::new(prep, &self.state.model, &self.state.params);
         let after = Prediction::new(prep, &next.model, &next.params);
-        criterion(&after, prep, cand.null.len()) < criterion(&now, prep, held)
+        criterion(&after, prep, cand.null.len()) < criterion(now, prep, held)
     }
 
     /// The bases fitted on the data the chosen corrections correct, the
@@ -264,7 +277,13 @@ impl Search<'_> {
     }
 
     /// Adds the library winner `w` as a step, then the backward check.
-    fn add_effect(&mut self, outcome: &StepOutcome, before: Gap, w: Winner) -> Result<()> {
+    fn add_effect(
+        &mut self,
+        outcome: &StepOutcome,
+        before: Gap,
+        w: Winner,
+        passed_over: Vec<PassedOver>,
+    ) -> Result<()> {
         let prep = self.prep;
         let wi = w.index;
         let win = &outcome.ranked[wi];
@@ -292,7 +311,7 @@ impl Search<'_> {
                 .enumerate()
                 .find(|(i, _)| *i != wi)
                 .map(|(_, e)| summary(prep, e, outcome.tried)),
-            passed_over: w.passed_over,
+            passed_over,
             candidates_tried: outcome.tried,
             candidates_failed: outcome.failed.len(),
             dropped: None,

@@ -11,7 +11,7 @@ use crate::diagnose::forward::step;
 use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::{Gap, Prediction};
 use crate::diagnose::locate::{locate, Location};
-use crate::diagnose::report::{CandidateSummary, Pedestal, Step};
+use crate::diagnose::report::{CandidateSummary, PassedOver, Pedestal, Step};
 use crate::diagnose::state::{pedestals, State};
 use crate::rundir::RunDir;
 use anyhow::Result;
@@ -34,6 +34,9 @@ pub(super) struct Search<'a> {
     pub(super) steps: Vec<Step>,
     /// The best candidate of the round that stopped the search.
     pub(super) best_rejected: Option<CandidateSummary>,
+    /// The significant candidates of the round that stopped the search
+    /// whose joint refit was rejected, with why.
+    pub(super) passed_over_at_stop: Vec<PassedOver>,
     /// The shared base as tried on the base model (reported whether chosen
     /// or not); later rounds try it again on the data the chosen sensor
     /// and table effects correct.
@@ -84,6 +87,7 @@ pub(super) fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Out
         after_steps: Vec::new(),
         steps: Vec::new(),
         best_rejected: None,
+        passed_over_at_stop: Vec::new(),
         foundation_tried: None,
         chosen: Vec::new(),
         on_base: None,
