@@ -7,7 +7,8 @@ NAME: a machine of scripts/ross_unseen.py (default unseen-four). RUNS_DIR
 holds run directories CASE-SEED made by scripts/ross_unseen.py (ROSS
 2.3.0); missing ones are made first. SEEDS: every case uses seeds 1..SEEDS
 (default 5), except unseen-four's clean-d3: 1..4 (its seed shifts the speed
-grid). Every run goes through `plinth identify --json` and `plinth diagnose
+grid); SEEDS given as FIRST-LAST (e.g. 91-92) uses those seeds for every
+case (fresh seeds nobody has looked at). Every run goes through `plinth identify --json` and `plinth diagnose
 --json --machine FILE` (the machine's nominal file: rigid ground, the drawn
 clearances, the table as supplied; without --machine when
 $BENCH_DIAGNOSE_PLAIN=1; not at all when $BENCH_IDENTIFY_ONLY=1), $BENCH_JOBS at a
@@ -27,7 +28,9 @@ diagnose: named right (exactly the expected effects, each at its bearing,
   expected effect at another bearing), partly (a subset, nothing wrong),
   missed (nothing named); named wrong with the verdict trusted (confidently
   wrong); untrusted verdicts; the worst k/m error of the
-  named-right runs' final pedestals; the flipped speeds diagnose lists
+  named-right runs' final pedestals; runs whose verdict is trusted while
+  a final pedestal (`pedestals_after`) has k_y, k_z or m more than 3 of
+  its ± from the truth (confidently off); the flipped speeds diagnose lists
   (`flipped_speeds_hz`: exactly the truth's on the flips case, any listed
   on the others); seconds per run.
 """
@@ -137,6 +140,14 @@ def run_json(args):
 COVERED = ("k_y", "k_z", "m", "c_y", "c_z")  # the values whose ± coverage is measured
 
 
+def worst_z(ped, truth):
+    """Largest |value − truth|/± of k_y, k_z, m (inf where a ± is 0 or
+    missing: a value given without an uncertainty)."""
+    t = next(t for t in truth["pedestals"] if t["bearing"] == ped["bearing"])
+    se = ped["std_err"]
+    return max(abs(ped[k] - t[k]) / se[k] if se.get(k, 0) > 0 else math.inf for k in ("k_y", "k_z", "m"))
+
+
 def worst_rel(ped, truth, get):
     """Largest relative error of k_y, k_z, m against the truth."""
     t = next(t for t in truth["pedestals"] if t["bearing"] == ped["bearing"])
@@ -175,8 +186,7 @@ def one(b, run):
         wrong = []
         for p in ident["pedestals"]:
             t = next(t for t in truth["pedestals"] if t["bearing"] == p["bearing"])
-            z = max(abs(p[k] - t[k]) / p["std_err"][k] if p["std_err"][k] > 0 else math.inf
-                    for k in ("k_y", "k_z", "m"))
+            z = worst_z(p, truth)
             rel = worst_rel(p, truth, lambda q, k: q[k])
             r.setdefault("ident_err", {})[p["bearing"]] = (rel, z, p["trusted"])
             for k in COVERED:
@@ -194,6 +204,9 @@ def one(b, run):
                              for p in diag["pedestals_after"])
         r["after_each"] = {p["bearing"]: worst_rel(p, truth, lambda q, k: q[k])
                            for p in diag["pedestals_after"]}
+        r["after_z"] = {p["bearing"]: worst_z(p, truth) for p in diag["pedestals_after"]}
+        # the final pedestals more than 3 ± off while the verdict is trusted (confidently wrong)
+        r["after_off"] = sorted(bb for bb, z in r["after_z"].items() if z > 3.0) if diag["trusted"] else []
     return r
 
 
@@ -230,18 +243,19 @@ def main():
         sys.exit("usage: bench_unseen.py [--machine NAME] PLINTH RUNS_DIR [SEEDS [CASES...]] (--help for more)")
     b, runs = args[0], args[1]
     try:
-        seeds = int(args[2]) if len(args) > 2 else 5
+        first, _, last = (args[2] if len(args) > 2 else "5").partition("-")
+        seeds = range(int(first), int(last) + 1) if last else range(1, int(first) + 1)
     except ValueError:
-        sys.exit(f"SEEDS: {args[2]!r} is not a whole number")
+        sys.exit(f"SEEDS: {args[2]!r} is neither a whole number nor FIRST-LAST")
     cases = args[3:] or list(ross_unseen.cases_of(MACHINE))
     bearings = [t["bearing"] for t in ross_unseen.nominal_truth(MACHINE)]
     todo, make = [], {}
     for case in cases:
-        n = 4 if (MACHINE, case) == ("unseen-four", "clean-d3") else seeds
-        missing = tuple(str(s) for s in range(1, n + 1) if not os.path.isdir(os.path.join(runs, f"{case}-{s}")))
+        these = range(1, 5) if (MACHINE, case) == ("unseen-four", "clean-d3") and seeds.start == 1 else seeds
+        missing = tuple(str(s) for s in these if not os.path.isdir(os.path.join(runs, f"{case}-{s}")))
         if missing:
             make.setdefault(missing, []).append(case)
-        todo += [(case, os.path.join(runs, f"{case}-{s}")) for s in range(1, n + 1)]
+        todo += [(case, os.path.join(runs, f"{case}-{s}")) for s in these]
     for missing, group in make.items():  # one ROSS process per group: its responses are cached
         subprocess.run([sys.executable, os.path.join(ROOT, "scripts", "ross_unseen.py"), "--machine", MACHINE,
                         runs, ",".join(group), *missing], check=True, capture_output=True)
@@ -292,8 +306,8 @@ def main():
     how = " ".join(["--json"] + [os.path.basename(a) for a in DIAGNOSE_MACHINE])
     print(f"diagnose (plinth diagnose {how}):")
     print("| case | runs | named right | named wrong | wrong and trusted | partly | missed | untrusted "
-          "| worst k/m error after (right runs) | flips listed exactly | s/run |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| worst k/m error after (right runs) | trusted, after > 3 ± off | flips listed exactly | s/run |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for case in cases:
         rs = by[case]
         n = len(rs)
@@ -307,8 +321,10 @@ def main():
         if kind(case)[0] == "flips":
             fl = str(sum(listed_exactly(r, r.get("dlisted", {})) for r in rs))
         wt = sum(j == "wrong" and r.get("dtrusted", False) for r, j in zip(rs, v))
+        off = sum(bool(r.get("after_off")) for r in rs)
+        off_b = sorted({bb for r in rs for bb in r.get("after_off", [])})
         print(f"| {case} | {n} | {v.count('right')} | {v.count('wrong')} | {wt} | {v.count('partly')} | "
-              f"{v.count('missed')} | {untr} | {worst} | {fl} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
+              f"{v.count('missed')} | {untr} | {worst} | {off} {off_b if off_b else ''} | {fl} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
     for case, r in results:
         if r["err"]:
             print(f"ERROR {r['run']}: {r['err']}")
@@ -320,6 +336,7 @@ def main():
         print(f"  {os.path.basename(r['run'])}: identify exit {r['icode']} untrusted {r.get('untrusted')} "
               f"listed {listed} ok_wrong {r.get('ok_wrong')}; diagnose {r.get('named')} trusted "
               f"{r.get('dtrusted')} gap {gap[0]:.3g}->{gap[1]:.3g} after {100 * r.get('after_err', math.nan):.2f} % "
+              f"z {max(r.get('after_z', {}).values(), default=math.nan):.2f} "
               f"({r['it']:.1f} + {r['dt']:.0f} s)")
     print(f"total {time.time() - t0:.0f} s wall")
 
