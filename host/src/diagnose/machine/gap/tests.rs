@@ -3,21 +3,9 @@
 //! not this crate's model.
 
 use super::*;
-use crate::diagnose::candidates::library;
-use crate::diagnose::forward::evaluate;
-use crate::diagnose::model::Term;
-use crate::effects::EffectKind;
-use crate::rundir::RunDir;
+use crate::diagnose::model::{DelayChannels, Nonlinear, Term};
+use crate::diagnose::test_runs::stored;
 use plinth_shared::regression::Parameter;
-
-/// The stored run `case` of tests/data.
-fn stored(case: &str) -> Prepared {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(case);
-    let run = RunDir::read(&dir).expect("stored run directory");
-    Prepared::from_run(&run).expect("prepared")
-}
 
 /// The pedestal terms (k, m, c) of bearing `b` in `state`, by term.
 fn pedestal_of(state: &State, b: usize) -> Vec<(Term, f64)> {
@@ -32,7 +20,7 @@ fn pedestal_of(state: &State, b: usize) -> Vec<(Term, f64)> {
 }
 
 /// A step acting at B2 (the rel delay, its joint refit as the search makes
-/// it) leaves the pedestals of B1 and B3 exactly as the refitted base
+/// it, `State::fit`) leaves the pedestals of B1 and B3 exactly as the refitted base
 /// model has them, where the base model's own (maximum-likelihood) values
 /// differ: step 1's machine-level change is then the effect's alone.
 #[test]
@@ -41,16 +29,15 @@ fn the_refitted_base_differs_from_a_step_only_where_the_step_acts() {
     let base = State::base(&prep, Parameter::ALL.as_slice()).expect("base state");
     let refitted = refitted_base(&prep, &base).expect("refitted base");
     let b2 = prep.bearing_index("B2").expect("bearing B2");
-    let cand = library(&base.model, prep.bearings.len())
-        .into_iter()
-        .find(|c| {
-            c.effect == EffectKind::SensorDelay
-                && c.bearing == b2
-                && c.variant.as_deref() == Some("rel")
-        })
-        .expect("the rel delay candidate");
-    let e = evaluate(&prep, &base, cand, 1, prep.real_equations()).expect("evaluated");
-    let step = State::fit(&prep, e.candidate.model.clone(), e.params.nl.clone()).expect("refit");
+    let mut model = base.model.clone();
+    model.nonlinear.push(Nonlinear::Delay {
+        bearing: b2,
+        channels: DelayChannels {
+            rel: [true; 2],
+            ped: [false; 2],
+        },
+    });
+    let step = State::fit(&prep, model, vec![150e-6]).expect("joint refit with the delay");
     let mut moved = 0.0f64;
     for b in (0..prep.bearings.len()).filter(|&b| b != b2) {
         let (r, s, m) = (
