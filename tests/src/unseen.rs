@@ -157,3 +157,28 @@ pub fn assert_ok_means_right(run: &RunDir, id: &Identification, label: &str) {
     let wrong = ok_but_wrong(run, id, false);
     assert!(wrong.is_empty(), "{label}: {wrong:?}");
 }
+
+/// Asserts that step `step` of `d` gives the true `sensor_delay` of `run`
+/// (truth.json's `tau_s` [s]) within 3 of its standard errors.
+pub fn assert_delay_in_its_error(run: &RunDir, d: &Diagnosis, step: usize) {
+    let truth = run
+        .truth
+        .as_ref()
+        .expect("truth")
+        .effect_details
+        .iter()
+        .find(|e| e.name == "sensor_delay")
+        .and_then(|e| e.parameters.get("tau_s").copied())
+        .expect("true delay");
+    let tau = d.steps[step]
+        .parameters
+        .iter()
+        .find(|p| p.name == "tau")
+        .expect("tau");
+    assert!(
+        (tau.value - truth).abs() < 3.0 * tau.std_err,
+        "tau {:.3e} ± {:.1e} s, true {truth:.3e} s",
+        tau.value,
+        tau.std_err
+    );
+}

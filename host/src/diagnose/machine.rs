@@ -34,7 +34,7 @@ use plinth_shared::bearing::BearingCoefficients;
 
 mod gap;
 pub(in crate::diagnose) use gap::flat;
-pub use gap::{machine_floor, machine_gap, parameter_variance, MachineCheck};
+pub use gap::{machine_floor, machine_gap, parameter_variance, refitted_base, MachineCheck};
 
 /// Predicted readings (rel, ped) per bearing and speed index [m].
 pub type Readings = Vec<Vec<Option<([Complex<f64>; 2], [Complex<f64>; 2])>>>;

@@ -29,3 +29,13 @@ pub fn with_noise_columns(run: &mut RunDir, fraction: f64) {
         }
     }
 }
+
+/// The stored run `case` of tests/data (a path under it, e.g.
+/// "ross-unseen-3/delay-55"), arranged for the fits.
+pub fn stored(case: &str) -> crate::diagnose::data::Prepared {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/data")
+        .join(case);
+    let run = RunDir::read(&dir).expect("stored run directory");
+    crate::diagnose::data::Prepared::from_run(&run).expect("prepared")
+}

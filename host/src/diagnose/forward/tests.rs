@@ -3,18 +3,9 @@
 //! damping −τ·k, so the base fit's dampings there come out impossible.
 
 use super::*;
+use crate::diagnose::test_runs::stored;
 use crate::effects::EffectKind;
-use crate::rundir::RunDir;
 use plinth_shared::regression::Parameter;
-
-/// The stored run `case` of tests/data.
-fn stored(case: &str) -> Prepared {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(case);
-    let run = RunDir::read(&dir).expect("stored run directory");
-    Prepared::from_run(&run).expect("prepared")
-}
 
 /// The base state of `prep`, bearing `name`'s index and its dampings,
 /// checked impossible on the base fit (what makes the search hold them).
