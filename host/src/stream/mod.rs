@@ -452,3 +452,18 @@ pub fn summary(report: &StreamReport) -> String {
     s.push_str(&report::render(&report.pedestals));
     s
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_line_speed_is_a_whole_number_of_bits_per_second_above_zero() {
+        assert_eq!(super::line_speed("115200"), Ok(115_200));
+        assert!(super::line_speed("0")
+            .unwrap_err()
+            .contains("0 is not allowed"));
+        assert!(super::line_speed("-9600").is_err());
+        assert!(super::line_speed("4294967296")
+            .unwrap_err()
+            .contains("beyond any serial line"));
+    }
+}
