@@ -18,17 +18,6 @@ fn example_machine() -> String {
     std::fs::read_to_string(path).unwrap()
 }
 
-/// A run directory of the example machine (5 to 200 Hz, exact phasors,
-/// with its `truth.json`) in `dir`, as the simulator writes it.
-fn run_in(dir: &Path) -> PathBuf {
-    let machine = plinth_tests::rundown::machine("examples/feng-hahn-1997-damped.toml");
-    let run = plinth_tests::rundown::run(&machine, None, None);
-    assert!(run.truth.is_some());
-    let path = dir.join("run");
-    run.write(&path).unwrap();
-    path
-}
-
 /// The notes on `text` read as a `truth.json`.
 fn notes(text: &str) -> Vec<String> {
     let truth: Truth = serde_json::from_str(text).unwrap();
@@ -74,8 +63,13 @@ fn a_subnormal_pedestal_value_in_a_machine_file_is_refused_at_its_key() {
 
 #[test]
 fn truth_keys_and_effect_names_plinth_does_not_read_are_named_at_their_place() {
+    // The example machine's run (5 to 200 Hz) as the simulator writes it.
     let t = tempfile::tempdir().unwrap();
-    let run = run_in(t.path());
+    let machine = plinth_tests::rundown::machine("examples/feng-hahn-1997-damped.toml");
+    let run = t.path().join("run");
+    plinth_tests::rundown::run(&machine, None, None)
+        .write(&run)
+        .unwrap();
     let path = run.join("truth.json");
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(notes(&text).is_empty(), "{:?}", notes(&text));
