@@ -85,7 +85,8 @@ pub fn json_value_place(path: &Path, key: &str, value: &str, nth: usize) -> (usi
     let text = std::fs::read_to_string(path).unwrap_or_default();
     let value = format!("\"{value}\"");
     let at = json_keys(&text, key)
-        .filter_map(|(_, v)| v.starts_with(&value).then(|| text.len() - v.len()))
+        .filter(|&(_, v)| v.starts_with(&value))
+        .map(|(_, v)| text.len() - v.len())
         .nth(nth.saturating_sub(1));
     at.map_or((1, 1), |at| line_column(&text, at))
 }
