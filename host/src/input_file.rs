@@ -83,23 +83,46 @@ pub fn utf8_text(mut bytes: Vec<u8>) -> std::io::Result<String> {
 /// listed twice) is placed by its text.
 pub fn json_value_place(path: &Path, key: &str, value: &str, nth: usize) -> (usize, usize) {
     let text = std::fs::read_to_string(path).unwrap_or_default();
-    let (key, value) = (format!("\"{key}\""), format!("\"{value}\""));
-    let at = text
-        .match_indices(&key)
-        .filter_map(|(k, _)| {
-            let rest = text[k + key.len()..].trim_start().strip_prefix(':')?;
-            let v = rest.trim_start();
-            v.starts_with(&value).then(|| text.len() - v.len())
-        })
+    let value = format!("\"{value}\"");
+    let at = json_keys(&text, key)
+        .filter(|&(_, v)| v.starts_with(&value))
+        .map(|(_, v)| text.len() - v.len())
         .nth(nth.saturating_sub(1));
-    at.map_or((1, 1), |at| {
-        let before = &text[..at];
-        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-        (
-            before.matches('\n').count() + 1,
-            before[line_start..].chars().count() + 1,
-        )
-    })
+    at.map_or((1, 1), |at| line_column(&text, at))
+}
+
+/// The line and column [1-based] of the `nth` (1-based) place where the
+/// JSON `text` writes the key `"key":`, at the key's opening quote, or
+/// (1, 1) when it has fewer (serde's values carry no position).
+pub fn json_key_place(text: &str, key: &str, nth: usize) -> (usize, usize) {
+    json_keys(text, key)
+        .nth(nth.saturating_sub(1))
+        .map_or((1, 1), |(at, _)| line_column(text, at))
+}
+
+/// Each place `text` writes `"key":`, in order: the byte where the quoted
+/// key starts and what follows its colon (blanks skipped).
+fn json_keys<'a>(text: &'a str, key: &str) -> impl Iterator<Item = (usize, &'a str)> + 'a {
+    let key = format!("\"{key}\"");
+    let len = key.len();
+    text.match_indices(&key)
+        .map(|(k, _)| k)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .filter_map(move |k| {
+            let rest = text[k + len..].trim_start().strip_prefix(':')?;
+            Some((k, rest.trim_start()))
+        })
+}
+
+/// The line and column [1-based, in characters] of byte `at` of `text`.
+pub fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let before = &text[..at];
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    (
+        before.matches('\n').count() + 1,
+        before[line_start..].chars().count() + 1,
+    )
 }
 
 /// What the first bytes of a file say if it is UTF-16 text: its byte-order
@@ -286,8 +309,7 @@ pub fn toml_error(text: &str, e: &toml::de::Error) -> String {
         .unwrap_or(0);
     let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
     let line_end = text[at..].find('\n').map_or(text.len(), |i| at + i);
-    let line = text[..at].matches('\n').count() + 1;
-    let column = text[line_start..at].chars().count() + 1;
+    let (line, column) = line_column(text, at);
     let whole = &text[line_start..line_end];
     let before: Vec<char> = text[line_start..at].chars().collect();
     let from = before.len().saturating_sub(TOML_EXCERPT_CHARS / 2);

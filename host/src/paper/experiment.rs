@@ -443,10 +443,15 @@ pub fn reproduce_with(
             std_err: None,
             trusted: None,
         };
-        machine
-            .set_pedestal(&p.bearing, Some(p.params()?))
+        // The identification's own check (a negative mass from too few
+        // speeds) is named as this step's too.
+        p.params()
+            .and_then(|params| Ok(machine.set_pedestal(&p.bearing, Some(params))?))
             .with_context(|| {
-                format!("re-predicting with the identified pedestal {:?}", p.bearing)
+                format!(
+                    "Fig. 6: re-predicting the {}-digit undamped run with the pedestal {:?} identified from it",
+                    fig6_digits, p.bearing
+                )
             })?;
     }
     let repredicted = predict_run(&machine, &EffectSet::none(), &undamped_truncated)?;

@@ -17,6 +17,7 @@ pub mod read;
 pub mod resolution;
 pub mod schedule;
 mod table;
+pub mod truth_keys;
 pub mod write;
 
 pub use digits::*;

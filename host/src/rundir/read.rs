@@ -113,14 +113,14 @@ impl RunDir {
 
         let truth = match crate::input_file::read_to_string(&t_path) {
             Ok(text) => {
-                Some(
+                let truth =
                     serde_json::from_str::<Truth>(&text).map_err(|e| RunDirError::Truth {
                         file: t_path.clone(),
                         line: e.line(),
                         column: e.column(),
                         message: e.to_string(),
-                    })?,
-                )
+                    })?;
+                Some((truth, text))
             }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
             Err(source) => {
@@ -130,7 +130,10 @@ impl RunDir {
                 })
             }
         };
-        if let Some(t) = &truth {
+        if let Some((t, text)) = &truth {
+            for note in super::truth_keys::unread(text, t) {
+                eprintln!("warning: {}:{note}", t_path.display());
+            }
             if let Some(note) = check_truth_bearings(&run, t, &t_path)? {
                 eprintln!("warning: {}: {note}", t_path.display());
             }
@@ -138,7 +141,10 @@ impl RunDir {
         for note in super::schedule::unlisted_speeds_with(&run, &schedules) {
             eprintln!("warning: {}: {note}", b_path.display());
         }
-        Ok(RunDir { truth, ..run })
+        Ok(RunDir {
+            truth: truth.map(|(t, _)| t),
+            ..run
+        })
     }
 }
 

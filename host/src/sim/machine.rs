@@ -218,11 +218,19 @@ impl Machine {
     ) -> Result<(), MachineError> {
         let i = self.bearing_index(name)?;
         if let Some(p) = pedestal {
-            let ok = |v: f64| v.is_finite() && v >= 0.0;
-            if !(p.m > 0.0 && ok(p.m) && ok(p.k_y) && ok(p.k_z) && ok(p.c_y) && ok(p.c_z)) {
-                return Err(MachineError::Request(format!(
-                    "pedestal for {name:?}: m must be > 0 and k, c finite and >= 0 (got {p:?})"
-                )));
+            let values = [
+                ("m", p.m, false),
+                ("k_y", p.k_y, true),
+                ("k_z", p.k_z, true),
+                ("c_y", p.c_y, true),
+                ("c_z", p.c_z, true),
+            ];
+            for (key, v, zero_allowed) in values {
+                if let Some(why) = not_a_quantity(v, zero_allowed) {
+                    return Err(MachineError::Request(format!(
+                        "pedestal for {name:?}: {key} {why}: m must be > 0 and k, c finite and >= 0 (got {p:?})"
+                    )));
+                }
             }
         }
         self.bearings[i].pedestal = pedestal;
@@ -342,6 +350,26 @@ impl BearingModel {
                 .coefficients(speed_hz)
                 .map_err(|e| MachineError::Request(format!("bearing {name:?}: {e}"))),
         }
+    }
+}
+
+/// Why `v` cannot be a physical quantity of a machine (a mass [kg], a
+/// stiffness [N/m], a damping [N·s/m], a length [m]...), or `None` when it
+/// can: not a number, infinite, negative, zero unless `zero_allowed`, or
+/// subnormal (nonzero but below 2.2e-308, `f64::MIN_POSITIVE`, where a
+/// double has lost digits and a ratio such as k/m overflows: 1e-310 kg is no
+/// mass, and a unit slip rather than a machine). The reason is a phrase
+/// starting "got", to follow "must be ...".
+pub fn not_a_quantity(v: f64, zero_allowed: bool) -> Option<String> {
+    if !v.is_finite() || v < 0.0 || (v == 0.0 && !zero_allowed) {
+        Some(format!("got {v}"))
+    } else if v != 0.0 && !v.is_normal() {
+        Some(format!(
+            "got {v:e}, a subnormal number below 2.2e-308 (`f64::MIN_POSITIVE`): no physical value; check the units{}",
+            if zero_allowed { ", or write 0" } else { "" }
+        ))
+    } else {
+        None
     }
 }
 

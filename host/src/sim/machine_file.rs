@@ -179,17 +179,15 @@ impl Ctx<'_> {
         }
     }
     fn positive(&self, key: &str, v: f64) -> Result<f64, MachineError> {
-        if v.is_finite() && v > 0.0 {
-            Ok(v)
-        } else {
-            Err(self.err(key, format!("must be a finite number > 0 (got {v})")))
+        match super::machine::not_a_quantity(v, false) {
+            None => Ok(v),
+            Some(why) => Err(self.err(key, format!("must be a finite number > 0 ({why})"))),
         }
     }
     fn non_negative(&self, key: &str, v: f64) -> Result<f64, MachineError> {
-        if v.is_finite() && v >= 0.0 {
-            Ok(v)
-        } else {
-            Err(self.err(key, format!("must be a finite number >= 0 (got {v})")))
+        match super::machine::not_a_quantity(v, true) {
+            None => Ok(v),
+            Some(why) => Err(self.err(key, format!("must be a finite number >= 0 ({why})"))),
         }
     }
     fn finite(&self, key: &str, v: f64) -> Result<f64, MachineError> {

@@ -75,7 +75,7 @@ pub struct Args {
     #[arg(long, required_unless_present = "offline")]
     pub port: Option<String>,
     /// Line speed [bit/s] (pseudo-terminals ignore it).
-    #[arg(long, allow_negative_numbers = true, default_value_t = 115_200)]
+    #[arg(long, allow_negative_numbers = true, default_value_t = 115_200, value_parser = line_speed)]
     pub baud: u32,
     /// Stream configuration (TOML: channel map, averaging, RLS, bearings.csv;
     /// documented in `plinth::stream::config`).
@@ -114,6 +114,15 @@ pub struct Args {
     /// No progress line.
     #[arg(skip)]
     pub quiet: bool,
+}
+
+/// `--baud`: a line speed [bit/s], a whole number from 1 to 2³² − 1 (0 is
+/// no speed: termios' B0 hangs the line up, and the port never opens).
+fn line_speed(text: &str) -> Result<u32, String> {
+    let n = crate::args::count(text)?;
+    u32::try_from(n).map_err(|_| {
+        format!("{n} bit/s is beyond any serial line: give a line speed such as 115200")
+    })
 }
 
 /// The directory a stream into `out` works in until it completes:
@@ -187,10 +196,11 @@ pub fn run(args: &Args) -> Result<()> {
             Ok(())
         }
         Some(e) => {
-            if let Ok(report) = &result {
+            let nothing = !resuming && raw_after == raw_before;
+            if let (Ok(report), false) = (&result, nothing) {
                 print!("{}", summary(report));
             }
-            if !resuming && raw_after == raw_before {
+            if nothing {
                 out.discard(); // nothing arrived: the staging directory goes
                 bail!(
                     "the stream did not complete: {e}; nothing was received, {} is unchanged",
@@ -441,4 +451,19 @@ pub fn summary(report: &StreamReport) -> String {
     }
     s.push_str(&report::render(&report.pedestals));
     s
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_line_speed_is_a_whole_number_of_bits_per_second_above_zero() {
+        assert_eq!(super::line_speed("115200"), Ok(115_200));
+        assert!(super::line_speed("0")
+            .unwrap_err()
+            .contains("0 is not allowed"));
+        assert!(super::line_speed("-9600").is_err());
+        assert!(super::line_speed("4294967296")
+            .unwrap_err()
+            .contains("beyond any serial line"));
+    }
 }

@@ -56,11 +56,15 @@ impl RawLog {
             .write_all(bytes)
             .and_then(|()| self.file.flush())
             .with_context(|| {
+                // A full disk takes part of the bytes: say how many are lost.
+                let now = self.file.metadata().map_or(self.len, |m| m.len());
+                let written = now.saturating_sub(self.len).min(bytes.len() as u64);
                 format!(
-                    "cannot append {} bytes to the raw log {} at byte {}",
+                    "cannot append {} bytes to the raw log {} at byte {} ({written} of them written, the last {} lost)",
                     bytes.len(),
                     self.path.display(),
-                    self.len
+                    self.len,
+                    bytes.len() as u64 - written
                 )
             })?;
         self.len += bytes.len() as u64;
