@@ -1,4 +1,4 @@
-//! Inputs found wanting by the session-34 hostile probe (docs/session34-probe12.md):
+//! Inputs found wanting by the session-34 hostile probe (docs/robustness-hostile.md, "Session 34"):
 //! a machine file with a subnormal pedestal mass (1e-310 kg) was accepted,
 //! a `truth.json` key Plinth does not read (`k_yy` beside `k_y`, `efects`)
 //! or an effect name it does not know (`probe_runnout`) was dropped without

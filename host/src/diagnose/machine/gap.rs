@@ -129,7 +129,7 @@ pub fn parameter_variance(
 /// way: between the base model and step 1's refit every pedestal changes by
 /// the change of estimator, a fraction of its ±, and near a lightly damped
 /// pedestal's resonance the open-loop re-simulation magnifies that more
-/// than the effect's own change (docs/session34-delay12.md).
+/// than the effect's own change (docs/diagnose-verdict.md, "Session 34").
 pub fn refitted_base(prep: &Prepared, first: &State) -> Result<State> {
     State::fit(prep, first.model.clone(), first.params.nl.clone())
 }
