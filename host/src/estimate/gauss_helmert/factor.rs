@@ -93,7 +93,7 @@ fn cholesky_in_place(a: &mut [f64], n: usize) -> bool {
             }
         }
         let diag = a[j * n + j];
-        if diag == 0.0 || !(diag >= 0.0) {
+        if diag.is_nan() || diag <= 0.0 {
             return false;
         }
         let denom = diag.sqrt();
