@@ -259,10 +259,21 @@ fn best_grouping(
 ) -> Option<GroupingFit> {
     let ln_n = (n_eq.max(2) as f64).ln();
     let mut best: Option<GroupingFit> = None;
+    // Each base group is fitted once: a group recurs in several groupings
+    // (a pair alone and beside another pair), and its fit depends on the
+    // group, `obs` and `start` only.
+    let mut fitted: Vec<(&[usize], Option<BaseFitResult>)> = Vec::new();
     for groups in groupings {
         let fits: Option<Vec<BaseFitResult>> = groups
             .iter()
-            .map(|g| fit_group(obs, g, start, kind))
+            .map(|g| {
+                if let Some((_, f)) = fitted.iter().find(|(h, _)| *h == g.as_slice()) {
+                    return f.clone();
+                }
+                let f = fit_group(obs, g, start, kind);
+                fitted.push((g, f.clone()));
+                f
+            })
             .collect();
         let Some(fits) = fits else { continue };
         if kind.is_some_and(|k| !fits.iter().all(|f| physical(f, k))) {

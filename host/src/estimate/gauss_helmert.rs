@@ -18,6 +18,10 @@
 
 use nalgebra::{DMatrix, DVector};
 
+mod factor;
+
+use factor::Workspace;
+
 /// A system of equations per speed, linear in the measured numbers.
 pub trait Equations {
     /// Speeds (independent blocks of equations).
@@ -39,17 +43,20 @@ pub trait Equations {
     /// with analytic derivatives overrides it (and does its per-speed work
     /// once, not per call).
     fn whiten(&self, p: &[f64], jacobian: Option<JacobianRequest<'_>>) -> Option<DVector<f64>> {
-        let r = whitened_generic(self, p, None)?;
+        let mut ws = Workspace::new();
+        let r = whitened_generic(self, p, None, &mut ws)?;
         if let Some(j) = jacobian {
             *j.out = DMatrix::zeros(r.len(), j.free.len());
+            let mut at = p.to_vec();
             for (c, (&k, &h)) in j.free.iter().zip(j.step).enumerate() {
-                let mut up = p.to_vec();
-                up[k] += h;
-                let mut dn = p.to_vec();
-                dn[k] -= h;
-                let d = (whitened_generic(self, &up, None)? - whitened_generic(self, &dn, None)?)
-                    / (2.0 * h);
-                j.out.set_column(c, &d);
+                at[k] = p[k] + h;
+                let up = whitened_generic(self, &at, None, &mut ws)?;
+                at[k] = p[k] - h;
+                let dn = whitened_generic(self, &at, None, &mut ws)?;
+                at[k] = p[k];
+                for (row, (a, b)) in up.iter().zip(dn.iter()).enumerate() {
+                    j.out[(row, c)] = (a - b) / (2.0 * h);
+                }
             }
         }
         Some(r)
@@ -130,21 +137,8 @@ pub struct Normal {
 /// mean diagonal when singular; `None` when Σ has no noise at all.
 pub fn whitening<E: Equations + ?Sized>(eq: &E, s: usize, p: &[f64]) -> Option<DMatrix<f64>> {
     let (_, b) = eq.residual(s, p);
-    let mut bd = b.clone();
-    for (c, v) in eq.variance(s).iter().enumerate() {
-        bd.column_mut(c).scale_mut(*v);
-    }
-    let sigma = bd * b.transpose();
-    let n = sigma.nrows();
-    let trace = sigma.trace();
-    if !(trace > 0.0 && trace.is_finite()) {
-        return None;
-    }
-    if let Some(c) = sigma.clone().cholesky() {
-        return Some(c.l());
-    }
-    let jitter = DMatrix::identity(n, n) * (1e-12 * trace / n as f64);
-    (sigma + jitter).cholesky().map(|c| c.l())
+    let mut ws = Workspace::new();
+    ws.factor(&b, eq.variance(s)).then(|| ws.lower())
 }
 
 /// Whitened residuals L_s⁻¹e_s stacked over speeds, with Σ at `p` or the
@@ -155,25 +149,41 @@ pub fn whitened<E: Equations + ?Sized>(
     frozen: Option<&[DMatrix<f64>]>,
 ) -> Option<DVector<f64>> {
     match frozen {
-        Some(_) => whitened_generic(eq, p, frozen),
+        Some(_) => whitened_generic(eq, p, frozen, &mut Workspace::new()),
         None => eq.whiten(p, None),
     }
 }
 
-/// [`whitened`] from [`Equations::residual`] and [`Equations::variance`].
+/// [`whitened`] from [`Equations::residual`] and [`Equations::variance`]
+/// (e_s and B_s from one call of [`Equations::residual`] where Σ is not
+/// frozen, each speed factored and whitened in the buffers of `ws`).
 fn whitened_generic<E: Equations + ?Sized>(
     eq: &E,
     p: &[f64],
     frozen: Option<&[DMatrix<f64>]>,
+    ws: &mut Workspace,
 ) -> Option<DVector<f64>> {
     let mut out = Vec::new();
     for s in 0..eq.speeds() {
-        let e = eq.error(s, p);
-        let w = match frozen {
-            Some(f) => f[s].solve_lower_triangular(&e)?,
-            None => whitening(eq, s, p)?.solve_lower_triangular(&e)?,
+        let mut e;
+        let solved = match frozen {
+            Some(f) => {
+                e = eq.error(s, p);
+                f[s].solve_lower_triangular_mut(&mut e)
+            }
+            None => {
+                let b;
+                (e, b) = eq.residual(s, p);
+                if !ws.factor(&b, eq.variance(s)) {
+                    return None;
+                }
+                ws.solve(&mut e)
+            }
         };
-        out.extend(w.iter().copied());
+        if !solved {
+            return None;
+        }
+        out.extend(e.iter().copied());
     }
     out.iter()
         .all(|v| v.is_finite())
