@@ -315,7 +315,8 @@ fn machine_level_gaps_line_up_with_the_steps_after_a_base() {
     let run = simulated_run(&skid, &speeds_hz(5.0, 120.0, 2.0), &effects, w, &mut normal);
     let out = diagnose(&run, &Options::default()).expect("diagnose");
     let mut d = out.diagnosis.clone();
-    MachineCheck::of(&skid, &out).expect("check").apply(&mut d);
+    let check = MachineCheck::of(&skid, &out).expect("check");
+    check.apply(&mut d);
     println!("{}", d.to_text());
     assert_eq!(out.after_steps.len(), d.steps.len());
     assert!(
@@ -333,7 +334,11 @@ fn machine_level_gaps_line_up_with_the_steps_after_a_base() {
             )
         })
         .collect();
-    assert_eq!(gaps[0].0, d.machine_gap_before.expect("gap"));
+    // Step 1 is judged against the base model refitted as the steps are
+    // (`refitted_base`), the report's overall "before" is the
+    // maximum-likelihood base model's.
+    assert_eq!(gaps[0].0, check.gap_refitted.expect("refitted gap"));
+    assert_eq!(d.machine_gap_before, check.gap_before);
     for w in gaps.windows(2) {
         assert_eq!(w[0].1, w[1].0, "{gaps:?}");
     }
