@@ -35,7 +35,7 @@
 //!   whose χ² excess the level test cannot see; q ≥ 0, chi-bar-squared),
 //!   against the noise columns (made only with them), p below
 //!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (docs/trust-support-mode.md,
-//!   session 29, for its measured rates).
+//!   sessions 29 and 35, for its measured rates).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
 //! machines, detections on a pedestal with its own sub-base): docs/trust.md.

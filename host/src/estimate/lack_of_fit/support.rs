@@ -35,6 +35,18 @@
 //! the correlation of the two coefficients' estimates. A two-sided χ²(2)
 //! spends half its rate on signs no support can have.
 //!
+//! **The score** (session 35): the gradient, in the extension, of the
+//! Gauss-Helmert criterion Σ_s e_sᵀ(B_sΣ_sB_sᵀ)⁻¹e_s the fit minimises, its
+//! weights moving with the parameters, less the part the one-mass
+//! parameters take (the efficient score). With the weights frozen (sessions
+//! 27-34) the score's mean under the null is not zero when the measured
+//! displacement the extension multiplies is noisy: its noise is in the
+//! residual too, and their product has a mean of one sign below the
+//! pedestal's resonance, large where a pick-up reads near its floor (the
+//! fourth unseen machine's stiff block: 1.2 % of clean runs flagged at a
+//! 0.1 % rate). The weights' own derivative cancels that mean to first
+//! order; the information (the Gauss-Newton G) is unchanged.
+//!
 //! **The level**: the whitened residuals are in units of the noise
 //! columns, so the test is made only with them. A form without columns
 //! (T̄ over the extended fit's residual variance, an F test) was measured in
@@ -87,6 +99,11 @@ pub fn support_mode<E: Equations + ?Sized>(
     let mut x = DMatrix::<f64>::zeros(4 * n, np);
     let mut x2 = DMatrix::<f64>::zeros(4 * n, EXTRA);
     let mut w = DVector::<f64>::zeros(4 * n);
+    // Half the gradient of the Gauss-Helmert criterion Σ_s |L_s⁻¹e_s|², its
+    // weights L_s(θ) moving with θ (module docs, "The score"): one-mass
+    // parameters (per unit of each) and the extension.
+    let mut grad = DVector::<f64>::zeros(np);
+    let mut grad2 = Vector2::<f64>::zeros();
     for (s, &speed) in speeds_hz.iter().enumerate() {
         let l = gh::whitening(eq, s, theta)?;
         let e0 = eq.error(s, theta);
@@ -103,6 +120,11 @@ pub fn support_mode<E: Equations + ?Sized>(
             x.view_mut((4 * s, k), (4, 1)).copy_from(&col);
             if k < EXTRA {
                 x2.view_mut((4 * s, k), (4, 1)).copy_from(&(col * (-r4)));
+            }
+            let half = criterion_slope(eq, s, theta, k, step)?;
+            grad[k] += half;
+            if k < EXTRA {
+                grad2[k] -= r4 * half;
             }
         }
     }
@@ -122,10 +144,21 @@ pub fn support_mode<E: Equations + ?Sized>(
         .collect();
     let u = u.select_columns(&keep);
     let v_t = v_t.select_rows(&keep);
-    let w_out = &w - &u * (u.transpose() * &w);
     let x2_out = &x2 - &u * (u.transpose() * &x2);
     let g: Matrix2<f64> = Matrix2::from_fn(|i, j| x2_out.column(i).dot(&x2_out.column(j)));
-    let b = Vector2::from_fn(|i, _| x2_out.column(i).dot(&w_out));
+    // The extension's score with the one-mass parameters' taken out
+    // (efficient score g_q − X₂ᵀU·S⁻¹Vᵀ·g_θ, g_θ per unit of the scaled
+    // columns): the frozen-weight form X₂⊥ᵀw⊥ when the weights do not move.
+    let mut g_scaled = v_t.clone()
+        * grad.component_div(&DVector::from_iterator(
+            np,
+            norms.iter().map(|&n| if n > 0.0 { n } else { 1.0 }),
+        ));
+    for (i, c) in g_scaled.iter_mut().enumerate() {
+        *c /= svd.singular_values[keep[i]];
+    }
+    let nuisance = x2.transpose() * (&u * g_scaled);
+    let b = Vector2::from_fn(|i, _| grad2[i] - nuisance[i]);
     let gamma = g.try_inverse()? * b;
     let two_sided = b.dot(&gamma).max(0.0);
     // The extension's coefficient is −γ (a Gauss-Newton step: w ≈ Xβ is the
@@ -176,6 +209,26 @@ pub fn support_mode<E: Equations + ?Sized>(
         p_value,
         drop_at_top,
     })
+}
+
+/// ½∂/∂θ_k of speed `s`'s term |L_s⁻¹e_s|² of the Gauss-Helmert criterion
+/// at `theta`, its weights L_s(θ) recomputed (central difference of step
+/// `step` in θ_k's units) [criterion per unit of θ_k]; `None` when a
+/// weight cannot be formed.
+fn criterion_slope<E: Equations + ?Sized>(
+    eq: &E,
+    s: usize,
+    theta: &[f64],
+    k: usize,
+    step: f64,
+) -> Option<f64> {
+    let term = |delta: f64| -> Option<f64> {
+        let mut p = theta.to_vec();
+        p[k] += delta;
+        let l = gh::whitening(eq, s, &p)?;
+        Some(l.solve_lower_triangular(&eq.error(s, &p))?.norm_squared())
+    };
+    Some(0.25 * (term(step)? - term(-step)?) / step)
 }
 
 #[cfg(test)]
@@ -293,11 +346,16 @@ mod tests {
     /// extension explains the whole residual, so its coefficient is the
     /// term's own (Ω_max⁴q/k per direction) and T is what the one-mass
     /// columns leave of the whitened residual (the null model's weighted
-    /// least squares, solved here by its normal equations).
+    /// least squares, solved here by its normal equations). X is read all
+    /// but exactly (sd 1e-12 m against forces known to 1 N), so the weights
+    /// do not move with θ and the criterion's gradient is the frozen-weight
+    /// projection (with X's sd 1e-9 m, |z|²σ_X² is 4 % of the variance and
+    /// the weights' derivative, second order in this large residual, moves
+    /// the coefficient by 0.4 %).
     #[test]
     fn a_known_quartic_term_gives_its_coefficient_and_score() {
         let q = [1e-3, 5e-4];
-        let eq = pedestal(q, 1e-9, 1.0, None);
+        let eq = pedestal(q, 1e-12, 1.0, None);
         let hz = speeds_hz(&eq);
         let t = support_mode(&eq, &THETA, &hz).expect("test");
         let top = eq.omega.iter().copied().fold(0.0, f64::max);
@@ -346,13 +404,14 @@ mod tests {
     }
 
     /// The share of 400 seeded one-mass pedestals with white noise on X
-    /// and F whose p-value is below 0.05 and below 0.2.
-    fn null_shares(seed: u64) -> (f64, f64) {
+    /// (sd `sd_x` [m]) and F (20 N) whose p-value is below 0.05 and below
+    /// 0.2.
+    fn null_shares(seed: u64, sd_x: f64) -> (f64, f64) {
         let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
         let runs = 400;
         let (mut below5, mut below20) = (0, 0);
         for _ in 0..runs {
-            let eq = pedestal([0.0; 2], 2e-8, 20.0, Some(&mut rng));
+            let eq = pedestal([0.0; 2], sd_x, 20.0, Some(&mut rng));
             let t = support_mode(&eq, &THETA, &speeds_hz(&eq)).expect("test");
             below5 += usize::from(t.p_value < 0.05);
             below20 += usize::from(t.p_value < 0.2);
@@ -366,7 +425,21 @@ mod tests {
     /// (standard error 1.1 %) and 20 % below 0.2 (2 %).
     #[test]
     fn the_one_sided_score_is_calibrated_on_white_noise_with_columns() {
-        let (p5, p20) = null_shares(2026);
+        let (p5, p20) = null_shares(2026, 2e-8);
+        assert!((p5 - 0.05).abs() < 0.034, "below 0.05: {p5}");
+        assert!((p20 - 0.2).abs() < 0.06, "below 0.2: {p20}");
+    }
+
+    /// The same where X is read at a signal-to-noise ratio near one (sd
+    /// 5e-7 m against |X| of 0.3-2.2e-6 m: a pick-up near its floor, as on
+    /// the fourth unseen machine's stiff block). The extension's column is
+    /// made of the measured X, whose noise is in the residual too; with the
+    /// weights frozen their product's mean made the score one-signed and the
+    /// p-values too small (session 35); the criterion's own gradient keeps
+    /// them uniform.
+    #[test]
+    fn the_score_is_calibrated_when_the_displacement_is_as_noisy_as_its_signal() {
+        let (p5, p20) = null_shares(2035, 5e-7);
         assert!((p5 - 0.05).abs() < 0.034, "below 0.05: {p5}");
         assert!((p20 - 0.2).abs() < 0.06, "below 0.2: {p20}");
     }
