@@ -8,6 +8,16 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
+/// What the report's overall machine-level "before" (`machine_gap_before`)
+/// is: the base model as `plinth identify` fits it (maximum likelihood,
+/// `State::base`).
+pub const BASE_AS_IDENTIFY: &str = "base model as identify fits it";
+
+/// What step 1's machine-level "before" is: the base model refitted as the
+/// steps' joint refits fit it (`crate::diagnose::machine::refitted_base`),
+/// the model step 1 extends.
+pub const BASE_AS_STEPS: &str = "base model refitted as the steps fit it";
+
 /// A parameter estimate with its standard error (SI units of the parameter).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Estimate {
@@ -385,7 +395,7 @@ impl Diagnosis {
             self.gap_before,
             self.noise.gap_floor_before,
             self.machine_gap_before.map_or(String::new(), |g| format!(
-                "; machine-level gap {g:.4} (noise floor {:.4})",
+                "; machine-level gap {g:.4} ({BASE_AS_IDENTIFY}; noise floor {:.4}, the final model's)",
                 self.machine_gap_floor.unwrap_or(0.0)
             ))
         );
@@ -483,7 +493,14 @@ impl Diagnosis {
                     let after = st
                         .machine_gap_after
                         .map_or("not simulated".to_string(), |a| format!("{a:.4}"));
-                    let _ = writeln!(s, "     machine-level gap {g:.4} -> {after}");
+                    // Step 1's "before" is not the figure above: it is the
+                    // base model refitted as the steps fit it.
+                    let whose = if i == 0 {
+                        format!(" (before: {BASE_AS_STEPS})")
+                    } else {
+                        String::new()
+                    };
+                    let _ = writeln!(s, "     machine-level gap {g:.4} -> {after}{whose}");
                 }
                 if let Some(h) = &st.held {
                     h.write_text(&mut s, &st.bearing);
