@@ -100,16 +100,25 @@ pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
             if step <= 0.0 || stop < start {
                 bail!("--speeds {text}: need STOP >= START and STEP > 0");
             }
-            let n = ((stop - start) / step + 1e-6).floor() as usize + 1;
-            if n > 10_000_000 {
-                bail!("--speeds {text}: {n} speeds is too many");
-            }
+            // Counted (saturating) and checked before anything is allocated.
+            let n = ((stop - start) / step + 1e-6).floor() as u64;
+            let n = n.saturating_add(1);
+            budget::SPEEDS
+                .check(&format!("--speeds {text}"), n)
+                .map_err(anyhow::Error::msg)?;
             (0..n).map(|i| start + i as f64 * step).collect()
         }
-        [_] => text
-            .split(',')
-            .map(num)
-            .collect::<anyhow::Result<Vec<_>>>()?,
+        [_] => {
+            budget::SPEEDS
+                .check(
+                    &format!("--speeds (a list of {} entries)", text.split(',').count()),
+                    text.split(',').count() as u64,
+                )
+                .map_err(anyhow::Error::msg)?;
+            text.split(',')
+                .map(num)
+                .collect::<anyhow::Result<Vec<_>>>()?
+        }
         _ => bail!("--speeds {text}: use START:STOP:STEP or a comma-separated list"),
     };
     if speeds.is_empty() {
@@ -133,6 +142,8 @@ pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
 pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
     let speeds = parse_speeds(&args.speeds)?;
+    budget::check_solves(&format!("--speeds {}", args.speeds), &machine, speeds.len())
+        .map_err(anyhow::Error::msg)?;
     let out = OutputDir::create(&args.out, args.force)?;
     let effects = EffectSet::from_options(&args.effects).map_err(anyhow::Error::msg)?;
     if let Some(d) = args.digits {
