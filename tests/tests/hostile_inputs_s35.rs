@@ -146,3 +146,73 @@ fn a_speed_list_beyond_the_budget_is_refused_before_any_work() {
     assert!(started.elapsed().as_secs() < 20, "{:?}", started.elapsed());
     assert!(!out.exists());
 }
+
+/// `plinth report RUN --out OUT --force` with the default figures.
+fn report_args(run: &Path, out: &Path) -> plinth::report::Args {
+    plinth::report::Args {
+        dir: run.to_path_buf(),
+        out: out.to_path_buf(),
+        diagnose: false,
+        speeds: None,
+        unmeasured_base: None,
+        polar: plinth::field::plot::PolarArgs {
+            layout: None,
+            channels: None,
+            rotation: None,
+            zero_at_transducer: false,
+            style: plinth::plots::StyleArgs {
+                speed_unit: Default::default(),
+                log_amplitude: false,
+            },
+        },
+        force: true,
+    }
+}
+
+#[test]
+fn a_report_is_never_written_over_a_fifo_a_link_or_a_device() {
+    let t = tempfile::tempdir().unwrap();
+    let machine = Machine::from_toml_str(&example_machine(), "m.toml").unwrap();
+    let speeds: Vec<f64> = (1..=40).map(|i| 5.0 * f64::from(i)).collect();
+    let run = t.path().join("run");
+    unbalance_response(&machine, &speeds, &EffectSet::none())
+        .unwrap()
+        .to_run_dir(None)
+        .unwrap()
+        .write(&run)
+        .unwrap();
+    // A FIFO (main replaced it with the page, as it replaced /dev/full).
+    let fifo = t.path().join("r.html");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let e = plinth::report::run(&report_args(&run, &fifo))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(&format!("--out {}: is not a regular file", fifo.display())),
+        "{e}"
+    );
+    use std::os::unix::fs::FileTypeExt;
+    assert!(fifo.symlink_metadata().unwrap().file_type().is_fifo());
+    // A symbolic link to a file: neither followed nor replaced.
+    let kept = t.path().join("kept.txt");
+    std::fs::write(&kept, "mine").unwrap();
+    let link = t.path().join("link.html");
+    std::os::unix::fs::symlink(&kept, &link).unwrap();
+    let e = plinth::report::run(&report_args(&run, &link))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("is a symbolic link"), "{e}");
+    assert!(link.symlink_metadata().unwrap().file_type().is_symlink());
+    assert_eq!(std::fs::read(&kept).unwrap(), b"mine");
+    // A regular file with --force is replaced whole.
+    let page = t.path().join("page.html");
+    std::fs::write(&page, "old").unwrap();
+    plinth::report::run(&report_args(&run, &page)).unwrap();
+    assert!(std::fs::read_to_string(&page)
+        .unwrap()
+        .starts_with("<!DOCTYPE html>"));
+}

@@ -56,6 +56,21 @@ pub enum Problem {
     /// The directory (or the directory held, inside it) cannot be written.
     #[error("{} is read-only: the previous directory could not be removed after the new one is moved into place; make it writable (chmod -R u+w) or choose another directory; nothing was changed", .0.display())]
     ReadOnly(PathBuf),
+    /// An output file's path has no file name (`..`, `/`).
+    #[error("has no file name: give the file's name")]
+    NoFileName,
+    /// An output file is an existing directory.
+    #[error("is a directory: give the file's name")]
+    IsDirectory,
+    /// An output file is a symbolic link (to the path held).
+    #[error("is a symbolic link (to {}): links are not followed; give another name, or remove the link", .0.display())]
+    FileIsSymlink(PathBuf),
+    /// An output file is a device, FIFO or socket.
+    #[error("is not a regular file (a device, FIFO or socket): give a file name")]
+    NotAFile,
+    /// An output file exists and `--force` was not given.
+    #[error("already exists (add --force to replace it)")]
+    FileExists,
     /// An operating-system error on a path.
     #[error("{what} {}: {source}", .path.display())]
     Io {

@@ -53,12 +53,14 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 mod error;
+mod file;
 mod leftovers;
 mod manifest;
 mod merge;
 mod target;
 
 pub use error::{OutputError, Problem};
+pub use file::{check_file, write_file};
 pub use leftovers::clean_leftovers;
 pub use target::describe;
 
