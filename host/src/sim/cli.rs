@@ -246,7 +246,11 @@ mod tests {
         assert!(parse_speeds("a:b").is_err());
         let twice = |t: &str| parse_speeds(t).unwrap_err().to_string();
         assert!(twice("5,10,5.0").contains("5 Hz comes twice"));
-        assert!(twice("65536:65536.00001:5e-12").contains("comes twice"));
+        // A STEP below the doubles' spacing at START (1.5e-11 at 65536):
+        // 20 000 speeds, within the limit, many of them equal.
+        assert!(twice("65536:65536.0000001:5e-12").contains("comes twice"));
+        // 2 000 000 such speeds are beyond budget::SPEEDS before that.
+        assert!(twice("65536:65536.00001:5e-12").contains("above the limit of"));
         assert_eq!(parse_speeds("10,5").unwrap(), vec![10.0, 5.0]);
     }
 }
