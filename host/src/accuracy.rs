@@ -447,6 +447,8 @@ pub struct Args {
 pub fn run(args: &Args) -> Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
     let speeds = crate::sim::cli::parse_speeds(&args.speeds)?;
+    crate::sim::budget::check_solves(&format!("--speeds {}", args.speeds), &machine, speeds.len())
+        .map_err(anyhow::Error::msg)?;
     let perturbation = match (args.noise, args.digits) {
         (_, Some(d)) => Perturbation::Digits(d),
         (Some(f), None) => Perturbation::Noise(f),

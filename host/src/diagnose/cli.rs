@@ -94,7 +94,7 @@ pub fn run(args: &Args) -> Result<()> {
         ..Options::default()
     };
     let plots = (args.plots.as_deref())
-        .map(|d| crate::output::OutputDir::create(d, args.force))
+        .map(|d| crate::output::OutputDir::create_as("--plots", d, args.force))
         .transpose()?;
     // Reader errors name their file, line and column already.
     crate::identify::cli::check_run_dir(&args.dir)?;

@@ -1,55 +1,76 @@
-//! What can go wrong with `--out`: every error names the path and what to
-//! do about it.
+//! What can go wrong with an output directory: every error names the
+//! command-line option the directory came from (`--out`, `--plots`), the
+//! path, and what to do about it.
 
 use std::path::{Path, PathBuf};
 
-/// Errors of an output directory; each names the path and what to do.
+/// An error of the output directory given by `option` (e.g. `--plots`):
+/// shown as `OPTION PATH: PROBLEM`.
 #[derive(Debug, thiserror::Error)]
-pub enum OutputError {
-    /// `--out` is an existing file, not a directory.
-    #[error("--out {}: is a file, not a directory: give a directory name (a new one, or an existing run directory with --force)", .0.display())]
-    IsFile(PathBuf),
-    /// `--out` is a symbolic link.
-    #[error("--out {}: is a symbolic link: give the directory it points to ({}) or a new directory, links are not followed", .0.display(), .1.display())]
-    IsSymlink(PathBuf, PathBuf),
-    /// `--out` is neither a file nor a directory (a FIFO, a device...).
-    #[error("--out {}: is not a directory (a FIFO, socket or device): give a directory name", .0.display())]
-    NotADirectory(PathBuf),
-    /// `--out` already holds something and `--force` was not given.
-    #[error("--out {}: already holds {what}: pass --force to write into it (files Plinth did not write are kept), or choose another directory", .path.display())]
-    NotEmpty {
-        /// The directory.
-        path: PathBuf,
-        /// What it holds, e.g. "a run directory (measurements.csv, raw.bin)".
-        what: String,
-    },
+#[error("{option} {}: {problem}", .out.display())]
+pub struct OutputError {
+    /// The command-line option that named the directory, e.g. `--out`.
+    pub option: &'static str,
+    /// The directory as the command uses it.
+    pub out: PathBuf,
+    /// What is wrong with it.
+    pub problem: Problem,
+}
+
+/// What is wrong with an output directory; the message says what to do and
+/// is shown after `OPTION PATH: ` ([`OutputError`]).
+#[derive(Debug, thiserror::Error)]
+pub enum Problem {
+    /// The directory is an existing file.
+    #[error("is a file, not a directory: give a directory name (a new one, or an existing run directory with --force)")]
+    IsFile,
+    /// The directory is a symbolic link (to the path held).
+    #[error("is a symbolic link: give the directory it points to ({}) or a new directory, links are not followed", .0.display())]
+    IsSymlink(PathBuf),
+    /// The directory is neither a file nor a directory (a FIFO, a device...).
+    #[error("is not a directory (a FIFO, socket or device): give a directory name")]
+    NotADirectory,
+    /// The directory already holds something and `--force` was not given;
+    /// what it holds, e.g. "a run directory (measurements.csv, raw.bin)".
+    #[error("already holds {0}: pass --force to write into it (files Plinth did not write are kept), or choose another directory")]
+    NotEmpty(String),
     /// `--force` would have replaced a file Plinth did not write.
-    #[error("--out {}: {file} would be replaced, but Plinth did not write it ({why}): move it away or choose another directory; nothing was changed", .dir.display())]
+    #[error("{file} would be replaced, but Plinth did not write it ({why}): move it away or choose another directory; nothing was changed")]
     WouldReplace {
-        /// The directory.
-        dir: PathBuf,
         /// The file, relative to the directory.
         file: String,
         /// Why it is protected.
         why: String,
     },
-    /// Another Plinth command holds the lock of `--out`.
-    #[error("--out {}: another Plinth command is writing it ({}): wait for it to finish, or choose another directory; nothing was changed", .0.display(), .1)]
-    Busy(PathBuf, String),
-    /// Something appeared in `--out` while the command ran.
-    #[error("--out {}: {what} appeared in it while this command ran (not written by it): nothing was replaced; move it away or choose another directory and run again", .path.display())]
-    Appeared {
-        /// The directory.
-        path: PathBuf,
-        /// What appeared, e.g. "2 entries (notes.txt, run.csv)".
-        what: String,
-    },
-    /// `--out` is (or contains) the current directory.
-    #[error("--out {}: is the current directory or contains it ({}); Plinth moves a finished directory into place and cannot replace the one you are in: give a new directory name, e.g. --out run1", .0.display(), .1.display())]
-    HoldsCurrentDir(PathBuf, PathBuf),
-    /// `--out` (or a directory in it) cannot be written.
-    #[error("--out {}: {} is read-only: the previous directory could not be removed after the new one is moved into place; make it writable (chmod -R u+w) or choose another directory; nothing was changed", .0.display(), .1.display())]
-    ReadOnly(PathBuf, PathBuf),
+    /// Another Plinth command holds the directory's lock (which process,
+    /// which lock file).
+    #[error("another Plinth command is writing it ({0}): wait for it to finish, or choose another directory; nothing was changed")]
+    Busy(String),
+    /// Something appeared in the directory while the command ran, e.g.
+    /// "2 entries (notes.txt, run.csv)".
+    #[error("{0} appeared in it while this command ran (not written by it): nothing was replaced; move it away or choose another directory and run again")]
+    Appeared(String),
+    /// The directory is (or contains) the current directory (held).
+    #[error("is the current directory or contains it ({}); Plinth moves a finished directory into place and cannot replace the one you are in: give a new directory name, e.g. --out run1", .0.display())]
+    HoldsCurrentDir(PathBuf),
+    /// The directory (or the directory held, inside it) cannot be written.
+    #[error("{} is read-only: the previous directory could not be removed after the new one is moved into place; make it writable (chmod -R u+w) or choose another directory; nothing was changed", .0.display())]
+    ReadOnly(PathBuf),
+    /// An output file's path has no file name (`..`, `/`).
+    #[error("has no file name: give the file's name")]
+    NoFileName,
+    /// An output file is an existing directory.
+    #[error("is a directory: give the file's name")]
+    IsDirectory,
+    /// An output file is a symbolic link (to the path held).
+    #[error("is a symbolic link (to {}): links are not followed; give another name, or remove the link", .0.display())]
+    FileIsSymlink(PathBuf),
+    /// An output file is a device, FIFO or socket.
+    #[error("is not a regular file (a device, FIFO or socket): give a file name")]
+    NotAFile,
+    /// An output file exists and `--force` was not given.
+    #[error("already exists (add --force to replace it)")]
+    FileExists,
     /// An operating-system error on a path.
     #[error("{what} {}: {source}", .path.display())]
     Io {
@@ -63,13 +84,24 @@ pub enum OutputError {
     },
 }
 
-/// The map from an operating-system error on `path` to [`OutputError::Io`]
+impl Problem {
+    /// This problem as an error of the directory `out` given by `option`.
+    pub fn of(self, option: &'static str, out: &Path) -> OutputError {
+        OutputError {
+            option,
+            out: out.to_path_buf(),
+            problem: self,
+        }
+    }
+}
+
+/// The map from an operating-system error on `path` to [`Problem::Io`]
 /// saying `what` was being done.
 pub(super) fn io<'a>(
     what: &'static str,
     path: &'a Path,
-) -> impl FnOnce(std::io::Error) -> OutputError + 'a {
-    move |source| OutputError::Io {
+) -> impl FnOnce(std::io::Error) -> Problem + 'a {
+    move |source| Problem::Io {
         what,
         path: path.to_path_buf(),
         source,

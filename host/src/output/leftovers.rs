@@ -140,7 +140,7 @@ pub(super) struct Lock {
 }
 
 impl Lock {
-    pub(super) fn take(out: &Path) -> Result<Lock, OutputError> {
+    pub(super) fn take(out: &Path) -> Result<Lock, Problem> {
         use std::os::unix::fs::MetadataExt;
         let path = lock_path(out);
         for _ in 0..8 {
@@ -159,7 +159,7 @@ impl Lock {
                         Ok(pid) => format!("process {pid}, lock {}", path.display()),
                         Err(_) => format!("lock {}", path.display()),
                     };
-                    return Err(OutputError::Busy(out.to_path_buf(), holder));
+                    return Err(Problem::Busy(holder));
                 }
                 Err(std::fs::TryLockError::Error(e)) => {
                     return Err(io("cannot lock", &path)(e));
@@ -180,10 +180,10 @@ impl Lock {
                 return Ok(Lock { path, file });
             }
         }
-        Err(OutputError::Busy(
-            out.to_path_buf(),
-            format!("lock {} keeps changing", path.display()),
-        ))
+        Err(Problem::Busy(format!(
+            "lock {} keeps changing",
+            path.display()
+        )))
     }
 }
 

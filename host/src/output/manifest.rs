@@ -14,7 +14,7 @@ pub(super) enum Entry {
 
 /// Every entry under `dir` (relative paths, '/'-separated, parents first),
 /// without following symbolic links.
-pub(super) fn list_entries(dir: &Path) -> Result<Vec<(String, Entry)>, OutputError> {
+pub(super) fn list_entries(dir: &Path) -> Result<Vec<(String, Entry)>, Problem> {
     let mut out = Vec::new();
     let mut stack = vec![(dir.to_path_buf(), String::new())];
     while let Some((path, rel)) = stack.pop() {
@@ -51,7 +51,7 @@ pub(super) fn list_entries(dir: &Path) -> Result<Vec<(String, Entry)>, OutputErr
 }
 
 /// The regular files under `dir` (relative paths), without the manifest.
-pub(super) fn list_files(dir: &Path) -> Result<BTreeSet<String>, OutputError> {
+pub(super) fn list_files(dir: &Path) -> Result<BTreeSet<String>, Problem> {
     Ok(list_entries(dir)?
         .into_iter()
         .filter(|(r, k)| matches!(k, Entry::File) && r != MANIFEST_FILE)
@@ -79,7 +79,7 @@ pub(super) fn file_hash(path: &Path) -> std::io::Result<(u64, u64)> {
     Ok((h, n))
 }
 
-pub(super) fn write_manifest(dir: &Path, files: &BTreeSet<String>) -> Result<(), OutputError> {
+pub(super) fn write_manifest(dir: &Path, files: &BTreeSet<String>) -> Result<(), Problem> {
     let mut text = String::from("# files plinth wrote here: FNV-1a-64 size path\n");
     for rel in files {
         let p = dir.join(rel);
@@ -106,14 +106,14 @@ pub(super) fn read_manifest(dir: &Path) -> BTreeMap<String, (u64, u64)> {
         .collect()
 }
 
-pub(super) fn same_content(a: &Path, b: &Path) -> Result<bool, OutputError> {
+pub(super) fn same_content(a: &Path, b: &Path) -> Result<bool, Problem> {
     let ha = file_hash(a).map_err(io("cannot read", a))?;
     let hb = file_hash(b).map_err(io("cannot read", b))?;
     Ok(ha == hb)
 }
 
 /// Whether `new` starts with every byte of `old`.
-pub(super) fn is_prefix(old: &Path, new: &Path) -> Result<bool, OutputError> {
+pub(super) fn is_prefix(old: &Path, new: &Path) -> Result<bool, Problem> {
     let a = std::fs::read(old).map_err(io("cannot read", old))?;
     let mut f = std::fs::File::open(new).map_err(io("cannot read", new))?;
     let mut b = vec![0u8; a.len()];

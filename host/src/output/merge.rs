@@ -11,7 +11,7 @@ impl OutputDir {
         &self,
         dir: &Path,
         known: &BTreeSet<String>,
-    ) -> Result<(), OutputError> {
+    ) -> Result<(), Problem> {
         let mut new: Vec<String> = list_entries(dir)?
             .into_iter()
             .map(|(r, _)| r)
@@ -21,16 +21,13 @@ impl OutputDir {
             return Ok(());
         }
         new.sort();
-        Err(OutputError::Appeared {
-            path: self.target.clone(),
-            what: describe(&new),
-        })
+        Err(Problem::Appeared(describe(&new)))
     }
 
     /// Checks every collision and links the old files that are kept into the
     /// staging directory; the old directory is only read.
     /// Returns every entry the old directory held.
-    pub(super) fn merge_old(&self) -> Result<BTreeSet<String>, OutputError> {
+    pub(super) fn merge_old(&self) -> Result<BTreeSet<String>, Problem> {
         let old = &self.target;
         let manifest = read_manifest(old);
         let old_entries = list_entries(old)?;
@@ -106,8 +103,7 @@ impl OutputDir {
             } else {
                 format!("{file} (and {})", others.join(", "))
             };
-            return Err(OutputError::WouldReplace {
-                dir: old.clone(),
+            return Err(Problem::WouldReplace {
                 file,
                 why: why.clone(),
             });

@@ -53,12 +53,14 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 mod error;
+mod file;
 mod leftovers;
 mod manifest;
 mod merge;
 mod target;
 
-pub use error::OutputError;
+pub use error::{OutputError, Problem};
+pub use file::{check_file, write_file};
 pub use leftovers::clean_leftovers;
 pub use target::describe;
 
@@ -75,6 +77,8 @@ pub const MANIFEST_FILE: &str = ".plinth-written";
 /// into place by [`OutputDir::commit`].
 #[derive(Debug)]
 pub struct OutputDir {
+    /// The command-line option that named `target` (`--out`, `--plots`).
+    option: &'static str,
     target: PathBuf,
     staging: PathBuf,
     existing: bool,
@@ -86,27 +90,36 @@ pub struct OutputDir {
 }
 
 impl OutputDir {
-    /// Checks `out` and creates the staging directory. `force`: write into an
-    /// `out` that already holds something (files Plinth did not write are
-    /// still never deleted or replaced).
+    /// Checks `out` (the option `--out`) and creates the staging directory.
+    /// `force`: write into an `out` that already holds something (files
+    /// Plinth did not write are still never deleted or replaced).
     pub fn create(out: &Path, force: bool) -> Result<OutputDir, OutputError> {
-        let out = &resolve(out)?;
-        let lock = Lock::take(out)?;
-        for note in clean_leftovers(out) {
-            eprintln!("{note}");
-        }
-        let existing = check_target(out, force)?;
-        let staging = sibling(out, "plinth-partial", std::process::id());
-        if staging.symlink_metadata().is_ok() {
-            std::fs::remove_dir_all(&staging).map_err(io("cannot clear", &staging))?;
-        }
-        std::fs::create_dir(&staging).map_err(io("cannot create", &staging))?;
-        // The staging directory's mark: an empty manifest (the commit
-        // writes the real one), so a leftover is known to be Plinth's.
-        std::fs::write(staging.join(MANIFEST_FILE), "")
-            .map_err(io("cannot write", &staging.join(MANIFEST_FILE)))?;
+        Self::create_as("--out", out, force)
+    }
+
+    /// [`OutputDir::create`] for the directory given by the command-line
+    /// option `option` (e.g. `--plots`), which every error names.
+    pub fn create_as(
+        option: &'static str,
+        out: &Path,
+        force: bool,
+    ) -> Result<OutputDir, OutputError> {
+        let (target, lock, existing) = open_target(option, out, force)?;
+        let staging = sibling(&target, "plinth-partial", std::process::id());
+        let made = || -> Result<(), Problem> {
+            if staging.symlink_metadata().is_ok() {
+                std::fs::remove_dir_all(&staging).map_err(io("cannot clear", &staging))?;
+            }
+            std::fs::create_dir(&staging).map_err(io("cannot create", &staging))?;
+            // The staging directory's mark: an empty manifest (the commit
+            // writes the real one), so a leftover is known to be Plinth's.
+            std::fs::write(staging.join(MANIFEST_FILE), "")
+                .map_err(io("cannot write", &staging.join(MANIFEST_FILE)))
+        };
+        made().map_err(|p| p.of(option, &target))?;
         Ok(OutputDir {
-            target: out.to_path_buf(),
+            option,
+            target,
             staging,
             existing,
             appends: BTreeSet::new(),
@@ -117,22 +130,21 @@ impl OutputDir {
     }
 
     /// Uses `staging` (created if needed; e.g. the one a killed `stream`
-    /// left) instead of a new hidden one; `out` is checked as in
-    /// [`OutputDir::create`]. Such a staging directory is kept when the
-    /// output is dropped uncommitted (it may hold a raw log): remove it
-    /// with [`OutputDir::discard`].
+    /// left) instead of a new hidden one; `out` (the option `--out`) is
+    /// checked as in [`OutputDir::create`]. Such a staging directory is
+    /// kept when the output is dropped uncommitted (it may hold a raw log):
+    /// remove it with [`OutputDir::discard`].
     pub fn resume(out: &Path, staging: &Path, force: bool) -> Result<OutputDir, OutputError> {
-        let out = &resolve(out)?;
-        let lock = Lock::take(out)?;
-        for note in clean_leftovers(out) {
-            eprintln!("{note}");
-        }
-        let existing = check_target(out, force)?;
+        let option = "--out";
+        let (target, lock, existing) = open_target(option, out, force)?;
         if !staging.is_dir() {
-            std::fs::create_dir(staging).map_err(io("cannot create", staging))?;
+            std::fs::create_dir(staging)
+                .map_err(io("cannot create", staging))
+                .map_err(|p| p.of(option, &target))?;
         }
         Ok(OutputDir {
-            target: out.to_path_buf(),
+            option,
+            target,
             staging: staging.to_path_buf(),
             existing,
             appends: BTreeSet::new(),
@@ -175,14 +187,16 @@ impl OutputDir {
     /// Moves the staged output into place (see the module docs); returns the
     /// final directory. On error the previous `--out` is as it was.
     pub fn commit(mut self) -> Result<PathBuf, OutputError> {
-        let result = self.commit_inner();
+        let result = self
+            .commit_inner()
+            .map_err(|p| p.of(self.option, &self.target));
         if result.is_ok() {
             self.done = true;
         }
         result.map(|()| self.target.clone())
     }
 
-    fn commit_inner(&mut self) -> Result<(), OutputError> {
+    fn commit_inner(&mut self) -> Result<(), Problem> {
         let new_files = list_files(&self.staging)?;
         let exists = self.target.symlink_metadata().is_ok();
         // What the old directory held when it was merged: anything else
@@ -257,6 +271,23 @@ impl Drop for OutputDir {
     }
 }
 
+/// The first steps of [`OutputDir::create`] and [`OutputDir::resume`]:
+/// `out` resolved, locked, cleared of a killed command's leftovers and
+/// checked; returns the resolved directory, its lock and whether it exists.
+fn open_target(
+    option: &'static str,
+    out: &Path,
+    force: bool,
+) -> Result<(PathBuf, Lock, bool), OutputError> {
+    let target = resolve(out).map_err(|p| p.of(option, out))?;
+    let lock = Lock::take(&target).map_err(|p| p.of(option, &target))?;
+    for note in clean_leftovers(&target) {
+        eprintln!("{note}");
+    }
+    let existing = check_target(&target, force).map_err(|p| p.of(option, &target))?;
+    Ok((target, lock, existing))
+}
+
 /// `remove_dir_all`, retried once with every directory made writable by its
 /// owner (a read-only directory inside a backup must not leave it behind).
 fn remove_tree(dir: &Path) -> std::io::Result<()> {
@@ -302,22 +333,34 @@ fn parent_dir(path: &Path) -> PathBuf {
     }
 }
 
-/// Writes a whole output directory at `out` through `write`, which fills the
-/// staging directory it is given: [`OutputDir::create`], `write`, then
-/// [`OutputDir::commit`]. On any error nothing at `out` has changed.
+/// Writes a whole output directory at `out` (the option `--out`) through
+/// `write`, which fills the staging directory it is given:
+/// [`OutputDir::create`], `write`, then [`OutputDir::commit`]. On any error
+/// nothing at `out` has changed.
 pub fn write_dir(
     out: &Path,
     force: bool,
     write: impl FnOnce(&Path) -> anyhow::Result<()>,
 ) -> anyhow::Result<PathBuf> {
-    let staged = OutputDir::create(out, force)?;
+    write_dir_as("--out", out, force, write)
+}
+
+/// [`write_dir`] for the directory given by the command-line option
+/// `option` (e.g. `--plots`), which every error names.
+pub fn write_dir_as(
+    option: &'static str,
+    out: &Path,
+    force: bool,
+    write: impl FnOnce(&Path) -> anyhow::Result<()>,
+) -> anyhow::Result<PathBuf> {
+    let staged = OutputDir::create_as(option, out, force)?;
     write(staged.path())?;
     Ok(staged.commit()?)
 }
 
 /// Writes `bytes` to `path` through a temporary sibling and a rename, so that
 /// `path` is either its old content or the whole new one.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), Problem> {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

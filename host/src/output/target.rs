@@ -8,7 +8,7 @@ use super::*;
 /// `out` with a real last component (`.`, `..` and `a/..` resolved), and
 /// refused when it is, or contains, the current directory (it could not be
 /// moved into place).
-pub(super) fn resolve(out: &Path) -> Result<PathBuf, OutputError> {
+pub(super) fn resolve(out: &Path) -> Result<PathBuf, Problem> {
     use std::path::Component;
     let odd = out.file_name().is_none()
         || out
@@ -24,7 +24,7 @@ pub(super) fn resolve(out: &Path) -> Result<PathBuf, OutputError> {
         let canon = std::fs::canonicalize(out).map_err(io("cannot inspect", out))?;
         if let Ok(cwd) = std::env::current_dir().and_then(std::fs::canonicalize) {
             if cwd.starts_with(&canon) {
-                return Err(OutputError::HoldsCurrentDir(out.to_path_buf(), cwd));
+                return Err(Problem::HoldsCurrentDir(cwd));
             }
         }
         if odd {
@@ -33,9 +33,7 @@ pub(super) fn resolve(out: &Path) -> Result<PathBuf, OutputError> {
             out.to_path_buf()
         }
     } else if odd {
-        let name = out
-            .file_name()
-            .ok_or_else(|| OutputError::NotADirectory(out.to_path_buf()))?;
+        let name = out.file_name().ok_or(Problem::NotADirectory)?;
         let parent = parent_dir(out);
         std::fs::create_dir_all(&parent).map_err(io("cannot create", &parent))?;
         std::fs::canonicalize(&parent)
@@ -56,7 +54,7 @@ pub(super) fn resolve(out: &Path) -> Result<PathBuf, OutputError> {
 
 /// Checks `out`: returns whether it exists (as a directory that may be
 /// written into).
-pub(super) fn check_target(out: &Path, force: bool) -> Result<bool, OutputError> {
+pub(super) fn check_target(out: &Path, force: bool) -> Result<bool, Problem> {
     let meta = match out.symlink_metadata() {
         Ok(m) => m,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -70,13 +68,13 @@ pub(super) fn check_target(out: &Path, force: bool) -> Result<bool, OutputError>
     let ft = meta.file_type();
     if ft.is_symlink() {
         let to = std::fs::read_link(out).unwrap_or_default();
-        return Err(OutputError::IsSymlink(out.to_path_buf(), to));
+        return Err(Problem::IsSymlink(to));
     }
     if ft.is_file() {
-        return Err(OutputError::IsFile(out.to_path_buf()));
+        return Err(Problem::IsFile);
     }
     if !ft.is_dir() {
-        return Err(OutputError::NotADirectory(out.to_path_buf()));
+        return Err(Problem::NotADirectory);
     }
     let mut names: Vec<String> = std::fs::read_dir(out)
         .map_err(io("cannot read", out))?
@@ -88,13 +86,10 @@ pub(super) fn check_target(out: &Path, force: bool) -> Result<bool, OutputError>
     }
     if !force {
         names.sort();
-        return Err(OutputError::NotEmpty {
-            path: out.to_path_buf(),
-            what: describe(&names),
-        });
+        return Err(Problem::NotEmpty(describe(&names)));
     }
     if let Some(dir) = read_only_dir(out) {
-        return Err(OutputError::ReadOnly(out.to_path_buf(), dir));
+        return Err(Problem::ReadOnly(dir));
     }
     Ok(true)
 }

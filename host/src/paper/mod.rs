@@ -152,6 +152,18 @@ pub fn run(args: &Args) -> Result<()> {
         heavy_damping_ratio: args.heavy_damping_ratio,
         ..PaperOptions::default()
     };
+    for machine in [&undamped, &damped] {
+        crate::sim::budget::check_solves(
+            &format!("--speeds {}", args.speeds),
+            machine,
+            opts.speeds_hz.len(),
+        )
+        .map_err(anyhow::Error::msg)?;
+    }
+    // --plots is checked (and locked) before anything is computed.
+    let staged = (args.plots.as_deref())
+        .map(|dir| crate::output::OutputDir::create_as("--plots", dir, args.force))
+        .transpose()?;
     let steps = if args.plots.is_some() { 2 } else { 1 };
     let mut ticker =
         crate::progress::Ticker::new("paper: simulate, identify, figures", steps, true);
@@ -174,8 +186,7 @@ pub fn run(args: &Args) -> Result<()> {
             reprediction_text(&paper)
         )
     };
-    if let Some(dir) = &args.plots {
-        let staged = crate::output::OutputDir::create(dir, args.force)?;
+    if let (Some(staged), Some(dir)) = (staged, &args.plots) {
         let files = write_figures(&paper, staged.path())?;
         staged.commit()?;
         ticker.tick(2);

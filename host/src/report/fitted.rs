@@ -102,7 +102,7 @@ pub fn write_identify_plots(
         eprintln!("note: {s}");
     }
     let mut names = Vec::new();
-    crate::output::write_dir(dir, true, |staging| {
+    crate::output::write_dir_as("--plots", dir, true, |staging| {
         for input in inputs {
             let stem = crate::names::file_in(staging, &format!("stiffness_{}", input.bearing));
             for f in figure(input, style).write(&stem)? {

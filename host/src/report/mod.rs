@@ -14,7 +14,7 @@ pub mod page;
 use crate::field::plot::{PlotOptions, PlotTransducer, PolarArgs};
 use crate::identify::Identification;
 use crate::rundir::RunDir;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
 
 /// Command-line arguments of `plinth report`.
@@ -127,49 +127,10 @@ pub fn command_line(args: impl IntoIterator<Item = String>) -> String {
         .join(" ")
 }
 
-/// Writes `text` to `out` through a sibling temporary file renamed into
-/// place (an interrupted run leaves no half page); refuses an existing
-/// `out` without `force`.
-fn write_atomically(out: &Path, force: bool, text: &str) -> Result<()> {
-    if out.is_dir() {
-        bail!(
-            "--out {}: is a directory; give the HTML file's name",
-            out.display()
-        );
-    }
-    if out.exists() && !force {
-        bail!(
-            "--out {}: already exists (add --force to replace it)",
-            out.display()
-        );
-    }
-    let name = out
-        .file_name()
-        .with_context(|| format!("--out {}: no file name", out.display()))?
-        .to_string_lossy()
-        .to_string();
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent)
-        .with_context(|| format!("--out: cannot create {}", parent.display()))?;
-    let tmp = parent.join(format!(".{name}.plinth-partial-{}", std::process::id()));
-    std::fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, out).with_context(|| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("moving the report into place at {}", out.display())
-    })
-}
-
 /// Runs `plinth report`.
 pub fn run(args: &Args) -> Result<()> {
-    if args.out.exists() && !args.force && !args.out.is_dir() {
-        bail!(
-            "--out {}: already exists (add --force to replace it)",
-            args.out.display()
-        );
-    }
+    // --out is checked before anything is computed.
+    crate::output::check_file("--out", &args.out, args.force)?;
     let (transducers, options) = crate::field::plot::run_figures(&args.dir, &args.polar)?;
     // What `plinth identify` shows: the band, the bases, the modal view.
     let (run, identification) = crate::identify::cli::identify_args(&identify_args(args)?)
@@ -197,7 +158,7 @@ pub fn run(args: &Args) -> Result<()> {
         identify_command: identify_command(args),
     };
     let html = page::render(&contents)?;
-    write_atomically(&args.out, args.force, &html)?;
+    crate::output::write_file("--out", &args.out, args.force, html.as_bytes())?;
     println!(
         "report of {} ({} pedestals, {} figures) -> {}",
         args.dir.display(),

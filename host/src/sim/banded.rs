@@ -19,6 +19,14 @@ pub enum BandError {
         /// Column (DOF index) of the zero pivot.
         column: usize,
     },
+    /// A pivot beyond double precision's range: its squared magnitude
+    /// (what partial pivoting compares) overflowed, i.e. a term of the
+    /// matrix, or one made from it, is above about 1.3e154 (√f64::MAX).
+    #[error("overflow: the pivot of column {column} is beyond double precision's range")]
+    Overflow {
+        /// Column (DOF index) of the pivot.
+        column: usize,
+    },
     /// A right-hand side of the wrong length.
     #[error("right-hand side has {got} rows, matrix has {expected}")]
     Dimension {
@@ -229,8 +237,11 @@ impl BandMatrix {
             }
             self.pivots[j] = j + jp;
             self.lower[j] = km as u32;
-            if best == 0.0 || !best.is_finite() {
+            if best == 0.0 {
                 return Err(BandError::Singular { column: j });
+            }
+            if !best.is_finite() {
+                return Err(BandError::Overflow { column: j });
             }
             ju = ju.max((j + ku + jp).min(n - 1));
             if jp != 0 {
@@ -366,6 +377,15 @@ mod tests {
         band.add(0, 0, C64::new(1.0, 0.0));
         band.add(2, 2, C64::new(1.0, 0.0));
         assert_eq!(band.factor(), Err(BandError::Singular { column: 1 }));
+        // A term whose square overflows is named as such, not as a zero.
+        let mut band = BandMatrix::zeros(2, 1, 1);
+        band.add(0, 0, C64::new(1.0, 0.0));
+        band.add(1, 1, C64::new(1e300, 0.0));
+        assert_eq!(band.factor(), Err(BandError::Overflow { column: 1 }));
+        let mut band = BandMatrix::zeros(2, 1, 1);
+        band.add(0, 0, C64::new(1.0, 0.0));
+        band.add(1, 1, C64::new(1e150, 0.0));
+        assert!(band.factor().is_ok(), "below √f64::MAX it is solved");
     }
 
     #[test]

@@ -198,6 +198,96 @@ fn parse_memory_mb(text: &str) -> Result<u64, String> {
     }
 }
 
+/// A limit on the size of a request (speeds, solves), checked before any
+/// work, so that a typo (`--speeds 5:200:0.001`) is refused at once instead
+/// of running for an hour: the default covers every run the repository's
+/// docs measure with a wide margin, and the environment variable `env`
+/// raises (or lowers) it for a request that is meant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Limit {
+    /// What is counted, e.g. "speeds".
+    pub what: &'static str,
+    /// The limit when `env` is not set.
+    pub default: u64,
+    /// The environment variable that sets another limit (a whole number ≥ 1).
+    pub env: &'static str,
+    /// Why the default is what it is (shown with a refusal).
+    pub why: &'static str,
+}
+
+/// Speeds of one speed list (`--speeds` of `simulate`, `paper`,
+/// `accuracy`) or of one run re-predicted (`predict --against`): every
+/// step after it (solves, identifications, draws, rows written) scales
+/// with it. 100 000: five times the largest run measured in docs/ (20 001
+/// speeds, the identify benchmark); `paper` takes about 1.3 ms CPU and
+/// 11 kB per speed (5.2 s, 42 MB at 3 901 speeds), so 2 minutes and 1 GB at
+/// the limit.
+pub const SPEEDS: Limit = Limit {
+    what: "speeds",
+    default: 100_000,
+    env: "PLINTH_MAX_SPEEDS",
+    why: "five times the largest run measured in docs/, 20 001 speeds",
+};
+
+/// Shaft nodes × speeds of one simulated run: the response's cost grows
+/// with both (docs/simulator.md: 100 000 elements at 196 speeds, 2e7 node
+/// solves, take 50 s CPU, about 2.6 µs each). 1e8: five times that run,
+/// about 4 minutes of CPU.
+pub const NODE_SPEEDS: Limit = Limit {
+    what: "shaft node x speed solves",
+    default: 100_000_000,
+    env: "PLINTH_MAX_NODE_SPEEDS",
+    why: "five times the largest simulation measured in docs/ (100 000 elements x 196 speeds), about 4 minutes of CPU",
+};
+
+impl Limit {
+    /// The limit in force: `env` when set, else [`Limit::default`]; `Err`
+    /// names `env` when it is not a whole number ≥ 1.
+    pub fn value(&self) -> Result<u64, String> {
+        match std::env::var_os(self.env) {
+            None => Ok(self.default),
+            Some(text) => match text.to_string_lossy().trim().parse::<u64>() {
+                Ok(n) if n >= 1 => Ok(n),
+                _ => Err(format!(
+                    "{}={}: not a whole number >= 1 (the most {} one request may ask for)",
+                    self.env,
+                    text.to_string_lossy(),
+                    self.what
+                )),
+            },
+        }
+    }
+
+    /// Refuses `asked` above the limit: the message names `request` (the
+    /// option and its value), the size asked, the limit, why it is that,
+    /// and how to raise it.
+    pub fn check(&self, request: &str, asked: u64) -> Result<(), String> {
+        let limit = self.value()?;
+        if asked <= limit {
+            return Ok(());
+        }
+        let set = if limit == self.default {
+            format!("the limit, {}", self.why)
+        } else {
+            format!("the limit set by {}", self.env)
+        };
+        Err(format!(
+            "{request}: {asked} {} asked, above the limit of {limit} ({set}); refused before any work: ask for fewer, or set {}={asked} in the environment to allow it",
+            self.what, self.env
+        ))
+    }
+}
+
+/// [`NODE_SPEEDS`] of simulating `machine` at `speeds` speeds; `request`
+/// names the option and value that set the speeds.
+pub fn check_solves(request: &str, machine: &Machine, speeds: usize) -> Result<(), String> {
+    let nodes = machine.node_positions.len() as u64;
+    NODE_SPEEDS.check(
+        &format!("{request} on {nodes} shaft nodes"),
+        nodes.saturating_mul(speeds as u64),
+    )
+}
+
 /// Memory one row of a table costs once read [bytes]: the parsed row (speed,
 /// bearing name, four phasors, noise, the digits it was written with), its
 /// copies while checked and sorted, and its share of the per-speed results
@@ -269,6 +359,20 @@ mod tests {
             "t.csv: 9 channels: needs about 3 MB of memory and this machine has 1 MB available"
         );
         assert!(super::check_input("x", 1 << 20, Some(1 << 20)).is_ok());
+    }
+    #[test]
+    fn a_request_above_a_limit_names_the_request_the_size_the_limit_and_the_way_up() {
+        let e = super::SPEEDS
+            .check("--speeds 5:200:0.001", 195_001)
+            .unwrap_err();
+        assert!(
+            e.starts_with("--speeds 5:200:0.001: 195001 speeds asked, above the limit of 100000")
+                && e.contains("set PLINTH_MAX_SPEEDS=195001"),
+            "{e}"
+        );
+        assert!(super::SPEEDS.check("--speeds 5:205:0.01", 20_001).is_ok());
+        assert!(super::NODE_SPEEDS.check("x", 100_000_000).is_ok());
+        assert!(super::NODE_SPEEDS.check("x", 100_000_001).is_err());
     }
     #[test]
     fn a_billion_draws_are_refused_naming_the_option() {

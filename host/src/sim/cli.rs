@@ -100,16 +100,25 @@ pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
             if step <= 0.0 || stop < start {
                 bail!("--speeds {text}: need STOP >= START and STEP > 0");
             }
-            let n = ((stop - start) / step + 1e-6).floor() as usize + 1;
-            if n > 10_000_000 {
-                bail!("--speeds {text}: {n} speeds is too many");
-            }
+            // Counted (saturating) and checked before anything is allocated.
+            let n = ((stop - start) / step + 1e-6).floor() as u64;
+            let n = n.saturating_add(1);
+            budget::SPEEDS
+                .check(&format!("--speeds {text}"), n)
+                .map_err(anyhow::Error::msg)?;
             (0..n).map(|i| start + i as f64 * step).collect()
         }
-        [_] => text
-            .split(',')
-            .map(num)
-            .collect::<anyhow::Result<Vec<_>>>()?,
+        [_] => {
+            budget::SPEEDS
+                .check(
+                    &format!("--speeds (a list of {} entries)", text.split(',').count()),
+                    text.split(',').count() as u64,
+                )
+                .map_err(anyhow::Error::msg)?;
+            text.split(',')
+                .map(num)
+                .collect::<anyhow::Result<Vec<_>>>()?
+        }
         _ => bail!("--speeds {text}: use START:STOP:STEP or a comma-separated list"),
     };
     if speeds.is_empty() {
@@ -133,6 +142,8 @@ pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
 pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
     let speeds = parse_speeds(&args.speeds)?;
+    budget::check_solves(&format!("--speeds {}", args.speeds), &machine, speeds.len())
+        .map_err(anyhow::Error::msg)?;
     let out = OutputDir::create(&args.out, args.force)?;
     let effects = EffectSet::from_options(&args.effects).map_err(anyhow::Error::msg)?;
     if let Some(d) = args.digits {
@@ -235,7 +246,11 @@ mod tests {
         assert!(parse_speeds("a:b").is_err());
         let twice = |t: &str| parse_speeds(t).unwrap_err().to_string();
         assert!(twice("5,10,5.0").contains("5 Hz comes twice"));
-        assert!(twice("65536:65536.00001:5e-12").contains("comes twice"));
+        // A STEP below the doubles' spacing at START (1.5e-11 at 65536):
+        // 20 000 speeds, within the limit, many of them equal.
+        assert!(twice("65536:65536.0000001:5e-12").contains("comes twice"));
+        // 2 000 000 such speeds are beyond budget::SPEEDS before that.
+        assert!(twice("65536:65536.00001:5e-12").contains("above the limit of"));
         assert_eq!(parse_speeds("10,5").unwrap(), vec![10.0, 5.0]);
     }
 }

@@ -379,6 +379,16 @@ pub fn predict(args: &PredictArgs) -> anyhow::Result<()> {
         effects.requests.push(req);
     }
     let run = RunDir::read(&args.against)?;
+    // The run's speeds are re-simulated: the same limits as `--speeds`.
+    let speeds = (run.measurements.iter())
+        .map(|m| m.speed_hz.to_bits())
+        .collect::<std::collections::BTreeSet<u64>>()
+        .len();
+    let request = format!("--against {} ({speeds} speeds)", args.against.display());
+    crate::sim::budget::SPEEDS
+        .check(&request, speeds as u64)
+        .and_then(|()| crate::sim::budget::check_solves(&request, &machine, speeds))
+        .map_err(anyhow::Error::msg)?;
     let predicted = predict_run(&machine, &effects, &run)
         .with_context(|| format!("predicting {}", args.against.display()))?;
     let comparison = compare(&predicted, &run.measurements)

@@ -18,6 +18,7 @@ use plinth_shared::phasor::Phasor2;
 use std::collections::BTreeMap;
 
 mod readings;
+mod singular;
 
 /// Why a simulation failed.
 #[derive(Debug, thiserror::Error)]
@@ -43,6 +44,15 @@ pub enum SimError {
         /// Speed [Hz].
         speed_hz: f64,
         /// Solver detail.
+        detail: String,
+    },
+    /// The dynamic stiffness at a speed holds numbers beyond double
+    /// precision's range (a machine-file value far too large).
+    #[error("the machine's dynamic stiffness at {speed_hz} Hz cannot be solved in double precision ({detail})")]
+    Overflow {
+        /// Speed [Hz].
+        speed_hz: f64,
+        /// Which machine-file key, and why.
         detail: String,
     },
     /// A bad noise request.
@@ -198,10 +208,7 @@ impl UnbalanceSolver {
     ) -> Result<Vec<BearingCoefficients<f64>>, SimError> {
         let coefs = self.bearing_coefficients(speed_hz)?;
         let omega = std::f64::consts::TAU * speed_hz;
-        let singular = |e: super::banded::BandError| SimError::Singular {
-            speed_hz,
-            detail: self.where_singular(&e, speed_hz),
-        };
+        let singular = |e: super::banded::BandError| self.solver_failure(&e, speed_hz);
         self.assembly
             .fill_and_factor(work, omega, &coefs)
             .map_err(singular)?;
@@ -215,6 +222,14 @@ impl UnbalanceSolver {
         self.assembly
             .solve(work, omega, &coefs, x)
             .map_err(singular)?;
+        // Terms below the pivots' overflow can still overflow in the
+        // solution (or its refinement): never a run with inf or NaN in it.
+        if let Some(column) = x
+            .iter()
+            .position(|v| !(v.re.is_finite() && v.im.is_finite()))
+        {
+            return Err(singular(super::banded::BandError::Overflow { column }));
+        }
         Ok(coefs)
     }
 
@@ -313,59 +328,6 @@ impl UnbalanceSolver {
     /// The machine's bases for `truth.json`.
     fn base_truth(&self) -> Vec<crate::rundir::BaseTruth> {
         super::base::truth(&self.machine)
-    }
-
-    /// Names the machine-file keys behind a zero pivot at `speed_hz` [Hz].
-    fn where_singular(&self, e: &super::banded::BandError, speed_hz: f64) -> String {
-        let super::banded::BandError::Singular { column } = *e else {
-            return e.to_string();
-        };
-        if column >= self.assembly.bases.first_dof {
-            return "the bases with their pedestals are singular at this speed: check the [[base]] and the bearings' sub_base m, k_y, k_z".into();
-        }
-        const DIRS: [&str; 4] = ["y", "z", "θ_y", "θ_z"];
-        for (b, p) in self.assembly.pedestal_dof.iter().enumerate() {
-            if let Some(p) = *p {
-                if (p..p + 2).contains(&column) {
-                    let name = &self.machine.bearings[b].name;
-                    let d = DIRS[column - p];
-                    return format!(
-                        "the pedestal of bearings[{b}] (name = {name:?}) has no stiffness against {d} motion at this speed: check its `pedestal = {{ m, k_{d}, c_{d} }}`"
-                    );
-                }
-            }
-        }
-        let node = self
-            .assembly
-            .node_dof
-            .iter()
-            .rposition(|&d| d <= column)
-            .unwrap_or(0);
-        let d = DIRS[(column - self.assembly.node_dof[node]).min(3)];
-        let x = self
-            .machine
-            .node_positions
-            .get(node)
-            .copied()
-            .unwrap_or(0.0);
-        let near = self
-            .machine
-            .bearings
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                format!(
-                    "bearings[{i}] (name = {:?}, node {}): {}",
-                    b.name,
-                    b.node,
-                    coefficient_source(i, &b.model, speed_hz)
-                )
-            })
-            .collect::<Vec<_>>()
-            .join("; ");
-        format!(
-            "nothing holds shaft node {node} (x = {x} m) in {d} at {speed_hz} Hz: check the bearing coefficients (kyy, kzz) in force at this speed: {near}"
-        )
     }
 
     /// Unbalance response at every speed in `speeds_hz` [Hz].
@@ -484,27 +446,6 @@ impl UnbalanceSolver {
     }
 }
 
-/// The machine-file key the coefficients of `bearings[index]` come from at
-/// `speed_hz` [Hz]: the `coefficients` table row(s) in force there (one row
-/// beyond the table's ends, two around a speed between rows) or the
-/// `oil_film`.
-fn coefficient_source(index: usize, model: &BearingModel, speed_hz: f64) -> String {
-    match model {
-        BearingModel::OilFilm(_) => format!("bearings[{index}].oil_film"),
-        BearingModel::Table(rows) => {
-            let after = rows.partition_point(|(s, _)| *s < speed_hz);
-            let key = |r: usize| format!("bearings[{index}].coefficients[{r}]");
-            let last = rows.len().saturating_sub(1);
-            match after {
-                0 => key(0),
-                a if a > last => key(last),
-                a if rows[a].0 == speed_hz => key(a),
-                a => format!("{} and {}", key(a - 1), key(a)),
-            }
-        }
-    }
-}
-
 /// Coefficients of the written (not simulated) bearing `model` of bearing
 /// `name` at `speed_hz` [Hz] (effect `bearing_coefficients`).
 fn written_coefficients(
@@ -524,63 +465,4 @@ pub fn unbalance_response(
     effects: &EffectSet,
 ) -> Result<Response, SimError> {
     UnbalanceSolver::new(machine, effects)?.run(speeds_hz)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::sim::banded::BandError;
-
-    /// The paper machine with the left bearing as a two-row coefficient
-    /// table (rows at 0 and 10 Hz) and the right one an oil film.
-    fn machine() -> Machine {
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../examples/feng-hahn-1997.toml"
-        ))
-        .unwrap();
-        let table = "coefficients = [ \
-            { speed_hz = 0.0, kyy = 1e8, kyz = 0.0, kzy = 0.0, kzz = 1e8, cyy = 1e3, cyz = 0.0, czy = 0.0, czz = 1e3 }, \
-            { speed_hz = 10.0, kyy = 1e8, kyz = 0.0, kzy = 0.0, kzz = 1e8, cyy = 1e3, cyz = 0.0, czy = 0.0, czz = 1e3 } ]";
-        let first_oil = text.find("oil_film").unwrap();
-        let line_end = first_oil + text[first_oil..].find('\n').unwrap();
-        let text = format!("{}{}{}", &text[..first_oil], table, &text[line_end..]);
-        Machine::from_toml_str(&text, "m.toml").unwrap()
-    }
-
-    #[test]
-    fn a_zero_pivot_is_named_by_its_machine_file_key() {
-        let m = machine();
-        let solver = UnbalanceSolver::new(&m, &EffectSet::none()).unwrap();
-        let asm = solver.assembly();
-        // A shaft DOF: every bearing's coefficient source at that speed.
-        let shaft = asm.node_dof[5] + 1;
-        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 5.0);
-        assert!(
-            msg.contains("shaft node 5") && msg.contains(" in z "),
-            "{msg}"
-        );
-        assert!(
-            msg.contains("bearings[0].coefficients[0] and bearings[0].coefficients[1]")
-                && msg.contains("bearings[1].oil_film"),
-            "{msg}"
-        );
-        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 10.0);
-        assert!(msg.contains("bearings[0].coefficients[1]"), "{msg}");
-        assert!(!msg.contains("coefficients[0]"), "{msg}");
-        let msg = solver.where_singular(&BandError::Singular { column: shaft }, 50.0);
-        assert!(msg.contains("bearings[0].coefficients[1]"), "{msg}");
-        // A pedestal DOF: that pedestal's keys.
-        let p = asm.pedestal_dof[1].unwrap();
-        let msg = solver.where_singular(&BandError::Singular { column: p }, 5.0);
-        assert!(
-            msg.contains("bearings[1]") && msg.contains("\"right\"") && msg.contains("k_y"),
-            "{msg}"
-        );
-        let err = SimError::Singular {
-            speed_hz: 5.0,
-            detail: msg,
-        };
-        assert!(err.to_string().contains("singular at 5 Hz"), "{err}");
-    }
 }
