@@ -109,10 +109,11 @@ pub fn parse_speeds(text: &str) -> anyhow::Result<Vec<f64>> {
             (0..n).map(|i| start + i as f64 * step).collect()
         }
         [_] => {
+            let entries = text.split(',').count();
             budget::SPEEDS
                 .check(
-                    &format!("--speeds (a list of {} entries)", text.split(',').count()),
-                    text.split(',').count() as u64,
+                    &format!("--speeds (a list of {entries} entries)"),
+                    entries as u64,
                 )
                 .map_err(anyhow::Error::msg)?;
             text.split(',')

@@ -301,6 +301,15 @@ pub fn compare(predicted: &[Measurement], measured: &[Measurement]) -> anyhow::R
     })
 }
 
+/// The distinct speeds of `run` [Hz], ascending: what [`predict_run`]
+/// simulates.
+fn run_speeds(run: &RunDir) -> Vec<f64> {
+    let mut speeds: Vec<f64> = run.measurements.iter().map(|m| m.speed_hz).collect();
+    speeds.sort_by(f64::total_cmp);
+    speeds.dedup();
+    speeds
+}
+
 /// Simulates `machine` (pedestals already set) at the speeds of `run` and
 /// returns the predicted rows (sensor effects of `effects` applied, no noise).
 pub fn predict_run(
@@ -308,9 +317,7 @@ pub fn predict_run(
     effects: &EffectSet,
     run: &RunDir,
 ) -> anyhow::Result<Vec<Measurement>> {
-    let mut speeds: Vec<f64> = run.measurements.iter().map(|m| m.speed_hz).collect();
-    speeds.sort_by(f64::total_cmp);
-    speeds.dedup();
+    let speeds = run_speeds(run);
     if speeds.is_empty() {
         bail!("the run has no measurements");
     }
@@ -380,10 +387,7 @@ pub fn predict(args: &PredictArgs) -> anyhow::Result<()> {
     }
     let run = RunDir::read(&args.against)?;
     // The run's speeds are re-simulated: the same limits as `--speeds`.
-    let speeds = (run.measurements.iter())
-        .map(|m| m.speed_hz.to_bits())
-        .collect::<std::collections::BTreeSet<u64>>()
-        .len();
+    let speeds = run_speeds(&run).len();
     let request = format!("--against {} ({speeds} speeds)", args.against.display());
     crate::sim::budget::SPEEDS
         .check(&request, speeds as u64)
