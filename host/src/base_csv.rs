@@ -11,6 +11,7 @@
 
 use crate::sim::Response;
 use num_complex::Complex;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// File name of the base motion in a run directory.
@@ -175,13 +176,22 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
         }
     };
     let mut rows: Vec<BaseRow> = Vec::new();
-    let mut lines: Vec<u64> = Vec::new();
+    // Each base's first row [index into `rows`], each bearing's base, and
+    // each (base, speed bits)'s line: the checks below look up, never scan
+    // the rows read so far (a scan made a long base.csv quadratic).
+    let mut first_of: HashMap<String, usize> = HashMap::new();
+    let mut base_of: HashMap<String, String> = HashMap::new();
+    let mut line_of: HashMap<(String, u64), u64> = HashMap::new();
+    let mut rows_read = crate::sim::budget::ROWS
+        .reading()
+        .map_err(|m| field(1, 1, m))?;
     for rec in r.records() {
         let rec = rec.map_err(|e| {
             let line = e.position().map_or(0, |p| p.line());
             field(line, 1, e.to_string())
         })?;
         let line = rec.position().map_or(0, |p| p.line());
+        rows_read.count(&file, 1).map_err(|m| field(line, 1, m))?;
         if rec.len() != header.len() {
             return Err(field(
                 line,
@@ -223,7 +233,7 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
         for b in &bearings {
             crate::names::check("bearing", b).map_err(|m| field(line, 3, m))?;
         }
-        if let Some(first) = rows.iter().find(|r: &&BaseRow| r.base == base) {
+        if let Some(first) = first_of.get(&base).and_then(|&i| rows.get(i)) {
             if first.bearings != bearings {
                 return Err(field(
                     line,
@@ -236,16 +246,16 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
                 ));
             }
         }
-        if let Some(other) = rows
+        if let Some(other) = bearings
             .iter()
-            .find(|r| r.base != base && r.bearings.iter().any(|b| bearings.contains(b)))
+            .filter_map(|b| base_of.get(b))
+            .find(|other| **other != base)
         {
             return Err(field(
                 line,
                 3,
                 format!(
-                    "a bearing of base `{base}` is also on base `{}`: a pedestal stands on one base",
-                    other.base
+                    "a bearing of base `{base}` is also on base `{other}`: a pedestal stands on one base"
                 ),
             ));
         }
@@ -270,11 +280,7 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
         } else {
             None
         };
-        if let Some((first, _)) = lines
-            .iter()
-            .zip(&rows)
-            .find(|(_, r)| r.base == base && r.speed_hz == speed_hz)
-        {
+        if let Some(first) = line_of.get(&(base.clone(), (speed_hz + 0.0).to_bits())) {
             return Err(field(
                 line,
                 1,
@@ -283,7 +289,11 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
                 ),
             ));
         }
-        lines.push(line);
+        line_of.insert((base.clone(), (speed_hz + 0.0).to_bits()), line);
+        first_of.entry(base.clone()).or_insert(rows.len());
+        for b in &bearings {
+            base_of.entry(b.clone()).or_insert_with(|| base.clone());
+        }
         rows.push(BaseRow {
             speed_hz,
             base,

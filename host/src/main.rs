@@ -48,6 +48,7 @@ enum Command {
 
 fn main() -> ExitCode {
     plinth::pipe::exit_quietly_on_closed_stdout();
+    plinth::output::refuse_writes_past_the_size_limit();
     let cli = Cli::parse();
     plinth::progress::set_quiet(cli.quiet);
     let quiet = cli.quiet;

@@ -264,6 +264,15 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
     let mut readings: Vec<(Vec<(f64, f64)>, f64)> = Vec::new();
     let mut seen: BTreeMap<u64, u64> = BTreeMap::new();
     let mut watches = vec![super::plausible::ReadingsWatch::default(); layout.transducers.len()];
+    // The table's speeds and the run's rows (one per speed and bearing),
+    // counted as the table is read: a table past either budget is refused
+    // at its first row past it, before the rest is read or anything written.
+    let mut speeds_read = crate::sim::budget::SPEEDS
+        .reading()
+        .map_err(|m| anyhow::anyhow!("{file}: {m}"))?;
+    let mut rows_read = crate::sim::budget::ROWS
+        .reading()
+        .map_err(|m| anyhow::anyhow!("{file}: {m}"))?;
     for record in records {
         let record = record.with_context(|| file.to_string())?;
         let line = record.position().map_or(0, |p| p.line());
@@ -330,6 +339,12 @@ pub fn read_table(path: &Path, layout: &Layout, layout_file: &str) -> Result<Vec
                 crate::rundir::digits::format_number(speed_hz)
             );
         }
+        speeds_read
+            .count(path, 1)
+            .map_err(|m| anyhow::anyhow!("{file}:{line}: {m}"))?;
+        rows_read
+            .count(path, groups.len() as u64)
+            .map_err(|m| anyhow::anyhow!("{file}:{line}: the run made from it would hold {m}"))?;
         let omega = std::f64::consts::TAU * speed_hz;
         let mut disp = Vec::with_capacity(cols.len());
         let mut read = Vec::with_capacity(cols.len());

@@ -72,9 +72,15 @@ pub fn read(dir: &Path) -> Result<Option<Vec<(String, Quantity, f64)>>> {
         })?;
     }
     let mut out = Vec::new();
+    let mut rows_read = crate::sim::budget::ROWS
+        .reading()
+        .map_err(|m| anyhow!("{name}: {m}"))?;
     for record in r.records() {
         let record = record.map_err(|e| anyhow!("{name}: {e}"))?;
         let line = record.position().map_or(0, |p| p.line());
+        rows_read
+            .count(&file, 1)
+            .map_err(|m| anyhow!("{name}:{line}: {m}"))?;
         let cell = |k: usize| record.get(index[k]).unwrap_or("");
         let bearing = cell(0);
         if bearing.is_empty() {

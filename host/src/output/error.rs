@@ -68,6 +68,15 @@ pub enum Problem {
     /// An output file is a device, FIFO or socket.
     #[error("is not a regular file (a device, FIFO or socket): give a file name")]
     NotAFile,
+    /// The file system holding the output has less free space [bytes]
+    /// than the output needs at least [bytes].
+    #[error("would need at least {needed} bytes and its file system has {free} bytes free: free some space, or choose a directory on another file system; nothing was written")]
+    NoRoom {
+        /// The least the output takes [bytes].
+        needed: u64,
+        /// Free space an unprivileged process may use [bytes].
+        free: u64,
+    },
     /// An output file exists and `--force` was not given.
     #[error("already exists (add --force to replace it)")]
     FileExists,

@@ -57,11 +57,13 @@ mod file;
 mod leftovers;
 mod manifest;
 mod merge;
+mod room;
 mod target;
 
 pub use error::{OutputError, Problem};
 pub use file::{check_file, write_file};
 pub use leftovers::clean_leftovers;
+pub use room::{check_room, free_bytes, refuse_writes_past_the_size_limit};
 pub use target::describe;
 
 use error::io;
@@ -366,7 +368,12 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), Problem> {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.plinth-partial-{}", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(io("cannot write", &tmp))?;
+    // A write cut short (a full disk, a file-size limit) leaves no
+    // half-written sibling behind: the partial file is removed.
+    std::fs::write(&tmp, bytes).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io("cannot write", &tmp)(e)
+    })?;
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         io("cannot write", path)(e)

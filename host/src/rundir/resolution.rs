@@ -70,18 +70,58 @@ pub fn read_into(
     measurements_file: &Path,
 ) -> Result<(), RunDirError> {
     let path = dir.join(RESOLUTION_FILE);
-    let text = match crate::input_file::read_to_string(&path) {
-        Ok(t) => t,
+    match path.symlink_metadata() {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(source) => return Err(RunDirError::Io { file: path, source }),
-    };
+        _ => {}
+    }
     let at = |line: usize, message: String| RunDirError::Csv {
         file: path.clone(),
         line: line as u64,
         message,
     };
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
-    let Some((_, header)) = lines.next() else {
+    // Read a line at a time (a table as long as measurements.csv is tens of
+    // megabytes: not a whole-file text), through the table readers' checks
+    // (a regular file, UTF-8 or UTF-16 named, lines and NUL bytes bounded).
+    let expected = RESOLUTION_COLUMNS.join(",");
+    let mut reader = crate::csv_layout::open(&path, &expected).map_err(|e| match e {
+        crate::csv_layout::LayoutError::NotAFile(m) => RunDirError::Io {
+            file: path.clone(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, m),
+        },
+        crate::csv_layout::LayoutError::At(line, message) => RunDirError::Csv {
+            file: path.clone(),
+            line,
+            message,
+        },
+    })?;
+    let mut bytes = Vec::new();
+    let mut next_line = |line: usize| -> Result<Option<String>, RunDirError> {
+        bytes.clear();
+        let n = std::io::BufRead::read_until(&mut reader, b'\n', &mut bytes).map_err(|source| {
+            RunDirError::Io {
+                file: path.clone(),
+                source,
+            }
+        })?;
+        if n == 0 {
+            return Ok(None);
+        }
+        while bytes.last().is_some_and(|&b| b == b'\n' || b == b'\r') {
+            bytes.pop();
+        }
+        String::from_utf8(std::mem::take(&mut bytes))
+            .map(Some)
+            .map_err(|e| {
+                at(
+                    line,
+                    format!(
+                        "byte {} is not UTF-8: save the file as UTF-8",
+                        e.utf8_error().valid_up_to() + 1
+                    ),
+                )
+            })
+    };
+    let Some(header) = next_line(1)? else {
         return Err(at(
             1,
             format!(
@@ -122,10 +162,14 @@ pub fn read_into(
     }
     let mut found: Vec<(usize, NoiseSd)> = Vec::new();
     let mut seen: HashMap<usize, usize> = HashMap::new();
-    for (line, record) in lines {
+    let mut rows_read = crate::sim::budget::ROWS.reading().map_err(|m| at(1, m))?;
+    let mut line = 1;
+    while let Some(record) = next_line(line + 1)? {
+        line += 1;
         if record.trim().is_empty() {
             continue;
         }
+        rows_read.count(&path, 1).map_err(|m| at(line, m))?;
         let fields: Vec<&str> = record.split(',').map(str::trim).collect();
         if fields.len() != names.len() {
             return Err(at(

@@ -120,9 +120,22 @@ pub(super) fn read_table<T>(
     let mut lines = Vec::with_capacity(room);
     // (speed bits, bearing index in `names`) → first line: one allocation
     // per bearing name, not per row.
-    let mut names: Vec<String> = Vec::new();
+    let mut names: HashMap<String, usize> = HashMap::new();
     let mut seen: HashMap<(u64, usize), u64, std::hash::BuildHasherDefault<KeyHasher>> =
         HashMap::with_capacity_and_hasher(room, Default::default());
+    // The table's distinct speeds (their bits).
+    let mut speeds: std::collections::HashSet<u64, std::hash::BuildHasherDefault<KeyHasher>> =
+        Default::default();
+    // The rows and speeds budgets, counted as the file is read: a table far
+    // past them is refused at its first row past the limit.
+    let budget = |limit: &crate::sim::budget::Limit| {
+        limit.reading().map_err(|m| RunDirError::Io {
+            file: file(),
+            source: std::io::Error::new(std::io::ErrorKind::InvalidInput, m),
+        })
+    };
+    let mut rows_read = budget(&crate::sim::budget::ROWS)?;
+    let mut speeds_read = budget(&crate::sim::budget::SPEEDS)?;
     // One record, reused for every line.
     let mut record = csv::StringRecord::new();
     while reader
@@ -130,6 +143,12 @@ pub(super) fn read_table<T>(
         .map_err(|e| csv_error(path, e))?
     {
         let line = record.position().map_or(0, csv::Position::line);
+        let over = |message: String| RunDirError::Csv {
+            file: file(),
+            line,
+            message,
+        };
+        rows_read.count(path, 1).map_err(over)?;
         if record.len() < width {
             let column = record.len() + 1;
             return Err(RunDirError::MissingColumn {
@@ -201,7 +220,7 @@ pub(super) fn read_table<T>(
                 column: index[1] + 1,
             });
         }
-        let known = names.iter().any(|n| n == bearing);
+        let known = names.contains_key(bearing);
         if let Err(reason) = if known {
             Ok(())
         } else {
@@ -250,14 +269,23 @@ pub(super) fn read_table<T>(
             _ => None,
         };
         // -0.0 and 0.0 are the same speed.
-        let name = match names.iter().position(|n| n == bearing) {
-            Some(i) => i,
+        let name = match names.get(bearing) {
+            Some(&i) => i,
             None => {
-                names.push(bearing.to_string());
-                names.len() - 1
+                let i = names.len();
+                names.insert(bearing.to_string(), i);
+                i
             }
         };
-        let key = ((speed_hz + 0.0).to_bits(), name);
+        let speed = (speed_hz + 0.0).to_bits();
+        if speeds.insert(speed) {
+            speeds_read.count(path, 1).map_err(|m| RunDirError::Csv {
+                file: file(),
+                line,
+                message: format!("speed {speed_hz} Hz: {m}"),
+            })?;
+        }
+        let key = (speed, name);
         if let Some(&first_line) = seen.get(&key) {
             return Err(RunDirError::Duplicate {
                 file: file(),

@@ -240,6 +240,61 @@ pub const NODE_SPEEDS: Limit = Limit {
     why: "five times the largest simulation measured in docs/ (100 000 elements x 196 speeds), about 4 minutes of CPU",
 };
 
+/// Rows of one table read from a file (`measurements.csv`, `bearings.csv`,
+/// `resolution.csv`, `base.csv`, `transducers.csv`, an `import` table) and
+/// of one run written (`simulate`, `import`: speeds × bearings): every
+/// reader holds its rows, checks and sorts them. 1 000 000: five times the
+/// largest run read in docs/ (200 000 rows, `plot` in 10.2 s and 121 MB,
+/// docs/robustness-hostile.md), and a run at [`SPEEDS`]' limit on ten
+/// bearings; the 2 000 000-row import measured there took 45 s and 1.2 GB.
+pub const ROWS: Limit = Limit {
+    what: "rows",
+    default: 1_000_000,
+    env: "PLINTH_MAX_ROWS",
+    why: "five times the largest run read in docs/, 200 000 rows, and a run of 100 000 speeds on ten bearings",
+};
+
+/// A [`Limit`] counted while a file is read: [`Reading::count`] at each
+/// new item (a row, a distinct speed) refuses the first one past the
+/// limit, so a file far too large is never read whole.
+#[derive(Clone, Copy, Debug)]
+pub struct Reading {
+    limit: Limit,
+    /// The limit in force (its environment variable read once).
+    most: u64,
+    /// Items counted so far.
+    seen: u64,
+}
+
+impl Reading {
+    /// Counts `n` more items of `file` (a row, or the rows one table row
+    /// becomes); `Err` once past the limit names the file's size [bytes],
+    /// the limit, why, and the variable that raises it (the caller places
+    /// it at the item's line).
+    pub fn count(&mut self, file: &std::path::Path, n: u64) -> Result<(), String> {
+        self.seen = self.seen.saturating_add(n);
+        if self.seen <= self.most {
+            return Ok(());
+        }
+        let size = std::fs::metadata(file).map_or(String::new(), |m| {
+            format!(" (the file is {} bytes)", m.len())
+        });
+        let set = if self.most == self.limit.default {
+            format!("the limit, {}", self.limit.why)
+        } else {
+            format!("the limit set by {}", self.limit.env)
+        };
+        Err(format!(
+            "more than {} {}{size}, above the limit of {} ({set}); refused while reading, at the first of them past the limit: is it the right file? Set {}=N in the environment (a whole number above {}) to read a larger one",
+            self.most,
+            self.limit.what,
+            self.most,
+            self.limit.env,
+            self.most
+        ))
+    }
+}
+
 impl Limit {
     /// The limit in force: `env` when set, else [`Limit::default`]; `Err`
     /// names `env` when it is not a whole number ≥ 1.
@@ -256,6 +311,17 @@ impl Limit {
                 )),
             },
         }
+    }
+
+    /// A counter of this limit for one file being read (the environment
+    /// variable read now); `Err` names the variable when it is not a whole
+    /// number ≥ 1.
+    pub fn reading(&self) -> Result<Reading, String> {
+        Ok(Reading {
+            limit: *self,
+            most: self.value()?,
+            seen: 0,
+        })
     }
 
     /// Refuses `asked` above the limit: the message names `request` (the

@@ -145,6 +145,26 @@ pub fn simulate(args: &SimulateArgs) -> anyhow::Result<()> {
     let speeds = parse_speeds(&args.speeds)?;
     budget::check_solves(&format!("--speeds {}", args.speeds), &machine, speeds.len())
         .map_err(anyhow::Error::msg)?;
+    // The run written has one row per speed and bearing: within the rows
+    // every reader takes, or it could never be read back.
+    let bearings = machine.bearings.len();
+    budget::ROWS
+        .check(
+            &format!("--speeds {} on {bearings} bearings", args.speeds),
+            (speeds.len() as u64).saturating_mul(bearings as u64),
+        )
+        .map_err(anyhow::Error::msg)?;
+    // The least the run's two tables take [bytes]: every row holds at least
+    // a one-character speed, the bearing's name and eight one-character
+    // numbers with their commas and line end, in measurements.csv and in
+    // bearings.csv. A disk with less free is refused before any work.
+    let least = machine
+        .bearings
+        .iter()
+        .map(|b| 2 * (19 + b.name.len() as u64))
+        .sum::<u64>()
+        .saturating_mul(speeds.len() as u64);
+    crate::output::check_room("--out", &args.out, least)?;
     let out = OutputDir::create(&args.out, args.force)?;
     let effects = EffectSet::from_options(&args.effects).map_err(anyhow::Error::msg)?;
     if let Some(d) = args.digits {
