@@ -109,16 +109,15 @@ pub fn read_into(
         while bytes.last().is_some_and(|&b| b == b'\n' || b == b'\r') {
             bytes.pop();
         }
-        String::from_utf8(std::mem::take(&mut bytes))
+        // The one line through the whole-file readers' check: its place
+        // within the line ("line 1, column C: byte 0xE9 ...") is placed at
+        // this line.
+        crate::input_file::utf8_text(std::mem::take(&mut bytes))
             .map(Some)
             .map_err(|e| {
-                at(
-                    line,
-                    format!(
-                        "byte {} is not UTF-8: save the file as UTF-8",
-                        e.utf8_error().valid_up_to() + 1
-                    ),
-                )
+                let message = e.to_string();
+                let within = message.strip_prefix("line 1, ").unwrap_or(&message);
+                at(line, within.to_string())
             })
     };
     let Some(header) = next_line(1)? else {
@@ -304,6 +303,29 @@ mod tests {
         std::fs::write(
             dir.path().join(RESOLUTION_FILE),
             "note,speed_hz,bearing,rel_y_sd,rel_z_sd,ped_y_sd,ped_z_sd\nx,10,left,1,2,3,4\n",
+        )
+        .unwrap();
+        let mut rows = vec![row(10.0, "left")];
+        read_into(dir.path(), &mut rows, &m_file).unwrap();
+        assert!((rows[0].resolution_sd().unwrap()[3] - 4.0).abs() < 1e-12);
+        // Read a line at a time: a Latin-1 byte is still placed at its line
+        // and column; CRLF line ends read as LF.
+        let h = "speed_hz,bearing,rel_y_sd,rel_z_sd,ped_y_sd,ped_z_sd\n";
+        std::fs::write(
+            dir.path().join(RESOLUTION_FILE),
+            [h.as_bytes(), b"10,l\xe9ft,1,1,1,1\n"].concat(),
+        )
+        .unwrap();
+        let e = read_into(dir.path(), &mut rows, &m_file)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("resolution.csv:2: column 5: byte 0xE9 is not UTF-8"),
+            "{e}"
+        );
+        std::fs::write(
+            dir.path().join(RESOLUTION_FILE),
+            format!("{h}10,left,1,2,3,4\n").replace('\n', "\r\n"),
         )
         .unwrap();
         let mut rows = vec![row(10.0, "left")];
