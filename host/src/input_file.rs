@@ -158,8 +158,17 @@ pub const MAX_LINE_BYTES: usize = 1 << 20;
 /// more lines than a table can hold in memory, naming the line [1-based] and
 /// never echoing its content. Memory stays bounded by the reader above it
 /// holding at most one line (and, for a table, at most the lines allowed).
+///
+/// Line ends are given as `\n` whatever the file has (`\r\n` from Windows,
+/// a lone `\r` from old Macs): the csv crate counts a line only at a `\n`
+/// it consumes and consumes only the `\r` of a `\r\n` ending a record, so
+/// a CRLF file's errors were placed a line early (rust-csv issue 395). The
+/// lines the readers name are then the file's lines, as an editor numbers them.
 pub struct BoundedLines<R> {
     inner: R,
+    /// One byte read from `inner` and not yet given (the byte after a `\r`
+    /// that ended a read).
+    carry: Option<u8>,
     /// The current line [1-based].
     line: u64,
     /// Bytes of the current line so far.
@@ -174,6 +183,7 @@ impl<R: Read> BoundedLines<R> {
     pub fn new(inner: R, max: usize) -> Self {
         BoundedLines {
             inner,
+            carry: None,
             line: 1,
             run: 0,
             max,
@@ -190,9 +200,63 @@ impl<R: Read> BoundedLines<R> {
     }
 }
 
+impl<R: Read> BoundedLines<R> {
+    /// Reads from `inner` into `buf` with every `\r\n` and lone `\r` given
+    /// as `\n`; a `\r` that ends what was read is held back until the next
+    /// byte says which it is. Returns the bytes given (0 only at the end).
+    fn read_line_ends(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        loop {
+            let start = usize::from(self.carry.is_some());
+            if let Some(b) = self.carry.take() {
+                buf[0] = b;
+            }
+            let n = if start < buf.len() {
+                self.inner.read(&mut buf[start..])?
+            } else {
+                // A carried `\r` and room for one byte: peek at the next.
+                let mut next = [0u8; 1];
+                let k = self.inner.read(&mut next)?;
+                if k == 1 && next[0] != b'\n' {
+                    self.carry = Some(next[0]);
+                }
+                if buf[0] == b'\r' {
+                    buf[0] = b'\n';
+                }
+                return Ok(1);
+            };
+            let total = start + n;
+            let (mut read, mut given) = (0, 0);
+            while read < total {
+                let b = buf[read];
+                read += 1;
+                if b == b'\r' {
+                    if read == total && n > 0 {
+                        // Ends the read: CRLF or a lone CR, the next read says.
+                        self.carry = Some(b'\r');
+                        break;
+                    }
+                    if read < total && buf[read] == b'\n' {
+                        continue;
+                    }
+                    buf[given] = b'\n';
+                } else {
+                    buf[given] = b;
+                }
+                given += 1;
+            }
+            if given > 0 || total == 0 {
+                return Ok(given);
+            }
+        }
+    }
+}
+
 impl<R: Read> Read for BoundedLines<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let n = self.inner.read(buf)?;
+        let n = self.read_line_ends(buf)?;
         // Line by line: each run of bytes up to a line end or a NUL is
         // judged at once (the same errors at the same line and byte as a
         // byte-by-byte check, at a fraction of its cost on large tables).
@@ -492,5 +556,67 @@ mod tests {
             .from_reader(BoundedLines::new(ones, MAX_LINE_BYTES));
         let e = r.records().next().unwrap().unwrap_err().to_string();
         assert!(e.contains("line 1 is longer than 1048576 bytes"), "{e}");
+    }
+
+    /// A reader giving at most `step` bytes per read (a file read in pieces).
+    struct Pieces<'a> {
+        bytes: &'a [u8],
+        step: usize,
+    }
+
+    impl Read for Pieces<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            let n = self.step.min(buf.len()).min(self.bytes.len());
+            buf[..n].copy_from_slice(&self.bytes[..n]);
+            self.bytes = &self.bytes[n..];
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn crlf_and_lone_cr_are_given_as_lf_whatever_the_reads_cut() {
+        let cases: [(&[u8], &[u8]); 7] = [
+            (b"a,b\r\nc,d\r\n", b"a,b\nc,d\n"),
+            (b"a\rb\rc", b"a\nb\nc"),
+            (b"a\r\r\nb\r", b"a\n\nb\n"),
+            (b"\r\n\r\n", b"\n\n"),
+            (b"\r", b"\n"),
+            (b"no line end", b"no line end"),
+            (b"a\n\rb", b"a\n\nb"),
+        ];
+        for (input, expected) in cases {
+            for step in 1..=input.len().max(1) {
+                for out_len in [1usize, 2, 3, 64] {
+                    let mut r = BoundedLines::new(Pieces { bytes: input, step }, 100);
+                    let mut out = Vec::new();
+                    let mut buf = vec![0u8; out_len];
+                    loop {
+                        let n = r.read(&mut buf).unwrap();
+                        if n == 0 {
+                            break;
+                        }
+                        out.extend_from_slice(&buf[..n]);
+                    }
+                    assert_eq!(out, expected, "{input:?} step {step} buf {out_len}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_crlf_table_error_is_placed_at_the_files_line() {
+        // rust-csv counts a line only at a `\n` it consumes: straight on a
+        // CRLF file, the bad cell of line 4 is placed at line 3.
+        let text = b"x,y\r\n1,2\r\n3,4\r\n5,abc\r\n6,7\r\n";
+        fn bad_line<R: Read>(r: csv::Reader<R>) -> Option<u64> {
+            r.into_records().find_map(|rec| {
+                let rec = rec.ok()?;
+                (&rec[1] == "abc").then(|| rec.position().map_or(0, csv::Position::line))
+            })
+        }
+        let plain = csv::Reader::from_reader(&text[..]);
+        assert_eq!(bad_line(plain), Some(3), "rust-csv fixed issue 395?");
+        let bounded = csv::Reader::from_reader(BoundedLines::new(&text[..], 100));
+        assert_eq!(bad_line(bounded), Some(4));
     }
 }

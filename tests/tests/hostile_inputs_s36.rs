@@ -35,13 +35,17 @@ fn simulated_run(dir: &Path) {
         .unwrap();
 }
 
-/// The bundled 1X vector table (61 speeds) copied into `dir` with LF line
-/// ends: the csv crate places a CRLF file's records one line early (left
-/// open, docs/robustness-hostile.md), which is not what is tested here.
-fn lf_vector_table(dir: &Path) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("examples/field/vector-table.csv")).unwrap();
+/// The bundled 1X vector table (61 speeds, CRLF line ends as a Windows
+/// export writes them) copied into `dir` unchanged: the lines named are the
+/// file's own (`input_file::BoundedLines` gives CRLF as LF to the csv crate).
+fn vector_table(dir: &Path) -> PathBuf {
+    let bytes = std::fs::read(root().join("examples/field/vector-table.csv")).unwrap();
+    assert!(
+        bytes.windows(2).any(|w| w == b"\r\n"),
+        "the example is CRLF"
+    );
     let table = dir.join("vector-table.csv");
-    std::fs::write(&table, text.replace("\r\n", "\n")).unwrap();
+    std::fs::write(&table, bytes).unwrap();
     table
 }
 
@@ -140,7 +144,7 @@ fn rows_budget_child() {
     let field = root().join("examples/field");
     let out = t.path().join("imported");
     let e = plinth::field::import::run(&plinth::field::import::Args {
-        table: lf_vector_table(t.path()),
+        table: vector_table(t.path()),
         layout: field.join("layout.toml"),
         bearings: field.join("bearings.csv"),
         out: out.clone(),
@@ -177,7 +181,7 @@ fn speeds_budget_child() {
     // The 1X vector table: one row per speed, refused at line 12.
     let field = root().join("examples/field");
     let layout = plinth::field::import::Layout::read(&field.join("layout.toml")).unwrap();
-    let table = lf_vector_table(t.path());
+    let table = vector_table(t.path());
     let e = plinth::field::import::read_table(&table, &layout, "layout.toml")
         .map(|_| ())
         .unwrap_err()
@@ -278,4 +282,27 @@ fn file_size_limit_child() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     assert_eq!(names, ["run"], "{names:?}");
+}
+
+/// A run written with CRLF line ends (Windows, a spreadsheet's export) and a
+/// bad cell: the error names the file's line, as an editor numbers it. The
+/// csv crate alone counts a line only at a `\n` it consumes and so placed
+/// it one line early (rust-csv issue 395; main before this: `:4:`).
+#[test]
+fn a_crlf_run_names_a_bad_cell_at_the_files_own_line() {
+    let t = tempfile::tempdir().unwrap();
+    let run = t.path().join("run");
+    simulated_run(&run);
+    let path = run.join("measurements.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut cells: Vec<&str> = lines[4].split(',').collect();
+    cells[3] = "abc";
+    lines[4] = cells.join(",");
+    std::fs::write(&path, lines.join("\r\n") + "\r\n").unwrap();
+    let e = RunDir::read(&run).map(|_| ()).unwrap_err().to_string();
+    assert!(
+        e.contains("measurements.csv:5:4") && e.contains("`abc`"),
+        "{e}"
+    );
 }
