@@ -40,9 +40,23 @@ support rule (false alarms; detections at the sub-base bearing for power
 rows) and, for clean rows, by any rule; the one-sided 95 % upper bound
 (Clopper-Pearson) of the pooled clean rates is printed last.
 
+diagnose: on the unseen machines' clean runs whose support p lies below
+the largest candidate's limit (the only runs whose diagnosis the rate can
+change: diagnose reads the rate only through identify::trust::support_limit),
+`plinth diagnose RUN --machine FILE --json` is run with the binary and its
+verdict listed ("diagnose untrusted k/n" per row): run the script with
+main's binary and with a binary at another rate for diagnose at both.
+
+The claim (session 36): at the adopted rate ADOPTED, the support rule's
+clean false-alarm rate per run is within the issue's BUDGET on every clean
+row and pooled. Printed last; the script exits 1 when a row's or the
+pooled rate at ADOPTED exceeds BUDGET (refuted), and says "not established"
+when the pooled 95 % upper bound does (too few runs).
+
 usage: bench_support_rate.py PLINTH_BINARY RUNS [PART ...]
 Runs go over $BENCH_JOBS workers (default: the CPU count).
 """
+import json
 import os
 import re
 import subprocess
@@ -55,6 +69,10 @@ import bench_trust as bt  # noqa: E402
 
 # Candidate per-run rates of the support-mode rule [-].
 RATES = (0.001, 0.002, 0.003, 0.005, 0.01)
+# The rate adopted for SUPPORT_FALSE_ALARM (host/src/identify/trust.rs) and
+# the issue's clean budget per run and rule [-].
+ADOPTED = 0.005
+BUDGET = 0.01
 # The unseen machines: (ross_unseen.py name, clean noisy case without
 # columns, sub-base case's bearing).
 UNSEEN = (("unseen-four", "clean-w1", "B3"), ("unseen-overhung", "clean-h1", "B1"),
@@ -92,6 +110,7 @@ class Tally:
         self.name, self.runs, self.tests = name, 0, 0
         self.support = [0] * len(RATES)
         self.any = [0] * len(RATES)
+        self.diagnosed = []
         self.notes = []
 
     def add(self, label, ps, main, target=None):
@@ -114,6 +133,10 @@ class Tally:
         cells = " ".join(f"{s:5d}" for s in self.support)
         anys = ("  any " + " ".join(f"{a:5d}" for a in self.any)) if clean else ""
         print(f"{self.name:44s} {self.runs:5d} {self.tests:6d}  {cells}{anys}", flush=True)
+        if self.diagnosed:
+            bad = [label for label, trusted in self.diagnosed if not trusted]
+            print(f"      diagnose untrusted {len(bad)}/{len(self.diagnosed)} of the runs "
+                  f"the rate can change: {bad}", flush=True)
         for n in self.notes[:12]:
             print(f"      {n}", flush=True)
 
@@ -134,17 +157,32 @@ def trust_part(plinth, n, pooled, only):
         pooled.append(t)
 
 
-def ross_runs(machine, case, seeds, plinth):
-    """[(seed, identify JSON, exit code)] of ROSS runs CASE-SEED of `machine`,
-    made in-process (ROSS's response cached per grid) and removed."""
+def diagnose_trusted(plinth, run, machine_file):
+    """`plinth diagnose RUN --machine FILE --json`'s `trusted` (False when it
+    exits with an error)."""
+    p = subprocess.run([plinth.binary, "diagnose", run, "--machine", machine_file, "--json"],
+                       capture_output=True, text=True)
+    if p.returncode not in (0, 2):
+        return False
+    return bool(json.loads(p.stdout)["trusted"])
+
+
+def ross_runs(machine, case, seeds, plinth, diagnose=False):
+    """[(seed, identify JSON, exit code, diagnose's trusted or None)] of ROSS
+    runs CASE-SEED of `machine`, made in-process (ROSS's response cached per
+    grid) and removed; with `diagnose`, diagnosed where the support rule
+    flags the run at the largest candidate rate (module docs)."""
     import ross_unseen as ru
 
     def one(seed):
         out = plinth.path(f"{machine}-{case}-{seed}")
         ru.make(out, case, seed, machine)
         ident, code = plinth.identify(out, refusal_ok=True)
+        trusted = None
+        if diagnose and ident is not None and flagged_at(support_ps(ident), RATES[-1]):
+            trusted = diagnose_trusted(plinth, out, ru.machine_file(machine))
         subprocess.run(["rm", "-rf", out], check=True)
-        return seed, ident, code
+        return seed, ident, code, trusted
     # ROSS first on one seed (fills the cache), then the rest in parallel.
     first = [one(seeds[0])]
     return first + bc.parallel(one, seeds[1:])
@@ -157,8 +195,11 @@ def unseen_part(plinth, n, pooled, only):
             if not re.search(only, f"{machine} {c}"):
                 continue
             t = Tally(f"{machine} {c}")
-            for seed, ident, code in ross_runs(machine, c, list(range(1, n + 1)), plinth):
+            for seed, ident, code, trusted in ross_runs(machine, c, list(range(1, n + 1)),
+                                                        plinth, diagnose=True):
                 t.add(f"seed {seed}", *record(ident, code))
+                if trusted is not None:
+                    t.diagnosed.append((f"seed {seed}", trusted))
             t.row()
             pooled.append(t)
 
@@ -167,7 +208,8 @@ def power_part(plinth, n, only):
     header("POWER: runs whose sub-base bearing the support rule flags, per rate", clean=False)
     for machine, _, bearing in (u for u in UNSEEN if only in u[0]):
         t = Tally(f"{machine} sub-base")
-        for seed, ident, code in ross_runs(machine, "sub-base", list(range(1, n + 1)), plinth):
+        for seed, ident, code, _ in ross_runs(machine, "sub-base", list(range(1, n + 1)),
+                                              plinth):
             t.add(f"seed {seed}", *record(ident, code), bearing)
         t.row(clean=False)
     subs = [("three-bearing-sub-base.toml", bc.SUB, [], "mid"),
@@ -202,7 +244,7 @@ def main():
     binary, n, parts = args[0], int(args[1]), args[2:] or ["trust", "unseen", "power"]
     plinth = bc.Plinth(binary, "bench-support-")
     t0 = time.time()
-    pooled = []
+    pooled, refuted = [], False
     try:
         for part in parts:
             if part.split("=")[0] == "trust":
@@ -220,12 +262,33 @@ def main():
                 print(f"  rate {r:5g}: support {s}/{runs} = {100 * s / runs:.2f} % "
                       f"(≤ {100 * bc.upper95(s, runs):.2f} %); any {a}/{runs} = "
                       f"{100 * a / runs:.2f} % (≤ {100 * bc.upper95(a, runs):.2f} %)", flush=True)
+            refuted = claim(pooled)
         for part in parts:
             if part.split("=")[0] == "power":
                 power_part(plinth, n, part.partition("=")[2])
     finally:
         print(f"\n({time.time() - t0:.0f} s)")
         plinth.close()
+    if pooled and refuted:
+        sys.exit(1)
+
+
+def claim(pooled):
+    """Prints the claim's check at ADOPTED (module docs); True when refuted."""
+    i = RATES.index(ADOPTED)
+    runs = sum(t.runs for t in pooled)
+    flagged = sum(t.support[i] for t in pooled)
+    over = [t.name for t in pooled if t.runs and t.support[i] > BUDGET * t.runs]
+    bound = bc.upper95(flagged, runs)
+    if over or flagged > BUDGET * runs:
+        verdict = f"REFUTED (over {BUDGET}: {over or 'pooled'})"
+    elif bound > BUDGET:
+        verdict = f"not established (95 % bound {100 * bound:.2f} % over {100 * BUDGET:g} %: more runs)"
+    else:
+        verdict = f"holds (every row at most {100 * BUDGET:g} %, pooled ≤ {100 * bound:.2f} %)"
+    print(f"CLAIM: the support rule at {ADOPTED} per run flags {flagged}/{runs} clean runs: "
+          f"{verdict}", flush=True)
+    return verdict.startswith("REFUTED")
 
 
 if __name__ == "__main__":

@@ -56,8 +56,13 @@ pub const STRUCTURE_LEVEL: f64 = crate::estimate::lack_of_fit::EXCESS_LEVEL;
 
 /// False-alarm rate per run of the support-mode test
 /// ([`crate::estimate::lack_of_fit::support_mode`]), Bonferroni over the
-/// bearings tested [-].
-pub const SUPPORT_FALSE_ALARM: f64 = 0.001;
+/// bearings tested [-]. A Neyman-Pearson choice (session 36,
+/// docs/trust-support-mode.md): half the clean budget of 1 % per
+/// run, its clean rate measured within it on every machine
+/// (`scripts/bench_support_rate.py`, which checks the claim); 0.001 before
+/// printed a pedestal on a sub-base `ok` 40 % off on 17/96 seeds of the
+/// third unseen machine (5/96 at this rate).
+pub const SUPPORT_FALSE_ALARM: f64 = 0.005;
 
 /// The support-mode test's limit on one bearing's p-value when it was made
 /// at `tested` bearings of the run: [`SUPPORT_FALSE_ALARM`] shared among
