@@ -161,6 +161,22 @@ fn a_clean_run_with_noise_columns_is_not_untrusted() {
     assert_ok_means_right(&run, &id, "clean-n1c-275");
 }
 
+/// A clean run on which diagnose named a `sensor_delay` at the stiff block
+/// B1 (ped_y, τ 485 ± 73 µs, Wald 44, untrusted): a delay there trades
+/// against B1's damping (−τ·k), and the Wald form's curvature at τ̂
+/// overstated the criterion's drop from τ = 0 (12.6). The profiled scalar
+/// is now tested by that drop (`plinth::diagnose::criterion`, "Profiled
+/// scalars"). Over seeds 93-292 of `python3 scripts/ross_unseen.py
+/// --machine unseen-flex DIR clean-n1c SEED`: 13/200 runs named a delay at
+/// B1 and were untrusted before, 0/200 now (docs/session36-flexdelay14.md).
+/// Stored: seed 382 (`clean-n1c-382`).
+#[test]
+fn a_clean_run_at_the_stiff_block_names_no_delay() {
+    let run = stored("clean-n1c-382");
+    let id = identify(&run);
+    unseen::assert_flagged_by_nothing(&run, &id, &diagnosis(&run), "clean-n1c-382");
+}
+
 /// Every effect untrusts exactly the bearing it acts on in identify, and the
 /// other bearing's `ok` values are right: pick-up-side cross-coupling, a
 /// delay and a table 25 % too stiff at the soft bracket B2, runout on the

@@ -250,6 +250,44 @@ pub fn search_interval(prep: &Prepared, model: &Model, k: usize, group: &[usize]
     }
 }
 
+/// The errors-in-variables criterion of `group` at nonlinear values `nl`:
+/// the whitened residual sum of squares with the noise propagated at the
+/// values tried (the effective variance), not at the reference fit's
+/// `weights` (which give the linear parameters' first fit) [-, χ² units].
+///
+/// With the reference's weights held, the noise the value itself carries
+/// into the equations (|K*(s)|²·σ²_rel through the bearing force) counts
+/// as misfit, and the minimum moves towards the value that carries less of
+/// it: a clearance ratio of 1.011-1.014 (~3 ± off 1) at an oil film under
+/// the third unseen machine's noise where the true ratio is 1
+/// (docs/unseen-train.md, item 6). [`profile`] minimises it; its drop from
+/// a scalar's null is the likelihood ratio the scalar is tested by
+/// (`super::criterion::Inference::evidence_profiled`).
+pub fn gauss_helmert_rss(
+    prep: &Prepared,
+    model: &Model,
+    nl: &[f64],
+    weights: &Weights,
+    group: &[usize],
+) -> Result<f64> {
+    let first = fit_group(prep, model, nl, weights, group)?;
+    let mut beta = vec![0.0; model.terms.len()];
+    for (t, v) in first.terms.iter().zip(&first.beta) {
+        beta[*t] = *v;
+    }
+    let mut own = weights.clone();
+    own.propagate_group(
+        prep,
+        model,
+        &Params {
+            beta,
+            nl: nl.to_vec(),
+        },
+        group,
+    );
+    Ok(fit_group(prep, model, nl, &own, group)?.rss)
+}
+
 /// Profiles nonlinear scalar `k` of `model` over its search interval (grid,
 /// then golden-section refinement of the best bracket), the other scalars
 /// fixed at `nl`; returns the best value and its fit.
@@ -268,33 +306,12 @@ pub fn profile(
         values[k] = s;
         fit_group(prep, model, &values, weights, group)
     };
-    // The value is chosen by the errors-in-variables likelihood: the χ² with
-    // the noise propagated at the value tried (the effective variance),
-    // not at the reference fit's. With the reference's weights held, the
-    // noise the value itself carries into the equations (|K*(s)|²·σ²_rel
-    // through the bearing force) counts as misfit, and the minimum moves
-    // towards the value that carries less of it: a clearance ratio of
-    // 1.011-1.014 (~3 ± off 1) at an oil film under the third unseen
-    // machine's noise where the true ratio is 1 (docs/unseen-train.md, item 6).
+    // The value is chosen by the errors-in-variables likelihood
+    // ([`gauss_helmert_rss`]).
     let objective = |s: f64| -> Result<f64> {
         let mut at = nl.to_vec();
         at[k] = s;
-        let first = fit_group(prep, model, &at, weights, group)?;
-        let mut beta = vec![0.0; model.terms.len()];
-        for (t, v) in first.terms.iter().zip(&first.beta) {
-            beta[*t] = *v;
-        }
-        let mut own = weights.clone();
-        own.propagate_group(
-            prep,
-            model,
-            &Params {
-                beta,
-                nl: at.clone(),
-            },
-            group,
-        );
-        Ok(fit_group(prep, model, &at, &own, group)?.rss)
+        gauss_helmert_rss(prep, model, &at, weights, group)
     };
     let (lo, hi) = interval;
     let step = (hi - lo) / (GRID - 1) as f64;

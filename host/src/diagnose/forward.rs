@@ -5,7 +5,7 @@ use super::backward::{evidence_against, Param};
 use super::candidates::{library, Candidate, ParamRef};
 use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
-use super::fit::{fit_group, jacobian, profile, search_interval};
+use super::fit::{fit_group, gauss_helmert_rss, jacobian, profile, search_interval};
 use super::model::{Model, Params, Term};
 use super::state::State;
 use anyhow::{anyhow, bail, Result};
@@ -61,15 +61,19 @@ pub fn evaluate(
         .ok_or_else(|| anyhow!("bearing index {} out of range", candidate.bearing))?;
     let mut nl = state.params.nl.clone();
     nl.resize(model.nonlinear.len(), 0.0);
-    let fit = match candidate.new_nonlinear {
+    // The likelihood ratio of a profiled scalar (its null is 0).
+    let (fit, drop) = match candidate.new_nonlinear {
         Some(k) => {
             let interval = search_interval(prep, model, k, &group);
             let (s, fit) = profile(prep, model, &nl, &state.weights, &group, k, interval)?;
             at_an_edge(model, k, s, interval)?;
+            nl[k] = 0.0;
+            let null = gauss_helmert_rss(prep, model, &nl, &state.weights, &group)?;
             nl[k] = s;
-            fit
+            let best = gauss_helmert_rss(prep, model, &nl, &state.weights, &group)?;
+            (fit, Some(null - best))
         }
-        None => fit_group(prep, model, &nl, &state.weights, &group)?,
+        None => (fit_group(prep, model, &nl, &state.weights, &group)?, None),
     };
     // Whole-machine parameters: the current values, the group refitted.
     let mut beta = super::bases::carried_linear(model, state);
@@ -100,7 +104,10 @@ pub fn evaluate(
         }
     }
     softens(model, &refs, &inference)?;
-    let evidence = inference.evidence(&c, tried, n_total)?;
+    let evidence = match drop {
+        Some(lr) => inference.evidence_profiled(&c, lr, tried, n_total)?,
+        None => inference.evidence(&c, tried, n_total)?,
+    };
     Ok(Evaluated {
         candidate,
         params,

@@ -10,9 +10,17 @@ use super::state::State;
 use crate::effects::EffectKind;
 use anyhow::Result;
 
-/// The name of the library's test, with the Bonferroni count.
-pub(super) fn wald_test(tried: usize) -> String {
-    format!("Wald, χ² with Bonferroni over {tried} candidates")
+/// The name of the library's test of `e`, with the Bonferroni count: the
+/// likelihood ratio for a candidate that adds a profiled scalar, else Wald
+/// (`super::criterion`, "Profiled scalars").
+pub(super) fn library_test(e: &Evaluated, tried: usize) -> String {
+    if e.candidate.new_nonlinear.is_some() {
+        format!(
+            "likelihood ratio of the profiled scalar, χ² with Bonferroni over {tried} candidates"
+        )
+    } else {
+        format!("Wald, χ² with Bonferroni over {tried} candidates")
+    }
 }
 
 /// The candidate as a report entry (`tried`: candidates of its step).
@@ -21,7 +29,7 @@ pub(super) fn summary(prep: &Prepared, e: &Evaluated, tried: usize) -> Candidate
         effect: e.candidate.effect.name().to_string(),
         bearing: prep.bearings[e.candidate.bearing].clone(),
         channels: e.candidate.variant.clone(),
-        test: wald_test(tried),
+        test: library_test(e, tried),
         evidence: e.evidence,
         parameters: as_reported(
             &e.candidate.model,

@@ -17,7 +17,7 @@ use crate::diagnose::foundation::{self, sub_base::above_range, FoundationFit};
 use crate::diagnose::gap::{Gap, Prediction};
 use crate::diagnose::report::{PassedOver, Step};
 use crate::diagnose::state::State;
-use crate::diagnose::summaries::{effect_estimates, held_dampings, summary, wald_test};
+use crate::diagnose::summaries::{effect_estimates, held_dampings, library_test, summary};
 use anyhow::Result;
 
 /// Significant candidates of a step refitted jointly, best first, to find
@@ -302,7 +302,7 @@ impl Search<'_> {
             test: w
                 .by_support
                 .as_ref()
-                .map_or_else(|| wald_test(outcome.tried), |n| n.test.clone()),
+                .map_or_else(|| library_test(win, outcome.tried), |n| n.test.clone()),
             foundation: None,
             evidence: w.by_support.as_ref().map_or(win.evidence, |n| n.evidence),
             runner_up: outcome
