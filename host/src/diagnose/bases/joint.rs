@@ -58,13 +58,16 @@ pub(in crate::diagnose) fn joint_on_base(
 ) -> (State, BaseOn, CarriedVariance) {
     let slots = correction_slots(state);
     let mut cur = state.clone();
-    let Some(mut best) = BaseOn::refit(prep, &cur, &on.fit, opts).filter(|b| b.chi2 <= on.chi2)
-    else {
+    // The profile χ² at the corrections as they are (the base refitted);
+    // the base as it is when that refit is no better.
+    let refit = if slots.is_empty() {
+        None
+    } else {
+        BaseOn::refit(prep, &cur, &on.fit, opts).filter(|b| b.chi2 <= on.chi2)
+    };
+    let Some(mut best) = refit else {
         return (state.clone(), on.clone(), Vec::new());
     };
-    if slots.is_empty() {
-        return (cur, best, Vec::new());
-    }
     let n = slots.len();
     let mut last = None;
     for _ in 0..JOINT_ITERATIONS {
