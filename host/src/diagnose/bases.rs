@@ -15,9 +15,11 @@ use anyhow::Result;
 use plinth_shared::regression::Parameter;
 
 pub(super) use corrections::{correction_on_base, lr_test, weakest_on_base};
+pub(super) use joint::{joint_on_base, widen_by_corrections};
 
 mod corrections;
 mod held;
+mod joint;
 
 /// The base candidates of one round, fitted to the data the state corrects.
 pub(super) struct BaseCandidates {

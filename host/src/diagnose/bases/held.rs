@@ -81,6 +81,22 @@ fn slot_step(state: &State, s: Slot, runout_scale: f64) -> f64 {
     (1e-2 * v).max(floor)
 }
 
+/// [`slot_step`] with the runout floor from `state`'s largest runout value.
+pub(super) fn slot_step_of(state: &State, s: Slot) -> f64 {
+    slot_step(state, s, runout_scale(state, &correction_slots(state)))
+}
+
+/// The largest runout value [m] among `slots` of `state` (0 without one).
+fn runout_scale(state: &State, slots: &[Slot]) -> f64 {
+    slots
+        .iter()
+        .filter(
+            |s| matches!(s, Slot::Term(i) if matches!(state.model.terms[*i], Term::Runout { .. })),
+        )
+        .map(|&s| slot_value(state, s).abs())
+        .fold(0.0, f64::max)
+}
+
 /// The pedestal-level χ² of the chosen base `fit`, its values held, on the
 /// data `state` corrects ([`Prediction::chi2`]; ∞ when it cannot predict).
 fn held_base_chi2(prep: &Prepared, state: &State, fit: &FoundationFit, opts: &Options) -> f64 {
@@ -133,13 +149,7 @@ pub(super) fn tuned_on_base(
     if slots.is_empty() || !f0.is_finite() {
         return (cur, f0);
     }
-    let runout_scale = slots
-        .iter()
-        .filter(
-            |s| matches!(s, Slot::Term(i) if matches!(state.model.terms[*i], Term::Runout { .. })),
-        )
-        .map(|&s| slot_value(state, s).abs())
-        .fold(0.0, f64::max);
+    let runout_scale = runout_scale(state, &slots);
     let n = slots.len();
     for _ in 0..TUNE_ITERATIONS {
         let h: Vec<f64> = slots

@@ -4,6 +4,7 @@
 
 use super::by_name;
 use super::search::{Before, Search};
+use crate::diagnose::bases::{joint_on_base, widen_by_corrections};
 use crate::diagnose::bearing_table;
 use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::Agreement;
@@ -48,9 +49,17 @@ impl Search<'_> {
         } else {
             Vec::new()
         };
-        let (foundation, base_prep) = match self.on_base {
-            // The reported bases' pedestals get their profile ± here, once.
-            Some(b) => (Some(b.fit.with_profile_errors()), Some(b.prep)),
+        let (foundation, base_prep) = match self.on_base.take() {
+            // The reported bases and their corrections fitted jointly, the
+            // pedestals' ± (profile along the mass split, then the
+            // corrections' share) here, once.
+            Some(b) => {
+                let (state, b, carried) = joint_on_base(prep, &self.state, &b, opts);
+                self.state = state;
+                let mut fit = b.fit.with_profile_errors();
+                widen_by_corrections(&mut fit, &carried);
+                (Some(fit), Some(b.prep))
+            }
             None => (None, None),
         };
         let state = &self.state;

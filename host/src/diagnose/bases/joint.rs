@@ -1,0 +1,227 @@
+//! The reported base and its corrections (probe runout, delays, a table's
+//! clearance, cross-coupling) fitted jointly: the minimum of the base's
+//! *profile* χ² over the corrections (each trial value of the corrections
+//! with the base refitted, [`BaseOn::refit`]), and the pedestals' ± widened
+//! by what the corrections' own uncertainty carries into them.
+//!
+//! Settling ([`super::corrections`]) alternates between the corrections
+//! (base held) and the base (corrections held). Where the two are
+//! correlated (a runout on a bearing that stands on the base: the base's
+//! motion and the runout both shift that pedestal's rel), alternating
+//! creeps along the valley and stops, by its χ²-drop rule, short of the
+//! minimum: the pedestal stays pulled toward where the rigid-ground runout
+//! put it. And the base's ± are conditional on the corrections held, so
+//! they leave out the corrections' uncertainty. Newton steps on the profile
+//! χ² reach the joint minimum; the linearised marginal covariance of the
+//! pedestal θ with the corrections free is
+//! `Cov(θ | s) + (dθ/ds)·Cov(s)·(dθ/ds)ᵀ`, `Cov(s) = 2·H⁻¹` with H the
+//! profile χ²'s Hessian in the corrections s and dθ/ds the refitted
+//! pedestals' sensitivity to them (the Schur-complement form of the joint
+//! fit's inverse Fisher matrix).
+
+use super::held::{correction_slots, set_slot, slot_step_of, slot_value, Slot};
+use super::BaseOn;
+use crate::diagnose::data::Prepared;
+use crate::diagnose::foundation::FoundationFit;
+use crate::diagnose::state::State;
+use crate::diagnose::workflow::Options;
+use nalgebra::{DMatrix, DVector};
+
+/// Newton iterations on the profile χ² (each costs 1 + 2n + n(n−1)/2
+/// base refits for n corrections).
+const JOINT_ITERATIONS: usize = 3;
+
+/// The extra variance of each bearing's pedestal θ (k_y, k_z, m, c_y, c_z
+/// in their units squared) that the corrections' uncertainty carries in.
+pub(in crate::diagnose) type CarriedVariance = Vec<(usize, [f64; 5])>;
+
+/// The pedestal θ of every bearing on a base in `fit`.
+fn thetas(fit: &FoundationFit) -> Vec<(usize, [f64; 5])> {
+    fit.grouping
+        .groups
+        .iter()
+        .zip(&fit.grouping.fits)
+        .flat_map(|(g, f)| g.iter().copied().zip(f.pedestals.iter().copied()))
+        .collect()
+}
+
+/// The corrections of `state` and the base `on` fitted jointly by Newton
+/// steps on the profile χ² (finite differences; a step is kept only when
+/// the refitted χ² falls), and the variance the corrections' uncertainty
+/// adds to each pedestal at the end. Returns the inputs unchanged (and no
+/// added variance) when the state has no correction or a refit fails.
+pub(in crate::diagnose) fn joint_on_base(
+    prep: &Prepared,
+    state: &State,
+    on: &BaseOn,
+    opts: &Options,
+) -> (State, BaseOn, CarriedVariance) {
+    let slots = correction_slots(state);
+    let mut cur = state.clone();
+    // The profile χ² at the corrections as they are (the base refitted);
+    // the base as it is when that refit is no better.
+    let refit = if slots.is_empty() {
+        None
+    } else {
+        BaseOn::refit(prep, &cur, &on.fit, opts).filter(|b| b.chi2 <= on.chi2)
+    };
+    let Some(mut best) = refit else {
+        return (state.clone(), on.clone(), Vec::new());
+    };
+    let n = slots.len();
+    let mut last = None;
+    for _ in 0..JOINT_ITERATIONS {
+        let Some(d) = derivatives(prep, &cur, &best, &slots, opts) else {
+            break;
+        };
+        let Some(ch) = d.hess.clone().cholesky() else {
+            break;
+        };
+        let dx = -ch.solve(&d.grad);
+        let mut t = 1.0;
+        let mut moved = false;
+        for _ in 0..6 {
+            let mut s = cur.clone();
+            for (i, &sl) in slots.iter().enumerate() {
+                set_slot(&mut s, sl, slot_value(&cur, sl) + t * dx[i]);
+            }
+            if let Some(b) = BaseOn::refit(prep, &s, &best.fit, opts) {
+                if b.chi2 < best.chi2 {
+                    moved = best.chi2 - b.chi2 > 1e-3;
+                    cur = s;
+                    best = b;
+                    break;
+                }
+            }
+            t *= 0.5;
+        }
+        last = Some(d);
+        if !moved {
+            break;
+        }
+    }
+    // The derivatives at the final point (those of the last iteration when
+    // it did not move).
+    let d = match last {
+        Some(d) if d.at_chi2 == best.chi2 => Some(d),
+        _ => derivatives(prep, &cur, &best, &slots, opts),
+    };
+    let carried = d.map_or_else(Vec::new, |d| carried_variance(&d, n));
+    (cur, best, carried)
+}
+
+/// Finite-difference derivatives of the profile χ² and of the refitted
+/// pedestals in the corrections.
+struct Derivatives {
+    /// The profile χ² where they were taken.
+    at_chi2: f64,
+    /// Its gradient.
+    grad: DVector<f64>,
+    /// Its Hessian.
+    hess: DMatrix<f64>,
+    /// dθ/ds of each bearing on a base: (bearing, 5 × n).
+    sens: Vec<(usize, DMatrix<f64>)>,
+}
+
+/// The profile χ²'s gradient and Hessian and the pedestals' sensitivity
+/// at `state`'s corrections (central differences, the base refitted at
+/// every trial point from `on`); `None` when a refit fails or a value is
+/// not finite.
+fn derivatives(
+    prep: &Prepared,
+    state: &State,
+    on: &BaseOn,
+    slots: &[Slot],
+    opts: &Options,
+) -> Option<Derivatives> {
+    let n = slots.len();
+    let h: Vec<f64> = slots.iter().map(|&s| slot_step_of(state, s)).collect();
+    let eval = |moves: &[(usize, f64)]| {
+        let mut s = state.clone();
+        for &(i, d) in moves {
+            set_slot(&mut s, slots[i], slot_value(state, slots[i]) + d);
+        }
+        BaseOn::refit(prep, &s, &on.fit, opts)
+    };
+    let f0 = on.chi2;
+    let theta0 = thetas(&on.fit);
+    let mut plus = Vec::with_capacity(n);
+    let mut minus = Vec::with_capacity(n);
+    let mut sens: Vec<(usize, DMatrix<f64>)> = theta0
+        .iter()
+        .map(|(b, _)| (*b, DMatrix::zeros(5, n)))
+        .collect();
+    for i in 0..n {
+        let p = eval(&[(i, h[i])])?;
+        let m = eval(&[(i, -h[i])])?;
+        let (tp, tm) = (thetas(&p.fit), thetas(&m.fit));
+        if tp.len() != theta0.len() || tm.len() != theta0.len() {
+            return None;
+        }
+        for (k, (_, s)) in sens.iter_mut().enumerate() {
+            for q in 0..5 {
+                s[(q, i)] = (tp[k].1[q] - tm[k].1[q]) / (2.0 * h[i]);
+            }
+        }
+        plus.push(p.chi2);
+        minus.push(m.chi2);
+    }
+    let mut grad = DVector::zeros(n);
+    let mut hess = DMatrix::zeros(n, n);
+    for i in 0..n {
+        grad[i] = (plus[i] - minus[i]) / (2.0 * h[i]);
+        hess[(i, i)] = (plus[i] - 2.0 * f0 + minus[i]) / (h[i] * h[i]);
+        for j in 0..i {
+            let both = eval(&[(i, h[i]), (j, h[j])])?.chi2;
+            let v = (both - plus[i] - plus[j] + f0) / (h[i] * h[j]);
+            hess[(i, j)] = v;
+            hess[(j, i)] = v;
+        }
+    }
+    let finite = grad.iter().chain(hess.iter()).all(|v| v.is_finite())
+        && sens.iter().all(|(_, s)| s.iter().all(|v| v.is_finite()));
+    finite.then_some(Derivatives {
+        at_chi2: f0,
+        grad,
+        hess,
+        sens,
+    })
+}
+
+/// The variance (dθ/ds)·Cov(s)·(dθ/ds)ᵀ on each pedestal's diagonal,
+/// Cov(s) = 2·H⁻¹; none when H is not positive definite.
+fn carried_variance(d: &Derivatives, n: usize) -> CarriedVariance {
+    let Some(ch) = d.hess.clone().cholesky() else {
+        return Vec::new();
+    };
+    let cov = ch.inverse() * 2.0;
+    if cov.nrows() != n {
+        return Vec::new();
+    }
+    d.sens
+        .iter()
+        .map(|(b, s)| {
+            let full = s * &cov * s.transpose();
+            (*b, std::array::from_fn(|q| full[(q, q)].max(0.0)))
+        })
+        .collect()
+}
+
+/// `fit`'s pedestal ± widened in quadrature by `carried`.
+pub(in crate::diagnose) fn widen_by_corrections(
+    fit: &mut FoundationFit,
+    carried: &CarriedVariance,
+) {
+    for (g, f) in fit.grouping.groups.iter().zip(fit.grouping.fits.iter_mut()) {
+        for (i, b) in g.iter().enumerate() {
+            let Some((_, v)) = carried.iter().find(|(c, _)| c == b) else {
+                continue;
+            };
+            if let Some(se) = f.pedestal_std_err.get_mut(i) {
+                for (e, add) in se.iter_mut().zip(v) {
+                    *e = (*e * *e + add).sqrt();
+                }
+            }
+        }
+    }
+}
