@@ -168,7 +168,7 @@ fn a_clean_run_with_noise_columns_is_not_untrusted() {
 /// is now tested by that drop (`plinth::diagnose::criterion`, "Profiled
 /// scalars"). Over seeds 93-292 of `python3 scripts/ross_unseen.py
 /// --machine unseen-flex DIR clean-n1c SEED`: 13/200 runs named a delay at
-/// B1 and were untrusted before, 0/200 now (docs/session36-flexdelay14.md).
+/// B1 and were untrusted before, 0/200 now (docs/diagnose.md, "Session 36").
 /// Stored: seed 382 (`clean-n1c-382`).
 #[test]
 fn a_clean_run_at_the_stiff_block_names_no_delay() {

@@ -37,7 +37,7 @@
 //! Ω³τm part; at τ = 400 µs the fitted damping is −τ·k (−1.3e6 N·s/m) and
 //! the column gains a −Ω²·c·X part no linear term takes. On a clean run
 //! (seed 382) the criterion drops by 12.6 from τ = 0 to τ = 485 µs while
-//! the Wald statistic at 485 ± 73 µs is 44 (docs/session36-flexdelay14.md).
+//! the Wald statistic at 485 ± 73 µs is 44 (docs/diagnose.md, "Session 36").
 //!
 //! Under the null, W is asymptotically χ²(q). The p-value of the best
 //! candidate is Bonferroni-corrected for the number of candidates tried in the
