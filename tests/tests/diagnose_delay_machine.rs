@@ -88,61 +88,20 @@ fn line_with(text: &str, figure: f64) -> &str {
         .unwrap_or_else(|| panic!("no line with {f}: {text}"))
 }
 
-/// Seed 74 of the same case (τ = 150 µs at B2 only): the search names the
-/// delay at B2, then a second, wrong `sensor_delay` (ped_y) at B1 whose
-/// machine-level gap does not fall (0.0333 → 0.0334: a change of noise
-/// size) and which turns B1's c_y negative: untrusted. The round that stops the search
-/// then has a significant candidate it rejects, a probe runout at B1 fitted
-/// with B1's dampings held at zero that fits worse than the state
-/// (`passed_over_at_stop`, docs/formats.md): it is listed with that reason
-/// in JSON and in the text, and it is `best_rejected`, said to have passed
-/// its test.
+/// Seed 74 of the same case (τ = 150 µs at B2 only). Until session 36 the
+/// search named the delay at B2, then a second, wrong `sensor_delay` (ped_y)
+/// at B1, 410 ± 75 µs, passed by the Wald form of its test where the delay
+/// trades against B1's damping (c_y turned negative), untrusted. A profiled
+/// scalar is now tested by its likelihood ratio (docs/diagnose.md "Session
+/// 36"): exactly the delay at B2, trusted, nothing at B1.
 #[test]
-fn a_wrong_second_delay_is_untrusted_and_the_stop_round_lists_what_it_passed_over() {
-    let run = unseen::stored(TRAIN, "delay-74");
-    let d = unseen::diagnosis_with_machine_check(TRAIN, "unseen-train.toml", &run);
+fn no_wrong_second_delay_at_the_stiff_block() {
+    let d = delay_trusted("delay-74");
     let text = d.to_text();
-    let first = &d.steps[0];
-    assert_eq!(
-        (first.effect.as_str(), first.bearing.as_str()),
-        ("sensor_delay", "B2"),
-        "{text}"
-    );
-    unseen::assert_delay_in_its_error(&run, &d, 0);
-    assert!(!d.trusted, "{text}");
-    // The wrong second delay (B1: the truth has no effect there) is not
-    // left trusted (it also turns B1's c_y negative).
     assert!(
         d.steps
             .iter()
-            .any(|s| s.bearing == "B1" && s.dropped.is_none()),
-        "no step at B1: {text}"
+            .all(|s| s.bearing != "B1" || s.dropped.is_some()),
+        "a step kept at B1: {text}"
     );
-    let passed = &d.passed_over_at_stop;
-    assert!(
-        !passed.is_empty(),
-        "nothing passed over at the stop: {text}"
-    );
-    let r = d.best_rejected.as_ref().expect("a best rejected candidate");
-    assert!(
-        r.evidence.delta_bic > 0.0 && r.evidence.p_adjusted < d.significance_level,
-        "{text}"
-    );
-    assert!(
-        passed.iter().any(|p| p.effect == r.effect
-            && p.bearing == r.bearing
-            && p.reason.contains("held at zero")),
-        "{passed:?}"
-    );
-    assert!(
-        text.contains("not added (its test passed, its joint refit was rejected)"),
-        "{text}"
-    );
-    for p in passed {
-        let line = format!(
-            "passed over (significant, not added): {} at {}: ",
-            p.effect, p.bearing
-        );
-        assert!(text.contains(&line), "{text}");
-    }
 }
