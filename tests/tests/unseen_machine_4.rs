@@ -169,12 +169,31 @@ fn a_clean_run_with_noise_columns_is_not_untrusted() {
 /// scalars"). Over seeds 93-292 of `python3 scripts/ross_unseen.py
 /// --machine unseen-flex DIR clean-n1c SEED`: 13/200 runs named a delay at
 /// B1 and were untrusted before, 0/200 now (docs/diagnose.md, "Session 36").
-/// Stored: seed 382 (`clean-n1c-382`).
+/// Stored: seed 382 (`clean-n1c-382`). Its B1 support-mode p-value is
+/// 5.9e-4: below the session-36 rate's share (0.005 per run, 2.5e-3 per
+/// bearing), so identify untrusts B1 on it, one of that rule's measured
+/// clean false alarms (docs/trust-support-mode.md "Session 36"); what is
+/// tested here is that no delay (and nothing else) is named and that the
+/// only reason given is that test's.
 #[test]
 fn a_clean_run_at_the_stiff_block_names_no_delay() {
     let run = stored("clean-n1c-382");
     let id = identify(&run);
-    unseen::assert_flagged_by_nothing(&run, &id, &diagnosis(&run), "clean-n1c-382");
+    assert!(
+        untrusted(&id).iter().all(|b| b == "B1"),
+        "{:?}",
+        untrusted(&id)
+    );
+    assert_ok_means_right(&run, &id, "clean-n1c-382");
+    let d = diagnosis(&run);
+    assert!(named(&d).is_empty(), "{}", d.to_text());
+    assert!(
+        d.trust_reasons
+            .iter()
+            .all(|r| r.starts_with("bearing B1: its dynamic stiffness falls with speed")),
+        "{:?}",
+        d.trust_reasons
+    );
 }
 
 /// Every effect untrusts exactly the bearing it acts on in identify, and the
