@@ -283,7 +283,9 @@ fn the_unexplained_residual_is_located() {
     // the bearing are what an engineer acts on (open: docs/diagnose.md).
     assert!(
         d.unexplained.iter().all(|u| !u.bands_hz.is_empty()
-            && u.bands_hz.iter().all(|b| 5.0 <= b[0] && b[0] <= b[1] && b[1] <= 125.0)),
+            && u.bands_hz
+                .iter()
+                .all(|b| 5.0 <= b[0] && b[0] <= b[1] && b[1] <= 125.0)),
         "{:?}",
         d.unexplained
     );
