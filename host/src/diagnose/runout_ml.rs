@@ -3,13 +3,14 @@
 //! runout ([`crate::estimate::ml::fit_with_runout`]), the estimator of the
 //! base model, instead of the search's weighted least squares (weights held
 //! at a reference fit), which pulls k and m toward zero where the
-//! pedestal's motion is near its pick-ups' noise (docs/diagnose.md,
-//! "Session 36 (runout15)").
+//! pedestal's motion is near its pick-ups' noise (measured in session 36,
+//! helper runout15: unseen-flex's stiff block B1, mean z of k and m −1.1).
 
 use super::data::Prepared;
 use super::model::Term;
-use super::report::Pedestal;
+use super::report::{Pedestal, Step};
 use super::state::State;
+use crate::effects::EffectKind;
 use crate::estimate::ml::{fit_with_runout, RunoutFit, RUNOUT_PARAMETERS};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
@@ -84,15 +85,33 @@ pub fn refit(prep: &Prepared, state: &mut State) -> Vec<(usize, RunoutFit)> {
     out
 }
 
-/// Writes the refits of [`refit`] into the reported pedestals: values and
-/// ± (the joint information's over (θ, r), so the runout's uncertainty is
-/// counted, scaled by J/dof where that is above 1).
-pub fn report(prep: &Prepared, refits: &[(usize, RunoutFit)], pedestals: &mut [Pedestal]) {
+/// Writes the refits of [`refit`] into the reported pedestals and the
+/// kept `probe_runout` step of their bearing: values and ± (the joint
+/// information's over (θ, r), so a pedestal's ± count the runout's
+/// uncertainty, scaled by J/dof where that is above 1).
+pub fn report(
+    prep: &Prepared,
+    refits: &[(usize, RunoutFit)],
+    pedestals: &mut [Pedestal],
+    steps: &mut [Step],
+) {
     for (b, fit) in refits {
         let Some(name) = prep.bearings.get(*b) else {
             continue;
         };
         let scale = (fit.chi2 / fit.dof.max(1) as f64).max(1.0);
+        let runout = EffectKind::ProbeRunout.name();
+        for s in steps
+            .iter_mut()
+            .filter(|s| s.effect == runout && &s.bearing == name && s.dropped.is_none())
+        {
+            for (i, t) in runout_terms(*b).iter().enumerate() {
+                if let Some(e) = s.parameters.iter_mut().find(|e| e.name == t.name()) {
+                    e.value = fit.runout[i];
+                    e.std_err = scale.sqrt() * fit.std_err(PARAMETERS + i);
+                }
+            }
+        }
         if let Some(p) = pedestals.iter_mut().find(|p| &p.bearing == name) {
             for (i, q) in Parameter::ALL.iter().enumerate() {
                 p.values.insert(q.name().to_string(), fit.theta[i]);
@@ -154,7 +173,7 @@ mod tests {
             let refits = refit(&prep, &mut state);
             assert_eq!(refits.len(), 1, "B1 refitted");
             let mut after = before.clone();
-            report(&prep, &refits, &mut after);
+            report(&prep, &refits, &mut after, &mut []);
             for (i, q) in ["k_y", "k_z", "m"].iter().enumerate() {
                 let z = |p: &Pedestal| (p.values[*q] - theta[[0, 1, 2][i]]) / p.std_err[*q];
                 wls[i] += z(&before[b]) / n as f64;

@@ -90,7 +90,7 @@ impl Search<'_> {
         );
         let mut pedestals_after = pedestals(prep, state)?;
         bearing_table::report_refits(prep, &refits, &mut pedestals_after);
-        runout_ml::report(prep, &runout_refits, &mut pedestals_after);
+        runout_ml::report(prep, &runout_refits, &mut pedestals_after, &mut self.steps);
         if let Some(f) = &foundation {
             for (b, p) in pedestals_after.iter_mut().enumerate() {
                 if let Some((theta, se)) = f.pedestal(b) {
