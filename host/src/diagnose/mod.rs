@@ -56,6 +56,7 @@ pub mod noise;
 pub mod outliers;
 pub mod plots;
 pub mod report;
+pub mod runout_ml;
 pub mod state;
 pub mod summaries;
 #[cfg(test)]

@@ -10,6 +10,7 @@ use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::Agreement;
 use crate::diagnose::locate::{locate, unexplained};
 use crate::diagnose::report::{Diagnosis, NoiseSummary};
+use crate::diagnose::runout_ml;
 use crate::diagnose::state::{pedestals, State};
 use crate::diagnose::trust::{self, as_pedestal_fit, conclude};
 use crate::rundir::RunDir;
@@ -49,6 +50,20 @@ impl Search<'_> {
         } else {
             Vec::new()
         };
+        // A probe runout on rigid ground refitted with its pedestal by
+        // maximum likelihood (`runout_ml::refit`).
+        let runout_refits = if self.on_base.is_none() {
+            let r = runout_ml::refit(prep, &mut self.state);
+            if let Some(last) = self.states.last_mut() {
+                *last = self.state.clone();
+            }
+            if let Some(last) = self.after_steps.last_mut() {
+                last.0 = self.state.clone();
+            }
+            r
+        } else {
+            Vec::new()
+        };
         let (foundation, base_prep) = match self.on_base.take() {
             // The reported bases and their corrections fitted jointly, the
             // pedestals' ± (profile along the mass split, then the
@@ -75,6 +90,7 @@ impl Search<'_> {
         );
         let mut pedestals_after = pedestals(prep, state)?;
         bearing_table::report_refits(prep, &refits, &mut pedestals_after);
+        runout_ml::report(prep, &runout_refits, &mut pedestals_after, &mut self.steps);
         if let Some(f) = &foundation {
             for (b, p) in pedestals_after.iter_mut().enumerate() {
                 if let Some((theta, se)) = f.pedestal(b) {
