@@ -38,6 +38,9 @@ pub struct BaseRow {
     pub motion: [Complex<f64>; 2],
     /// Noise sd sqrt(E|n|²) of the y and z phasors [m] (`y_sd,z_sd`), when given.
     pub noise_sd: Option<[f64; 2]>,
+    /// The line of `base.csv` the row was read from (1-based, the header is
+    /// line 1), so a later check can say where; 0 for a row not read from a file.
+    pub line: u64,
 }
 
 /// A problem reading `base.csv`, with file, line and column.
@@ -77,6 +80,7 @@ pub fn rows_of(response: &Response, bases: &[(String, Vec<String>)]) -> Vec<Base
                 bearings: bearings.clone(),
                 motion: *m,
                 noise_sd: None,
+                line: 0,
             });
         }
     }
@@ -303,6 +307,7 @@ pub fn read(dir: &Path) -> Result<Option<Vec<BaseRow>>, BaseCsvError> {
                 Complex::new(num(5)?, num(6)?),
             ],
             noise_sd,
+            line,
         });
     }
     if rows.is_empty() {
@@ -322,7 +327,7 @@ pub fn check_bearings(dir: &Path, rows: &[BaseRow], measured: &[&str]) -> Result
         if let Some(b) = r.bearings.iter().find(|b| !measured.contains(&b.as_str())) {
             return Err(BaseCsvError::Field {
                 file: dir.join(BASE_FILE),
-                line: 0,
+                line: r.line,
                 column: 3,
                 message: format!(
                     "base `{}`: bearing `{b}` is not in measurements.csv (it has: {})",
@@ -349,6 +354,7 @@ mod tests {
                 Complex::new(-3.0e-7, 4.25e-6),
             ],
             noise_sd,
+            line: 2,
         }
     }
 
@@ -358,6 +364,7 @@ mod tests {
             let dir = tempfile::tempdir().unwrap();
             let second = BaseRow {
                 speed_hz: 13.0,
+                line: 3,
                 ..row(sd)
             };
             write(dir.path(), &[row(sd), second.clone()]).unwrap();
@@ -431,7 +438,11 @@ mod tests {
         .unwrap();
         let e = read(dir.path()).unwrap_err().to_string();
         assert!(e.contains("`;`") && e.contains("decimal commas"), "{e}");
-        std::fs::write(&file, format!("{head}10,skid,left,1e-6,0,0,1e-6\n")).unwrap();
+        std::fs::write(
+            &file,
+            format!("{head}10,skid,left,1e-6,0,0,1e-6\n11,skid,left,1e-6,0,0,1e-6\n12,pad,NDE,1e-6,0,0,1e-6\n"),
+        )
+        .unwrap();
         let rows = read(dir.path()).unwrap().unwrap();
         let e = check_bearings(dir.path(), &rows, &["DE", "NDE"])
             .unwrap_err()
@@ -440,6 +451,13 @@ mod tests {
             e.contains("`left` is not in measurements.csv") && e.contains("DE, NDE"),
             "{e}"
         );
-        assert!(check_bearings(dir.path(), &rows, &["left"]).is_ok());
+        // The first row naming it, at its line and the bearings' column
+        // (it was placed at line 0 before session 37).
+        assert!(e.contains("base.csv:2:3:"), "{e}");
+        let e = check_bearings(dir.path(), &rows, &["left"])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("base.csv:4:3:") && e.contains("`NDE`"), "{e}");
+        assert!(check_bearings(dir.path(), &rows, &["left", "NDE"]).is_ok());
     }
 }

@@ -97,3 +97,33 @@ fn an_unreadable_memory_budget_is_named_and_not_used() {
         "{msg}"
     );
 }
+
+#[test]
+fn a_signal_set_its_disk_cannot_hold_is_refused_before_any_work() {
+    // 195 000 s of run-down at 10 MHz: 1.95e12 samples × 8 channels × 2
+    // bytes = 31 TB of `samples.i16` alone, more than any test disk holds.
+    // The free space is checked before the memory budget and before the
+    // staging directory is made (session 37: only the memory budget
+    // refused it, naming no disk; a set that fits memory but not the disk
+    // was written until the disk was full).
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("sig");
+    let o = plinth()
+        .arg("signals")
+        .arg(example())
+        .args(["--rundown", "200:5:0.001", "--rate", "1e7", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let msg = text(&o);
+    assert!(!o.status.success(), "{msg}");
+    assert!(
+        msg.contains(&format!("--out {}: would need at least ", out.display()))
+            && msg.contains("bytes free")
+            && msg.contains("nothing was written"),
+        "{msg}"
+    );
+    assert!(!msg.contains("panicked"), "{msg}");
+    let left: Vec<_> = std::fs::read_dir(t.path()).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
+}

@@ -418,20 +418,65 @@ pub fn write_both(
         let root = BitMapBackend::new(&png_path, size).into_drawing_area();
         png(&root).with_context(|| format!("rendering {}", png_path.display()))?;
         root.present()
-            .map_err(|e| anyhow!("writing {}: {e:?}", png_path.display()))?;
+            .map_err(|e| anyhow!("writing {}: {}", png_path.display(), write_cause(&e)))?;
     }
     {
         let root = SVGBackend::new(&svg_path, size).into_drawing_area();
         svg(&root).with_context(|| format!("rendering {}", svg_path.display()))?;
         root.present()
-            .map_err(|e| anyhow!("writing {}: {e:?}", svg_path.display()))?;
+            .map_err(|e| anyhow!("writing {}: {}", svg_path.display(), write_cause(&e)))?;
     }
     Ok([png_path, svg_path])
+}
+
+/// What stopped a figure's file being written, as the operating system said
+/// it ("No space left on device (os error 28)"): plotters' bitmap backend
+/// shows its errors only as nested debug text
+/// (`BackendError(DrawingError(ImageError(IoError(Custom { .. error: "..." }))))`),
+/// so the innermost quoted message is taken from it; any other error is
+/// shown as plotters says it.
+fn write_cause(e: &(impl std::fmt::Display + std::fmt::Debug)) -> String {
+    let debug = format!("{e:?}");
+    // A custom io::Error shows `error: "..."`, an OS one `message: "..."`.
+    let quoted = ["error: \"", "message: \""].iter().find_map(|key| {
+        let rest = &debug[debug.rfind(key)? + key.len()..];
+        rest.find('"').map(|end| &rest[..end])
+    });
+    match quoted {
+        Some(message) if !message.is_empty() => message.to_string(),
+        _ => e.to_string(),
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_figure_write_error_says_what_the_system_said() {
+        #[derive(Debug)]
+        #[allow(dead_code)]
+        enum Nested {
+            BackendError(std::io::Error),
+        }
+        impl std::fmt::Display for Nested {
+            fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "{self:?}")
+            }
+        }
+        let full = Nested::BackendError(std::io::Error::other(
+            "No space left on device (os error 28)",
+        ));
+        assert_eq!(write_cause(&full), "No space left on device (os error 28)");
+        let os = Nested::BackendError(std::io::Error::from_raw_os_error(28));
+        assert!(
+            write_cause(&os).starts_with("No space left on device"),
+            "{}",
+            write_cause(&os)
+        );
+        let plain = std::io::Error::other("x");
+        assert_eq!(write_cause(&plain), "x");
+    }
 
     fn resonance(k: f64, m: f64, c: f64) -> Vec<(f64, Complex<f64>)> {
         (1..=200)

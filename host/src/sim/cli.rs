@@ -68,10 +68,7 @@ pub struct SignalsCommand {
 /// into place only when complete.
 pub fn signals(command: SignalsCommand) -> anyhow::Result<()> {
     let SignalsCommand { args, force } = command;
-    let out = OutputDir::create(&args.out, force)?;
-    super::signals::signals(&args, out.path())?;
-    out.commit()?;
-    Ok(())
+    super::signals::signals(&args, force)
 }
 
 /// Parses a speed list: `START:STOP:STEP` (inclusive, to within STEP/1e6) or

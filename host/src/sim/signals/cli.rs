@@ -52,9 +52,11 @@ pub struct SignalsArgs {
     pub effects: Vec<String>,
 }
 
-/// Runs `plinth signals`, writing into `staging` (the directory the set is
-/// staged in; `args.out`, the one named in messages, once committed).
-pub fn signals(args: &SignalsArgs, staging: &Path) -> anyhow::Result<()> {
+/// Runs `plinth signals`: the set is staged beside `args.out` and moved into
+/// place only when complete (`force`: write into an `--out` that already
+/// holds files). A file system without room for the samples alone is
+/// refused before any work.
+pub fn signals(args: &SignalsArgs, force: bool) -> anyhow::Result<()> {
     let machine = Machine::from_toml_path(&args.machine)?;
     let effects = EffectSet::from_options(&args.effects).map_err(anyhow::Error::msg)?;
     let opts = SignalOptions {
@@ -73,8 +75,17 @@ pub fn signals(args: &SignalsArgs, staging: &Path) -> anyhow::Result<()> {
         t0_sample_position: 0.5,
         seed: args.seed,
     };
-    let set = synthesise_to(&machine, &effects, &opts, staging)
+    // `samples.i16` alone: samples × channels × 2 bytes [bytes].
+    let channels = 4 * machine.bearings.len() as u64;
+    let least = opts
+        .sample_count()?
+        .saturating_mul(channels)
+        .saturating_mul(2);
+    crate::output::check_room("--out", &args.out, least)?;
+    let out = crate::output::OutputDir::create(&args.out, force)?;
+    let set = synthesise_to(&machine, &effects, &opts, out.path())
         .with_context(|| format!("making signals of {}", args.machine.display()))?;
+    out.commit()?;
     let h = &set.header;
     println!(
         "{}: {} samples x {} channels at {} Hz ({:.1} s), {} keyphasor pulses -> {}",

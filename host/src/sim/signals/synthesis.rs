@@ -35,6 +35,33 @@ pub struct SignalOptions {
     pub seed: u64,
 }
 
+impl SignalOptions {
+    /// Sample vectors (samples per channel) the set holds: every sample time
+    /// within [−p0/fs, duration] of the run-down at the sample rate. The
+    /// run-down, the rate [Hz] and the first pulse's position are checked
+    /// first, so a command can size its output before any work.
+    pub fn sample_count(&self) -> Result<u64, SignalsError> {
+        self.rundown
+            .validate()
+            .map_err(|m| SignalsError::Request(format!("run-down: {m}")))?;
+        let fs = self.sample_rate_hz;
+        if !(fs.is_finite() && fs > 0.0) {
+            return Err(SignalsError::Request(format!(
+                "sample rate must be finite and > 0 Hz (got {fs})"
+            )));
+        }
+        if !(0.0..1.0).contains(&self.t0_sample_position) {
+            return Err(SignalsError::Request(format!(
+                "t0 sample position must be in [0, 1) (got {})",
+                self.t0_sample_position
+            )));
+        }
+        // Saturating: a count beyond u64 is refused by the size checks.
+        let samples = (self.rundown.duration_s() * fs + self.t0_sample_position).floor() as u64;
+        Ok(samples.saturating_add(1))
+    }
+}
+
 impl Default for SignalOptions {
     fn default() -> Self {
         Self {
@@ -76,15 +103,9 @@ pub fn synthesise(
     effects: &EffectSet,
     opts: &SignalOptions,
 ) -> Result<(SignalSet, RunDir), SignalsError> {
+    let samples = opts.sample_count()?;
     let r = opts.rundown;
-    r.validate()
-        .map_err(|m| SignalsError::Request(format!("run-down: {m}")))?;
     let fs = opts.sample_rate_hz;
-    if !(fs.is_finite() && fs > 0.0) {
-        return Err(SignalsError::Request(format!(
-            "sample rate must be finite and > 0 Hz (got {fs})"
-        )));
-    }
     let max_speed = r.start_hz.max(r.end_hz);
     if fs < 8.0 * max_speed {
         return Err(SignalsError::Request(format!(
@@ -95,12 +116,6 @@ pub fn synthesise(
     if !(step.is_finite() && step > 0.0) {
         return Err(SignalsError::Request(format!(
             "grid step must be finite and > 0 Hz (got {step})"
-        )));
-    }
-    if !(0.0..1.0).contains(&opts.t0_sample_position) {
-        return Err(SignalsError::Request(format!(
-            "t0 sample position must be in [0, 1) (got {})",
-            opts.t0_sample_position
         )));
     }
     for (what, v) in [
@@ -128,10 +143,6 @@ pub fn synthesise(
             "probe gap voltage must be finite".into(),
         ));
     }
-
-    // Sample count: every sample time within [−p0/fs, duration].
-    let duration = r.duration_s();
-    let samples = ((duration * fs + opts.t0_sample_position).floor() as u64) + 1;
 
     // Speed grid covering the run with 4 steps of margin each side.
     let lo = r.start_hz.min(r.end_hz);
