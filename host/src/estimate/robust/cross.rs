@@ -80,9 +80,11 @@ pub(super) const SCREEN_GAP: usize = FLIP_BLOCK - 1;
 /// only when the negation of one bearing alone passes every condition:
 /// when two bearings' do, the data do not say which one flipped (as with
 /// two bearings). At the run's first and last [`SCREEN_GAP`] + 1 speeds,
-/// whose window lies on one side of them ([`surrounded`]), Σ r/s and its
-/// halving are taken over the studentised r/((1 + ℓ)·s′): there the
-/// subspace is an extrapolation and its error is part of r.
+/// whose window lies on one side of them ([`surrounded`]), the first
+/// condition's sum is over the studentised r/((1 + ℓ)·s′): there the
+/// subspace is an extrapolation and its error is part of r (the halving
+/// stays on r/s: dividing the negated reading by its own, larger, 1 + ℓ
+/// would favour negations that move it further out of the span).
 pub fn cross_bearing_flips(
     bearings: &[&[Observation]],
     listed: &[&[f64]],
@@ -285,26 +287,29 @@ impl Limits {
         // −2 ln L of a reading (r, ℓ) at speed j, up to a constant.
         let nll =
             |(r, l): (f64, f64), j: usize| r / ((1.0 + l) * scale_s[j]) + self.dof * l.ln_1p();
-        let (mut before, mut after, mut gain) = (0.0, 0.0, 0.0);
+        // Σ r/s as read (against the limit: studentised where the
+        // subspace is extrapolated, [`surrounded`]), as read and negated
+        // (plain, for the halving).
+        let (mut beyond, mut before, mut after, mut gain) = (0.0, 0.0, 0.0, 0.0);
         let mut agrees = true;
         for j in block.clone() {
             let read = u.residual(&y[j]);
             let flipped = u.residual(&signed(&y[j], which));
-            if surrounded(y.len(), j) {
-                before += read.0 / scale[j];
-                after += flipped.0 / scale[j];
+            before += read.0 / scale[j];
+            after += flipped.0 / scale[j];
+            beyond += if surrounded(y.len(), j) {
+                read.0 / scale[j]
             } else {
                 // An extrapolated subspace: its error, about ℓ times the
-                // noise, is part of r ([`surrounded`]).
-                before += read.0 / ((1.0 + read.1) * scale_s[j]);
-                after += flipped.0 / ((1.0 + flipped.1) * scale_s[j]);
-            }
+                // noise, is part of r.
+                read.0 / ((1.0 + read.1) * scale_s[j])
+            };
             let (l_read, l_flipped) = (nll(read, j), nll(flipped, j));
             agrees &= flipped.0 / ((1.0 + flipped.1) * scale_s[j]) <= self.consistent
                 && l_flipped < l_read;
             gain += l_read - l_flipped;
         }
-        let named = before > self.block_limit[block.len()]
+        let named = beyond > self.block_limit[block.len()]
             && agrees
             && after < FLIP_RATIO * before
             && gain.is_finite();
