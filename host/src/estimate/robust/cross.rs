@@ -158,16 +158,16 @@ pub fn cross_bearing_flips(
 
 /// Whether speed `i` of `n` is surrounded: its screening window (the
 /// speeds beyond [`SCREEN_GAP`] on each side, [`screened_scales`]) holds
-/// speeds on both sides of it. At the run's first and last [`SCREEN_GAP`]
-/// + 1 speeds it lies on one side only: the subspace is then an
-/// extrapolation, and the reading's plain residual is neither χ²(2(C − D))
-/// over its scale nor owed to one bearing (measured on the third unseen machine's clean
-/// run-up, docs/session37-trainclean16.md: over 300 runs the 99.9 %
-/// quantile of r/s at the first four speeds is 9.4 times its median,
-/// χ²(12)'s is 2.9; 10 of 1000 runs named a flip at the first three
-/// speeds, and in 7 of them negating two or three bearings passed every
-/// condition; the studentised r of those three speeds stood at 25-77
-/// against the plain 44-85).
+/// speeds on both sides of it. At the run's first and last
+/// [`SCREEN_GAP`]&nbsp;+&nbsp;1 speeds it lies on one side only: the
+/// subspace is then an extrapolation, and the reading's plain residual is
+/// neither χ²(2(C − D)) over its scale nor owed to one bearing (measured
+/// on the third unseen machine's clean run-up,
+/// docs/session37-trainclean16.md: over 300 runs the 99.9 % quantile of
+/// r/s at the first four speeds is 9.4 times its median, χ²(12)'s is 2.9;
+/// 10 of 1000 runs named a flip at the first three speeds, and in 7 of
+/// them negating two or three bearings passed every condition; their
+/// studentised r stood at 25-77 against the plain 44-85).
 fn surrounded(n: usize, i: usize) -> bool {
     i > SCREEN_GAP && i + SCREEN_GAP + 1 < n
 }
