@@ -56,6 +56,40 @@ fn clean_per_sensor_noise_is_flagged_by_nothing_and_ok_means_right() {
     assert!(d.trusted, "{:?}\n{}", d.trust_reasons, d.to_text());
 }
 
+/// A clean run-up names no keyphasor flip at its first speeds. Seeds 717
+/// and 356 of clean-p2c (`python3 scripts/ross_unseen.py --machine
+/// unseen-train tests/data/ross-unseen-3 clean-p2c 717`): the test across
+/// bearings named B1 flipped at 5 Hz, the first speed, where the window's
+/// subspace is an extrapolation (two of 10 such runs in 1000,
+/// docs/session37-trainclean16.md). Seed 717: Σ r/s 84.7 against its limit
+/// 43.5, and negating B1, B2 or B3 each passed every condition: the data
+/// do not say which bearing flipped, and nothing is named. Seed 356: only
+/// B1's negation passed, but the studentised r/((1 + ℓ)s′) that an
+/// extrapolated subspace calls for is 28.4, within the limit. identify
+/// lists nothing and trusts every pedestal, and diagnose's flip search
+/// (`Prepared::from_run`) names no flip either.
+#[test]
+fn a_clean_run_up_names_no_flip_at_its_first_speeds() {
+    for case in ["clean-p2c-717", "clean-p2c-356"] {
+        let run = stored(case);
+        let id = identify(&run);
+        for b in BEARINGS {
+            assert!(
+                listed(&id, b).is_empty(),
+                "{case}: {b} lists {:?}",
+                listed(&id, b)
+            );
+        }
+        assert!(untrusted(&id).is_empty(), "{case}: {:?}", untrusted(&id));
+        let prepared = plinth::diagnose::data::Prepared::from_run(&run).expect("prepared");
+        assert!(
+            prepared.flipped_speeds_hz.iter().all(Vec::is_empty),
+            "{case}: {:?}",
+            prepared.flipped_speeds_hz
+        );
+    }
+}
+
 /// Each bearing at its own number of digits (B1 2, B2 3, B3 4): nothing
 /// untrusted, every `ok` right (identify only: diagnose takes about a
 /// minute on these runs).
