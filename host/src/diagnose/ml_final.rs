@@ -1,7 +1,7 @@
 //! The final values of a diagnosis on rigid ground refitted by maximum
-//! likelihood: every group of pedestals whose final model carries an effect
-//! (a runout, a cross stiffness, a mass per direction, a quartic term, a
-//! loss factor, a sensor delay) is refitted once by the Gauss–Helmert
+//! likelihood: when the final model carries an effect (a runout, a cross
+//! stiffness, a mass per direction, a quartic term, a loss factor, a
+//! sensor delay), every group of pedestals is refitted once by the Gauss–Helmert
 //! estimator of the base model ([`crate::estimate::gauss_helmert`], the
 //! engine of `plinth identify`'s fit), over all its linear terms and
 //! nonlinear scalars at once. The search's weighted least squares holds its
@@ -184,19 +184,25 @@ impl Equations for GroupEquations<'_> {
     }
 }
 
-/// Whether the group's final model has more than the paper's pedestal
-/// terms (an effect), and no bearing-table scalar (refitted elsewhere).
-fn refittable(model: &Model, terms: &[usize], nonlinear: &[usize]) -> bool {
+/// Whether a group of `model` is refitted: the model carries an effect
+/// somewhere (a term beyond the paper's pedestal terms, or a nonlinear
+/// scalar; without one the state is the base model's ML fit already), and
+/// the group has no bearing-table scalar (refitted elsewhere). A group
+/// without an effect of its own is refitted too: the search refits every
+/// group by the held-weights least squares after each step, so its values
+/// carry the same dilution (unseen-overhung `runout`, the effect-free B1:
+/// mean z of k_y −0.66 over seeds 98-117, session 37).
+fn refittable(model: &Model, nonlinear: &[usize]) -> bool {
     let table = nonlinear.iter().any(|&k| {
         matches!(
             model.nonlinear[k],
             Nonlinear::Clearance { .. } | Nonlinear::StiffnessRatio { .. }
         )
     });
-    let effect = !nonlinear.is_empty()
-        || terms.iter().any(|&t| {
+    let effect = !model.nonlinear.is_empty()
+        || model.terms.iter().any(|t| {
             !matches!(
-                model.terms[t],
+                t,
                 Term::Stiffness { .. } | Term::Mass { dir: None, .. } | Term::Damping { .. }
             )
         });
@@ -236,8 +242,8 @@ fn linearised(
     ok.then(|| (jac, DVector::from_vec(resid), speed))
 }
 
-/// Refits by maximum likelihood every group of `state` whose final model
-/// carries an effect (module docs) on its own observations; the state's
+/// Refits by maximum likelihood every group of `state` (when its final
+/// model carries an effect, [`refittable`]) on its own observations; the state's
 /// values of the group are replaced by the fit's (and the weights
 /// re-propagated). A fit that fails, or a scalar that leaves its
 /// admissible interval, leaves the group's least-squares values. Returns
@@ -248,7 +254,7 @@ pub fn refit(prep: &Prepared, state: &mut State) -> Vec<GroupRefit> {
     let mut out = Vec::new();
     for group in model.groups(prep.bearings.len()) {
         let eq = GroupEquations::new(prep, &model, &group, state);
-        if !refittable(&model, &eq.terms, &eq.nonlinear) {
+        if !refittable(&model, &eq.nonlinear) {
             continue;
         }
         let start = eq.pack(&state.params.beta, &state.params.nl);
