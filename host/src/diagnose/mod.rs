@@ -51,12 +51,12 @@ pub mod foundation;
 pub mod gap;
 pub mod locate;
 pub mod machine;
+pub mod ml_final;
 pub mod model;
 pub mod noise;
 pub mod outliers;
 pub mod plots;
 pub mod report;
-pub mod runout_ml;
 pub mod state;
 pub mod summaries;
 #[cfg(test)]

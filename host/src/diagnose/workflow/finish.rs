@@ -9,8 +9,8 @@ use crate::diagnose::bearing_table;
 use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::Agreement;
 use crate::diagnose::locate::{locate, unexplained};
+use crate::diagnose::ml_final;
 use crate::diagnose::report::{Diagnosis, NoiseSummary};
-use crate::diagnose::runout_ml;
 use crate::diagnose::state::{pedestals, State};
 use crate::diagnose::trust::{self, as_pedestal_fit, conclude};
 use crate::rundir::RunDir;
@@ -50,10 +50,10 @@ impl Search<'_> {
         } else {
             Vec::new()
         };
-        // A probe runout on rigid ground refitted with its pedestal by
-        // maximum likelihood (`runout_ml::refit`).
-        let runout_refits = if self.on_base.is_none() {
-            let r = runout_ml::refit(prep, &mut self.state);
+        // Every group with an effect on rigid ground refitted by maximum
+        // likelihood, its ± from the same inference (`ml_final::refit`).
+        let ml_refits = if self.on_base.is_none() {
+            let r = ml_final::refit(prep, &mut self.state);
             if let Some(last) = self.states.last_mut() {
                 *last = self.state.clone();
             }
@@ -90,7 +90,13 @@ impl Search<'_> {
         );
         let mut pedestals_after = pedestals(prep, state)?;
         bearing_table::report_refits(prep, &refits, &mut pedestals_after);
-        runout_ml::report(prep, &runout_refits, &mut pedestals_after, &mut self.steps);
+        ml_final::report(
+            prep,
+            &state.model,
+            &ml_refits,
+            &mut pedestals_after,
+            &mut self.steps,
+        );
         if let Some(f) = &foundation {
             for (b, p) in pedestals_after.iter_mut().enumerate() {
                 if let Some((theta, se)) = f.pedestal(b) {

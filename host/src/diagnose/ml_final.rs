@@ -1,0 +1,370 @@
+//! The final values of a diagnosis on rigid ground refitted by maximum
+//! likelihood: when the final model carries an effect (a runout, a cross
+//! stiffness, a mass per direction, a quartic term, a loss factor, a
+//! sensor delay), every group of pedestals is refitted once by the Gauss–Helmert
+//! estimator of the base model ([`crate::estimate::gauss_helmert`], the
+//! engine of `plinth identify`'s fit), over all its linear terms and
+//! nonlinear scalars at once. The search's weighted least squares holds its
+//! weights at a reference fit; where a pedestal's motion is near its
+//! pick-ups' noise the motion, the regressor of k and m, is as noisy as it
+//! is large, and the held-weights fit pulls k and m toward zero (regression
+//! dilution; measured in session 36, helper runout15, on unseen-flex's stiff
+//! block B1: mean z of k and m −1.1 with a runout). The likelihood counts
+//! that the equation noise grows with the model's dynamic stiffness, so the
+//! refit does not.
+//!
+//! Per speed of a group the residual is the model's own equation
+//!
+//! ```text
+//! e = Σ_k β_k·(M_k·X + g_k) − K*·rel     (X, rel delay-corrected, [N])
+//! ```
+//!
+//! ([`Model::assemble`]), linear in the measured numbers with
+//! ∂e/∂ped = M·e^{iΩτ_ped} and ∂e/∂rel = −K*·e^{iΩτ_rel}, the derivatives
+//! the search's noise weights ([`super::fit::Weights`]) propagate.
+//!
+//! The ± come from [`Inference`] at the ML values, the one definition the
+//! search and every other ± of diagnose use: the larger of the noise
+//! floor's (inverse Fisher information of the whitened Jacobian at the
+//! estimate's Σ) and the autocorrelation-robust sandwich built from the
+//! fit's own whitened residuals.
+//!
+//! Groups with a bearing-table scalar are left to
+//! [`super::bearing_table::refine`], which refits them by ML itself.
+
+use super::criterion::Inference;
+use super::data::Prepared;
+use super::fit::{search_interval, Weights};
+use super::model::{Model, Nonlinear, Term};
+use super::report::{Pedestal, Step};
+use super::state::State;
+use crate::estimate::base::put;
+use crate::estimate::gauss_helmert::{self as gh, Equations};
+use nalgebra::{DMatrix, DVector};
+use num_complex::Complex;
+
+/// Most Levenberg–Marquardt iterations of a refit.
+const ITERATIONS: usize = 200;
+
+/// Measured real numbers per bearing and speed (rel y, rel z, ped y, ped z;
+/// real and imaginary parts, the order of [`crate::estimate::Observation::var`]).
+const MEASURED: usize = 8;
+
+/// One group's ML refit: its terms and scalars (global indices) and the
+/// inference at the ML values (estimate entries: the terms, then the scalars).
+#[derive(Clone, Debug)]
+pub struct GroupRefit {
+    /// Bearing indices of the group.
+    pub group: Vec<usize>,
+    /// Global indices of the group's linear terms.
+    pub terms: Vec<usize>,
+    /// Global indices of the group's nonlinear scalars.
+    pub nonlinear: Vec<usize>,
+    /// Inference at the ML values (terms, then scalars; SI units).
+    pub inference: Inference,
+}
+
+/// The equations of one group of a [`Model`] as a Gauss–Helmert system:
+/// p = (the group's linear terms, then its nonlinear scalars), the other
+/// groups' values held (they do not enter).
+struct GroupEquations<'a> {
+    prep: &'a Prepared,
+    model: &'a Model,
+    group: &'a [usize],
+    speeds: Vec<usize>,
+    terms: Vec<usize>,
+    nonlinear: Vec<usize>,
+    beta: Vec<f64>,
+    nl: Vec<f64>,
+    var: Vec<Vec<f64>>,
+}
+
+impl<'a> GroupEquations<'a> {
+    fn new(prep: &'a Prepared, model: &'a Model, group: &'a [usize], state: &State) -> Self {
+        let speeds = Model::group_speeds(prep, group);
+        let var = speeds
+            .iter()
+            .map(|&j| {
+                group
+                    .iter()
+                    .flat_map(|&b| {
+                        prep.points[b][j]
+                            .as_ref()
+                            .map_or([0.0; MEASURED], |o| o.var)
+                    })
+                    .collect()
+            })
+            .collect();
+        Self {
+            prep,
+            model,
+            group,
+            speeds,
+            terms: model.group_terms(group),
+            nonlinear: model.group_nonlinear(group),
+            beta: state.params.beta.clone(),
+            nl: state.params.nl.clone(),
+            var,
+        }
+    }
+
+    /// The model's (β, nl) with the group's entries set from `p`.
+    fn unpack(&self, p: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let (mut beta, mut nl) = (self.beta.clone(), self.nl.clone());
+        for (t, v) in self.terms.iter().zip(p) {
+            beta[*t] = *v;
+        }
+        for (k, v) in self.nonlinear.iter().zip(&p[self.terms.len()..]) {
+            nl[*k] = *v;
+        }
+        (beta, nl)
+    }
+
+    /// The values of `state` as p.
+    fn pack(&self, beta: &[f64], nl: &[f64]) -> Vec<f64> {
+        self.terms
+            .iter()
+            .map(|&t| beta[t])
+            .chain(self.nonlinear.iter().map(|&k| nl[k]))
+            .collect()
+    }
+}
+
+impl Equations for GroupEquations<'_> {
+    fn speeds(&self) -> usize {
+        self.speeds.len()
+    }
+
+    fn variance(&self, s: usize) -> &[f64] {
+        &self.var[s]
+    }
+
+    fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+        let n = 2 * self.group.len();
+        let (beta, nl) = self.unpack(p);
+        let assembled =
+            self.model
+                .assemble(self.prep, self.group, self.speeds[s], &nl, Some(&beta));
+        let Some((a, m)) = assembled.and_then(|a| a.matrix.clone().map(|m| (a, m))) else {
+            // Not finite: J cannot be evaluated here.
+            return (
+                DVector::from_element(2 * n, f64::NAN),
+                DMatrix::zeros(2 * n, MEASURED * self.group.len()),
+            );
+        };
+        let mut e = DVector::zeros(2 * n);
+        let mut b = DMatrix::zeros(2 * n, MEASURED * self.group.len());
+        for (pb, _) in self.group.iter().enumerate() {
+            for d in 0..2 {
+                let row = 2 * pb + d;
+                let mut v = -a.force[row];
+                for (k, col) in &a.columns {
+                    v += beta[*k] * col[row];
+                }
+                e[2 * row] = v.re;
+                e[2 * row + 1] = v.im;
+                for (qc, _) in self.group.iter().enumerate() {
+                    for dc in 0..2 {
+                        let c = 2 * qc + dc;
+                        put(
+                            &mut b,
+                            2 * row,
+                            MEASURED * qc + 4 + 2 * dc,
+                            m[(row, c)] * a.ped_phase[c],
+                        );
+                    }
+                }
+                for dc in 0..2 {
+                    let coef: Complex<f64> = -a.kstar[pb][d][dc] * a.rel_phase[2 * pb + dc];
+                    put(&mut b, 2 * row, MEASURED * pb + 2 * dc, coef);
+                }
+            }
+        }
+        (e, b)
+    }
+}
+
+/// Whether a group of `model` is refitted: the model carries an effect
+/// somewhere (a term beyond the paper's pedestal terms, or a nonlinear
+/// scalar; without one the state is the base model's ML fit already), and
+/// the group has no bearing-table scalar (refitted elsewhere). A group
+/// without an effect of its own is refitted too: the search refits every
+/// group by the held-weights least squares after each step, so its values
+/// carry the same dilution (unseen-overhung `runout`, the effect-free B1:
+/// mean z of k_y −0.66 over seeds 98-117, session 37).
+fn refittable(model: &Model, nonlinear: &[usize]) -> bool {
+    let table = nonlinear.iter().any(|&k| {
+        matches!(
+            model.nonlinear[k],
+            Nonlinear::Clearance { .. } | Nonlinear::StiffnessRatio { .. }
+        )
+    });
+    let effect = !model.nonlinear.is_empty()
+        || model.terms.iter().any(|t| {
+            !matches!(
+                t,
+                Term::Stiffness { .. } | Term::Mass { dir: None, .. } | Term::Damping { .. }
+            )
+        });
+    effect && !table
+}
+
+/// The whitened Jacobian L_s⁻¹·∂e_s/∂p at fixed Σ(p̂) (central differences,
+/// steps 1e-6·`scale`), the whitened residuals L_s⁻¹e_s and the speed of
+/// every row, stacked over speeds: what [`Inference::new`] takes.
+fn linearised(
+    eq: &GroupEquations<'_>,
+    p: &[f64],
+    scale: &[f64],
+) -> Option<(DMatrix<f64>, DVector<f64>, Vec<usize>)> {
+    let (mut rows, mut resid, mut speed) = (Vec::new(), Vec::new(), Vec::new());
+    for s in 0..eq.speeds() {
+        let l = gh::whitening(eq, s, p)?;
+        let e = eq.error(s, p);
+        let mut a = DMatrix::zeros(e.len(), p.len());
+        for (k, sc) in scale.iter().enumerate() {
+            let h = 1e-6 * sc;
+            let (mut up, mut dn) = (p.to_vec(), p.to_vec());
+            up[k] += h;
+            dn[k] -= h;
+            a.set_column(k, &((eq.error(s, &up) - eq.error(s, &dn)) / (2.0 * h)));
+        }
+        let wa = l.solve_lower_triangular(&a)?;
+        let we = l.solve_lower_triangular(&e)?;
+        for r in 0..wa.nrows() {
+            rows.push(wa.row(r).clone_owned());
+            resid.push(we[r]);
+            speed.push(eq.speeds[s]);
+        }
+    }
+    let jac = DMatrix::from_rows(&rows);
+    let ok = jac.iter().chain(&resid).all(|v| v.is_finite());
+    ok.then(|| (jac, DVector::from_vec(resid), speed))
+}
+
+/// Refits by maximum likelihood every group of `state` (when its final
+/// model carries an effect, [`refittable`]) on its own observations; the state's
+/// values of the group are replaced by the fit's (and the weights
+/// re-propagated). A fit that fails, or a scalar that leaves its
+/// admissible interval, leaves the group's least-squares values. Returns
+/// the refits for [`report`].
+pub fn refit(prep: &Prepared, state: &mut State) -> Vec<GroupRefit> {
+    let model = state.model.clone();
+    let inferences = state.inference(prep).unwrap_or_default();
+    let mut out = Vec::new();
+    for group in model.groups(prep.bearings.len()) {
+        let eq = GroupEquations::new(prep, &model, &group, state);
+        if !refittable(&model, &eq.nonlinear) {
+            continue;
+        }
+        let start = eq.pack(&state.params.beta, &state.params.nl);
+        let n = start.len();
+        if 4 * group.len() * eq.speeds.len() <= n {
+            continue;
+        }
+        // Units: each parameter's scale is the larger of its size and its
+        // least-squares ± (a runout near zero), or, a scalar, 1 % of its
+        // admissible interval.
+        let se = inferences
+            .iter()
+            .find(|(g, _, _)| *g == group)
+            .map(|(_, inf, _)| (0..n).map(|i| inf.std_err(i)).collect::<Vec<_>>());
+        let scale: Vec<f64> = (0..n)
+            .map(|i| {
+                let s = se.as_ref().map_or(0.0, |v| v[i]);
+                let floor = match i.checked_sub(eq.terms.len()) {
+                    Some(j) => {
+                        let (lo, hi) = search_interval(prep, &model, eq.nonlinear[j], &group);
+                        0.01 * (hi - lo)
+                    }
+                    None => f64::MIN_POSITIVE,
+                };
+                start[i].abs().max(s).max(floor)
+            })
+            .collect();
+        if !scale.iter().chain(&start).all(|v| v.is_finite()) {
+            continue;
+        }
+        let Some(m) = gh::fit(&eq, &start, &scale, &vec![true; n], None, ITERATIONS) else {
+            continue;
+        };
+        let admissible = eq.nonlinear.iter().enumerate().all(|(j, &k)| {
+            let (lo, hi) = search_interval(prep, &model, k, &group);
+            let v = m.p[eq.terms.len() + j];
+            v >= lo && v <= hi
+        });
+        if !admissible || !m.p.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let Some((jac, resid, row_speed)) = linearised(&eq, &m.p, &scale) else {
+            continue;
+        };
+        let Ok(inference) =
+            Inference::new(&jac, &resid, &row_speed, DVector::from_vec(m.p.clone()))
+        else {
+            continue;
+        };
+        let (beta, nl) = eq.unpack(&m.p);
+        state.params.beta = beta;
+        state.params.nl = nl;
+        out.push(GroupRefit {
+            terms: eq.terms.clone(),
+            nonlinear: eq.nonlinear.clone(),
+            group,
+            inference,
+        });
+    }
+    if !out.is_empty() {
+        state.weights = Weights::propagate(prep, &state.model, &state.params);
+    }
+    out
+}
+
+/// Writes the refits of [`refit`] into the reported pedestals and the kept
+/// steps at their bearings: values and ± ([`Inference::std_err`]) of every
+/// pedestal term and of every effect parameter the steps list by name.
+pub fn report(
+    prep: &Prepared,
+    model: &Model,
+    refits: &[GroupRefit],
+    pedestals: &mut [Pedestal],
+    steps: &mut [Step],
+) {
+    for r in refits {
+        let entries = r
+            .terms
+            .iter()
+            .map(|&t| {
+                let term = model.terms[t];
+                (term.bearings()[0], term.name(), term.is_pedestal())
+            })
+            .chain(r.nonlinear.iter().map(|&k| {
+                let p = model.nonlinear[k];
+                (Some(p.bearing()), p.name().to_string(), false)
+            }));
+        for (i, (bearing, name, is_pedestal)) in entries.enumerate() {
+            let Some(bname) = bearing.and_then(|b| prep.bearings.get(b)) else {
+                continue;
+            };
+            let (value, se) = (r.inference.estimate[i], r.inference.std_err(i));
+            if is_pedestal {
+                if let Some(p) = pedestals.iter_mut().find(|p| &p.bearing == bname) {
+                    p.values.insert(name.clone(), value);
+                    p.std_err.insert(name.clone(), se);
+                }
+            }
+            for s in steps
+                .iter_mut()
+                .filter(|s| &s.bearing == bname && s.dropped.is_none())
+            {
+                if let Some(e) = s.parameters.iter_mut().find(|e| e.name == name) {
+                    e.value = value;
+                    e.std_err = se;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;
