@@ -284,7 +284,8 @@ pub fn non_physical_dampings(prep: &Prepared, state: &State) -> Vec<Term> {
 /// the refit with them free leaves none of them impossible
 /// ([`non_physical_dampings`]) and the data support them at the search's
 /// level `alpha` (the test a `pedestal_damping` step would pass: ΔBIC > 0,
-/// p < `alpha`); else `next` unchanged.
+/// p < `alpha`; beside a profiled scalar by the likelihood ratio,
+/// [`freed_evidence`]); else `next` unchanged.
 ///
 /// Why: those dampings are the base model's own parameters, held at the
 /// passive bound only because, without the effect, their free values were
