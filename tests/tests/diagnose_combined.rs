@@ -275,12 +275,14 @@ fn the_unexplained_residual_is_located() {
         d.unexplained
     );
     // Until session 36 the band held the bracket's resonance (F_B). Since
-    // a profiled scalar is tested by its likelihood ratio (docs/diagnose.md
-    // "Session 36"), a delay on the right probe is accepted first: it takes
-    // up the bracket's phase lag (−2ζf/f_b below f_b, a delay's linear
-    // phase), and what is left lies above the resonance (98-121 Hz on this
-    // run). The band is within the run's speeds either way; the verdict and
-    // the bearing are what an engineer acts on (open: docs/diagnose.md).
+    // then a delay on the right rel_y probe (313 µs: in the pedestal
+    // equation a ped_y advance, the phase lead of the inverted reading
+    // above f_b, not the lag below it) and a runout are named, and the
+    // final fit's right pedestal (k_y 1.70 MN/m, m 3.7 kg against the
+    // truth's 6 MN/m, 60 kg) has its own resonance at 108.6 Hz (z: 126.7):
+    // the band (98-121 Hz) is where that fitted resonance blows up the
+    // predicted motion, not where the bracket is (docs/diagnose.md, session
+    // 37; open). The bearing and the verdict are what an engineer acts on.
     assert!(
         d.unexplained.iter().all(|u| !u.bands_hz.is_empty()
             && u.bands_hz

@@ -4,8 +4,9 @@
 //! significant.
 
 use super::candidates::{Candidate, ParamRef};
-use super::criterion::Evidence;
+use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
+use super::fit::scalar_drop;
 use super::model::{Model, Nonlinear, Term};
 use super::state::State;
 use nalgebra::DMatrix;
@@ -90,6 +91,16 @@ impl Chosen {
 /// row of (parameter, coefficient) per constraint) on the parameters of
 /// the group holding `bearing` (`checked`: the Bonferroni count, `n_total`
 /// the BIC's N); `None` when they cannot be tested.
+///
+/// A null that sets one profiled scalar to zero (a delay, a loss factor, a
+/// table's clearance or stiffness ratio) is tested by the likelihood ratio
+/// the forward step chose it by ([`scalar_drop`], the same function):
+/// the Wald form's curvature at the estimate overstates the drop where the
+/// scalar trades against a linear term at its null (module docs of
+/// `super::criterion`, "Profiled scalars"), and with the ratio in one test
+/// and the Wald form in the other the backward check could drop what the
+/// forward step chose, or keep what it would not have chosen. Any other
+/// null: the Wald statistic.
 pub(super) fn evidence_against(
     prep: &Prepared,
     state: &State,
@@ -98,8 +109,35 @@ pub(super) fn evidence_against(
     checked: usize,
     n_total: usize,
 ) -> Option<Evidence> {
+    let (group, inf, c) = constraints(prep, state, bearing, null)?;
+    match profiled_scalar(&state.model, null) {
+        Some(k) => {
+            let lr = scalar_drop(
+                prep,
+                &state.model,
+                &state.params.nl,
+                &state.weights,
+                &group,
+                k,
+            )
+            .ok()?;
+            inf.evidence_profiled(&c, lr, checked, n_total).ok()
+        }
+        None => inf.evidence(&c, checked, n_total).ok(),
+    }
+}
+
+/// The group holding `bearing` in `state`'s joint fit, its inference and
+/// the constraints `null` as rows over that inference's parameters; `None`
+/// when a parameter of `null` is not among them.
+pub(super) fn constraints(
+    prep: &Prepared,
+    state: &State,
+    bearing: usize,
+    null: &[Vec<(Param, f64)>],
+) -> Option<(Vec<usize>, Inference, DMatrix<f64>)> {
     let infs = state.inference(prep).ok()?;
-    let (_, inf, refs) = infs.iter().find(|(g, _, _)| g.contains(&bearing))?;
+    let (group, inf, refs) = infs.into_iter().find(|(g, _, _)| g.contains(&bearing))?;
     let position = |p: &Param| {
         refs.iter().position(|r| match (*r, p) {
             (ParamRef::Term(k), Param::Term(t)) => state.model.terms[k] == *t,
@@ -113,5 +151,21 @@ pub(super) fn evidence_against(
             c[(row, position(p)?)] = *coef;
         }
     }
-    inf.evidence(&c, checked, n_total).ok()
+    Some((group, inf, c))
 }
+
+/// The index in `model` of the one profiled scalar `null` sets to zero
+/// (one constraint on one nonlinear parameter); `None` for any other null.
+fn profiled_scalar(model: &Model, null: &[Vec<(Param, f64)>]) -> Option<usize> {
+    let [row] = null else { return None };
+    let [(Param::Nonlinear(n), coef)] = row.as_slice() else {
+        return None;
+    };
+    if *coef == 0.0 {
+        return None;
+    }
+    model.nonlinear.iter().position(|m| m == n)
+}
+
+#[cfg(test)]
+mod tests;

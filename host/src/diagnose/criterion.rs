@@ -200,15 +200,17 @@ impl Inference {
         ))
     }
 
-    /// Evidence against a profiled nonlinear scalar's null (one constraint
-    /// `c`, [`Self::evidence`]'s arguments) by the likelihood ratio `lr`:
-    /// the drop of the errors-in-variables criterion from the scalar's null
-    /// to its estimate, the linear parameters refitted at both
-    /// (`super::fit::gauss_helmert_rss`) [χ²]. The floor statistic is `lr`;
-    /// the robust one is `lr` times the floor-to-robust variance ratio of
-    /// the scalar (the two Wald forms' ratio), so autocorrelated or excess
-    /// noise discounts it as it does the Wald statistic (module docs,
-    /// "Profiled scalars").
+    /// Evidence against the constraints `c` ([`Self::evidence`]'s
+    /// arguments) by the likelihood ratio `lr`: the drop of the
+    /// errors-in-variables criterion (`super::fit::gauss_helmert_rss`) from
+    /// the fit under the constraints to this one [χ²]. Used where the
+    /// group holds a profiled scalar: its own null
+    /// (`super::fit::scalar_drop`: from the scalar's null to its estimate,
+    /// the linear parameters refitted at both) or held dampings freed
+    /// beside it (`super::forward::freed_held`). The floor statistic is
+    /// `lr`; the robust one is `lr` times the floor-to-robust ratio of the
+    /// two Wald forms, so autocorrelated or excess noise discounts it as it
+    /// does the Wald statistic (module docs, "Profiled scalars").
     pub fn evidence_profiled(
         &self,
         c: &DMatrix<f64>,

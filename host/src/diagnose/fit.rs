@@ -288,6 +288,28 @@ pub fn gauss_helmert_rss(
     Ok(fit_group(prep, model, nl, &own, group)?.rss)
 }
 
+/// The likelihood ratio of profiled scalar `k` of `model` against its null
+/// (0, every scalar's null): the drop of [`gauss_helmert_rss`] over `group`
+/// from `nl` with `nl[k]` = 0 to `nl`, the linear parameters refitted at
+/// both and the group's other scalars held at `nl` [χ²]. The one
+/// definition the forward step, the backward check and the held-damping
+/// freeing test a scalar by (`super::criterion::Inference::evidence_profiled`).
+pub fn scalar_drop(
+    prep: &Prepared,
+    model: &Model,
+    nl: &[f64],
+    weights: &Weights,
+    group: &[usize],
+    k: usize,
+) -> Result<f64> {
+    let mut null = nl.to_vec();
+    *null
+        .get_mut(k)
+        .ok_or_else(|| anyhow!("no nonlinear scalar {k}"))? = 0.0;
+    Ok(gauss_helmert_rss(prep, model, &null, weights, group)?
+        - gauss_helmert_rss(prep, model, nl, weights, group)?)
+}
+
 /// Profiles nonlinear scalar `k` of `model` over its search interval (grid,
 /// then golden-section refinement of the best bracket), the other scalars
 /// fixed at `nl`; returns the best value and its fit.

@@ -1,11 +1,11 @@
 //! One forward step of the search: every library candidate fitted on top of
 //! the current state, tested (Wald, Bonferroni over the step) and ranked.
 
-use super::backward::{evidence_against, Param};
+use super::backward::{constraints, Param};
 use super::candidates::{library, Candidate, ParamRef};
 use super::criterion::{Evidence, Inference};
 use super::data::Prepared;
-use super::fit::{fit_group, gauss_helmert_rss, jacobian, profile, search_interval};
+use super::fit::{fit_group, gauss_helmert_rss, jacobian, profile, scalar_drop, search_interval};
 use super::model::{Model, Params, Term};
 use super::state::State;
 use anyhow::{anyhow, bail, Result};
@@ -67,11 +67,9 @@ pub fn evaluate(
             let interval = search_interval(prep, model, k, &group);
             let (s, fit) = profile(prep, model, &nl, &state.weights, &group, k, interval)?;
             at_an_edge(model, k, s, interval)?;
-            nl[k] = 0.0;
-            let null = gauss_helmert_rss(prep, model, &nl, &state.weights, &group)?;
             nl[k] = s;
-            let best = gauss_helmert_rss(prep, model, &nl, &state.weights, &group)?;
-            (fit, Some(null - best))
+            let drop = scalar_drop(prep, model, &nl, &state.weights, &group, k)?;
+            (fit, Some(drop))
         }
         None => (fit_group(prep, model, &nl, &state.weights, &group)?, None),
     };
@@ -286,7 +284,8 @@ pub fn non_physical_dampings(prep: &Prepared, state: &State) -> Vec<Term> {
 /// the refit with them free leaves none of them impossible
 /// ([`non_physical_dampings`]) and the data support them at the search's
 /// level `alpha` (the test a `pedestal_damping` step would pass: ΔBIC > 0,
-/// p < `alpha`); else `next` unchanged.
+/// p < `alpha`; beside a profiled scalar by the likelihood ratio,
+/// [`freed_evidence`]); else `next` unchanged.
 ///
 /// Why: those dampings are the base model's own parameters, held at the
 /// passive bound only because, without the effect, their free values were
@@ -321,11 +320,42 @@ pub fn freed_held(
     if held.iter().any(|t| impossible.contains(t)) {
         return next;
     }
-    let null: Vec<_> = held.iter().map(|t| vec![(Param::Term(*t), 1.0)]).collect();
-    match evidence_against(prep, &freed, bearing, &null, 1, prep.real_equations()) {
+    match freed_evidence(prep, &next, &freed, bearing, &held) {
         Some(ev) if ev.delta_bic > 0.0 && ev.p_value < alpha => freed,
         _ => next,
     }
+}
+
+/// The evidence for the dampings `held` at `bearing` in `freed`, the
+/// joint refit of `next` with them free (one test, no Bonferroni count).
+/// Where their group holds a profiled scalar (the held variant's delay or
+/// loss factor, re-profiled in both fits), by the likelihood ratio: the
+/// drop of the criterion the profile minimises
+/// ([`super::fit::gauss_helmert_rss`], the one the forward step's
+/// [`scalar_drop`] takes its drop of) from `next` to `freed`, each at its
+/// own scalars, scaled robustly as the forward step's
+/// ([`Inference::evidence_profiled`]). The Wald form at `freed` would carry
+/// its curvature back to the held fit, where the damping and the delay's
+/// −τ·k trade (module docs of `super::criterion`, "Profiled scalars").
+/// Without a scalar in the group: the Wald statistic, whose floor form is
+/// the drop for linear terms.
+fn freed_evidence(
+    prep: &Prepared,
+    next: &State,
+    freed: &State,
+    bearing: usize,
+    held: &[Term],
+) -> Option<Evidence> {
+    let null: Vec<_> = held.iter().map(|t| vec![(Param::Term(*t), 1.0)]).collect();
+    let n_total = prep.real_equations();
+    let (group, inf, c) = constraints(prep, freed, bearing, &null)?;
+    if freed.model.group_nonlinear(&group).is_empty() {
+        return inf.evidence(&c, 1, n_total).ok();
+    }
+    let criterion =
+        |s: &State| gauss_helmert_rss(prep, &s.model, &s.params.nl, &next.weights, &group);
+    let lr = criterion(next).ok()? - criterion(freed).ok()?;
+    inf.evidence_profiled(&c, lr, 1, n_total).ok()
 }
 
 /// The pedestal dampings at `bearing` that `before` estimates and `after`
