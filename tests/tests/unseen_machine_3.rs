@@ -61,7 +61,7 @@ fn clean_per_sensor_noise_is_flagged_by_nothing_and_ok_means_right() {
 /// unseen-train tests/data/ross-unseen-3 clean-p2c 717`): the test across
 /// bearings named B1 flipped at 5 Hz, the first speed, where the window's
 /// subspace is an extrapolation (two of 10 such runs in 1000,
-/// docs/session37-trainclean16.md). Seed 717: Σ r/s 84.7 against its limit
+/// docs/trust-bad-speeds.md "Session 37"). Seed 717: Σ r/s 84.7 against its limit
 /// 43.5, and negating B1, B2 or B3 each passed every condition: the data
 /// do not say which bearing flipped, and nothing is named. Seed 356: only
 /// B1's negation passed, but the studentised r/((1 + ℓ)s′) that an

@@ -163,7 +163,7 @@ pub fn cross_bearing_flips(
 /// subspace is then an extrapolation, and the reading's plain residual is
 /// neither χ²(2(C − D)) over its scale nor owed to one bearing (measured
 /// on the third unseen machine's clean run-up,
-/// docs/session37-trainclean16.md: over 300 runs the 99.9 % quantile of
+/// docs/trust-bad-speeds.md "Session 37": over 300 runs the 99.9 % quantile of
 /// r/s at the first four speeds is 9.4 times its median, χ²(12)'s is 2.9;
 /// 10 of 1000 runs named a flip at the first three speeds, and in 7 of
 /// them negating two or three bearings passed every condition; their
