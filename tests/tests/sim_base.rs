@@ -258,7 +258,17 @@ fn measured_base_makes_the_pedestal_model_linear_again() {
     let dir = tempfile::tempdir().unwrap();
     base_csv::write(dir.path(), &rows).unwrap();
     let back = base_csv::read(dir.path()).unwrap().unwrap();
-    assert_eq!(back, rows, "base.csv does not round-trip");
+    // Read back, each row also carries the file line it came from (the
+    // header is line 1); the data round-trip exactly.
+    let data: Vec<base_csv::BaseRow> = back
+        .iter()
+        .map(|r| base_csv::BaseRow {
+            line: 0,
+            ..r.clone()
+        })
+        .collect();
+    assert_eq!(data, rows, "base.csv does not round-trip");
+    assert!(back.iter().zip(2u64..).all(|(r, line)| r.line == line));
     // The skid moves: a sizeable share of the pedestal motion.
     let fits = identify_on_measured_base(&run, &back).unwrap();
     assert_eq!(fits.len(), 2);
