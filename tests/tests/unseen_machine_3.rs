@@ -320,3 +320,39 @@ fn the_outlier_reading_stays_an_outlier_under_the_chosen_model() {
     let median = c[c.len() / 2];
     assert!(median < 6.0, "median χ² of the clean readings {median}");
 }
+
+/// Noise-free ROSS phasors at 12 digits (clean-d12, seed 141:
+/// `python3 scripts/ross_unseen.py --machine unseen-train
+/// tests/data/ross-unseen-3 clean-d12 141`): ROSS's chain leaves B1 and B2
+/// a model error of a few parts in 10⁷ (B3 matches to 10⁻¹³). identify
+/// sees it (B1's fit 57.5 times the variance the scatter between
+/// neighbouring speeds allows, B2 7.3) and untrusts them; diagnose's gap
+/// and floor, both on the pedestal-level prediction with the noise taken
+/// from the fit's scatter, put it within 3 floors, named nothing and
+/// printed trusted with B2's k_y 3.7 ± from the truth (session 38). The
+/// lack-of-fit findings of the base fits are diagnose's reasons too, where
+/// no effect acts (`diagnose::trust::lack_of_fit_reasons`).
+#[test]
+fn model_error_identify_sees_is_not_trusted_by_diagnose() {
+    let run = stored("clean-d12-141");
+    let id = identify(&run);
+    let mut flagged = untrusted(&id);
+    flagged.sort();
+    assert_eq!(flagged, ["B1", "B2"], "identify untrusts {flagged:?}");
+    let d = diagnosis(&run);
+    assert!(!d.trusted, "{}", d.to_text());
+    for b in ["B1", "B2"] {
+        assert!(
+            d.trust_reasons
+                .iter()
+                .any(|r| r.starts_with(&format!("bearing {b}: its base model's fit"))),
+            "{b}: {:?}",
+            d.trust_reasons
+        );
+    }
+    assert!(
+        !d.trust_reasons.iter().any(|r| r.starts_with("bearing B3")),
+        "{:?}",
+        d.trust_reasons
+    );
+}

@@ -47,6 +47,12 @@ pub struct Prepared {
     /// support_mode`]; `None` where identify does not make it), judged by
     /// [`super::trust::judge_support`].
     pub support_modes: Vec<Option<SupportMode>>,
+    /// Per bearing (aligned with `bearings`), what `plinth identify`'s
+    /// lack-of-fit rule finds in its base model's fit, level and structure
+    /// ([`crate::identify::trust::lack_of_fit_findings`], the run's
+    /// family-wise shares; empty where it finds nothing; the support-mode
+    /// test is `support_modes`'), judged by [`super::trust::judge_support`].
+    pub lack_of_fit: Vec<Vec<String>>,
 }
 
 impl Prepared {
@@ -177,6 +183,7 @@ impl Prepared {
         let mut base_fits = Vec::with_capacity(bearings.len());
         let mut outliers = Vec::with_capacity(bearings.len());
         let mut support_modes = Vec::with_capacity(bearings.len());
+        let mut reports = std::collections::BTreeMap::new();
         for (b, name) in bearings.iter().enumerate() {
             let mut rows: Vec<&Measurement> = run
                 .measurements
@@ -200,8 +207,9 @@ impl Prepared {
             };
             let (fit, report) = fit_ml(name, &obs, &mut noise, &options)
                 .with_context(|| format!("fitting the base model of bearing {name}"))?;
-            outliers.push(report.outlier_speeds_hz);
+            outliers.push(report.outlier_speeds_hz.clone());
             support_modes.push(report.lack_of_fit.and_then(|l| l.support_mode));
+            reports.insert(name.clone(), report);
             // The noise from the data alone (module docs of `noise`).
             unscale(&mut noise);
             for (m, var) in rows.iter().zip(&noise.var) {
@@ -227,6 +235,16 @@ impl Prepared {
                 );
             }
         }
+        let mut findings = crate::identify::trust::lack_of_fit_findings(&reports);
+        let lack_of_fit = bearings
+            .iter()
+            .map(|name| {
+                findings
+                    .remove(name)
+                    .map(|f| f.model_error)
+                    .unwrap_or_default()
+            })
+            .collect();
         let flipped_speeds_hz = vec![Vec::new(); bearings.len()];
         Ok(Self {
             bearings,
@@ -237,6 +255,7 @@ impl Prepared {
             flipped_speeds_hz,
             outlier_speeds_hz: outliers,
             support_modes,
+            lack_of_fit,
         })
     }
 

@@ -71,59 +71,66 @@ pub fn support_limit(tested: usize) -> f64 {
     SUPPORT_FALSE_ALARM / tested.max(1) as f64
 }
 
-/// Adds a [`WarningKind::LackOfFit`] warning to every pedestal whose fit
-/// shows model error (module docs), and updates `trusted`.
-pub fn mark_lack_of_fit(identification: &mut Identification) {
-    let judged = identification
-        .noise
-        .values()
-        .filter(|n| n.lack_of_fit.is_some())
-        .count();
+/// One bearing's lack-of-fit findings (module docs), each a sentence: what
+/// the rule saw and its limit.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Findings {
+    /// Level and structure: the fit leaves model error as noise would not.
+    pub model_error: Vec<String>,
+    /// The support-mode test: an Ω⁴ fall of the stiffness.
+    pub support_mode: Option<String>,
+}
+
+impl Findings {
+    /// Whether any rule flagged the bearing.
+    pub fn any(&self) -> bool {
+        !self.model_error.is_empty() || self.support_mode.is_some()
+    }
+}
+
+/// The lack-of-fit rule (module docs) over a run's bearings, each bearing's
+/// noise report `noise` as its base fit gave it (`plinth identify`'s
+/// `noise`): the findings of every bearing flagged, with the family-wise
+/// shares of the run. One rule for identify ([`mark_lack_of_fit`]) and
+/// diagnose (`diagnose::trust::lack_of_fit_reasons`).
+pub fn lack_of_fit_findings(
+    noise: &std::collections::BTreeMap<String, super::NoiseReport>,
+) -> std::collections::BTreeMap<String, Findings> {
+    let judged = noise.values().filter(|n| n.lack_of_fit.is_some()).count();
     let alpha = FAMILY_FALSE_ALARM / judged.max(1) as f64;
     // Noise columns' level test: at most the χ² limit beyond which the fit
     // was judged before the support-mode test made every fit with columns
     // judged (`lack_of_fit::assess`): the level rule is unchanged by it.
     let level_alpha = alpha.min(CHI2_P_THRESHOLD);
     // The structure rule's share: over the bearings it can flag (module docs).
-    let can_flag = identification
-        .noise
+    let can_flag = noise
         .values()
         .filter_map(|n| n.lack_of_fit)
         .filter(|l| l.structure.is_some() && l.level_ratio > STRUCTURE_LEVEL)
         .count();
     let alpha_structure = FAMILY_FALSE_ALARM / can_flag.max(1) as f64;
     // The support-mode test's share: over the bearings it was made at.
-    let support_tested = identification
-        .noise
+    let support_tested = noise
         .values()
         .filter_map(|n| n.lack_of_fit)
         .filter(|l| l.support_mode.is_some())
         .count();
     let alpha_support = support_limit(support_tested);
-    let levels: Vec<(String, f64)> = identification
-        .noise
-        .iter()
-        .filter(|(_, n)| n.dof > 0)
-        .map(|(b, n)| (b.clone(), n.chi2 / n.dof as f64))
-        .collect();
-    for p in &mut identification.pedestals {
-        let Some(l) = identification
-            .noise
-            .get(&p.bearing)
-            .and_then(|n| n.lack_of_fit)
-        else {
+    let mut flagged = std::collections::BTreeMap::new();
+    for (bearing, n) in noise {
+        let Some(l) = n.lack_of_fit else {
             continue;
         };
-        let mut reasons = Vec::new();
+        let mut found = Findings::default();
         match l.level_from {
-            NoiseSource::Columns if l.level_p < level_alpha => reasons.push(format!(
+            NoiseSource::Columns if l.level_p < level_alpha => found.model_error.push(format!(
                 "χ²/dof = {:.3} against its noise columns (p = {:.1e}, limit {level_alpha:.1e})",
                 l.level_ratio, l.level_p
             )),
             NoiseSource::Scatter | NoiseSource::Digits
                 if l.level_ratio > SCATTER_LEVEL_TOLERANCE =>
             {
-                reasons.push(format!(
+                found.model_error.push(format!(
                     "its fit leaves {:.3} times the variance its {} allow (the scatter between neighbouring speeds, floored by the digits, measured without the model; at most {SCATTER_LEVEL_TOLERANCE} for noise)",
                     l.level_ratio,
                     l.level_from.name()
@@ -153,7 +160,7 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
                         s.statistic_null_median,
                     )
                 };
-                reasons.push(format!(
+                found.model_error.push(format!(
                     "its residuals ({:.3} times its measured level) follow a smooth curve in speed as model error does and noise does not ({evidence}; p = {:.1e}, twice the smaller of the scan score's {:.1e} and the mean's {:.1e} (Bonferroni); limit {alpha_structure:.1e}: {FAMILY_FALSE_ALARM} over the {can_flag} bearing(s) whose fit leaves more than their level)",
                     l.level_ratio,
                     s.p_value,
@@ -164,7 +171,7 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
         }
         if let Some(t) = l.support_mode {
             if t.p_value < alpha_support {
-                reasons.push(format!(
+                found.support_mode = Some(format!(
                     "its dynamic stiffness does not follow one mass on one spring over speed: an Ω⁴ term, what a support with a second mode above the speed range adds (a sub-base, a frame: per direction K − Ω²M − Ω⁴Q below that mode, Q > 0), explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model (in units of its noise columns; one-sided, Ω⁴Q ≥ 0: p = {:.1e}, limit {alpha_support:.1e}: {SUPPORT_FALSE_ALARM} over the {support_tested} bearing(s) tested); Ω⁴Q at the top speed is {:+.1} % (y) and {:+.1} % (z) of the stiffness (positive: it falls faster than one mass allows); the k and m printed are then the support's apparent values, not the pedestal's",
                     t.statistic,
                     t.p_value,
@@ -173,9 +180,33 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
                 ));
             }
         }
-        if reasons.is_empty() {
-            continue;
+        if found.any() {
+            flagged.insert(bearing.clone(), found);
         }
+    }
+    flagged
+}
+
+/// Adds a [`WarningKind::LackOfFit`] warning to every pedestal whose fit
+/// shows model error ([`lack_of_fit_findings`]), and updates `trusted`.
+pub fn mark_lack_of_fit(identification: &mut Identification) {
+    let flagged = lack_of_fit_findings(&identification.noise);
+    let levels: Vec<(String, f64)> = identification
+        .noise
+        .iter()
+        .filter(|(_, n)| n.dof > 0)
+        .map(|(b, n)| (b.clone(), n.chi2 / n.dof as f64))
+        .collect();
+    for p in &mut identification.pedestals {
+        let Some(found) = flagged.get(&p.bearing) else {
+            continue;
+        };
+        let reasons: Vec<&str> = found
+            .model_error
+            .iter()
+            .chain(&found.support_mode)
+            .map(String::as_str)
+            .collect();
         let others: Vec<String> = levels
             .iter()
             .filter(|(b, _)| *b != p.bearing)

@@ -163,8 +163,10 @@ pub struct MachineCheck {
     /// The machine file's bases the re-simulation replaced
     /// ([`replaced_bases`]), said in the verdict (text and JSON).
     pub replaced: Option<String>,
-    /// The bearings whose base model failed the support-mode test, with
-    /// the reason ([`crate::diagnose::trust::support_reasons`]): unexplained again
+    /// The bearings whose base model failed the support-mode test or the
+    /// lack-of-fit rule, with the reason
+    /// ([`crate::diagnose::trust::support_reasons`],
+    /// [`crate::diagnose::trust::lack_of_fit_reasons`]): unexplained again
     /// when the step at them does not lower the machine-level gap.
     pub support: Vec<(String, String)>,
 }
@@ -235,7 +237,11 @@ impl MachineCheck {
         let foundation = (outcome.after_steps.last()).is_some_and(|(_, b)| b.is_some());
         Ok(Self {
             replaced: replaced_bases(machine, &prep.bearings, foundation),
-            support: crate::diagnose::trust::support_reasons(prep),
+            support: {
+                let mut model = crate::diagnose::trust::support_reasons(prep);
+                model.extend(crate::diagnose::trust::lack_of_fit_reasons(prep));
+                model
+            },
             gap_before,
             gap_refitted,
             gaps_after,
