@@ -40,8 +40,11 @@ use super::report::{Pedestal, Step};
 use super::state::State;
 use crate::estimate::base::put;
 use crate::estimate::gauss_helmert::{self as gh, Equations};
+use held_delay::{held_delays, HeldDelay};
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
+
+pub mod held_delay;
 
 /// Most Levenberg–Marquardt iterations of a refit.
 const ITERATIONS: usize = 200;
@@ -62,6 +65,9 @@ pub struct GroupRefit {
     pub nonlinear: Vec<usize>,
     /// Inference at the ML values (terms, then scalars; SI units).
     pub inference: Inference,
+    /// The group's delays fitted beside pedestal dampings held at zero,
+    /// with their ± counting those dampings as unknown ([`held_delay`]).
+    pub held_delays: Vec<HeldDelay>,
 }
 
 /// The equations of one group of a [`Model`] as a Gauss–Helmert system:
@@ -81,6 +87,18 @@ struct GroupEquations<'a> {
 
 impl<'a> GroupEquations<'a> {
     fn new(prep: &'a Prepared, model: &'a Model, group: &'a [usize], state: &State) -> Self {
+        Self::from_values(prep, model, group, &state.params.beta, &state.params.nl)
+    }
+
+    /// The equations of `group` of `model` at the values (β, nl) of the
+    /// whole model (β one entry per term of `model`).
+    fn from_values(
+        prep: &'a Prepared,
+        model: &'a Model,
+        group: &'a [usize],
+        beta: &[f64],
+        nl: &[f64],
+    ) -> Self {
         let speeds = Model::group_speeds(prep, group);
         let var = speeds
             .iter()
@@ -102,8 +120,8 @@ impl<'a> GroupEquations<'a> {
             speeds,
             terms: model.group_terms(group),
             nonlinear: model.group_nonlinear(group),
-            beta: state.params.beta.clone(),
-            nl: state.params.nl.clone(),
+            beta: beta.to_vec(),
+            nl: nl.to_vec(),
             var,
         }
     }
@@ -246,9 +264,10 @@ fn linearised(
 /// model carries an effect, [`refittable`]) on its own observations; the state's
 /// values of the group are replaced by the fit's (and the weights
 /// re-propagated). A fit that fails, or a scalar that leaves its
-/// admissible interval, leaves the group's least-squares values. Returns
-/// the refits for [`report`].
-pub fn refit(prep: &Prepared, state: &mut State) -> Vec<GroupRefit> {
+/// admissible interval, leaves the group's least-squares values. `base`:
+/// the base model, whose pedestal dampings the final model lacks are the
+/// ones held at zero ([`held_delay`]). Returns the refits for [`report`].
+pub fn refit(prep: &Prepared, base: &Model, state: &mut State) -> Vec<GroupRefit> {
     let model = state.model.clone();
     let inferences = state.inference(prep).unwrap_or_default();
     let mut out = Vec::new();
@@ -305,6 +324,7 @@ pub fn refit(prep: &Prepared, state: &mut State) -> Vec<GroupRefit> {
             continue;
         };
         let (beta, nl) = eq.unpack(&m.p);
+        let held_delays = held_delays(prep, &model, base, &group, &beta, &nl, &inference);
         state.params.beta = beta;
         state.params.nl = nl;
         out.push(GroupRefit {
@@ -312,6 +332,7 @@ pub fn refit(prep: &Prepared, state: &mut State) -> Vec<GroupRefit> {
             nonlinear: eq.nonlinear.clone(),
             group,
             inference,
+            held_delays,
         });
     }
     if !out.is_empty() {
@@ -322,7 +343,10 @@ pub fn refit(prep: &Prepared, state: &mut State) -> Vec<GroupRefit> {
 
 /// Writes the refits of [`refit`] into the reported pedestals and the kept
 /// steps at their bearings: values and ± ([`Inference::std_err`]) of every
-/// pedestal term and of every effect parameter the steps list by name.
+/// pedestal term and of every effect parameter the steps list by name. A
+/// delay fitted beside a damping held at zero gets the ± with that damping
+/// free ([`HeldDelay::std_err`]); the held fit's own ± goes under the
+/// step's `held` ([`super::summaries::HeldDamping::tau_std_err_damping_zero`]).
 pub fn report(
     prep: &Prepared,
     model: &Model,
@@ -336,17 +360,19 @@ pub fn report(
             .iter()
             .map(|&t| {
                 let term = model.terms[t];
-                (term.bearings()[0], term.name(), term.is_pedestal())
+                (term.bearings()[0], term.name(), term.is_pedestal(), None)
             })
             .chain(r.nonlinear.iter().map(|&k| {
                 let p = model.nonlinear[k];
-                (Some(p.bearing()), p.name().to_string(), false)
+                let held = r.held_delays.iter().find(|h| h.nonlinear == k);
+                (Some(p.bearing()), p.name().to_string(), false, held)
             }));
-        for (i, (bearing, name, is_pedestal)) in entries.enumerate() {
+        for (i, (bearing, name, is_pedestal, held)) in entries.enumerate() {
             let Some(bname) = bearing.and_then(|b| prep.bearings.get(b)) else {
                 continue;
             };
-            let (value, se) = (r.inference.estimate[i], r.inference.std_err(i));
+            let value = r.inference.estimate[i];
+            let se = held.map_or(r.inference.std_err(i), |h| h.std_err);
             if is_pedestal {
                 if let Some(p) = pedestals.iter_mut().find(|p| &p.bearing == bname) {
                     p.values.insert(name.clone(), value);
@@ -360,6 +386,9 @@ pub fn report(
                 if let Some(e) = s.parameters.iter_mut().find(|e| e.name == name) {
                     e.value = value;
                     e.std_err = se;
+                    if let (Some(h), Some(sh)) = (held, s.held.as_mut()) {
+                        sh.tau_std_err_damping_zero = Some(h.std_err_held);
+                    }
                 }
             }
         }

@@ -129,6 +129,12 @@ pub struct HeldDamping {
     /// adds c/k = 2ζ/ω_n to it: with the damping held at zero, τ is a lower
     /// bound (ω_n = √(k/m) [rad/s] from the step's refit).
     pub delay_per_percent_damping: Vec<(String, f64)>,
+    /// For a delay refitted at the end (`super::ml_final::held_delay`): its
+    /// ± [s] were the held dampings exactly zero. The step's τ ± counts
+    /// them as unknown (the fit with them free, linearised at the held
+    /// values), so it covers the delay a true damping adds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tau_std_err_damping_zero: Option<f64>,
 }
 
 /// What `cand` (the step's winner, refitted as `after`) holds at zero:
@@ -185,6 +191,7 @@ pub(super) fn held_dampings(
     Some(HeldDamping {
         dampings: dirs.into_iter().map(name).collect(),
         delay_per_percent_damping,
+        tau_std_err_damping_zero: None,
     })
 }
 
@@ -207,6 +214,12 @@ impl HeldDamping {
                 s,
                 "     tau is a lower bound: a delay reads as a damping −tau·k, so a true pedestal damping adds c/k = 2ζ/ω_n to it ({})",
                 per.join(", ")
+            );
+        }
+        if let Some(se) = self.tau_std_err_damping_zero {
+            let _ = writeln!(
+                s,
+                "     tau's ± counts the held damping as unknown (the fit with it free); with it exactly 0 the ± would be {se:.1e} s"
             );
         }
     }

@@ -75,7 +75,8 @@ fn z_stats(effect: Effect, n: usize) -> [([f64; 3], [f64; 3]); 2] {
         }
         let mut state = State::fit(&prep, model.clone(), Vec::new()).expect("fit");
         let before = pedestals(&prep, &state).expect("pedestals");
-        let refits = refit(&prep, &mut state);
+        let base = state.model.clone();
+        let refits = refit(&prep, &base, &mut state);
         assert!(refits.iter().any(|r| r.group == [b]), "B1 refitted");
         let mut after = before.clone();
         report(&prep, &state.model, &refits, &mut after, &mut []);
