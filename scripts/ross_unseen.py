@@ -12,7 +12,8 @@ Usage:
   python3 scripts/ross_unseen.py --compare RUN_A RUN_B
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
-NAME: unseen-four (default), unseen-overhung, unseen-train or unseen-flex.
+NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex or
+unseen-five.
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and
@@ -57,6 +58,15 @@ bracket with k_y = 3 k_z. Its speeds are a run-down sampled unevenly (steps
 recorder drop-out); its noise is each sensor's own: probes 0.5 % of
 |phasor| + 0.05 um, pick-ups 1 % + a velocity floor of 1 um/s (largest at
 low speed).
+
+unseen-five is tests/data/ross-unseen-5/unseen-five.toml: a fan rotor on
+two plain bearings with strong cross-coupling (B1 a lightly loaded short
+sleeve bearing, B2 a skew cross-coupled table), a 170 kg wheel overhung
+0.36 m beyond B2, pedestals four times stiffer vertically than
+horizontally, their horizontal resonances (29, 36 Hz) inside the run.
+Its speeds are a coarse run-down table, one speed every 1.5 Hz from 56.1 Hz
+down to 9.6 Hz (32 speeds, below the oil whip onset at 59 Hz); its noise is the largest of the five: 3 % of |phasor|
+plus a floor of 0.3 % of the channel's RMS.
 
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
@@ -287,6 +297,38 @@ MACHINES["unseen-flex"] = {
     "field": ("vel",),
     "d3_effects": False,
     "repo": ("clean-n1", "clean-vel", "clean-d2", "sub-base", "cross", "runout", "delay", "delay-runout", "base"),
+}
+SUB_BASE_FIVE = {"bearing": "B2", "m_y": 250.0, "m_z": 250.0, "k_y": 1.5e8, "k_z": 6.0e7,
+                 "c_y": 4000.0, "c_z": 2000.0}
+FRAME_FIVE = {"name": "skid", "bearings": ["B1", "B2"], "m_y": 600.0, "m_z": 600.0,
+              "k_y": 2.0e8, "k_z": 8.0e7, "c_y": 8000.0, "c_z": 4000.0}
+MACHINES["unseen-five"] = {
+    "data": os.path.join(ROOT, "tests", "data", "ross-unseen-5"),
+    "file": "unseen-five.toml",
+    # a coarse run-down table: one speed logged every 1.5 Hz, 56.1 Hz down
+    # to 9.6 Hz (32 speeds), about as coarse as the lightly damped peaks are
+    # wide; the top speed below the oil whip onset (59 Hz: ROSS's log dec of
+    # the 29 Hz mode crosses zero there, B1's lightly loaded film driving it)
+    "grid": uniform_grid(9.6, 56.1, 1.5),
+    # noisier than the others: 3 % of |phasor| plus a floor of 0.3 % of the
+    # channel's RMS on every channel
+    "noise": {"rel": 0.03, "floor": 0.003},
+    "noisy": "n3",
+    "digits": ("d3", "d12"),
+    "rng": 27_000,
+    "effects": {
+        "sub-base": [("sub_base", SUB_BASE_FIVE)],
+        "table-film": [("worn_film", "B1", 1.0 / 0.85)],
+        "table-scale": [("table_scale", "B2", 1.0 / 1.25, 1.0)],
+        "cross": [("cross", "B1", 0.2)],
+        "runout": [("runout", "B2")],
+        "delay": [("delay", "B1", 150e-6)],
+        "flips": [("flips", ["B1", "B2"])],
+        "outlier": [("outlier", "B1")],
+        "base": [("frame", FRAME_FIVE)],
+    },
+    "d3_effects": False,
+    "repo": ("clean-n3c", "cross"),
 }
 DEFAULT = "unseen-four"
 
