@@ -328,7 +328,7 @@ MACHINES["unseen-five"] = {
         "base": [("frame", FRAME_FIVE)],
     },
     "d3_effects": False,
-    "repo": ("clean-n3c", "cross"),
+    "repo": ("clean-n3", "clean-n3c", "cross", "sub-base"),
 }
 DEFAULT = "unseen-four"
 
