@@ -112,9 +112,9 @@ fn a_sub_base_above_the_range_reads_as_the_apparent_support() {
 /// scripts/bench_unseen.py --machine unseen-five PLINTH DIR 1-10
 /// sub-base`): B2 untrusted 1/10 (3/50 on seeds 11-60), diagnose named
 /// `pedestal_sub_base` 1/10 and was trusted with nothing named 9/10. With
-/// the same runs' noise
-/// scaled (docs/session38-unseen5.md): 1 % noise 5/5 untrusted, 1.5 % 6/10,
-/// 2.1 % 2/10, 3 % 1/10: a limit of the data's power, not a bias.
+/// the same runs' noise scaled (docs/session38-unseen5.md): 1 % noise 5/5
+/// untrusted, 1.5 % 6/10, 2.1 % 2/10, 3 % 1/10: a limit of the data's
+/// power, not a bias.
 #[test]
 #[ignore = "B2 on its sub-base is trusted in 9/10 runs at 3 % noise (docs/session38-unseen5.md)"]
 fn a_sub_base_under_b2_is_untrusted() {
