@@ -96,8 +96,20 @@ EXPECT_FLEX = {
     "delay-runout": ([("sensor_delay", "B1"), ("probe_runout", "B2")], {"B1", "B2"}),
     "base": ([("foundation_coupling", "")], None),
 }
+EXPECT_FIVE = {
+    "clean-w1": ([], set()),
+    "sub-base": ([("pedestal_sub_base", "B2")], {"B2"}),
+    "table-film": ([("bearing_coefficients", "B1")], {"B1"}),
+    "table-scale": ([("bearing_coefficients", "B2")], {"B2"}),
+    "cross": ([("pedestal_cross_coupling", "B1")], {"B1"}),
+    "runout": ([("probe_runout", "B2")], {"B2"}),
+    "delay": ([("sensor_delay", "B1")], {"B1"}),
+    "flips": ([], set()),
+    "outlier": ([], set()),
+    "base": ([("foundation_coupling", "")], None),
+}
 EXPECT = {"unseen-four": EXPECT_FOUR, "unseen-overhung": EXPECT_OVERHUNG, "unseen-train": EXPECT_TRAIN,
-          "unseen-flex": EXPECT_FLEX}
+          "unseen-flex": EXPECT_FLEX, "unseen-five": EXPECT_FIVE}
 
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))

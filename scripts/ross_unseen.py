@@ -12,7 +12,8 @@ Usage:
   python3 scripts/ross_unseen.py --compare RUN_A RUN_B
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
-NAME: unseen-four (default), unseen-overhung, unseen-train or unseen-flex.
+NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex or
+unseen-five.
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and
@@ -58,6 +59,15 @@ recorder drop-out); its noise is each sensor's own: probes 0.5 % of
 |phasor| + 0.05 um, pick-ups 1 % + a velocity floor of 1 um/s (largest at
 low speed).
 
+unseen-five is tests/data/ross-unseen-5/unseen-five.toml: a fan rotor on
+two plain bearings with strong cross-coupling (B1 a lightly loaded short
+sleeve bearing, B2 a skew cross-coupled table), a 170 kg wheel overhung
+0.36 m beyond B2, pedestals four times stiffer vertically than
+horizontally, their horizontal resonances (29, 36 Hz) inside the run.
+Its speeds are a coarse run-down table, one speed every 1.5 Hz from 56.1 Hz
+down to 9.6 Hz (32 speeds, below the oil whip onset at 59 Hz); its noise is the largest of the five: 3 % of |phasor|
+plus a floor of 0.3 % of the channel's RMS.
+
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
 BearingElement from the shaft node to a PointMass (n_link, the pedestal),
@@ -71,7 +81,8 @@ docs/formats.md directly (rel = rotor - pedestal, ped absolute, y vertical,
 z horizontal, q(t) = Re{Q e^{iWt}}; the axis map Plinth (y, z) -> ROSS
 (x, y) is make_reference.py's, a proper rotation).
 
-Cases: `--cases` lists them; each machine's table (MACHINES below) says
+Cases: `--cases` lists them; each machine's table (MACHINES in
+scripts/ross_unseen_machines.py) says
 what each case does. Noise kinds: clean-w1 / clean-h1 (the machine's
 noise, 7 digits, no columns), clean-w1c / clean-h1c (with the *_sd noise
 columns), clean-dN (no noise, N significant digits, the speed grid shifted
@@ -103,192 +114,14 @@ warnings.filterwarnings("ignore")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests", "reference", "ross"))
 from make_reference import disks_of, node_of, ocvirk, shaft_elements  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+# the machines (grids, noise laws, cases); FRAME_FOUR is bench_table_combos.py's
+from ross_unseen_machines import DEFAULT, FRAME_FOUR, MACHINES  # noqa: E402,F401
 
 CHANNELS = ("rel_y", "rel_z", "ped_y", "ped_z")
 RUNOUT_SIZE = 0.2           # of the median |rel| of the bearing
 OUTLIER = 0.15             # an outlier's error on each channel, of the channel's RMS
 KEYS = ("kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz")
-
-
-def uniform_grid(first, last, step):
-    """Speeds first..last [Hz] in steps of `step`, shifted 0.137 Hz per
-    seed in the digit cases."""
-    def speeds(shifted, seed):
-        shift = 0.137 * (seed - 1) if shifted else 0.0
-        n = int(round((last - first) / step)) + 1
-        return np.round(first + shift + step * np.arange(n), 4)
-    return speeds
-
-
-def coast_down_grid(top, bottom, n):
-    """A windage-braked coast-down sampled every few revolutions: n speeds
-    from `top` down to `bottom` [Hz] in a constant ratio (listed rising),
-    the phase of the sampling shifted by the seed in the digit cases."""
-    ratio = (bottom / top) ** (1.0 / (n - 1))
-    def speeds(shifted, seed):
-        frac = (0.37 * (seed - 1)) % 1.0 if shifted else 0.0
-        return np.round(np.sort(top * ratio ** (np.arange(n) + frac)), 3)
-    return speeds
-
-
-def run_up_grid(bottom, top, n, skipped):
-    """A run-up at constant acceleration sampled every few revolutions:
-    Omega^2 grows by the same step per sample, so n speeds from `bottom` to
-    `top` [Hz] spaced ever closer at high speed; the speeds inside the band
-    `skipped` = (lo, hi) [Hz] are missing (the operator drove fast through
-    it); the phase of the sampling shifted by the seed in the digit cases."""
-    def speeds(shifted, seed):
-        frac = (0.37 * (seed - 1)) % 1.0 if shifted else 0.0
-        sq = bottom**2 + (top**2 - bottom**2) * (np.arange(n) + frac) / (n - 1)
-        s = np.round(np.sqrt(sq), 3)
-        return s[(s < skipped[0]) | (s > skipped[1])]
-    return speeds
-
-
-def run_down_grid(top, bottom, n, gap, seed=4_404):
-    """A run-down recorded by an instrument that samples when it can: n
-    speeds from `top` down to `bottom` [Hz] (listed rising) with uneven
-    steps (each step 0.3-1.7 of the mean, fixed by `seed`, the same in every
-    run), the speeds inside the band `gap` = (lo, hi) [Hz] lost (a recorder
-    drop-out); the sampling shifted by a fraction of a mean step per seed in
-    the digit cases."""
-    u = np.random.default_rng(seed).uniform(0.3, 1.7, n - 1)
-    p = np.concatenate([[0.0], np.cumsum(u)]) / np.sum(u)
-    def speeds(shifted, s):
-        frac = (0.37 * (s - 1)) % 1.0 if shifted else 0.0
-        q = np.clip(p + frac * np.mean(u) / np.sum(u), 0.0, 1.0)
-        v = np.unique(np.round(bottom + (top - bottom) * q, 3))
-        return v[(v < gap[0]) | (v > gap[1])]
-    return speeds
-
-
-SUB_BASE_FOUR = {"bearing": "B3", "m_y": 180.0, "m_z": 160.0, "k_y": 2.4e7, "k_z": 2.0e7,
-                 "c_y": 2500.0, "c_z": 2000.0}
-FRAME_FOUR = {"name": "frame", "bearings": ["B1", "B2"], "m_y": 350.0, "m_z": 350.0,
-              "k_y": 1.6e7, "k_z": 2.2e7, "c_y": 3000.0, "c_z": 2500.0}
-SUB_BASE_OVERHUNG = {"bearing": "B1", "m_y": 140.0, "m_z": 140.0, "k_y": 3.0e7, "k_z": 1.0e7,
-                     "c_y": 3000.0, "c_z": 1500.0}
-SKID_OVERHUNG = {"name": "skid", "bearings": ["B1", "B2"], "m_y": 500.0, "m_z": 500.0,
-                 "k_y": 6.0e7, "k_z": 2.0e7, "c_y": 4000.0, "c_z": 2000.0}
-
-SUB_BASE_TRAIN = {"bearing": "B2", "m_y": 150.0, "m_z": 150.0, "k_y": 2.0e8, "k_z": 1.2e8,
-                  "c_y": 5000.0, "c_z": 3000.0}
-FRAME_TRAIN = {"name": "baseplate", "bearings": ["B2", "B3"], "m_y": 400.0, "m_z": 400.0,
-               "k_y": 1.2e8, "k_z": 6.0e7, "c_y": 6000.0, "c_z": 4000.0}
-
-SUB_BASE_FLEX = {"bearing": "B1", "m_y": 600.0, "m_z": 600.0, "k_y": 4.0e8, "k_z": 3.0e8,
-                 "c_y": 2.0e4, "c_z": 1.5e4}
-FRAME_FLEX = {"name": "bedplate", "bearings": ["B1", "B2"], "m_y": 900.0, "m_z": 900.0,
-              "k_y": 3.0e8, "k_z": 1.5e8, "c_y": 2.0e4, "c_z": 1.2e4}
-
-# Per machine: its file and data directory, speed grid, noise (sigma = rel
-# |phasor| + floor RMS of the channel), the seed base of its random numbers,
-# its cases (effect case: list of effects, applied in order) and the runs
-# kept in the repository (seed 1).
-MACHINES = {
-    "unseen-four": {
-        "data": os.path.join(ROOT, "tests", "data", "ross-unseen"),
-        "file": "unseen-four.toml",
-        "grid": uniform_grid(6.0, 126.0, 1.25),
-        "noise": {"rel": 0.0, "floor": 0.01},
-        "noisy": "w1",
-        "digits": ("d3",),
-        "rng": 17_000,
-        "effects": {
-            "sub-base": [("sub_base", SUB_BASE_FOUR)],
-            "table": [("worn_film", "B2", 1.0 / 0.85)],
-            "cross": [("cross", "B4", 0.2)],
-            "runout": [("runout", "B3")],
-            "flips": [("flips", ["B1"])],
-            "base-runout": [("frame", FRAME_FOUR), ("runout", "B2")],
-        },
-        "d3_effects": True,
-        "repo": ("clean-w1c", "clean-d3", "sub-base", "sub-base-d3", "table", "cross", "runout",
-                 "flips", "base-runout-d3"),
-    },
-    "unseen-overhung": {
-        "data": os.path.join(ROOT, "tests", "data", "ross-unseen-2"),
-        "file": "unseen-overhung.toml",
-        "grid": coast_down_grid(150.0, 8.0, 120),
-        "noise": {"rel": 0.01, "floor": 0.001},
-        "noisy": "h1",
-        "digits": ("d3", "d2", "d12"),
-        "rng": 23_000,
-        "effects": {
-            "sub-base": [("sub_base", SUB_BASE_OVERHUNG)],
-            "table-film": [("worn_film", "B2", 1.0 / 0.85)],
-            "table-scale": [("table_scale", "B1", 1.0 / 1.25, 1.0)],
-            "cross": [("cross", "B1", 0.2)],
-            "runout": [("runout", "B2")],
-            "delay": [("delay", "B1", 150e-6)],
-            "flips": [("flips", ["B1", "B2"])],
-            "outlier": [("outlier", "B2")],
-            "base-runout-delay": [("frame", SKID_OVERHUNG), ("runout", "B1"), ("delay", "B2", 150e-6)],
-            "cross-runout": [("cross", "B2", 0.2), ("runout", "B1")],
-        },
-        "d3_effects": False,
-        "repo": ("clean-h1", "clean-h1c", "clean-d3", "sub-base", "table-film", "table-scale", "cross", "runout",
-                 "delay", "flips", "outlier", "base-runout-delay", "cross-runout"),
-    },
-    "unseen-train": {
-        "data": os.path.join(ROOT, "tests", "data", "ross-unseen-3"),
-        "file": "unseen-train.toml",
-        "grid": run_up_grid(5.0, 85.0, 150, (38.0, 46.0)),
-        # pedestal pick-ups: 2 % of |phasor|, no floor; proximity probes: a
-        # constant floor of 0.5 % of the channel's RMS
-        "noise": {"rel": {"rel": 0.0, "floor": 0.005}, "ped": {"rel": 0.02, "floor": 0.0}},
-        "noisy": "p2",
-        "digits": ("d3", "dmix", "d12"),
-        "mixed_digits": {"B1": 2, "B2": 3, "B3": 4},
-        "rng": 24_000,
-        "effects": {
-            "sub-base": [("sub_base", SUB_BASE_TRAIN)],
-            "table-film": [("worn_film", "B2", 1.0 / 0.85)],
-            "table-scale": [("table_scale", "B3", 1.0 / 1.25, 1.0)],
-            "cross": [("cross", "B3", 0.2)],
-            "runout": [("runout", "B1")],
-            "delay": [("delay", "B2", 150e-6)],
-            "flips": [("flips", ["B1", "B2", "B3"])],
-            "outlier": [("outlier", "B3")],
-            "base-runout": [("frame", FRAME_TRAIN), ("runout", "B1")],
-            "cross-delay": [("cross", "B2", 0.2), ("delay", "B3", 150e-6)],
-        },
-        "d3_effects": False,
-        "repo": ("clean-p2", "clean-p2c", "clean-dmix", "sub-base", "table-film", "table-scale", "cross", "runout",
-                 "delay", "outlier", "base-runout"),
-    },
-}
-MACHINES["unseen-flex"] = {
-    "data": os.path.join(ROOT, "tests", "data", "ross-unseen-4"),
-    "file": "unseen-flex.toml",
-    "grid": run_down_grid(110.0, 12.0, 110, (55.0, 61.0)),
-    # per kind of sensor, the sensor's own floor, not a fraction of the
-    # signal: proximity probes sigma = 0.5 % of |phasor| + 0.05 um; seismic
-    # pick-ups 1 % of |phasor| + a velocity floor of 1 um/s (1.3e-8 m at
-    # 12 Hz): B1's pick-ups on the stiff block read near it at low speed
-    "noise": {"rel": {"rel": 0.005, "floor": 0.0, "abs": 5e-8},
-              "ped": {"rel": 0.01, "floor": 0.0, "vel": 1e-6}},
-    "noisy": "n1",
-    "digits": ("d2", "d3", "d12"),
-    "rng": 26_000,
-    "effects": {
-        "sub-base": [("sub_base", SUB_BASE_FLEX)],
-        "table-scale": [("table_scale", "B2", 1.0 / 1.25, 1.0)],
-        "cross": [("cross", "B2", 0.2)],
-        "runout": [("runout", "B1")],
-        "delay": [("delay", "B2", 150e-6)],
-        "flips": [("flips", ["B1"])],
-        "outlier": [("outlier", "B2")],
-        "delay-runout": [("delay", "B1", 150e-6), ("runout", "B2")],
-        "base": [("frame", FRAME_FLEX)],
-    },
-    # clean-vel: the machine's noise, written as a field instrument's 1X
-    # vector table (FIELD_LAYOUT) for `plinth import`
-    "field": ("vel",),
-    "d3_effects": False,
-    "repo": ("clean-n1", "clean-vel", "clean-d2", "sub-base", "cross", "runout", "delay", "delay-runout", "base"),
-}
-DEFAULT = "unseen-four"
 
 
 def noise_sd(m, channel, v, speeds):
