@@ -41,7 +41,7 @@ fn diagnosis(run: &RunDir) -> Diagnosis {
 /// seeds 1-10), an `ok` beyond 3 ± on 6/110 clean-n3 and 2/110 clean-n3c
 /// runs (not seed 1); diagnose named something on 1/130 (clean-n3 and
 /// clean-d3 seeds 1-10, clean-n3c 1-110; clean-n3c seed 2: a
-/// `sensor_delay` at B1, trusted; docs/session38-unseen5.md).
+/// `sensor_delay` at B1, trusted; docs/unseen.md "Session 38 (2026-12-04, helper unseen5)").
 #[test]
 fn clean_runs_are_flagged_by_nothing_and_ok_means_right() {
     for case in ["clean-n3", "clean-n3c"] {
@@ -112,11 +112,11 @@ fn a_sub_base_above_the_range_reads_as_the_apparent_support() {
 /// scripts/bench_unseen.py --machine unseen-five PLINTH DIR 1-10
 /// sub-base`): B2 untrusted 1/10 (3/50 on seeds 11-60), diagnose named
 /// `pedestal_sub_base` 1/10 and was trusted with nothing named 9/10. With
-/// the same runs' noise scaled (docs/session38-unseen5.md): 1 % noise 5/5
+/// the same runs' noise scaled (docs/unseen.md "Session 38 (2026-12-04, helper unseen5)"): 1 % noise 5/5
 /// untrusted, 1.5 % 6/10, 2.1 % 2/10, 3 % 1/10: a limit of the data's
 /// power, not a bias.
 #[test]
-#[ignore = "B2 on its sub-base is trusted in 9/10 runs at 3 % noise (docs/session38-unseen5.md)"]
+#[ignore = "B2 on its sub-base is trusted in 9/10 runs at 3 % noise (docs/unseen.md, Session 38, helper unseen5)"]
 fn a_sub_base_under_b2_is_untrusted() {
     let run = stored("sub-base");
     let id = identify(&run);
