@@ -27,6 +27,11 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 /// undecidable: module docs).
 pub const CROSS_MIN_BEARINGS: usize = 3;
 
+/// Degrees of freedom of r/s's tail at the run's first and last
+/// [`SCREEN_GAP`] + 1 speeds, whose subspace is an extrapolation
+/// ([`surrounded`]) [-]: measured on clean runs, docs/trust-bad-speeds.md.
+pub const EDGE_DOF: f64 = 2.0;
+
 /// Fewest window speeds on each side of a tested speed [-].
 pub const CROSS_SIDE: usize = 6;
 
@@ -76,15 +81,17 @@ pub(super) const SCREEN_GAP: usize = FLIP_BLOCK - 1;
 ///
 /// the block and bearing with the largest gain of that likelihood is
 /// negated first, the subspaces and scales are measured again, and so on.
-/// A speed negated for one bearing is not tested again. A block is named
-/// only when the negation of one bearing alone passes every condition:
-/// when two bearings' do, the data do not say which one flipped (as with
-/// two bearings). At the run's first and last [`SCREEN_GAP`] + 1 speeds,
-/// whose window lies on one side of them ([`surrounded`]), the first
-/// condition's sum is over the studentised r/((1 + ℓ)·s′): there the
-/// subspace is an extrapolation and its error is part of r (the halving
-/// stays on r/s: dividing the negated reading by its own, larger, 1 + ℓ
-/// would favour negations that move it further out of the span).
+/// A speed negated for one bearing is not tested again. When the
+/// negations of two bearings or more pass every condition, the best is
+/// named only when its gain beats every other's by the margin
+/// 2 ln(n/[`OUTLIER_FAMILY_RATE`]) ([`Limits::named`]); else the data do
+/// not say which one flipped (as with two bearings). At the run's first
+/// and last [`SCREEN_GAP`] + 1 speeds, whose window lies on one side of
+/// them ([`surrounded`]), the subspace is an extrapolation and r/s has a
+/// heavier tail than χ²(2(C − D)): measured on clean runs, that of
+/// χ²([`EDGE_DOF`]) with a median no larger; the first condition takes
+/// each such speed's r/s over [`Limits::edge_scale`] as χ²([`EDGE_DOF`])
+/// in the block's sum.
 pub fn cross_bearing_flips(
     bearings: &[&[Observation]],
     listed: &[&[f64]],
@@ -136,7 +143,7 @@ pub fn cross_bearing_flips(
                             .map(|gain| (b, gain))
                     })
                     .collect();
-                if let [(b, gain)] = passing[..] {
+                if let Some((b, gain)) = limits.named(&passing) {
                     if best.as_ref().is_none_or(|(_, _, g)| gain > *g) {
                         best = Some((b, block.clone(), gain));
                     }
@@ -164,10 +171,8 @@ pub fn cross_bearing_flips(
 /// neither χ²(2(C − D)) over its scale nor owed to one bearing (measured
 /// on the third unseen machine's clean run-up,
 /// docs/trust-bad-speeds.md "Session 37": over 300 runs the 99.9 % quantile of
-/// r/s at the first four speeds is 9.4 times its median, χ²(12)'s is 2.9;
-/// 10 of 1000 runs named a flip at the first three speeds, and in 7 of
-/// them negating two or three bearings passed every condition; their
-/// studentised r stood at 25-77 against the plain 44-85).
+/// r/s at the first four speeds is 9.4 times its median, χ²(12)'s is 2.9,
+/// χ²(2)'s 10.0; docs/session38-flipmargin17.md for the last four).
 fn surrounded(n: usize, i: usize) -> bool {
     i > SCREEN_GAP && i + SCREEN_GAP + 1 < n
 }
@@ -243,9 +248,18 @@ pub(super) struct Limits {
     screen: f64,
     /// Its [`CONSISTENT_QUANTILE`] [-].
     consistent: f64,
-    /// Per block length L (index), the χ²(dof·L) quantile at
-    /// [`OUTLIER_FAMILY_RATE`]/n [-].
-    block_limit: Vec<f64>,
+    /// Per block length L and number e of its speeds at the run's ends
+    /// ([`surrounded`]) (indices), the χ²(dof·(L − e) + [`EDGE_DOF`]·e)
+    /// quantile at [`OUTLIER_FAMILY_RATE`]/n [-]: the limit of the block's
+    /// Σ r/s, each end speed's r/s over [`Limits::edge_scale`].
+    edge_limit: Vec<Vec<f64>>,
+    /// The median of χ²(dof) over that of χ²([`EDGE_DOF`]) [-]: at an end
+    /// speed r/s over it is taken as χ²([`EDGE_DOF`]).
+    edge_scale: f64,
+    /// The least gain of −2 ln L of the best bearing's negation over the
+    /// second best's for the best to be named when both pass,
+    /// 2 ln(n/[`OUTLIER_FAMILY_RATE`]) [-].
+    margin: f64,
 }
 
 impl Limits {
@@ -254,19 +268,42 @@ impl Limits {
     pub(super) fn new(nb: usize, n: usize) -> Option<Self> {
         let dof = (2 * (4 * nb).saturating_sub(2 * nb)) as f64;
         let chi2 = ChiSquared::new(dof).ok()?;
+        let rate = OUTLIER_FAMILY_RATE / n.max(1) as f64;
+        let quantile =
+            |k: f64| ChiSquared::new(k).map_or(f64::INFINITY, |d| d.inverse_cdf(1.0 - rate));
+        let null_median = chi2.inverse_cdf(0.5);
         Some(Limits {
             dof,
-            null_median: chi2.inverse_cdf(0.5),
+            null_median,
             screen: chi2.inverse_cdf(SCREEN_QUANTILE),
             consistent: chi2.inverse_cdf(CONSISTENT_QUANTILE),
-            block_limit: (0..=FLIP_BLOCK)
+            edge_limit: (0..=FLIP_BLOCK)
                 .map(|l| {
-                    ChiSquared::new(dof * l.max(1) as f64).map_or(f64::INFINITY, |d| {
-                        d.inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / n.max(1) as f64)
-                    })
+                    let l = l.max(1);
+                    (0..=l)
+                        .map(|e| quantile(dof * (l - e) as f64 + EDGE_DOF * e as f64))
+                        .collect()
                 })
                 .collect(),
+            edge_scale: null_median / ChiSquared::new(EDGE_DOF).ok()?.inverse_cdf(0.5),
+            margin: -2.0 * rate.ln(),
         })
+    }
+
+    /// The bearing (and its gain) [`cross_bearing_flips`] names among
+    /// those whose negation passes every condition (`passing`: bearing,
+    /// gain of −2 ln L): the one when one passes; the best when its gain
+    /// beats every other's by [`Limits::margin`]; else none. The margin is
+    /// the universal bound on a likelihood ratio: when bearing c is the
+    /// one flipped, the odds of "b flipped" against it reach k with
+    /// probability at most 1/k, k = n/[`OUTLIER_FAMILY_RATE`].
+    pub(super) fn named(&self, passing: &[(usize, f64)]) -> Option<(usize, f64)> {
+        let best = passing.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1))?;
+        passing
+            .iter()
+            .filter(|(b, _)| *b != best.0)
+            .all(|(_, g)| best.1 - g >= self.margin)
+            .then_some(best)
     }
 
     /// The hypothesis "the bearings `which` are negated at the speeds
@@ -287,10 +324,11 @@ impl Limits {
         // −2 ln L of a reading (r, ℓ) at speed j, up to a constant.
         let nll =
             |(r, l): (f64, f64), j: usize| r / ((1.0 + l) * scale_s[j]) + self.dof * l.ln_1p();
-        // Σ r/s as read (against the limit: studentised where the
-        // subspace is extrapolated, [`surrounded`]), as read and negated
-        // (plain, for the halving).
+        // Σ r/s as read (against the limit; where the subspace is
+        // extrapolated, [`surrounded`], over the edge scale), as read and
+        // negated (for the halving).
         let (mut beyond, mut before, mut after, mut gain) = (0.0, 0.0, 0.0, 0.0);
+        let mut edges = 0;
         let mut agrees = true;
         for j in block.clone() {
             let read = u.residual(&y[j]);
@@ -300,16 +338,17 @@ impl Limits {
             beyond += if surrounded(y.len(), j) {
                 read.0 / scale[j]
             } else {
-                // An extrapolated subspace: its error, about ℓ times the
-                // noise, is part of r.
-                read.0 / ((1.0 + read.1) * scale_s[j])
+                // An extrapolated subspace: r/s has the tail of
+                // χ²(EDGE_DOF), its median that of χ²(2(C − D)) at most.
+                edges += 1;
+                read.0 / (scale[j] * self.edge_scale)
             };
             let (l_read, l_flipped) = (nll(read, j), nll(flipped, j));
             agrees &= flipped.0 / ((1.0 + flipped.1) * scale_s[j]) <= self.consistent
                 && l_flipped < l_read;
             gain += l_read - l_flipped;
         }
-        let named = beyond > self.block_limit[block.len()]
+        let named = beyond > self.edge_limit[block.len()][edges]
             && agrees
             && after < FLIP_RATIO * before
             && gain.is_finite();
@@ -562,6 +601,32 @@ pub(super) mod tests {
                 "{i}: {w:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_best_bearing_is_named_only_by_the_margin_and_the_ends_by_chi2_2() {
+        // 79 speeds (the three-bearing machine's run): margin 2 ln(n/α).
+        let limits = Limits::new(3, 79).expect("limits");
+        let margin = 2.0 * (79.0 / OUTLIER_FAMILY_RATE).ln();
+        assert!((limits.margin - margin).abs() < 1e-9, "{}", limits.margin);
+        assert_eq!(limits.named(&[]), None);
+        assert_eq!(limits.named(&[(2, 5.0)]), Some((2, 5.0)));
+        // Session 37's ambiguous clean blocks: margins 3.3-11.9, none named;
+        // a flip at the run's last speed: ahead by 74 or more.
+        assert_eq!(limits.named(&[(0, 71.2), (1, 59.4), (2, 54.0)]), None);
+        assert_eq!(limits.named(&[(0, 26.9), (1, 117.3)]), Some((1, 117.3)));
+        assert_eq!(limits.named(&[(0, 100.0), (1, 100.0 - margin + 0.1)]), None);
+        // One end speed alone: r/s over the edge scale against χ²(2)'s
+        // quantile at α/n, which is −2 ln(α/n); a block of an interior and
+        // an end speed against χ²(12 + 2).
+        let one = limits.edge_limit[1][1];
+        assert!((one - margin).abs() < 1e-6, "{one} against {margin}");
+        let chi2_2_median = 2.0 * 2f64.ln();
+        assert!((limits.edge_scale - limits.null_median / chi2_2_median).abs() < 1e-9);
+        let mixed = ChiSquared::new(14.0)
+            .expect("χ²")
+            .inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / 79.0);
+        assert!((limits.edge_limit[2][1] - mixed).abs() < 1e-6);
     }
 
     #[test]
