@@ -28,7 +28,8 @@ pub const CROSS_MIN_BEARINGS: usize = 3;
 
 /// Degrees of freedom of r/s's tail at the run's first and last
 /// [`SCREEN_GAP`] + 1 speeds, whose subspace is an extrapolation
-/// ([`surrounded`]) [-]: measured on clean runs, docs/trust-bad-speeds.md.
+/// ([`surrounded`]) [-]: measured on clean runs, docs/trust-bad-speeds.md
+/// "Session 37" and docs/session38-flipmargin17.md.
 pub const EDGE_DOF: f64 = 2.0;
 
 /// Fewest window speeds on each side of a tested speed [-].
@@ -86,11 +87,14 @@ pub(super) const SCREEN_GAP: usize = FLIP_BLOCK - 1;
 /// 2 ln(n/[`OUTLIER_FAMILY_RATE`]) ([`Limits::named`]); else the data do
 /// not say which one flipped (as with two bearings). At the run's first
 /// and last [`SCREEN_GAP`] + 1 speeds, whose window lies on one side of
-/// them ([`surrounded`]), the subspace is an extrapolation and r/s has a
-/// heavier tail than χ²(2(C − D)): measured on clean runs, that of
-/// χ²([`EDGE_DOF`]) with a median no larger; the first condition takes
-/// each such speed's r/s over [`Limits::edge_scale`] as χ²([`EDGE_DOF`])
-/// in the block's sum.
+/// them ([`surrounded`]), the subspace is an extrapolation and r/s is not
+/// χ²(2(C − D)) (measured on clean runs: at the first speeds the tail of
+/// χ²(2) at a smaller median; at the last a tail lighter than that at a
+/// median 3-18 times larger; docs/session38-flipmargin17.md); the first
+/// condition takes each such speed's r/s over [`Limits::edge_scale`] as
+/// χ²([`EDGE_DOF`]) in the block's sum, a limit above every clean end
+/// reading of the three-bearing machines measured, not of unseen-four's
+/// last speeds, where the other conditions hold.
 pub fn cross_bearing_flips(
     bearings: &[&[Observation]],
     listed: &[&[f64]],

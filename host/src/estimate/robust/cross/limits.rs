@@ -114,8 +114,8 @@ impl Limits {
             beyond += if surrounded(y.len(), j) {
                 read.0 / scale[j]
             } else {
-                // An extrapolated subspace: r/s has the tail of
-                // χ²(EDGE_DOF), its median that of χ²(2(C − D)) at most.
+                // An extrapolated subspace: r/s taken as χ²(EDGE_DOF) at
+                // the median of χ²(2(C − D)) ([`super::cross_bearing_flips`]).
                 edges += 1;
                 read.0 / (scale[j] * self.edge_scale)
             };
