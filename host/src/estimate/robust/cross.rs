@@ -14,18 +14,23 @@
 //! two bearings, cannot tell which one flipped (negating either is the
 //! same up to a common sign): both are left to the test in speed.
 
-use super::flips::{
-    channel_weights, readings, CONSISTENT_QUANTILE, FLIP_BLOCK, FLIP_RATIO, FLIP_WINDOW,
-    SCREEN_QUANTILE,
-};
-use super::{window_medians, Observation, OUTLIER_FAMILY_RATE};
+mod limits;
+
+use super::flips::{channel_weights, readings, FLIP_BLOCK, FLIP_WINDOW};
+use super::{window_medians, Observation};
+pub(super) use limits::Limits;
 use nalgebra::DMatrix;
 use num_complex::Complex;
-use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 /// Fewest bearings the test judges [-] (with two, which one flipped is
 /// undecidable: module docs).
 pub const CROSS_MIN_BEARINGS: usize = 3;
+
+/// Degrees of freedom of r/s's tail at the run's first and last
+/// [`SCREEN_GAP`] + 1 speeds, whose subspace is an extrapolation
+/// ([`surrounded`]) [-]: measured on clean runs, docs/trust-bad-speeds.md
+/// "Session 37" and docs/session38-flipmargin17.md.
+pub const EDGE_DOF: f64 = 2.0;
 
 /// Fewest window speeds on each side of a tested speed [-].
 pub const CROSS_SIDE: usize = 6;
@@ -76,15 +81,20 @@ pub(super) const SCREEN_GAP: usize = FLIP_BLOCK - 1;
 ///
 /// the block and bearing with the largest gain of that likelihood is
 /// negated first, the subspaces and scales are measured again, and so on.
-/// A speed negated for one bearing is not tested again. A block is named
-/// only when the negation of one bearing alone passes every condition:
-/// when two bearings' do, the data do not say which one flipped (as with
-/// two bearings). At the run's first and last [`SCREEN_GAP`] + 1 speeds,
-/// whose window lies on one side of them ([`surrounded`]), the first
-/// condition's sum is over the studentised r/((1 + ℓ)·s′): there the
-/// subspace is an extrapolation and its error is part of r (the halving
-/// stays on r/s: dividing the negated reading by its own, larger, 1 + ℓ
-/// would favour negations that move it further out of the span).
+/// A speed negated for one bearing is not tested again. When the
+/// negations of two bearings or more pass every condition, the best is
+/// named only when its gain beats every other's by the margin
+/// 2 ln(n/[`OUTLIER_FAMILY_RATE`]) ([`Limits::named`]); else the data do
+/// not say which one flipped (as with two bearings). At the run's first
+/// and last [`SCREEN_GAP`] + 1 speeds, whose window lies on one side of
+/// them ([`surrounded`]), the subspace is an extrapolation and r/s is not
+/// χ²(2(C − D)) (measured on clean runs: at the first speeds the tail of
+/// χ²(2) at a smaller median; at the last a tail lighter than that at a
+/// median 3-18 times larger; docs/session38-flipmargin17.md); the first
+/// condition takes each such speed's r/s over [`Limits::edge_scale`] as
+/// χ²([`EDGE_DOF`]) in the block's sum, a limit above every clean end
+/// reading of the three-bearing machines measured, not of unseen-four's
+/// last speeds, where the other conditions hold.
 pub fn cross_bearing_flips(
     bearings: &[&[Observation]],
     listed: &[&[f64]],
@@ -136,7 +146,7 @@ pub fn cross_bearing_flips(
                             .map(|gain| (b, gain))
                     })
                     .collect();
-                if let [(b, gain)] = passing[..] {
+                if let Some((b, gain)) = limits.named(&passing) {
                     if best.as_ref().is_none_or(|(_, _, g)| gain > *g) {
                         best = Some((b, block.clone(), gain));
                     }
@@ -164,10 +174,8 @@ pub fn cross_bearing_flips(
 /// neither χ²(2(C − D)) over its scale nor owed to one bearing (measured
 /// on the third unseen machine's clean run-up,
 /// docs/trust-bad-speeds.md "Session 37": over 300 runs the 99.9 % quantile of
-/// r/s at the first four speeds is 9.4 times its median, χ²(12)'s is 2.9;
-/// 10 of 1000 runs named a flip at the first three speeds, and in 7 of
-/// them negating two or three bearings passed every condition; their
-/// studentised r stood at 25-77 against the plain 44-85).
+/// r/s at the first four speeds is 9.4 times its median, χ²(12)'s is 2.9,
+/// χ²(2)'s 10.0; docs/session38-flipmargin17.md for the last four).
 fn surrounded(n: usize, i: usize) -> bool {
     i > SCREEN_GAP && i + SCREEN_GAP + 1 < n
 }
@@ -229,91 +237,6 @@ impl Stack {
             }
         }
         stack
-    }
-}
-
-/// The χ² figures of the test across bearings for B bearings and n speeds
-/// ([`cross_bearing_flips`]).
-pub(super) struct Limits {
-    /// Degrees of freedom of a good reading's r/s, 2(C − D) [-].
-    dof: f64,
-    /// Median of χ²(dof) [-].
-    pub(super) null_median: f64,
-    /// Its [`SCREEN_QUANTILE`] [-].
-    screen: f64,
-    /// Its [`CONSISTENT_QUANTILE`] [-].
-    consistent: f64,
-    /// Per block length L (index), the χ²(dof·L) quantile at
-    /// [`OUTLIER_FAMILY_RATE`]/n [-].
-    block_limit: Vec<f64>,
-}
-
-impl Limits {
-    /// The figures for `nb` bearings and `n` speeds; `None` when they
-    /// leave no degree of freedom.
-    pub(super) fn new(nb: usize, n: usize) -> Option<Self> {
-        let dof = (2 * (4 * nb).saturating_sub(2 * nb)) as f64;
-        let chi2 = ChiSquared::new(dof).ok()?;
-        Some(Limits {
-            dof,
-            null_median: chi2.inverse_cdf(0.5),
-            screen: chi2.inverse_cdf(SCREEN_QUANTILE),
-            consistent: chi2.inverse_cdf(CONSISTENT_QUANTILE),
-            block_limit: (0..=FLIP_BLOCK)
-                .map(|l| {
-                    ChiSquared::new(dof * l.max(1) as f64).map_or(f64::INFINITY, |d| {
-                        d.inverse_cdf(1.0 - OUTLIER_FAMILY_RATE / n.max(1) as f64)
-                    })
-                })
-                .collect(),
-        })
-    }
-
-    /// The hypothesis "the bearings `which` are negated at the speeds
-    /// `block`" against the subspace `u` of the window around the block,
-    /// the weighted phasors `y` (per speed), the scales `scale` of r and
-    /// `scale_s` of the studentised r (per speed): `Some(gain)` (the gain
-    /// of −2 ln L) when it is named by [`cross_bearing_flips`]'s three
-    /// conditions, else `None`.
-    pub(super) fn judge(
-        &self,
-        u: &Subspace,
-        y: &[Vec<Complex<f64>>],
-        block: std::ops::Range<usize>,
-        which: &[usize],
-        scale: &[f64],
-        scale_s: &[f64],
-    ) -> Option<f64> {
-        // −2 ln L of a reading (r, ℓ) at speed j, up to a constant.
-        let nll =
-            |(r, l): (f64, f64), j: usize| r / ((1.0 + l) * scale_s[j]) + self.dof * l.ln_1p();
-        // Σ r/s as read (against the limit: studentised where the
-        // subspace is extrapolated, [`surrounded`]), as read and negated
-        // (plain, for the halving).
-        let (mut beyond, mut before, mut after, mut gain) = (0.0, 0.0, 0.0, 0.0);
-        let mut agrees = true;
-        for j in block.clone() {
-            let read = u.residual(&y[j]);
-            let flipped = u.residual(&signed(&y[j], which));
-            before += read.0 / scale[j];
-            after += flipped.0 / scale[j];
-            beyond += if surrounded(y.len(), j) {
-                read.0 / scale[j]
-            } else {
-                // An extrapolated subspace: its error, about ℓ times the
-                // noise, is part of r.
-                read.0 / ((1.0 + read.1) * scale_s[j])
-            };
-            let (l_read, l_flipped) = (nll(read, j), nll(flipped, j));
-            agrees &= flipped.0 / ((1.0 + flipped.1) * scale_s[j]) <= self.consistent
-                && l_flipped < l_read;
-            gain += l_read - l_flipped;
-        }
-        let named = beyond > self.block_limit[block.len()]
-            && agrees
-            && after < FLIP_RATIO * before
-            && gain.is_finite();
-        named.then_some(gain)
     }
 }
 
