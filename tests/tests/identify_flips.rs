@@ -162,7 +162,7 @@ fn one_bearing_flipped_at_the_last_two_speeds_is_listed_exactly() {
     // the only one. There the window's subspace is an extrapolation:
     // r/s's tail is χ²(2)'s (robust::cross, EDGE_DOF), and a second
     // bearing's negation may pass too, the flipped one's likelihood ahead
-    // by far more than the margin 2 ln(n/α) (docs/session38-flipmargin17.md).
+    // by far more than the margin 2 ln(n/α) (docs/trust-bad-speeds.md "Session 38").
     // Main at eacba08 lists nothing for drive at 197.5 and 200 Hz, mid at
     // 200 and outboard at 200.
     let mut missed = Vec::new();

@@ -29,7 +29,7 @@ pub const CROSS_MIN_BEARINGS: usize = 3;
 /// Degrees of freedom of r/s's tail at the run's first and last
 /// [`SCREEN_GAP`] + 1 speeds, whose subspace is an extrapolation
 /// ([`surrounded`]) [-]: measured on clean runs, docs/trust-bad-speeds.md
-/// "Session 37" and docs/session38-flipmargin17.md.
+/// "Session 37" and docs/trust-bad-speeds.md "Session 38".
 pub const EDGE_DOF: f64 = 2.0;
 
 /// Fewest window speeds on each side of a tested speed [-].
@@ -90,7 +90,7 @@ pub(super) const SCREEN_GAP: usize = FLIP_BLOCK - 1;
 /// them ([`surrounded`]), the subspace is an extrapolation and r/s is not
 /// χ²(2(C − D)) (measured on clean runs: at the first speeds the tail of
 /// χ²(2) at a smaller median; at the last a tail lighter than that at a
-/// median 3-18 times larger; docs/session38-flipmargin17.md); the first
+/// median 3-18 times larger; docs/trust-bad-speeds.md "Session 38"); the first
 /// condition takes each such speed's r/s over [`Limits::edge_scale`] as
 /// χ²([`EDGE_DOF`]) in the block's sum, a limit above every clean end
 /// reading of the three-bearing machines measured, not of unseen-four's
@@ -175,7 +175,7 @@ pub fn cross_bearing_flips(
 /// on the third unseen machine's clean run-up,
 /// docs/trust-bad-speeds.md "Session 37": over 300 runs the 99.9 % quantile of
 /// r/s at the first four speeds is 9.4 times its median, χ²(12)'s is 2.9,
-/// χ²(2)'s 10.0; docs/session38-flipmargin17.md for the last four).
+/// χ²(2)'s 10.0; docs/trust-bad-speeds.md "Session 38" for the last four).
 fn surrounded(n: usize, i: usize) -> bool {
     i > SCREEN_GAP && i + SCREEN_GAP + 1 < n
 }
