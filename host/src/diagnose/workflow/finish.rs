@@ -4,7 +4,7 @@
 
 use super::by_name;
 use super::search::{Before, Search};
-use crate::diagnose::bases::{joint_on_base, widen_by_corrections};
+use crate::diagnose::bases::{joint_on_base, scale_to_misfit, widen_by_corrections};
 use crate::diagnose::bearing_table;
 use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::Agreement;
@@ -77,6 +77,7 @@ impl Search<'_> {
                 self.state = state;
                 let mut fit = b.fit.with_profile_errors();
                 widen_by_corrections(&mut fit, &carried);
+                scale_to_misfit(&mut fit);
                 (Some(fit), Some(b.prep))
             }
             None => (None, None),
