@@ -158,6 +158,15 @@ pub fn assert_ok_means_right(run: &RunDir, id: &Identification, label: &str) {
     assert!(wrong.is_empty(), "{label}: {wrong:?}");
 }
 
+/// The delay τ [s] step `step` of `d` reports, with its standard error.
+pub fn delay_of(d: &Diagnosis, step: usize) -> &plinth::diagnose::report::Estimate {
+    d.steps[step]
+        .parameters
+        .iter()
+        .find(|p| p.name == "tau")
+        .expect("tau")
+}
+
 /// Asserts that step `step` of `d` gives the true `sensor_delay` of `run`
 /// (truth.json's `tau_s` [s]) within 3 of its standard errors.
 pub fn assert_delay_in_its_error(run: &RunDir, d: &Diagnosis, step: usize) {
@@ -170,11 +179,7 @@ pub fn assert_delay_in_its_error(run: &RunDir, d: &Diagnosis, step: usize) {
         .find(|e| e.name == "sensor_delay")
         .and_then(|e| e.parameters.get("tau_s").copied())
         .expect("true delay");
-    let tau = d.steps[step]
-        .parameters
-        .iter()
-        .find(|p| p.name == "tau")
-        .expect("tau");
+    let tau = delay_of(d, step);
     assert!(
         (tau.value - truth).abs() < 3.0 * tau.std_err,
         "tau {:.3e} ± {:.1e} s, true {truth:.3e} s",

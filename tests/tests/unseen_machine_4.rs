@@ -297,12 +297,11 @@ fn a_sub_base_under_the_stiff_block_is_untrusted_with_its_reason() {
 /// Measured over seeds 1-5 (`BENCH_JOBS=1 python3 scripts/bench_unseen.py
 /// --machine unseen-flex PLINTH DIR 5 delay-runout`, session 28): named
 /// right and trusted 5/5 (1/5 before, untrusted 4/5).
-#[test]
-fn a_delay_at_the_stiff_block_and_runout_at_the_bracket_are_both_named() {
-    let run = stored("delay-runout");
-    let d = diagnosis(&run);
+/// The delay-runout case's names: the runout at the bracket B2, the delay
+/// at the stiff block B1, nothing else.
+fn assert_runout_at_b2_and_delay_at_b1(d: &Diagnosis) {
     assert_eq!(
-        named(&d),
+        named(d),
         [
             ("probe_runout".to_string(), "B2".to_string()),
             ("sensor_delay".to_string(), "B1".to_string())
@@ -310,6 +309,13 @@ fn a_delay_at_the_stiff_block_and_runout_at_the_bracket_are_both_named() {
         "{}",
         d.to_text()
     );
+}
+
+#[test]
+fn a_delay_at_the_stiff_block_and_runout_at_the_bracket_are_both_named() {
+    let run = stored("delay-runout");
+    let d = diagnosis(&run);
+    assert_runout_at_b2_and_delay_at_b1(&d);
     assert!(d.trusted, "{}", d.to_text());
     let tau = d
         .steps
@@ -339,26 +345,14 @@ fn a_delay_at_the_stiff_block_and_runout_at_the_bracket_are_both_named() {
 fn the_delay_at_the_stiff_block_is_printed_within_its_error_of_the_truth() {
     let run = stored("delay-runout-100");
     let d = diagnosis(&run);
-    assert_eq!(
-        named(&d),
-        [
-            ("probe_runout".to_string(), "B2".to_string()),
-            ("sensor_delay".to_string(), "B1".to_string())
-        ],
-        "{}",
-        d.to_text()
-    );
+    assert_runout_at_b2_and_delay_at_b1(&d);
     let step = d
         .steps
         .iter()
         .position(|s| s.effect == "sensor_delay")
         .expect("sensor_delay");
     unseen::assert_delay_in_its_error(&run, &d, step);
-    let tau = d.steps[step]
-        .parameters
-        .iter()
-        .find(|p| p.name == "tau")
-        .expect("tau");
+    let tau = unseen::delay_of(&d, step);
     assert!(
         tau.std_err < tau.value,
         "tau {:.3e} ± {:.1e}",

@@ -363,7 +363,19 @@ pub fn judge_support(conclusion: &mut Conclusion, prep: &Prepared, steps: &[Step
             conclusion.trusted = false;
         }
     }
-    for (name, why) in support_reasons(prep) {
+    // The base model's own findings at a bearing no kept step acts at:
+    // what the verdict says of each kind.
+    let support = support_reasons(prep)
+        .into_iter()
+        .map(|(n, w)| (n, w, "the pedestal model does not describe the support"));
+    let lack = lack_of_fit_reasons(prep).into_iter().map(|(n, w)| {
+        (
+            n,
+            w,
+            "the base model leaves model error that no effect of the library was found for",
+        )
+    });
+    for (name, why, says) in support.chain(lack) {
         let acted = steps
             .iter()
             .any(|s| s.dropped.is_none() && acts_at(s, &name));
@@ -371,20 +383,7 @@ pub fn judge_support(conclusion: &mut Conclusion, prep: &Prepared, steps: &[Step
             continue;
         }
         conclusion.verdict += &format!(
-            " But at bearing {name} the pedestal model does not describe the support (reasons below): the identified parameters are not to be trusted."
-        );
-        conclusion.reasons.push(why);
-        conclusion.trusted = false;
-    }
-    for (name, why) in lack_of_fit_reasons(prep) {
-        let acted = steps
-            .iter()
-            .any(|s| s.dropped.is_none() && acts_at(s, &name));
-        if acted {
-            continue;
-        }
-        conclusion.verdict += &format!(
-            " But at bearing {name} the base model leaves model error that no effect of the library was found for (reasons below): the identified parameters are not to be trusted."
+            " But at bearing {name} {says} (reasons below): the identified parameters are not to be trusted."
         );
         conclusion.reasons.push(why);
         conclusion.trusted = false;
