@@ -363,19 +363,7 @@ pub fn judge_support(conclusion: &mut Conclusion, prep: &Prepared, steps: &[Step
             conclusion.trusted = false;
         }
     }
-    // The base model's own findings at a bearing no kept step acts at:
-    // what the verdict says of each kind.
-    let support = support_reasons(prep)
-        .into_iter()
-        .map(|(n, w)| (n, w, "the pedestal model does not describe the support"));
-    let lack = lack_of_fit_reasons(prep).into_iter().map(|(n, w)| {
-        (
-            n,
-            w,
-            "the base model leaves model error that no effect of the library was found for",
-        )
-    });
-    for (name, why, says) in support.chain(lack) {
+    for (name, why, says) in base_model_findings(prep) {
         let acted = steps
             .iter()
             .any(|s| s.dropped.is_none() && acts_at(s, &name));
@@ -388,6 +376,26 @@ pub fn judge_support(conclusion: &mut Conclusion, prep: &Prepared, steps: &[Step
         conclusion.reasons.push(why);
         conclusion.trusted = false;
     }
+}
+
+/// (bearing, reason, what the verdict says of it) for every bearing of
+/// `prep` whose base model fails the support-mode test
+/// ([`support_reasons`]) or the lack-of-fit rule
+/// ([`lack_of_fit_reasons`]): the bearings [`judge_support`] untrusts where
+/// no kept step acts, and the machine check's unexplained ones when the
+/// step at them does not lower the machine-level gap.
+pub fn base_model_findings(prep: &Prepared) -> Vec<(String, String, &'static str)> {
+    let support = support_reasons(prep)
+        .into_iter()
+        .map(|(n, w)| (n, w, "the pedestal model does not describe the support"));
+    let lack = lack_of_fit_reasons(prep).into_iter().map(|(n, w)| {
+        (
+            n,
+            w,
+            "the base model leaves model error that no effect of the library was found for",
+        )
+    });
+    support.chain(lack).collect()
 }
 
 /// (bearing, reason) for every bearing of `prep` whose base model fails

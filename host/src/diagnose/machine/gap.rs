@@ -165,8 +165,7 @@ pub struct MachineCheck {
     pub replaced: Option<String>,
     /// The bearings whose base model failed the support-mode test or the
     /// lack-of-fit rule, with the reason
-    /// ([`crate::diagnose::trust::support_reasons`],
-    /// [`crate::diagnose::trust::lack_of_fit_reasons`]): unexplained again
+    /// ([`crate::diagnose::trust::base_model_findings`]): unexplained again
     /// when the step at them does not lower the machine-level gap.
     pub support: Vec<(String, String)>,
 }
@@ -237,11 +236,10 @@ impl MachineCheck {
         let foundation = (outcome.after_steps.last()).is_some_and(|(_, b)| b.is_some());
         Ok(Self {
             replaced: replaced_bases(machine, &prep.bearings, foundation),
-            support: {
-                let mut model = crate::diagnose::trust::support_reasons(prep);
-                model.extend(crate::diagnose::trust::lack_of_fit_reasons(prep));
-                model
-            },
+            support: crate::diagnose::trust::base_model_findings(prep)
+                .into_iter()
+                .map(|(bearing, why, _)| (bearing, why))
+                .collect(),
             gap_before,
             gap_refitted,
             gaps_after,

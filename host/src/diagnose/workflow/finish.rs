@@ -53,9 +53,8 @@ impl Search<'_> {
         // Every group with an effect on rigid ground refitted by maximum
         // likelihood, its ± from the same inference (`ml_final::refit`).
         let ml_refits = if self.on_base.is_none() {
-            let base = self.states.first().map(|s| s.model.clone());
-            let r = match base {
-                Some(base) => ml_final::refit(prep, &base, &mut self.state),
+            let r = match self.states.first() {
+                Some(base) => ml_final::refit(prep, &base.model, &mut self.state),
                 None => Vec::new(),
             };
             if let Some(last) = self.states.last_mut() {

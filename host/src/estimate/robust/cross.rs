@@ -29,7 +29,7 @@ pub const CROSS_MIN_BEARINGS: usize = 3;
 /// Degrees of freedom of r/s's tail at the run's first and last
 /// [`SCREEN_GAP`] + 1 speeds, whose subspace is an extrapolation
 /// ([`surrounded`]) [-]: measured on clean runs, docs/trust-bad-speeds.md
-/// "Session 37" and docs/trust-bad-speeds.md "Session 38".
+/// "Session 37" and "Session 38".
 pub const EDGE_DOF: f64 = 2.0;
 
 /// Fewest window speeds on each side of a tested speed [-].
@@ -136,9 +136,9 @@ pub fn cross_bearing_flips(
                 let Some(u) = Subspace::of(&y, &window(n, block.clone(), side), dims) else {
                     continue;
                 };
-                // Named only when one bearing's negation passes: when two
-                // do, the data do not say which bearing flipped
-                // ([`cross_bearing_flips`]).
+                // One bearing named among those whose negation passes:
+                // the one, or the best by the likelihood margin; else the
+                // data do not say which bearing flipped ([`Limits::named`]).
                 let passing: Vec<(usize, f64)> = (0..nb)
                     .filter_map(|b| {
                         limits
