@@ -7,10 +7,12 @@ Usage:
   ross_recording.py [--machine NAME] OUT CASE SEED [KEY=VALUE...]
         OUT/recording.wav, channels.toml, bearings.csv, truth.json and
         steady.npz (the dense ROSS response the signals were made from)
-  ross_recording.py --check RUN OUT
+  ross_recording.py --check RUN OUT [EXPECTED.csv]
         each channel's extracted phasors (RUN/measurements.csv) against
         OUT/steady.npz at the row's speed: rms |error|, rms sd (the noise
-        columns), mean |error|^2/sd^2 (1 when the columns are calibrated)
+        columns), mean |error|^2/sd^2 (1 when the columns are calibrated);
+        with EXPECTED.csv, ROSS's phasors at the rows' speeds written there
+        (speed_hz, bearing, then measurements.csv's phasor columns)
 KEY=VALUE (defaults): top, bottom [Hz] (the machine's grid), rate=1.0
 [Hz/s, the run-down's deceleration], fs=12800 [samples/s], bits=16,
 probe_mv=5.0 and pickup_mv=1.0 [mV rms of white noise per sample],
@@ -165,31 +167,38 @@ def make(machine, out, case, seed, opt):
              **{f"{b}.{c}": resp[b][c] for b in names for c in ru.CHANNELS})
 
 
-def check(run, out):
+def check(run, out, expected=None):
     """Prints and returns {(bearing, channel): (rms |err|, rms sd, mean z^2, rows)}."""
     from scipy.interpolate import CubicSpline
     z = np.load(os.path.join(out, "steady.npz"))
     rows = list(csv.DictReader(open(os.path.join(run, "measurements.csv"))))
-    res = {}
+    res, table = {}, {}
     for b in sorted({r["bearing"] for r in rows}):
         rb = [r for r in rows if r["bearing"] == b]
         sp = np.array([float(r["speed_hz"]) for r in rb])
         for c in ru.CHANNELS:
             got = np.array([complex(float(r[c + "_re"]), float(r[c + "_im"])) for r in rb])
             want = CubicSpline(z["speeds"], z[f"{b}.{c}"])(sp)
+            for r, w in zip(rb, want):
+                table.setdefault((r["speed_hz"], b), {})[c] = w
             err = np.abs(got - want)
             sd = np.array([float(r.get(c + "_sd") or "nan") for r in rb])
             res[(b, c)] = (math.sqrt(np.mean(err**2)), math.sqrt(np.mean(sd**2)), float(np.mean(err**2 / sd**2)),
                            len(rb))
             print(f"{b} {c}: rms err {res[(b, c)][0]:.3e} m, rms sd {res[(b, c)][1]:.3e} m, "
                   f"mean err^2/sd^2 {res[(b, c)][2]:.2f}, peak {np.abs(want).max():.3e} m ({len(rb)} rows)")
+    if expected:
+        with open(expected, "w") as f:
+            f.write("speed_hz,bearing," + ",".join(f"{c}_re,{c}_im" for c in ru.CHANNELS) + "\n")
+            for (s, b), v in table.items():
+                f.write(f"{s},{b}," + ",".join(f"{v[c].real:.9e},{v[c].imag:.9e}" for c in ru.CHANNELS) + "\n")
     return res
 
 
 def main():
     args = sys.argv[1:]
-    if args[:1] == ["--check"] and len(args) == 3:
-        check(args[1], args[2])
+    if args[:1] == ["--check"] and len(args) in (3, 4):
+        check(*args[1:])
         return
     machine = ru.DEFAULT
     if args[:1] == ["--machine"] and len(args) >= 2 and args[1] in ru.MACHINES:

@@ -27,7 +27,6 @@
 //! is then 0.94-1.04, no channel above 1.14.
 
 use super::phasors::Output;
-use plinth_shared::phasor::Phasor;
 
 /// How far from R revolutions [revolutions] the time between consecutive
 /// outputs may be for them to count as neighbours (a keyphasor fault drops
@@ -82,19 +81,20 @@ pub fn mid_window(outputs: &[Output], revolutions: u16) -> Vec<Output> {
     out
 }
 
-/// The phasor of a response along the revolution number: used by the tests.
-#[cfg(test)]
-fn window_mean(q: impl Fn(f64) -> Phasor, first: f64, revolutions: u16) -> Phasor {
-    let n = f32::from(revolutions);
-    (0..revolutions)
-        .map(|j| q(first + f64::from(j)))
-        .fold(Phasor::new(0.0, 0.0), |s, v| s + v)
-        / n
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use plinth_shared::phasor::Phasor;
+
+    /// The mean of a response `q` along the revolution number over the
+    /// `revolutions` revolutions from `first`.
+    fn window_mean(q: impl Fn(f64) -> Phasor, first: f64, revolutions: u16) -> Phasor {
+        let n = f32::from(revolutions);
+        (0..revolutions)
+            .map(|j| q(first + f64::from(j)))
+            .fold(Phasor::new(0.0, 0.0), |s, v| s + v)
+            / n
+    }
 
     fn output(k: usize, q: Phasor, revolutions: u16) -> Output {
         // 20 Hz, R revolutions per output, no gap.
