@@ -88,7 +88,10 @@ fn noise_columns_are_calibrated_against_ross() {
     let mut bad = Vec::new();
     for ((bearing, k), (sum, n)) in &sums {
         let ratio = sum / *n as f64;
-        eprintln!("{bearing} {}: mean |error|²/sd² {ratio:.2} ({n} rows)", names[*k]);
+        eprintln!(
+            "{bearing} {}: mean |error|²/sd² {ratio:.2} ({n} rows)",
+            names[*k]
+        );
         if !(0.6..=1.5).contains(&ratio) {
             bad.push(format!("{bearing} {}: {ratio:.2}", names[*k]));
         }
