@@ -7,7 +7,8 @@
 //! extractor turns every revolution into displacement phasors (seismic
 //! channels converted with the revolution's kinematics, the run-down
 //! correction applied), R of which are averaged into one phasor with its
-//! noise ([`phasors`]); each bearing's channels are resolved into y and z;
+//! noise ([`phasors`]) and moved from the window's mean to its middle
+//! ([`window`]); each bearing's channels are resolved into y and z;
 //! consecutive phasors whose speeds agree within `speed_resolution_hz`
 //! (default 0.001 Hz: a dwell) are averaged into one row at their mean speed. The run
 //! directory has the noise columns (`rel_y_sd`, ...: sqrt(E|n|²) of the
@@ -21,6 +22,7 @@ pub mod keyphasor;
 pub mod phasors;
 pub mod recording;
 pub mod wav;
+pub mod window;
 
 use crate::field::angle::resolve;
 use crate::field::import::write_run;
@@ -98,7 +100,8 @@ fn bearing_phasors(
     (values, sds)
 }
 
-/// Turns an extraction into run-directory rows: y/z resolved per bearing;
+/// Turns an extraction into run-directory rows: each output moved to its
+/// window's middle ([`window::mid_window`]); y/z resolved per bearing;
 /// a dwell (consecutive phasors within `config.speed_resolution_hz` of the
 /// first of them) averaged into one row at their mean speed, its noise sd
 /// the sd of that mean. Rows without a noise estimate take the median of
@@ -106,8 +109,9 @@ fn bearing_phasors(
 pub fn measurements(extraction: &Extraction, config: &Channels) -> Vec<Measurement> {
     let res = config.speed_resolution_hz;
     // Consecutive outputs within `res` of the group's first speed.
+    let outputs = window::mid_window(&extraction.outputs, config.revolutions);
     let mut groups: Vec<Vec<&phasors::Output>> = Vec::new();
-    for o in &extraction.outputs {
+    for o in &outputs {
         match groups.last_mut() {
             Some(g) if (o.speed_hz - g[0].speed_hz).abs() <= res => g.push(o),
             _ => groups.push(vec![o]),
