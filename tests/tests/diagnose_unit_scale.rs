@@ -24,7 +24,10 @@ fn diagnosis(data: &str, file: &str, case: &str) -> Diagnosis {
 fn unit_scale(d: &Diagnosis) -> Option<(String, f64)> {
     let v = serde_json::to_value(d).expect("diagnosis as JSON");
     let u = v.get("unit_scale")?;
-    Some((u.get("kind")?.as_str()?.to_string(), u.get("factor")?.as_f64()?))
+    Some((
+        u.get("kind")?.as_str()?.to_string(),
+        u.get("factor")?.as_f64()?,
+    ))
 }
 
 /// Asserts the diagnosis is untrusted with the one scale of `kind` within
@@ -33,7 +36,10 @@ fn assert_named(d: &Diagnosis, kind: &str, factor: f64, common: &str) {
     assert!(!d.trusted, "{}", d.to_text());
     let (k, s) = unit_scale(d).unwrap_or_else(|| panic!("no unit_scale: {}", d.to_text()));
     assert_eq!(k, kind);
-    assert!((s / factor - 1.0).abs() < 0.03, "factor {s} against {factor}");
+    assert!(
+        (s / factor - 1.0).abs() < 0.03,
+        "factor {s} against {factor}"
+    );
     assert!(
         d.trust_reasons.iter().any(|r| r.contains(&format!(
             "unit or scale mistake on every `{kind}` transducer"
