@@ -33,6 +33,7 @@ use num_complex::Complex;
 use plinth_shared::bearing::BearingCoefficients;
 
 mod gap;
+pub mod unit_scale;
 pub(in crate::diagnose) use gap::flat;
 pub use gap::{machine_floor, machine_gap, parameter_variance, refitted_base, MachineCheck};
 

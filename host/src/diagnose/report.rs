@@ -260,6 +260,12 @@ pub struct Diagnosis {
     /// limit at most `trust::MACHINE_INFORMATIVE_LIMIT`), with `--machine`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub machine_check_informative: Option<bool>,
+    /// With `--machine`, when the final model fails the machine-level
+    /// check: one scale on every transducer of one kind (rel or ped) that
+    /// brings the base model within it, the likely cause
+    /// (`machine::unit_scale`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unit_scale: Option<super::machine::unit_scale::UnitScale>,
     /// The noise floor.
     pub noise: NoiseSummary,
     /// Where the base model's disagreement lives, largest first.

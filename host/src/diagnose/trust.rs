@@ -210,7 +210,12 @@ pub const MACHINE_INFORMATIVE_LIMIT: f64 = 0.5;
 /// forces, but the machine file (rotor, unbalance, bearing table or base)
 /// does not describe the machine the run was measured on. `gap` is `None`
 /// when the final model could not be simulated: nothing to judge.
-pub fn judge_machine(d: &mut super::report::Diagnosis, gap: Option<f64>, floor: f64) {
+pub fn judge_machine(
+    d: &mut super::report::Diagnosis,
+    gap: Option<f64>,
+    floor: f64,
+    unit_scale: Option<&super::machine::unit_scale::UnitScale>,
+) {
     let Some(gap) = gap else { return };
     let check = MachineCheck::of(gap, floor);
     d.machine_check_informative = Some(!matches!(check, MachineCheck::CannotJudge { .. }));
@@ -224,16 +229,45 @@ pub fn judge_machine(d: &mut super::report::Diagnosis, gap: Option<f64>, floor: 
             );
         }
         MachineCheck::Disagrees { limit } => {
-            let why = format!(
-                "the machine re-simulated with the identified model does not reproduce the measurements: machine-level gap {gap:.4} (noise floor {floor:.4}, limit {limit:.4}); the machine file (rotor, unbalance, bearing table or base) does not describe the machine of this run"
-            );
+            let why = match unit_scale {
+                Some(u) => unit_scale_reason(u, gap, floor, limit),
+                None => format!(
+                    "the machine re-simulated with the identified model does not reproduce the measurements: machine-level gap {gap:.4} (noise floor {floor:.4}, limit {limit:.4}); the machine file (rotor, unbalance, bearing table or base) does not describe the machine of this run"
+                ),
+            };
             d.verdict += &format!(
                 " But at the machine level {why}, so the identified parameters are not to be trusted."
             );
             d.trust_reasons.push(why);
             d.trusted = false;
+            d.unit_scale = unit_scale.cloned();
         }
     }
+}
+
+/// The reason of a failed machine-level check that one scale on every
+/// transducer of one kind explains (`machine::unit_scale`) [text].
+fn unit_scale_reason(
+    u: &super::machine::unit_scale::UnitScale,
+    gap: f64,
+    floor: f64,
+    limit: f64,
+) -> String {
+    use super::machine::unit_scale::Kind;
+    let kind = u.kind.columns();
+    let s = u.factor;
+    let pedestals = match u.kind {
+        Kind::Rel => format!("their k, m, c and runouts ÷ {s:.3}"),
+        Kind::Ped => format!("their k, m, c × {s:.3}"),
+    };
+    let nearest = match &u.nearest {
+        Some(n) => format!(": the common unit factor {n}"),
+        None => ", near no common unit factor".to_string(),
+    };
+    format!(
+        "the machine re-simulated with the identified model does not reproduce the measurements (machine-level gap {gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but it does with every `{kind}` reading divided by {s:.4} (gap {:.4}, noise floor {:.4}; pedestals {pedestals}){nearest}. A unit or scale mistake on every `{kind}` transducer is likely (an import's unit or peak convention): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor",
+        u.gap, u.floor
+    )
 }
 
 /// What the machine-level check says of a final model's gap.

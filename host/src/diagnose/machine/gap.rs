@@ -168,6 +168,10 @@ pub struct MachineCheck {
     /// ([`crate::diagnose::trust::base_model_findings`]): unexplained again
     /// when the step at them does not lower the machine-level gap.
     pub support: Vec<(String, String)>,
+    /// When the final model fails the check: a scale on every transducer
+    /// of one kind that brings the base model within it
+    /// ([`super::unit_scale::find`]), said as the likely cause.
+    pub unit_scale: Option<super::unit_scale::UnitScale>,
 }
 
 impl MachineCheck {
@@ -234,7 +238,25 @@ impl MachineCheck {
             _ => 0.0,
         };
         let foundation = (outcome.after_steps.last()).is_some_and(|(_, b)| b.is_some());
+        // Only a model that fails the check is asked for a unit mistake.
+        let fails = match (outcome.after_steps.is_empty(), &after) {
+            (true, _) => gap_before,
+            (false, Some(_)) => gaps_after.last().copied().flatten(),
+            (false, None) => None,
+        }
+        .is_some_and(|g| {
+            matches!(
+                crate::diagnose::trust::MachineCheck::of(g, floor),
+                crate::diagnose::trust::MachineCheck::Disagrees { .. }
+            )
+        });
+        let unit_scale = if fails {
+            super::unit_scale::find(machine, prep, first)
+        } else {
+            None
+        };
         Ok(Self {
+            unit_scale,
             replaced: replaced_bases(machine, &prep.bearings, foundation),
             support: crate::diagnose::trust::base_model_findings(prep)
                 .into_iter()
@@ -272,7 +294,12 @@ impl MachineCheck {
             before = *after;
         }
         crate::diagnose::trust::judge_steps(d, &self.support);
-        crate::diagnose::trust::judge_machine(d, self.gap_after(), self.floor);
+        crate::diagnose::trust::judge_machine(
+            d,
+            self.gap_after(),
+            self.floor,
+            self.unit_scale.as_ref(),
+        );
         if let Some(note) = &self.replaced {
             d.verdict += &format!(" Note: {note}.");
         }

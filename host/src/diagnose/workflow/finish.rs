@@ -161,6 +161,7 @@ impl Search<'_> {
             machine_gap_after: None,
             machine_gap_floor: None,
             machine_check_informative: None,
+            unit_scale: None,
             noise: NoiseSummary {
                 digits: prep.noise.digits(),
                 bearings: bearings_noise,
