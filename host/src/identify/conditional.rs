@@ -174,7 +174,7 @@ pub fn of(
     };
     Conditional {
         statement: format!(
-            "k, c, m are each support's apparent (equivalent) values over the speeds it was measured at: a support with more inside it (a sub-base, a frame) whose own resonances lie outside that range moves as one mass-spring-damper there, and that is what is fitted. {doubt}"
+            "k, c, m are each support's apparent (equivalent) values over the speeds it was measured at: a support with more inside it (a sub-base, a frame) whose own resonances lie outside that range moves as one mass-spring-damper there, and that is what is fitted. {doubt} The transducers' units and sensitivities are taken as given too: one scale on every rel reading (or every ped reading), say mil pp read as µm pp, scales k, c, m alike with the same fit; only `plinth diagnose --machine` (the rotor and its unbalance) can see it."
         ),
         table_uncertainty,
         bearings,
