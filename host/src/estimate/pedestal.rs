@@ -130,7 +130,7 @@ impl NoiseLevel {
     /// The factor [-] a fit's *reported* parameter variances computed under
     /// a known level are multiplied by: χ²/dof where the residuals scatter
     /// significantly less than the level says ([`NoiseLevel::Below`]), else
-    /// 1. The one rule `identify` (rigid ground) and `diagnose` (rigid
+    /// one: the one rule `identify` (rigid ground) and `diagnose` (rigid
     /// ground and bases) report a pedestal's ± by.
     ///
     /// Why: a known level can be an upper bound by design. `diagnose` takes
