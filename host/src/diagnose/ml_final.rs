@@ -376,7 +376,11 @@ pub fn report(
             if is_pedestal {
                 if let Some(p) = pedestals.iter_mut().find(|p| &p.bearing == bname) {
                     p.values.insert(name.clone(), value);
-                    p.std_err.insert(name.clone(), se);
+                    // Reported by the one rule of every pedestal's ±
+                    // (`Inference::reported_std_err`); the effects' ± below
+                    // stay those the tests use.
+                    let reported = held.map_or(r.inference.reported_std_err(i), |h| h.std_err);
+                    p.std_err.insert(name.clone(), reported);
                 }
             }
             for s in steps

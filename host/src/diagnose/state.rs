@@ -197,7 +197,8 @@ fn infer_group(
     Ok((inf, refs))
 }
 
-/// The pedestal parameters (k, m, c terms) of every bearing with standard errors.
+/// The pedestal parameters (k, m, c terms) of every bearing with their
+/// reported standard errors ([`crate::diagnose::criterion::Inference::reported_std_err`]).
 pub fn pedestals(prep: &Prepared, state: &State) -> Result<Vec<Pedestal>> {
     let infs = state.inference(prep)?;
     let mut out: Vec<Pedestal> = prep
@@ -218,7 +219,7 @@ pub fn pedestals(prep: &Prepared, state: &State) -> Result<Vec<Pedestal>> {
             }
             if let [Some(b), None] = t.bearings() {
                 out[b].values.insert(t.name(), inf.estimate[i]);
-                out[b].std_err.insert(t.name(), inf.std_err(i));
+                out[b].std_err.insert(t.name(), inf.reported_std_err(i));
             }
         }
     }

@@ -348,7 +348,8 @@ pub(crate) fn fit_ml_checked(
         })
         .collect();
     // The level: the one noise policy's verdict on χ².
-    let variance_scale = match noise_level(chi2, dof, noise.source.scale_estimated()) {
+    let level = noise_level(chi2, dof, noise.source.scale_estimated());
+    let variance_scale = match level {
         // A measured noise level (columns, digits, or the scatter's own
         // level from its local fits) that the residuals exceed by far: the
         // model error, not the noise, may dominate, and is then modelled as
@@ -406,11 +407,12 @@ pub(crate) fn fit_ml_checked(
             extra.push(Warning {
                 kind: WarningKind::NoiseScaleMismatch,
                 message: format!(
-                    "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter less than the noise of their {} says; standard errors are kept at that noise (an upper bound)",
-                    noise.source.name()
+                    "χ²/dof = {ratio:.3} (p = {p_value:.1e}): the data scatter less than the noise of their {} says (an upper bound); standard errors are scaled to the residuals by {:.3}",
+                    noise.source.name(),
+                    level.reported_scale().sqrt()
                 ),
             });
-            1.0
+            level.reported_scale()
         }
         NoiseLevel::Known => 1.0,
     };

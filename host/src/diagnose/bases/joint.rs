@@ -25,7 +25,7 @@ use crate::diagnose::data::Prepared;
 use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::state::State;
 use crate::diagnose::workflow::Options;
-use crate::estimate::pedestal::{noise_level, NoiseLevel};
+use crate::estimate::pedestal::noise_level;
 use nalgebra::{DMatrix, DVector};
 
 /// Newton iterations on the profile χ² (each costs 1 + 2n + n(n−1)/2
@@ -242,10 +242,12 @@ pub(in crate::diagnose) fn widen_by_corrections(
 
 /// `fit`'s pedestal and base ± (and the pedestal covariance) scaled to the
 /// noise the residuals show where they scatter significantly less than the
-/// noise model says: the variances by each group's χ²/dof when
-/// [`noise_level`] finds the level an upper bound
-/// ([`NoiseLevel::Below`]); unchanged otherwise (a misfit above the level
-/// is already counted by the profile, `Misfit::Scaled`).
+/// noise model says: the variances by each group's
+/// [`crate::estimate::pedestal::NoiseLevel::reported_scale`] (χ²/dof where
+/// [`noise_level`] finds the level an upper bound, the rule rigid-ground
+/// pedestals are reported by too, `State`'s `pedestals`); unchanged
+/// otherwise (a misfit above the level is already counted by the profile,
+/// `Misfit::Scaled`).
 ///
 /// The workflow's noise is an upper bound by design (docs/diagnose.md: the
 /// digits taken as truncated, mean square ulp²/3, four times a rounding's
@@ -258,10 +260,8 @@ pub(in crate::diagnose) fn widen_by_corrections(
 /// workflow judges with do not.
 pub(in crate::diagnose) fn scale_to_misfit(fit: &mut FoundationFit) {
     for f in fit.grouping.fits.iter_mut() {
-        let NoiseLevel::Below(r) = noise_level(f.chi2, f.dof, false) else {
-            continue;
-        };
-        if !(r.is_finite() && r > 0.0 && r < 1.0) {
+        let r = noise_level(f.chi2, f.dof, false).reported_scale();
+        if r == 1.0 {
             continue;
         }
         let s = r.sqrt();
