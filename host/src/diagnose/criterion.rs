@@ -162,6 +162,33 @@ impl Inference {
         f.max(r).sqrt()
     }
 
+    /// Variance [SI²] of the change of cᵀθ between this fit and the same
+    /// model without the parameters `added` (indices into θ; fitted to the
+    /// same data with the same weights), under the noise floor: wᵀC_γγ⁻¹w
+    /// with C the floor covariance, γ the `added` parameters and
+    /// w = Cov(γ̂, cᵀθ̂). In a weighted linear fit the smaller model's
+    /// estimate of the shared parameters is the larger one's moved along
+    /// its regression on γ̂ to γ = 0, so the change is a linear function of
+    /// γ̂ alone, and this is its variance exactly (it equals the difference
+    /// of the two fits' variances of cᵀθ̂, without computing that
+    /// difference of two nearly equal numbers). `None` when `added` is
+    /// empty, out of range or its block is singular.
+    pub fn floor_change_variance(&self, c: &[f64], added: &[usize]) -> Option<f64> {
+        let p = self.norms.len();
+        if added.is_empty() || c.len() != p || added.iter().any(|&i| i >= p) {
+            return None;
+        }
+        let cn = DVector::from_iterator(p, c.iter().zip(&self.norms).map(|(a, s)| a / s));
+        let w_all = &self.cov_floor * &cn;
+        let w = DVector::from_iterator(added.len(), added.iter().map(|&i| w_all[i]));
+        let block = DMatrix::from_fn(added.len(), added.len(), |r, k| {
+            self.cov_floor[(added[r], added[k])]
+        });
+        let inv = block.try_inverse()?;
+        let v = (w.transpose() * inv * &w)[(0, 0)];
+        v.is_finite().then_some(v.max(0.0))
+    }
+
     /// Evidence against the constraints C·θ = 0 (rows of `c`, one per
     /// constraint, over the parameter vector), with `candidates` tried in the
     /// step and `n_total` real equations for the BIC penalty.

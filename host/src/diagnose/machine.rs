@@ -32,6 +32,7 @@ use anyhow::{anyhow, Context, Result};
 use num_complex::Complex;
 use plinth_shared::bearing::BearingCoefficients;
 
+mod change;
 mod gap;
 pub(in crate::diagnose) use gap::flat;
 pub use gap::{machine_floor, machine_gap, parameter_variance, refitted_base, MachineCheck};
