@@ -46,7 +46,11 @@ fn right_and_trusted(
     assert_eq!(got, want, "{}", d.to_text());
     let s = &d.steps[rising];
     let (Some(before), Some(after)) = (s.machine_gap_before, s.machine_gap_after) else {
-        panic!("step {} has no machine-level gaps: {}", rising + 1, d.to_text());
+        panic!(
+            "step {} has no machine-level gaps: {}",
+            rising + 1,
+            d.to_text()
+        );
     };
     assert!(
         after >= before,
