@@ -418,4 +418,29 @@ mod tests {
         assert!((chi2_sf(5.991_464_547_107_979, 2) - 0.05).abs() < 1e-9);
         assert_eq!(chi2_sf(0.0, 1), 1.0);
     }
+
+    /// The change variance of nested linear fits is the difference of
+    /// their floor variances (Hausman's identity): a 4-parameter fit
+    /// against its first 2 parameters, with no residual (so the robust
+    /// covariance is zero and `std_err_of` is the floor's).
+    #[test]
+    fn the_change_variance_of_nested_fits_is_the_difference_of_their_variances() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let n = 60;
+        let big = DMatrix::from_fn(n, 4, |_, _| rng.gen_range(-1.0..1.0));
+        let small = big.columns(0, 2).into_owned();
+        let speeds: Vec<usize> = (0..n).collect();
+        let zero = DVector::zeros(n);
+        let a = Inference::new(&big, &zero, &speeds, DVector::zeros(4)).expect("big");
+        let b = Inference::new(&small, &zero, &speeds, DVector::zeros(2)).expect("small");
+        let c = [0.7, -1.3, 2.0, 0.4];
+        let want = a.std_err_of(&c).powi(2) - b.std_err_of(&c[..2]).powi(2);
+        let got = a.floor_change_variance(&c, &[2, 3]).expect("variance");
+        assert!(want > 0.0);
+        assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
+        // Only the added parameters' direction counts: with one of them
+        // called shared the answer differs.
+        let other = a.floor_change_variance(&c, &[3]).expect("variance");
+        assert!((other - want).abs() > 1e-3 * want);
+    }
 }
