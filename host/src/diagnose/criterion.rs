@@ -186,6 +186,33 @@ impl Inference {
         f.max(r).sqrt()
     }
 
+    /// Variance [SI²] of the change of cᵀθ between this fit and the same
+    /// model without the parameters `added` (indices into θ; fitted to the
+    /// same data with the same weights), under the noise floor: wᵀC_γγ⁻¹w
+    /// with C the floor covariance, γ the `added` parameters and
+    /// w = Cov(γ̂, cᵀθ̂). In a weighted linear fit the smaller model's
+    /// estimate of the shared parameters is the larger one's moved along
+    /// its regression on γ̂ to γ = 0, so the change is a linear function of
+    /// γ̂ alone, and this is its variance exactly (it equals the difference
+    /// of the two fits' variances of cᵀθ̂, without computing that
+    /// difference of two nearly equal numbers). `None` when `added` is
+    /// empty, out of range or its block is singular.
+    pub fn floor_change_variance(&self, c: &[f64], added: &[usize]) -> Option<f64> {
+        let p = self.norms.len();
+        if added.is_empty() || c.len() != p || added.iter().any(|&i| i >= p) {
+            return None;
+        }
+        let cn = DVector::from_iterator(p, c.iter().zip(&self.norms).map(|(a, s)| a / s));
+        let w_all = &self.cov_floor * &cn;
+        let w = DVector::from_iterator(added.len(), added.iter().map(|&i| w_all[i]));
+        let block = DMatrix::from_fn(added.len(), added.len(), |r, k| {
+            self.cov_floor[(added[r], added[k])]
+        });
+        let inv = block.try_inverse()?;
+        let v = (w.transpose() * inv * &w)[(0, 0)];
+        v.is_finite().then_some(v.max(0.0))
+    }
+
     /// Evidence against the constraints C·θ = 0 (rows of `c`, one per
     /// constraint, over the parameter vector), with `candidates` tried in the
     /// step and `n_total` real equations for the BIC penalty.
@@ -414,5 +441,30 @@ mod tests {
         assert!((chi2_sf(3.841_458_820_694_124, 1) - 0.05).abs() < 1e-9);
         assert!((chi2_sf(5.991_464_547_107_979, 2) - 0.05).abs() < 1e-9);
         assert_eq!(chi2_sf(0.0, 1), 1.0);
+    }
+
+    /// The change variance of nested linear fits is the difference of
+    /// their floor variances (Hausman's identity): a 4-parameter fit
+    /// against its first 2 parameters, with no residual (so the robust
+    /// covariance is zero and `std_err_of` is the floor's).
+    #[test]
+    fn the_change_variance_of_nested_fits_is_the_difference_of_their_variances() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let n = 60;
+        let big = DMatrix::from_fn(n, 4, |_, _| rng.gen_range(-1.0..1.0));
+        let small = big.columns(0, 2).into_owned();
+        let speeds: Vec<usize> = (0..n).collect();
+        let zero = DVector::zeros(n);
+        let a = Inference::new(&big, &zero, &speeds, DVector::zeros(4)).expect("big");
+        let b = Inference::new(&small, &zero, &speeds, DVector::zeros(2)).expect("small");
+        let c = [0.7, -1.3, 2.0, 0.4];
+        let want = a.std_err_of(&c).powi(2) - b.std_err_of(&c[..2]).powi(2);
+        let got = a.floor_change_variance(&c, &[2, 3]).expect("variance");
+        assert!(want > 0.0);
+        assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
+        // Only the added parameters' direction counts: with one of them
+        // called shared the answer differs.
+        let other = a.floor_change_variance(&c, &[3]).expect("variance");
+        assert!((other - want).abs() > 1e-3 * want);
     }
 }

@@ -32,6 +32,7 @@ use anyhow::{anyhow, Context, Result};
 use num_complex::Complex;
 use plinth_shared::bearing::BearingCoefficients;
 
+mod change;
 mod gap;
 pub mod unit_scale;
 pub(in crate::diagnose) use gap::flat;

@@ -69,6 +69,11 @@ pub struct Step {
     /// Machine-level gap after the step, with `--machine`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub machine_gap_after: Option<f64>,
+    /// Standard deviation of the step's machine-level gap change from one
+    /// noise draw to the next (`machine::change`), with `--machine` where
+    /// the gap did not fall [-].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine_gap_change_sd: Option<f64>,
     /// Delayed channels of a sensor delay.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub channels: Option<String>,

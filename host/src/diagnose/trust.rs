@@ -518,8 +518,22 @@ pub fn support_reasons(prep: &Prepared) -> Vec<(String, String)> {
         .collect()
 }
 
-/// A kept step whose machine-level gap (`--machine`) did not fall makes the
-/// diagnosis untrusted: an effect that lowers the pedestal-level χ² but
+/// How many standard deviations of its own noise a step's machine-level gap
+/// may rise by before the step counts as not lowering it
+/// ([`judge_steps`]): the one-sided 1 % point of the normal, so a step
+/// whose true change is zero is untrusted by its noise alone in 1 % of runs
+/// (the false-alarm rate per run); right steps lower the gap, so
+/// they reach it less often (docs/diagnose-verdict.md, "Session 39") [-].
+pub const MACHINE_STEP_NOISE_SD: f64 = 2.33;
+
+/// A kept step whose machine-level gap (`--machine`) did not fall by more
+/// than its own noise allows makes the diagnosis untrusted: a rise above
+/// [`MACHINE_STEP_NOISE_SD`] standard deviations of the step's change
+/// (`Step::machine_gap_change_sd`, `super::machine`'s change noise of two
+/// nested fits to the same data), or any rise where that noise is not
+/// known (a step on or after an identified base). A right step can rise
+/// within that noise when the model still lacks another effect (unseen-flex
+/// delay-runout seed 141: the runout at B2, 0.0404 → 0.0455, 2.0 sd). An effect that lowers the pedestal-level χ² but
 /// does not bring the re-simulated machine closer to the measurements is
 /// fitting something else (the fourth unseen machine's sub-base: a probe
 /// runout of 0.02 µm, a third of the probes' noise, named with the
@@ -545,8 +559,20 @@ pub fn judge_steps(d: &mut super::report::Diagnosis, support: &[(String, String)
         if after < before {
             continue;
         }
+        let noise = s
+            .machine_gap_change_sd
+            .filter(|sd| sd.is_finite() && *sd > 0.0);
+        if noise.is_some_and(|sd| after - before <= MACHINE_STEP_NOISE_SD * sd) {
+            continue;
+        }
+        let by = noise.map_or(String::new(), |sd| {
+            format!(
+                ", a rise of {:.1} times the change's own noise {sd:.4}, above {MACHINE_STEP_NOISE_SD}",
+                (after - before) / sd
+            )
+        });
         let why = format!(
-            "step {}, {} at {}, did not lower the machine-level gap ({before:.4} → {after:.4}): the re-simulated machine is no closer to the measurements with it, so the effect is not shown to be there",
+            "step {}, {} at {}, did not lower the machine-level gap ({before:.4} → {after:.4}{by}): the re-simulated machine is no closer to the measurements with it, so the effect is not shown to be there",
             i + 1,
             s.effect,
             s.bearing

@@ -151,6 +151,12 @@ pub struct MachineCheck {
     /// after step i, a chosen base included); `None` where the identified
     /// model cannot be simulated (the reason in `warnings`) [-].
     pub gaps_after: Vec<Option<f64>>,
+    /// The standard deviation of each step's machine-level gap change
+    /// ([`super::change::change_sd`], aligned with `gaps_after`), given
+    /// where the gap did not fall (the only steps [`crate::diagnose::trust::judge_steps`]
+    /// weighs it for); `None` elsewhere, on a step that stands on an
+    /// identified base or extends one, and where it cannot be computed [-].
+    pub change_sds: Vec<Option<f64>>,
     /// The final model's machine-level floor ([`machine_floor`]) [-].
     pub floor: f64,
     /// The base model's re-simulated readings (figures; every point `None`
@@ -194,8 +200,11 @@ impl MachineCheck {
             }
         };
         let gap_before = simulated.as_ref().map(|r| machine_gap(prep, r));
-        let gap_refitted = match refitted_base(prep, first)
-            .and_then(|state| resimulate(machine, prep, &state, None))
+        let refitted = refitted_base(prep, first).ok();
+        let gap_refitted = match refitted
+            .as_ref()
+            .ok_or_else(|| anyhow!("the refit failed"))
+            .and_then(|state| resimulate(machine, prep, state, None))
         {
             Ok(r) => Some(machine_gap(prep, &r)),
             Err(e) => {
@@ -227,6 +236,14 @@ impl MachineCheck {
                 }
             }
         }
+        let change_sds = change_sds(
+            machine,
+            prep,
+            outcome,
+            refitted.as_ref(),
+            gap_refitted,
+            &gaps_after,
+        );
         // The floor of the final model (the base model's when nothing was
         // added or the final model could not be simulated).
         let floor = match (outcome.after_steps.last(), &after) {
@@ -265,6 +282,7 @@ impl MachineCheck {
             gap_before,
             gap_refitted,
             gaps_after,
+            change_sds,
             floor,
             before,
             after,
@@ -288,9 +306,15 @@ impl MachineCheck {
         d.machine_gap_after = self.gap_after();
         d.machine_gap_floor = Some(self.floor);
         let mut before = self.gap_refitted;
-        for (s, after) in d.steps.iter_mut().zip(&self.gaps_after) {
+        for ((s, after), sd) in d
+            .steps
+            .iter_mut()
+            .zip(&self.gaps_after)
+            .zip(&self.change_sds)
+        {
             s.machine_gap_before = before;
             s.machine_gap_after = *after;
+            s.machine_gap_change_sd = *sd;
             before = *after;
         }
         crate::diagnose::trust::judge_steps(d, &self.support);
@@ -304,6 +328,37 @@ impl MachineCheck {
             d.verdict += &format!(" Note: {note}.");
         }
     }
+}
+
+/// Per step, the standard deviation of its machine-level gap change
+/// ([`super::change::change_sd`]) where the gap did not fall; `refitted`
+/// is step 1's "before" model with its gap `gap_refitted` [-], `gaps_after`
+/// the steps' gaps [-]. A step on or after an identified base gets none
+/// (the base's covariance is not the state's): the sign rule judges it.
+fn change_sds(
+    machine: &Machine,
+    prep: &Prepared,
+    outcome: &crate::diagnose::Outcome,
+    refitted: Option<&State>,
+    gap_refitted: Option<f64>,
+    gaps_after: &[Option<f64>],
+) -> Vec<Option<f64>> {
+    let mut out = Vec::with_capacity(gaps_after.len());
+    let (mut before, mut gap_before) = (refitted.map(|s| (s, false)), gap_refitted);
+    for ((state, base), gap) in outcome.after_steps.iter().zip(gaps_after) {
+        let sd = match (before, gap_before, *gap) {
+            (Some((b, false)), Some(g0), Some(g1)) if base.is_none() && g1 >= g0 => {
+                super::change::change_sd(machine, prep, b, state, g1)
+                    .ok()
+                    .flatten()
+            }
+            _ => None,
+        };
+        out.push(sd);
+        before = Some((state, base.is_some()));
+        gap_before = *gap;
+    }
+    out
 }
 
 #[cfg(test)]

@@ -13,6 +13,7 @@ fn step(before: f64, after: f64) -> Step {
         gap_floor_after: 0.01,
         machine_gap_before: None,
         machine_gap_after: None,
+        machine_gap_change_sd: None,
         channels: None,
         parameters: Vec::new(),
         test: "Wald".into(),

@@ -55,6 +55,7 @@ impl Search<'_> {
             gap_floor_after: on.fit.gap.floor,
             machine_gap_before: None,
             machine_gap_after: None,
+            machine_gap_change_sd: None,
             channels: win.candidate.variant.clone(),
             parameters: effect_estimates(prep, &next, &win.candidate)?,
             test: lr_test(tried),

@@ -254,6 +254,7 @@ impl Search<'_> {
             gap_floor_after: f.gap.floor,
             machine_gap_before: None,
             machine_gap_after: None,
+            machine_gap_change_sd: None,
             channels: None,
             parameters: f.parameters(prep),
             test: f.test.test.clone(),
@@ -297,6 +298,7 @@ impl Search<'_> {
             gap_floor_after: after.floor,
             machine_gap_before: None,
             machine_gap_after: None,
+            machine_gap_change_sd: None,
             channels: win.candidate.variant.clone(),
             parameters,
             test: w
