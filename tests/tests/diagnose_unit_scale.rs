@@ -1,5 +1,5 @@
 //! One unit mistake on every transducer of one kind (session 39,
-//! docs/session39-unitmix17.md): `plinth identify` cannot see it (the
+//! docs/robustness-hostile.md ("Session 39")): `plinth identify` cannot see it (the
 //! pedestal equation is homogeneous: its k, m, c come out scaled by the
 //! factor, trusted), `plinth diagnose --machine` can (the machine file's
 //! rotor and unbalance fix the absolute response, and the rotor's absolute

@@ -5,7 +5,7 @@
 //! rounding's variance, on purpose: a truncation bias must not pass for an
 //! effect. Its reported ± followed that upper bound, so on ROSS runs at 3
 //! digits the final pedestals were 2-4 times closer to the truth than their
-//! ± said (RMS z 0.15-0.6 per parameter, docs/session39-digits17.md). The
+//! ± said (RMS z 0.15-0.6 per parameter, docs/diagnose-accuracy.md ("Session 39")). The
 //! reported ± now follow the residuals where they scatter significantly
 //! less than the noise model says (`NoiseLevel::reported_scale`, the rule
 //! the base pedestals are reported by too). They are still about 1.6 times

@@ -5,7 +5,7 @@
 //! (tests/data/ross-recording/README.md): 52 → 9.6 Hz at 2 Hz/s, 4 kHz,
 //! 16-bit, proximity probes on a −9 V gap and velocity pick-ups with a 2X
 //! and white noise in volts, a notch keyphasor, 4 revolutions per phasor.
-//! Only the reading is Plinth's. docs/session39-recording17.md has the
+//! Only the reading is Plinth's. docs/field-data.md ("Session 39") has the
 //! figures over seeds and machines.
 
 use num_complex::Complex;

@@ -170,7 +170,7 @@ impl Inference {
     ///
     /// Why: the floor is an upper bound by design (digits taken as
     /// truncated); on rigid ground at 3 digits it left every reported ±
-    /// about 2 times too wide (RMS z 0.2-0.5, docs/session39-digits17.md).
+    /// about 2 times too wide (RMS z 0.2-0.5, docs/diagnose-accuracy.md ("Session 39")).
     pub fn reported_std_err(&self, i: usize) -> f64 {
         (self.reported_scale * self.cov_floor[(i, i)])
             .max(self.cov_robust[(i, i)])

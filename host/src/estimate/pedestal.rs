@@ -138,7 +138,7 @@ impl NoiseLevel {
     /// ulp²/12) so that a truncation bias does not pass for an effect; on
     /// data rounded to 3 digits its residuals then scatter at χ²/dof ≈ 0.2
     /// and every ± it reported was about 2.2 times too wide (docs/bases.md,
-    /// "Session 38"; docs/session39-digits17.md). Only the reported ± move:
+    /// "Session 38"; docs/diagnose-accuracy.md ("Session 39")). Only the reported ± move:
     /// the level the tests judge effects with does not. Where the residuals
     /// agree with the level (real noise above the digits, χ²/dof ≈ 1) or
     /// exceed it, this is 1.

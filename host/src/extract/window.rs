@@ -8,7 +8,7 @@
 //! Q(n̄) + Q''·(R² − 1)/24 + …: the variance of R equally spaced
 //! positions, (R² − 1)/12, times Q''/2. It is a bias, not noise: measured
 //! on ROSS-made run-downs of unseen-five (`scripts/ross_recording.py`, 4
-//! revolutions per phasor, docs/session39-recording17.md) it made the
+//! revolutions per phasor, docs/field-data.md ("Session 39")) it made the
 //! phasor at a pedestal resonance 6 % off at 1 Hz/s while its noise column
 //! said 0.23 %: mean |error|²/sd² up to 3.9 per channel at 1 Hz/s and 21 at
 //! 2 Hz/s (1.0-1.15 with one revolution per phasor).

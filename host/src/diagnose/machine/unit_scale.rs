@@ -80,7 +80,7 @@ const LOG_RANGE: f64 = 6.5;
 /// in s. The open-loop re-simulation makes the gap's valley around the
 /// right s narrow where a lightly damped resonance lies in the run
 /// (unseen-train: a pedestal scale 5 % off gives a gap of about 1, as wrong
-/// as no model; docs/session39-unitmix17.md): a step of 0.1 (26 %) missed
+/// as no model; docs/robustness-hostile.md ("Session 39")): a step of 0.1 (26 %) missed
 /// √2 there. About 3 250 re-simulations per kind, 0.6 ms each on that
 /// machine.
 const LOG_STEP: f64 = 0.004;
