@@ -451,7 +451,7 @@ mod tests {
     fn the_change_variance_of_nested_fits_is_the_difference_of_their_variances() {
         let mut rng = rand::rngs::StdRng::seed_from_u64(7);
         let n = 60;
-        let big = DMatrix::from_fn(n, 4, |_, _| rng.gen_range(-1.0..1.0));
+        let big = DMatrix::from_fn(n, 4, |_, _| rng.random_range(-1.0..1.0));
         let small = big.columns(0, 2).into_owned();
         let speeds: Vec<usize> = (0..n).collect();
         let zero = DVector::zeros(n);
