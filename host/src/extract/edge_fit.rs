@@ -29,6 +29,12 @@ pub const MIN_RUN: usize = 5;
 /// inside one run (a missing pulse doubles it, an extra one halves it).
 pub const RUN_BREAK: f64 = 0.2;
 
+/// Jitter [samples] below which the edges are left as timed: a transition
+/// spanning samples times its edges far better (the 8° notch edges of
+/// scripts/ross_recording.py at 77 samples per revolution: 0.0013 sample),
+/// and the extractor then sees the box's own edges.
+pub const SMOOTH_ABOVE: f64 = 0.01;
+
 /// The smoothed edges of a recording.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EdgeFit {
@@ -43,6 +49,8 @@ pub struct EdgeFit {
     pub leverage: f64,
     /// Median edge period [samples] (0 with fewer than two edges).
     pub median_period: f64,
+    /// Whether `times` are smoothed (the jitter above [`SMOOTH_ABOVE`]).
+    pub smoothed: bool,
 }
 
 impl EdgeFit {
@@ -58,7 +66,7 @@ impl EdgeFit {
     /// The sd of the smoothed edges' phase error [rad] at `period` samples
     /// per revolution.
     pub fn residual_phase_rad(&self, period: f64) -> f64 {
-        if period > 0.0 {
+        if period > 0.0 && self.smoothed {
             std::f64::consts::TAU * self.jitter_samples * self.leverage.sqrt() / period
         } else {
             0.0
@@ -168,6 +176,10 @@ pub fn smooth(times: &[f64]) -> EdgeFit {
         out.jitter_samples = (r2 / dof).sqrt();
     }
     out.leverage = full_leverage.unwrap_or(1.0);
+    out.smoothed = out.jitter_samples > SMOOTH_ABOVE;
+    if !out.smoothed {
+        out.times = times.to_vec();
+    }
     periods.sort_by(f64::total_cmp);
     out.median_period = periods[periods.len() / 2];
     out
@@ -228,6 +240,7 @@ mod tests {
                     / t.len() as f64)
                     .sqrt()
             };
+            assert!(fit.smoothed);
             let (raw, smoothed) = (rms(&timed), rms(&fit.times));
             assert!(smoothed < 0.5 * raw, "{rate}: {raw} -> {smoothed}");
             let predicted = fit.jitter_samples * fit.leverage.sqrt();
@@ -248,7 +261,8 @@ mod tests {
         for (a, b) in fit.times.iter().zip(&times) {
             assert!((a - b).abs() < 1e-3, "{a} {b}");
         }
-        assert!(fit.jitter_samples < 1e-3);
+        assert!(fit.jitter_samples < 1e-3 && !fit.smoothed);
+        assert_eq!(fit.times, times);
         assert!(
             (fit.median_period - 80.06).abs() < 0.1,
             "{}",

@@ -296,12 +296,19 @@ pub fn run(args: &Args) -> Result<()> {
     )?;
     let fit = &extraction.edge_fit;
     println!(
-        "keyphasor: edge timing jitter {:.3}° of shaft angle (sd, {:.3} samples at {:.1} samples per revolution), smoothed over ±{} edges to {:.3}°",
+        "keyphasor: edge timing jitter {:.3}° of shaft angle (sd, {:.4} samples at {:.1} samples per revolution), {}",
         fit.jitter_deg(),
         fit.jitter_samples,
         fit.median_period,
-        edge_fit::HALF_WINDOW,
-        fit.jitter_deg() * fit.leverage.sqrt()
+        if fit.smoothed {
+            format!(
+                "smoothed over ±{} edges to {:.3}°",
+                edge_fit::HALF_WINDOW,
+                fit.jitter_deg() * fit.leverage.sqrt()
+            )
+        } else {
+            format!("edges used as timed (below {} sample)", edge_fit::SMOOTH_ABOVE)
+        }
     );
     if let Some(w) = jitter_warning(&extraction, config.revolutions) {
         eprintln!("warning: {}: {w}", args.recording.display());
@@ -346,7 +353,7 @@ fn jitter_warning(e: &Extraction, revolutions: u16) -> Option<String> {
             }
         }
     }
-    (worst > 1.0).then(|| {
+    (fit.smoothed && worst > 1.0).then(|| {
         format!(
             "the keyphasor's edge times jitter by {:.2}° of shaft angle (sd) around a smooth shaft speed: its transition is probably shorter than a sample (a square pulse, a sharp notch), so each edge is timed only to within ±0.5 sample; unsmoothed, this jitter would be up to {worst:.1}× a phasor's noise. The edges were smoothed over ±{} revolutions and the noise columns count what remains ({:.2}°); a keyphasor edge spanning 2 or more samples avoids it",
             fit.jitter_deg(),
