@@ -124,11 +124,11 @@ fn identify_and_diagnose_read_the_ross_recording_right() {
 /// say against ROSS: per bearing and channel, mean |extracted − ROSS|²/sd²
 /// within 0.6-1.5. ROSS's phasor is interpolated linearly in speed from the
 /// two nearest rows of expected.csv, for the rows within 0.01 Hz of one
-/// (at least 75 %: 272 of 324 here). On main (c0eccc6 binary, the same square
-/// recording through `plinth extract`, the same comparison): no jitter
-/// reported, 206 of 300 rows off the stored speeds, and on the 94 that
-/// match B2 ped_z 21.9, B1 ped_z 4.4, B1 rel_z 2.6, B2 rel_y 0.29, B2
-/// rel_z 0.53; here 0.86-1.20.
+/// (at least 75 %: 272 of 324 here). On main (57297e3 built as a binary,
+/// the same square recording through `plinth extract`, the same
+/// comparison): no jitter reported, 206 of 300 rows off the stored speeds,
+/// and on the 94 that match rel 0.24-0.43 (B2 rel_y 0.24), ped 0.75-1.06;
+/// on c0eccc6 also B2 ped_z 21.9. Here 0.86-1.20.
 #[test]
 fn a_square_keyphasor_pulse_is_measured_and_counted_in_the_noise_columns() {
     let dir = tempfile::tempdir().expect("temporary directory");
