@@ -17,6 +17,7 @@
 //! counts them.
 
 pub mod channels;
+pub mod edge_fit;
 pub mod health;
 pub mod keyphasor;
 pub mod phasors;
@@ -293,6 +294,25 @@ pub fn run(args: &Args) -> Result<()> {
             .then(|| crate::field::plot::FieldFigures::from_channels(&config)),
         &placements,
     )?;
+    let fit = &extraction.edge_fit;
+    println!(
+        "keyphasor: edge timing jitter {:.3}° of shaft angle (sd, {:.4} samples at {:.1} samples per revolution), {}",
+        fit.jitter_deg(),
+        fit.jitter_samples,
+        fit.median_period,
+        if fit.smoothed {
+            format!(
+                "smoothed over ±{} edges to {:.3}°",
+                edge_fit::HALF_WINDOW,
+                fit.jitter_deg() * fit.leverage.sqrt()
+            )
+        } else {
+            format!("edges used as timed (below {} sample)", edge_fit::SMOOTH_ABOVE)
+        }
+    );
+    if let Some(w) = jitter_warning(&extraction, config.revolutions) {
+        eprintln!("warning: {}: {w}", args.recording.display());
+    }
     let per_channel = extraction.frames as f64 / elapsed.max(1e-9);
     println!(
         "{} ({}, {} channels at {} Hz, {:.1} s): {} keyphasor edges, {} phasors, {} rows -> {}",
@@ -312,6 +332,35 @@ pub fn run(args: &Args) -> Result<()> {
         per_channel / extraction.sample_rate_hz
     );
     Ok(())
+}
+
+/// A warning when the keyphasor's raw edge jitter would have been the
+/// larger part of some phasor's error (|phasor| × jitter [rad] / √R above
+/// its noise sd, the sd including the smoothed edges' remaining part): the
+/// keyphasor's transition is then likely shorter than a sample, and the
+/// phases rest on the smoothing of its edges.
+fn jitter_warning(e: &Extraction, revolutions: u16) -> Option<String> {
+    let fit = &e.edge_fit;
+    let mut worst = 0.0f64;
+    for o in &e.outputs {
+        let raw = std::f64::consts::TAU * fit.jitter_samples * o.speed_hz
+            / e.sample_rate_hz
+            / f64::from(revolutions.max(1)).sqrt();
+        for (d, sd) in o.displacement.iter().zip(&o.noise_sd) {
+            if let Some(sd) = sd.filter(|s| *s > 0.0) {
+                let q = f64::from(d.re).hypot(f64::from(d.im));
+                worst = worst.max(q * raw / sd);
+            }
+        }
+    }
+    (fit.smoothed && worst > 1.0).then(|| {
+        format!(
+            "the keyphasor's edge times jitter by {:.2}° of shaft angle (sd) around a smooth shaft speed: its transition is probably shorter than a sample (a square pulse, a sharp notch), so each edge is timed only to within ±0.5 sample; unsmoothed, this jitter would be up to {worst:.1}× a phasor's noise. The edges were smoothed over ±{} revolutions and the noise columns count what remains ({:.2}°); a keyphasor edge spanning 2 or more samples avoids it",
+            fit.jitter_deg(),
+            edge_fit::HALF_WINDOW,
+            fit.jitter_deg() * fit.leverage.sqrt()
+        )
+    })
 }
 
 /// Prints the keyphasor faults the way the box counts them.

@@ -11,6 +11,7 @@
 //! inside the extractor, as on the box.
 
 use super::channels::Channels;
+use super::edge_fit::{smooth, EdgeFit};
 use super::keyphasor::{EdgeDetector, MIN_SAMPLES_PER_REVOLUTION};
 use super::recording::Recording;
 use anyhow::{bail, Result};
@@ -55,6 +56,9 @@ pub struct Extraction {
     pub sample_rate_hz: f64,
     /// Frames of the first and the last keyphasor edge.
     pub keyphasor_span: Option<(f64, f64)>,
+    /// The keyphasor edges' timing jitter and smoothing (its `times`
+    /// emptied once used).
+    pub edge_fit: EdgeFit,
 }
 
 /// The most memory one block of frames may take [bytes]: 16 MiB (a
@@ -211,6 +215,30 @@ pub fn extract_within(
                 .map_err(|e| anyhow::anyhow!("{file}: extractor settings refused: {e:?}"))?,
         );
     }
+    // First pass: the keyphasor edges alone (one number per revolution),
+    // smoothed over their neighbours (`edge_fit`): the extractor is fed the
+    // smoothed times.
+    let fit = {
+        let mut first = recording.reopen()?;
+        let mut detector = EdgeDetector::new(&config.keyphasor);
+        let mut buf = Vec::with_capacity(block_frames * n);
+        let mut times = Vec::new();
+        let mut position = 0u64;
+        loop {
+            let frames = first.read(&mut buf, block_frames)?;
+            if frames == 0 {
+                break;
+            }
+            for k in 0..frames {
+                if let Some(fraction) = detector.push(f64::from(buf[k * n + kp])) {
+                    times.push((position + k as u64) as f64 - 1.0 + f64::from(fraction));
+                }
+            }
+            position += frames as u64;
+        }
+        smooth(&times)
+    };
+    let mut next_edge = 0usize;
     let mut detector = EdgeDetector::new(&config.keyphasor);
     let mut result = Extraction {
         sample_rate_hz: fs,
@@ -247,9 +275,25 @@ pub fn extract_within(
             }
         }
         edges.clear();
+        // The smoothed edges ending in this block: edge time s ends in frame
+        // ⌊s⌋ + 1 at fraction s − ⌊s⌋.
+        let end_frame = first_frame + frames as u64;
+        while let Some(&s) = fit.times.get(next_edge) {
+            let frame = s.floor() + 1.0;
+            if frame >= end_frame as f64 {
+                break;
+            }
+            let index = (frame - first_frame as f64).max(0.0) as usize;
+            let fraction = ((s - s.floor()) as f32).clamp(0.0, 1.0 - f32::EPSILON);
+            if edges.last().is_none_or(|e: &KeyphasorEdge| {
+                e.index < index || (e.index == index && e.fraction < fraction)
+            }) {
+                edges.push(KeyphasorEdge { index, fraction });
+            }
+            next_edge += 1;
+        }
         for k in 0..frames {
             if let Some(fraction) = detector.push(f64::from(buf[k * n + kp])) {
-                edges.push(KeyphasorEdge { index: k, fraction });
                 let at = (first_frame + k as u64) as f64 - 1.0 + f64::from(fraction);
                 first_edge.get_or_insert(at);
                 if let Some(prev) = last_edge.replace(at) {
@@ -301,7 +345,7 @@ pub fn extract_within(
                     anyhow::anyhow!("{file}: keyphasor edges refused at frame {first_frame}: {e:?}")
                 })?;
         }
-        collect(&events, &mut result, config.channels.len());
+        collect(&events, &mut result, config.channels.len(), &fit);
         result.frames += frames as u64;
         if let Some(most) = most_outputs {
             let held = result.outputs.len() as u64
@@ -322,6 +366,10 @@ pub fn extract_within(
         progress(result.frames);
     }
     result.edges = detector.edges;
+    result.edge_fit = EdgeFit {
+        times: Vec::new(),
+        ..fit
+    };
     result.keyphasor_span = first_edge.zip(last_edge);
     if detector.edges == 0 {
         let k = &config.keyphasor;
@@ -355,7 +403,11 @@ pub fn extract_within(
 }
 
 /// Matches the groups' events by revolution into outputs.
-fn collect(events: &[Vec<Event<GROUP>>], result: &mut Extraction, channels: usize) {
+/// Each phasor's noise sd takes the smoothed keyphasor's remaining timing
+/// error as a part proportional to |phasor| (the same phase error on every
+/// channel: not in the scatter between revolutions, which the smoothing
+/// made smooth).
+fn collect(events: &[Vec<Event<GROUP>>], result: &mut Extraction, channels: usize, fit: &EdgeFit) {
     let fs = result.sample_rate_hz;
     let mut others: Vec<std::collections::VecDeque<&Event<GROUP>>> =
         events.iter().skip(1).map(|e| e.iter().collect()).collect();
@@ -395,6 +447,14 @@ fn collect(events: &[Vec<Event<GROUP>>], result: &mut Extraction, channels: usiz
                     .collect();
                 displacement.truncate(channels);
                 noise_sd.truncate(channels);
+                let speed_hz = f64::from(p.speed_hz);
+                let phase = fit.residual_phase_rad(fs / speed_hz);
+                for (sd, d) in noise_sd.iter_mut().zip(&displacement) {
+                    if let Some(sd) = sd {
+                        let q2 = f64::from(d.re).powi(2) + f64::from(d.im).powi(2);
+                        *sd = (*sd * *sd + q2 * phase * phase).sqrt();
+                    }
+                }
                 result.outputs.push(Output {
                     speed_hz: f64::from(p.speed_hz),
                     time_s: p.end.sample as f64 / fs,

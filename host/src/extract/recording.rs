@@ -81,11 +81,24 @@ pub struct Recording {
     /// Volts at |v| ≥ which a float/CSV sample counts as clipped.
     float_rail: Option<f64>,
     source: Source,
+    /// Where it was opened from, and the full scale it was opened with.
+    reopen: (std::path::PathBuf, Option<f64>),
 }
 
 impl Recording {
     /// Opens a WAV (by its `.wav` extension or RIFF header) or CSV recording.
     pub fn open(path: &Path, full_scale_v: Option<f64>) -> Result<Recording> {
+        let mut r = Self::open_any(path, full_scale_v)?;
+        r.reopen = (path.to_path_buf(), full_scale_v);
+        Ok(r)
+    }
+
+    /// The same recording opened again at its start.
+    pub fn reopen(&self) -> Result<Recording> {
+        Self::open(&self.reopen.0, self.reopen.1)
+    }
+
+    fn open_any(path: &Path, full_scale_v: Option<f64>) -> Result<Recording> {
         let file = path.display().to_string();
         let mut head = [0u8; 4];
         crate::input_file::ensure_regular(path).with_context(|| file.clone())?;
@@ -139,6 +152,7 @@ impl Recording {
             format,
             position: 0,
             clipping: vec![Clipping::default(); channels],
+            reopen: (std::path::PathBuf::new(), None),
             float_rail: if float { full_scale_v } else { None },
             source: Source::Wav {
                 reader,
@@ -210,6 +224,7 @@ impl Recording {
             format: "CSV".into(),
             position: 0,
             clipping: vec![Clipping::default(); channels],
+            reopen: (std::path::PathBuf::new(), None),
             float_rail: full_scale_v,
             source: Source::Csv {
                 records,
