@@ -26,18 +26,7 @@ fn data(file: &str) -> PathBuf {
 /// recording's truth.json); the directory is returned to keep it alive.
 fn extracted() -> (tempfile::TempDir, RunDir) {
     let dir = tempfile::tempdir().expect("temporary directory");
-    let out = dir.path().join("run");
-    run(&Args {
-        recording: data("recording.wav"),
-        channels: data("channels.toml"),
-        bearings: data("bearings.csv"),
-        out: out.clone(),
-        slow_roll: None,
-        plots: false,
-        quiet: true,
-        force: false,
-    })
-    .expect("extract");
+    let out = extract_into(data("recording.wav"), dir.path());
     std::fs::copy(data("truth.json"), out.join("truth.json")).expect("truth.json");
     let run = RunDir::read(&out).expect("run directory");
     (dir, run)
@@ -154,18 +143,7 @@ fn a_square_keyphasor_pulse_is_measured_and_counted_in_the_noise_columns() {
         square > 0.8 && ramp < 0.1,
         "jitter {square}° square, {ramp}° 8° edges"
     );
-    let out = dir.path().join("run");
-    run(&Args {
-        recording,
-        channels: data("channels.toml"),
-        bearings: data("bearings.csv"),
-        out: out.clone(),
-        slow_roll: None,
-        plots: false,
-        quiet: true,
-        force: false,
-    })
-    .expect("extract");
+    let out = extract_into(recording, dir.path());
     let got = RunDir::read(&out).expect("run directory");
     let want = expected();
     let mut sums = std::collections::BTreeMap::new();
@@ -227,4 +205,22 @@ fn channels_off(
     }
     assert_eq!(sums.len(), 8, "two bearings, four channels");
     bad
+}
+
+/// `plinth extract` of `recording` with the stored channels and bearings
+/// into `dir`/run; returns that run directory's path.
+fn extract_into(recording: std::path::PathBuf, dir: &std::path::Path) -> std::path::PathBuf {
+    let out = dir.join("run");
+    run(&Args {
+        recording,
+        channels: data("channels.toml"),
+        bearings: data("bearings.csv"),
+        out: out.clone(),
+        slow_roll: None,
+        plots: false,
+        quiet: true,
+        force: false,
+    })
+    .expect("extract");
+    out
 }
