@@ -13,6 +13,11 @@ Usage:
         columns), mean |error|^2/sd^2 (1 when the columns are calibrated);
         with EXPECTED.csv, ROSS's phasors at the rows' speeds written there
         (speed_hz, bearing, then measurements.csv's phasor columns)
+  ross_recording.py --null RUN OUT NEW SEED
+        RUN copied to NEW with every phasor replaced by OUT/steady.npz's at
+        the row's speed plus complex white noise of exactly the row's noise
+        column (sd/sqrt 2 per part): data that follow the columns' own
+        model, to test a reader of the columns apart from the extraction
 KEY=VALUE (defaults): top, bottom [Hz] (the machine's grid), rate=1.0
 [Hz/s, the run-down's deceleration], fs=12800 [samples/s], bits=16,
 probe_mv=5.0 and pickup_mv=1.0 [mV rms of white noise per sample],
@@ -234,8 +239,31 @@ def check(run, out, expected=None):
     return res
 
 
+def null(run, out, new, seed):
+    """--null: RUN's rows with ROSS's phasors plus noise drawn from the columns."""
+    import shutil
+    from scipy.interpolate import CubicSpline
+    shutil.rmtree(new, ignore_errors=True)
+    shutil.copytree(run, new)
+    z = np.load(os.path.join(out, "steady.npz"))
+    rng = np.random.default_rng(int(seed))
+    rows = list(csv.DictReader(open(os.path.join(run, "measurements.csv"))))
+    for r in rows:
+        for c in ru.CHANNELS:
+            q = CubicSpline(z["speeds"], z[f"{r['bearing']}.{c}"])(float(r["speed_hz"]))
+            n = float(r[c + "_sd"]) / math.sqrt(2) * complex(rng.standard_normal(), rng.standard_normal())
+            r[c + "_re"], r[c + "_im"] = f"{(q + n).real:.9e}", f"{(q + n).imag:.9e}"
+    with open(os.path.join(new, "measurements.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
 def main():
     args = sys.argv[1:]
+    if args[:1] == ["--null"] and len(args) == 5:
+        null(*args[1:])
+        return
     if args[:1] == ["--check"] and len(args) in (3, 4):
         check(*args[1:])
         return
