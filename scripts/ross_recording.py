@@ -13,11 +13,20 @@ Usage:
         columns), mean |error|^2/sd^2 (1 when the columns are calibrated);
         with EXPECTED.csv, ROSS's phasors at the rows' speeds written there
         (speed_hz, bearing, then measurements.csv's phasor columns)
+  ross_recording.py --null RUN OUT NEW SEED
+        RUN copied to NEW with every phasor replaced by OUT/steady.npz's at
+        the row's speed plus complex white noise of exactly the row's noise
+        column (sd/sqrt 2 per part): data that follow the columns' own
+        model, to test a reader of the columns apart from the extraction
 KEY=VALUE (defaults): top, bottom [Hz] (the machine's grid), rate=1.0
 [Hz/s, the run-down's deceleration], fs=12800 [samples/s], bits=16,
 probe_mv=5.0 and pickup_mv=1.0 [mV rms of white noise per sample],
 revolutions=4 [per phasor], two_x=0.1 [the 2X, of each channel's rms 1X],
-kp_ramp_deg=2.0 [the keyphasor notch's edges, shaft degrees].
+kp_ramp_deg=2.0 [the keyphasor notch's edges, shaft degrees],
+profile=F0,F1@RATE,~SECONDS,... [the speed: from F0 Hz, then each step
+either to F1 Hz at RATE Hz/s (up or down) or a dwell of SECONDS at the
+speed reached; replaces top, bottom and rate, e.g. profile=50,30@2,~5,
+40@1,10@2: a run-down with a dwell at 30 Hz and a run-up to 40 Hz].
 CASE: "clean" or one of the machine's effects in ross_unseen_machines.py
 whose effects ROSS simulates or that act on the phasors at every speed
 (sub-base, frame, table, cross, runout, delay; not flips or outliers).
@@ -33,6 +42,8 @@ mV/(in/s), reading Re{(i Omega Q + dQ/dt) e^{i theta}}, dQ/dt = Q'(f)
 df/dt); each channel a 2X of fixed phase and white noise; a notch
 keyphasor (-1 V, -9 V in the notch) as the last channel; integer PCM at
 full scale 10 V. Seeded: the seed fixes the noise and theta0.
+With a profile, f(t) is piecewise linear (theta its integral, exact at
+each sample) and dQ/dt = Q'(f) df/dt with df/dt of the sample's segment.
 """
 import csv
 import json
@@ -112,10 +123,17 @@ def make(machine, out, case, seed, opt):
     truth = truth_of(machine, resp, speeds, effects)
     names = list(resp)
     rng = np.random.default_rng(1_000 * seed + 17)
-    duration = (top - bottom) / rate
-    t = np.arange(int(duration * fs)) / fs
-    f = top - rate * t
-    theta = 2 * math.pi * (top * t - 0.5 * rate * t * t) + 2 * math.pi * rng.random()
+    if "profile" in opt:
+        t, f, dfdt, turns = profile(opt["profile"], fs)
+        if f.min() < speeds[0] or f.max() > speeds[-1]:
+            sys.exit(f"profile: speeds {f.min():.3g}..{f.max():.3g} Hz beyond the machine's {speeds[0]}..{speeds[-1]} Hz")
+        theta = 2 * math.pi * turns + 2 * math.pi * rng.random()
+    else:
+        duration = (top - bottom) / rate
+        t = np.arange(int(duration * fs)) / fs
+        f = top - rate * t
+        dfdt = np.full_like(t, -rate)
+        theta = 2 * math.pi * (top * t - 0.5 * rate * t * t) + 2 * math.pi * rng.random()
     rot = np.exp(1j * theta)
     channels, signals = [], []
     for b in names:
@@ -127,7 +145,7 @@ def make(machine, out, case, seed, opt):
                 one = PROBE_V_PER_M * x
                 dc, noise = GAP_V, opt.get("probe_mv", 5.0) * 1e-3
             else:  # velocity: d/dt Re{X e^{i theta}} = Re{(i Omega X + X'(f) df/dt) e^{i theta}}
-                one = PICKUP_V_PER_M_S * (2j * math.pi * f * x + s(f, 1) * (-rate))
+                one = PICKUP_V_PER_M_S * (2j * math.pi * f * x + s(f, 1) * dfdt)
                 dc, noise = 0.0, opt.get("pickup_mv", 1.0) * 1e-3
             rms = math.sqrt(float(np.mean(np.abs(one) ** 2)))
             two = opt.get("two_x", 0.1) * rms * np.exp(1j * (2 * theta + rng.uniform(0, 2 * math.pi)))
@@ -167,6 +185,32 @@ def make(machine, out, case, seed, opt):
              **{f"{b}.{c}": resp[b][c] for b in names for c in ru.CHANNELS})
 
 
+def profile(spec, fs):
+    """(t, f, df/dt, revolutions) at each sample of the profile `spec`
+    (docstring: F0,F1@RATE,~SECONDS,...): f piecewise linear in t, the
+    revolutions its exact integral."""
+    steps = spec.split(",")
+    f0 = float(steps[0])
+    knots = [(0.0, f0)]
+    for step in steps[1:]:
+        t0, fa = knots[-1]
+        if step.startswith("~"):
+            knots.append((t0 + float(step[1:]), fa))
+        else:
+            fb, _, r = step.partition("@")
+            fb, r = float(fb), float(r)
+            knots.append((t0 + abs(fb - fa) / r, fb))
+    kt, kf = np.array([k[0] for k in knots]), np.array([k[1] for k in knots])
+    t = np.arange(int(kt[-1] * fs)) / fs
+    f = np.interp(t, kt, kf)
+    seg = np.clip(np.searchsorted(kt, t, side="right") - 1, 0, len(kt) - 2)
+    slope = (kf[seg + 1] - kf[seg]) / (kt[seg + 1] - kt[seg])
+    # revolutions at each knot, then within the segment: f_k dt + slope dt^2/2
+    at = np.concatenate([[0.0], np.cumsum(0.5 * (kf[1:] + kf[:-1]) * np.diff(kt))])
+    dt = t - kt[seg]
+    return t, f, slope, at[seg] + kf[seg] * dt + 0.5 * slope * dt * dt
+
+
 def check(run, out, expected=None):
     """Prints and returns {(bearing, channel): (rms |err|, rms sd, mean z^2, rows)}."""
     from scipy.interpolate import CubicSpline
@@ -195,8 +239,31 @@ def check(run, out, expected=None):
     return res
 
 
+def null(run, out, new, seed):
+    """--null: RUN's rows with ROSS's phasors plus noise drawn from the columns."""
+    import shutil
+    from scipy.interpolate import CubicSpline
+    shutil.rmtree(new, ignore_errors=True)
+    shutil.copytree(run, new)
+    z = np.load(os.path.join(out, "steady.npz"))
+    rng = np.random.default_rng(int(seed))
+    rows = list(csv.DictReader(open(os.path.join(run, "measurements.csv"))))
+    for r in rows:
+        for c in ru.CHANNELS:
+            q = CubicSpline(z["speeds"], z[f"{r['bearing']}.{c}"])(float(r["speed_hz"]))
+            n = float(r[c + "_sd"]) / math.sqrt(2) * complex(rng.standard_normal(), rng.standard_normal())
+            r[c + "_re"], r[c + "_im"] = f"{(q + n).real:.9e}", f"{(q + n).imag:.9e}"
+    with open(os.path.join(new, "measurements.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
 def main():
     args = sys.argv[1:]
+    if args[:1] == ["--null"] and len(args) == 5:
+        null(*args[1:])
+        return
     if args[:1] == ["--check"] and len(args) in (3, 4):
         check(*args[1:])
         return
@@ -205,7 +272,7 @@ def main():
         machine, args = args[1], args[2:]
     if len(args) < 3 or not (args[1] == "clean" or args[1] in ru.MACHINES[machine]["effects"]):
         sys.exit(__doc__)
-    opt = {k: float(v) for k, v in (a.split("=", 1) for a in args[3:])}
+    opt = {k: (v if k == "profile" else float(v)) for k, v in (a.split("=", 1) for a in args[3:])}
     make(machine, args[0], args[1], int(args[2]), opt)
 
 

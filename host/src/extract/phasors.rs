@@ -65,9 +65,21 @@ pub struct Extraction {
 /// recording of many channels is read in fewer frames at a time).
 pub const BLOCK_BYTES: usize = 16 << 20;
 
+/// The first pass's memory per keyphasor edge [bytes]: the edge times as
+/// they are read (8, up to twice that while the list grows), and while
+/// they are smoothed ([`smooth`]) the smoothed copy (8) and the periods
+/// (8). The smoothed copy (8 per edge) is held through the second pass.
+pub const EDGE_BYTES: u64 = 32;
+
+/// What the smoothed edge list keeps through the second pass [bytes per
+/// edge].
+const HELD_EDGE_BYTES: u64 = 8;
+
 /// What the extraction's memory is made of: a fixed part [bytes] (the
-/// block buffers, the extractors, the channel checks) and what every
-/// phasor output adds [bytes] (its phasors and the run rows made from it).
+/// block buffers, the extractors, the channel checks), what every
+/// keyphasor edge adds [bytes] (the first pass's edge list, see
+/// [`EDGE_BYTES`]) and what every phasor output adds [bytes] (its phasors
+/// and the run rows made from it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ExtractionMemory {
     /// Frames per block read.
@@ -112,10 +124,21 @@ impl ExtractionMemory {
         }
     }
 
-    /// The most outputs and faults [`Self::fixed`] leaves room for in
-    /// `available` bytes (`None`: no bound known).
-    fn most_outputs(&self, available: Option<u64>) -> Option<u64> {
-        available.map(|a| a.saturating_sub(self.fixed) / self.per_output)
+    /// The most outputs and faults [`Self::fixed`] and the smoothed list
+    /// of `edges` keyphasor edges leave room for in `available` bytes
+    /// (`None`: no bound known).
+    fn most_outputs(&self, available: Option<u64>, edges: u64) -> Option<u64> {
+        available.map(|a| {
+            a.saturating_sub(self.fixed)
+                .saturating_sub(edges.saturating_mul(HELD_EDGE_BYTES))
+                / self.per_output
+        })
+    }
+
+    /// The most keyphasor edges the first pass may list in `available`
+    /// bytes besides [`Self::fixed`] (`None`: no bound known).
+    fn most_edges(&self, available: Option<u64>) -> Option<u64> {
+        available.map(|a| a.saturating_sub(self.fixed) / EDGE_BYTES)
     }
 }
 
@@ -186,7 +209,6 @@ pub fn extract_within(
         available,
     )
     .map_err(|e| anyhow::anyhow!("{e}: is it the right channels file?"))?;
-    let most_outputs = memory.most_outputs(available);
     let block_frames = memory.block_frames;
     let groups = config.channels.len().div_ceil(GROUP);
     let mut extractors = Vec::with_capacity(groups);
@@ -235,9 +257,21 @@ pub fn extract_within(
                 }
             }
             position += frames as u64;
+            if let Some(most) = memory.most_edges(available) {
+                if times.len() as u64 > most {
+                    bail!(
+                        "{file}: {} keyphasor edges by {:.3} s: listing them for the edge smoothing ({EDGE_BYTES} bytes an edge) needs more than the {} of memory this machine has available besides the {} the extraction's buffers take: split the recording",
+                        times.len(),
+                        position as f64 / fs,
+                        bytes(available.unwrap_or(0)),
+                        bytes(memory.fixed)
+                    );
+                }
+            }
         }
         smooth(&times)
     };
+    let most_outputs = memory.most_outputs(available, fit.times.len() as u64);
     let mut next_edge = 0usize;
     let mut detector = EdgeDetector::new(&config.keyphasor);
     let mut result = Extraction {
@@ -402,6 +436,15 @@ pub fn extract_within(
     Ok(result)
 }
 
+/// `b` bytes in MB (kB below 1 MB), for messages.
+fn bytes(b: u64) -> String {
+    if b >= 1 << 20 {
+        format!("{} MB", b >> 20)
+    } else {
+        format!("{} kB", b.div_ceil(1 << 10))
+    }
+}
+
 /// Matches the groups' events by revolution into outputs.
 /// Each phasor's noise sd takes the smoothed keyphasor's remaining timing
 /// error as a part proportional to |phasor| (the same phase error on every
@@ -473,8 +516,18 @@ mod tests {
     /// Five channels (two `rel`, two `ped` probes of bearing B1, the
     /// keyphasor) at 6400 Hz, a constant 50 Hz for 2 s: 100 revolutions.
     fn recording(dir: &std::path::Path) -> (std::path::PathBuf, Channels) {
+        recording_of(dir, 12_800, 1)
+    }
+
+    /// [`recording`] of `samples` samples (128 a revolution) and
+    /// `revolutions` a phasor.
+    fn recording_of(
+        dir: &std::path::Path,
+        samples: u32,
+        revolutions: u32,
+    ) -> (std::path::PathBuf, Channels) {
         let mut text = String::from("time_s,r45,r135,p45,p135,kp\n");
-        for i in 0..12_800u32 {
+        for i in 0..samples {
             let t = f64::from(i) / 6400.0;
             let w = 2.0 * std::f64::consts::PI * 50.0 * t;
             let kp = if i % 128 < 8 { -10.0 } else { 0.0 };
@@ -488,8 +541,8 @@ mod tests {
         }
         let path = dir.join("rec.csv");
         std::fs::write(&path, text).unwrap();
-        let mut toml = String::from(
-            "revolutions = 1\n[keyphasor]\nchannel = 4\nthreshold_v = -5.0\nedge = \"falling\"\n",
+        let mut toml = format!(
+            "revolutions = {revolutions}\n[keyphasor]\nchannel = 4\nthreshold_v = -5.0\nedge = \"falling\"\n",
         );
         for (index, (quantity, angle)) in [("rel", 45), ("rel", 135), ("ped", 45), ("ped", 135)]
             .iter()
@@ -521,7 +574,7 @@ mod tests {
             match run(Some(a)) {
                 Ok(e) => {
                     assert!(
-                        m.fixed <= a && k <= m.most_outputs(Some(a)).unwrap(),
+                        m.fixed <= a && k <= m.most_outputs(Some(a), 100).unwrap(),
                         "{kib} KiB"
                     );
                     assert_eq!(e.outputs, reference.outputs, "{kib} KiB");
@@ -535,8 +588,14 @@ mod tests {
                             "{e}"
                         );
                         refused_channels += 1;
+                    } else if m.most_edges(Some(a)).unwrap() < 100 {
+                        assert!(
+                            e.contains("keyphasor edges") && e.contains("rec.csv"),
+                            "{e}"
+                        );
+                        refused_outputs += 1;
                     } else {
-                        assert!(k > m.most_outputs(Some(a)).unwrap(), "{kib} KiB: {e}");
+                        assert!(k > m.most_outputs(Some(a), 100).unwrap(), "{kib} KiB: {e}");
                         assert!(e.contains("phasors") && e.contains("`revolutions`"), "{e}");
                         refused_outputs += 1;
                     }
@@ -547,6 +606,49 @@ mod tests {
             refused_outputs > 0 && refused_channels > 0 && passed > 0,
             "{refused_outputs} {refused_channels} {passed}"
         );
+    }
+
+    #[test]
+    fn an_edge_list_beyond_the_memory_budget_is_refused_before_the_phasors() {
+        // 10 s at 50 Hz: 500 keyphasor edges (16 kB listed) but, at 100
+        // revolutions a phasor, only 4 phasors (under 5 kB of rows).
+        let dir = tempfile::tempdir().unwrap();
+        let (path, config) = recording_of(dir.path(), 64_000, 100);
+        let run = |available: Option<u64>| {
+            let mut r = Recording::open(&path, None).unwrap();
+            extract_within(&mut r, &config, |_| {}, available)
+        };
+        let reference = run(None).unwrap();
+        assert!(reference.edges >= 499, "{} edges", reference.edges);
+        let outputs = reference.outputs.len() as u64;
+        assert!((1..=5).contains(&outputs), "{outputs} outputs");
+        let edges = reference.edges;
+        // A budget with room for the phasors and the smoothed edges, not for
+        // the edge list while it is smoothed.
+        let room = |kib: u64| {
+            let a = kib << 10;
+            let m = ExtractionMemory::new(5, 0, 4, 1, Some(a));
+            (a, m, a.saturating_sub(m.fixed))
+        };
+        let (a, _, _) = (1..4096)
+            .map(room)
+            .find(|&(_, m, r)| {
+                r < edges * EDGE_BYTES && r > outputs * m.per_output + edges * HELD_EDGE_BYTES
+            })
+            .expect("a budget between the phasors' and the edges' needs");
+        let e = run(Some(a))
+            .expect_err("edges beyond the budget")
+            .to_string();
+        assert!(
+            e.contains("rec.csv") && e.contains("keyphasor edges") && e.contains(" kB of memory"),
+            "{e}"
+        );
+        // With room for them it runs, unchanged.
+        let (a, _, _) = (1..4096)
+            .map(room)
+            .find(|&(_, m, r)| r > edges * EDGE_BYTES + outputs * m.per_output)
+            .unwrap();
+        assert_eq!(run(Some(a)).unwrap().outputs, reference.outputs);
     }
 
     #[test]
