@@ -323,10 +323,10 @@ fn flat_columns_over_a_pick_ups_velocity_floor_give_that_floor() {
 /// function of eight numbers estimated from 128 residuals; its error moves
 /// the estimate, and the ± must carry it (estimate::noise::variance,
 /// "uncertainty"). Over 60 seeds the RMS of (estimate − truth)/± of k_y,
-/// k_z and m over both pedestals must lie in 0.90-1.10 (its sampling sd
-/// about 0.04). Measured: main at fd6fbae 1.16 (the ± 14 % narrow, the
-/// variance function's error ignored); with its error carried 1.04
-/// (docs/session40-scatterpm17.md).
+/// k_z and m over both pedestals must lie in 0.92-1.08 (its sampling sd
+/// about 0.04). Measured on these seeds: main's code (fd6fbae) 1.110 (the
+/// variance function's error ignored); with its error carried and the ±
+/// floored by the residuals' sandwich 1.006 (docs/session40-scatterpm17.md).
 #[test]
 fn few_speeds_with_an_estimated_noise_law_keep_their_promise() {
     let speeds: Vec<f64> = (0..32).map(|i| 9.6 + 1.5 * i as f64).collect();
@@ -353,11 +353,17 @@ fn few_speeds_with_an_estimated_noise_law_keep_their_promise() {
         }
     }
     let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
-    eprintln!("RMS z {rms:.3} over {} values, variance function taken {taken}/120", z2.len());
-    assert!(taken >= 60, "the variance function was taken {taken}/120 times");
+    eprintln!(
+        "RMS z {rms:.3} over {} values, variance function taken {taken}/120",
+        z2.len()
+    );
+    assert!(
+        taken >= 60,
+        "the variance function was taken {taken}/120 times"
+    );
     assert!(z2.len() >= 300, "only {} values printed ok", z2.len());
     assert!(
-        (0.90..=1.10).contains(&rms),
+        (0.92..=1.08).contains(&rms),
         "RMS of (estimate − truth)/± of k_y, k_z, m = {rms:.3} over {} values",
         z2.len()
     );

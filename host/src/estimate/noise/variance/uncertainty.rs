@@ -60,10 +60,7 @@ pub fn with_law_uncertainty(
     let mut info = DMatrix::<f64>::zeros(m, m);
     for (s, o) in speeds.iter().zip(obs) {
         let w = s.own.try_inverse()?;
-        let mk: Vec<Matrix4<f64>> = free
-            .iter()
-            .map(|&k| w * s.g[k / 3] * s.factor(k))
-            .collect();
+        let mk: Vec<Matrix4<f64>> = free.iter().map(|&k| w * s.g[k / 3] * s.factor(k)).collect();
         for i in 0..m {
             for j in i..m {
                 let v = 0.5 * mk[i].component_mul(&mk[j].transpose()).sum();
@@ -104,10 +101,7 @@ pub fn with_law_uncertainty(
             out[pr as usize][pk as usize] += added[(r, k)];
         }
     }
-    out.iter()
-        .flatten()
-        .all(|x| x.is_finite())
-        .then_some(out)
+    out.iter().flatten().all(|x| x.is_finite()).then_some(out)
 }
 
 /// The pseudo-inverse of the symmetric positive semi-definite `info`, its
@@ -138,5 +132,7 @@ fn pseudo_inverse(info: &DMatrix<f64>) -> Option<DMatrix<f64>> {
             inv += (u * u.transpose()) / lambda;
         }
     }
-    Some(DMatrix::<f64>::from_fn(n, n, |r, c| d[r] * inv[(r, c)] * d[c]))
+    Some(DMatrix::<f64>::from_fn(n, n, |r, c| {
+        d[r] * inv[(r, c)] * d[c]
+    }))
 }
