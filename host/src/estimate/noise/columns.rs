@@ -75,10 +75,7 @@ pub fn refit(
     fit: &MlFit,
 ) -> Option<Refit> {
     match source {
-        NoiseSource::Scatter => variance::refit(obs, floor, columns, fit).map(|mut r| {
-            widen_to_residuals(&mut r, columns);
-            r
-        }),
+        NoiseSource::Scatter => variance::refit(obs, floor, columns, fit),
         NoiseSource::Columns => {
             let p_value = homoscedasticity_p(obs, &fit.theta, Family::FractionFloor)?;
             if p_value < COLUMNS_P {
