@@ -422,7 +422,7 @@ pub fn equation_covariance(o: &Observation, theta: &[f64; PARAMETERS]) -> Matrix
 
 /// The regression rows A (4×5, eq. 4 in (y re, y im, z re, z im) order) and
 /// right-hand side of one speed, from the shared definition.
-pub(super) fn rows(o: &Observation) -> (SMatrix<f64, 4, PARAMETERS>, Vector4<f64>) {
+pub(crate) fn rows(o: &Observation) -> (SMatrix<f64, 4, PARAMETERS>, Vector4<f64>) {
     let eqs = equations(o.omega(), &o.ped, &o.force());
     let a = SMatrix::<f64, 4, PARAMETERS>::from_fn(|r, c| eqs[r].row[c]);
     let rhs = Vector4::from_fn(|r, _| eqs[r].rhs);

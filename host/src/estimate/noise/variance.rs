@@ -455,7 +455,11 @@ pub fn refit_under(
         }
         current = Some((f, p));
     }
-    let (fit, law) = current?;
+    let (mut fit, law) = current?;
+    // The law is an estimate from these residuals: its error is in the ±.
+    if let Some(c) = with_law_uncertainty(&obs, &fit.theta, &law, columns, &fit.covariance) {
+        fit.covariance = c;
+    }
     Some(Refit {
         fit,
         law,
@@ -477,6 +481,9 @@ pub struct Refit {
     /// The observations with the variance function's variances.
     pub obs: Vec<Observation>,
 }
+
+mod uncertainty;
+pub use uncertainty::with_law_uncertainty;
 
 #[cfg(test)]
 mod tests;

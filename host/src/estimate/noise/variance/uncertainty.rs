@@ -1,0 +1,138 @@
+//! The ± of a fit whose weights are a variance function estimated from the
+//! same fit's residuals ([`super::refit_under`]).
+//!
+//! **Why.** The fit's own covariance F⁻¹ (F = Σ_s Aᵀ·Σ_s⁻¹·A) holds when
+//! each speed's equation covariance Σ_s is the noise's. Under a variance
+//! function fitted to the residuals (α, β per channel: eight numbers from
+//! the 4n residuals of n speeds), Σ_s is itself an estimate, and its error
+//! moves the estimate: on ROSS unseen-five (32 speeds, 3 % noise) the
+//! fractions and floors it finds scatter by factors of 2-30 around the
+//! truth, the estimate's scatter is 10-25 % above the ± and 3 % of clean
+//! `ok` pedestals were more than 3 ± off (docs/session40-scatterpm17.md).
+//!
+//! **Model.** θ̂ solves Σ_s Aᵀ·W_s(p̂)·e_s = 0 with W_s = Σ_s(p)⁻¹ and p̂
+//! the variance function. A small error δp moves it by
+//! δθ = F⁻¹·Σ_s Aᵀ·(∂W_s/∂p_k)·e_s·δp_k with ∂W_s/∂p_k = −W_s·M_sk·W_s
+//! (M_sk = f_k·G_s,ch the covariance component k adds, [`super::Speed`]).
+//! With δp of covariance V_p (the inverse of the pseudo-likelihood's
+//! information, I_kl = ½·Σ_s tr(W_s·M_sk·W_s·M_sl)) and e_s of covariance
+//! Σ_s, the expected covariance this adds is F⁻¹·Δ·F⁻¹ with
+//! Δ = Σ_kl V_p,kl·Σ_s Aᵀ·W_s·M_sk·W_s·M_sl·W_s·A. For one variance scale
+//! (M = Σ, V = 2s²/(4n)) Δ = F·2/(4n): the Student-t factor ν/(ν − 2) to
+//! first order; for a variance function it is that factor's
+//! multi-parameter form, large where a speed's weight rests on a poorly
+//! determined component (a floor the residuals hardly see).
+
+use super::{speeds, COMPONENTS};
+use crate::estimate::ml;
+use crate::estimate::Observation;
+use nalgebra::{DMatrix, Matrix4, SMatrix};
+use plinth_shared::regression::{Parameter, PARAMETERS};
+
+/// Relative eigenvalue below which a direction of the variance function's
+/// information is taken as not estimated (left out of V_p) [-].
+const RANK_TOLERANCE: f64 = 1e-10;
+
+/// The covariance [θ units] of the fit `covariance` (its F⁻¹ over all five
+/// parameters, module docs) of `obs` (their variances the variance function
+/// `law`'s, [`COMPONENTS`]) at `theta` (parameters `columns`), with the
+/// variance function's own estimation error added (module docs): F⁻¹ +
+/// F⁻¹·Δ·F⁻¹. Only the components of `law` that are positive count as
+/// estimated. `None` when a speed's numbers are not finite, a covariance is
+/// singular or the result is not finite.
+pub fn with_law_uncertainty(
+    obs: &[Observation],
+    theta: &[f64; PARAMETERS],
+    law: &[f64; COMPONENTS],
+    columns: &[Parameter],
+    covariance: &[[f64; PARAMETERS]; PARAMETERS],
+) -> Option<[[f64; PARAMETERS]; PARAMETERS]> {
+    let speeds = speeds(obs.iter(), theta)?;
+    let free: Vec<usize> = (0..COMPONENTS).filter(|&k| law[k] > 0.0).collect();
+    let (m, p) = (free.len(), columns.len());
+    if m == 0 || p == 0 || speeds.is_empty() {
+        return Some(*covariance);
+    }
+    // Per speed: W·M_k (each free component) and W·A (the free columns).
+    let mut wm: Vec<Vec<Matrix4<f64>>> = Vec::with_capacity(speeds.len());
+    let mut wa: Vec<DMatrix<f64>> = Vec::with_capacity(speeds.len());
+    let mut a_rows: Vec<DMatrix<f64>> = Vec::with_capacity(speeds.len());
+    let mut info = DMatrix::<f64>::zeros(m, m);
+    for (s, o) in speeds.iter().zip(obs) {
+        let w = s.own.try_inverse()?;
+        let mk: Vec<Matrix4<f64>> = free.iter().map(|&k| w * s.g[k / 3] * s.factor(k)).collect();
+        for i in 0..m {
+            for j in i..m {
+                let v = 0.5 * mk[i].component_mul(&mk[j].transpose()).sum();
+                info[(i, j)] += v;
+                info[(j, i)] = info[(i, j)];
+            }
+        }
+        let (a, _) = ml::rows(o);
+        let a: SMatrix<f64, 4, PARAMETERS> = a;
+        let a = DMatrix::<f64>::from_fn(4, p, |r, c| a[(r, columns[c] as usize)]);
+        let w = DMatrix::<f64>::from_fn(4, 4, |r, c| w[(r, c)]);
+        wa.push(&w * &a);
+        a_rows.push(a);
+        wm.push(mk);
+    }
+    let v = pseudo_inverse(&info)?;
+    let mut delta = DMatrix::<f64>::zeros(p, p);
+    for ((mk, wa), a) in wm.iter().zip(&wa).zip(&a_rows) {
+        // Σ_kl V_kl·W·M_k·W·M_l = Σ_k (W·M_k)·Σ_l V_kl·(W·M_l).
+        let mut sum = Matrix4::<f64>::zeros();
+        for (i, mi) in mk.iter().enumerate() {
+            let mut inner = Matrix4::<f64>::zeros();
+            for (j, mj) in mk.iter().enumerate() {
+                inner += mj * v[(i, j)];
+            }
+            sum += mi * inner;
+        }
+        let sum = DMatrix::<f64>::from_fn(4, 4, |r, c| sum[(r, c)]);
+        delta += a.transpose() * sum * wa;
+    }
+    let c = DMatrix::<f64>::from_fn(p, p, |r, k| {
+        covariance[columns[r] as usize][columns[k] as usize]
+    });
+    let added = &c * (0.5 * (&delta + delta.transpose())) * &c;
+    let mut out = *covariance;
+    for (r, &pr) in columns.iter().enumerate() {
+        for (k, &pk) in columns.iter().enumerate() {
+            out[pr as usize][pk as usize] += added[(r, k)];
+        }
+    }
+    out.iter().flatten().all(|x| x.is_finite()).then_some(out)
+}
+
+/// The pseudo-inverse of the symmetric positive semi-definite `info`, its
+/// directions below [`RANK_TOLERANCE`] of the largest eigenvalue (after
+/// Jacobi scaling) left out; `None` when it has no positive direction.
+fn pseudo_inverse(info: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let n = info.nrows();
+    let d: Vec<f64> = (0..n)
+        .map(|k| {
+            let x = info[(k, k)];
+            if x > 0.0 && x.is_finite() {
+                1.0 / x.sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let scaled = DMatrix::<f64>::from_fn(n, n, |r, c| d[r] * info[(r, c)] * d[c]);
+    let eig = scaled.symmetric_eigen();
+    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+    if !(top > 0.0 && top.is_finite()) {
+        return None;
+    }
+    let mut inv = DMatrix::<f64>::zeros(n, n);
+    for (i, &lambda) in eig.eigenvalues.iter().enumerate() {
+        if lambda > RANK_TOLERANCE * top {
+            let u = eig.eigenvectors.column(i);
+            inv += (u * u.transpose()) / lambda;
+        }
+    }
+    Some(DMatrix::<f64>::from_fn(n, n, |r, c| {
+        d[r] * inv[(r, c)] * d[c]
+    }))
+}
