@@ -236,9 +236,8 @@ pub fn judge_machine(
         MachineCheck::CannotJudge { .. } if unit_scale.is_some() => {
             if let Some(u) = unit_scale {
                 let why = super::machine::unit_scale::reason(u, gap, floor, check);
-                d.verdict += &format!(
-                    " But {why}, so the identified parameters are not to be trusted."
-                );
+                d.verdict +=
+                    &format!(" But {why}, so the identified parameters are not to be trusted.");
                 d.trust_reasons.push(why);
                 d.trusted = false;
                 d.unit_scale = Some(u.clone());

@@ -340,7 +340,12 @@ impl MachineCheck {
 fn scale_like_effects(outcome: &crate::diagnose::Outcome) -> Vec<(String, Vec<usize>)> {
     let prep = &outcome.prep;
     let mut out = Vec::new();
-    for st in outcome.diagnosis.steps.iter().filter(|s| s.dropped.is_none()) {
+    for st in outcome
+        .diagnosis
+        .steps
+        .iter()
+        .filter(|s| s.dropped.is_none())
+    {
         let bearings: Vec<usize> = match st.effect.as_str() {
             "bearing_coefficients" | "pedestal_sub_base" => {
                 prep.bearing_index(&st.bearing).into_iter().collect()

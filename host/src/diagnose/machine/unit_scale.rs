@@ -402,9 +402,12 @@ pub fn find(
     if !fails {
         first.also_fits.extend(named.iter().map(|(w, _)| w.clone()));
     }
-    first
-        .also_fits
-        .extend(found.iter().skip(1).map(|u| format!("{} (gap {:.4})", short(u), u.gap)));
+    first.also_fits.extend(
+        found
+            .iter()
+            .skip(1)
+            .map(|u| format!("{} (gap {:.4})", short(u), u.gap)),
+    );
     Some(first)
 }
 
@@ -456,14 +459,19 @@ pub fn reason(u: &UnitScale, final_gap: f64, floor: f64, check: MachineCheck) ->
     } else {
         format!(" (these pass too: {})", u.also_fits.join("; "))
     };
-    let as_read = if matches!(check, MachineCheck::CannotJudge { .. }) {
-        "the machine-level check cannot judge the identified model (its limit is too wide"
+    let (as_read, but) = if matches!(check, MachineCheck::CannotJudge { .. }) {
+        (
+            "the machine-level check cannot judge the identified model (its limit is too wide: ",
+            "the base model passes it",
+        )
     } else {
-        "the machine re-simulated with the identified model does not reproduce the measurements ("
+        (
+            "the machine re-simulated with the identified model does not reproduce the measurements (",
+            "it does",
+        )
     };
-    let sep = if as_read.ends_with('(') { "" } else { ": " };
     format!(
-        "{as_read}{sep}machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but it does {scale}{others}. A unit or scale mistake on {transducers} is likely (an import's unit or peak convention): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor"
+        "{as_read}machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but {but} {scale}{others}. A unit or scale mistake on {transducers} is likely (an import's unit or peak convention): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor"
     )
 }
 
