@@ -220,9 +220,29 @@ pub fn judge_machine(
     let check = MachineCheck::of(gap, floor);
     d.machine_check_informative = Some(!matches!(check, MachineCheck::CannotJudge { .. }));
     match check {
-        MachineCheck::Agrees => {}
+        // A scale at a named effect's bearing passes as well: the check
+        // cannot tell the two readings apart (`machine::unit_scale::find`).
+        MachineCheck::Agrees => {
+            if let Some(u) = unit_scale {
+                let why = super::machine::unit_scale::reason(u, gap, floor, check);
+                d.verdict += &format!(" But {why}.");
+                d.trust_reasons.push(why);
+                d.trusted = false;
+                d.unit_scale = Some(u.clone());
+            }
+        }
         // A limit this wide passes nearly any model: the check is said not
         // to have judged, rather than read as a confirmation.
+        MachineCheck::CannotJudge { .. } if unit_scale.is_some() => {
+            if let Some(u) = unit_scale {
+                let why = super::machine::unit_scale::reason(u, gap, floor, check);
+                d.verdict +=
+                    &format!(" But {why}, so the identified parameters are not to be trusted.");
+                d.trust_reasons.push(why);
+                d.trusted = false;
+                d.unit_scale = Some(u.clone());
+            }
+        }
         MachineCheck::CannotJudge { limit } => {
             d.verdict += &format!(
                 " The machine-level check cannot judge this model: its noise floor {floor:.3} (the identified parameters' own ± carried through the re-simulation) lets a gap up to {limit:.3} pass, so the verdict rests on the pedestal-level checks alone."
@@ -230,7 +250,7 @@ pub fn judge_machine(
         }
         MachineCheck::Disagrees { limit } => {
             let why = match unit_scale {
-                Some(u) => unit_scale_reason(u, gap, floor, limit),
+                Some(u) => super::machine::unit_scale::reason(u, gap, floor, check),
                 None => format!(
                     "the machine re-simulated with the identified model does not reproduce the measurements: machine-level gap {gap:.4} (noise floor {floor:.4}, limit {limit:.4}); the machine file (rotor, unbalance, bearing table or base) does not describe the machine of this run"
                 ),
@@ -243,31 +263,6 @@ pub fn judge_machine(
             d.unit_scale = unit_scale.cloned();
         }
     }
-}
-
-/// The reason of a failed machine-level check that one scale on every
-/// transducer of one kind explains (`machine::unit_scale`) [text].
-fn unit_scale_reason(
-    u: &super::machine::unit_scale::UnitScale,
-    gap: f64,
-    floor: f64,
-    limit: f64,
-) -> String {
-    use super::machine::unit_scale::Kind;
-    let kind = u.kind.columns();
-    let s = u.factor;
-    let pedestals = match u.kind {
-        Kind::Rel => format!("their k, m, c and runouts ÷ {s:.3}"),
-        Kind::Ped => format!("their k, m, c × {s:.3}"),
-    };
-    let nearest = match &u.nearest {
-        Some(n) => format!(": the common unit factor {n}"),
-        None => ", near no common unit factor".to_string(),
-    };
-    format!(
-        "the machine re-simulated with the identified model does not reproduce the measurements (machine-level gap {gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but it does with every `{kind}` reading divided by {s:.4} (gap {:.4}, noise floor {:.4}; pedestals {pedestals}){nearest}. A unit or scale mistake on every `{kind}` transducer is likely (an import's unit or peak convention): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor",
-        u.gap, u.floor
-    )
 }
 
 /// What the machine-level check says of a final model's gap.
@@ -289,12 +284,18 @@ pub enum MachineCheck {
 }
 
 impl MachineCheck {
+    /// The limit of a gap whose noise floor is `floor` [-]:
+    /// [`AT_THE_FLOOR`] × floor, at least [`MACHINE_TOLERANCE`] [-].
+    pub fn limit(floor: f64) -> f64 {
+        (AT_THE_FLOOR * floor).max(MACHINE_TOLERANCE)
+    }
+
     /// Judges a machine-level gap `gap` [-] against its noise floor `floor`
     /// [-]: the limit is [`AT_THE_FLOOR`] × floor, at least
     /// [`MACHINE_TOLERANCE`]. A gap above the limit (or not finite)
     /// disagrees even when the limit is wide.
     pub fn of(gap: f64, floor: f64) -> Self {
-        let limit = (AT_THE_FLOOR * floor).max(MACHINE_TOLERANCE);
+        let limit = Self::limit(floor);
         if !gap.is_finite() || gap > limit {
             Self::Disagrees { limit }
         } else if limit > MACHINE_INFORMATIVE_LIMIT {

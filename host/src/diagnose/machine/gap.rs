@@ -174,9 +174,11 @@ pub struct MachineCheck {
     /// ([`crate::diagnose::trust::base_model_findings`]): unexplained again
     /// when the step at them does not lower the machine-level gap.
     pub support: Vec<(String, String)>,
-    /// When the final model fails the check: a scale on every transducer
-    /// of one kind that brings the base model within it
-    /// ([`super::unit_scale::find`]), said as the likely cause.
+    /// When the final model fails the check: a scale on the transducers
+    /// of one kind (every bearing's or one bearing's) that brings the base
+    /// model within it ([`super::unit_scale::find`]), said as the likely
+    /// cause; when it passes with a scale-like effect named, a scale at
+    /// that effect's bearing that passes too (neither trusted).
     pub unit_scale: Option<super::unit_scale::UnitScale>,
 }
 
@@ -255,20 +257,21 @@ impl MachineCheck {
             _ => 0.0,
         };
         let foundation = (outcome.after_steps.last()).is_some_and(|(_, b)| b.is_some());
-        // Only a model that fails the check is asked for a unit mistake.
+        // A model that fails the check (or that the check cannot judge) is
+        // asked for a unit mistake anywhere; one that passes, at the
+        // bearings of its scale-like effects (`unit_scale::find`).
         let fails = match (outcome.after_steps.is_empty(), &after) {
             (true, _) => gap_before,
             (false, Some(_)) => gaps_after.last().copied().flatten(),
             (false, None) => None,
         }
         .is_some_and(|g| {
-            matches!(
-                crate::diagnose::trust::MachineCheck::of(g, floor),
-                crate::diagnose::trust::MachineCheck::Disagrees { .. }
-            )
+            crate::diagnose::trust::MachineCheck::of(g, floor)
+                != crate::diagnose::trust::MachineCheck::Agrees
         });
-        let unit_scale = if fails {
-            super::unit_scale::find(machine, prep, first)
+        let named = scale_like_effects(outcome);
+        let unit_scale = if fails || !named.is_empty() {
+            super::unit_scale::find(machine, prep, first, fails, &named)
         } else {
             None
         };
@@ -328,6 +331,36 @@ impl MachineCheck {
             d.verdict += &format!(" Note: {note}.");
         }
     }
+}
+
+/// The effects the final model of `outcome` carries that a scale on one
+/// bearing's transducers also explains at the pedestal level (a table
+/// scale, a sub-base, a base: [`super::unit_scale`]), each as its words
+/// and its bearings' indices.
+fn scale_like_effects(outcome: &crate::diagnose::Outcome) -> Vec<(String, Vec<usize>)> {
+    let prep = &outcome.prep;
+    let mut out = Vec::new();
+    for st in outcome
+        .diagnosis
+        .steps
+        .iter()
+        .filter(|s| s.dropped.is_none())
+    {
+        let bearings: Vec<usize> = match st.effect.as_str() {
+            "bearing_coefficients" | "pedestal_sub_base" => {
+                prep.bearing_index(&st.bearing).into_iter().collect()
+            }
+            "foundation_coupling" => (0..prep.bearings.len()).collect(),
+            _ => continue,
+        };
+        let words = if st.effect == "foundation_coupling" {
+            "`foundation_coupling`".to_string()
+        } else {
+            format!("`{}` at {}", st.effect, st.bearing)
+        };
+        out.push((words, bearings));
+    }
+    out
 }
 
 /// Per step, the standard deviation of its machine-level gap change

@@ -1,6 +1,6 @@
-//! One scale on every transducer of one kind (a unit mistake of an import:
-//! µm read as mm, mil as µm, 0-pk as pp, rms as pk), as the machine-level
-//! check sees it.
+//! One scale on the transducers of one kind, every bearing's or one
+//! bearing's (a unit mistake of an import: µm read as mm, mil as µm, 0-pk as
+//! pp, rms as pk), as the machine-level check sees it.
 //!
 //! The pedestal equation Z·ped = K*·(rel − r) (Z = k − Ω²m + iΩc) is
 //! homogeneous: every `rel` reading s times its true value identifies
@@ -14,6 +14,18 @@
 //! ped/s, pedestals s·Z. Each is re-simulated for s over a wide range and
 //! judged as the machine-level check judges a model
 //! ([`crate::diagnose::trust::MachineCheck`]: gap against 3× its floor).
+//!
+//! The same holds for one bearing's transducers (session 40,
+//! docs/session40-partialunit17.md): one bearing's `rel` s times their true
+//! value identify that pedestal (and its runouts) s times its own, exactly
+//! what a bearing table s times too stiff and too damped at that bearing
+//! gives, so the pedestal level cannot tell the two apart and `diagnose`
+//! may name `bearing_coefficients`, a sub-base or a base there. The machine
+//! file can tell them apart where the rotor's response depends on that
+//! bearing: a table scale changes the rotor's motion, a unit mistake only
+//! the readings. Each reading is re-simulated and judged by the check; the
+//! one that passes is named, and where both the named effect and the unit
+//! mistake pass, both are said and neither is trusted ([`Reading`]).
 
 use super::{machine_floor, machine_gap, resimulate, Readings};
 use crate::diagnose::data::Prepared;
@@ -49,6 +61,10 @@ impl Kind {
 pub struct UnitScale {
     /// The transducers whose readings look scaled.
     pub kind: Kind,
+    /// The bearing whose transducers of `kind` look scaled; absent: every
+    /// bearing's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bearing: Option<String>,
     /// The factor s the readings look to carry: measured = s × true [-].
     pub factor: f64,
     /// Machine-level gap of the base model with those readings divided by
@@ -60,6 +76,25 @@ pub struct UnitScale {
     /// mistake it stands for, when one is.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub nearest: Option<String>,
+    /// The factors whose hypothesis stays within the check's limit (the
+    /// profile of the gap over s, with the floor of `factor`): every s the
+    /// machine file cannot tell from `factor` [-]. Not a standard error.
+    pub factor_interval: [f64; 2],
+    /// The other readings of the run that pass the machine-level check as
+    /// well (the named effects, other scales), when any: then the check
+    /// cannot tell them apart and none is trusted.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub also_fits: Vec<String>,
+}
+
+/// Where the scale of a hypothesis is put: every bearing's transducers of
+/// one kind, or one bearing's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Reading {
+    /// The transducers.
+    pub kind: Kind,
+    /// The bearing (index into the run's bearings); `None`: every bearing.
+    pub bearing: Option<usize>,
 }
 
 /// Common unit factors of vibration transducers [-] and the mistakes they
@@ -76,6 +111,15 @@ const COMMON: [(f64, &str); 6] = [
 /// The search range of s: 10^±LOG_RANGE [-] (beyond m against µm).
 const LOG_RANGE: f64 = 6.5;
 
+/// The search range of one bearing's s: 10^±LOG_RANGE_ONE [-] (beyond mm
+/// against µm; m against µm on one bearing alone puts its |ped|/|rel|
+/// beyond what machines give, and the reader names it:
+/// docs/identify.md, "Plausibility").
+const LOG_RANGE_ONE: f64 = 3.5;
+
+/// Step of log10 s of the factor's interval walk [-] (0.46 % in s).
+const INTERVAL_STEP: f64 = 0.002;
+
 /// Grid step of log10 s before the golden-section refinement [-]: 0.93 %
 /// in s. The open-loop re-simulation makes the gap's valley around the
 /// right s narrow where a lightly damped resonance lies in the run
@@ -85,17 +129,25 @@ const LOG_RANGE: f64 = 6.5;
 /// machine.
 const LOG_STEP: f64 = 0.004;
 
-/// `prep` and the base model `state` as hypothesis s on `kind` makes them
-/// (module docs): readings divided by s (variances by s²), pedestal terms
-/// and runouts scaled as the equation's homogeneity says, the noise weights
-/// propagated afresh.
-pub fn hypothesis(prep: &Prepared, state: &State, kind: Kind, s: f64) -> (Prepared, State) {
+/// `prep` and the base model `state` as hypothesis s on `reading` makes
+/// them (module docs): its readings divided by s (variances by s²), its
+/// bearings' pedestal terms and runouts scaled as the equation's
+/// homogeneity says, the noise weights propagated afresh.
+pub fn hypothesis(prep: &Prepared, state: &State, reading: Reading, s: f64) -> (Prepared, State) {
     let mut p = prep.clone();
+    let kind = reading.kind;
     let range = match kind {
         Kind::Rel => 0..4,
         Kind::Ped => 4..8,
     };
-    for o in p.points.iter_mut().flatten().flatten() {
+    let chosen = |b: usize| reading.bearing.is_none_or(|j| j == b);
+    for o in p
+        .points
+        .iter_mut()
+        .enumerate()
+        .filter(|(b, _)| chosen(*b))
+        .flat_map(|(_, row)| row.iter_mut().flatten())
+    {
         let x = match kind {
             Kind::Rel => &mut o.rel,
             Kind::Ped => &mut o.ped,
@@ -109,6 +161,9 @@ pub fn hypothesis(prep: &Prepared, state: &State, kind: Kind, s: f64) -> (Prepar
     }
     let mut st = state.clone();
     for (t, v) in st.model.terms.iter().zip(st.params.beta.iter_mut()) {
+        if !t.bearings().into_iter().flatten().any(chosen) {
+            continue;
+        }
         let runout = matches!(t, Term::Runout { .. });
         *v *= match kind {
             Kind::Rel => 1.0 / s,
@@ -122,26 +177,38 @@ pub fn hypothesis(prep: &Prepared, state: &State, kind: Kind, s: f64) -> (Prepar
 
 /// The machine-level gap of hypothesis s on `kind` (`None` where that
 /// model cannot be simulated) [-].
-fn gap_of(machine: &Machine, prep: &Prepared, state: &State, kind: Kind, s: f64) -> Option<f64> {
-    let (p, st) = hypothesis(prep, state, kind, s);
+fn gap_of(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    reading: Reading,
+    s: f64,
+) -> Option<f64> {
+    let (p, st) = hypothesis(prep, state, reading, s);
     let r: Readings = resimulate(machine, &p, &st, None).ok()?;
     Some(machine_gap(&p, &r)).filter(|g| g.is_finite())
 }
 
-/// The s of `kind` that minimises the base model's machine-level gap:
-/// a grid of log10 s over ±[`LOG_RANGE`] in steps of [`LOG_STEP`], then a
-/// golden-section search within a step either side of the grid's best.
+/// The s of `reading` that minimises the base model's machine-level gap:
+/// a grid of log10 s over ±[`LOG_RANGE`] (one bearing: ±[`LOG_RANGE_ONE`])
+/// in steps of [`LOG_STEP`], then a golden-section search within a step
+/// either side of the grid's best.
 fn best_factor(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
-    kind: Kind,
+    reading: Reading,
 ) -> Option<(f64, f64)> {
-    let g = |l: f64| gap_of(machine, prep, state, kind, 10f64.powf(l));
-    let n = (2.0 * LOG_RANGE / LOG_STEP).round() as i32;
+    let g = |l: f64| gap_of(machine, prep, state, reading, 10f64.powf(l));
+    let range = if reading.bearing.is_some() {
+        LOG_RANGE_ONE
+    } else {
+        LOG_RANGE
+    };
+    let n = (2.0 * range / LOG_STEP).round() as i32;
     let (mut best_l, mut best_g) = (0.0, g(0.0)?);
     for i in 0..=n {
-        let l = -LOG_RANGE + LOG_STEP * f64::from(i);
+        let l = -range + LOG_STEP * f64::from(i);
         if let Some(v) = g(l) {
             if v < best_g {
                 (best_l, best_g) = (l, v);
@@ -192,46 +259,220 @@ pub fn nearest_common(s: f64) -> Option<String> {
     })
 }
 
-/// A scale on one kind of transducer that the machine file finds, when the
-/// base model `state` fails the machine-level check: the hypothesis of the
-/// kind (rel, then ped) whose best s brings the base model's gap within
-/// the check's limit ([`MachineCheck::of`] agrees), the smaller gap when
-/// both do. `None` when the base model already agrees (no scale is seen:
-/// s = 1 passes), or when no single scale on one kind explains the
-/// disagreement (another cause: the file's rotor, unbalance or table).
-pub fn find(machine: &Machine, prep: &Prepared, state: &State) -> Option<UnitScale> {
-    let r = resimulate(machine, prep, state, None).ok()?;
-    let gap = machine_gap(prep, &r);
-    let floor = machine_floor(machine, prep, state, None, &r).ok()?;
-    if !matches!(MachineCheck::of(gap, floor), MachineCheck::Disagrees { .. }) {
+/// The factors around `s` [-] whose hypothesis on `reading` stays within
+/// the check's limit for the floor `floor` [-]: log10 s walked outward in
+/// steps of [`INTERVAL_STEP`] until the gap leaves it (at most 0.5 either
+/// side).
+fn interval(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    reading: Reading,
+    s: f64,
+    floor: f64,
+) -> [f64; 2] {
+    let passes = |l: f64| {
+        gap_of(machine, prep, state, reading, 10f64.powf(l))
+            .is_some_and(|g| MachineCheck::of(g, floor) == MachineCheck::Agrees)
+    };
+    let l0 = s.log10();
+    let edge = |dir: f64| {
+        let mut l = l0;
+        for _ in 0..250 {
+            if !passes(l + dir * INTERVAL_STEP) {
+                break;
+            }
+            l += dir * INTERVAL_STEP;
+        }
+        10f64.powf(l)
+    };
+    [edge(-1.0), edge(1.0)]
+}
+
+/// The hypothesis `reading` at its best s, when it brings the base model
+/// `state` within the machine-level check's limit ([`MachineCheck::of`]
+/// agrees, its own floor).
+fn passing(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    reading: Reading,
+) -> Option<UnitScale> {
+    let (s, g) = best_factor(machine, prep, state, reading)?;
+    let (p, st) = hypothesis(prep, state, reading, s);
+    let r = resimulate(machine, &p, &st, None).ok()?;
+    let f = machine_floor(machine, &p, &st, None, &r).ok()?;
+    if MachineCheck::of(g, f) != MachineCheck::Agrees {
         return None;
     }
-    let mut found: Option<UnitScale> = None;
-    for kind in [Kind::Rel, Kind::Ped] {
-        let Some((s, g)) = best_factor(machine, prep, state, kind) else {
-            continue;
-        };
-        let (p, st) = hypothesis(prep, state, kind, s);
-        let Ok(r) = resimulate(machine, &p, &st, None) else {
-            continue;
-        };
-        let Ok(f) = machine_floor(machine, &p, &st, None, &r) else {
-            continue;
-        };
-        if MachineCheck::of(g, f) != MachineCheck::Agrees {
-            continue;
+    // The evidence: the readings as they are (s = 1) fail the yardstick
+    // under which s passes. A wide limit of the model as read (the check
+    // cannot judge it) is no evidence for a scale that merely narrows it.
+    let as_read = gap_of(machine, prep, state, reading, 1.0)?;
+    if MachineCheck::of(as_read, f) == MachineCheck::Agrees {
+        return None;
+    }
+    Some(UnitScale {
+        kind: reading.kind,
+        bearing: reading.bearing.and_then(|b| prep.bearings.get(b).cloned()),
+        factor: s,
+        gap: g,
+        floor: f,
+        nearest: nearest_common(s),
+        factor_interval: interval(machine, prep, state, reading, s, f),
+        also_fits: Vec::new(),
+    })
+}
+
+/// The scale in words: `\`rel\` of B2 × 0.0394` [text].
+fn short(u: &UnitScale) -> String {
+    let at = u
+        .bearing
+        .as_deref()
+        .map_or(" (every bearing)".to_string(), |b| format!(" of {b}"));
+    format!("`{}`{at} ÷ {:.4}", u.kind.columns(), u.factor)
+}
+
+/// A scale on the transducers of one kind (every bearing's, or one
+/// bearing's) that the machine file finds, for the base model `state`.
+///
+/// `fails`: the final model fails the machine-level check or the check
+/// cannot judge it (its limit is too wide). Then every
+/// reading is tried (every bearing's `rel`, `ped`, then each bearing's),
+/// and the one whose best s brings the base model within the check's limit
+/// with the smallest gap is returned, the other passing ones in
+/// `also_fits`. `None` when the base model already agrees (s = 1 passes)
+/// or when no scale explains the disagreement (another cause: the file's
+/// rotor, unbalance or table).
+///
+/// Otherwise (the final model passes): `named` are the effects the final
+/// model carries that a scale at one bearing also explains at the pedestal
+/// level (`bearing_coefficients`, `pedestal_sub_base`,
+/// `foundation_coupling`), each as (its words, its bearings' indices).
+/// Each of their bearings' `rel` and `ped` is tried; a passing one is
+/// returned with the named effects in `also_fits`: the machine file cannot
+/// tell the two readings apart, and neither is to be trusted.
+pub fn find(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    fails: bool,
+    named: &[(String, Vec<usize>)],
+) -> Option<UnitScale> {
+    let nb = prep.bearings.len();
+    let mut readings: Vec<Reading> = Vec::new();
+    let kinds = [Kind::Rel, Kind::Ped];
+    if fails {
+        let r = resimulate(machine, prep, state, None).ok()?;
+        let gap = machine_gap(prep, &r);
+        let floor = machine_floor(machine, prep, state, None, &r).ok()?;
+        if MachineCheck::of(gap, floor) == MachineCheck::Agrees {
+            return None;
         }
-        if found.as_ref().is_none_or(|u| g < u.gap) {
-            found = Some(UnitScale {
+        readings.extend(kinds.map(|kind| Reading {
+            kind,
+            bearing: None,
+        }));
+        // One bearing of a one-bearing run is every bearing.
+        if nb > 1 {
+            for b in 0..nb {
+                readings.extend(kinds.map(|kind| Reading {
+                    kind,
+                    bearing: Some(b),
+                }));
+            }
+        }
+    } else {
+        let mut at: Vec<usize> = named.iter().flat_map(|(_, b)| b.clone()).collect();
+        at.sort_unstable();
+        at.dedup();
+        for b in at.into_iter().filter(|&b| b < nb) {
+            readings.extend(kinds.map(|kind| Reading {
                 kind,
-                factor: s,
-                gap: g,
-                floor: f,
-                nearest: nearest_common(s),
-            });
+                bearing: Some(b),
+            }));
         }
     }
-    found
+    let mut found: Vec<UnitScale> = readings
+        .into_iter()
+        .filter_map(|r| passing(machine, prep, state, r))
+        .collect();
+    found.sort_by(|a, b| a.gap.total_cmp(&b.gap));
+    let mut first = found.first()?.clone();
+    if !fails {
+        first.also_fits.extend(named.iter().map(|(w, _)| w.clone()));
+    }
+    first.also_fits.extend(
+        found
+            .iter()
+            .skip(1)
+            .map(|u| format!("{} (gap {:.4})", short(u), u.gap)),
+    );
+    Some(first)
+}
+
+/// The reason of a machine-level check that a scale on some transducers
+/// explains: `final_gap` (the final model's) against its `floor` as
+/// `check` judged it [text].
+pub fn reason(u: &UnitScale, final_gap: f64, floor: f64, check: MachineCheck) -> String {
+    let limit = match check {
+        MachineCheck::Disagrees { limit } | MachineCheck::CannotJudge { limit } => limit,
+        MachineCheck::Agrees => MachineCheck::limit(floor),
+    };
+    let kind = u.kind.columns();
+    let s = u.factor;
+    let (readings, transducers) = match &u.bearing {
+        Some(b) => (
+            format!("{b}'s `{kind}` readings"),
+            format!("the `{kind}` transducers of {b}"),
+        ),
+        None => (
+            format!("every `{kind}` reading"),
+            format!("every `{kind}` transducer"),
+        ),
+    };
+    let at = u
+        .bearing
+        .as_deref()
+        .map_or(String::new(), |b| format!(" at {b}"));
+    let pedestals = match u.kind {
+        Kind::Rel => format!("pedestals{at} k, m, c and runouts ÷ {s:.3}"),
+        Kind::Ped => format!("pedestals{at} k, m, c × {s:.3}"),
+    };
+    let nearest = match &u.nearest {
+        Some(n) => format!(": the common unit factor {n}"),
+        None => ", near no common unit factor".to_string(),
+    };
+    let [lo, hi] = u.factor_interval;
+    let scale = format!(
+        "with {readings} divided by {s:.4} (gap {:.4}, noise floor {:.4}; {pedestals}; factors {lo:.4} to {hi:.4} pass){nearest}",
+        u.gap, u.floor
+    );
+    if check == MachineCheck::Agrees {
+        return format!(
+            "the machine-level check cannot tell the named {} from a unit or scale mistake on {transducers}: the identified model passes it (machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), and so does the base model {scale}. Check the units of {transducers} (an import's unit or peak convention); neither reading is trusted",
+            u.also_fits.join(", ")
+        );
+    }
+    let others = if u.also_fits.is_empty() {
+        String::new()
+    } else {
+        format!(" (these pass too: {})", u.also_fits.join("; "))
+    };
+    let (as_read, but) = if matches!(check, MachineCheck::CannotJudge { .. }) {
+        (
+            "the machine-level check cannot judge the identified model (its limit is too wide: ",
+            "the base model passes it",
+        )
+    } else {
+        (
+            "the machine re-simulated with the identified model does not reproduce the measurements (",
+            "it does",
+        )
+    };
+    format!(
+        "{as_read}machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but {but} {scale}{others}. A unit or scale mistake on {transducers} is likely (an import's unit or peak convention): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor"
+    )
 }
 
 #[cfg(test)]
