@@ -1,5 +1,5 @@
 //! A unit mistake on one bearing's transducers (session 40,
-//! docs/session40-partialunit17.md): one bearing's `rel` s times their true
+//! docs/robustness-hostile.md "Session 40 (partialunit17)"): one bearing's `rel` s times their true
 //! value identify that pedestal s times its own (exactly what a bearing
 //! table s times too stiff gives there), so `plinth identify` cannot tell;
 //! the machine file can where the rotor's response depends on that

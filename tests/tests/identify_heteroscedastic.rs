@@ -326,7 +326,7 @@ fn flat_columns_over_a_pick_ups_velocity_floor_give_that_floor() {
 /// k_z and m over both pedestals must lie in 0.92-1.08 (its sampling sd
 /// about 0.04). Measured on these seeds: main's code (fd6fbae) 1.110 (the
 /// variance function's error ignored); with its error carried 1.046
-/// (docs/session40-scatterpm17.md).
+/// (docs/estimation-scatter.md "Session 40 (scatterpm17)").
 #[test]
 fn few_speeds_with_an_estimated_noise_law_keep_their_promise() {
     let speeds: Vec<f64> = (0..32).map(|i| 9.6 + 1.5 * i as f64).collect();

@@ -16,7 +16,7 @@
 //! ([`crate::diagnose::trust::MachineCheck`]: gap against 3× its floor).
 //!
 //! The same holds for one bearing's transducers (session 40,
-//! docs/session40-partialunit17.md): one bearing's `rel` s times their true
+//! docs/robustness-hostile.md "Session 40 (partialunit17)"): one bearing's `rel` s times their true
 //! value identify that pedestal (and its runouts) s times its own, exactly
 //! what a bearing table s times too stiff and too damped at that bearing
 //! gives, so the pedestal level cannot tell the two apart and `diagnose`
@@ -114,7 +114,7 @@ const LOG_RANGE: f64 = 6.5;
 /// The search range of one bearing's s: 10^±LOG_RANGE_ONE [-] (beyond mm
 /// against µm; m against µm on one bearing alone puts its |ped|/|rel|
 /// beyond what machines give, and the reader names it:
-/// docs/identify.md, "Plausibility").
+/// docs/identify.md "Physical plausibility").
 const LOG_RANGE_ONE: f64 = 3.5;
 
 /// Step of log10 s of the factor's interval walk [-] (0.46 % in s).

@@ -187,7 +187,7 @@ const FOUR_B3: Lab = Lab {
 /// (session 40, runoutpm17): RMS z 0.82/0.83/0.83, mean z −0.17/−0.19/−0.19;
 /// a ± a quarter short (session 39's reading of seeds 161-181) would give
 /// RMS z about 1.3. A guard: it passes on main too (the shortfall was not
-/// found on fresh seeds, docs/session40-runoutpm17.md).
+/// found on fresh seeds, docs/unseen.md "Session 40 (runoutpm17)").
 #[test]
 fn the_final_pedestal_std_err_covers_a_runout_trade() {
     let r = [

@@ -8,7 +8,7 @@
 //! moves the estimate: on ROSS unseen-five (32 speeds, 3 % noise) the
 //! fractions and floors it finds scatter by factors of 2-30 around the
 //! truth, the estimate's scatter is 10-25 % above the ± and 3 % of clean
-//! `ok` pedestals were more than 3 ± off (docs/session40-scatterpm17.md).
+//! `ok` pedestals were more than 3 ± off (docs/estimation-scatter.md "Session 40 (scatterpm17)").
 //!
 //! **Model.** θ̂ solves Σ_s Aᵀ·W_s(p̂)·e_s = 0 with W_s = Σ_s(p)⁻¹ and p̂
 //! the variance function. A small error δp moves it by
