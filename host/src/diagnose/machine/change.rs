@@ -2,20 +2,24 @@
 //! `machine_gap_after − machine_gap_before` of one step moves from one
 //! noise draw to the next.
 //!
-//! The two models of a step are nested (the step's model is the one before
-//! it plus the effect's parameters γ) and fitted to the same data, so their
-//! estimates are strongly correlated and the change is far less noisy than
-//! either gap (the machine-level floor). In a weighted linear fit the
-//! smaller model's estimate is the larger one's moved along its regression
-//! on γ̂ to γ = 0: the change of the parameters is a linear function of γ̂
-//! alone, and the change of the gap, to first order ∇g·(θ̂_a − θ̂_b) with
-//! ∇g the machine-level gap's gradient at the step's model, has variance
-//! wᵀC_γγ⁻¹w, w = Cov(γ̂, ∇g·θ̂), from the step's model's covariance alone
-//! (`Inference::floor_change_variance`). The covariance is the noise
-//! floor's: the measurement noise, not the misfit a model without the
-//! effect leaves (that is what the step removes, not noise). Measured
-//! against the spread of the change over fresh noise draws in
-//! docs/diagnose-verdict.md ("Session 39").
+//! The two models of a step are both one model (the step's, plus any
+//! damping the step holds at zero) with some parameters at zero, fitted to
+//! the same data, so their estimates are strongly correlated and the change
+//! is far less noisy than either gap (the machine-level floor). In a
+//! weighted linear fit a model without the parameters R has the larger
+//! one's estimate moved along its regression on θ̂_R to θ_R = 0: both
+//! estimates are linear functions of the larger model's, and the change of
+//! the gap, to first order ∇g_a·θ̂_a − ∇g_b·θ̂_b, has the variance
+//! `Inference::floor_change_variance` gives. The gradient is taken at both
+//! models: the gap (a norm dominated by model error) bends between them,
+//! and with the gradient at the step's model only (session 39) the sd was
+//! a sixth of the change's seed-to-seed spread on unseen-flex's runout
+//! (docs/session40-stepsd17.md). The covariance is the noise floor's: the
+//! measurement noise, not the misfit a model without the effect leaves
+//! (that is what the step removes, not noise). Both gaps also compare the
+//! readings with the same measured numbers: that noise is added
+//! ([`direct_variance`]), as independent of the parameters' (an
+//! approximation: the parameters are fitted to those numbers too).
 
 use super::{machine_gap, resimulate};
 use crate::diagnose::candidates::ParamRef;
@@ -91,20 +95,6 @@ pub fn change_sd(
         let Some(v) = inf.floor_change_variance(&g_a, &g_b, &absent_a, &absent_b) else {
             return Ok(None);
         };
-        if std::env::var_os("PLINTH_DEBUG_STEP_SD").is_some() {
-            let same = if absent_a.is_empty() {
-                inf.floor_change_variance(&g_a, &g_a, &[], &absent_b)
-                    .unwrap_or(f64::NAN)
-            } else {
-                f64::NAN
-            };
-            eprintln!(
-                "STEPSD group sd_same {:.6} sd_two {:.6} held {}",
-                same.sqrt(),
-                v.sqrt(),
-                absent_a.len()
-            );
-        }
         var += v;
         any = true;
     }
@@ -118,13 +108,6 @@ pub fn change_sd(
         return Ok(None);
     };
     let direct = direct_variance(prep, (&rb, gap_before), (&ra, gap_after));
-    if std::env::var_os("PLINTH_DEBUG_STEP_SD").is_some() {
-        eprintln!(
-            "STEPSD step g0 {gap_before:.6} g1 {gap_after:.6} sd_two {:.6} sd_direct {:.6}",
-            var.sqrt(),
-            direct.sqrt()
-        );
-    }
     Ok(Some((var + direct).sqrt()))
 }
 

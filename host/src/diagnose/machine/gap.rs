@@ -344,12 +344,10 @@ fn change_sds(
     gaps_after: &[Option<f64>],
 ) -> Vec<Option<f64>> {
     let mut out = Vec::with_capacity(gaps_after.len());
-    // Measuring only: every step's sd (docs/session40-stepsd17.md).
-    let every = std::env::var_os("PLINTH_EVERY_STEP_SD").is_some();
     let (mut before, mut gap_before) = (refitted.map(|s| (s, false)), gap_refitted);
     for ((state, base), gap) in outcome.after_steps.iter().zip(gaps_after) {
         let sd = match (before, gap_before, *gap) {
-            (Some((b, false)), Some(g0), Some(g1)) if base.is_none() && (g1 >= g0 || every) => {
+            (Some((b, false)), Some(g0), Some(g1)) if base.is_none() && g1 >= g0 => {
                 super::change::change_sd(machine, prep, (b, g0), (state, g1))
                     .ok()
                     .flatten()
