@@ -537,7 +537,8 @@ mod tests {
         let same = a
             .floor_change_variance(c.as_slice(), c.as_slice(), &[], &[2, 3])
             .expect("variance");
-        assert!(got > 2.0 * same, "{got} vs {same}");
+        // The gradient at one end only misses the shared parameters' noise.
+        assert!((same - want).abs() > 0.1 * want, "{same} vs {want}");
     }
 
     /// Two models that are neither nested (each lacks a parameter of the
