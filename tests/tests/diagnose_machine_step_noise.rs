@@ -16,6 +16,12 @@
 //! - `ross-unseen-3/cross-delay-151` (`--machine unseen-train DIR
 //!   cross-delay 151`: a pedestal cross-coupling at B2, a delay at B3):
 //!   step 2, the delay at B3, 0.1112 → 0.1113 (0.1 sd).
+//! - `ross-unseen-4/delay-runout-340` (as 141, seed 340; session 40):
+//!   step 1, the runout at B2, raises the gap 0.0556 → 0.0649. Its change
+//!   sd with the gap's gradient at one end only (session 39) was 0.0030, a
+//!   rise of 3.1 sd (untrusted); the gap bends between the two models, and
+//!   with its gradient at both ends (and the measurements' own noise,
+//!   `machine::change::change_sd`) the sd is about 0.006, the rise 1.5 sd.
 
 use plinth::diagnose::report::Diagnosis;
 use plinth::diagnose::trust::MACHINE_STEP_NOISE_SD;
@@ -88,5 +94,16 @@ fn a_right_delay_that_leaves_the_machine_gap_where_it_was_is_trusted() {
         "cross-delay-151",
         &[("pedestal_cross_coupling", "B2"), ("sensor_delay", "B3")],
         1,
+    );
+}
+
+#[test]
+fn a_right_runout_whose_gap_bends_between_the_two_models_is_trusted() {
+    right_and_trusted(
+        FLEX,
+        "unseen-flex.toml",
+        "delay-runout-340",
+        &[("probe_runout", "B2"), ("sensor_delay", "B1")],
+        0,
     );
 }

@@ -186,30 +186,68 @@ impl Inference {
         f.max(r).sqrt()
     }
 
-    /// Variance [SI²] of the change of cᵀθ between this fit and the same
-    /// model without the parameters `added` (indices into θ; fitted to the
-    /// same data with the same weights), under the noise floor: wᵀC_γγ⁻¹w
-    /// with C the floor covariance, γ the `added` parameters and
-    /// w = Cov(γ̂, cᵀθ̂). In a weighted linear fit the smaller model's
-    /// estimate of the shared parameters is the larger one's moved along
-    /// its regression on γ̂ to γ = 0, so the change is a linear function of
-    /// γ̂ alone, and this is its variance exactly (it equals the difference
-    /// of the two fits' variances of cᵀθ̂, without computing that
-    /// difference of two nearly equal numbers). `None` when `added` is
-    /// empty, out of range or its block is singular.
-    pub fn floor_change_variance(&self, c: &[f64], added: &[usize]) -> Option<f64> {
+    /// Variance [SI²] of the change g(θ̂_a) − g(θ̂_b) of a function g
+    /// between two models that are both this fit's model (θ) with some
+    /// parameters held at zero, fitted to the same data with the same
+    /// weights, under the noise floor, to first order at both ends: model
+    /// a lacks θ's parameters `absent_a`, model b lacks `absent_b`
+    /// (indices into θ), `c_a` is ∇g at θ̂_a and `c_b` ∇g at θ̂_b (θ's
+    /// indexing; their absent entries ignored). In a weighted linear fit a
+    /// model without the parameters R has the estimate θ̂ moved along its
+    /// regression on θ̂_R to θ_R = 0, θ̂ − C_{·R}·C_RR⁻¹·θ̂_R, so the change
+    /// is uᵀθ̂ with u = c_a − c_b − E_aᵀC_aa⁻¹(C·c_a)_a + E_bᵀC_bb⁻¹(C·c_b)_b
+    /// (E_x the rows of `absent_x`), and its variance is uᵀ·C·u (C the
+    /// floor covariance). A step that adds γ to model b is a = θ, b = θ
+    /// without γ: with c_b = c_a = c this is wᵀC_γγ⁻¹w, w = Cov(γ̂, cᵀθ̂)
+    /// (the difference of the two fits' variances of cᵀθ̂, Hausman's
+    /// identity); where g bends between the two estimates (c_b ≠ c_a) the
+    /// shared parameters' own noise enters through c_a − c_b. `None` when
+    /// both absent sets are empty, an index is out of range or a block is
+    /// singular.
+    pub fn floor_change_variance(
+        &self,
+        c_a: &[f64],
+        c_b: &[f64],
+        absent_a: &[usize],
+        absent_b: &[usize],
+    ) -> Option<f64> {
         let p = self.norms.len();
-        if added.is_empty() || c.len() != p || added.iter().any(|&i| i >= p) {
+        if (absent_a.is_empty() && absent_b.is_empty())
+            || c_a.len() != p
+            || c_b.len() != p
+            || absent_a.iter().chain(absent_b).any(|&i| i >= p)
+        {
             return None;
         }
-        let cn = DVector::from_iterator(p, c.iter().zip(&self.norms).map(|(a, s)| a / s));
-        let w_all = &self.cov_floor * &cn;
-        let w = DVector::from_iterator(added.len(), added.iter().map(|&i| w_all[i]));
-        let block = DMatrix::from_fn(added.len(), added.len(), |r, k| {
-            self.cov_floor[(added[r], added[k])]
-        });
-        let inv = block.try_inverse()?;
-        let v = (w.transpose() * inv * &w)[(0, 0)];
+        // Normalised gradient, zero on the model's absent parameters.
+        let scaled = |v: &[f64], absent: &[usize]| {
+            let mut out = DVector::from_iterator(p, v.iter().zip(&self.norms).map(|(a, s)| a / s));
+            for &i in absent {
+                out[i] = 0.0;
+            }
+            out
+        };
+        // E_Rᵀ·C_RR⁻¹·(C·c)_R: the gradient's part carried by the held
+        // parameters' regression.
+        let carried = |c: &DVector<f64>, absent: &[usize]| -> Option<DVector<f64>> {
+            let mut out = DVector::zeros(p);
+            if absent.is_empty() {
+                return Some(out);
+            }
+            let block = DMatrix::from_fn(absent.len(), absent.len(), |r, k| {
+                self.cov_floor[(absent[r], absent[k])]
+            });
+            let w_all = &self.cov_floor * c;
+            let w = DVector::from_iterator(absent.len(), absent.iter().map(|&i| w_all[i]));
+            let shift = block.try_inverse()? * w;
+            for (k, &i) in absent.iter().enumerate() {
+                out[i] = shift[k];
+            }
+            Some(out)
+        };
+        let (ca, cb) = (scaled(c_a, absent_a), scaled(c_b, absent_b));
+        let u = &ca - &cb - carried(&ca, absent_a)? + carried(&cb, absent_b)?;
+        let v = (u.transpose() * &self.cov_floor * &u)[(0, 0)];
         v.is_finite().then_some(v.max(0.0))
     }
 
@@ -459,12 +497,83 @@ mod tests {
         let b = Inference::new(&small, &zero, &speeds, DVector::zeros(2)).expect("small");
         let c = [0.7, -1.3, 2.0, 0.4];
         let want = a.std_err_of(&c).powi(2) - b.std_err_of(&c[..2]).powi(2);
-        let got = a.floor_change_variance(&c, &[2, 3]).expect("variance");
+        let got = a
+            .floor_change_variance(&c, &c, &[], &[2, 3])
+            .expect("variance");
         assert!(want > 0.0);
         assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
         // Only the added parameters' direction counts: with one of them
         // called shared the answer differs.
-        let other = a.floor_change_variance(&c, &[3]).expect("variance");
+        let other = a
+            .floor_change_variance(&c, &c, &[], &[3])
+            .expect("variance");
         assert!((other - want).abs() > 1e-3 * want);
+    }
+
+    /// Where the function bends between the two estimates (its gradient
+    /// `c0` at the smaller model's differs from `c` at the larger one's),
+    /// the change cᵀθ̂ − c0ᵀθ̂₀ of two nested linear fits to the same unit
+    /// white noise has the variance ‖A_aᵀc − A_bᵀc0‖² (A = (JᵀJ)⁻¹Jᵀ of
+    /// each fit), which the same-gradient formula misses.
+    #[test]
+    fn the_change_variance_counts_the_gradient_at_both_ends() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+        let n = 60;
+        let big = DMatrix::from_fn(n, 4, |_, _| rng.random_range(-1.0..1.0));
+        let small = big.columns(0, 2).into_owned();
+        let speeds: Vec<usize> = (0..n).collect();
+        let a = Inference::new(&big, &DVector::zeros(n), &speeds, DVector::zeros(4)).expect("a");
+        let pinv =
+            |j: &DMatrix<f64>| (j.transpose() * j).try_inverse().expect("inverse") * j.transpose();
+        let c = DVector::from_vec(vec![0.7, -1.3, 2.0, 0.4]);
+        let c0 = DVector::from_vec(vec![1.5, 0.2]);
+        let u = pinv(&big).transpose() * &c - pinv(&small).transpose() * &c0;
+        let want = u.norm_squared();
+        let c0_full = [c0[0], c0[1], 0.0, 0.0];
+        let got = a
+            .floor_change_variance(c.as_slice(), &c0_full, &[], &[2, 3])
+            .expect("variance");
+        assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
+        let same = a
+            .floor_change_variance(c.as_slice(), c.as_slice(), &[], &[2, 3])
+            .expect("variance");
+        // The gradient at one end only misses the shared parameters' noise.
+        assert!((same - want).abs() > 0.1 * want, "{same} vs {want}");
+    }
+
+    /// Two models that are neither nested (each lacks a parameter of the
+    /// other, as a delay named with a damping held at zero against the
+    /// model with the damping free): the change cᵀθ̂_a − c0ᵀθ̂_b of their
+    /// linear fits to the same unit white noise has the variance
+    /// ‖A_aᵀc − A_bᵀc0‖², from the union model's covariance.
+    #[test]
+    fn the_change_variance_of_two_restrictions_of_one_fit_is_exact() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        let n = 50;
+        let union = DMatrix::from_fn(n, 4, |_, _| rng.random_range(-1.0..1.0));
+        let pick = |cols: [usize; 3]| DMatrix::from_fn(n, 3, |r, k| union[(r, cols[k])]);
+        let (ja, jb) = (pick([0, 1, 2]), pick([0, 1, 3]));
+        let pinv =
+            |j: &DMatrix<f64>| (j.transpose() * j).try_inverse().expect("inverse") * j.transpose();
+        let (ca, cb) = ([0.4, -0.9, 1.7], [1.1, -0.5, 0.8]);
+        let u = pinv(&ja).transpose() * DVector::from_row_slice(&ca)
+            - pinv(&jb).transpose() * DVector::from_row_slice(&cb);
+        let want = u.norm_squared();
+        let inf = Inference::new(
+            &union,
+            &DVector::zeros(n),
+            &(0..n).collect::<Vec<_>>(),
+            DVector::zeros(4),
+        )
+        .expect("union");
+        let got = inf
+            .floor_change_variance(
+                &[ca[0], ca[1], ca[2], 0.0],
+                &[cb[0], cb[1], 0.0, cb[2]],
+                &[3],
+                &[2],
+            )
+            .expect("variance");
+        assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
     }
 }

@@ -381,7 +381,7 @@ fn change_sds(
     for ((state, base), gap) in outcome.after_steps.iter().zip(gaps_after) {
         let sd = match (before, gap_before, *gap) {
             (Some((b, false)), Some(g0), Some(g1)) if base.is_none() && g1 >= g0 => {
-                super::change::change_sd(machine, prep, b, state, g1)
+                super::change::change_sd(machine, prep, (b, g0), (state, g1))
                     .ok()
                     .flatten()
             }
