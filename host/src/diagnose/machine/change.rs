@@ -14,7 +14,7 @@
 //! models: the gap (a norm dominated by model error) bends between them,
 //! and with the gradient at the step's model only (session 39) the sd was
 //! a sixth of the change's seed-to-seed spread on unseen-flex's runout
-//! (docs/session40-stepsd17.md). The covariance is the noise floor's: the
+//! (docs/diagnose-verdict.md "Session 40 (stepsd17)"). The covariance is the noise floor's: the
 //! measurement noise, not the misfit a model without the effect leaves
 //! (that is what the step removes, not noise). Both gaps also compare the
 //! readings with the same measured numbers: that noise is added
