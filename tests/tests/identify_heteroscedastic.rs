@@ -108,6 +108,15 @@ fn noise_run(
 }
 
 /// (estimate − truth)/± of every parameter of every pedestal printed `ok`.
+/// How many bearings of `id` were fitted under a variance function of their
+/// residuals (the scatter's law or the columns' shape rejected).
+fn variance_functions(id: &Identification) -> usize {
+    id.noise
+        .values()
+        .filter(|n| n.variance_function.is_some())
+        .count()
+}
+
 fn z_scores(run: &RunDir, id: &Identification) -> Vec<(String, f64)> {
     printed_ok(run, id, true)
         .into_iter()
@@ -145,11 +154,7 @@ fn a_fraction_plus_a_floor_without_columns_keeps_its_promise() {
     for seed in 1..=6 {
         let run = mixed_noise_run("examples/feng-hahn-1997-damped.toml", 0.01, 0.001, seed);
         let id = identify(&run);
-        taken += id
-            .noise
-            .values()
-            .filter(|n| n.variance_function.is_some())
-            .count();
+        taken += variance_functions(&id);
         assert!(
             id.pedestals.iter().all(|p| p.trusted),
             "seed {seed}: untrusted {:?}",
@@ -343,11 +348,7 @@ fn few_speeds_with_an_estimated_noise_law_keep_their_promise() {
         )
         .0;
         let id = identify(&run);
-        taken += id
-            .noise
-            .values()
-            .filter(|n| n.variance_function.is_some())
-            .count();
+        taken += variance_functions(&id);
         for (_, got, se, want) in printed_ok(&run, &id, false) {
             z2.push(((got - want) / se).powi(2));
         }
