@@ -21,7 +21,7 @@
 //! ([`direct_variance`]), as independent of the parameters' (an
 //! approximation: the parameters are fitted to those numbers too).
 
-use super::{machine_gap, resimulate};
+use super::{machine_gap, resimulate, Readings};
 use crate::diagnose::candidates::ParamRef;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::state::State;
@@ -30,8 +30,9 @@ use anyhow::Result;
 
 /// The standard deviation of a step's machine-level gap change [-] (module
 /// docs): `before` is the model the step extends (step 1: the base model
-/// refitted as the steps fit it) with its machine-level gap [-], `after`
-/// the step's model with its gap [-]. Two parts, added as independent:
+/// refitted as the steps fit it) with its re-simulated readings and
+/// machine-level gap [-], `after` the step's model with its readings and
+/// gap [-]. Two parts, added as independent:
 ///
 /// - the parameters' noise: both models are `after`'s model with the
 ///   parameters `before` lacks (the step's) or `after` lacks (a damping
@@ -52,10 +53,10 @@ use anyhow::Result;
 pub fn change_sd(
     machine: &Machine,
     prep: &Prepared,
-    before: (&State, f64),
-    after: (&State, f64),
+    before: (&State, &Readings, f64),
+    after: (&State, &Readings, f64),
 ) -> Result<Option<f64>> {
-    let ((before, gap_before), (after, gap_after)) = (before, after);
+    let ((before, rb, gap_before), (after, ra, gap_after)) = (before, after);
     let union = union_of(after, before);
     // A union whose held damping cannot be told from the delay (a singular
     // Jacobian): the step's own parameters alone, as the nested case.
@@ -101,13 +102,7 @@ pub fn change_sd(
     if !any {
         return Ok(None);
     }
-    let (Ok(ra), Ok(rb)) = (
-        resimulate(machine, prep, after, None),
-        resimulate(machine, prep, before, None),
-    ) else {
-        return Ok(None);
-    };
-    let direct = direct_variance(prep, (&rb, gap_before), (&ra, gap_after));
+    let direct = direct_variance(prep, (rb, gap_before), (ra, gap_after));
     Ok(Some((var + direct).sqrt()))
 }
 
@@ -132,11 +127,7 @@ fn union_of(after: &State, before: &State) -> State {
 /// by the difference of the two, each real number weighted by its noise
 /// variance (`Observation::var`). `before`, `after`: each model's
 /// re-simulated readings and gap [-].
-fn direct_variance(
-    prep: &Prepared,
-    before: (&super::Readings, f64),
-    after: (&super::Readings, f64),
-) -> f64 {
+fn direct_variance(prep: &Prepared, before: (&Readings, f64), after: (&Readings, f64)) -> f64 {
     let mut den = 0.0;
     for p in prep.points.iter().flatten().flatten() {
         for d in 0..2 {

@@ -203,12 +203,16 @@ impl MachineCheck {
         };
         let gap_before = simulated.as_ref().map(|r| machine_gap(prep, r));
         let refitted = refitted_base(prep, first).ok();
-        let gap_refitted = match refitted
-            .as_ref()
+        // The refitted base model with its readings and gap: step 1's
+        // "before" for the change's sd.
+        let refitted = match refitted
             .ok_or_else(|| anyhow!("the refit failed"))
-            .and_then(|state| resimulate(machine, prep, state, None))
+            .and_then(|state| resimulate(machine, prep, &state, None).map(|r| (state, r)))
         {
-            Ok(r) => Some(machine_gap(prep, &r)),
+            Ok((state, r)) => {
+                let gap = machine_gap(prep, &r);
+                Some((state, r, gap))
+            }
             Err(e) => {
                 warnings.push(format!(
                     "no machine-level check of the base model as the steps refit it: {e:#}"
@@ -216,21 +220,22 @@ impl MachineCheck {
                 None
             }
         };
+        let gap_refitted = refitted.as_ref().map(|(_, _, g)| *g);
         let before = simulated
             .unwrap_or_else(|| vec![vec![None; prep.speeds_hz.len()]; prep.bearings.len()]);
         let mut gaps_after = Vec::new();
-        let mut after = None;
+        let mut readings_after = Vec::new();
         for (i, (state, base)) in outcome.after_steps.iter().enumerate() {
             match resimulate(machine, prep, state, base.as_ref()) {
                 Ok(r) => {
                     gaps_after.push(Some(machine_gap(prep, &r)));
-                    after = Some(r);
+                    readings_after.push(Some(r));
                 }
                 // A base the simulator cannot hold (negative stiffness:
                 // the diagnosis is then untrusted anyway).
                 Err(e) => {
                     gaps_after.push(None);
-                    after = None;
+                    readings_after.push(None);
                     warnings.push(format!(
                         "no machine-level check of the model after step {}: {e:#}",
                         i + 1
@@ -242,10 +247,11 @@ impl MachineCheck {
             machine,
             prep,
             outcome,
-            refitted.as_ref(),
-            gap_refitted,
+            refitted.as_ref().map(|(state, r, gap)| (state, r, *gap)),
+            &readings_after,
             &gaps_after,
         );
+        let after = readings_after.pop().flatten();
         // The floor of the final model (the base model's when nothing was
         // added or the final model could not be simulated).
         let floor = match (outcome.after_steps.last(), &after) {
@@ -365,31 +371,39 @@ fn scale_like_effects(outcome: &crate::diagnose::Outcome) -> Vec<(String, Vec<us
 
 /// Per step, the standard deviation of its machine-level gap change
 /// ([`super::change::change_sd`]) where the gap did not fall; `refitted`
-/// is step 1's "before" model with its gap `gap_refitted` [-], `gaps_after`
-/// the steps' gaps [-]. A step on or after an identified base gets none
-/// (the base's covariance is not the state's): the sign rule judges it.
+/// is step 1's "before" model with its re-simulated readings and gap [-],
+/// `readings_after` and `gaps_after` the steps' [-]. A step on or after an
+/// identified base gets none (the base's covariance is not the state's):
+/// the sign rule judges it.
 fn change_sds(
     machine: &Machine,
     prep: &Prepared,
     outcome: &crate::diagnose::Outcome,
-    refitted: Option<&State>,
-    gap_refitted: Option<f64>,
+    refitted: Option<(&State, &Readings, f64)>,
+    readings_after: &[Option<Readings>],
     gaps_after: &[Option<f64>],
 ) -> Vec<Option<f64>> {
     let mut out = Vec::with_capacity(gaps_after.len());
-    let (mut before, mut gap_before) = (refitted.map(|s| (s, false)), gap_refitted);
-    for ((state, base), gap) in outcome.after_steps.iter().zip(gaps_after) {
-        let sd = match (before, gap_before, *gap) {
-            (Some((b, false)), Some(g0), Some(g1)) if base.is_none() && g1 >= g0 => {
-                super::change::change_sd(machine, prep, (b, g0), (state, g1))
+    // The previous model, its readings and gap, and whether it is on a base.
+    let mut before = refitted.map(|(s, r, g)| (s, Some(r), Some(g), false));
+    for (((state, base), readings), gap) in outcome
+        .after_steps
+        .iter()
+        .zip(readings_after)
+        .zip(gaps_after)
+    {
+        let sd = match (before, readings, *gap) {
+            (Some((b, Some(rb), Some(g0), false)), Some(ra), Some(g1))
+                if base.is_none() && g1 >= g0 =>
+            {
+                super::change::change_sd(machine, prep, (b, rb, g0), (state, ra, g1))
                     .ok()
                     .flatten()
             }
             _ => None,
         };
         out.push(sd);
-        before = Some((state, base.is_some()));
-        gap_before = *gap;
+        before = Some((state, readings.as_ref(), *gap, base.is_some()));
     }
     out
 }

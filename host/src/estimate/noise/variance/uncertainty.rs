@@ -23,7 +23,7 @@
 //! multi-parameter form, large where a speed's weight rests on a poorly
 //! determined component (a floor the residuals hardly see).
 
-use super::{speeds, COMPONENTS};
+use super::{speeds, COMPONENTS, PER_CHANNEL};
 use crate::estimate::ml;
 use crate::estimate::Observation;
 use nalgebra::{DMatrix, Matrix4, SMatrix};
@@ -60,7 +60,10 @@ pub fn with_law_uncertainty(
     let mut info = DMatrix::<f64>::zeros(m, m);
     for (s, o) in speeds.iter().zip(obs) {
         let w = s.own.try_inverse()?;
-        let mk: Vec<Matrix4<f64>> = free.iter().map(|&k| w * s.g[k / 3] * s.factor(k)).collect();
+        let mk: Vec<Matrix4<f64>> = free
+            .iter()
+            .map(|&k| w * s.g[k / PER_CHANNEL] * s.factor(k))
+            .collect();
         for i in 0..m {
             for j in i..m {
                 let v = 0.5 * mk[i].component_mul(&mk[j].transpose()).sum();
