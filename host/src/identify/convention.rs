@@ -63,8 +63,9 @@
 //! and has a χ² no larger than that of every other passive reading and of
 //! the data as found (passive or not); otherwise nothing is named. The data
 //! as found are the reading the user stated, overturned only by evidence
-//! ([`decide::decide`]): the named reading must explain some of the
-//! bearing forces (relative residual below 1, the zero pedestal's), the
+//! ([`decide::decide`]): the named reading must explain the bearing
+//! forces (relative residual at most [`decide::MAX_RELATIVE_RESIDUAL`],
+//! 0.25: a fit leaving more is fitted to forces that are mostly noise), the
 //! data as found must not fit decisively better in r, and where their fit
 //! is passive, or not passive only within its standard errors (a mass of
 //! −1000 ± 1400 kg on a stiff pedestal the band does not determine), the

@@ -561,7 +561,7 @@ fn stiff_fit(m: f64, m_se: f64) -> PedestalFit {
 /// The stated reading (the data as found) is overturned only by evidence
 /// (docs/session41-recflex17.md): where its fit is not passive only within
 /// its standard errors, where it fits decisively better, where the best
-/// reading explains none of the bearing forces, or where the χ² under a
+/// reading leaves most of the bearing forces unexplained, or where the χ² under a
 /// floor whose law holds does not tell the readings apart, nothing is
 /// named. Each case below named `conjugated` before (4e8447f).
 #[test]
@@ -577,46 +577,53 @@ fn the_data_as_found_are_overturned_only_by_evidence() {
     };
     // Not passive within its noise, fitting alike: cannot tell.
     let rs = [
-        (reading(None, 1.0, 0.5, false), &within),
-        (reading(conj, 0.99, 0.5, true), &passive),
+        (reading(None, 1.0, 0.05, false), &within),
+        (reading(conj, 0.99, 0.05, true), &passive),
     ];
     assert_eq!(named(&rs, true), None);
     assert_eq!(named(&rs, false), None);
     // The same with the data as found significantly not passive: named.
     let rs = [
-        (reading(None, 1.0, 0.5, false), &beyond),
-        (reading(conj, 0.99, 0.5, true), &passive),
+        (reading(None, 1.0, 0.05, false), &beyond),
+        (reading(conj, 0.99, 0.05, true), &passive),
     ];
     assert_eq!(named(&rs, true), conj);
     // Within its noise, but beaten decisively in both figures: named.
     let rs = [
-        (reading(None, 2.0, 0.5, false), &within),
-        (reading(conj, 0.9, 0.1, true), &passive),
+        (reading(None, 2.0, 0.05, false), &within),
+        (reading(conj, 0.9, 0.01, true), &passive),
     ];
     assert_eq!(named(&rs, true), conj);
     // The data as found fit decisively better (100·ln 2 = 69): never named,
     // even where the floor's law is rejected and χ² cannot veto.
     let rs = [
-        (reading(None, 1.2, 0.1, false), &beyond),
-        (reading(conj, 1.0, 0.2, true), &passive),
+        (reading(None, 1.2, 0.01, false), &beyond),
+        (reading(conj, 1.0, 0.02, true), &passive),
     ];
     assert_eq!(named(&rs, false), None);
-    // The best reading's residual exceeds the bearing forces (r ≥ 1).
+    // The best reading leaves more than a quarter of the bearing forces'
+    // power (their noise, at χ²/ν ≈ 1): nothing named, whatever the rest.
     let rs = [
-        (reading(None, 1.2, 1.3, false), &beyond),
-        (reading(conj, 1.0, 1.1, true), &passive),
+        (reading(None, 2.0, 0.35, false), &beyond),
+        (reading(conj, 1.0, 0.3, true), &passive),
     ];
+    assert_eq!(named(&rs, true), None);
     assert_eq!(named(&rs, false), None);
+    let rs = [
+        (reading(None, 2.0, 0.035, false), &beyond),
+        (reading(conj, 1.0, 0.03, true), &passive),
+    ];
+    assert_eq!(named(&rs, true), conj);
     // Passive data as found: decisive in r (100·ln 1.5 = 41) but χ² only
     // 10 lower: the unweighted ratio alone does not overturn them.
     let rs = [
-        (reading(None, 1.1, 0.3, true), &passive),
-        (reading(conj, 1.0, 0.2, true), &passive),
+        (reading(None, 1.1, 0.03, true), &passive),
+        (reading(conj, 1.0, 0.02, true), &passive),
     ];
     assert_eq!(named(&rs, true), None);
     let rs = [
-        (reading(None, 1.3, 0.3, true), &passive),
-        (reading(conj, 1.0, 0.2, true), &passive),
+        (reading(None, 1.3, 0.03, true), &passive),
+        (reading(conj, 1.0, 0.02, true), &passive),
     ];
     assert_eq!(named(&rs, true), conj);
 }
