@@ -77,7 +77,10 @@ pub(super) fn naming_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
 /// Only passive readings compete with it: one that is not passive cannot be
 /// what happened, however well it fits (negating `rel` and every parameter
 /// leaves every residual unchanged, for one). The runner-up reported is the
-/// best other reading, passive or not.
+/// best other reading, passive or not. The data as found, the stated
+/// reading, are overturned only by evidence (the comments in the body,
+/// [`explains_forces`], [`passive_within_noise`]): otherwise the data
+/// cannot tell the mistake from the stated convention and nothing is named.
 ///
 /// `floor_law_holds`: whether the bearing's residuals leave the noise
 /// floor's law standing. Where they reject it (the estimator's score test,
