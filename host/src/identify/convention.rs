@@ -61,7 +61,19 @@
 //! the smallest r of the passive readings, beats every other passive
 //! reading (the data as found included) by [`DECISIVE_DELTA_CHI2`] in r,
 //! and has a χ² no larger than that of every other passive reading and of
-//! the data as found (passive or not); otherwise nothing is named.
+//! the data as found (passive or not); otherwise nothing is named. The data
+//! as found are the reading the user stated, overturned only by evidence
+//! ([`decide::decide`]): the named reading must explain the bearing
+//! forces (relative residual at most [`decide::MAX_RELATIVE_RESIDUAL`],
+//! 0.25: a fit leaving more is fitted to forces that are mostly noise), the
+//! data as found must not fit decisively better in r, and where their fit
+//! is passive, or not passive only within its standard errors (a mass of
+//! −1000 ± 1400 kg on a stiff pedestal the band does not determine), the
+//! named reading must beat them decisively in r and, where the floor's law
+//! holds, in χ² as well. A mistake the data cannot tell from the stated
+//! convention is then not named (docs/session41-recflex17.md: clean
+//! narrow-band recordings of unseen-flex named a mistake at its stiff B1
+//! in 25 of 39).
 //! "Passive" here is also "plausible": a reading whose pedestal has values
 //! no pedestal has ([`super::plausibility`]: a mass of 1e-4 kg, a support
 //! sagging more than a quarter metre under its own weight) is not a

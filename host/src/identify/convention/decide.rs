@@ -77,7 +77,10 @@ pub(super) fn naming_limit(readings: &[(Reading, PedestalFit)]) -> f64 {
 /// Only passive readings compete with it: one that is not passive cannot be
 /// what happened, however well it fits (negating `rel` and every parameter
 /// leaves every residual unchanged, for one). The runner-up reported is the
-/// best other reading, passive or not.
+/// best other reading, passive or not. The data as found, the stated
+/// reading, are overturned only by evidence (the comments in the body,
+/// [`explains_forces`], [`passive_within_noise`]): otherwise the data
+/// cannot tell the mistake from the stated convention and nothing is named.
 ///
 /// `floor_law_holds`: whether the bearing's residuals leave the noise
 /// floor's law standing. Where they reject it (the estimator's score test,
@@ -120,11 +123,70 @@ pub(super) fn decide<'a>(
         .filter(|(r, _)| r.plausible)
         .all(|(r, _)| log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2 && not_worse(r));
     // The data as found, passive or not, must not fit the noise better
-    // than the named reading.
+    // than the named reading, nor decisively better in the unweighted
+    // ratio (the one comparison with them left where the floor's law is
+    // rejected). Where they are a passive pedestal, or one within their
+    // standard errors ([`passive_within_noise`]), they are the stated
+    // reading and the named one must beat them decisively in both
+    // figures: the unweighted ratio and, where the floor's law holds, the
+    // χ² itself (−2·ln of the likelihood ratio under that floor). Where
+    // the bearing forces are mostly noise (a stiff pedestal over a narrow
+    // band: relative residuals 0.8-0.9) the unweighted ratio follows
+    // Σ|F|², which a reading changes (y and z exchanged on an anisotropic
+    // bearing), and calls readings decisive (ν·ln of 1.13: 97) whose χ²
+    // differ by noise (5.6).
     let as_found = readings.iter().find(|(r, _)| r.convention.is_none());
-    let better_than_found = as_found.is_none_or(|(r, _)| r == best || not_worse(r));
+    let better_than_found = as_found.is_none_or(|(r, q)| {
+        r == best
+            || (not_worse(r)
+                && log_likelihood_ratio(r, best) < DECISIVE_DELTA_CHI2
+                && (!(r.plausible || passive_within_noise(q))
+                    || (log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2
+                        && (!floor_law_holds || r.chi2 - best.chi2 >= DECISIVE_DELTA_CHI2))))
+    });
     let runner_up = others().min_by(by_residual)?.0;
-    (decisive && better_than_found).then_some((*best, runner_up, *fit))
+    (explains_forces(best) && decisive && better_than_found).then_some((*best, runner_up, *fit))
+}
+
+/// Largest relative residual Σ|e|²/Σ|F|² [-] of a reading that can be named:
+/// its residual at most half the bearing forces in rms. A reading at the
+/// noise floor (χ²/ν ≈ 1) that leaves more is fitted to forces that are
+/// mostly the probes' noise (a stiff pedestal over a narrow band), and
+/// every reading of such forces fits about alike: on clean ROSS recordings
+/// of unseen-flex and -train the mistakes named at such pedestals (r 0.52-0.94)
+/// were as often wrong as right, while ROSS phasor runs of the same band
+/// leave 0.003-0.015 (docs/session41-recflex17.md; the bound was chosen
+/// between the two after seeing them).
+pub const MAX_RELATIVE_RESIDUAL: f64 = 0.25;
+
+/// Whether reading `r` explains the bearing forces well enough to be named:
+/// a relative residual at most [`MAX_RELATIVE_RESIDUAL`] (the zero
+/// pedestal leaves 1). A fit whose residual is most of the forces it is
+/// fitted to says little about the pedestal, and nothing about the
+/// conventions of its data.
+fn explains_forces(r: &Reading) -> bool {
+    r.relative_residual <= MAX_RELATIVE_RESIDUAL
+}
+
+/// Whether `fit` is a passive pedestal within its standard errors: no
+/// stiffness, mass or damping below zero by more than
+/// [`crate::identify::plausibility::SIGMAS`] standard errors (the same
+/// margin as the plausibility ranges), and no value outside what a
+/// pedestal can be ([`crate::identify::plausibility::findings`], whose
+/// ranges are themselves judged at that margin). The data as found are the reading
+/// the user stated; where their fit is not passive only by amounts its
+/// noise allows (a mass of −1000 ± 1400 kg on a stiff pedestal whose mass
+/// the band does not determine), the passivity of another reading is no
+/// evidence against them, and only the fit can tell the readings apart.
+pub(super) fn passive_within_noise(fit: &PedestalFit) -> bool {
+    use crate::identify::plausibility::SIGMAS;
+    let se = fit.std_err.theta();
+    let within = plinth_shared::regression::Parameter::ALL.iter().all(|&p| {
+        let s = se[p as usize];
+        let s = if s.is_finite() { s } else { f64::INFINITY };
+        fit.pedestal.get(p) >= -SIGMAS * s
+    });
+    within && crate::identify::plausibility::findings(fit, None).is_empty()
 }
 
 /// Relative difference [-] of two χ² taken as a tie: readings that are the

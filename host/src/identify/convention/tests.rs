@@ -536,3 +536,94 @@ fn negating_rel_negates_every_force_and_the_fit_bit_for_bit() {
         }
     }
 }
+
+/// A fit with the stiff pedestal of unseen-flex's B1 (3e9 N/m, 450 kg)
+/// and mass `m` ± `m_se` [kg].
+fn stiff_fit(m: f64, m_se: f64) -> PedestalFit {
+    let mut f = passive_fit();
+    f.pedestal = crate::estimate::Pedestal {
+        k_y: 3.0e9,
+        k_z: 2.0e9,
+        m,
+        c_y: 3.0e4,
+        c_z: 2.5e4,
+    };
+    f.std_err = crate::estimate::Pedestal {
+        k_y: 2.0e8,
+        k_z: 2.0e8,
+        m: m_se,
+        c_y: 3.0e5,
+        c_z: 3.0e5,
+    };
+    f
+}
+
+/// The stated reading (the data as found) is overturned only by evidence
+/// (docs/session41-recflex17.md): where its fit is not passive only within
+/// its standard errors, where it fits decisively better, where the best
+/// reading leaves most of the bearing forces unexplained, or where the χ² under a
+/// floor whose law holds does not tell the readings apart, nothing is
+/// named. Each case below named `conjugated` before (4e8447f).
+#[test]
+fn the_data_as_found_are_overturned_only_by_evidence() {
+    let conj = Some(Convention::Conjugated);
+    let passive = stiff_fit(450.0, 1400.0);
+    let within = stiff_fit(-1000.0, 1400.0);
+    let beyond = stiff_fit(-10000.0, 1200.0);
+    assert!(decide::passive_within_noise(&within));
+    assert!(!decide::passive_within_noise(&beyond));
+    let named = |rs: &[(Reading, &PedestalFit)], law: bool| {
+        decide(rs, law).and_then(|(best, _, _)| best.convention)
+    };
+    // Not passive within its noise, fitting alike: cannot tell.
+    let rs = [
+        (reading(None, 1.0, 0.05, false), &within),
+        (reading(conj, 0.99, 0.05, true), &passive),
+    ];
+    assert_eq!(named(&rs, true), None);
+    assert_eq!(named(&rs, false), None);
+    // The same with the data as found significantly not passive: named.
+    let rs = [
+        (reading(None, 1.0, 0.05, false), &beyond),
+        (reading(conj, 0.99, 0.05, true), &passive),
+    ];
+    assert_eq!(named(&rs, true), conj);
+    // Within its noise, but beaten decisively in both figures: named.
+    let rs = [
+        (reading(None, 2.0, 0.05, false), &within),
+        (reading(conj, 0.9, 0.01, true), &passive),
+    ];
+    assert_eq!(named(&rs, true), conj);
+    // The data as found fit decisively better (100·ln 2 = 69): never named,
+    // even where the floor's law is rejected and χ² cannot veto.
+    let rs = [
+        (reading(None, 1.2, 0.01, false), &beyond),
+        (reading(conj, 1.0, 0.02, true), &passive),
+    ];
+    assert_eq!(named(&rs, false), None);
+    // The best reading leaves more than a quarter of the bearing forces'
+    // power (their noise, at χ²/ν ≈ 1): nothing named, whatever the rest.
+    let rs = [
+        (reading(None, 2.0, 0.35, false), &beyond),
+        (reading(conj, 1.0, 0.3, true), &passive),
+    ];
+    assert_eq!(named(&rs, true), None);
+    assert_eq!(named(&rs, false), None);
+    let rs = [
+        (reading(None, 2.0, 0.035, false), &beyond),
+        (reading(conj, 1.0, 0.03, true), &passive),
+    ];
+    assert_eq!(named(&rs, true), conj);
+    // Passive data as found: decisive in r (100·ln 1.5 = 41) but χ² only
+    // 10 lower: the unweighted ratio alone does not overturn them.
+    let rs = [
+        (reading(None, 1.1, 0.03, true), &passive),
+        (reading(conj, 1.0, 0.02, true), &passive),
+    ];
+    assert_eq!(named(&rs, true), None);
+    let rs = [
+        (reading(None, 1.3, 0.03, true), &passive),
+        (reading(conj, 1.0, 0.02, true), &passive),
+    ];
+    assert_eq!(named(&rs, true), conj);
+}
