@@ -1,7 +1,7 @@
 //! A clean recording of a stiff pedestal over a narrow band names no
 //! convention mistake, and the same run with its phasors conjugated by
 //! hand still names the mistake where the band can see it
-//! (docs/session41-recflex17.md). The run: `tests/data/ross-recording-flex-narrow`
+//! (docs/field-data.md "Session 41 (recflex17)"). The run: `tests/data/ross-recording-flex-narrow`
 //! (ROSS, unseen-flex, 60 → 20 Hz at 2 Hz/s, extracted by `plinth
 //! extract`; its README gives the commands). main at 4e8447f named
 //! `conjugated` at B1 on it and exited 2.

@@ -71,7 +71,7 @@
 //! −1000 ± 1400 kg on a stiff pedestal the band does not determine), the
 //! named reading must beat them decisively in r and, where the floor's law
 //! holds, in χ² as well. A mistake the data cannot tell from the stated
-//! convention is then not named (docs/session41-recflex17.md: clean
+//! convention is then not named (docs/field-data.md "Session 41 (recflex17)": clean
 //! narrow-band recordings of unseen-flex named a mistake at its stiff B1
 //! in 25 of 39).
 //! "Passive" here is also "plausible": a reading whose pedestal has values

@@ -155,7 +155,7 @@ pub(super) fn decide<'a>(
 /// every reading of such forces fits about alike: on clean ROSS recordings
 /// of unseen-flex and -train the mistakes named at such pedestals (r 0.52-0.94)
 /// were as often wrong as right, while ROSS phasor runs of the same band
-/// leave 0.003-0.015 (docs/session41-recflex17.md; the bound was chosen
+/// leave 0.003-0.015 (docs/field-data.md "Session 41 (recflex17)"; the bound was chosen
 /// between the two after seeing them).
 pub const MAX_RELATIVE_RESIDUAL: f64 = 0.25;
 

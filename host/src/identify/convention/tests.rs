@@ -559,7 +559,7 @@ fn stiff_fit(m: f64, m_se: f64) -> PedestalFit {
 }
 
 /// The stated reading (the data as found) is overturned only by evidence
-/// (docs/session41-recflex17.md): where its fit is not passive only within
+/// (docs/field-data.md "Session 41 (recflex17)"): where its fit is not passive only within
 /// its standard errors, where it fits decisively better, where the best
 /// reading leaves most of the bearing forces unexplained, or where the χ² under a
 /// floor whose law holds does not tell the readings apart, nothing is
