@@ -155,29 +155,6 @@ pub fn sandwich_std_errs(
     theta: &[f64; PARAMETERS],
     columns: &[Parameter],
 ) -> Option<[f64; PARAMETERS]> {
-    sandwich(obs, theta, columns, Restore::LeaveOneOut)
-}
-
-/// How a speed's whitened residual w_i, shrunk by its own pull on the fit
-/// (leverage P_ii = J_i H⁻¹ J_iᵀ), is restored before it enters the sandwich.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum Restore {
-    /// (I − P_ii)⁻¹w_i, the leave-one-speed-out residual (HC3): the
-    /// jackknife's spread, wider than the variance on average.
-    LeaveOneOut,
-    /// (I − P_ii)^(−1/2) w_i (HC2): the sandwich unbiased when the weights
-    /// are the noise's (E w_i w_iᵀ = I − P_ii for a linear model).
-    Unbiased,
-}
-
-/// The sandwich of [`sandwich_std_errs`] with each speed's residual
-/// restored by `restore`.
-fn sandwich(
-    obs: &[Observation],
-    theta: &[f64; PARAMETERS],
-    columns: &[Parameter],
-    restore: Restore,
-) -> Option<[f64; PARAMETERS]> {
     let n = obs.len();
     let p = columns.len();
     if p == 0 || n <= p {
@@ -190,22 +167,12 @@ fn sandwich(
         // A speed's residual shrunk by its own pull on the fit, restored
         // (I − P_ii)⁻¹w_i with P_ii = J_i H⁻¹ J_iᵀ: the leave-one-speed-out
         // residual (HC3), so that a few speeds that steer the fit are not
-        // taken for speeds that fit well; or by (I − P_ii)^(−1/2) (HC2).
+        // taken for speeds that fit well.
         let rows = jac.rows(4 * i, 4).into_owned();
         let leverage = &rows * &inv * rows.transpose();
-        let shrink = DMatrix::<f64>::identity(4, 4) - leverage;
-        let wi = w.rows(4 * i, 4).into_owned();
-        let restored = match restore {
-            Restore::LeaveOneOut => shrink.lu().solve(&wi)?,
-            Restore::Unbiased => {
-                let eig = shrink.symmetric_eigen();
-                if eig.eigenvalues.iter().any(|&l| !(l > 0.0)) {
-                    return None;
-                }
-                let root = DMatrix::from_diagonal(&eig.eigenvalues.map(|l| l.sqrt().recip()));
-                &eig.eigenvectors * root * eig.eigenvectors.transpose() * wi
-            }
-        };
+        let restored = (DMatrix::<f64>::identity(4, 4) - leverage)
+            .lu()
+            .solve(&w.rows(4 * i, 4).into_owned())?;
         let score = rows.tr_mul(&restored);
         meat += &score * score.transpose();
     }
@@ -219,40 +186,6 @@ fn sandwich(
         out[k] = v.sqrt();
     }
     Some(out)
-}
-
-/// Widens `covariance` (θ units², reported as `scale` × `covariance`) of
-/// the ML estimate `theta` of `obs` over `columns` so that no reported
-/// standard error is below its sandwich (HC2, [`Restore::Unbiased`]: right
-/// whatever the weights, and unbiased when they are right, where HC3's
-/// leave-one-out restoration is wide at the few speeds that carry a
-/// damping): each parameter's row and column scaled by
-/// max(1, sandwich / reported), the correlations kept. For a fit whose
-/// weights are an estimated pattern the data may not follow. Unchanged when
-/// the sandwich fails.
-pub fn widen_to_sandwich(
-    obs: &[Observation],
-    theta: &[f64; PARAMETERS],
-    columns: &[Parameter],
-    covariance: &mut [[f64; PARAMETERS]; PARAMETERS],
-    scale: f64,
-) {
-    let Some(spread) = sandwich(obs, theta, columns, Restore::Unbiased) else {
-        return;
-    };
-    let ratio: [f64; PARAMETERS] = std::array::from_fn(|i| {
-        let own = (scale * covariance[i][i]).sqrt();
-        if own > 0.0 && spread[i] > own {
-            spread[i] / own
-        } else {
-            1.0
-        }
-    });
-    for (i, row) in covariance.iter_mut().enumerate() {
-        for (j, v) in row.iter_mut().enumerate() {
-            *v *= ratio[i] * ratio[j];
-        }
-    }
 }
 
 /// Largest leverage (eigenvalue of J_iH⁻¹J_iᵀ, the fit through speed i) at

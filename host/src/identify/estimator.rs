@@ -419,23 +419,6 @@ pub(crate) fn fit_ml_checked(
     if noise.source.scale_estimated() {
         noise.rescale(variance_scale);
     }
-    // The scatter's pattern kept (its residuals did not reject it, law
-    // None): the weights are an estimated pattern the noise may not follow
-    // (one sd per channel where the noise grows with the amplitude), and
-    // the ± under them alone then fall short; they are never below the
-    // residuals' own (docs/session41-flexz17.md).
-    if noise.source == NoiseSource::Scatter
-        && law.is_none()
-        && matches!(level, NoiseLevel::Estimated(_))
-    {
-        robust::widen_to_sandwich(
-            &obs,
-            &ml_fit.theta,
-            &columns,
-            &mut ml_fit.covariance,
-            variance_scale,
-        );
-    }
     let se = ml_fit.std_err(variance_scale);
     let mut fit = ols_fit.clone();
     fit.pedestal = crate::estimate::Pedestal::from_theta(ml_fit.theta);
