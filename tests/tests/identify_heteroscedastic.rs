@@ -369,3 +369,98 @@ fn few_speeds_with_an_estimated_noise_law_keep_their_promise() {
         z2.len()
     );
 }
+
+/// unseen-flex's sensor noise (scripts/ross_unseen_machines.py): proximity
+/// probes 0.5 % of |phasor| + 0.05 µm, seismic pick-ups 1 % of |phasor| + a
+/// velocity floor of 1 µm/s (complex sd [m]), at speed `speed_hz` [Hz].
+fn flex_sd(channel: usize, x: num_complex::Complex<f64>, speed_hz: f64) -> f64 {
+    if channel < 2 {
+        0.005 * x.norm() + 5e-8
+    } else {
+        0.01 * x.norm() + 1e-6 / (2.0 * std::f64::consts::PI * speed_hz)
+    }
+}
+
+/// ROSS's noise-free unseen-flex run (tests/data/ross-unseen-4/clean-exact,
+/// `scripts/ross_unseen_exact.py unseen-flex clean-n1 DIR`: the grid of
+/// `clean-n1`, 15 digits) with [`flex_sd`]'s noise drawn with `seed`,
+/// without noise columns, written with 7 digits and read back: what
+/// `ross_unseen.py --machine unseen-flex DIR clean-n1 SEED` writes, its
+/// noise drawn here.
+fn flex_noise_run(exact: &RunDir, seed: u64) -> RunDir {
+    let mut run = exact.clone();
+    let mut rng = StdRng::seed_from_u64(seed);
+    for m in &mut run.measurements {
+        let speed = m.speed_hz;
+        for ch in 0..4 {
+            let x = if ch < 2 { m.rel[ch] } else { m.ped[ch - 2] };
+            let sd = flex_sd(ch, x, speed) / 2f64.sqrt();
+            let re: f64 = StandardNormal.sample(&mut rng);
+            let im: f64 = StandardNormal.sample(&mut rng);
+            let noisy = x + num_complex::Complex::new(re * sd, im * sd);
+            if ch < 2 {
+                m.rel[ch] = noisy;
+            } else {
+                m.ped[ch - 2] = noisy;
+            }
+        }
+    }
+    let dir = write_run(&run, Some(7));
+    RunDir::read(dir.path()).expect("read back")
+}
+
+/// A fit under the scatter's own pattern (one sd per channel, its residuals
+/// not rejecting it at the score test's limit) while the noise grows with
+/// the amplitude: ROSS's flexible roll, B2 (a soft bracket with its
+/// resonances at 46 and 80 Hz in the run), 1 % noise without columns, keeps
+/// the scatter's flat pattern in about a third of the runs, and its ± are
+/// those of the wrong weights alone. Here: 500 draws of ROSS's exact
+/// phasors; the RMS z of k_y, k_z, m, c_y, c_z over every pedestal printed
+/// ok and fitted under the kept flat pattern should lie within 0.90-1.06
+/// (sampling sd about 0.03). Measured: 1.116 over 152 fits on main's code
+/// (4e8447f), 1.007 with the ± floored by the residuals' HC2 sandwich; that
+/// floor was not kept (it widens right-pattern fits by 5-10 %:
+/// estimation_accuracy's three-bearing-tabulated drive k_z ± / scatter
+/// 1.17 → 1.29 against its limit 1.2), so this is an open reproducer
+/// (docs/session41-flexz17.md).
+#[test]
+#[ignore = "open: a kept flat scatter pattern's ± are 12 % short (docs/session41-flexz17.md)"]
+fn a_kept_scatter_pattern_under_amplitude_noise_keeps_its_promise() {
+    let exact = plinth_tests::unseen::stored(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4"),
+        "clean-exact",
+    );
+    let (mut z2, mut fits) = (Vec::new(), 0);
+    for seed in 1..=500 {
+        let run = flex_noise_run(&exact, seed);
+        let id = identify(&run);
+        for p in id.pedestals.iter().filter(|p| p.trusted) {
+            let kept = id.noise.get(&p.bearing).is_some_and(|n| {
+                n.source == plinth::estimate::noise::NoiseSource::Scatter
+                    && n.variance_function.is_none()
+            });
+            if !kept {
+                continue;
+            }
+            fits += 1;
+            let t = plinth_tests::unseen::truth_of(&run, &p.bearing);
+            let (f, e) = (&p.pedestal, &p.std_err);
+            for (got, se, want) in [
+                (f.k_y, e.k_y, t.k_y),
+                (f.k_z, e.k_z, t.k_z),
+                (f.m, e.m, t.m),
+                (f.c_y, e.c_y, t.c_y),
+                (f.c_z, e.c_z, t.c_z),
+            ] {
+                z2.push(((got - want) / se).powi(2));
+            }
+        }
+    }
+    let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+    eprintln!("RMS z {rms:.3} over {fits} fits under the scatter's kept pattern");
+    assert!(fits >= 100, "only {fits} fits kept the scatter's pattern");
+    assert!(
+        (0.90..=1.06).contains(&rms),
+        "RMS of (estimate − truth)/± over {fits} fits under the scatter's kept pattern = {rms:.3}"
+    );
+}
