@@ -422,9 +422,9 @@ fn flex_noise_run(exact: &RunDir, seed: u64) -> RunDir {
 /// floor was not kept (it widens right-pattern fits by 5-10 %:
 /// estimation_accuracy's three-bearing-tabulated drive k_z ± / scatter
 /// 1.17 → 1.29 against its limit 1.2), so this is an open reproducer
-/// (docs/session41-flexz17.md).
+/// (docs/unseen.md "Session 41 (flexz17)").
 #[test]
-#[ignore = "open: a kept flat scatter pattern's ± are 12 % short (docs/session41-flexz17.md)"]
+#[ignore = "open: a kept flat scatter pattern's ± are 12 % short (docs/unseen.md "Session 41 (flexz17)")"]
 fn a_kept_scatter_pattern_under_amplitude_noise_keeps_its_promise() {
     let exact = plinth_tests::unseen::stored(
         concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4"),
