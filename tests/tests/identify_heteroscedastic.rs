@@ -424,7 +424,7 @@ fn flex_noise_run(exact: &RunDir, seed: u64) -> RunDir {
 /// 1.17 → 1.29 against its limit 1.2), so this is an open reproducer
 /// (docs/unseen.md "Session 41 (flexz17)").
 #[test]
-#[ignore = "open: a kept flat scatter pattern's ± are 12 % short (docs/unseen.md "Session 41 (flexz17)")"]
+#[ignore = "open: a kept flat scatter pattern's ± are 12 % short (docs/unseen.md, Session 41 (flexz17))"]
 fn a_kept_scatter_pattern_under_amplitude_noise_keeps_its_promise() {
     let exact = plinth_tests::unseen::stored(
         concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4"),
