@@ -213,10 +213,7 @@ impl Inference {
         absent_b: &[usize],
     ) -> Option<f64> {
         let p = self.norms.len();
-        if c_a.len() != p
-            || c_b.len() != p
-            || absent_a.iter().chain(absent_b).any(|&i| i >= p)
-        {
+        if c_a.len() != p || c_b.len() != p || absent_a.iter().chain(absent_b).any(|&i| i >= p) {
             return None;
         }
         // Normalised gradient, zero on the model's absent parameters.
