@@ -22,6 +22,14 @@
 //!   rise of 3.1 sd (untrusted); the gap bends between the two models, and
 //!   with its gradient at both ends (and the measurements' own noise,
 //!   `machine::change::change_sd`) the sd is about 0.006, the rise 1.5 sd.
+//! - `ross-unseen-4/delay-runout-920` (as 141, seed 920; session 41,
+//!   docs/session41-stepsd17b.md): step 2, the delay at B1 with B1's
+//!   dampings held at zero, raises the gap 0.0283 → 0.0386. Counting only
+//!   the bearing whose parameters the step changes (session 40) its change
+//!   sd was 0.0013, a rise of 7.9 sd (untrusted); the other bearings'
+//!   estimates are the same in both models but the gap's gradient along
+//!   them is not, and with their noise counted the sd is about 0.019, the
+//!   rise 0.5 sd.
 
 use plinth::diagnose::report::Diagnosis;
 use plinth::diagnose::trust::MACHINE_STEP_NOISE_SD;
@@ -105,5 +113,16 @@ fn a_right_runout_whose_gap_bends_between_the_two_models_is_trusted() {
         "delay-runout-340",
         &[("probe_runout", "B2"), ("sensor_delay", "B1")],
         0,
+    );
+}
+
+#[test]
+fn a_right_held_damping_delay_whose_other_bearings_bend_the_gap_is_trusted() {
+    right_and_trusted(
+        FLEX,
+        "unseen-flex.toml",
+        "delay-runout-920",
+        &[("probe_runout", "B2"), ("sensor_delay", "B1")],
+        1,
     );
 }

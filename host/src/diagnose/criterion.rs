@@ -201,9 +201,10 @@ impl Inference {
     /// without γ: with c_b = c_a = c this is wᵀC_γγ⁻¹w, w = Cov(γ̂, cᵀθ̂)
     /// (the difference of the two fits' variances of cᵀθ̂, Hausman's
     /// identity); where g bends between the two estimates (c_b ≠ c_a) the
-    /// shared parameters' own noise enters through c_a − c_b. `None` when
-    /// both absent sets are empty, an index is out of range or a block is
-    /// singular.
+    /// shared parameters' own noise enters through c_a − c_b; with both
+    /// absent sets empty (a group both models fit alike) that is all of it,
+    /// uᵀCu with u = c_a − c_b. `None` when an index is out of range or a
+    /// block is singular.
     pub fn floor_change_variance(
         &self,
         c_a: &[f64],
@@ -212,11 +213,7 @@ impl Inference {
         absent_b: &[usize],
     ) -> Option<f64> {
         let p = self.norms.len();
-        if (absent_a.is_empty() && absent_b.is_empty())
-            || c_a.len() != p
-            || c_b.len() != p
-            || absent_a.iter().chain(absent_b).any(|&i| i >= p)
-        {
+        if c_a.len() != p || c_b.len() != p || absent_a.iter().chain(absent_b).any(|&i| i >= p) {
             return None;
         }
         // Normalised gradient, zero on the model's absent parameters.

@@ -14,7 +14,11 @@
 //! models: the gap (a norm dominated by model error) bends between them,
 //! and with the gradient at the step's model only (session 39) the sd was
 //! a sixth of the change's seed-to-seed spread on unseen-flex's runout
-//! (docs/diagnose-verdict.md "Session 40 (stepsd17)"). The covariance is the noise floor's: the
+//! (docs/diagnose-verdict.md "Session 40 (stepsd17)"). That holds for
+//! every bearing's parameters, not only the step's: a bearing both models
+//! fit alike has the same estimate in both, yet its noise moves the two
+//! gaps differently (session 41, docs/session41-stepsd17b.md). The
+//! covariance is the noise floor's: the
 //! measurement noise, not the misfit a model without the effect leaves
 //! (that is what the step removes, not noise). Both gaps also compare the
 //! readings with the same measured numbers: that noise is added
@@ -41,8 +45,13 @@ use anyhow::Result;
 ///   ([`crate::diagnose::criterion::Inference::floor_change_variance`]),
 ///   with the gap's gradient taken at both models (each parameter's a
 ///   forward difference of 1 % of its ± in the union model, as
-///   [`super::parameter_variance`]): the gap bends between them. Only the
-///   groups holding a parameter one of the models lacks change.
+///   [`super::parameter_variance`]): the gap bends between them. The
+///   groups (bearings) holding a parameter one of the models lacks change
+///   their estimates; the others keep theirs, but the gap's gradient along
+///   them differs between the two models, so their noise enters too
+///   (u = ∇g_a − ∇g_b; without it the sd of a delay step holding a damping
+///   at zero on unseen-flex was a nineteenth of its spread,
+///   docs/session41-stepsd17b.md).
 /// - the measurements' own noise: both gaps compare the readings with the
 ///   same measured numbers ([`direct_variance`]).
 ///
@@ -75,9 +84,6 @@ pub fn change_sd(
                 .collect()
         };
         let (absent_a, absent_b) = (absent(after), absent(before));
-        if absent_a.is_empty() && absent_b.is_empty() {
-            continue;
-        }
         let (mut g_a, mut g_b) = (vec![0.0; refs.len()], vec![0.0; refs.len()]);
         for (i, r) in refs.iter().enumerate() {
             let h = 0.01 * inf.std_err(i);
@@ -97,7 +103,9 @@ pub fn change_sd(
             return Ok(None);
         };
         var += v;
-        any = true;
+        // A group both models fit alike (every parameter in both) moves the
+        // change only through the gap's bending; it does not make a step.
+        any |= !(absent_a.is_empty() && absent_b.is_empty());
     }
     if !any {
         return Ok(None);
