@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The step rule of `plinth diagnose --machine` on ROSS runs (docs/session41-stepsd17b.md).
+"""The step rule of `plinth diagnose --machine` on ROSS runs (docs/diagnose-verdict.md "Session 41 (stepsd17b)").
 
 Usage: /tmp/rossvenv/bin/python scripts/step_rule_rates.py MACHINE:OUTDIR ...
 

@@ -23,7 +23,7 @@
 //!   with its gradient at both ends (and the measurements' own noise,
 //!   `machine::change::change_sd`) the sd is about 0.006, the rise 1.5 sd.
 //! - `ross-unseen-4/delay-runout-920` (as 141, seed 920; session 41,
-//!   docs/session41-stepsd17b.md): step 2, the delay at B1 with B1's
+//!   docs/diagnose-verdict.md, Session 41 (stepsd17b)): step 2, the delay at B1 with B1's
 //!   dampings held at zero, raises the gap 0.0283 → 0.0386. Counting only
 //!   the bearing whose parameters the step changes (session 40) its change
 //!   sd was 0.0013, a rise of 7.9 sd (untrusted); the other bearings'

@@ -17,7 +17,7 @@
 //! (docs/diagnose-verdict.md "Session 40 (stepsd17)"). That holds for
 //! every bearing's parameters, not only the step's: a bearing both models
 //! fit alike has the same estimate in both, yet its noise moves the two
-//! gaps differently (session 41, docs/session41-stepsd17b.md). The
+//! gaps differently (session 41, docs/diagnose-verdict.md, Session 41 (stepsd17b)). The
 //! covariance is the noise floor's: the
 //! measurement noise, not the misfit a model without the effect leaves
 //! (that is what the step removes, not noise). Both gaps also compare the
@@ -51,7 +51,7 @@ use anyhow::Result;
 ///   them differs between the two models, so their noise enters too
 ///   (u = ∇g_a − ∇g_b; without it the sd of a delay step holding a damping
 ///   at zero on unseen-flex was a nineteenth of its spread,
-///   docs/session41-stepsd17b.md).
+///   docs/diagnose-verdict.md, Session 41 (stepsd17b)).
 /// - the measurements' own noise: both gaps compare the readings with the
 ///   same measured numbers ([`direct_variance`]).
 ///
