@@ -46,16 +46,17 @@
 //! columns and the fit under them, as they keep the scatter's law: their
 //! verdicts do not move. Measured figures: docs/estimation.md "Session 29".
 
-use super::variance::{self, homoscedasticity_p, Family, Refit};
+use super::variance::{self, columns_shape_p, Family, Refit};
 use super::NoiseSource;
 use crate::estimate::ml::MlFit;
 use crate::estimate::{robust, Observation};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
-/// p-value of the score test ([`homoscedasticity_p`]) below which the
-/// fit's residuals reject the noise columns' shape [-] (module docs: set on
-/// a null Monte-Carlo, the χ² null being anti-conservative at resonances).
-pub const COLUMNS_P: f64 = 1e-12;
+/// p-value of the columns' shape test ([`columns_shape_p`]) at or below
+/// which the fit's residuals reject the noise columns' shape [-]: the least
+/// its bootstrap gives, 1/([`variance::BOOTSTRAP_DRAWS`] + 1) (none of the
+/// draws under the columns reached the observed statistic), the test's size.
+pub const COLUMNS_P: f64 = 1e-3;
 
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
 /// function of its residuals when they reject the pattern of its noise
@@ -77,8 +78,8 @@ pub fn refit(
     match source {
         NoiseSource::Scatter => variance::refit(obs, floor, columns, fit),
         NoiseSource::Columns => {
-            let p_value = homoscedasticity_p(obs, &fit.theta, Family::FractionFloor)?;
-            if p_value < COLUMNS_P {
+            let p_value = columns_shape_p(obs, &fit.theta, columns)?;
+            if p_value <= COLUMNS_P {
                 let mut r = variance::refit_under(
                     obs,
                     floor,
@@ -133,7 +134,7 @@ fn widen_to_residuals(r: &mut Refit, columns: &[Parameter]) {
 /// and its ± are under instead.
 pub fn rejected(p_value: f64, chi2_per_dof: f64) -> String {
     format!(
-        "the noise columns misdescribe this bearing's noise: the fit's residuals reject their shape over the speeds (score test against a fraction of |X| plus a floor per channel, one scale free: p = {p_value:.1e} < {COLUMNS_P:.0e}) although their overall level gives χ²/dof = {chi2_per_dof:.3}; the fit and its ± are those under the variance function of its residuals (noise.variance_function), not under the columns"
+        "the noise columns misdescribe this bearing's noise: the fit's residuals reject their shape over the speeds (score test against a fraction of |X| plus a floor per channel, one scale free: p = {p_value:.1e} ≤ {COLUMNS_P:.0e}, from a parametric bootstrap of the statistic under the columns) although their overall level gives χ²/dof = {chi2_per_dof:.3}; the fit and its ± are those under the variance function of its residuals (noise.variance_function), not under the columns"
     )
 }
 
@@ -143,8 +144,8 @@ mod tests {
 
     #[test]
     fn the_message_gives_the_test_and_the_noise_used_instead() {
-        let m = rejected(2.1e-74, 0.704);
-        assert!(m.contains("p = 2.1e-74 < 1e-12"), "{m}");
+        let m = rejected(1e-3, 0.704);
+        assert!(m.contains("p = 1.0e-3 ≤ 1e-3"), "{m}");
         assert!(m.contains("χ²/dof = 0.704"), "{m}");
         assert!(m.contains("variance function"), "{m}");
     }
