@@ -24,7 +24,10 @@ use plinth_tests::unseen::{printed_ok, stored};
 /// is beyond 3 of its ±.
 #[test]
 fn true_columns_of_a_pedestal_read_below_its_noise_are_accepted() {
-    let run = stored(concat!(env!("CARGO_MANIFEST_DIR"), "/data"), "lowsnr-null-train");
+    let run = stored(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/data"),
+        "lowsnr-null-train",
+    );
     let id = identify(&run);
     let n = &id.noise["B1"];
     assert!(
@@ -32,11 +35,7 @@ fn true_columns_of_a_pedestal_read_below_its_noise_are_accepted() {
         "true columns rejected: {:?}",
         n.variance_function
     );
-    let b1 = id
-        .pedestals
-        .iter()
-        .find(|p| p.bearing == "B1")
-        .expect("B1");
+    let b1 = id.pedestals.iter().find(|p| p.bearing == "B1").expect("B1");
     assert!(
         !b1.warnings
             .iter()

@@ -16,22 +16,22 @@
 //!
 //! **Test.** Under the columns the residuals of a speed's equations are
 //! N(0, Σ_s) with Σ_s the columns' variances through the equations'
-//! sensitivities. The score test of [`super::variance::homoscedasticity_p`]
-//! tests that covariance (one scale free: this judges the columns' shape,
-//! the level test of [`crate::estimate::lack_of_fit`] judges their level)
-//! against the addition of a variance α_ch·|X_ch|² + β_ch per real part and
-//! channel: a fraction of the amplitude plus a floor, the law of a real
-//! probe. The same statistic as the scatter's, made only where the model
-//! fits (χ²/dof within [`crate::estimate::pedestal::SCATTER_LEVEL_TOLERANCE`]:
-//! beyond, the residuals are model error that no variance law describes),
-//! at its own limit [`COLUMNS_P`]: with true columns the statistic's χ²
-//! null is anti-conservative on a resonant machine (the fraction's
-//! direction weights by |X|², so a few speeds at the peaks carry it, and
-//! there the fit's leverage is concentrated): on tests/machines/
-//! field-coast-down.toml with white noise and true columns 11 of 400 fits
-//! fell below 1e-3, 2 below 1e-6, the smallest 6.6e-10. The limit is set on
-//! that null Monte-Carlo; constant columns on ROSS unseen-overhung give
-//! p below 1e-30 at every bearing of 30 runs.
+//! sensitivities. The scatter's score statistic
+//! ([`super::variance::homoscedasticity_p`]) tests that covariance (one
+//! scale free: this judges the columns' shape, the level test of
+//! [`crate::estimate::lack_of_fit`] judges their level) against the
+//! addition of a variance α_ch·|X_ch|² + β_ch + γ_ch/Ω² per real part and
+//! channel, and against the floors alone, made only where the model fits
+//! (χ²/dof within [`crate::estimate::pedestal::SCATTER_LEVEL_TOLERANCE`]:
+//! beyond, the residuals are model error that no variance law describes).
+//! Its null must not lean on the χ² law nor on the speed's own |X|
+//! ([`variance::columns_shape_p`]): the fraction's regressor is read from
+//! the neighbouring speeds (a pedestal read near its noise had its true
+//! columns rejected at p = 1e-67 when it was the speed's own |X|², that
+//! speed's noise), and the p-value is that of a parametric bootstrap under
+//! the columns themselves (the leverage of a few peak speeds put 1 in 300
+//! true-column fits at χ² p = 4e-13), rejected at [`COLUMNS_P`], the
+//! test's size. Measured figures: docs/session41-lowsnr17.md.
 //!
 //! **Remedy.** When the residuals reject the columns' shape the pedestal is
 //! refitted under the variance function of its residuals
@@ -54,15 +54,16 @@ use plinth_shared::regression::{Parameter, PARAMETERS};
 
 /// p-value of the columns' shape test ([`columns_shape_p`]) at or below
 /// which the fit's residuals reject the noise columns' shape [-]: the least
-/// its bootstrap gives, 1/([`variance::BOOTSTRAP_DRAWS`] + 1) (none of the
-/// draws under the columns reached the observed statistic), the test's size.
+/// its bootstrap gives, 2/([`variance::BOOTSTRAP_DRAWS`] + 1) (none of the
+/// draws under the columns reached either observed statistic), the test's
+/// size.
 pub const COLUMNS_P: f64 = 1e-3;
 
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
 /// function of its residuals when they reject the pattern of its noise
 /// `source` ([`NoiseSource::pattern_on_trial`]): the scatter's law at
 /// [`variance::HETEROSCEDASTIC_P`] ([`variance::refit`]); noise columns'
-/// shape at [`COLUMNS_P`] (the same test), refitted under
+/// shape at [`COLUMNS_P`] ([`variance::columns_shape_p`]), refitted under
 /// [`Family::VelocityFloor`] ([`variance::refit_under`]) with ± never
 /// below the residuals' ([`widen_to_residuals`]); `floor` gives each
 /// observation's digits' variances [m²].
@@ -134,7 +135,7 @@ fn widen_to_residuals(r: &mut Refit, columns: &[Parameter]) {
 /// and its ± are under instead.
 pub fn rejected(p_value: f64, chi2_per_dof: f64) -> String {
     format!(
-        "the noise columns misdescribe this bearing's noise: the fit's residuals reject their shape over the speeds (score test against a fraction of |X| plus a floor per channel, one scale free: p = {p_value:.1e} ≤ {COLUMNS_P:.0e}, from a parametric bootstrap of the statistic under the columns) although their overall level gives χ²/dof = {chi2_per_dof:.3}; the fit and its ± are those under the variance function of its residuals (noise.variance_function), not under the columns"
+        "the noise columns misdescribe this bearing's noise: the fit's residuals reject their shape over the speeds (score tests against a fraction of |X|, a floor and a velocity floor per channel and against the floors alone, one scale free: p = {p_value:.1e} ≤ {COLUMNS_P:.0e}, from a parametric bootstrap of the statistic under the columns) although their overall level gives χ²/dof = {chi2_per_dof:.3}; the fit and its ± are those under the variance function of its residuals (noise.variance_function), not under the columns"
     )
 }
 

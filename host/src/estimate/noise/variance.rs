@@ -59,6 +59,10 @@ pub enum Family {
     /// α|X|² + β + γ/Ω² per channel: also a velocity pick-up's floor in
     /// displacement (1/Ω in sd).
     VelocityFloor,
+    /// β + γ/Ω² per channel, no fraction: the floors alone, whose
+    /// regressors no few peak speeds carry (the columns' test's second
+    /// statistic, [`columns_shape_p`]).
+    Floors,
 }
 
 impl Family {
@@ -67,6 +71,7 @@ impl Family {
         match self {
             Family::FractionFloor => k % PER_CHANNEL != 2,
             Family::VelocityFloor => true,
+            Family::Floors => !k.is_multiple_of(PER_CHANNEL),
         }
     }
 
@@ -394,8 +399,8 @@ pub struct Refit {
 
 mod score;
 mod uncertainty;
-pub use score::{columns_shape_p, neighbour_magnitudes_sq, BOOTSTRAP_DRAWS, EXCEEDANCES};
 use score::Score;
+pub use score::{columns_shape_p, neighbour_magnitudes_sq, BOOTSTRAP_DRAWS, EXCEEDANCES};
 pub use uncertainty::with_law_uncertainty;
 
 #[cfg(test)]
