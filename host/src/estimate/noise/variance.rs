@@ -39,7 +39,7 @@
 
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::Observation;
-use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
+use nalgebra::{Matrix4, Vector4};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
 /// Parameters of the variance function: (α, β, γ) of each of the four
@@ -59,6 +59,10 @@ pub enum Family {
     /// α|X|² + β + γ/Ω² per channel: also a velocity pick-up's floor in
     /// displacement (1/Ω in sd).
     VelocityFloor,
+    /// β + γ/Ω² per channel, no fraction: the floors alone, whose
+    /// regressors no few peak speeds carry (the columns' test's second
+    /// statistic, [`columns_shape_p`]).
+    Floors,
 }
 
 impl Family {
@@ -67,6 +71,7 @@ impl Family {
         match self {
             Family::FractionFloor => k % PER_CHANNEL != 2,
             Family::VelocityFloor => true,
+            Family::Floors => !k.is_multiple_of(PER_CHANNEL),
         }
     }
 
@@ -232,105 +237,15 @@ pub fn homoscedasticity_p(
     theta: &[f64; PARAMETERS],
     family: Family,
 ) -> Option<f64> {
-    let stride = obs.len().div_ceil(MAX_TEST_SPEEDS).max(1);
-    let speeds = speeds(obs.iter().step_by(stride), theta)?;
+    let speeds = speeds(obs.iter().step_by(score::test_stride(obs.len())), theta)?;
     if speeds.is_empty() {
         return None;
     }
-    // The null's scale: its maximum-likelihood value χ²/(4n).
-    let mut chi2 = 0.0;
-    let mut inverses = Vec::with_capacity(speeds.len());
-    for s in &speeds {
-        let a = s.own.try_inverse()?;
-        chi2 += (s.e.transpose() * a * s.e)[0];
-        inverses.push(a);
-    }
-    let scale = chi2 / (4 * speeds.len()) as f64;
-    if !(scale > 0.0 && scale.is_finite()) {
-        return None;
-    }
-    // Score U and information I of the family's components and of the
-    // null's scale (last index, direction Σ_own), at Σ0 = scale·Σ_own.
-    // Component k adds f_k·G_ch (f_k = |X_ch|² for α, 1 for β, 1/Ω² for γ):
-    // with B_ch = Σ0⁻¹G_ch,
-    // U_k = ½f_k(wᵀG_ch·w − tr B_ch), I_kl = ½f_k·f_l·tr(B_ch·B_ch'), and
-    // the scale's direction gives Σ0⁻¹Σ_own = I/scale: one product per
-    // channel and ten channel pairs per speed.
-    let free = family.components();
-    let m = free.len();
-    let n = m + 1;
-    let mut u = DVector::<f64>::zeros(n);
-    let mut info = DMatrix::<f64>::zeros(n, n);
-    for (s, a) in speeds.iter().zip(&inverses) {
-        let a0 = a / scale;
-        let w = a0 * s.e;
-        let b: [Matrix4<f64>; 4] = std::array::from_fn(|ch| a0 * s.g[ch]);
-        let bt: [Matrix4<f64>; 4] = std::array::from_fn(|ch| b[ch].transpose());
-        let trace: [f64; 4] = std::array::from_fn(|ch| b[ch].trace());
-        let excess: [f64; 4] =
-            std::array::from_fn(|ch| (w.transpose() * s.g[ch] * w)[0] - trace[ch]);
-        // tr(B·B') = Σ B ∘ B'ᵀ.
-        let mut pair = [[0.0; 4]; 4];
-        for ch in 0..4 {
-            for other in ch..4 {
-                pair[ch][other] = b[ch].component_mul(&bt[other]).sum();
-                pair[other][ch] = pair[ch][other];
-            }
-        }
-        for (i, &k) in free.iter().enumerate() {
-            let (ch, fk) = (k / PER_CHANNEL, s.factor(k));
-            u[i] += 0.5 * fk * excess[ch];
-            for (j, &l) in free.iter().enumerate().skip(i) {
-                info[(i, j)] += 0.5 * fk * s.factor(l) * pair[ch][l / PER_CHANNEL];
-            }
-            info[(i, m)] += 0.5 * fk * trace[ch] / scale;
-        }
-        u[m] += 0.5 * ((w.transpose() * s.own * w)[0] - 4.0 / scale);
-        info[(m, m)] += 2.0 / (scale * scale);
-    }
-    for k in 0..n {
-        for l in 0..k {
-            info[(k, l)] = info[(l, k)];
-        }
-    }
-    // Jacobi scaling: the components' units differ by many decades.
-    let d = DVector::<f64>::from_fn(n, |k, _| {
-        let x = info[(k, k)];
-        if x > 0.0 {
-            1.0 / x.sqrt()
-        } else {
-            0.0
-        }
-    });
-    let info = DMatrix::<f64>::from_fn(n, n, |k, l| d[k] * info[(k, l)] * d[l]);
-    let u = u.component_mul(&d);
-    // The efficient information of the components, the scale profiled out.
-    let phi = info[(m, m)];
-    if phi.is_nan() || phi <= 0.0 {
-        return None;
-    }
-    let eff = DMatrix::<f64>::from_fn(m, m, |k, l| {
-        info[(k, l)] - info[(k, m)] * info[(m, l)] / phi
-    });
-    let ue = DVector::<f64>::from_fn(m, |k, _| u[k] - info[(k, m)] * u[m] / phi);
-    let eig = eff.symmetric_eigen();
-    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
-    if !(top > 0.0 && top.is_finite()) {
-        return None;
-    }
-    let (mut statistic, mut rank) = (0.0, 0usize);
-    for (i, &lambda) in eig.eigenvalues.iter().enumerate() {
-        if lambda > 1e-10 * top {
-            let proj = eig.eigenvectors.column(i).dot(&ue);
-            statistic += proj * proj / lambda;
-            rank += 1;
-        }
-    }
-    if rank == 0 || !statistic.is_finite() {
-        return None;
-    }
+    let score = Score::new(&speeds, family)?;
+    let residuals: Vec<Vector4<f64>> = speeds.iter().map(|s| s.e).collect();
+    let statistic = score.statistic(&speeds, &residuals)?;
     use statrs::distribution::{ChiSquared, ContinuousCDF};
-    let chi = ChiSquared::new(rank as f64).ok()?;
+    let chi = ChiSquared::new(score.rank as f64).ok()?;
     Some(chi.sf(statistic))
 }
 
@@ -482,7 +397,10 @@ pub struct Refit {
     pub obs: Vec<Observation>,
 }
 
+mod score;
 mod uncertainty;
+use score::Score;
+pub use score::{columns_shape_p, neighbour_magnitudes_sq, BOOTSTRAP_DRAWS, EXCEEDANCES};
 pub use uncertainty::with_law_uncertainty;
 
 #[cfg(test)]
