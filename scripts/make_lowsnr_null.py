@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The stored run tests/data/lowsnr-null-train/ (docs/session41-lowsnr17.md):
+"""The stored run tests/data/lowsnr-null-train/ (docs/estimation.md "Session 41 (lowsnr17)"):
 one bearing's rows of a `ross_recording.py --null` draw, every STEP-th speed,
 numbers written with DIGITS significant digits, so that it stays a few tens
 of kB.

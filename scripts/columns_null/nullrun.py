@@ -2,7 +2,7 @@
 usage: nullrun.py FIRST LAST PLINTH... ; prints one line per seed and binary."""
 import json, subprocess, sys, os
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the repository
-# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/session41-lowsnr17.md, ross/ runs, null draws).
+# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
 first, last = int(sys.argv[1]), int(sys.argv[2]); bins = sys.argv[3:]
 PY = "/tmp/rossvenv/bin/python"; SCRIPT = os.path.join(ROOT, "scripts", "ross_recording.py")
 os.chdir("/tmp/lowsnr17")

@@ -7,7 +7,7 @@ too small), true (noise FRAC*RMS, true columns). Noise complex, sd split on re/i
 Prints per seed and binary: per bearing rejected (shape) and max |z| of k,m if trusted."""
 import csv, json, math, os, random, subprocess, sys
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the repository
-# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/session41-lowsnr17.md, ross/ runs, null draws).
+# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
 machine, mode, frac, first, last = sys.argv[1], sys.argv[2], float(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
 bins = sys.argv[6:]
 tag = os.path.basename(machine).replace(".toml", "")

@@ -2,7 +2,7 @@
 usage: rossnull.py PLINTH -> one line per run."""
 import glob, json, os, subprocess, sys
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the repository
-# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/session41-lowsnr17.md, ross/ runs, null draws).
+# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
 plinth = sys.argv[1]
 for d in sorted(glob.glob("/tmp/lowsnr17/ross/*/*-7??")):
     if not os.path.exists(d + "/measurements.csv"):

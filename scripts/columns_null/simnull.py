@@ -5,7 +5,7 @@ usage: simnull.py MACHINE.toml FIRST LAST PLINTH [FRAC] -> one line per seed:
 seed, per bearing: rejected (noise_scale_mismatch), trusted, max |z|."""
 import csv, json, math, os, subprocess, sys
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the repository
-# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/session41-lowsnr17.md, ross/ runs, null draws).
+# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
 machine, first, last, plinth = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 frac = float(sys.argv[5]) if len(sys.argv) > 5 else 0.01
 tag = os.path.basename(machine).replace(".toml", "")

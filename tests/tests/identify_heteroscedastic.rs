@@ -279,10 +279,17 @@ fn noise_columns_with_the_wrong_shape_are_rejected_and_the_pm_stay_honest() {
 /// factor 2 of 1 µm/s: the equation residuals tell the channels' shares
 /// apart less well than their sum, one channel's share can fall to 0; a
 /// fraction of |X| and a floor cannot take it; main reported no velocity
-/// floor), and no value printed `ok` is beyond 4 of its ±.
+/// floor), and no value printed `ok` is beyond 4 of its ±. Power: the
+/// columns' shape is rejected on at least five of the six fits (since
+/// session 41 the test's p comes from a parametric bootstrap under the
+/// columns, whose null no longer rejects true columns of a pedestal read
+/// below its noise: seed 2's right bearing reaches p = 7e-3, above the
+/// 1e-3 limit, and keeps the flat columns, its values within their ±;
+/// docs/estimation.md "Session 41 (lowsnr17)").
 #[test]
 fn flat_columns_over_a_pick_ups_velocity_floor_give_that_floor() {
     const VELOCITY: f64 = 1e-6;
+    let (mut fits, mut kept) = (0, Vec::new());
     for seed in 1..=3 {
         let (mut run, sds) = noise_run(
             "examples/feng-hahn-1997-damped.toml",
@@ -306,7 +313,11 @@ fn flat_columns_over_a_pick_ups_velocity_floor_give_that_floor() {
         let id = identify(&run);
         for (b, n) in &id.noise {
             let law = serde_json::to_value(&n.variance_function).expect("json");
-            assert!(!law.is_null(), "seed {seed} {b}: flat columns not rejected");
+            fits += 1;
+            if law.is_null() {
+                kept.push(format!("seed {seed} {b}"));
+                continue;
+            }
             let floor = |ch: &str| law["velocity_floor_sd"][ch].as_f64().unwrap_or(0.0);
             let (y, z) = (floor("ped_y"), floor("ped_z"));
             let v = ((y * y + z * z) / 2.0).sqrt();
@@ -317,6 +328,10 @@ fn flat_columns_over_a_pick_ups_velocity_floor_give_that_floor() {
         }
         checked_z_scores(&run, &id, seed);
     }
+    assert!(
+        fits == 6 && kept.len() <= 1,
+        "flat columns kept on {kept:?} of {fits} fits"
+    );
 }
 
 /// A coarse run of few speeds, the noise law estimated from them: the

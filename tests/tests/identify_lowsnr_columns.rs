@@ -1,5 +1,5 @@
 //! Issue 17: true noise columns on a pedestal read near or below its noise
-//! (docs/session41-lowsnr17.md). ROSS unseen-train's B1 is a stiff pedestal
+//! (docs/estimation.md, Session 41 (lowsnr17)). ROSS unseen-train's B1 is a stiff pedestal
 //! whose pick-ups read near or below their noise. The stored run is B1's
 //! rows of a `scripts/ross_recording.py --null` draw (seed 701) of the
 //! extracted 4 Hz/s recording: ROSS's phasors at each row's speed plus

@@ -31,7 +31,7 @@
 //! speed's noise), and the p-value is that of a parametric bootstrap under
 //! the columns themselves (the leverage of a few peak speeds put 1 in 300
 //! true-column fits at χ² p = 4e-13), rejected at [`COLUMNS_P`], the
-//! test's size. Measured figures: docs/session41-lowsnr17.md.
+//! test's size. Measured figures: docs/estimation.md, Session 41 (lowsnr17).
 //!
 //! **Remedy.** When the residuals reject the columns' shape the pedestal is
 //! refitted under the variance function of its residuals

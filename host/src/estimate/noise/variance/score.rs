@@ -12,7 +12,7 @@
 //! scaled together. [`Score::new`] keeps everything else.
 //!
 //! **The columns' test** ([`columns_shape_p`]). Two things make the χ²
-//! null of that statistic wrong for noise columns (docs/session41-lowsnr17.md):
+//! null of that statistic wrong for noise columns (docs/estimation.md, Session 41 (lowsnr17)):
 //! (1) the fraction's regressor |X_ch,s|² read from the speed's own phasor is,
 //! where a channel reads near its noise, that speed's own noise, correlated
 //! with its squared residual under the null (the columns of a stiff
