@@ -7,7 +7,8 @@ Every RUN (a run directory) is copied with a unit mistake on some of its
 transducers (scripts/unit_scale_run.py) and goes through `plinth identify
 --json` and `plinth diagnose --json --machine TOML`; one TSV line per case.
 The cases, per run: the run as it is (`none`), then for each bearing B of
-the run (or $BEARINGS, comma-separated) and each KIND of $KINDS (default
+the run (or $BEARINGS, comma-separated; `all`: every bearing's transducers
+of the kind at once) and each KIND of $KINDS (default
 `rel,ped,rel_y`: both probes of B, both pick-ups of B, B's y probe alone)
 each factor of $FACTORS (default `25.4,1/25.4,2,sqrt2,1000`). $CLEAN_ONLY=1:
 only `none` (false alarms on clean or real-table-scale runs). $BENCH_JOBS at
@@ -57,8 +58,9 @@ def one(plinth, toml, run, kind, bearing, factor, tmp):
         d = run
     else:
         d = os.path.join(tmp, f"{os.path.basename(run)}-{kind}-{bearing}-{factor.replace('/', 'i')}")
+        at = [] if bearing == "all" else [bearing]
         subprocess.run(
-            [sys.executable, os.path.join(HERE, "unit_scale_run.py"), run, d, factor, kind, bearing],
+            [sys.executable, os.path.join(HERE, "unit_scale_run.py"), run, d, factor, kind] + at,
             check=True,
         )
     ident = plinth_json([plinth, "identify", d, "--json"])
@@ -99,7 +101,7 @@ def main():
     base_ky = {}
     with open(out, "w") as fo, cf.ThreadPoolExecutor(jobs) as ex:
         fo.write(
-            "run\tkind\tbearing\tfactor\ttrusted\tnamed\tunit_scale\talternatives\ttable_twin\tmgap\tmfloor"
+            "run\tkind\tbearing\tfactor\ttrusted\tnamed\tunit_scale\talso_fits\ttable_twin\tmgap\tmfloor"
             "\tid_trusted\tid_ky_ratio\tblind\n"
         )
         futs = [ex.submit(one, plinth, toml, *c, tmp) for c in cases]

@@ -114,8 +114,20 @@ pub fn sentence(blind: &[Blind]) -> Option<String> {
         .iter()
         .map(|b| {
             let [lo, hi] = b.factor_interval;
+            // An edge at the walk's end is a bound: the range goes on.
+            let end = 10f64.powf(RANGE - 0.5 * STEP);
+            let lo = if lo < 1.0 / end {
+                "below × 0.2".to_string()
+            } else {
+                format!("× {lo:.3}")
+            };
+            let hi = if hi > end {
+                "beyond × 5".to_string()
+            } else {
+                format!("× {hi:.3}")
+            };
             format!(
-                "{}'s `{}` readings × {lo:.3} to × {hi:.3} (it holds {})",
+                "{}'s `{}` readings {lo} to {hi} (it holds {})",
                 b.bearing,
                 b.kind.columns(),
                 b.unseen.join(", ")
