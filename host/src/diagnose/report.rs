@@ -271,6 +271,11 @@ pub struct Diagnosis {
     /// (`machine::unit_scale`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub unit_scale: Option<super::machine::unit_scale::UnitScale>,
+    /// With `--machine`, when the final model passes: the scales on one
+    /// bearing's transducers the check cannot see, where they hold a
+    /// common unit mistake (`machine::unit_scale::blind`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unit_scale_blind: Vec<super::machine::unit_scale::Blind>,
     /// The noise floor.
     pub noise: NoiseSummary,
     /// Where the base model's disagreement lives, largest first.

@@ -180,6 +180,10 @@ pub struct MachineCheck {
     /// cause; when it passes with a scale-like effect named, a scale at
     /// that effect's bearing that passes too (neither trusted).
     pub unit_scale: Option<super::unit_scale::UnitScale>,
+    /// When the final model passes and no scale is found: the scales on
+    /// one bearing's transducers the check cannot see
+    /// ([`super::unit_scale::blind`]), said in the verdict.
+    pub blind: Vec<super::unit_scale::Blind>,
 }
 
 impl MachineCheck {
@@ -281,8 +285,14 @@ impl MachineCheck {
         } else {
             None
         };
+        let blind = if fails || unit_scale.is_some() {
+            Vec::new()
+        } else {
+            super::unit_scale::blind::blind(machine, prep, first)
+        };
         Ok(Self {
             unit_scale,
+            blind,
             replaced: replaced_bases(machine, &prep.bearings, foundation),
             support: crate::diagnose::trust::base_model_findings(prep)
                 .into_iter()
@@ -333,6 +343,10 @@ impl MachineCheck {
             self.floor,
             self.unit_scale.as_ref(),
         );
+        if let Some(note) = super::unit_scale::blind::sentence(&self.blind) {
+            d.verdict += &format!(" Note: {note}.");
+            d.unit_scale_blind.clone_from(&self.blind);
+        }
         if let Some(note) = &self.replaced {
             d.verdict += &format!(" Note: {note}.");
         }

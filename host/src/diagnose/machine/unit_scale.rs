@@ -36,6 +36,11 @@ use crate::diagnose::trust::MachineCheck;
 use crate::sim::Machine;
 use serde::Serialize;
 
+pub mod blind;
+mod table;
+pub use blind::Blind;
+pub use table::TableScale;
+
 /// The transducers a scale is put on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -85,6 +90,13 @@ pub struct UnitScale {
     /// cannot tell them apart and none is trusted.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub also_fits: Vec<String>,
+    /// The bearing table at the same bearing(s) scaled instead, its
+    /// pedestal with it (the unit mistake's twin at the pedestal level,
+    /// [`table`]), when the final model fails the check: when it passes
+    /// too, the check cannot tell a unit mistake from a table scale there
+    /// and neither is trusted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub table: Option<TableScale>,
 }
 
 /// Where the scale of a hypothesis is put: every bearing's transducers of
@@ -190,21 +202,30 @@ fn gap_of(
 }
 
 /// The s of `reading` that minimises the base model's machine-level gap:
-/// a grid of log10 s over ±[`LOG_RANGE`] (one bearing: ±[`LOG_RANGE_ONE`])
-/// in steps of [`LOG_STEP`], then a golden-section search within a step
-/// either side of the grid's best.
+/// [`minimise`] over log10 s within ±[`LOG_RANGE`] (one bearing:
+/// ±[`LOG_RANGE_ONE`]).
 fn best_factor(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
     reading: Reading,
 ) -> Option<(f64, f64)> {
-    let g = |l: f64| gap_of(machine, prep, state, reading, 10f64.powf(l));
     let range = if reading.bearing.is_some() {
         LOG_RANGE_ONE
     } else {
         LOG_RANGE
     };
+    minimise(
+        |l| gap_of(machine, prep, state, reading, 10f64.powf(l)),
+        range,
+    )
+}
+
+/// The factor 10^l, |l| ≤ `range`, that minimises the gap `g(l)` [-], with
+/// that gap: a grid of l in steps of [`LOG_STEP`], then a golden-section
+/// search within a step either side of the grid's best. `None` when the
+/// unscaled model (l = 0) cannot be simulated.
+pub(super) fn minimise(g: impl Fn(f64) -> Option<f64>, range: f64) -> Option<(f64, f64)> {
     let n = (2.0 * range / LOG_STEP).round() as i32;
     let (mut best_l, mut best_g) = (0.0, g(0.0)?);
     for i in 0..=n {
@@ -321,6 +342,7 @@ fn passing(
         nearest: nearest_common(s),
         factor_interval: interval(machine, prep, state, reading, s, f),
         also_fits: Vec::new(),
+        table: None,
     })
 }
 
@@ -393,20 +415,24 @@ pub fn find(
             }));
         }
     }
-    let mut found: Vec<UnitScale> = readings
+    let mut found: Vec<(Reading, UnitScale)> = readings
         .into_iter()
-        .filter_map(|r| passing(machine, prep, state, r))
+        .filter_map(|r| passing(machine, prep, state, r).map(|u| (r, u)))
         .collect();
-    found.sort_by(|a, b| a.gap.total_cmp(&b.gap));
-    let mut first = found.first()?.clone();
-    if !fails {
+    found.sort_by(|a, b| a.1.gap.total_cmp(&b.1.gap));
+    let (reading, first) = found.first()?;
+    let mut first = first.clone();
+    if fails {
+        // The unit mistake's twin: the table at the same bearing(s).
+        first.table = table::best(machine, prep, state, reading.bearing);
+    } else {
         first.also_fits.extend(named.iter().map(|(w, _)| w.clone()));
     }
     first.also_fits.extend(
         found
             .iter()
             .skip(1)
-            .map(|u| format!("{} (gap {:.4})", short(u), u.gap)),
+            .map(|(_, u)| format!("{} (gap {:.4})", short(u), u.gap)),
     );
     Some(first)
 }
@@ -459,6 +485,38 @@ pub fn reason(u: &UnitScale, final_gap: f64, floor: f64, check: MachineCheck) ->
     } else {
         format!(" (these pass too: {})", u.also_fits.join("; "))
     };
+    let tables = match &u.bearing {
+        Some(b) => format!("{b}'s bearing table"),
+        None => "every bearing table".to_string(),
+    };
+    let (likely, twin) = match &u.table {
+        Some(t) if t.passes => (
+            format!(
+                "The machine-level check cannot tell a unit or scale mistake on {transducers} from {tables} {:.4} times the file's: check the `{kind}` columns' units and the table; neither reading is trusted, and the pedestals{at} identified from these readings are off by one factor or the other",
+                t.factor
+            ),
+            format!(
+                ", and so does the base model with {tables} × {:.4} (stiffness and damping, the pedestals{at} with it; gap {:.4}, noise floor {:.4})",
+                t.factor, t.gap, t.floor
+            ),
+        ),
+        Some(t) => (
+            format!(
+                "A unit or scale mistake on {transducers} is likely (an import's unit or peak convention; {tables} scaled instead, the twin reading at the pedestal level, leaves at best gap {:.4} at × {:.4}, above the limit {:.4} of its noise floor {:.4}): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor",
+                t.gap,
+                t.factor,
+                MachineCheck::limit(t.floor),
+                t.floor
+            ),
+            String::new(),
+        ),
+        None => (
+            format!(
+                "A unit or scale mistake on {transducers} is likely (an import's unit or peak convention): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor"
+            ),
+            String::new(),
+        ),
+    };
     let (as_read, but) = if matches!(check, MachineCheck::CannotJudge { .. }) {
         (
             "the machine-level check cannot judge the identified model (its limit is too wide: ",
@@ -471,7 +529,7 @@ pub fn reason(u: &UnitScale, final_gap: f64, floor: f64, check: MachineCheck) ->
         )
     };
     format!(
-        "{as_read}machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but {but} {scale}{others}. A unit or scale mistake on {transducers} is likely (an import's unit or peak convention): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor"
+        "{as_read}machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but {but} {scale}{others}{twin}. {likely}"
     )
 }
 

@@ -162,6 +162,7 @@ impl Search<'_> {
             machine_gap_floor: None,
             machine_check_informative: None,
             unit_scale: None,
+            unit_scale_blind: Vec::new(),
             noise: NoiseSummary {
                 digits: prep.noise.digits(),
                 bearings: bearings_noise,
