@@ -1,5 +1,5 @@
 //! What the machine-level check can and cannot tell of a scale at one
-//! bearing (session 41, docs/session41-unitscale17c.md).
+//! bearing (session 41, docs/robustness-hostile.md, Session 41 (unitscale17c)).
 //!
 //! A bearing table t times the file's at bearing j identifies that pedestal
 //! t times its own, exactly as j's `rel` readings 1/t times their true
