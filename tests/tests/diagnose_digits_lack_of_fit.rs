@@ -24,7 +24,10 @@ fn a_lack_of_fit_identify_sees_at_three_digits_untrusts_the_diagnosis() {
     let run = unseen::stored(FOUR, "sub-base-d3-1201");
     let id = identify(&run);
     assert_eq!(untrusted(&id), vec!["B3".to_string()]);
-    assert!(id.pedestal("B3").expect("B3").has_warning(WarningKind::LackOfFit));
+    assert!(id
+        .pedestal("B3")
+        .expect("B3")
+        .has_warning(WarningKind::LackOfFit));
     let (_, options) = unseen::machine_and_options(FOUR, "unseen-four.toml");
     let d = diagnose(&run, &options).expect("diagnose").diagnosis;
     assert!(!d.trusted, "{}", d.to_text());
@@ -47,7 +50,9 @@ fn truncated_clean_digits_are_not_a_lack_of_fit() {
         .expect("diagnose")
         .diagnosis;
     assert!(
-        !d.trust_reasons.iter().any(|r| r.contains("lack-of-fit rule")),
+        !d.trust_reasons
+            .iter()
+            .any(|r| r.contains("lack-of-fit rule")),
         "{:?}",
         d.trust_reasons
     );
