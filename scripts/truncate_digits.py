@@ -10,7 +10,7 @@ digits writes; the ROSS scripts' dN cases round instead).
 SRC_RUN should carry many digits (e.g. a `clean-d12` run of
 scripts/ross_unseen.py). The speed, bearing and any *_sd columns are kept
 as they are; bearings.csv and truth.json are copied. Session 41
-(docs/session41-d3trust17.md): the truncated clean runs on which the
+(docs/trust-lack-of-fit.md "Session 41 (d3trust17)"): the truncated clean runs on which the
 false alarms of diagnose's lack-of-fit rule were measured."""
 import csv
 import decimal

@@ -1,4 +1,4 @@
-//! Session 41 (docs/session41-d3trust17.md): `plinth diagnose` reads
+//! Session 41 (docs/trust-lack-of-fit.md, Session 41 (d3trust17)): `plinth diagnose` reads
 //! written digits as truncated (the larger of the two noises), so the
 //! lack-of-fit findings it took from its base fits were judged against a
 //! level 4 times `plinth identify`'s (in variance) and never fired where
