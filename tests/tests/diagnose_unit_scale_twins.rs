@@ -78,6 +78,40 @@ fn a_scale_the_check_cannot_see_is_said() {
     );
 }
 
+/// unseen-flex's clean run (`python3 scripts/ross_unseen.py --machine
+/// unseen-flex DIR clean-n1c 802`) with B1's `ped` × 1/25.4 (`python3
+/// scripts/unit_scale_run.py DIR/clean-n1c-802
+/// tests/data/ross-unseen-4/clean-n1c-802-b1-ped-x-inv254 1/25.4 ped B1`):
+/// the stiff block's pick-ups barely enter the machine-level check, which
+/// passes the run as recorded (main, 4e8447f: trusted, nothing said). The
+/// walk of the scales the check cannot see stops at × 0.2; the common unit
+/// factors beyond it are tried one by one, and 1/25.4 is said (session 41,
+/// lead: unitscale17c's walk left it out).
+#[test]
+fn a_unit_mistake_beyond_the_walk_is_said() {
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4");
+    let run = unseen::stored(data, "clean-n1c-802-b1-ped-x-inv254");
+    let d = unseen::diagnosis_with_machine_check(data, "unseen-flex.toml", &run);
+    let v = serde_json::to_value(&d).expect("diagnosis as JSON");
+    let blind = v
+        .get("unit_scale_blind")
+        .and_then(|b| b.as_array())
+        .unwrap_or_else(|| panic!("no unit_scale_blind: {}", d.to_text()));
+    let b1 = blind
+        .iter()
+        .find(|b| b["bearing"] == "B1" && b["kind"] == "ped")
+        .unwrap_or_else(|| panic!("B1's ped not said: {blind:?}"));
+    let said: Vec<&str> = b1["unseen"]
+        .as_array()
+        .into_iter()
+        .chain(b1["beyond"].as_array())
+        .flatten()
+        .filter_map(|n| n.as_str())
+        .collect();
+    assert!(said.iter().any(|n| n.starts_with("×1/25.4")), "{said:?}");
+    assert!(d.verdict.contains("×1/25.4"), "{}", d.verdict);
+}
+
 /// The trust reason that mentions `what`.
 fn reason_with(d: &Diagnosis, what: &str) -> String {
     d.trust_reasons

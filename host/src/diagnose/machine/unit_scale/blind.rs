@@ -35,6 +35,10 @@ pub struct Blind {
     pub factor_interval: [f64; 2],
     /// The common unit mistakes within it (`×√2 (rms against peak)`, …).
     pub unseen: Vec<String>,
+    /// The common unit mistakes beyond an edge the walk stopped at (its
+    /// [`RANGE`]) that pass the check too, each tried on its own: the
+    /// range may not hold every factor between.
+    pub beyond: Vec<String>,
 }
 
 /// Step of log10 s of the walk [-] (2.3 % in s).
@@ -43,12 +47,13 @@ const STEP: f64 = 0.01;
 /// How far the walk goes either side, in log10 s [-] (× 5: beyond 2√2).
 const RANGE: f64 = 0.7;
 
-/// The common unit factors (each also as its inverse) within [lo, hi], named.
-fn common_within(lo: f64, hi: f64) -> Vec<String> {
+/// The common unit factors (each also as its inverse) s with
+/// `within(s)`, named.
+fn common_where(within: impl Fn(f64) -> bool) -> Vec<String> {
     let mut out = Vec::new();
     for &(f, _) in COMMON.iter() {
         for s in [f, 1.0 / f] {
-            if (lo..=hi).contains(&s) {
+            if within(s) {
                 if let Some(n) = super::nearest_common(s) {
                     out.push(n);
                 }
@@ -91,13 +96,21 @@ pub fn blind(machine: &Machine, prep: &Prepared, state: &State) -> Vec<Blind> {
                 10f64.powf(dir * l)
             };
             let (lo, hi) = (edge(-1.0), edge(1.0));
-            let unseen = common_within(lo, hi);
-            if !unseen.is_empty() {
+            let unseen = common_where(|s| (lo..=hi).contains(&s));
+            // Where the walk stopped at its end, the common factors beyond
+            // it are tried one by one (flex B1's `ped` × 1/25.4 passed,
+            // trusted, with a note that stopped at × 0.2: session 41).
+            let end = 10f64.powf(RANGE - 0.5 * STEP);
+            let beyond = common_where(|s| {
+                ((hi > end && s > hi) || (lo < 1.0 / end && s < lo)) && passes(s.log10())
+            });
+            if !unseen.is_empty() || !beyond.is_empty() {
                 out.push(Blind {
                     kind,
                     bearing: name.clone(),
                     factor_interval: [lo, hi],
                     unseen,
+                    beyond,
                 });
             }
         }
@@ -126,11 +139,24 @@ pub fn sentence(blind: &[Blind]) -> Option<String> {
             } else {
                 format!("× {hi:.3}")
             };
+            let holds = if b.unseen.is_empty() {
+                String::new()
+            } else {
+                format!(" (it holds {})", b.unseen.join(", "))
+            };
+            let beyond = if b.beyond.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; beyond the walk, {} pass{} too",
+                    b.beyond.join(", "),
+                    if b.beyond.len() == 1 { "es" } else { "" }
+                )
+            };
             format!(
-                "{}'s `{}` readings {lo} to {hi} (it holds {})",
+                "{}'s `{}` readings {lo} to {hi}{holds}{beyond}",
                 b.bearing,
-                b.kind.columns(),
-                b.unseen.join(", ")
+                b.kind.columns()
             )
         })
         .collect();
