@@ -57,15 +57,7 @@ fn a_scale_the_check_cannot_see_is_said() {
     let data = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-3");
     let run = unseen::stored(data, "clean-p2c-b1-rel-x-sqrt2");
     let d = unseen::diagnosis_with_machine_check(data, "unseen-train.toml", &run);
-    let v = serde_json::to_value(&d).expect("diagnosis as JSON");
-    let blind = v
-        .get("unit_scale_blind")
-        .and_then(|b| b.as_array())
-        .unwrap_or_else(|| panic!("no unit_scale_blind: {}", d.to_text()));
-    let b1 = blind
-        .iter()
-        .find(|b| b["bearing"] == "B1" && b["kind"] == "rel")
-        .unwrap_or_else(|| panic!("B1's rel not said: {blind:?}"));
+    let b1 = blind_entry(&d, "B1", "rel");
     let lo = b1["factor_interval"][0].as_f64().expect("lower edge");
     let hi = b1["factor_interval"][1].as_f64().expect("upper edge");
     // measured = s × true with s = √2: the true readings are within reach.
@@ -92,15 +84,7 @@ fn a_unit_mistake_beyond_the_walk_is_said() {
     let data = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-4");
     let run = unseen::stored(data, "clean-n1c-802-b1-ped-x-inv254");
     let d = unseen::diagnosis_with_machine_check(data, "unseen-flex.toml", &run);
-    let v = serde_json::to_value(&d).expect("diagnosis as JSON");
-    let blind = v
-        .get("unit_scale_blind")
-        .and_then(|b| b.as_array())
-        .unwrap_or_else(|| panic!("no unit_scale_blind: {}", d.to_text()));
-    let b1 = blind
-        .iter()
-        .find(|b| b["bearing"] == "B1" && b["kind"] == "ped")
-        .unwrap_or_else(|| panic!("B1's ped not said: {blind:?}"));
+    let b1 = blind_entry(&d, "B1", "ped");
     let said: Vec<&str> = b1["unseen"]
         .as_array()
         .into_iter()
@@ -110,6 +94,20 @@ fn a_unit_mistake_beyond_the_walk_is_said() {
         .collect();
     assert!(said.iter().any(|n| n.starts_with("×1/25.4")), "{said:?}");
     assert!(d.verdict.contains("×1/25.4"), "{}", d.verdict);
+}
+
+/// The `unit_scale_blind` entry (JSON) of `bearing`'s `kind` transducers.
+fn blind_entry(d: &Diagnosis, bearing: &str, kind: &str) -> serde_json::Value {
+    let v = serde_json::to_value(d).expect("diagnosis as JSON");
+    let blind = v
+        .get("unit_scale_blind")
+        .and_then(|b| b.as_array())
+        .unwrap_or_else(|| panic!("no unit_scale_blind: {}", d.to_text()));
+    blind
+        .iter()
+        .find(|b| b["bearing"] == bearing && b["kind"] == kind)
+        .cloned()
+        .unwrap_or_else(|| panic!("{bearing}'s {kind} not said: {blind:?}"))
 }
 
 /// The trust reason that mentions `what`.

@@ -267,6 +267,9 @@ impl Prepared {
     }
 }
 
+/// `plinth identify`'s lack-of-fit findings per bearing name.
+type FindingsByBearing = std::collections::BTreeMap<String, crate::identify::trust::Findings>;
+
 /// What `plinth identify`'s lack-of-fit rule finds at bearing `name`
 /// (its model-error findings; empty: nothing). The written digits cannot
 /// tell rounding from truncation, so a model error is one that stands
@@ -282,11 +285,11 @@ impl Prepared {
 /// it trusted with B3 23.8 % off at z 25).
 fn lack_of_fit_either_way(
     name: &str,
-    truncated: &std::collections::BTreeMap<String, crate::identify::trust::Findings>,
-    written: &std::collections::BTreeMap<String, crate::identify::trust::Findings>,
-    centred: &std::collections::BTreeMap<String, crate::identify::trust::Findings>,
+    truncated: &FindingsByBearing,
+    written: &FindingsByBearing,
+    centred: &FindingsByBearing,
 ) -> Vec<String> {
-    let found = |m: &std::collections::BTreeMap<String, crate::identify::trust::Findings>| {
+    let found = |m: &FindingsByBearing| {
         m.get(name)
             .map(|f| f.model_error.clone())
             .unwrap_or_default()

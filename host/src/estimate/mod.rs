@@ -18,6 +18,7 @@ pub mod gauss_helmert;
 pub mod lack_of_fit;
 pub mod levenberg;
 pub mod ml;
+pub mod monte_carlo;
 pub mod noise;
 pub mod params;
 pub mod pedestal;

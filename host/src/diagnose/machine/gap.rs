@@ -285,10 +285,13 @@ impl MachineCheck {
         } else {
             None
         };
-        let blind = if fails || unit_scale.is_some() {
-            Vec::new()
-        } else {
-            super::unit_scale::blind::blind(machine, prep, first)
+        // The base model's gap and readings as simulated above (none: the
+        // simulator could not hold it, nothing to walk).
+        let blind = match gap_before {
+            Some(gap) if !fails && unit_scale.is_none() => {
+                super::unit_scale::blind::blind(machine, prep, first, gap, &before)
+            }
+            _ => Vec::new(),
         };
         Ok(Self {
             unit_scale,

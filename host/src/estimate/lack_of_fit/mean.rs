@@ -102,11 +102,11 @@ pub(super) fn mean_test(w: &[[f64; 4]]) -> Option<MeanTest> {
         }
     }
     let done = null.len();
-    let p_value = if above == super::STOP_AFTER_EXCEEDANCES {
-        above as f64 / done as f64
-    } else {
-        (1 + above) as f64 / (1 + NEGATIONS) as f64
-    };
+    let p_value = crate::estimate::monte_carlo::sequential_p_value(
+        above,
+        done,
+        super::STOP_AFTER_EXCEEDANCES,
+    );
     null.sort_by(f64::total_cmp);
     Some(MeanTest {
         statistic: (observed - own) / unit,

@@ -196,12 +196,10 @@ fn scan_standardised(
     }
     let done = null.len();
     // Besag & Clifford (1991): stopped after h exceedances in L shuffles the
-    // p-value is h/L; run to the end it is (1 + count)/(1 + shuffles).
-    let p_value = if above == STOP_AFTER_EXCEEDANCES {
-        above as f64 / done as f64
-    } else {
-        (1 + above) as f64 / (1 + PERMUTATIONS) as f64
-    };
+    // p-value is h/L; run to the end (done = PERMUTATIONS) it is
+    // (1 + count)/(1 + shuffles).
+    let p_value =
+        crate::estimate::monte_carlo::sequential_p_value(above, done, STOP_AFTER_EXCEEDANCES);
     null.sort_by(f64::total_cmp);
     let win = &scan[at];
     let ss = win.explained(&w);

@@ -39,7 +39,7 @@
 
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::Observation;
-use nalgebra::{Matrix4, Vector4};
+use nalgebra::{DMatrix, Matrix4, Vector4};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
 /// Parameters of the variance function: (α, β, γ) of each of the four
@@ -395,6 +395,48 @@ pub struct Refit {
     pub p_value: f64,
     /// The observations with the variance function's variances.
     pub obs: Vec<Observation>,
+}
+
+/// Relative eigenvalue below which a direction of a Jacobi-scaled
+/// information is taken as not estimated [-] ([`eigen_pseudo_inverse`]).
+const RANK_TOLERANCE: f64 = 1e-10;
+
+/// Jacobi scaling 1/√I_kk of a symmetric information `info` (0 where the
+/// diagonal is not positive and finite): the components' units differ by
+/// many decades.
+fn jacobi_scaling(info: &DMatrix<f64>) -> Vec<f64> {
+    (0..info.nrows())
+        .map(|k| {
+            let x = info[(k, k)];
+            if x > 0.0 && x.is_finite() {
+                1.0 / x.sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// The pseudo-inverse of the symmetric positive semi-definite (already
+/// scaled) `m` and its rank: its directions below [`RANK_TOLERANCE`] of the
+/// largest eigenvalue left out; `None` when it has no positive direction.
+fn eigen_pseudo_inverse(m: &DMatrix<f64>) -> Option<(DMatrix<f64>, usize)> {
+    let eig = m.clone().symmetric_eigen();
+    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+    if !(top > 0.0 && top.is_finite()) {
+        return None;
+    }
+    let n = m.nrows();
+    let mut inverse = DMatrix::<f64>::zeros(n, n);
+    let mut rank = 0;
+    for (i, &lambda) in eig.eigenvalues.iter().enumerate() {
+        if lambda > RANK_TOLERANCE * top {
+            let v = eig.eigenvectors.column(i);
+            inverse += v * v.transpose() / lambda;
+            rank += 1;
+        }
+    }
+    Some((inverse, rank))
 }
 
 mod score;

@@ -137,12 +137,15 @@ pub(super) fn decide<'a>(
     // differ by noise (5.6).
     let as_found = readings.iter().find(|(r, _)| r.convention.is_none());
     let better_than_found = as_found.is_none_or(|(r, q)| {
-        r == best
-            || (not_worse(r)
-                && log_likelihood_ratio(r, best) < DECISIVE_DELTA_CHI2
-                && (!(r.plausible || passive_within_noise(q))
-                    || (log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2
-                        && (!floor_law_holds || r.chi2 - best.chi2 >= DECISIVE_DELTA_CHI2))))
+        if r == best {
+            return true;
+        }
+        let not_decisively_better =
+            not_worse(r) && log_likelihood_ratio(r, best) < DECISIVE_DELTA_CHI2;
+        let stated_stands = r.plausible || passive_within_noise(q);
+        let beats_stated = log_likelihood_ratio(best, r) >= DECISIVE_DELTA_CHI2
+            && (!floor_law_holds || r.chi2 - best.chi2 >= DECISIVE_DELTA_CHI2);
+        not_decisively_better && (!stated_stands || beats_stated)
     });
     let runner_up = others().min_by(by_residual)?.0;
     (explains_forces(best) && decisive && better_than_found).then_some((*best, runner_up, *fit))

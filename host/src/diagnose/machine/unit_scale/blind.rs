@@ -13,7 +13,7 @@
 //! unit mistake ([`super::COMMON`]). A pedestal there is right only if its
 //! transducers' units are.
 
-use super::super::{machine_floor, machine_gap, resimulate};
+use super::super::{machine_floor, Readings};
 use super::{gap_of, Kind, Reading, COMMON};
 use crate::diagnose::data::Prepared;
 use crate::diagnose::state::State;
@@ -64,14 +64,17 @@ fn common_where(within: impl Fn(f64) -> bool) -> Vec<String> {
 }
 
 /// Per bearing and kind, the scales the check cannot see on the base model
-/// `state` (module docs), when the readings as they are pass it; only
-/// those whose range holds a common unit mistake.
-pub fn blind(machine: &Machine, prep: &Prepared, state: &State) -> Vec<Blind> {
-    let Ok(r) = resimulate(machine, prep, state, None) else {
-        return Vec::new();
-    };
-    let gap = machine_gap(prep, &r);
-    let Ok(floor) = machine_floor(machine, prep, state, None, &r) else {
+/// `state` (module docs), when the readings as they are pass it (`gap`
+/// [-]: its machine-level gap; `readings`: its re-simulated readings, the
+/// check's own); only those whose range holds a common unit mistake.
+pub fn blind(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    gap: f64,
+    readings: &Readings,
+) -> Vec<Blind> {
+    let Ok(floor) = machine_floor(machine, prep, state, None, readings) else {
         return Vec::new();
     };
     if MachineCheck::of(gap, floor) != MachineCheck::Agrees {

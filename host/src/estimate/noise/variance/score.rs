@@ -31,7 +31,9 @@
 //! them reach the observed statistic, so accepted columns cost a few tens
 //! of draws and only rejected ones the [`BOOTSTRAP_DRAWS`].
 
-use super::{speeds, Family, Speed, MAX_TEST_SPEEDS, PER_CHANNEL};
+use super::{
+    eigen_pseudo_inverse, jacobi_scaling, speeds, Family, Speed, MAX_TEST_SPEEDS, PER_CHANNEL,
+};
 use crate::estimate::{ml, Observation};
 use nalgebra::{DMatrix, DVector, Matrix4, SMatrix, SVector, Vector4};
 use plinth_shared::regression::{Parameter, PARAMETERS};
@@ -107,17 +109,7 @@ impl Score {
                 info[(k, l)] = info[(l, k)];
             }
         }
-        // Jacobi scaling: the components' units differ by many decades.
-        let scaling: Vec<f64> = (0..=m)
-            .map(|k| {
-                let x = info[(k, k)];
-                if x > 0.0 {
-                    1.0 / x.sqrt()
-                } else {
-                    0.0
-                }
-            })
-            .collect();
+        let scaling = jacobi_scaling(&info);
         let info =
             DMatrix::<f64>::from_fn(m + 1, m + 1, |k, l| scaling[k] * info[(k, l)] * scaling[l]);
         let phi = info[(m, m)];
@@ -126,20 +118,7 @@ impl Score {
         }
         let coupling: Vec<f64> = (0..m).map(|k| info[(k, m)] / phi).collect();
         let eff = DMatrix::<f64>::from_fn(m, m, |k, l| info[(k, l)] - coupling[k] * info[(m, l)]);
-        let eig = eff.symmetric_eigen();
-        let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
-        if !(top > 0.0 && top.is_finite()) {
-            return None;
-        }
-        let mut inverse = DMatrix::<f64>::zeros(m, m);
-        let mut rank = 0;
-        for (i, &lambda) in eig.eigenvalues.iter().enumerate() {
-            if lambda > 1e-10 * top {
-                let v = eig.eigenvectors.column(i);
-                inverse += v * v.transpose() / lambda;
-                rank += 1;
-            }
-        }
+        let (inverse, rank) = eigen_pseudo_inverse(&eff)?;
         (rank > 0).then_some(Self {
             inverses,
             free,
@@ -285,11 +264,7 @@ pub fn columns_shape_p(
     }
     // Bonferroni over the two statistics.
     let fewest = reached[0].min(reached[1]);
-    let p = if fewest >= EXCEEDANCES {
-        2.0 * EXCEEDANCES as f64 / made as f64
-    } else {
-        2.0 * (1 + fewest) as f64 / (1 + made) as f64
-    };
+    let p = 2.0 * crate::estimate::monte_carlo::sequential_p_value(fewest, made, EXCEEDANCES);
     Some(p.min(1.0))
 }
 

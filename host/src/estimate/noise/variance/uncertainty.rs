@@ -23,15 +23,11 @@
 //! multi-parameter form, large where a speed's weight rests on a poorly
 //! determined component (a floor the residuals hardly see).
 
-use super::{speeds, COMPONENTS, PER_CHANNEL};
+use super::{eigen_pseudo_inverse, jacobi_scaling, speeds, COMPONENTS, PER_CHANNEL};
 use crate::estimate::ml;
 use crate::estimate::Observation;
 use nalgebra::{DMatrix, Matrix4, SMatrix};
 use plinth_shared::regression::{Parameter, PARAMETERS};
-
-/// Relative eigenvalue below which a direction of the variance function's
-/// information is taken as not estimated (left out of V_p) [-].
-const RANK_TOLERANCE: f64 = 1e-10;
 
 /// The covariance [θ units] of the fit `covariance` (its F⁻¹ over all five
 /// parameters, module docs) of `obs` (their variances the variance function
@@ -108,33 +104,14 @@ pub fn with_law_uncertainty(
 }
 
 /// The pseudo-inverse of the symmetric positive semi-definite `info`, its
-/// directions below [`RANK_TOLERANCE`] of the largest eigenvalue (after
-/// Jacobi scaling) left out; `None` when it has no positive direction.
+/// directions below [`super::RANK_TOLERANCE`] of the largest eigenvalue
+/// (after Jacobi scaling) left out (the variance function's directions not
+/// estimated, left out of V_p); `None` when it has no positive direction.
 fn pseudo_inverse(info: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     let n = info.nrows();
-    let d: Vec<f64> = (0..n)
-        .map(|k| {
-            let x = info[(k, k)];
-            if x > 0.0 && x.is_finite() {
-                1.0 / x.sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let d = jacobi_scaling(info);
     let scaled = DMatrix::<f64>::from_fn(n, n, |r, c| d[r] * info[(r, c)] * d[c]);
-    let eig = scaled.symmetric_eigen();
-    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
-    if !(top > 0.0 && top.is_finite()) {
-        return None;
-    }
-    let mut inv = DMatrix::<f64>::zeros(n, n);
-    for (i, &lambda) in eig.eigenvalues.iter().enumerate() {
-        if lambda > RANK_TOLERANCE * top {
-            let u = eig.eigenvectors.column(i);
-            inv += (u * u.transpose()) / lambda;
-        }
-    }
+    let (inv, _) = eigen_pseudo_inverse(&scaled)?;
     Some(DMatrix::<f64>::from_fn(n, n, |r, c| {
         d[r] * inv[(r, c)] * d[c]
     }))
