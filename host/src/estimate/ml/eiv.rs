@@ -118,7 +118,12 @@ pub fn eiv_covariance(
         }
         n += n_s;
     }
-    if !f.iter().chain(n.iter()).chain(gamma.iter()).all(|v| v.is_finite()) {
+    if !f
+        .iter()
+        .chain(n.iter())
+        .chain(gamma.iter())
+        .all(|v| v.is_finite())
+    {
         return None;
     }
     let f_inv = gh::inverse_psd(&f);
@@ -176,7 +181,7 @@ mod tests {
     use super::*;
     use crate::estimate::ml;
     use plinth_shared::bearing::BearingCoefficients;
-    
+
     fn machine() -> ([f64; PARAMETERS], BearingCoefficients<f64>) {
         let theta = [9.0e8, 6.5e8, 320.0, 2.0e5, 1.5e5];
         let bearing = BearingCoefficients {
@@ -198,12 +203,8 @@ mod tests {
                 let h = |k: f64, c: f64| Complex::new(k - w * w * theta[2], w * c);
                 // ped = H⁻¹·F, F = K*·rel: pick rel, derive ped.
                 let rel = [Complex::new(1e-6, 2e-7), Complex::new(-3e-7, 8e-7)];
-                let mut o = Observation::without_noise(
-                    hz,
-                    rel,
-                    [Complex::new(0.0, 0.0); 2],
-                    &bearing,
-                );
+                let mut o =
+                    Observation::without_noise(hz, rel, [Complex::new(0.0, 0.0); 2], &bearing);
                 let force = o.force();
                 o.ped = [
                     force[0] / h(theta[0], theta[3]),
@@ -230,19 +231,63 @@ mod tests {
         }
     }
 
+    /// RMS over parameters and draws of (θ̂ − θ)/sd [-], the sd from
+    /// `covariance`, for the draws it gives one.
+    fn rms_z(z: &[f64]) -> f64 {
+        (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt()
+    }
+
     #[test]
     fn regressors_read_near_their_noise_widen_the_covariance() {
+        use rand::{Rng, SeedableRng};
         let (theta, _) = machine();
-        // ped of ~1e-9..1e-8 m against 3e-9 m of noise.
-        let obs = exact(3e-9, 1e-10);
-        let e = eiv_covariance(&obs, &Parameter::ALL, &theta, 0.0).unwrap();
-        let (bound, _) = ml::bound(&obs, &Parameter::ALL, &theta).unwrap();
-        assert!(e.noise_share > 0.05, "{}", e.noise_share);
-        if let Some(cov) = e.covariance {
-            let widest = (0..PARAMETERS)
-                .map(|k| cov[k][k] / bound[k][k])
-                .fold(0.0f64, f64::max);
-            assert!(widest > 1.0 / (1.0 - e.noise_share).powi(2) * 0.5, "{widest}");
+        // The pedestal's phasors are 1.6e-7 .. 3e-7 m: noise of 3e-7 m on
+        // each (complex sd): a signal-to-noise ratio near 1 in amplitude.
+        let (ped_sd, rel_sd) = (3e-7, 1e-9);
+        let clean = exact(ped_sd, rel_sd);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(17);
+        let (mut z_fisher, mut z_eiv, mut shares) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..60 {
+            let noisy: Vec<Observation> = clean
+                .iter()
+                .map(|o| {
+                    let mut n = *o;
+                    for (c, v) in n.rel.iter_mut().chain(n.ped.iter_mut()).enumerate() {
+                        let s = (0.5f64).sqrt() * if c < 2 { rel_sd } else { ped_sd };
+                        *v += Complex::new(
+                            s * rng.sample::<f64, _>(rand_distr::StandardNormal),
+                            s * rng.sample::<f64, _>(rand_distr::StandardNormal),
+                        );
+                    }
+                    n
+                })
+                .collect();
+            let Ok(fit) = ml::fit(&noisy, &Parameter::ALL, &theta) else {
+                continue;
+            };
+            let Some(e) = eiv_covariance(&noisy, &Parameter::ALL, &fit.theta, 0.0) else {
+                continue;
+            };
+            shares.push(e.noise_share);
+            let Some(cov) = e.covariance else { continue };
+            for k in 0..3 {
+                let d = fit.theta[k] - theta[k];
+                z_fisher.push(d / fit.covariance[k][k].sqrt());
+                z_eiv.push(d / cov[k][k].sqrt());
+            }
         }
+        let share = shares.iter().sum::<f64>() / shares.len() as f64;
+        assert!(z_eiv.len() >= 150, "{} of 180", z_eiv.len());
+        let (f, e) = (rms_z(&z_fisher), rms_z(&z_eiv));
+        let said = format!("noise share {share:.3}, RMS z {f:.3} (F⁻¹), {e:.3} (EIV)");
+        eprintln!("{said}");
+        assert!(share > 0.2, "{said}");
+        // Measured (seed 17): share 0.65, RMS z 0.79 under F⁻¹ and 0.54
+        // under the EIV covariance: on this machine both are conservative and
+        // the EIV covariance is the wider; it is never the narrower, and the
+        // estimate is never more than its ± off in RMS
+        // (docs/session42-lowsnrpm17.md: on the unseen-train recording F⁻¹
+        // gives RMS z ≈ 3 and the EIV covariance ≈ 1).
+        assert!(e < f && e < 1.3, "{said}");
     }
 }
