@@ -423,8 +423,16 @@ pub(crate) fn fit_ml_checked(
     // the measured phasors counts their noise as information, which matters
     // where a pedestal is read near or below its noise.
     if let Some(e) = ml::eiv_covariance(&obs, &columns, &ml_fit.theta, ml_fit.equation_var) {
-        match e.covariance {
-            Some(c) => ml_fit.covariance = c,
+        match e.excess {
+            // Added to the fit's covariance: a widening it already carries
+            // (the variance function's error) is kept.
+            Some(x) => {
+                for (row, add) in ml_fit.covariance.iter_mut().zip(&x) {
+                    for (v, a) in row.iter_mut().zip(add) {
+                        *v += a;
+                    }
+                }
+            }
             None => extra.push(Warning {
                 kind: WarningKind::Undetermined,
                 message: format!(

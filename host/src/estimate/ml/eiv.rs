@@ -40,6 +40,9 @@ pub struct EivCovariance {
     /// M⁻¹ + M⁻¹ΓM⁻¹ over all five parameters (θ units; zero rows and
     /// columns for fixed ones); `None` when F − N is not positive definite.
     pub covariance: Option<[[f64; PARAMETERS]; PARAMETERS]>,
+    /// `covariance` − F⁻¹ (θ units): what the regressors' noise adds to the
+    /// covariance a fit reports, to be added to any other widening of it.
+    pub excess: Option<[[f64; PARAMETERS]; PARAMETERS]>,
     /// The largest share of the fit's information F that is its regressors'
     /// noise N: the largest eigenvalue of F⁻¹N [-] (0: read exactly; ≥ 1:
     /// some combination of the parameters is read no better than its noise).
@@ -149,8 +152,18 @@ pub fn eiv_covariance(
                 .iter()
                 .all(|&k| c[k as usize][k as usize].is_finite() && c[k as usize][k as usize] > 0.0)
         });
+    let excess = covariance.map(|c| {
+        let mut out = c;
+        for (r, &pr) in columns.iter().enumerate() {
+            for (k, &pc) in columns.iter().enumerate() {
+                out[pr as usize][pc as usize] -= f_inv[(r, k)];
+            }
+        }
+        out
+    });
     Some(EivCovariance {
         covariance,
+        excess,
         noise_share,
     })
 }
