@@ -47,3 +47,23 @@ fn true_columns_of_a_pedestal_read_below_its_noise_are_accepted() {
         assert!(((v - t) / se).abs() < 3.0, "{name}: {v} ± {se}, truth {t}");
     }
 }
+
+/// A pedestal read below its noise: the errors-in-variables ± include the
+/// regressors' noise (host/src/estimate/ml/eiv.rs), so no value printed
+/// `ok` is beyond 3 of its ±. The stored run is B1's rows of null draw 1509
+/// (the same recording, `ross_recording.py --null RUN REC NULL 1509`, then
+/// `make_lowsnr_null.py NULL OUT B1 2 5`): main (296e18c) prints B1 `ok`
+/// with k_y 5.8 ±, k_z 5.2 ±, m 4.5 ± off (its ± from F⁻¹ of the measured,
+/// noisy phasors, which counts their noise as information: B1's share of
+/// it is 0.82).
+#[test]
+fn a_pedestal_read_below_its_noise_is_not_printed_ok_beyond_its_uncertainty() {
+    let run = stored(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/data"),
+        "lowsnr-null-train-1509",
+    );
+    let id = identify(&run);
+    for (name, v, se, t) in printed_ok(&run, &id, true) {
+        assert!(((v - t) / se).abs() < 3.0, "{name}: {v} ± {se}, truth {t}");
+    }
+}

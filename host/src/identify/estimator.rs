@@ -419,6 +419,29 @@ pub(crate) fn fit_ml_checked(
     if noise.source.scale_estimated() {
         noise.rescale(variance_scale);
     }
+    // The covariance with the regressors' noise (estimate::ml::eiv): F⁻¹ of
+    // the measured phasors counts their noise as information, which matters
+    // where a pedestal is read near or below its noise.
+    if let Some(e) = ml::eiv_covariance(&obs, &columns, &ml_fit.theta, ml_fit.equation_var) {
+        match e.excess {
+            // Added to the fit's covariance: a widening it already carries
+            // (the variance function's error) is kept.
+            Some(x) => {
+                for (row, add) in ml_fit.covariance.iter_mut().zip(&x) {
+                    for (v, a) in row.iter_mut().zip(add) {
+                        *v += a;
+                    }
+                }
+            }
+            None => extra.push(Warning {
+                kind: WarningKind::Undetermined,
+                message: format!(
+                    "the pedestal is read below its noise: the noise of its phasors carries {:.0} % of the fit's information on some combination of the parameters (errors in variables), so their standard errors are not known; those shown are the asymptotic ones",
+                    100.0 * e.noise_share
+                ),
+            }),
+        }
+    }
     let se = ml_fit.std_err(variance_scale);
     let mut fit = ols_fit.clone();
     fit.pedestal = crate::estimate::Pedestal::from_theta(ml_fit.theta);
