@@ -299,7 +299,7 @@ mod tests {
         // under the EIV covariance: on this machine both are conservative and
         // the EIV covariance is the wider; it is never the narrower, and the
         // estimate is never more than its ± off in RMS
-        // (docs/session42-lowsnrpm17.md: on the unseen-train recording F⁻¹
+        // (docs/estimation.md, Session 42 (lowsnrpm17): on the unseen-train recording F⁻¹
         // gives RMS z ≈ 3 and the EIV covariance ≈ 1).
         assert!(e < f && e < 1.3, "{said}");
     }
