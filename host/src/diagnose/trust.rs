@@ -176,7 +176,7 @@ pub fn conclude(
     // pedestals: about 4 %).
     let family: usize = pedestals.iter().map(physical::constrained_estimates).sum();
     for fit in pedestals {
-        for w in physical::violations_in_family(fit, family, None) {
+        for w in physical::violations_in_family(fit, family, None, None) {
             reasons.push(format!("pedestal {}: {}", fit.bearing, w.message));
         }
     }

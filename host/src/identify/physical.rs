@@ -92,10 +92,18 @@ pub fn damping_impossible(c: f64, se: f64, k: f64, omega_max: f64, sigmas: f64) 
     se.is_finite() && c < -sigmas * se && material
 }
 
-/// Marks the note of a mass or stiffness below zero within its noise
+/// Marks the sign rule's notes that a value is not determined
 /// ([`WarningKind::Undetermined`], module docs), so that a re-judgement
-/// ([`recheck_run`]) replaces it.
-pub const NEGATIVE_WITHIN_NOISE: &str = "negative within its noise";
+/// ([`recheck_run`]) replaces them.
+pub const NOT_DETERMINED: &str = "not determined by these data";
+
+/// Largest relative residual Σ|e|²/Σ|F|² [-] ([`super::misfit::Misfit`]) of
+/// a fit whose standard errors the sign rule trusts to call a value
+/// impossible: the convention check's bound on a reading that explains its
+/// forces (one definition). A fit that leaves more is fitted to bearing
+/// forces that are mostly the probes' noise, where the linearised ± is far
+/// too short (module docs).
+pub use super::convention::MAX_RELATIVE_RESIDUAL;
 
 /// The sign rule's findings on `fit` (module docs): one
 /// [`WarningKind::PhysicallyImpossible`] warning per parameter below zero
@@ -105,18 +113,22 @@ pub const NEGATIVE_WITHIN_NOISE: &str = "negative within its noise";
 /// fixed by the model are 0 and pass. Its estimates are tested as a family
 /// of their own (see [`violations_in_family`]).
 pub fn violations(fit: &PedestalFit) -> Vec<Warning> {
-    violations_in_family(fit, constrained_estimates(fit), None)
+    violations_in_family(fit, constrained_estimates(fit), None, None)
 }
 
 /// [`violations`] with the estimates tested as `family` of a larger family
 /// (every sign-constrained estimate of the run), each at
 /// [`sigmas_below_zero`]`(family)` standard errors, each the larger of the
 /// fit's and `floor` (θ units: N/m, N/m, kg, N·s/m, N·s/m;
-/// [`judged_std_errs`]; module docs).
+/// [`judged_std_errs`]; module docs). With the fit's `relative_residual`
+/// (Σ|e|²/Σ|F|² [-] on its bearing's data) above [`MAX_RELATIVE_RESIDUAL`]
+/// a value below zero beyond its noise is not determined either, not
+/// impossible (its ± is not to be trusted there).
 pub fn violations_in_family(
     fit: &PedestalFit,
     family: usize,
     floor: Option<[f64; PARAMETERS]>,
+    relative_residual: Option<f64>,
 ) -> Vec<Warning> {
     let sigmas = sigmas_below_zero(family);
     let mut out = Vec::new();
@@ -156,7 +168,18 @@ pub fn violations_in_family(
             _ => negative_beyond_noise(value, sigma, sigmas),
         };
         let name = p.name();
-        if beyond {
+        let noise_forces = relative_residual.filter(|r| !(*r <= MAX_RELATIVE_RESIDUAL));
+        if let (true, Some(r)) = (beyond, noise_forces) {
+            out.push(Warning {
+                kind: WarningKind::Undetermined,
+                message: format!(
+                    "{name} = {value:.4e} ± {sigma:.2e} {unit} is negative by {:.1} standard errors, but the fit leaves {:.0} % of the bearing forces unexplained (more than the {:.0} % within which its ± is trusted to call a value impossible): the forces are mostly noise, the ± too short to judge by, and the {what} {NOT_DETERMINED}",
+                    -value / sigma,
+                    100.0 * r,
+                    100.0 * MAX_RELATIVE_RESIDUAL
+                ),
+            });
+        } else if beyond {
             out.push(Warning {
                 kind: WarningKind::PhysicallyImpossible,
                 message: format!(
@@ -168,7 +191,7 @@ pub fn violations_in_family(
             out.push(Warning {
                 kind: WarningKind::Undetermined,
                 message: format!(
-                    "{name} = {value:.4e} ± {sigma:.2e} {unit} is {NEGATIVE_WITHIN_NOISE} ({:.1} standard errors, within {allowance}): consistent with a {what} near zero, not determined by these data",
+                    "{name} = {value:.4e} ± {sigma:.2e} {unit} is negative within its noise ({:.1} standard errors, within {allowance}): consistent with a {what} near zero, {NOT_DETERMINED}",
                     -value / sigma
                 ),
             });
@@ -193,7 +216,7 @@ fn already_undetermined(fit: &PedestalFit, p: Parameter) -> bool {
     fit.warnings.iter().any(|w| {
         w.kind == WarningKind::Undetermined
             && w.message.starts_with(&prefix)
-            && !w.message.contains(NEGATIVE_WITHIN_NOISE)
+            && !w.message.contains(NOT_DETERMINED)
     })
 }
 
@@ -202,8 +225,13 @@ fn already_undetermined(fit: &PedestalFit, p: Parameter) -> bool {
 /// estimated masses, stiffnesses and dampings), so that the run's
 /// false-alarm rate is [`FAMILY_FALSE_ALARM`] however many pedestals it
 /// has, each estimate with the larger of its fit's standard error and the
-/// floor of [`judged_std_errs`], and updates `trusted`.
-pub fn recheck_run(identification: &mut super::Identification) {
+/// floor of [`judged_std_errs`] and the fit's relative residual on its
+/// bearing's data from `relative_residuals` (by bearing name;
+/// [`violations_in_family`]), and updates `trusted`.
+pub fn recheck_run(
+    identification: &mut super::Identification,
+    relative_residuals: &std::collections::BTreeMap<String, f64>,
+) {
     let family: usize = identification
         .pedestals
         .iter()
@@ -213,11 +241,11 @@ pub fn recheck_run(identification: &mut super::Identification) {
     for p in &mut identification.pedestals {
         p.warnings.retain(|w| {
             w.kind != WarningKind::PhysicallyImpossible
-                && !(w.kind == WarningKind::Undetermined
-                    && w.message.contains(NEGATIVE_WITHIN_NOISE))
+                && !(w.kind == WarningKind::Undetermined && w.message.contains(NOT_DETERMINED))
         });
         let floor = noise.get(&p.bearing).map(|n| judged_std_errs(p, n));
-        let found = violations_in_family(p, family, floor);
+        let r = relative_residuals.get(&p.bearing).copied();
+        let found = violations_in_family(p, family, floor, r);
         p.warnings.extend(found);
         p.trusted = !p.warnings.iter().any(|w| w.kind.makes_untrusted());
     }
@@ -440,14 +468,14 @@ mod tests {
         assert_eq!(w.len(), 1);
         assert_eq!(w[0].kind, WarningKind::Undetermined);
         assert!(w[0].message.starts_with("m = "), "{}", w[0].message);
-        assert!(w[0].message.contains(NEGATIVE_WITHIN_NOISE));
+        assert!(w[0].message.contains(NOT_DETERMINED));
         assert!(!is_plausible(&f));
         // −2.9 σ: beyond the allowance of one pedestal (2.88), within that
         // of a two-pedestal run (3.09).
         let f = fit([-2.9e4, 8e6, 150.0, 0.0, 0.0], SE);
         assert_eq!(violations(&f)[0].kind, WarningKind::PhysicallyImpossible);
         assert_eq!(
-            violations_in_family(&f, 10, None)[0].kind,
+            violations_in_family(&f, 10, None, None)[0].kind,
             WarningKind::Undetermined
         );
         // Not repeated where the fit already says the value is not
@@ -487,10 +515,10 @@ mod tests {
         // is -1.5 σ. A smaller ± from the residuals never tightens the rule.
         let f = fit([1e7, 8e6, 150.0, -150.0, 0.0], SE);
         let floor = |c: f64| Some([0.0, 0.0, 0.0, c, c]);
-        assert_eq!(violations_in_family(&f, 5, None).len(), 1);
-        assert!(violations_in_family(&f, 5, floor(100.0)).is_empty());
-        assert_eq!(violations_in_family(&f, 5, floor(10.0)).len(), 1);
-        assert_eq!(violations_in_family(&f, 5, floor(f64::NAN)).len(), 1);
+        assert_eq!(violations_in_family(&f, 5, None, None).len(), 1);
+        assert!(violations_in_family(&f, 5, floor(100.0), None).is_empty());
+        assert_eq!(violations_in_family(&f, 5, floor(10.0), None).len(), 1);
+        assert_eq!(violations_in_family(&f, 5, floor(f64::NAN), None).len(), 1);
     }
 
     #[test]
@@ -510,13 +538,13 @@ mod tests {
             noise: Default::default(),
             bases: Vec::new(),
         };
-        recheck_run(&mut run);
+        recheck_run(&mut run, &Default::default());
         assert!(run
             .pedestals
             .iter()
             .all(|p| p.trusted && p.warnings.is_empty()));
         run.pedestals[0].pedestal.c_y = -160.0;
-        recheck_run(&mut run);
+        recheck_run(&mut run, &Default::default());
         assert!(!run.pedestals[0].trusted);
         assert!(run.pedestals[0].warnings[0].message.contains("family-wise"));
     }
