@@ -85,7 +85,11 @@ fn a_mass_negative_within_its_noise_is_undetermined_not_impossible() {
         assert!(!(negative && p.trusted), "{}: {p:?}", p.bearing);
     }
     assert!(!b1.trusted);
-    assert!(b1.has_warning(WarningKind::Undetermined), "{:#?}", b1.warnings);
+    assert!(
+        b1.has_warning(WarningKind::Undetermined),
+        "{:#?}",
+        b1.warnings
+    );
     // No exit 2 (what `plinth identify` returns after printing).
     assert!(NotPhysical::of(&id).is_none(), "{:?}", NotPhysical::of(&id));
 }
