@@ -512,18 +512,7 @@ pub fn identify_prepared(
     let findings = convention::diagnose(run, &identification, noise, options);
     convention::mark(&mut identification, &findings);
     crate::present::modal::attach(&mut identification);
-    // Each fit's residual relative to its bearing forces (unweighted: the
-    // noise it is whitened by does not enter), for the sign rule.
-    let schedules = run.bearing_schedules();
-    let sigma = crate::estimate::pedestal::floor_sd(noise, run.measurements.len());
-    let relative_residuals: BTreeMap<String, f64> = identification
-        .pedestals
-        .iter()
-        .filter_map(|p| {
-            misfit::misfit(run, &schedules, &sigma, p)
-                .map(|m| (p.bearing.clone(), m.relative_residual))
-        })
-        .collect();
+    let relative_residuals = misfit::relative_residuals(run, noise, &identification.pedestals);
     physical::recheck_run(&mut identification, &relative_residuals);
     trust::mark_lack_of_fit(&mut identification);
     plausibility::mark(run, &mut identification);
