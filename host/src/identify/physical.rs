@@ -173,7 +173,7 @@ pub fn violations_in_family(
             _ => negative_beyond_noise(value, sigma, sigmas),
         };
         let name = p.name();
-        let noise_forces = relative_residual.filter(|r| !(*r <= MAX_RELATIVE_RESIDUAL));
+        let noise_forces = relative_residual.filter(|r| r.is_nan() || *r > MAX_RELATIVE_RESIDUAL);
         if let (true, Some(r)) = (beyond, noise_forces) {
             out.push(Warning {
                 kind: WarningKind::Undetermined,
