@@ -454,7 +454,7 @@ mod tests {
         assert_eq!(offending(&fit([1e7, -8e6, 150.0, 0.0, 0.0], SE)), ["k_z"]);
         assert_eq!(offending(&fit([1e7, 8e6, -0.5, 0.0, 0.0], SE)), ["m"]);
         assert_eq!(
-            offending(&fit([1e7, 8e6, 150.0, -130.0, -5000.0], SE)),
+            offending(&fit([1e7, 8e6, 150.0, -150.0, -5000.0], SE)),
             ["c_y", "c_z"]
         );
         // 2.02 σ below zero is chance for a family of five (2.88 σ).
