@@ -113,8 +113,8 @@ pub use super::convention::MAX_RELATIVE_RESIDUAL;
 /// The sign rule's findings on `fit` (module docs): one
 /// [`WarningKind::PhysicallyImpossible`] warning per parameter below zero
 /// beyond the noise, one [`WarningKind::Undetermined`] note per mass or
-/// stiffness below zero within it (unless the fit already says that value
-/// is not determined); empty when every value is non-negative. Parameters
+/// stiffness below zero within it; empty when every value is non-negative
+/// ([`recheck_run`] leaves out a note the fit's own check already makes). Parameters
 /// fixed by the model are 0 and pass. Its estimates are tested as a family
 /// of their own (see [`violations_in_family`]).
 pub fn violations(fit: &PedestalFit) -> Vec<Warning> {
@@ -192,7 +192,7 @@ pub fn violations_in_family(
                     -value / sigma
                 ),
             });
-        } else if what != "damping" && !already_undetermined(fit, p) {
+        } else if what != "damping" {
             out.push(Warning {
                 kind: WarningKind::Undetermined,
                 message: format!(
@@ -213,16 +213,19 @@ pub fn negative_beyond_noise(value: f64, se: f64, sigmas: f64) -> bool {
     se.is_finite() && value < -sigmas * se
 }
 
-/// Whether `fit` already says `p` is not determined (the fit's own check:
-/// its standard error exceeds its value), so that the sign rule's note
-/// would repeat it.
-fn already_undetermined(fit: &PedestalFit, p: Parameter) -> bool {
-    let prefix = format!("{} = ", p.name());
-    fit.warnings.iter().any(|w| {
-        w.kind == WarningKind::Undetermined
-            && w.message.starts_with(&prefix)
-            && !w.message.contains(NOT_DETERMINED)
-    })
+/// Whether the sign rule's note `w` repeats what `fit` already says: the
+/// same value not determined by the fit's own check (its standard error
+/// exceeds its value).
+fn repeats(fit: &PedestalFit, w: &Warning) -> bool {
+    let Some((name, _)) = w.message.split_once(" = ") else {
+        return false;
+    };
+    w.kind == WarningKind::Undetermined
+        && fit.warnings.iter().any(|v| {
+            v.kind == WarningKind::Undetermined
+                && v.message.split_once(" = ").is_some_and(|(n, _)| n == name)
+                && !v.message.contains(NOT_DETERMINED)
+        })
 }
 
 /// Re-judges the sign rule on every pedestal of a run with its
@@ -250,7 +253,10 @@ pub fn recheck_run(
         });
         let floor = noise.get(&p.bearing).map(|n| judged_std_errs(p, n));
         let r = relative_residuals.get(&p.bearing).copied();
-        let found = violations_in_family(p, family, floor, r);
+        let found: Vec<Warning> = violations_in_family(p, family, floor, r)
+            .into_iter()
+            .filter(|w| !repeats(p, w))
+            .collect();
         p.warnings.extend(found);
         p.trusted = !p.warnings.iter().any(|w| w.kind.makes_untrusted());
     }
@@ -483,16 +489,28 @@ mod tests {
             violations_in_family(&f, 10, None, None)[0].kind,
             WarningKind::Undetermined
         );
-        // Not repeated where the fit already says the value is not
-        // determined (its ± exceeds it).
+        // Said on its own (diagnose reads it), but not repeated in a run
+        // where the fit already says the value is not determined.
         let mut f = fit([1e7, 8e6, -0.05, 0.0, 0.0], SE);
         f.warnings.push(Warning {
             kind: WarningKind::Undetermined,
             message: "m = -5e-2 ± 1e-1: its standard error exceeds its value: not determined"
                 .into(),
         });
-        assert!(violations(&f).is_empty());
+        assert_eq!(violations(&f).len(), 1);
         assert!(!is_plausible(&f));
+        let mut run = crate::identify::Identification {
+            model: Vec::new(),
+            equations: "r-and-i".into(),
+            estimator: "ml".into(),
+            pedestals: vec![f],
+            noise: Default::default(),
+            bases: Vec::new(),
+        };
+        recheck_run(&mut run, &Default::default());
+        recheck_run(&mut run, &Default::default());
+        assert_eq!(run.pedestals[0].warnings.len(), 1);
+        assert!(!run.pedestals[0].trusted);
         // A negative damping within its noise is only unresolved (the
         // fit's own check), not a finding of the sign rule.
         assert!(violations(&fit([1e7, 8e6, 150.0, -101.0, 0.0], SE)).is_empty());
