@@ -223,7 +223,7 @@ pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
 }
 
 /// The pedestal dampings of `state` that no passive pedestal can have:
-/// negative beyond [`crate::identify::physical::damping_sigmas`] standard
+/// negative beyond [`crate::identify::physical::sigmas_below_zero`] standard
 /// errors for the family of every damping the model estimates and
 /// materially so ([`crate::identify::physical::damping_impossible`], the
 /// rule `plinth identify` untrusts a pedestal by, 1 % family-wise per run).
@@ -238,7 +238,7 @@ pub fn step(prep: &Prepared, state: &State, alpha: f64) -> StepOutcome {
 /// with an impossible damping; held at the physical bound, the delay
 /// explains it.
 pub fn non_physical_dampings(prep: &Prepared, state: &State) -> Vec<Term> {
-    use crate::identify::physical::{damping_impossible, damping_sigmas};
+    use crate::identify::physical::{damping_impossible, sigmas_below_zero};
     let family = state
         .model
         .terms
@@ -248,7 +248,7 @@ pub fn non_physical_dampings(prep: &Prepared, state: &State) -> Vec<Term> {
     if family == 0 {
         return Vec::new();
     }
-    let sigmas = damping_sigmas(family);
+    let sigmas = sigmas_below_zero(family);
     let omega_max = 2.0 * std::f64::consts::PI * prep.speeds_hz.last().copied().unwrap_or(0.0);
     let Ok(infs) = state.inference(prep) else {
         return Vec::new();

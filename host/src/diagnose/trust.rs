@@ -169,13 +169,14 @@ pub fn conclude(
             ));
         }
     }
-    // The run's dampings are one family, as `plinth identify` judges them
-    // (`physical::recheck_run`): each fit tested as its own family would
-    // make the run's false-alarm rate the pedestals' count times the stated
-    // one (four undamped-or-lightly-damped pedestals: about 4 %).
-    let family: usize = pedestals.iter().map(physical::estimated_dampings).sum();
+    // The run's masses, stiffnesses and dampings are one family, as
+    // `plinth identify` judges them (`physical::recheck_run`): each fit
+    // tested as its own family would make the run's false-alarm rate the
+    // pedestals' count times the stated one (four undamped-or-lightly-damped
+    // pedestals: about 4 %).
+    let family: usize = pedestals.iter().map(physical::constrained_estimates).sum();
     for fit in pedestals {
-        for w in physical::violations_in_family(fit, family, None) {
+        for w in physical::violations_in_family(fit, family, None, None) {
             reasons.push(format!("pedestal {}: {}", fit.bearing, w.message));
         }
     }

@@ -404,6 +404,7 @@ mod rows;
 mod screen;
 
 use candidate::Candidate;
+pub use decide::MAX_RELATIVE_RESIDUAL;
 use decide::{decide, run_prefers};
 use judge::Judge;
 

@@ -74,6 +74,25 @@ pub fn misfit(
     misfit_of(rows, fit)
 }
 
+/// Each fit's relative residual Σ|e|²/Σ|F|² [-] ([`Misfit::relative_residual`],
+/// unweighted: the noise `noise` gives the χ² does not enter it) on its
+/// bearing's data in `run`, by bearing name; bearings with no speed to
+/// evaluate are left out. What the sign rule reads
+/// ([`super::physical::recheck_run`]).
+pub fn relative_residuals(
+    run: &RunDir,
+    noise: &RunNoise,
+    fits: &[PedestalFit],
+) -> BTreeMap<String, f64> {
+    let schedules = run.bearing_schedules();
+    let sigma = crate::estimate::pedestal::floor_sd(noise, run.measurements.len());
+    fits.iter()
+        .filter_map(|p| {
+            misfit(run, &schedules, &sigma, p).map(|m| (p.bearing.clone(), m.relative_residual))
+        })
+        .collect()
+}
+
 /// The misfit of `fit` on its bearing's observations, each with the noise
 /// sd of its four phasors ([`noise_floor`]'s row), in the order of the run's
 /// rows; observations with a number that is not finite are left out.

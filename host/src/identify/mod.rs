@@ -512,7 +512,8 @@ pub fn identify_prepared(
     let findings = convention::diagnose(run, &identification, noise, options);
     convention::mark(&mut identification, &findings);
     crate::present::modal::attach(&mut identification);
-    physical::recheck_run(&mut identification);
+    let relative_residuals = misfit::relative_residuals(run, noise, &identification.pedestals);
+    physical::recheck_run(&mut identification, &relative_residuals);
     trust::mark_lack_of_fit(&mut identification);
     plausibility::mark(run, &mut identification);
     Ok(identification)
