@@ -22,7 +22,7 @@
 //! There the fit's ± is many times too short (clean ROSS recordings of
 //! unseen-flex/-train B1: rms (estimate − truth)/± of 3-67 for k and m,
 //! against 0.7-1.0 at the pedestals whose forces are measured;
-//! docs/session42-impossible17.md), and values like m = −4.6e4 ± 1.7e3 kg
+//! docs/trust.md, Session 42 (impossible17)), and values like m = −4.6e4 ± 1.7e3 kg
 //! on clean data would otherwise exit 2.
 //!
 //! A truly undamped pedestal (the paper's first machine) gives dampings
@@ -56,7 +56,7 @@ use plinth_shared::regression::{Parameter, PARAMETERS};
 /// that a run of passive pedestals (undamped ones and barely determined
 /// masses included) has some mass, stiffness or damping called
 /// significantly negative. Measured by `scripts/bench-trust.sh` and on
-/// clean recordings (docs/session42-impossible17.md).
+/// clean recordings (docs/trust.md, Session 42 (impossible17)).
 pub const FAMILY_FALSE_ALARM: f64 = 0.01;
 
 /// Standard errors below zero beyond which one of `family` sign-constrained
