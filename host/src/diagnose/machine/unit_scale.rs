@@ -26,6 +26,11 @@
 //! the readings. Each reading is re-simulated and judged by the check; the
 //! one that passes is named, and where both the named effect and the unit
 //! mistake pass, both are said and neither is trusted ([`Reading`]).
+//!
+//! A scale that passes is named only when it is a unit mistake a person
+//! can act on ([`evidence`], session 42): told from 1 by its own ± (ln ŝ's
+//! standard deviation from the machine-level fit) and beyond a
+//! transducer's calibration tolerance (×/÷ 1.1).
 
 use super::{machine_floor, machine_gap, resimulate, Readings};
 use crate::diagnose::data::Prepared;

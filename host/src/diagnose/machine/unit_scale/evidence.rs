@@ -54,17 +54,29 @@ pub const TOLERANCE: f64 = 1.1;
 /// Step of ln s of the central difference of the residuals [-].
 const H: f64 = 1.0e-3;
 
-/// Re-simulated minus measured readings of hypothesis `s` on `reading`, and
-/// the measured numbers' noise variances, real numbers in the order of
-/// [`super::super::gap::flat`] (0 and 0 where a point is not measured or
-/// not simulated), with the hypothesis's readings, data and model.
+/// One hypothesis's misfit, real numbers in the order of
+/// [`super::super::gap::flat`] (0 and 0 where a point is not measured).
+struct Residuals {
+    /// Re-simulated minus measured readings [m].
+    r: Vec<f64>,
+    /// The measured numbers' noise variances [m²].
+    var: Vec<f64>,
+    /// The hypothesis's re-simulated readings.
+    readings: Readings,
+    /// Its data.
+    prep: Prepared,
+    /// Its model.
+    state: State,
+}
+
+/// [`Residuals`] of hypothesis `s` on `reading`.
 fn residuals(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
     reading: Reading,
     s: f64,
-) -> Option<(Vec<f64>, Vec<f64>, Readings, Prepared, State)> {
+) -> Option<Residuals> {
     let (p, st) = hypothesis(prep, state, reading, s);
     let x: Readings = resimulate(machine, &p, &st, None).ok()?;
     let (mut r, mut var) = (Vec::new(), Vec::new());
@@ -89,7 +101,13 @@ fn residuals(
             }
         }
     }
-    Some((r, var, x, p, st))
+    Some(Residuals {
+        r,
+        var,
+        readings: x,
+        prep: p,
+        state: st,
+    })
 }
 
 /// The standard deviation of ln ŝ [-] of the scale `s` found on
@@ -103,9 +121,10 @@ pub fn log_sd(
     reading: Reading,
     s: f64,
 ) -> Option<f64> {
-    let (_, var, x, p, st) = residuals(machine, prep, state, reading, s)?;
-    let (up, ..) = residuals(machine, prep, state, reading, s * H.exp())?;
-    let (down, ..) = residuals(machine, prep, state, reading, s * (-H).exp())?;
+    let at = residuals(machine, prep, state, reading, s)?;
+    let var = &at.var;
+    let up = residuals(machine, prep, state, reading, s * H.exp())?.r;
+    let down = residuals(machine, prep, state, reading, s * (-H).exp())?.r;
     if up.len() != var.len() || down.len() != var.len() {
         return None;
     }
@@ -120,8 +139,8 @@ pub fn log_sd(
         return Some(f64::INFINITY);
     }
     let w: Vec<f64> = j.iter().map(|v| v / jtj).collect();
-    let noise: f64 = w.iter().zip(&var).map(|(a, v)| a * a * v).sum();
-    let params = parameter_variance_of(machine, &p, &st, &x, &w).ok()?;
+    let noise: f64 = w.iter().zip(var).map(|(a, v)| a * a * v).sum();
+    let params = parameter_variance_of(machine, &at.prep, &at.state, &at.readings, &w).ok()?;
     let sd = (noise + params).sqrt();
     Some(if sd.is_finite() { sd } else { f64::INFINITY })
 }
