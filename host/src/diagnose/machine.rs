@@ -36,7 +36,10 @@ mod change;
 mod gap;
 pub mod unit_scale;
 pub(in crate::diagnose) use gap::flat;
-pub use gap::{machine_floor, machine_gap, parameter_variance, refitted_base, MachineCheck};
+pub use gap::{
+    machine_floor, machine_gap, parameter_variance, parameter_variance_of, refitted_base,
+    MachineCheck,
+};
 
 /// Predicted readings (rel, ped) per bearing and speed index [m].
 pub type Readings = Vec<Vec<Option<([Complex<f64>; 2], [Complex<f64>; 2])>>>;

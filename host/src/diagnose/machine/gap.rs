@@ -89,9 +89,59 @@ pub fn parameter_variance(
     foundation: Option<&FoundationFit>,
     readings: &Readings,
 ) -> Result<f64> {
+    let n = flat(readings).len();
+    let mut total = 0.0;
+    for (inf, grads) in gradients(machine, prep, state, foundation, readings)? {
+        for o in 0..n {
+            let c: Vec<f64> = grads.iter().map(|g| g[o]).collect();
+            let se = inf.std_err_of(&c);
+            if se.is_finite() {
+                total += se * se;
+            }
+        }
+    }
+    Ok(total)
+}
+
+/// Var(Σ w_o X̂_o) [m²] of a weighted sum of the re-simulated readings
+/// `readings` (`w` in [`flat`]'s order [-]) from the state's parameter
+/// covariance, by the delta method of [`parameter_variance`] (the groups
+/// independent, as there).
+pub fn parameter_variance_of(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    readings: &Readings,
+    w: &[f64],
+) -> Result<f64> {
+    let mut total = 0.0;
+    for (inf, grads) in gradients(machine, prep, state, None, readings)? {
+        let c: Vec<f64> = grads
+            .iter()
+            .map(|g| g.iter().zip(w).map(|(a, b)| a * b).sum())
+            .collect();
+        let se = inf.std_err_of(&c);
+        if se.is_finite() {
+            total += se * se;
+        }
+    }
+    Ok(total)
+}
+
+/// Per inference group of `state`, its inference and the gradient of every
+/// re-simulated reading ([`flat`]'s order) by each of its parameters
+/// (forward difference of 1 % of the parameter's ±; zero where that ± is
+/// not finite) [m / SI].
+fn gradients(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    foundation: Option<&FoundationFit>,
+    readings: &Readings,
+) -> Result<Vec<(crate::diagnose::criterion::Inference, Vec<Vec<f64>>)>> {
     use crate::diagnose::candidates::ParamRef;
     let x0 = flat(readings);
-    let mut total = 0.0;
+    let mut out = Vec::new();
     for (_, inf, refs) in state.inference(prep)? {
         let mut grads: Vec<Vec<f64>> = Vec::with_capacity(refs.len());
         for (i, r) in refs.iter().enumerate() {
@@ -110,15 +160,9 @@ pub fn parameter_variance(
             let x = flat(&resimulate(machine, prep, &shifted, foundation)?);
             grads.push(x.iter().zip(&x0).map(|(a, b)| (a - b) / h).collect());
         }
-        for o in 0..x0.len() {
-            let c: Vec<f64> = grads.iter().map(|g| g[o]).collect();
-            let se = inf.std_err_of(&c);
-            if se.is_finite() {
-                total += se * se;
-            }
-        }
+        out.push((inf, grads));
     }
-    Ok(total)
+    Ok(out)
 }
 
 /// The base model `first` refitted as every step's joint refit fits its

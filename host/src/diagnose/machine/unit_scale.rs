@@ -26,6 +26,11 @@
 //! the readings. Each reading is re-simulated and judged by the check; the
 //! one that passes is named, and where both the named effect and the unit
 //! mistake pass, both are said and neither is trusted ([`Reading`]).
+//!
+//! A scale that passes is named only when it is a unit mistake a person
+//! can act on ([`evidence`], session 42): told from 1 by its own ± (ln ŝ's
+//! standard deviation from the machine-level fit) and beyond a
+//! transducer's calibration tolerance (×/÷ 1.1).
 
 use super::{machine_floor, machine_gap, resimulate, Readings};
 use crate::diagnose::data::Prepared;
@@ -37,6 +42,7 @@ use crate::sim::Machine;
 use serde::Serialize;
 
 pub mod blind;
+pub mod evidence;
 mod table;
 pub use blind::Blind;
 pub use table::TableScale;
@@ -72,6 +78,10 @@ pub struct UnitScale {
     pub bearing: Option<String>,
     /// The factor s the readings look to carry: measured = s × true [-].
     pub factor: f64,
+    /// Standard deviation of ln `factor` from the machine-level fit
+    /// (measurement noise and the identified parameters' own ±,
+    /// [`evidence::log_sd`]) [-].
+    pub log_sd: f64,
     /// Machine-level gap of the base model with those readings divided by
     /// s (and its pedestals as that implies) [-].
     pub gap: f64,
@@ -254,7 +264,8 @@ pub(super) fn minimise(g: impl Fn(f64) -> Option<f64>, range: f64) -> Option<(f6
     }
 }
 
-/// The common unit factor within 10 % of `s` (or of 1/s), named.
+/// The common unit factor within [`evidence::TOLERANCE`] (10 %) of `s` (or
+/// of 1/s), named.
 pub fn nearest_common(s: f64) -> Option<String> {
     let (f, what) = COMMON
         .iter()
@@ -264,7 +275,7 @@ pub fn nearest_common(s: f64) -> Option<String> {
             da.total_cmp(&db)
         })
         .copied()?;
-    ((s.ln().abs() - f.ln()).abs() < 1.1f64.ln()).then(|| {
+    ((s.ln().abs() - f.ln()).abs() < evidence::TOLERANCE.ln()).then(|| {
         let shown = if f == std::f64::consts::SQRT_2 {
             "√2".to_string()
         } else if f == 2.0 * std::f64::consts::SQRT_2 {
@@ -333,10 +344,17 @@ fn passing(
     if MachineCheck::of(as_read, f) == MachineCheck::Agrees {
         return None;
     }
+    // A scale within its own ± of 1, or within a transducer's calibration
+    // tolerance, is no unit mistake ([`evidence`]).
+    let sd = evidence::log_sd(machine, prep, state, reading, s)?;
+    if !evidence::named(s, sd) {
+        return None;
+    }
     Some(UnitScale {
         kind: reading.kind,
         bearing: reading.bearing.and_then(|b| prep.bearings.get(b).cloned()),
         factor: s,
+        log_sd: sd,
         gap: g,
         floor: f,
         nearest: nearest_common(s),
@@ -471,8 +489,10 @@ pub fn reason(u: &UnitScale, final_gap: f64, floor: f64, check: MachineCheck) ->
     };
     let [lo, hi] = u.factor_interval;
     let scale = format!(
-        "with {readings} divided by {s:.4} (gap {:.4}, noise floor {:.4}; {pedestals}; factors {lo:.4} to {hi:.4} pass){nearest}",
-        u.gap, u.floor
+        "with {readings} divided by {s:.4} ± {:.2} % (gap {:.4}, noise floor {:.4}; {pedestals}; factors {lo:.4} to {hi:.4} pass){nearest}",
+        100.0 * u.log_sd,
+        u.gap,
+        u.floor
     );
     if check == MachineCheck::Agrees {
         return format!(
