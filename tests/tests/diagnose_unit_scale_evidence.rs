@@ -1,6 +1,6 @@
 //! A found scale is named a unit mistake only when the machine-level fit
 //! tells it from 1 by its own ± and it lies beyond a transducer's
-//! calibration tolerance (session 42, docs/session42-unitscale17d.md;
+//! calibration tolerance (session 42, docs/robustness-hostile.md, Session 42 (unitscale17d);
 //! `plinth::diagnose::machine::unit_scale::evidence`).
 
 use plinth::diagnose::diagnose;
