@@ -367,6 +367,7 @@ pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
     })
 }
 
+pub mod held;
 #[cfg(test)]
 mod tests;
 
