@@ -174,8 +174,14 @@ pub(super) fn free_held(
     let Some(held_cost) = gh::cost(&eq, &start) else {
         return Held::Kept;
     };
-    let Some(free) = gh::fit(&eq, &start, &scale, &vec![true; start.len()], None, ITERATIONS)
-    else {
+    let Some(free) = gh::fit(
+        &eq,
+        &start,
+        &scale,
+        &vec![true; start.len()],
+        None,
+        ITERATIONS,
+    ) else {
         return Held::Kept;
     };
     if !free.p.iter().all(|v| v.is_finite()) {
@@ -203,21 +209,6 @@ pub(super) fn free_held(
         .filter(|t| matches!(t, Term::Damping { .. }))
         .count();
     let sigmas = damping_sigmas(family);
-    if std::env::var_os("PLINTH_DEBUG_HELD").is_some() {
-        for i in n_held..n_terms {
-            eprintln!(
-                "DEBUGHELD group {group:?} term {:?} c {:.4e} se {:.3e} z {:.2} sigmas {sigmas:.3} lr {lr:.2} ev.wald {:.2} floor {:.2} robust {:.2} converged {}",
-                extended.terms[eq.terms[i]],
-                inf.estimate[i],
-                inf.std_err(i),
-                inf.estimate[i] / inf.std_err(i),
-                ev.wald,
-                ev.wald_floor,
-                ev.wald_robust,
-                free.converged
-            );
-        }
-    }
     let judged: Vec<HeldAgainstData> = (n_held..n_terms)
         .filter_map(|i| {
             let Term::Damping { bearing, dir } = extended.terms[eq.terms[i]] else {

@@ -14,13 +14,12 @@
 //! verdict as it was.
 
 use super::Conclusion;
-use crate::diagnose::data::Prepared;
 use crate::diagnose::ml_final::GroupRefit;
 
 /// Untrusts `conclusion` for every damping of `refits` held at zero
 /// against the data ([`GroupRefit::held_against_data`]), one reason per
-/// bearing.
-pub fn judge_held(conclusion: &mut Conclusion, prep: &Prepared, refits: &[GroupRefit]) {
+/// bearing (`bearings`: the run's bearing names, by index).
+pub fn judge_held(conclusion: &mut Conclusion, bearings: &[String], refits: &[GroupRefit]) {
     for r in refits {
         for &b in &r.group {
             let at: Vec<_> = r
@@ -28,7 +27,7 @@ pub fn judge_held(conclusion: &mut Conclusion, prep: &Prepared, refits: &[GroupR
                 .iter()
                 .filter(|h| h.bearing == b)
                 .collect();
-            let (Some(first), Some(name)) = (at.first(), prep.bearings.get(b)) else {
+            let (Some(first), Some(name)) = (at.first(), bearings.get(b)) else {
                 continue;
             };
             let values = at
@@ -54,5 +53,71 @@ pub fn judge_held(conclusion: &mut Conclusion, prep: &Prepared, refits: &[GroupR
             conclusion.reasons.push(why);
             conclusion.trusted = false;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::criterion::Inference;
+    use crate::diagnose::ml_final::held_free::HeldAgainstData;
+    use nalgebra::{DMatrix, DVector};
+
+    fn refit(held: Vec<HeldAgainstData>) -> GroupRefit {
+        let jac = DMatrix::from_row_slice(3, 1, &[1.0, 2.0, 1.5]);
+        let resid = DVector::from_vec(vec![0.1, -0.2, 0.05]);
+        let inference = Inference::new(&jac, &resid, &[0, 1, 2], DVector::from_vec(vec![1.0]))
+            .expect("inference");
+        GroupRefit {
+            group: vec![1],
+            terms: vec![0],
+            nonlinear: Vec::new(),
+            inference,
+            held_delays: Vec::new(),
+            held_against_data: held,
+            freed: Vec::new(),
+        }
+    }
+
+    fn trusted() -> Conclusion {
+        Conclusion {
+            verdict: "v.".to_string(),
+            trusted: true,
+            reasons: Vec::new(),
+        }
+    }
+
+    /// A held damping the free fit finds impossible untrusts the
+    /// diagnosis with its bearing, value and ± in the reason.
+    #[test]
+    fn a_damping_held_against_the_data_untrusts() {
+        let h = HeldAgainstData {
+            bearing: 1,
+            dir: 1,
+            value: -5.0e3,
+            std_err: 1.0e3,
+            sigmas: 2.81,
+            family: 4,
+            likelihood_ratio: 30.0,
+        };
+        let mut c = trusted();
+        judge_held(&mut c, &["B1".into(), "B2".into()], &[refit(vec![h])]);
+        assert!(!c.trusted);
+        assert_eq!(c.reasons.len(), 1);
+        assert!(c.reasons[0].starts_with("bearing B2:"), "{}", c.reasons[0]);
+        assert!(c.reasons[0].contains("c_z = -5.000e3"), "{}", c.reasons[0]);
+        assert!(
+            c.reasons[0].contains("5.0 standard errors"),
+            "{}",
+            c.reasons[0]
+        );
+    }
+
+    /// No damping held against the data: the verdict is untouched.
+    #[test]
+    fn no_damping_held_against_the_data_leaves_the_verdict() {
+        let mut c = trusted();
+        judge_held(&mut c, &["B1".into(), "B2".into()], &[refit(Vec::new())]);
+        assert_eq!(c, trusted());
     }
 }

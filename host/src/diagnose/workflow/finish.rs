@@ -140,7 +140,7 @@ impl Search<'_> {
             &where_after,
         );
         trust::judge_support(&mut conclusion, prep, &self.steps);
-        trust::held::judge_held(&mut conclusion, prep, &ml_refits);
+        trust::held::judge_held(&mut conclusion, &prep.bearings, &ml_refits);
         let unexplained = if conclusion.verdict.contains(trust::UNEXPLAINED) {
             unexplained(&where_after, trust::AT_THE_FLOOR)
         } else {
