@@ -41,10 +41,12 @@ use super::state::State;
 use crate::estimate::base::put;
 use crate::estimate::gauss_helmert::{self as gh, Equations};
 use held_delay::{held_delays, HeldDelay};
+use held_free::{free_held, Held, HeldAgainstData};
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
 
 pub mod held_delay;
+pub mod held_free;
 
 /// Most Levenberg–Marquardt iterations of a refit.
 const ITERATIONS: usize = 200;
@@ -68,6 +70,12 @@ pub struct GroupRefit {
     /// The group's delays fitted beside pedestal dampings held at zero,
     /// with their ± counting those dampings as unknown ([`held_delay`]).
     pub held_delays: Vec<HeldDelay>,
+    /// The group's dampings held at zero that its ML refit with them free
+    /// finds impossible for a passive pedestal ([`held_free`]).
+    pub held_against_data: Vec<HeldAgainstData>,
+    /// The group's dampings held at zero in the search that its ML refit
+    /// freed again ([`held_free`]): the final model estimates them.
+    pub freed: Vec<Term>,
 }
 
 /// The equations of one group of a [`Model`] as a Gauss–Helmert system:
@@ -267,7 +275,7 @@ fn linearised(
 /// admissible interval, leaves the group's least-squares values. `base`:
 /// the base model, whose pedestal dampings the final model lacks are the
 /// ones held at zero ([`held_delay`]). Returns the refits for [`report`].
-pub fn refit(prep: &Prepared, base: &Model, state: &mut State) -> Vec<GroupRefit> {
+pub fn refit(prep: &Prepared, base: &Model, state: &mut State, alpha: f64) -> Vec<GroupRefit> {
     let model = state.model.clone();
     let inferences = state.inference(prep).unwrap_or_default();
     let mut out = Vec::new();
@@ -324,6 +332,34 @@ pub fn refit(prep: &Prepared, base: &Model, state: &mut State) -> Vec<GroupRefit
             continue;
         };
         let (beta, nl) = eq.unpack(&m.p);
+        let held = free_held(prep, &model, base, &group, &beta, &nl, &inference, alpha);
+        if let Held::Freed {
+            terms,
+            p,
+            inference,
+        } = held
+        {
+            // The freed dampings join the model (appended: every other
+            // group's term indices stay valid), valued by the free fit.
+            state.model.terms.extend(terms.iter().copied());
+            state.params.beta = beta;
+            state.params.beta.resize(state.model.terms.len(), 0.0);
+            state.params.nl = nl;
+            let eq = GroupEquations::new(prep, &state.model, &group, state);
+            let (beta, nl) = eq.unpack(&p);
+            state.params.beta = beta;
+            state.params.nl = nl;
+            out.push(GroupRefit {
+                terms: eq.terms.clone(),
+                nonlinear: eq.nonlinear.clone(),
+                group,
+                inference,
+                held_delays: Vec::new(),
+                held_against_data: Vec::new(),
+                freed: terms,
+            });
+            continue;
+        }
         let held_delays = held_delays(prep, &model, base, &group, &beta, &nl, &inference);
         state.params.beta = beta;
         state.params.nl = nl;
@@ -333,6 +369,11 @@ pub fn refit(prep: &Prepared, base: &Model, state: &mut State) -> Vec<GroupRefit
             group,
             inference,
             held_delays,
+            held_against_data: match held {
+                Held::AgainstData(v) => v,
+                _ => Vec::new(),
+            },
+            freed: Vec::new(),
         });
     }
     if !out.is_empty() {
@@ -355,6 +396,18 @@ pub fn report(
     steps: &mut [Step],
 ) {
     for r in refits {
+        // Dampings the search held and the refit freed are no longer held.
+        for dir in r.freed.iter().filter_map(|t| match *t {
+            Term::Damping { bearing, dir } => Some((bearing, dir)),
+            _ => None,
+        }) {
+            let Some(bname) = prep.bearings.get(dir.0) else {
+                continue;
+            };
+            for s in steps.iter_mut().filter(|s| &s.bearing == bname) {
+                s.held = None;
+            }
+        }
         let entries = r
             .terms
             .iter()

@@ -118,7 +118,7 @@ fn z_stats_at(lab: &Lab, effect: Effect, n: usize, seed: u64) -> [([f64; 3], [f6
         let mut state = State::fit(&prep, model.clone(), Vec::new()).expect("fit");
         let before = pedestals(&prep, &state).expect("pedestals");
         let base = state.model.clone();
-        let refits = refit(&prep, &base, &mut state);
+        let refits = refit(&prep, &base, &mut state, 1e-3);
         assert!(
             refits.iter().any(|r| r.group == [b]),
             "the bearing refitted"

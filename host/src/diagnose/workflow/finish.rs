@@ -54,7 +54,7 @@ impl Search<'_> {
         // likelihood, its ± from the same inference (`ml_final::refit`).
         let ml_refits = if self.on_base.is_none() {
             let r = match self.states.first() {
-                Some(base) => ml_final::refit(prep, &base.model, &mut self.state),
+                Some(base) => ml_final::refit(prep, &base.model, &mut self.state, opts.alpha),
                 None => Vec::new(),
             };
             if let Some(last) = self.states.last_mut() {
@@ -140,6 +140,7 @@ impl Search<'_> {
             &where_after,
         );
         trust::judge_support(&mut conclusion, prep, &self.steps);
+        trust::held::judge_held(&mut conclusion, &prep.bearings, &ml_refits);
         let unexplained = if conclusion.verdict.contains(trust::UNEXPLAINED) {
             unexplained(&where_after, trust::AT_THE_FLOOR)
         } else {

@@ -1,0 +1,123 @@
+//! A diagnosis whose final model holds a pedestal damping at zero against
+//! the data is not trusted.
+//!
+//! The hold is a passive pedestal's bound, taken where the free damping
+//! came out impossible. Where the group's ML refit with the effect in the
+//! model and the damping free still finds it impossible
+//! ([`crate::diagnose::ml_final::held_free`], `plinth identify`'s
+//! family-wise rule for negative dampings confirmed by the likelihood
+//! ratio), the model with the effect still needs an active pedestal there:
+//! it lacks something, and every value fitted beside the hold absorbs it
+//! with a ± conditional on the hold (unseen-four `runout-d3` seed 1201:
+//! B3 k_y 6.8 % = 9.7 ± off, trusted). A hold within the noise (a truly
+//! undamped pedestal, a damping that trades with a delay) leaves the
+//! verdict as it was.
+
+use super::Conclusion;
+use crate::diagnose::ml_final::GroupRefit;
+
+/// Untrusts `conclusion` for every damping of `refits` held at zero
+/// against the data ([`GroupRefit::held_against_data`]), one reason per
+/// bearing (`bearings`: the run's bearing names, by index).
+pub fn judge_held(conclusion: &mut Conclusion, bearings: &[String], refits: &[GroupRefit]) {
+    for r in refits {
+        for &b in &r.group {
+            let at: Vec<_> = r
+                .held_against_data
+                .iter()
+                .filter(|h| h.bearing == b)
+                .collect();
+            let (Some(first), Some(name)) = (at.first(), bearings.get(b)) else {
+                continue;
+            };
+            let values = at
+                .iter()
+                .map(|h| {
+                    format!(
+                        "{} = {:.3e} ± {:.2e} N·s/m ({:.1} standard errors below zero)",
+                        h.name(),
+                        h.value,
+                        h.std_err,
+                        -h.value / h.std_err
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(", ");
+            let why = format!(
+                "bearing {name}: its pedestal dampings are held at 0 (a passive pedestal's bound), but the final fit with them free still finds them impossible: {values}, beyond the {:.2} standard errors of `plinth identify`'s rule for the run's {} damping(s) (1 % family-wise), and freeing them lowers the fit's χ² by {:.1}; the model with its effects still lacks something there, and the k, m fitted beside the hold absorb it with a ± that counts the hold as exact",
+                first.sigmas, first.family, first.likelihood_ratio
+            );
+            conclusion.verdict += &format!(
+                " But at bearing {name} the dampings are held at zero against the data (reasons below): the identified parameters are not to be trusted."
+            );
+            conclusion.reasons.push(why);
+            conclusion.trusted = false;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::criterion::Inference;
+    use crate::diagnose::ml_final::held_free::HeldAgainstData;
+    use nalgebra::{DMatrix, DVector};
+
+    fn refit(held: Vec<HeldAgainstData>) -> GroupRefit {
+        let jac = DMatrix::from_row_slice(3, 1, &[1.0, 2.0, 1.5]);
+        let resid = DVector::from_vec(vec![0.1, -0.2, 0.05]);
+        let inference = Inference::new(&jac, &resid, &[0, 1, 2], DVector::from_vec(vec![1.0]))
+            .expect("inference");
+        GroupRefit {
+            group: vec![1],
+            terms: vec![0],
+            nonlinear: Vec::new(),
+            inference,
+            held_delays: Vec::new(),
+            held_against_data: held,
+            freed: Vec::new(),
+        }
+    }
+
+    fn trusted() -> Conclusion {
+        Conclusion {
+            verdict: "v.".to_string(),
+            trusted: true,
+            reasons: Vec::new(),
+        }
+    }
+
+    /// A held damping the free fit finds impossible untrusts the
+    /// diagnosis with its bearing, value and ± in the reason.
+    #[test]
+    fn a_damping_held_against_the_data_untrusts() {
+        let h = HeldAgainstData {
+            bearing: 1,
+            dir: 1,
+            value: -5.0e3,
+            std_err: 1.0e3,
+            sigmas: 2.81,
+            family: 4,
+            likelihood_ratio: 30.0,
+        };
+        let mut c = trusted();
+        judge_held(&mut c, &["B1".into(), "B2".into()], &[refit(vec![h])]);
+        assert!(!c.trusted);
+        assert_eq!(c.reasons.len(), 1);
+        assert!(c.reasons[0].starts_with("bearing B2:"), "{}", c.reasons[0]);
+        assert!(c.reasons[0].contains("c_z = -5.000e3"), "{}", c.reasons[0]);
+        assert!(
+            c.reasons[0].contains("5.0 standard errors"),
+            "{}",
+            c.reasons[0]
+        );
+    }
+
+    /// No damping held against the data: the verdict is untouched.
+    #[test]
+    fn no_damping_held_against_the_data_leaves_the_verdict() {
+        let mut c = trusted();
+        judge_held(&mut c, &["B1".into(), "B2".into()], &[refit(Vec::new())]);
+        assert_eq!(c, trusted());
+    }
+}
