@@ -13,7 +13,7 @@
 //! the model with the effect still needs an active pedestal: something is
 //! missing, and every value fitted beside the hold absorbs it (unseen-four
 //! `runout-d3` seed 1201, 170-290 Hz: probe runout at B3 named, c_y, c_z
-//! held, B3 k_y 6.8 % = 9.7 ± off, trusted; docs/session42-heldpm17b.md).
+//! held, B3 k_y 6.8 % = 9.7 ± off, trusted; docs/diagnose-verdict.md, Session 42 (heldpm17b)).
 //!
 //! The held dampings were judged by the search's held-weights least
 //! squares. The test here is the same group's maximum-likelihood refit with
