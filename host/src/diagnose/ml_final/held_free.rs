@@ -29,7 +29,7 @@
 //! - **Against the data**: a freed damping is impossible by `plinth
 //!   identify`'s rule for negative dampings
 //!   ([`crate::identify::physical::damping_impossible`] at
-//!   [`crate::identify::physical::damping_sigmas`] of the family of every
+//!   [`crate::identify::physical::sigmas_below_zero`] of the family of every
 //!   damping the freed model estimates, 1 % family-wise per run), with the
 //!   ± of [`Inference::std_err`] (the larger of the noise floor's and the
 //!   residuals' sandwich), confirmed by the likelihood ratio: the drop of
@@ -51,7 +51,7 @@ use crate::diagnose::data::Prepared;
 use crate::diagnose::forward::held_terms;
 use crate::diagnose::model::{Model, Nonlinear, Term};
 use crate::estimate::gauss_helmert as gh;
-use crate::identify::physical::{damping_impossible, damping_sigmas};
+use crate::identify::physical::{damping_impossible, sigmas_below_zero};
 use nalgebra::{DMatrix, DVector};
 
 /// A pedestal damping held at zero whose free ML value beside the step's
@@ -208,7 +208,7 @@ pub(super) fn free_held(
         .iter()
         .filter(|t| matches!(t, Term::Damping { .. }))
         .count();
-    let sigmas = damping_sigmas(family);
+    let sigmas = sigmas_below_zero(family);
     let judged: Vec<HeldAgainstData> = (n_held..n_terms)
         .filter_map(|i| {
             let Term::Damping { bearing, dir } = extended.terms[eq.terms[i]] else {
