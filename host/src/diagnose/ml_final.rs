@@ -154,6 +154,67 @@ impl<'a> GroupEquations<'a> {
             .chain(self.nonlinear.iter().map(|&k| nl[k]))
             .collect()
     }
+
+    /// The start p and per-parameter scales of these equations when they
+    /// are those of `held_model` with held dampings appended
+    /// ([`with_freed`]): the group's terms and scalars are scaled by the
+    /// larger of their size and their ± in `held_fit` (the held model's
+    /// group refit), each appended damping by `freed_scale(bearing, dir, k)`
+    /// [N·s/m] (k: that bearing's stiffness in that direction in
+    /// `held_beta` [N/m]). `None` where a start value or a scale is not a
+    /// finite number, or `freed_scale` gives none.
+    fn freed_start(
+        &self,
+        held_model: &Model,
+        held_beta: &[f64],
+        held_fit: &Inference,
+        mut freed_scale: impl FnMut(usize, usize, f64) -> Option<f64>,
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let n_held = held_model.group_terms(self.group).len();
+        let n_terms = self.terms.len();
+        let n_new = n_terms - n_held;
+        let start = self.pack(&self.beta, &self.nl);
+        let stiffness = |bearing: usize, dir: usize| {
+            let i = held_model
+                .terms
+                .iter()
+                .position(|u| *u == Term::Stiffness { bearing, dir })?;
+            held_beta.get(i).copied()
+        };
+        let mut scale = Vec::with_capacity(start.len());
+        for (i, v) in start.iter().enumerate() {
+            let s = if i < n_held {
+                v.abs().max(held_fit.std_err(i))
+            } else if i < n_terms {
+                let Term::Damping { bearing, dir } = self.model.terms[self.terms[i]] else {
+                    return None;
+                };
+                freed_scale(bearing, dir, stiffness(bearing, dir).unwrap_or(0.0))?
+            } else {
+                v.abs().max(held_fit.std_err(i - n_new))
+            };
+            if !s.is_finite() {
+                return None;
+            }
+            scale.push(s.max(f64::MIN_POSITIVE));
+        }
+        start
+            .iter()
+            .all(|v| v.is_finite())
+            .then_some((start, scale))
+    }
+}
+
+/// `model` with the held dampings `freed` appended to its terms, and its
+/// values β with a zero for each: the group's terms keep their order, the
+/// freed ones follow them in p, then the scalars (what
+/// [`held_delay`] and [`held_free`] refit).
+fn with_freed(model: &Model, beta: &[f64], freed: &[Term]) -> (Model, Vec<f64>) {
+    let mut extended = model.clone();
+    extended.terms.extend(freed.iter().copied());
+    let mut ext_beta = beta.to_vec();
+    ext_beta.resize(extended.terms.len(), 0.0);
+    (extended, ext_beta)
 }
 
 impl Equations for GroupEquations<'_> {

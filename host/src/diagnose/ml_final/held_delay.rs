@@ -18,7 +18,7 @@
 //! the held fit's values (c = 0, its residuals). The value stays the held
 //! fit's, a lower bound of the delay for a passive pedestal (c ≥ 0).
 
-use super::{linearised, GroupEquations};
+use super::{linearised, with_freed, GroupEquations};
 use crate::diagnose::criterion::Inference;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::forward::held_terms;
@@ -78,50 +78,23 @@ pub(super) fn held_delays(
             freed.push(*t);
         }
     }
-    // Appended: the group's terms keep their order, the freed ones follow
-    // them in p, then the scalars.
-    let mut extended = model.clone();
-    extended.terms.extend(freed.iter().copied());
-    let mut ext_beta = beta.to_vec();
-    ext_beta.resize(extended.terms.len(), 0.0);
+    let (extended, ext_beta) = with_freed(model, beta, &freed);
     let eq = GroupEquations::from_values(prep, &extended, group, &ext_beta, nl);
     let n_held = model.group_terms(group).len();
     let n_terms = eq.terms.len();
-    let n_new = n_terms - n_held;
-    let p = eq.pack(&ext_beta, nl);
-    let value = |t: Term| {
-        let i = model.terms.iter().position(|u| *u == t)?;
-        beta.get(i).copied()
-    };
-    // Units: a held-fit parameter's scale is the larger of its size and its
-    // ±; a freed damping's is the damping the delay reads as, τ·k [N·s/m].
-    let mut scale = Vec::with_capacity(p.len());
-    for (i, v) in p.iter().enumerate() {
-        let s = if i < n_held {
-            v.abs().max(held_fit.std_err(i))
-        } else if i < n_terms {
-            let Term::Damping { bearing, dir } = extended.terms[eq.terms[i]] else {
-                return Vec::new();
-            };
-            let tau = delays
-                .iter()
-                .find(|(k, _)| model.nonlinear[*k].bearing() == bearing)
-                .map_or(0.0, |(k, _)| nl[*k]);
-            let k = value(Term::Stiffness { bearing, dir }).unwrap_or(0.0);
-            let s = (tau * k).abs();
-            if !(s.is_finite() && s > 0.0) {
-                // No delay to trade with (τ or k zero): nothing to widen.
-                return Vec::new();
-            }
-            s
-        } else {
-            v.abs().max(held_fit.std_err(i - n_new))
-        };
-        scale.push(s.max(f64::MIN_POSITIVE));
-    }
-    if !scale.iter().chain(&p).all(|v| v.is_finite()) {
+    // Units: a freed damping's scale is the damping the delay reads as,
+    // τ·k [N·s/m]; none where there is no delay to trade with (τ or k
+    // zero): nothing to widen.
+    let Some((p, scale)) = eq.freed_start(model, beta, held_fit, |bearing, _, k| {
+        let tau = delays
+            .iter()
+            .find(|(k, _)| model.nonlinear[*k].bearing() == bearing)
+            .map_or(0.0, |(k, _)| nl[*k]);
+        let s = (tau * k).abs();
+        (s.is_finite() && s > 0.0).then_some(s)
+    }) else {
         return Vec::new();
-    }
+    };
     let Some((jac, resid, row_speed)) = linearised(&eq, &p, &scale) else {
         return Vec::new();
     };

@@ -45,7 +45,7 @@
 //!   noise, flagged at the rule's false-alarm rate; a damping that trades
 //!   with a delay): the hold stays, the verdict as it was.
 
-use super::{linearised, GroupEquations, ITERATIONS};
+use super::{linearised, with_freed, GroupEquations, ITERATIONS};
 use crate::diagnose::criterion::Inference;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::forward::held_terms;
@@ -134,43 +134,22 @@ pub(super) fn free_held(
         return Held::Kept;
     }
     let omega_max = 2.0 * std::f64::consts::PI * prep.speeds_hz.last().copied().unwrap_or(0.0);
-    let mut extended = model.clone();
-    extended.terms.extend(freed.iter().copied());
-    let mut ext_beta = beta.to_vec();
-    ext_beta.resize(extended.terms.len(), 0.0);
+    let (extended, ext_beta) = with_freed(model, beta, &freed);
     let eq = GroupEquations::from_values(prep, &extended, group, &ext_beta, nl);
     let n_held = model.group_terms(group).len();
     let n_terms = eq.terms.len();
     let n_new = n_terms - n_held;
-    let start = eq.pack(&ext_beta, nl);
     let value = |t: Term| {
         let i = model.terms.iter().position(|u| *u == t)?;
         beta.get(i).copied()
     };
-    // Units: a held-fit parameter's scale is the larger of its size and its
-    // ±; a freed damping's is a loss factor of 1 % at the top speed,
-    // 0.01·k/Ω_max [N·s/m].
-    let mut scale = Vec::with_capacity(start.len());
-    for (i, v) in start.iter().enumerate() {
-        let s = if i < n_held {
-            v.abs().max(held_fit.std_err(i))
-        } else if i < n_terms {
-            let Term::Damping { bearing, dir } = extended.terms[eq.terms[i]] else {
-                return Held::Kept;
-            };
-            let k = value(Term::Stiffness { bearing, dir }).unwrap_or(0.0);
-            0.01 * k.abs() / omega_max
-        } else {
-            v.abs().max(held_fit.std_err(i - n_new))
-        };
-        if !s.is_finite() {
-            return Held::Kept;
-        }
-        scale.push(s.max(f64::MIN_POSITIVE));
-    }
-    if !start.iter().all(|v| v.is_finite()) {
+    // Units: a freed damping's scale is a loss factor of 1 % at the top
+    // speed, 0.01·k/Ω_max [N·s/m].
+    let Some((start, scale)) = eq.freed_start(model, beta, held_fit, |_, _, k| {
+        Some(0.01 * k.abs() / omega_max)
+    }) else {
         return Held::Kept;
-    }
+    };
     let Some(held_cost) = gh::cost(&eq, &start) else {
         return Held::Kept;
     };
