@@ -35,9 +35,9 @@
 
 use super::bearing_table::report_delta;
 use super::criterion::Inference;
-use super::forward::held_terms;
 use super::data::Prepared;
 use super::fit::{search_interval, Weights};
+use super::forward::held_terms;
 use super::model::{Model, Term};
 use super::report::{Pedestal, Step};
 use super::state::State;
@@ -537,7 +537,8 @@ pub fn report(
                     // (`Inference::reported_std_err`); the effects' ± below
                     // stay those the tests use.
                     let reported = held.map_or(r.inference.reported_std_err(i), |h| h.std_err);
-                    let reported = unknown.map_or(reported, |u| reported.max(u.reported_std_err[i]));
+                    let reported =
+                        unknown.map_or(reported, |u| reported.max(u.reported_std_err[i]));
                     p.std_err.insert(name.clone(), reported);
                 }
             }

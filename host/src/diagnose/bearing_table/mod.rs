@@ -448,14 +448,7 @@ pub fn refine(
             }
         }
         out.push((b, *fit));
-        report_delta(
-            prep,
-            &state.model,
-            r.p,
-            fit.delta,
-            fit.delta_std_err,
-            steps,
-        );
+        report_delta(prep, &state.model, r.p, fit.delta, fit.delta_std_err, steps);
     }
     if !out.is_empty() {
         state.weights = super::fit::Weights::propagate(prep, &state.model, &state.params);

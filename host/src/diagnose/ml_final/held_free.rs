@@ -265,7 +265,11 @@ pub(super) fn free_held(
         let reported_std_err: Vec<f64> = kept
             .iter()
             .enumerate()
-            .map(|(j, &i)| at_held.reported_std_err(i).max(held_fit.reported_std_err(j)))
+            .map(|(j, &i)| {
+                at_held
+                    .reported_std_err(i)
+                    .max(held_fit.reported_std_err(j))
+            })
             .collect();
         std_err
             .iter()
