@@ -45,13 +45,20 @@
 //!   noise, flagged at the rule's false-alarm rate; a damping that trades
 //!   with a delay or a table's clearance): the hold stays, the verdict as
 //!   it was. The held fit's ± are conditional on the damping being zero
-//!   exactly; [`HeldUnknown`] gives the group's ± with it unknown. Where
-//!   the damping trades with a bearing table's clearance they differ by an
-//!   order of magnitude: unseen-four `table-d3` seed 1602 (225-346 Hz,
-//!   B2's clearance named, c_y held), held fit B2 m 244.87 ± 0.19 kg, δ
-//!   0.16922 ± 0.00034; freed, c_y 1895 ± 1070 N·s/m (truth 1800), LR 3.0
-//!   (not supported), m 239.88 ± 2.85 (truth 240), δ 0.1769 ± 0.0044
-//!   (truth 0.17647). [`super::refit`] reports them for table groups.
+//!   exactly; [`HeldUnknown`] gives the group's ± with it unknown.
+//!
+//! A bearing table's scalar trades with a held damping (a clearance moves
+//! the bearing's damping too), and there the hold itself is the error:
+//! unseen-four `table-d3` seed 1602 (225-346 Hz, B2's clearance named, c_y
+//! held), held ML fit B2 m 244.87 ± 0.19 kg (truth 240), δ 0.16922 ±
+//! 0.00034 (truth 0.17647); freed, c_y 1895 ± 1070 N·s/m (truth 1800), m
+//! 239.88 ± 2.85, δ 0.1769 ± 0.0044, but the LR only 3.0 (not supported).
+//! With the ± widened alone ([`HeldUnknown`]) k_y stayed 2.6 ± off (the
+//! held value is biased by the damping it holds). So for a table group
+//! [`super::refit`] frees the held dampings wherever the free fit finds
+//! them physical (`need_support` false: the base model's own rule, every
+//! damping not impossible estimated), and reports [`HeldUnknown`] where the
+//! hold stays (docs/session43-heldtable17.md).
 
 use super::{linearised, with_freed, GroupEquations, ITERATIONS};
 use crate::diagnose::criterion::Inference;
