@@ -448,30 +448,47 @@ pub fn refine(
             }
         }
         out.push((b, *fit));
-        let kind = crate::effects::EffectKind::from_name(super::candidates::BEARING_COEFFICIENTS);
-        for s in steps.iter_mut().filter(|s| {
-            s.effect == super::candidates::BEARING_COEFFICIENTS
-                && s.bearing == prep.bearings[b]
-                && s.dropped.is_none()
-        }) {
-            if let Some(kind) = kind {
-                s.parameters = super::summaries::as_reported(
-                    &state.model,
-                    b,
-                    kind,
-                    vec![super::report::Estimate {
-                        name: r.p.name().into(),
-                        value: fit.delta,
-                        std_err: fit.delta_std_err,
-                    }],
-                );
-            }
-        }
+        report_delta(prep, &state.model, r.p, fit.delta, fit.delta_std_err, steps);
     }
     if !out.is_empty() {
         state.weights = super::fit::Weights::propagate(prep, &state.model, &state.params);
     }
     Ok(out)
+}
+
+/// Writes a table correction's δ [-] and its ± [-] (`p`: the nonlinear
+/// scalar of `model`) into the kept `bearing_coefficients` steps at its
+/// bearing, as reported (`k_scale` or `clearance_ratio` = 1 + δ, with the
+/// clearances when the table is an oil film).
+pub(super) fn report_delta(
+    prep: &Prepared,
+    model: &super::model::Model,
+    p: Nonlinear,
+    delta: f64,
+    std_err: f64,
+    steps: &mut [Step],
+) {
+    let b = p.bearing();
+    let Some(kind) = crate::effects::EffectKind::from_name(super::candidates::BEARING_COEFFICIENTS)
+    else {
+        return;
+    };
+    for s in steps.iter_mut().filter(|s| {
+        s.effect == super::candidates::BEARING_COEFFICIENTS
+            && prep.bearings.get(b) == Some(&s.bearing)
+            && s.dropped.is_none()
+    }) {
+        s.parameters = super::summaries::as_reported(
+            model,
+            b,
+            kind,
+            vec![super::report::Estimate {
+                name: p.name().into(),
+                value: delta,
+                std_err,
+            }],
+        );
+    }
 }
 
 /// The pedestals reported after [`refine`]: each refitted bearing's values

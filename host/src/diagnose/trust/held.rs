@@ -76,6 +76,7 @@ mod tests {
             held_delays: Vec::new(),
             held_against_data: held,
             freed: Vec::new(),
+            held_unknown: None,
         }
     }
 
