@@ -294,7 +294,7 @@ fn has_table(model: &Model, nonlinear: &[usize]) -> bool {
 /// table group holding a damping was refitted by nobody: its values stayed
 /// the search's held-weights least squares and its hold was never judged
 /// (unseen-four `table-d3` seed 1602, 225-346 Hz: B2's clearance named,
-/// c_y held, B2 m 21.7 ± off, trusted; docs/session43-heldtable17.md).
+/// c_y held, B2 m 21.7 ± off, trusted; docs/diagnose-verdict.md, Session 43 (heldtable17)).
 /// Here it is refitted with its scalar, and [`free_held`] judges the hold.
 /// A group without an effect of its own is refitted too: the search refits
 /// every group by the held-weights least squares after each step, so its

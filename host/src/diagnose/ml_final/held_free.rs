@@ -58,7 +58,7 @@
 //! [`super::refit`] frees the held dampings wherever the free fit finds
 //! them physical (`need_support` false: the base model's own rule, every
 //! damping not impossible estimated), and reports [`HeldUnknown`] where the
-//! hold stays (docs/session43-heldtable17.md).
+//! hold stays (docs/diagnose-verdict.md, Session 43 (heldtable17)).
 
 use super::{linearised, with_freed, GroupEquations, ITERATIONS};
 use crate::diagnose::criterion::Inference;
