@@ -16,8 +16,8 @@ them (session 43, docs/session43-cross17.md):
 
 Prints per case, for the final pedestals (`pedestals_after`: k_y, k_z, m,
 c_y, c_z where the value has a ± > 0; a held damping has none) and each
-named effect's parameters whose truth the run's truth.json gives (e.g.
-k_yz): n, mean z with its 95 % interval (t-free: ±1.96 sd/√n), RMS z with
+named effect's parameters whose truth the run's truth.json gives (k_yz,
+a runout's r_*, a sub-base's sub_k_y … as its k_y …): n, mean z with its 95 % interval (t-free: ±1.96 sd/√n), RMS z with
 its 95 % interval (χ² with n degrees of freedom, the truth known), and the
 values beyond 3 ± (seed, z). Then the pooled tails of k_y, k_z, m: counts
 beyond 2 and 3 ± against the normal law's expectation. --trusted: only runs
@@ -57,7 +57,9 @@ def z_values(d, truth):
         if s.get("dropped"):
             continue
         for q in s.get("parameters", []):
-            tv = eff.get((s["effect"], s["bearing"]), {}).get(q["name"])
+            truth_of = eff.get((s["effect"], s["bearing"]), {})
+            # a sub-base's k_y is reported as sub_k_y (the pedestal's own is k_y)
+            tv = truth_of.get(q["name"], truth_of.get(q["name"].removeprefix("sub_")))
             if tv is not None and q["std_err"] > 0:
                 out[(s["bearing"], q["name"])] = (q["value"] - tv) / q["std_err"]
     return out
