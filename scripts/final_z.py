@@ -7,7 +7,7 @@ JSON_DIR holds `plinth diagnose --json` outputs named
 diagnose-CASE-SEED.json; RUNS_DIR the run directories CASE-SEED (with their
 truth.json) made by scripts/ross_unseen.py. To keep the outputs of a
 `scripts/bench_unseen.py` run, give the bench a wrapper as PLINTH that tees
-them (session 43, docs/session43-cross17.md):
+them (session 43, docs/unseen.md "Session 43 (cross17)"):
 
     #!/bin/bash
     out=$(/path/to/plinth "$@"); rc=$?
