@@ -47,6 +47,11 @@ pub struct EivCovariance {
     /// noise N: the largest eigenvalue of F⁻¹N [-] (0: read exactly; ≥ 1:
     /// some combination of the parameters is read no better than its noise).
     pub noise_share: f64,
+    /// In the direction of `noise_share`, the information the true phasors
+    /// carry (estimated by F − N) in standard deviations of its own
+    /// estimate's noise [-] (≤ 0 where `noise_share` ≥ 1): small where the
+    /// first-order covariance cannot be trusted.
+    pub information_sigmas: f64,
 }
 
 /// G_j = ∂A/∂ped_j (4×5) for the four real numbers of `ped` (y re, y im,
@@ -84,6 +89,10 @@ pub fn eiv_covariance(
     let mut f = DMatrix::<f64>::zeros(p, p);
     let mut n = DMatrix::<f64>::zeros(p, p);
     let mut gamma = DMatrix::<f64>::zeros(p, p);
+    // Per speed: Σ⁻¹, the rows A and the variance-weighted G_j (for the
+    // noise of F in the direction of the noise share).
+    let mut kept: Vec<(DMatrix<f64>, DMatrix<f64>, Vec<(f64, DMatrix<f64>)>)> =
+        Vec::with_capacity(obs.len());
     for o in obs {
         let sp = Speed::new(o, 1.0);
         let s_inv: Matrix4<f64> = sp.sigma(theta, equation_var).try_inverse()?;
@@ -94,12 +103,14 @@ pub fn eiv_covariance(
         // C_k = Σ_j d_j·G_j[:,k]·g_jᵀ with g_j = G_j·θ (= ∂e/∂ped_j).
         let mut c_k = vec![DMatrix::<f64>::zeros(4, 4); p];
         let mut n_s = DMatrix::<f64>::zeros(p, p);
+        let mut g_kept = Vec::with_capacity(4);
         for (j, g) in grads.iter().enumerate() {
             let d = sp.var_ped[j];
             if d == 0.0 {
                 continue;
             }
             let gj = pick(g);
+            g_kept.push((d, gj.clone()));
             let e_j = g * th;
             n_s += (gj.transpose() * &s_inv * &gj) * d;
             for (k, ck) in c_k.iter_mut().enumerate() {
@@ -120,6 +131,7 @@ pub fn eiv_covariance(
             }
         }
         n += n_s;
+        kept.push((s_inv, a, g_kept));
     }
     if !f
         .iter()
@@ -133,7 +145,8 @@ pub fn eiv_covariance(
     if !f_inv.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let noise_share = largest_generalised_eigenvalue(&f, &n)?;
+    let (noise_share, v) = largest_generalised_eigenvalue(&f, &n)?;
+    let information_sigmas = (1.0 - noise_share) / f_noise_sd(&kept, &v);
     let m = &f - &n;
     let covariance = (noise_share < 1.0)
         .then(|| {
@@ -165,11 +178,45 @@ pub fn eiv_covariance(
         covariance,
         excess,
         noise_share,
+        information_sigmas,
     })
 }
 
-/// The largest λ with N·v = λ·F·v (F positive definite, N symmetric) [-].
-fn largest_generalised_eigenvalue(f: &DMatrix<f64>, n: &DMatrix<f64>) -> Option<f64> {
+/// The standard deviation of vᵀFv [-] from the regressors' noise (vᵀFv = 1):
+/// per speed, with a = Σ^{-½}A·v and S = Σ_j d_j·(Σ^{-½}G_j·v)(…)ᵀ,
+/// Var |a⁰ + noise|² = 4·a⁰ᵀSa⁰ + 2·tr S², a⁰ᵀSa⁰ estimated from the
+/// measured a as aᵀSa − tr S² (its mean being a⁰ᵀSa⁰ + tr S²).
+fn f_noise_sd(
+    kept: &[(DMatrix<f64>, DMatrix<f64>, Vec<(f64, DMatrix<f64>)>)],
+    v: &nalgebra::DVector<f64>,
+) -> f64 {
+    let mut var = 0.0;
+    for (s_inv, a, gs) in kept {
+        let av = a * v;
+        let gv: Vec<(f64, nalgebra::DVector<f64>)> = gs.iter().map(|(d, g)| (*d, g * v)).collect();
+        // aᵀSa = Σ_j d_j (aᵀΣ⁻¹G_jv)², tr S² = Σ_jk d_j d_k (vᵀG_jᵀΣ⁻¹G_kv)².
+        let asa: f64 = gv
+            .iter()
+            .map(|(d, g)| d * av.dot(&(s_inv * g)).powi(2))
+            .sum();
+        let tr_s2: f64 = gv
+            .iter()
+            .flat_map(|(dj, gj)| {
+                gv.iter()
+                    .map(move |(dk, gk)| dj * dk * gj.dot(&(s_inv * gk)).powi(2))
+            })
+            .sum();
+        var += 4.0 * (asa - tr_s2).max(0.0) + 2.0 * tr_s2;
+    }
+    var.sqrt()
+}
+
+/// The largest λ with N·v = λ·F·v (F positive definite, N symmetric) [-],
+/// and its v, scaled to vᵀFv = 1.
+fn largest_generalised_eigenvalue(
+    f: &DMatrix<f64>,
+    n: &DMatrix<f64>,
+) -> Option<(f64, nalgebra::DVector<f64>)> {
     let p = f.nrows();
     let d: Vec<f64> = (0..p).map(|i| f[(i, i)].sqrt()).collect();
     if !d.iter().all(|x| *x > 0.0 && x.is_finite()) {
@@ -181,12 +228,16 @@ fn largest_generalised_eigenvalue(f: &DMatrix<f64>, n: &DMatrix<f64>) -> Option<
     let l_inv = l.try_inverse()?;
     let w = &l_inv * ns * l_inv.transpose();
     let w = (&w + w.transpose()) * 0.5;
-    w.symmetric_eigen()
+    let eig = w.symmetric_eigen();
+    let (i, &lambda) = eig
         .eigenvalues
         .iter()
-        .copied()
-        .fold(None, |a: Option<f64>, v| Some(a.map_or(v, |a| a.max(v))))
-        .filter(|v| v.is_finite())
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))?;
+    // x = L⁻ᵀy in the scaled coordinates (xᵀ·fs·x = 1), v = D⁻¹x.
+    let x = l_inv.transpose() * eig.eigenvectors.column(i);
+    let v = nalgebra::DVector::from_fn(p, |r, _| x[r] / d[r]);
+    (lambda.is_finite() && v.iter().all(|x| x.is_finite())).then_some((lambda, v))
 }
 
 #[cfg(test)]
@@ -302,5 +353,85 @@ mod tests {
         // (docs/estimation.md, Session 42 (lowsnrpm17): on the unseen-train recording F⁻¹
         // gives RMS z ≈ 3 and the EIV covariance ≈ 1).
         assert!(e < f && e < 1.3, "{said}");
+    }
+
+    /// Sweep (exploration): RMS z of k_y, k_z, m under F⁻¹ and the EIV
+    /// covariance, the noise declared as drawn.
+    #[test]
+    #[ignore]
+    fn sweep_signal_to_noise() {
+        use rand::{Rng, SeedableRng};
+        let (theta, _) = machine();
+        for &every in &[1usize, 2, 4, 10] {
+            for &ped_sd in &[3e-7, 6e-7, 1e-6, 1.3e-6, 1.6e-6, 2e-6, 2.5e-6] {
+                let rel_sd = 1e-9;
+                let mut clean = exact(ped_sd, rel_sd);
+                for o in clean.iter_mut() {
+                    for v in o.var.iter_mut() {
+                        *v *= 0.5;
+                    }
+                }
+                let clean: Vec<Observation> = clean.into_iter().step_by(every).collect();
+                let mut rng = rand::rngs::StdRng::seed_from_u64(2103);
+                let (mut zf, mut ze, mut shares, mut none, mut fail) =
+                    (Vec::new(), Vec::new(), Vec::new(), 0, 0);
+                let mut zp = vec![Vec::new(); 5];
+                for _ in 0..100 {
+                    let noisy: Vec<Observation> = clean
+                        .iter()
+                        .map(|o| {
+                            let mut n = *o;
+                            for (c, v) in n.rel.iter_mut().chain(n.ped.iter_mut()).enumerate() {
+                                let s = (0.5f64).sqrt() * if c < 2 { rel_sd } else { ped_sd };
+                                *v += Complex::new(
+                                    s * rng.sample::<f64, _>(rand_distr::StandardNormal),
+                                    s * rng.sample::<f64, _>(rand_distr::StandardNormal),
+                                );
+                            }
+                            n
+                        })
+                        .collect();
+                    let Ok(fit) = ml::fit(&noisy, &Parameter::ALL, &theta) else {
+                        fail += 1;
+                        continue;
+                    };
+                    let Some(e) = eiv_covariance(&noisy, &Parameter::ALL, &fit.theta, 0.0) else {
+                        fail += 1;
+                        continue;
+                    };
+                    shares.push(e.noise_share);
+                    let Some(cov) = e.covariance else {
+                        none += 1;
+                        continue;
+                    };
+                    let zs: Vec<f64> = (0..5)
+                        .map(|k| (fit.theta[k] - theta[k]) / cov[k][k].sqrt())
+                        .collect();
+                    eprintln!(
+                        "FIT {} {ped_sd:e} {:.4} {:.4} {:?}",
+                        clean.len(),
+                        e.noise_share,
+                        e.information_sigmas,
+                        zs
+                    );
+                    for k in 0..5 {
+                        let d = fit.theta[k] - theta[k];
+                        zf.push(d / fit.covariance[k][k].sqrt());
+                        ze.push(d / cov[k][k].sqrt());
+                        zp[k].push(d / cov[k][k].sqrt());
+                    }
+                }
+                let share = shares.iter().sum::<f64>() / shares.len() as f64;
+                let smax = shares.iter().copied().fold(0.0, f64::max);
+                eprintln!(
+                "n {} ped_sd {ped_sd:e}: share {share:.3} (max {smax:.3}), none {none}, fail {fail}, RMS z F⁻¹ {:.3} EIV {:.3} per k {:.2} {:.2} {:.2} {:.2} {:.2} ({} fits)",
+                clean.len(),
+                rms_z(&zf),
+                rms_z(&ze),
+                rms_z(&zp[0]), rms_z(&zp[1]), rms_z(&zp[2]), rms_z(&zp[3]), rms_z(&zp[4]),
+                zp[0].len()
+            );
+            }
+        }
     }
 }
