@@ -25,6 +25,16 @@
 //! scalar case: sd × 1/(1 − ρ), ρ = N/F). When F − N is not positive
 //! definite the data's information about some combination of the
 //! parameters is no more than their noise's: no covariance is given.
+//!
+//! Nor is one given where F − N, in the direction of the largest noise
+//! share, is less than [`MIN_INFORMATION_SIGMAS`] standard deviations of its
+//! own noise above zero ([`EivCovariance::information_sigmas`]): there the
+//! first-order expansion fails (the estimate behaves as a ratio whose
+//! denominator is mostly noise) and the covariance above is short. Measured
+//! on a synthetic pedestal (docs/session43-eivpm17.md; 20-200 speeds, noise
+//! share 0.3-1.3, 1842 fits, seed 2103): RMS z 1.62 and 1.84 where the
+//! information is within 0.5 and 0.5-1 of its sd, 1.39 at 1-1.5, 1.12 at
+//! 1.5-2, 1.08 at 2-3, 1.07 at 3-4, 0.99-1.04 above.
 
 use super::rigid::{rows, Speed};
 use crate::estimate::gauss_helmert as gh;
@@ -33,12 +43,17 @@ use nalgebra::{DMatrix, Matrix4, SMatrix};
 use num_complex::Complex;
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
+/// Least [`EivCovariance::information_sigmas`] for which a covariance is
+/// given [-] (module docs: below it the first-order covariance is short).
+pub const MIN_INFORMATION_SIGMAS: f64 = 3.0;
+
 /// The covariance of the ML estimate with its regressors' noise
 /// ([module docs](self)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EivCovariance {
     /// M⁻¹ + M⁻¹ΓM⁻¹ over all five parameters (θ units; zero rows and
-    /// columns for fixed ones); `None` when F − N is not positive definite.
+    /// columns for fixed ones); `None` when F − N is not positive definite
+    /// or `information_sigmas` < [`MIN_INFORMATION_SIGMAS`].
     pub covariance: Option<[[f64; PARAMETERS]; PARAMETERS]>,
     /// `covariance` − F⁻¹ (θ units): what the regressors' noise adds to the
     /// covariance a fit reports, to be added to any other widening of it.
@@ -77,6 +92,18 @@ pub fn eiv_covariance(
     columns: &[Parameter],
     theta: &[f64; PARAMETERS],
     equation_var: f64,
+) -> Option<EivCovariance> {
+    eiv_covariance_from(obs, columns, theta, equation_var, MIN_INFORMATION_SIGMAS)
+}
+
+/// [`eiv_covariance`] giving a covariance from `min_information_sigmas`
+/// [-] (−∞: wherever F − N is positive definite, the rule before session 43).
+fn eiv_covariance_from(
+    obs: &[Observation],
+    columns: &[Parameter],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+    min_information_sigmas: f64,
 ) -> Option<EivCovariance> {
     let p = columns.len();
     if p == 0 {
@@ -148,7 +175,7 @@ pub fn eiv_covariance(
     let (noise_share, v) = largest_generalised_eigenvalue(&f, &n)?;
     let information_sigmas = (1.0 - noise_share) / f_noise_sd(&kept, &v);
     let m = &f - &n;
-    let covariance = (noise_share < 1.0)
+    let covariance = (noise_share < 1.0 && information_sigmas >= min_information_sigmas)
         .then(|| {
             let m_inv = gh::inverse_psd(&m);
             let cov = &m_inv + &m_inv * &gamma * &m_inv;
@@ -255,9 +282,9 @@ mod tests {
         (theta, bearing)
     }
 
-    /// Exact observations of a pedestal driven by a unit force, with noise
-    /// sd `ped_sd`, `rel_sd` [m] on every real number (not drawn: only the
-    /// variances matter here).
+    /// Exact observations of a pedestal driven by a unit force, declaring a
+    /// complex noise of sd `ped_sd`, `rel_sd` [m] on each phasor (variance
+    /// sd²/2 on each real number; not drawn: see [`noisy`]).
     fn exact(ped_sd: f64, rel_sd: f64) -> Vec<Observation> {
         let (theta, bearing) = machine();
         (0..200)
@@ -274,7 +301,7 @@ mod tests {
                     force[0] / h(theta[0], theta[3]),
                     force[1] / h(theta[1], theta[4]),
                 ];
-                let (vr, vp) = (rel_sd * rel_sd, ped_sd * ped_sd);
+                let (vr, vp) = (0.5 * rel_sd * rel_sd, 0.5 * ped_sd * ped_sd);
                 o.var = [vr, vr, vr, vr, vp, vp, vp, vp];
                 o
             })
@@ -301,137 +328,124 @@ mod tests {
         (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt()
     }
 
-    #[test]
-    fn regressors_read_near_their_noise_widen_the_covariance() {
-        use rand::{Rng, SeedableRng};
+    /// `clean` with complex white noise of sd `ped_sd`, `rel_sd` [m] on each
+    /// phasor (sd/√2 on each real number: what [`exact`] declares).
+    fn noisy(
+        clean: &[Observation],
+        ped_sd: f64,
+        rel_sd: f64,
+        rng: &mut rand::rngs::StdRng,
+    ) -> Vec<Observation> {
+        use rand::Rng;
+        clean
+            .iter()
+            .map(|o| {
+                let mut n = *o;
+                for (c, v) in n.rel.iter_mut().chain(n.ped.iter_mut()).enumerate() {
+                    let s = (0.5f64).sqrt() * if c < 2 { rel_sd } else { ped_sd };
+                    *v += Complex::new(
+                        s * rng.sample::<f64, _>(rand_distr::StandardNormal),
+                        s * rng.sample::<f64, _>(rand_distr::StandardNormal),
+                    );
+                }
+                n
+            })
+            .collect()
+    }
+
+    /// Over `draws` noisy copies of [`exact`] at `ped_sd` on every `every`-th
+    /// of its 200 speeds: (z of all five parameters under F⁻¹, under the EIV
+    /// covariance, for the draws given one; draws without one).
+    fn z_scores(
+        ped_sd: f64,
+        every: usize,
+        draws: usize,
+        seed: u64,
+        min_information_sigmas: f64,
+    ) -> (Vec<f64>, Vec<f64>, usize) {
+        use rand::SeedableRng;
         let (theta, _) = machine();
-        // The pedestal's phasors are 1.6e-7 .. 3e-7 m: noise of 3e-7 m on
-        // each (complex sd): a signal-to-noise ratio near 1 in amplitude.
-        let (ped_sd, rel_sd) = (3e-7, 1e-9);
-        let clean = exact(ped_sd, rel_sd);
-        let mut rng = rand::rngs::StdRng::seed_from_u64(17);
-        let (mut z_fisher, mut z_eiv, mut shares) = (Vec::new(), Vec::new(), Vec::new());
-        for _ in 0..60 {
-            let noisy: Vec<Observation> = clean
-                .iter()
-                .map(|o| {
-                    let mut n = *o;
-                    for (c, v) in n.rel.iter_mut().chain(n.ped.iter_mut()).enumerate() {
-                        let s = (0.5f64).sqrt() * if c < 2 { rel_sd } else { ped_sd };
-                        *v += Complex::new(
-                            s * rng.sample::<f64, _>(rand_distr::StandardNormal),
-                            s * rng.sample::<f64, _>(rand_distr::StandardNormal),
-                        );
-                    }
-                    n
-                })
-                .collect();
-            let Ok(fit) = ml::fit(&noisy, &Parameter::ALL, &theta) else {
+        let rel_sd = 1e-9;
+        let clean: Vec<Observation> = exact(ped_sd, rel_sd).into_iter().step_by(every).collect();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let (mut z_fisher, mut z_eiv, mut withheld) = (Vec::new(), Vec::new(), 0);
+        for _ in 0..draws {
+            let data = noisy(&clean, ped_sd, rel_sd, &mut rng);
+            let fit = ml::fit(&data, &Parameter::ALL, &theta).unwrap();
+            let e = eiv_covariance_from(
+                &data,
+                &Parameter::ALL,
+                &fit.theta,
+                0.0,
+                min_information_sigmas,
+            )
+            .unwrap();
+            let Some(cov) = e.covariance else {
+                withheld += 1;
                 continue;
             };
-            let Some(e) = eiv_covariance(&noisy, &Parameter::ALL, &fit.theta, 0.0) else {
-                continue;
-            };
-            shares.push(e.noise_share);
-            let Some(cov) = e.covariance else { continue };
-            for k in 0..3 {
+            for k in 0..PARAMETERS {
                 let d = fit.theta[k] - theta[k];
                 z_fisher.push(d / fit.covariance[k][k].sqrt());
                 z_eiv.push(d / cov[k][k].sqrt());
             }
         }
-        let share = shares.iter().sum::<f64>() / shares.len() as f64;
-        assert!(z_eiv.len() >= 150, "{} of 180", z_eiv.len());
-        let (f, e) = (rms_z(&z_fisher), rms_z(&z_eiv));
-        let said = format!("noise share {share:.3}, RMS z {f:.3} (F⁻¹), {e:.3} (EIV)");
-        eprintln!("{said}");
-        assert!(share > 0.2, "{said}");
-        // Measured (seed 17): share 0.65, RMS z 0.79 under F⁻¹ and 0.54
-        // under the EIV covariance: on this machine both are conservative and
-        // the EIV covariance is the wider; it is never the narrower, and the
-        // estimate is never more than its ± off in RMS
-        // (docs/estimation.md, Session 42 (lowsnrpm17): on the unseen-train recording F⁻¹
-        // gives RMS z ≈ 3 and the EIV covariance ≈ 1).
-        assert!(e < f && e < 1.3, "{said}");
+        (z_fisher, z_eiv, withheld)
     }
 
-    /// Sweep (exploration): RMS z of k_y, k_z, m under F⁻¹ and the EIV
-    /// covariance, the noise declared as drawn.
+    /// The pedestal's phasors are 1.6e-7 .. 3e-7 m; a complex noise of sd
+    /// 1e-7 .. 2e-6 m on each: amplitude signal-to-noise from 3 down to
+    /// 0.1, with 20, 50 and 200 speeds (noise share about 0.05 to 1.3).
+    /// Main 795fd3c gave a covariance wherever F − N is positive definite:
+    /// the same draws under that rule are asserted to be short in some cell
+    /// (RMS z > 1.25: the first-order covariance fails near the share 1),
+    /// so this test fails on main; with [`MIN_INFORMATION_SIGMAS`] every
+    /// cell is within [0.8, 1.25] (docs/session43-eivpm17.md).
     #[test]
-    #[ignore]
-    fn sweep_signal_to_noise() {
-        use rand::{Rng, SeedableRng};
-        let (theta, _) = machine();
-        for &every in &[1usize, 2, 4, 10] {
-            for &ped_sd in &[3e-7, 6e-7, 1e-6, 1.3e-6, 1.6e-6, 2e-6, 2.5e-6] {
-                let rel_sd = 1e-9;
-                let mut clean = exact(ped_sd, rel_sd);
-                for o in clean.iter_mut() {
-                    for v in o.var.iter_mut() {
-                        *v *= 0.5;
-                    }
-                }
-                let clean: Vec<Observation> = clean.into_iter().step_by(every).collect();
-                let mut rng = rand::rngs::StdRng::seed_from_u64(2103);
-                let (mut zf, mut ze, mut shares, mut none, mut fail) =
-                    (Vec::new(), Vec::new(), Vec::new(), 0, 0);
-                let mut zp = vec![Vec::new(); 5];
-                for _ in 0..100 {
-                    let noisy: Vec<Observation> = clean
-                        .iter()
-                        .map(|o| {
-                            let mut n = *o;
-                            for (c, v) in n.rel.iter_mut().chain(n.ped.iter_mut()).enumerate() {
-                                let s = (0.5f64).sqrt() * if c < 2 { rel_sd } else { ped_sd };
-                                *v += Complex::new(
-                                    s * rng.sample::<f64, _>(rand_distr::StandardNormal),
-                                    s * rng.sample::<f64, _>(rand_distr::StandardNormal),
-                                );
-                            }
-                            n
-                        })
-                        .collect();
-                    let Ok(fit) = ml::fit(&noisy, &Parameter::ALL, &theta) else {
-                        fail += 1;
-                        continue;
-                    };
-                    let Some(e) = eiv_covariance(&noisy, &Parameter::ALL, &fit.theta, 0.0) else {
-                        fail += 1;
-                        continue;
-                    };
-                    shares.push(e.noise_share);
-                    let Some(cov) = e.covariance else {
-                        none += 1;
-                        continue;
-                    };
-                    let zs: Vec<f64> = (0..5)
-                        .map(|k| (fit.theta[k] - theta[k]) / cov[k][k].sqrt())
-                        .collect();
-                    eprintln!(
-                        "FIT {} {ped_sd:e} {:.4} {:.4} {:?}",
-                        clean.len(),
-                        e.noise_share,
-                        e.information_sigmas,
-                        zs
-                    );
-                    for k in 0..5 {
-                        let d = fit.theta[k] - theta[k];
-                        zf.push(d / fit.covariance[k][k].sqrt());
-                        ze.push(d / cov[k][k].sqrt());
-                        zp[k].push(d / cov[k][k].sqrt());
-                    }
-                }
-                let share = shares.iter().sum::<f64>() / shares.len() as f64;
-                let smax = shares.iter().copied().fold(0.0, f64::max);
-                eprintln!(
-                "n {} ped_sd {ped_sd:e}: share {share:.3} (max {smax:.3}), none {none}, fail {fail}, RMS z F⁻¹ {:.3} EIV {:.3} per k {:.2} {:.2} {:.2} {:.2} {:.2} ({} fits)",
-                clean.len(),
-                rms_z(&zf),
-                rms_z(&ze),
-                rms_z(&zp[0]), rms_z(&zp[1]), rms_z(&zp[2]), rms_z(&zp[3]), rms_z(&zp[4]),
-                zp[0].len()
+    fn the_covariance_is_given_only_where_it_is_calibrated() {
+        let mut said = String::new();
+        let (mut failed, mut main_short) = (false, false);
+        for &(every, ped_sd) in &[
+            (1usize, 1e-7),
+            (1, 3e-7),
+            (1, 6e-7),
+            (1, 1e-6),
+            (4, 3e-7),
+            (4, 6e-7),
+            (4, 1e-6),
+            (4, 1.3e-6),
+            (4, 2e-6),
+            (10, 1e-6),
+        ] {
+            let (_, z_main, _) = z_scores(ped_sd, every, 100, 2104, f64::NEG_INFINITY);
+            let main = rms_z(&z_main);
+            if z_main.len() >= 20 * PARAMETERS && main > 1.25 {
+                main_short = true;
+            }
+            let (zf, ze, withheld) = z_scores(ped_sd, every, 100, 2104, MIN_INFORMATION_SIGMAS);
+            let (f, e) = (rms_z(&zf), rms_z(&ze));
+            let line = format!(
+                "{} speeds, ped sd {ped_sd:e} m: given {}/100, RMS z {f:.3} (F⁻¹), {e:.3} (EIV); main's rule: given {}/100, RMS z {main:.3}\n",
+                200 / every,
+                ze.len() / PARAMETERS,
+                z_main.len() / PARAMETERS
             );
+            said += &line;
+            // Calibrated where given (judged where at least 20 draws are).
+            if ze.len() >= 20 * PARAMETERS && !(0.8..=1.25).contains(&e) {
+                failed = true;
+            }
+            // Never withheld where the signal stands well above its noise.
+            if ped_sd <= 3e-7 && withheld > 0 {
+                failed = true;
+            }
+            // Where the noise share is large, F⁻¹ alone is short.
+            if every == 1 && ped_sd >= 6e-7 && f < 1.3 {
+                failed = true;
             }
         }
+        eprint!("{said}");
+        assert!(!failed, "{said}");
+        assert!(main_short, "main's rule is short nowhere here:\n{said}");
     }
 }
