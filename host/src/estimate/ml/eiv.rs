@@ -43,6 +43,10 @@ use nalgebra::{DMatrix, Matrix4, SMatrix};
 use num_complex::Complex;
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
+/// One speed's Σ⁻¹ (4×4), rows A (4×p) and (d_j, G_j (4×p)) of the
+/// pedestal numbers with noise.
+type SpeedTerms = (DMatrix<f64>, DMatrix<f64>, Vec<(f64, DMatrix<f64>)>);
+
 /// Least [`EivCovariance::information_sigmas`] for which a covariance is
 /// given [-] (module docs: below it the first-order covariance is short).
 pub const MIN_INFORMATION_SIGMAS: f64 = 3.0;
@@ -118,8 +122,7 @@ fn eiv_covariance_from(
     let mut gamma = DMatrix::<f64>::zeros(p, p);
     // Per speed: Σ⁻¹, the rows A and the variance-weighted G_j (for the
     // noise of F in the direction of the noise share).
-    let mut kept: Vec<(DMatrix<f64>, DMatrix<f64>, Vec<(f64, DMatrix<f64>)>)> =
-        Vec::with_capacity(obs.len());
+    let mut kept: Vec<SpeedTerms> = Vec::with_capacity(obs.len());
     for o in obs {
         let sp = Speed::new(o, 1.0);
         let s_inv: Matrix4<f64> = sp.sigma(theta, equation_var).try_inverse()?;
@@ -213,10 +216,7 @@ fn eiv_covariance_from(
 /// per speed, with a = Σ^{-½}A·v and S = Σ_j d_j·(Σ^{-½}G_j·v)(…)ᵀ,
 /// Var |a⁰ + noise|² = 4·a⁰ᵀSa⁰ + 2·tr S², a⁰ᵀSa⁰ estimated from the
 /// measured a as aᵀSa − tr S² (its mean being a⁰ᵀSa⁰ + tr S²).
-fn f_noise_sd(
-    kept: &[(DMatrix<f64>, DMatrix<f64>, Vec<(f64, DMatrix<f64>)>)],
-    v: &nalgebra::DVector<f64>,
-) -> f64 {
+fn f_noise_sd(kept: &[SpeedTerms], v: &nalgebra::DVector<f64>) -> f64 {
     let mut var = 0.0;
     for (s_inv, a, gs) in kept {
         let av = a * v;
