@@ -70,7 +70,7 @@ mod tests;
 
 pub use bound::{bound, fisher_information, ols_covariance, ols_covariance_with};
 pub use chi2::{chi2_two_sided_p, cost, cost_over, cost_with};
-pub use eiv::{eiv_covariance, EivCovariance};
+pub use eiv::{eiv_covariance, EivCovariance, MIN_INFORMATION_SIGMAS};
 pub use equation_error::{equation_var_for_chi2, fit_with_equation_error, log_det};
 pub(crate) use rigid::rows;
 pub use rigid::{equation_covariance, equation_residual, Rigid};

@@ -436,8 +436,10 @@ pub(crate) fn fit_ml_checked(
             None => extra.push(Warning {
                 kind: WarningKind::Undetermined,
                 message: format!(
-                    "the pedestal is read below its noise: the noise of its phasors carries {:.0} % of the fit's information on some combination of the parameters (errors in variables), so their standard errors are not known; those shown are the asymptotic ones",
-                    100.0 * e.noise_share
+                    "the pedestal is read near or below its noise: the noise of its phasors carries {:.0} % of the fit's information on some combination of the parameters (errors in variables), and what remains is {:.1} standard deviations of its own noise (below {}), so their standard errors are not known; those shown are the asymptotic ones",
+                    100.0 * e.noise_share,
+                    e.information_sigmas.max(0.0),
+                    ml::MIN_INFORMATION_SIGMAS
                 ),
             }),
         }

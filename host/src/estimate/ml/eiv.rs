@@ -25,6 +25,16 @@
 //! scalar case: sd × 1/(1 − ρ), ρ = N/F). When F − N is not positive
 //! definite the data's information about some combination of the
 //! parameters is no more than their noise's: no covariance is given.
+//!
+//! Nor is one given where F − N, in the direction of the largest noise
+//! share, is less than [`MIN_INFORMATION_SIGMAS`] standard deviations of its
+//! own noise above zero ([`EivCovariance::information_sigmas`]): there the
+//! first-order expansion fails (the estimate behaves as a ratio whose
+//! denominator is mostly noise) and the covariance above is short. Measured
+//! on a synthetic pedestal (docs/session43-eivpm17.md; 20-200 speeds, noise
+//! share 0.3-1.3, 1842 fits, seed 2103): RMS z 1.62 and 1.84 where the
+//! information is within 0.5 and 0.5-1 of its sd, 1.39 at 1-1.5, 1.12 at
+//! 1.5-2, 1.08 at 2-3, 1.07 at 3-4, 0.99-1.04 above.
 
 use super::rigid::{rows, Speed};
 use crate::estimate::gauss_helmert as gh;
@@ -33,12 +43,21 @@ use nalgebra::{DMatrix, Matrix4, SMatrix};
 use num_complex::Complex;
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
+/// One speed's Σ⁻¹ (4×4), rows A (4×p) and (d_j, G_j (4×p)) of the
+/// pedestal numbers with noise.
+type SpeedTerms = (DMatrix<f64>, DMatrix<f64>, Vec<(f64, DMatrix<f64>)>);
+
+/// Least [`EivCovariance::information_sigmas`] for which a covariance is
+/// given [-] (module docs: below it the first-order covariance is short).
+pub const MIN_INFORMATION_SIGMAS: f64 = 3.0;
+
 /// The covariance of the ML estimate with its regressors' noise
 /// ([module docs](self)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct EivCovariance {
     /// M⁻¹ + M⁻¹ΓM⁻¹ over all five parameters (θ units; zero rows and
-    /// columns for fixed ones); `None` when F − N is not positive definite.
+    /// columns for fixed ones); `None` when F − N is not positive definite
+    /// or `information_sigmas` < [`MIN_INFORMATION_SIGMAS`].
     pub covariance: Option<[[f64; PARAMETERS]; PARAMETERS]>,
     /// `covariance` − F⁻¹ (θ units): what the regressors' noise adds to the
     /// covariance a fit reports, to be added to any other widening of it.
@@ -47,6 +66,11 @@ pub struct EivCovariance {
     /// noise N: the largest eigenvalue of F⁻¹N [-] (0: read exactly; ≥ 1:
     /// some combination of the parameters is read no better than its noise).
     pub noise_share: f64,
+    /// In the direction of `noise_share`, the information the true phasors
+    /// carry (estimated by F − N) in standard deviations of its own
+    /// estimate's noise [-] (≤ 0 where `noise_share` ≥ 1): small where the
+    /// first-order covariance cannot be trusted.
+    pub information_sigmas: f64,
 }
 
 /// G_j = ∂A/∂ped_j (4×5) for the four real numbers of `ped` (y re, y im,
@@ -73,6 +97,18 @@ pub fn eiv_covariance(
     theta: &[f64; PARAMETERS],
     equation_var: f64,
 ) -> Option<EivCovariance> {
+    eiv_covariance_from(obs, columns, theta, equation_var, MIN_INFORMATION_SIGMAS)
+}
+
+/// [`eiv_covariance`] giving a covariance from `min_information_sigmas`
+/// [-] (−∞: wherever F − N is positive definite, the rule before session 43).
+fn eiv_covariance_from(
+    obs: &[Observation],
+    columns: &[Parameter],
+    theta: &[f64; PARAMETERS],
+    equation_var: f64,
+    min_information_sigmas: f64,
+) -> Option<EivCovariance> {
     let p = columns.len();
     if p == 0 {
         return None;
@@ -84,6 +120,9 @@ pub fn eiv_covariance(
     let mut f = DMatrix::<f64>::zeros(p, p);
     let mut n = DMatrix::<f64>::zeros(p, p);
     let mut gamma = DMatrix::<f64>::zeros(p, p);
+    // Per speed: Σ⁻¹, the rows A and the variance-weighted G_j (for the
+    // noise of F in the direction of the noise share).
+    let mut kept: Vec<SpeedTerms> = Vec::with_capacity(obs.len());
     for o in obs {
         let sp = Speed::new(o, 1.0);
         let s_inv: Matrix4<f64> = sp.sigma(theta, equation_var).try_inverse()?;
@@ -94,12 +133,14 @@ pub fn eiv_covariance(
         // C_k = Σ_j d_j·G_j[:,k]·g_jᵀ with g_j = G_j·θ (= ∂e/∂ped_j).
         let mut c_k = vec![DMatrix::<f64>::zeros(4, 4); p];
         let mut n_s = DMatrix::<f64>::zeros(p, p);
+        let mut g_kept = Vec::with_capacity(4);
         for (j, g) in grads.iter().enumerate() {
             let d = sp.var_ped[j];
             if d == 0.0 {
                 continue;
             }
             let gj = pick(g);
+            g_kept.push((d, gj.clone()));
             let e_j = g * th;
             n_s += (gj.transpose() * &s_inv * &gj) * d;
             for (k, ck) in c_k.iter_mut().enumerate() {
@@ -120,6 +161,7 @@ pub fn eiv_covariance(
             }
         }
         n += n_s;
+        kept.push((s_inv, a, g_kept));
     }
     if !f
         .iter()
@@ -133,9 +175,10 @@ pub fn eiv_covariance(
     if !f_inv.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let noise_share = largest_generalised_eigenvalue(&f, &n)?;
+    let (noise_share, v) = largest_generalised_eigenvalue(&f, &n)?;
+    let information_sigmas = (1.0 - noise_share) / f_noise_sd(&kept, &v);
     let m = &f - &n;
-    let covariance = (noise_share < 1.0)
+    let covariance = (noise_share < 1.0 && information_sigmas >= min_information_sigmas)
         .then(|| {
             let m_inv = gh::inverse_psd(&m);
             let cov = &m_inv + &m_inv * &gamma * &m_inv;
@@ -165,11 +208,42 @@ pub fn eiv_covariance(
         covariance,
         excess,
         noise_share,
+        information_sigmas,
     })
 }
 
-/// The largest λ with N·v = λ·F·v (F positive definite, N symmetric) [-].
-fn largest_generalised_eigenvalue(f: &DMatrix<f64>, n: &DMatrix<f64>) -> Option<f64> {
+/// The standard deviation of vᵀFv [-] from the regressors' noise (vᵀFv = 1):
+/// per speed, with a = Σ^{-½}A·v and S = Σ_j d_j·(Σ^{-½}G_j·v)(…)ᵀ,
+/// Var |a⁰ + noise|² = 4·a⁰ᵀSa⁰ + 2·tr S², a⁰ᵀSa⁰ estimated from the
+/// measured a as aᵀSa − tr S² (its mean being a⁰ᵀSa⁰ + tr S²).
+fn f_noise_sd(kept: &[SpeedTerms], v: &nalgebra::DVector<f64>) -> f64 {
+    let mut var = 0.0;
+    for (s_inv, a, gs) in kept {
+        let av = a * v;
+        let gv: Vec<(f64, nalgebra::DVector<f64>)> = gs.iter().map(|(d, g)| (*d, g * v)).collect();
+        // aᵀSa = Σ_j d_j (aᵀΣ⁻¹G_jv)², tr S² = Σ_jk d_j d_k (vᵀG_jᵀΣ⁻¹G_kv)².
+        let asa: f64 = gv
+            .iter()
+            .map(|(d, g)| d * av.dot(&(s_inv * g)).powi(2))
+            .sum();
+        let tr_s2: f64 = gv
+            .iter()
+            .flat_map(|(dj, gj)| {
+                gv.iter()
+                    .map(move |(dk, gk)| dj * dk * gj.dot(&(s_inv * gk)).powi(2))
+            })
+            .sum();
+        var += 4.0 * (asa - tr_s2).max(0.0) + 2.0 * tr_s2;
+    }
+    var.sqrt()
+}
+
+/// The largest λ with N·v = λ·F·v (F positive definite, N symmetric) [-],
+/// and its v, scaled to vᵀFv = 1.
+fn largest_generalised_eigenvalue(
+    f: &DMatrix<f64>,
+    n: &DMatrix<f64>,
+) -> Option<(f64, nalgebra::DVector<f64>)> {
     let p = f.nrows();
     let d: Vec<f64> = (0..p).map(|i| f[(i, i)].sqrt()).collect();
     if !d.iter().all(|x| *x > 0.0 && x.is_finite()) {
@@ -181,12 +255,16 @@ fn largest_generalised_eigenvalue(f: &DMatrix<f64>, n: &DMatrix<f64>) -> Option<
     let l_inv = l.try_inverse()?;
     let w = &l_inv * ns * l_inv.transpose();
     let w = (&w + w.transpose()) * 0.5;
-    w.symmetric_eigen()
+    let eig = w.symmetric_eigen();
+    let (i, &lambda) = eig
         .eigenvalues
         .iter()
-        .copied()
-        .fold(None, |a: Option<f64>, v| Some(a.map_or(v, |a| a.max(v))))
-        .filter(|v| v.is_finite())
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))?;
+    // x = L⁻ᵀy in the scaled coordinates (xᵀ·fs·x = 1), v = D⁻¹x.
+    let x = l_inv.transpose() * eig.eigenvectors.column(i);
+    let v = nalgebra::DVector::from_fn(p, |r, _| x[r] / d[r]);
+    (lambda.is_finite() && v.iter().all(|x| x.is_finite())).then_some((lambda, v))
 }
 
 #[cfg(test)]
@@ -204,9 +282,9 @@ mod tests {
         (theta, bearing)
     }
 
-    /// Exact observations of a pedestal driven by a unit force, with noise
-    /// sd `ped_sd`, `rel_sd` [m] on every real number (not drawn: only the
-    /// variances matter here).
+    /// Exact observations of a pedestal driven by a unit force, declaring a
+    /// complex noise of sd `ped_sd`, `rel_sd` [m] on each phasor (variance
+    /// sd²/2 on each real number; not drawn: see [`noisy`]).
     fn exact(ped_sd: f64, rel_sd: f64) -> Vec<Observation> {
         let (theta, bearing) = machine();
         (0..200)
@@ -223,7 +301,7 @@ mod tests {
                     force[0] / h(theta[0], theta[3]),
                     force[1] / h(theta[1], theta[4]),
                 ];
-                let (vr, vp) = (rel_sd * rel_sd, ped_sd * ped_sd);
+                let (vr, vp) = (0.5 * rel_sd * rel_sd, 0.5 * ped_sd * ped_sd);
                 o.var = [vr, vr, vr, vr, vp, vp, vp, vp];
                 o
             })
@@ -250,57 +328,124 @@ mod tests {
         (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt()
     }
 
-    #[test]
-    fn regressors_read_near_their_noise_widen_the_covariance() {
-        use rand::{Rng, SeedableRng};
+    /// `clean` with complex white noise of sd `ped_sd`, `rel_sd` [m] on each
+    /// phasor (sd/√2 on each real number: what [`exact`] declares).
+    fn noisy(
+        clean: &[Observation],
+        ped_sd: f64,
+        rel_sd: f64,
+        rng: &mut rand::rngs::StdRng,
+    ) -> Vec<Observation> {
+        use rand::Rng;
+        clean
+            .iter()
+            .map(|o| {
+                let mut n = *o;
+                for (c, v) in n.rel.iter_mut().chain(n.ped.iter_mut()).enumerate() {
+                    let s = (0.5f64).sqrt() * if c < 2 { rel_sd } else { ped_sd };
+                    *v += Complex::new(
+                        s * rng.sample::<f64, _>(rand_distr::StandardNormal),
+                        s * rng.sample::<f64, _>(rand_distr::StandardNormal),
+                    );
+                }
+                n
+            })
+            .collect()
+    }
+
+    /// Over `draws` noisy copies of [`exact`] at `ped_sd` on every `every`-th
+    /// of its 200 speeds: (z of all five parameters under F⁻¹, under the EIV
+    /// covariance, for the draws given one; draws without one).
+    fn z_scores(
+        ped_sd: f64,
+        every: usize,
+        draws: usize,
+        seed: u64,
+        min_information_sigmas: f64,
+    ) -> (Vec<f64>, Vec<f64>, usize) {
+        use rand::SeedableRng;
         let (theta, _) = machine();
-        // The pedestal's phasors are 1.6e-7 .. 3e-7 m: noise of 3e-7 m on
-        // each (complex sd): a signal-to-noise ratio near 1 in amplitude.
-        let (ped_sd, rel_sd) = (3e-7, 1e-9);
-        let clean = exact(ped_sd, rel_sd);
-        let mut rng = rand::rngs::StdRng::seed_from_u64(17);
-        let (mut z_fisher, mut z_eiv, mut shares) = (Vec::new(), Vec::new(), Vec::new());
-        for _ in 0..60 {
-            let noisy: Vec<Observation> = clean
-                .iter()
-                .map(|o| {
-                    let mut n = *o;
-                    for (c, v) in n.rel.iter_mut().chain(n.ped.iter_mut()).enumerate() {
-                        let s = (0.5f64).sqrt() * if c < 2 { rel_sd } else { ped_sd };
-                        *v += Complex::new(
-                            s * rng.sample::<f64, _>(rand_distr::StandardNormal),
-                            s * rng.sample::<f64, _>(rand_distr::StandardNormal),
-                        );
-                    }
-                    n
-                })
-                .collect();
-            let Ok(fit) = ml::fit(&noisy, &Parameter::ALL, &theta) else {
+        let rel_sd = 1e-9;
+        let clean: Vec<Observation> = exact(ped_sd, rel_sd).into_iter().step_by(every).collect();
+        let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
+        let (mut z_fisher, mut z_eiv, mut withheld) = (Vec::new(), Vec::new(), 0);
+        for _ in 0..draws {
+            let data = noisy(&clean, ped_sd, rel_sd, &mut rng);
+            let fit = ml::fit(&data, &Parameter::ALL, &theta).unwrap();
+            let e = eiv_covariance_from(
+                &data,
+                &Parameter::ALL,
+                &fit.theta,
+                0.0,
+                min_information_sigmas,
+            )
+            .unwrap();
+            let Some(cov) = e.covariance else {
+                withheld += 1;
                 continue;
             };
-            let Some(e) = eiv_covariance(&noisy, &Parameter::ALL, &fit.theta, 0.0) else {
-                continue;
-            };
-            shares.push(e.noise_share);
-            let Some(cov) = e.covariance else { continue };
-            for k in 0..3 {
+            for k in 0..PARAMETERS {
                 let d = fit.theta[k] - theta[k];
                 z_fisher.push(d / fit.covariance[k][k].sqrt());
                 z_eiv.push(d / cov[k][k].sqrt());
             }
         }
-        let share = shares.iter().sum::<f64>() / shares.len() as f64;
-        assert!(z_eiv.len() >= 150, "{} of 180", z_eiv.len());
-        let (f, e) = (rms_z(&z_fisher), rms_z(&z_eiv));
-        let said = format!("noise share {share:.3}, RMS z {f:.3} (F⁻¹), {e:.3} (EIV)");
-        eprintln!("{said}");
-        assert!(share > 0.2, "{said}");
-        // Measured (seed 17): share 0.65, RMS z 0.79 under F⁻¹ and 0.54
-        // under the EIV covariance: on this machine both are conservative and
-        // the EIV covariance is the wider; it is never the narrower, and the
-        // estimate is never more than its ± off in RMS
-        // (docs/estimation.md, Session 42 (lowsnrpm17): on the unseen-train recording F⁻¹
-        // gives RMS z ≈ 3 and the EIV covariance ≈ 1).
-        assert!(e < f && e < 1.3, "{said}");
+        (z_fisher, z_eiv, withheld)
+    }
+
+    /// The pedestal's phasors are 1.6e-7 .. 3e-7 m; a complex noise of sd
+    /// 1e-7 .. 2e-6 m on each: amplitude signal-to-noise from 3 down to
+    /// 0.1, with 20, 50 and 200 speeds (noise share about 0.05 to 1.3).
+    /// Main 795fd3c gave a covariance wherever F − N is positive definite:
+    /// the same draws under that rule are asserted to be short in some cell
+    /// (RMS z > 1.25: the first-order covariance fails near the share 1),
+    /// so this test fails on main; with [`MIN_INFORMATION_SIGMAS`] every
+    /// cell is within [0.8, 1.25] (docs/session43-eivpm17.md).
+    #[test]
+    fn the_covariance_is_given_only_where_it_is_calibrated() {
+        let mut said = String::new();
+        let (mut failed, mut main_short) = (false, false);
+        for &(every, ped_sd) in &[
+            (1usize, 1e-7),
+            (1, 3e-7),
+            (1, 6e-7),
+            (1, 1e-6),
+            (4, 3e-7),
+            (4, 6e-7),
+            (4, 1e-6),
+            (4, 1.3e-6),
+            (4, 2e-6),
+            (10, 1e-6),
+        ] {
+            let (_, z_main, _) = z_scores(ped_sd, every, 100, 2104, f64::NEG_INFINITY);
+            let main = rms_z(&z_main);
+            if z_main.len() >= 20 * PARAMETERS && main > 1.25 {
+                main_short = true;
+            }
+            let (zf, ze, withheld) = z_scores(ped_sd, every, 100, 2104, MIN_INFORMATION_SIGMAS);
+            let (f, e) = (rms_z(&zf), rms_z(&ze));
+            let line = format!(
+                "{} speeds, ped sd {ped_sd:e} m: given {}/100, RMS z {f:.3} (F⁻¹), {e:.3} (EIV); main's rule: given {}/100, RMS z {main:.3}\n",
+                200 / every,
+                ze.len() / PARAMETERS,
+                z_main.len() / PARAMETERS
+            );
+            said += &line;
+            // Calibrated where given (judged where at least 20 draws are).
+            if ze.len() >= 20 * PARAMETERS && !(0.8..=1.25).contains(&e) {
+                failed = true;
+            }
+            // Never withheld where the signal stands well above its noise.
+            if ped_sd <= 3e-7 && withheld > 0 {
+                failed = true;
+            }
+            // Where the noise share is large, F⁻¹ alone is short.
+            if every == 1 && ped_sd >= 6e-7 && f < 1.3 {
+                failed = true;
+            }
+        }
+        eprint!("{said}");
+        assert!(!failed, "{said}");
+        assert!(main_short, "main's rule is short nowhere here:\n{said}");
     }
 }
