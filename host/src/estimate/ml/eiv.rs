@@ -31,7 +31,7 @@
 //! own noise above zero ([`EivCovariance::information_sigmas`]): there the
 //! first-order expansion fails (the estimate behaves as a ratio whose
 //! denominator is mostly noise) and the covariance above is short. Measured
-//! on a synthetic pedestal (docs/session43-eivpm17.md; 20-200 speeds, noise
+//! on a synthetic pedestal (docs/estimation.md, Session 43 (eivpm17); 20-200 speeds, noise
 //! share 0.3-1.3, 1842 fits, seed 2103): RMS z 1.62 and 1.84 where the
 //! information is within 0.5 and 0.5-1 of its sd, 1.39 at 1-1.5, 1.12 at
 //! 1.5-2, 1.08 at 2-3, 1.07 at 3-4, 0.99-1.04 above.
@@ -400,7 +400,7 @@ mod tests {
     /// the same draws under that rule are asserted to be short in some cell
     /// (RMS z > 1.25: the first-order covariance fails near the share 1),
     /// so this test fails on main; with [`MIN_INFORMATION_SIGMAS`] every
-    /// cell is within [0.8, 1.25] (docs/session43-eivpm17.md).
+    /// cell is within [0.8, 1.25] (docs/estimation.md, Session 43 (eivpm17)).
     #[test]
     fn the_covariance_is_given_only_where_it_is_calibrated() {
         let mut said = String::new();
