@@ -46,7 +46,7 @@ fn one_probe_in_mil_is_named_at_its_bearing_and_channel() {
 /// each channel) is examined on its base model whether or not the check
 /// would have asked (`examine` without stopping): one TSV line per
 /// reading on stdout (`--nocapture`), and whether the check as run names a
-/// scale. Run with `cargo test --release -p plinth-tests --test
+/// scale; `$UNIT_SCALE_FORCED_CHANNELS` set: the channels' readings only. Run with `cargo test --release -p plinth-tests --test
 /// diagnose_unit_scale_channel -- --ignored --nocapture`.
 #[test]
 #[ignore = "a measuring tool: needs $UNIT_SCALE_FORCED"]
@@ -55,6 +55,8 @@ fn forced_search_on_listed_runs() {
         return;
     };
     let text = std::fs::read_to_string(&list).expect("the list of runs");
+    // `UNIT_SCALE_FORCED_CHANNELS=1`: only the one-channel readings.
+    let channels_only = std::env::var_os("UNIT_SCALE_FORCED_CHANNELS").is_some();
     println!("run\treading\tfactor\tgap\tfloor\tpasses\tas_read_gap\tas_read_fails\tlog_sd\tnamed\tchecked_names");
     for line in text.lines().filter(|l| !l.trim().is_empty()) {
         let mut it = line.split_whitespace();
@@ -82,7 +84,13 @@ fn forced_search_on_listed_runs() {
         let Some(first) = out.states.first() else {
             continue;
         };
-        for reading in Reading::all(out.prep.bearings.len()) {
+        let nb = out.prep.bearings.len();
+        let readings: Vec<Reading> = if channels_only {
+            (0..nb).flat_map(Reading::channels).collect()
+        } else {
+            Reading::all(nb)
+        };
+        for reading in readings {
             let what = format!(
                 "{}{}{}",
                 reading.kind.columns(),

@@ -469,7 +469,12 @@ pub fn examine(
     // The evidence: the readings as they are (s = 1) fail the yardstick
     // under which s passes. A wide limit of the model as read (the check
     // cannot judge it) is no evidence for a scale that merely narrows it.
-    e.as_read_gap = gap_of(machine, prep, state, reading, 1.0)?;
+    // One channel: the refit of the readings as read; where the simulator
+    // cannot hold it, the base model itself (the readings as read too).
+    e.as_read_gap = gap_of(machine, prep, state, reading, 1.0).or_else(|| {
+        let r = resimulate(machine, prep, state, None).ok()?;
+        Some(machine_gap(prep, &r)).filter(|g| g.is_finite())
+    })?;
     e.as_read_fails = MachineCheck::of(e.as_read_gap, f) != MachineCheck::Agrees;
     if stop && !e.as_read_fails {
         return Some(e);
@@ -583,7 +588,11 @@ pub fn find(
         at.extend(poor);
         at.sort_unstable();
         at.dedup();
-        readings.extend(at.into_iter().filter(|&b| b < nb).flat_map(Reading::channels));
+        readings.extend(
+            at.into_iter()
+                .filter(|&b| b < nb)
+                .flat_map(Reading::channels),
+        );
     }
     let mut found: Vec<(Reading, UnitScale)> = readings
         .into_iter()

@@ -79,17 +79,22 @@ fn candidates() -> Vec<f64> {
 
 /// The factor of `reading` (one channel) that minimises the gap `g(log10
 /// s)` among [`candidates`], refined within the tolerance window around it
-/// (module docs), with that gap. `None` when the channel as read cannot be
-/// simulated.
+/// (module docs), with that gap. `None` when no factor can be simulated.
 pub fn best_factor(g: impl Fn(f64) -> Option<f64>, reading: Reading) -> Option<(f64, f64)> {
     debug_assert!(reading.dir.is_some());
-    let (mut best_l, mut best_g) = (0.0, g(0.0)?);
+    // The refit of the readings as they are may leave a pedestal the
+    // simulator cannot hold (a negative mass): then only the other factors
+    // compete (`super::examine` takes the base model's gap as read).
+    let (mut best_l, mut best_g) = (0.0, f64::INFINITY);
     for l in candidates() {
         if let Some(v) = g(l) {
             if v < best_g {
                 (best_l, best_g) = (l, v);
             }
         }
+    }
+    if !best_g.is_finite() {
+        return None;
     }
     let half = super::evidence::TOLERANCE.log10();
     Some(refine(&g, best_l, best_g, half))

@@ -34,7 +34,9 @@ pub fn reason(u: &UnitScale, final_gap: Option<f64>, floor: f64, check: MachineC
         .as_deref()
         .map_or(String::new(), |b| format!(" at {b}"));
     let pedestals = match u.kind {
-        _ if u.channel.is_some() => "the pedestals refitted to the readings so corrected".to_string(),
+        _ if u.channel.is_some() => {
+            "the pedestals refitted to the readings so corrected".to_string()
+        }
         Kind::Rel => format!("pedestals{at} k, m, c and runouts ÷ {s:.3}"),
         Kind::Ped => format!("pedestals{at} k, m, c × {s:.3}"),
     };
@@ -124,4 +126,3 @@ pub fn reason(u: &UnitScale, final_gap: Option<f64>, floor: f64, check: MachineC
         "{as_read}machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but {but} {scale}{others}{twin}. {likely}"
     )
 }
-
