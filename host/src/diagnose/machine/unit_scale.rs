@@ -440,7 +440,7 @@ pub struct Examined {
 /// [`Examined`] of `reading` on the base model `state`. `stop`: leave off
 /// at the first test it fails (the search's way: `log_sd` NaN, `as_read`
 /// NaN where not reached); otherwise every number is computed (the
-/// false-alarm measurement's, docs/robustness-hostile.md, Session 43 (unitfa17)).
+/// false-alarm measurement's, docs/session43-unitfa17.md).
 pub fn examine(
     machine: &Machine,
     prep: &Prepared,

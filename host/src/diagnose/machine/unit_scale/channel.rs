@@ -1,6 +1,6 @@
 //! One channel in the wrong unit: one bearing's `rel_y`, `rel_z`, `ped_y`
 //! or `ped_z` (the data contract's column names, docs/formats.md) s times
-//! its true value, the others right (session 43, docs/robustness-hostile.md, Session 43 (unitfa17):
+//! its true value, the others right (session 43, docs/session43-unitfa17.md:
 //! one probe in mil while the others are in µm, one pick-up in inches).
 //!
 //! A scale on one direction is no scale of the pedestal: the pedestal
