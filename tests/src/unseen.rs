@@ -151,6 +151,28 @@ pub fn ok_but_wrong(run: &RunDir, id: &Identification, damping: bool) -> Vec<Str
         .collect()
 }
 
+/// Where diagnose trusts its verdict, every pedestal after its steps lies
+/// within 3 of its ± of the truth in k_y, k_z and m (the method's promise;
+/// nothing is asserted of an untrusted verdict).
+pub fn assert_trusted_means_right(run: &RunDir, d: &Diagnosis) {
+    if !d.trusted {
+        return;
+    }
+    for after in &d.pedestals_after {
+        let truth = truth_of(run, &after.bearing);
+        for (key, t) in [("k_y", truth.k_y), ("k_z", truth.k_z), ("m", truth.m)] {
+            let (v, se) = (after.values[key], after.std_err[key]);
+            assert!(
+                ((v - t) / se).abs() < 3.0,
+                "{} {key}: {v:.6e} ± {se:.2e}, truth {t:.6e} ({:.1} ±), trusted\n{}",
+                after.bearing,
+                (v - t) / se,
+                d.to_text()
+            );
+        }
+    }
+}
+
 /// Every pedestal identify printed as `ok` lies within 3 of its ± of the
 /// truth in k_y, k_z and m (the method's promise).
 pub fn assert_ok_means_right(run: &RunDir, id: &Identification, label: &str) {

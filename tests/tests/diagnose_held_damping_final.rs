@@ -6,7 +6,7 @@
 //! impossible beyond `plinth identify`'s family-wise rule
 //! (`diagnose::trust::held`), the hold kept where it is within the noise.
 
-use plinth_tests::unseen::{diagnosis_with_machine_check, named, truth_of};
+use plinth_tests::unseen::{assert_trusted_means_right, diagnosis_with_machine_check, named};
 
 const FOUR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen");
 
@@ -38,21 +38,7 @@ fn held_dampings_the_final_fit_supports_are_freed_and_the_pedestals_are_right() 
         assert!(se > 0.0, "B3 {c} still held: {}", d.to_text());
     }
     assert!(d.steps[0].held.is_none(), "{}", d.to_text());
-    if !d.trusted {
-        return;
-    }
-    for after in &d.pedestals_after {
-        let truth = truth_of(&run, &after.bearing);
-        for (key, t) in [("k_y", truth.k_y), ("k_z", truth.k_z), ("m", truth.m)] {
-            let (v, se) = (after.values[key], after.std_err[key]);
-            assert!(
-                ((v - t) / se).abs() < 3.0,
-                "{} {key}: {v:.6e} ± {se:.2e}, truth {t:.6e} ({:.1} ±), trusted",
-                after.bearing,
-                (v - t) / se
-            );
-        }
-    }
+    assert_trusted_means_right(&run, &d);
 }
 
 /// A control: unseen-four `cross` (stored run; a cross stiffness at B4,

@@ -449,7 +449,7 @@ pub fn refit(prep: &Prepared, base: &Model, state: &mut State, alpha: f64) -> Ve
         }
         let held_delays = held_delays(prep, &model, base, &group, &beta, &nl, &inference);
         let held_unknown = match &held {
-            Held::Within(u) if table => u.clone(),
+            Held::Within(u) => u.clone(),
             _ => None,
         };
         state.params.beta = beta;

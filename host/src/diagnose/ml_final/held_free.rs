@@ -117,7 +117,8 @@ pub(super) enum Held {
     Kept,
     /// Within the noise: the hold stays, and the ± of the group's values
     /// with the held dampings unknown (`None` where they cannot be
-    /// computed).
+    /// computed, and for a group whose freeing needs the data's support:
+    /// only a table group reports them).
     Within(Option<HeldUnknown>),
     /// Held against the data: the impossible freed dampings.
     AgainstData(Vec<HeldAgainstData>),
@@ -287,5 +288,8 @@ pub(super) fn free_held(
                 reported_std_err,
             })
     };
-    Held::Within(unknown())
+    // Only a group freed without the data's support (a table's, whose
+    // scalar trades with the damping) reports them; the others' hold is
+    // judged as before and nothing is computed for them.
+    Held::Within(if need_support { None } else { unknown() })
 }
