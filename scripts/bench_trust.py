@@ -36,7 +36,12 @@ RUNS_DIR/MACHINE/CASE-SEED, missing ones made first, kept for a rerun),
 RUNS_PER_CASE seeds each; CASE_FILTER is then a regular expression searched
 in "MACHINE CASE" (e.g. "clean-(w1|h1|p2|n1|n3|vel)": the noisy cases).
 
-usage: bench_trust.py [--first-seed S] [--ross RUNS_DIR] PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
+With --runs PARENT: the false alarms per rule over every run directory
+(holding measurements.csv) directly under PARENT, as one row, e.g. clean
+null draws of an extracted recording (scripts/ross_recording.py --null);
+RUNS_PER_CASE and CASE_FILTER are then ignored.
+
+usage: bench_trust.py [--first-seed S] [--ross RUNS_DIR | --runs PARENT] PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
   --first-seed S: every case's runs (false alarms and detections) use seeds
   S, S+1, ... instead of 1, 2, ... (default 1: old figures reproduce).
   CASE_FILTER: run only the false-alarm cases whose name contains it (and
@@ -177,6 +182,23 @@ def ross_false_alarms(plinth, n, only, first, runs_dir):
                 total[r] += counts[r]
             total_runs += n
     row("ALL CLEAN ROSS RUNS", total_runs, total)
+
+
+def stored_false_alarms(plinth, parent):
+    """`false_alarms` over the run directories under `parent` (module docs)."""
+    header(f"FALSE ALARMS per run on the clean runs under {parent} (flagged %, by rule)")
+    runs = sorted(d for d in os.listdir(parent)
+                  if os.path.exists(os.path.join(parent, d, "measurements.csv")))
+    counts = {r: 0 for r in RULES + ["any"]}
+    for name, (ident, code) in zip(runs, bc.parallel(
+            lambda d: plinth.identify(os.path.join(parent, d)), runs)):
+        f = flags(ident, code)
+        for r in RULES:
+            counts[r] += f[r]
+        counts["any"] += any(f.values())
+        if any(f.values()):
+            print(f"    flagged: {name}: {[r for r in RULES if f[r]]}", flush=True)
+    row(os.path.basename(os.path.normpath(parent)), len(runs), counts)
 
 
 def sub_base(plinth, n, first=1):
@@ -386,19 +408,23 @@ def detections(plinth, n, first=1):
 
 def main(argv=None):
     argv = list(sys.argv[1:] if argv is None else argv)
-    runs_dir = None
-    if "--ross" in argv:
-        i = argv.index("--ross")
-        if i + 1 >= len(argv):
-            raise SystemExit("--ross needs a runs directory")
-        runs_dir = argv[i + 1]
-        del argv[i:i + 2]
+    dirs = {}
+    for flag in ("--ross", "--runs"):
+        if flag in argv:
+            i = argv.index(flag)
+            if i + 1 >= len(argv):
+                raise SystemExit(f"{flag} needs a directory")
+            dirs[flag] = argv[i + 1]
+            del argv[i:i + 2]
     binary, n, only, first = bc.arguments(argv, first_seed=True)
     plinth = bc.Plinth(binary, "bench-trust-")
     t0 = time.time()
     try:
-        if runs_dir is not None:
-            ross_false_alarms(plinth, n, only, first, runs_dir)
+        if "--ross" in dirs:
+            ross_false_alarms(plinth, n, only, first, dirs["--ross"])
+            return
+        if "--runs" in dirs:
+            stored_false_alarms(plinth, dirs["--runs"])
             return
         if not only:
             detections(plinth, n, first)
