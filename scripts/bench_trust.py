@@ -41,7 +41,8 @@ With --runs PARENT: the false alarms per rule over every run directory
 null draws of an extracted recording (scripts/ross_recording.py --null);
 RUNS_PER_CASE and CASE_FILTER are then ignored.
 
-usage: bench_trust.py [--first-seed S] [--ross RUNS_DIR | --runs PARENT] PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
+usage: bench_trust.py [--first-seed S] [--ross RUNS_DIR | --runs PARENT]
+                      PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
   --first-seed S: every case's runs (false alarms and detections) use seeds
   S, S+1, ... instead of 1, 2, ... (default 1: old figures reproduce).
   CASE_FILTER: run only the false-alarm cases whose name contains it (and
@@ -93,7 +94,17 @@ def lack_of_fit_figures(ident):
     return level, p
 
 
+def undetermined(ident):
+    """1 when some pedestal of the run is `undetermined` (untrusted, exit 0:
+    a value the data do not determine, no fault claimed), else 0; counted
+    apart from RULES and "any"."""
+    return int(any(w["kind"] == "undetermined" for p in ident["pedestals"] for w in p["warnings"]))
+
+
 def row(case, runs, counts, extremes=None):
+    if counts.get("undetermined"):
+        print(f"    runs with a pedestal `undetermined` (not a false alarm: no fault claimed):"
+              f" {counts['undetermined']}/{runs}", flush=True)
     cells = "  ".join(f"{100.0 * counts[r] / max(runs, 1):6.2f}" for r in RULES)
     anyc = counts["any"]
     ext = f"  {extremes[0]:8.3f} {extremes[1]:8.4f}" if extremes else ""
@@ -110,10 +121,10 @@ def header(title):
 
 def false_alarms(plinth, n, only, first=1):
     header("FALSE ALARMS per run on clean data (flagged %, by rule)")
-    total = {r: 0 for r in RULES + ["any"]}
+    total = {r: 0 for r in RULES + ["any", "undetermined"]}
     total_runs = 0
     for case, runs, results in bc.clean_identifications(plinth, n, only, first):
-        counts = {r: 0 for r in RULES + ["any"]}
+        counts = {r: 0 for r in RULES + ["any", "undetermined"]}
         extremes = [0.0, 1.0]
         for seed, ident, code in results:
             level, p = lack_of_fit_figures(ident)
@@ -122,6 +133,7 @@ def false_alarms(plinth, n, only, first=1):
             for r in RULES:
                 counts[r] += f[r]
             counts["any"] += any(f.values())
+            counts["undetermined"] += undetermined(ident)
             if any(f.values()):
                 print(f"    flagged: {case} seed {seed}: {[r for r in RULES if f[r]]}",
                       flush=True)
@@ -142,13 +154,13 @@ def ross_false_alarms(plinth, n, only, first, runs_dir):
     machine, ROSS's responses cached) where RUNS_DIR lacks them. `only`
     is a regular expression searched in "MACHINE CASE"."""
     header("FALSE ALARMS per run on clean ROSS runs (flagged %, by rule)")
-    total = {r: 0 for r in RULES + ["any"]}
+    total = {r: 0 for r in RULES + ["any", "undetermined"]}
     total_runs = 0
     seeds = range(first, first + n)
     for machine in ROSS_MACHINES:
-        listing = subprocess.run([sys.executable, os.path.join(bc.ROOT, "scripts", "ross_unseen.py"),
-                                  "--machine", machine, "--cases"], check=True,
-                                 capture_output=True, text=True).stdout.split()
+        script = os.path.join(bc.ROOT, "scripts", "ross_unseen.py")
+        listing = subprocess.run([sys.executable, script, "--machine", machine, "--cases"],
+                                 check=True, capture_output=True, text=True).stdout.split()
         cases = [c for c in listing if c.startswith("clean-") and re.search(only, f"{machine} {c}")]
         if not cases:
             continue
@@ -156,8 +168,7 @@ def ross_false_alarms(plinth, n, only, first, runs_dir):
         missing = [c for c in cases
                    if any(not os.path.isdir(os.path.join(where, f"{c}-{s}")) for s in seeds)]
         if missing:
-            subprocess.run([sys.executable, os.path.join(bc.ROOT, "scripts", "ross_unseen.py"),
-                            "--machine", machine, where, ",".join(missing),
+            subprocess.run([sys.executable, script, "--machine", machine, where, ",".join(missing),
                             *[str(s) for s in seeds]], check=True, stdout=subprocess.DEVNULL)
         for case in cases:
             if not os.path.exists(os.path.join(where, f"{case}-{first}", "measurements.csv")):
@@ -168,15 +179,16 @@ def ross_false_alarms(plinth, n, only, first, runs_dir):
             def one(seed, case=case, where=where):
                 return (seed, *plinth.identify(os.path.join(where, f"{case}-{seed}")))
 
-            counts = {r: 0 for r in RULES + ["any"]}
+            counts = {r: 0 for r in RULES + ["any", "undetermined"]}
             for seed, ident, code in bc.parallel(one, seeds):
                 f = flags(ident, code)
                 for r in RULES:
                     counts[r] += f[r]
                 counts["any"] += any(f.values())
+                counts["undetermined"] += undetermined(ident)
                 if any(f.values()):
-                    print(f"    flagged: {machine} {case} seed {seed}: {[r for r in RULES if f[r]]}",
-                          flush=True)
+                    fired = [r for r in RULES if f[r]]
+                    print(f"    flagged: {machine} {case} seed {seed}: {fired}", flush=True)
             row(f"{machine} {case}", n, counts)
             for r in counts:
                 total[r] += counts[r]
@@ -189,13 +201,14 @@ def stored_false_alarms(plinth, parent):
     header(f"FALSE ALARMS per run on the clean runs under {parent} (flagged %, by rule)")
     runs = sorted(d for d in os.listdir(parent)
                   if os.path.exists(os.path.join(parent, d, "measurements.csv")))
-    counts = {r: 0 for r in RULES + ["any"]}
+    counts = {r: 0 for r in RULES + ["any", "undetermined"]}
     for name, (ident, code) in zip(runs, bc.parallel(
             lambda d: plinth.identify(os.path.join(parent, d)), runs)):
         f = flags(ident, code)
         for r in RULES:
             counts[r] += f[r]
         counts["any"] += any(f.values())
+        counts["undetermined"] += undetermined(ident)
         if any(f.values()):
             print(f"    flagged: {name}: {[r for r in RULES if f[r]]}", flush=True)
     row(os.path.basename(os.path.normpath(parent)), len(runs), counts)

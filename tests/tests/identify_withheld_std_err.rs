@@ -17,7 +17,9 @@ use plinth::rundir::RunDir;
 use std::path::Path;
 
 fn identify(name: &str) -> Identification {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("data").join(name);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(name);
     let run = RunDir::read(&dir).expect("reading the run directory");
     identify_run(&run, &Options::default()).expect("identification")
 }
