@@ -33,13 +33,27 @@ SPEEDS = "5:200:2.5"
 GRID = [5 + 2.5 * i for i in range(79)]
 
 
-def arguments(argv=None):
+def arguments(argv=None, first_seed=False):
     """(PLINTH_BINARY, RUNS_PER_CASE (default 100), CASE_FILTER (default ""))
-    from the command line of a bench."""
-    argv = sys.argv[1:] if argv is None else argv
+    from the command line of a bench; with `first_seed`, also FIRST_SEED
+    (default 1) from `[--first-seed S] PLINTH_BINARY ...`: each case's runs
+    then use seeds FIRST_SEED..FIRST_SEED+runs-1 (default 1..runs, as before
+    the flag: old figures reproduce; a later first seed gives fresh runs
+    nobody has looked at). A bench that does not take the flag refuses it."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    first = 1
+    if "--first-seed" in argv:
+        if not first_seed:
+            raise SystemExit("this bench does not take --first-seed")
+        i = argv.index("--first-seed")
+        if i + 1 >= len(argv):
+            raise SystemExit("--first-seed needs a value")
+        first = int(argv[i + 1])
+        del argv[i:i + 2]
     if not argv:
-        raise SystemExit("usage: PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]")
-    return argv[0], int(argv[1]) if len(argv) > 1 else 100, argv[2] if len(argv) > 2 else ""
+        raise SystemExit("usage: [--first-seed S] PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]")
+    got = (argv[0], int(argv[1]) if len(argv) > 1 else 100, argv[2] if len(argv) > 2 else "")
+    return (*got, first) if first_seed else got
 
 
 def jobs():
@@ -130,11 +144,11 @@ def clean_run(plinth, machine, exact, how, seed, out):
         data(exact, out, *how[1:], "--seed", str(seed))
 
 
-def clean_identifications(plinth, n, only):
+def clean_identifications(plinth, n, only, first_seed=1):
     """Every clean case (`clean_cases`, `n` runs each) whose name contains
     `only`: yields (case, runs, [(seed, identify JSON, exit code)] for seeds
-    1..runs), each run made (`clean_run`), identified and removed in
-    parallel; each machine's exact run is simulated once."""
+    first_seed..first_seed+runs-1), each run made (`clean_run`), identified
+    and removed in parallel; each machine's exact run is simulated once."""
     for mname, machine in CLEAN_MACHINES:
         exact = plinth.path(f"exact-{mname}")
         plinth.sim(machine, exact, "--digits", "12")
@@ -149,7 +163,7 @@ def clean_identifications(plinth, n, only):
                 subprocess.run(["rm", "-rf", out], check=True)
                 return seed, ident, code
 
-            yield case, runs, parallel(one, range(1, runs + 1))
+            yield case, runs, parallel(one, range(first_seed, first_seed + runs))
 
 
 def listed(ident, bearing):

@@ -29,7 +29,22 @@ Each row prints the flagged % per rule and, for the run-level verdict
 (Clopper-Pearson). Runs go in parallel over $BENCH_JOBS workers (default:
 the CPU count).
 
-usage: bench_trust.py PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
+With --ross RUNS_DIR (run it with the ROSS 2.3.0 python): the false alarms
+per rule on the clean cases (`clean-*`) of the five unseen machines of
+scripts/ross_unseen.py instead (made by ROSS, not by Plinth's simulator;
+RUNS_DIR/MACHINE/CASE-SEED, missing ones made first, kept for a rerun),
+RUNS_PER_CASE seeds each; CASE_FILTER is then a regular expression searched
+in "MACHINE CASE" (e.g. "clean-(w1|h1|p2|n1|n3|vel)": the noisy cases).
+
+With --runs PARENT: the false alarms per rule over every run directory
+(holding measurements.csv) directly under PARENT, as one row, e.g. clean
+null draws of an extracted recording (scripts/ross_recording.py --null);
+RUNS_PER_CASE and CASE_FILTER are then ignored.
+
+usage: bench_trust.py [--first-seed S] [--ross RUNS_DIR | --runs PARENT]
+                      PLINTH_BINARY [RUNS_PER_CASE] [CASE_FILTER]
+  --first-seed S: every case's runs (false alarms and detections) use seeds
+  S, S+1, ... instead of 1, 2, ... (default 1: old figures reproduce).
   CASE_FILTER: run only the false-alarm cases whose name contains it (and
   no detections), e.g. "paper-undamped hetero".
 """
@@ -38,6 +53,7 @@ import json
 import math
 import os
 import random
+import re
 import statistics
 import subprocess
 import sys
@@ -78,7 +94,17 @@ def lack_of_fit_figures(ident):
     return level, p
 
 
+def undetermined(ident):
+    """1 when some pedestal of the run is `undetermined` (untrusted, exit 0:
+    a value the data do not determine, no fault claimed), else 0; counted
+    apart from RULES and "any"."""
+    return int(any(w["kind"] == "undetermined" for p in ident["pedestals"] for w in p["warnings"]))
+
+
 def row(case, runs, counts, extremes=None):
+    if counts.get("undetermined"):
+        print(f"    runs with a pedestal `undetermined` (not a false alarm: no fault claimed):"
+              f" {counts['undetermined']}/{runs}", flush=True)
     cells = "  ".join(f"{100.0 * counts[r] / max(runs, 1):6.2f}" for r in RULES)
     anyc = counts["any"]
     ext = f"  {extremes[0]:8.3f} {extremes[1]:8.4f}" if extremes else ""
@@ -93,12 +119,12 @@ def header(title):
     print(f"{'':34s} {'':5s}  " + "  ".join(f"{'%':>6s}" for _ in RULES))
 
 
-def false_alarms(plinth, n, only):
+def false_alarms(plinth, n, only, first=1):
     header("FALSE ALARMS per run on clean data (flagged %, by rule)")
-    total = {r: 0 for r in RULES + ["any"]}
+    total = {r: 0 for r in RULES + ["any", "undetermined"]}
     total_runs = 0
-    for case, runs, results in bc.clean_identifications(plinth, n, only):
-        counts = {r: 0 for r in RULES + ["any"]}
+    for case, runs, results in bc.clean_identifications(plinth, n, only, first):
+        counts = {r: 0 for r in RULES + ["any", "undetermined"]}
         extremes = [0.0, 1.0]
         for seed, ident, code in results:
             level, p = lack_of_fit_figures(ident)
@@ -107,6 +133,7 @@ def false_alarms(plinth, n, only):
             for r in RULES:
                 counts[r] += f[r]
             counts["any"] += any(f.values())
+            counts["undetermined"] += undetermined(ident)
             if any(f.values()):
                 print(f"    flagged: {case} seed {seed}: {[r for r in RULES if f[r]]}",
                       flush=True)
@@ -117,7 +144,77 @@ def false_alarms(plinth, n, only):
     row("ALL CLEAN RUNS", total_runs, total)
 
 
-def sub_base(plinth, n):
+ROSS_MACHINES = ("unseen-four", "unseen-overhung", "unseen-train", "unseen-flex", "unseen-five")
+
+
+def ross_false_alarms(plinth, n, only, first, runs_dir):
+    """`false_alarms` on ROSS-made clean runs: every `clean-*` case of the
+    five unseen machines whose "MACHINE CASE" contains `only`, seeds
+    first..first+n-1, made by scripts/ross_unseen.py (one process a
+    machine, ROSS's responses cached) where RUNS_DIR lacks them. `only`
+    is a regular expression searched in "MACHINE CASE"."""
+    header("FALSE ALARMS per run on clean ROSS runs (flagged %, by rule)")
+    total = {r: 0 for r in RULES + ["any", "undetermined"]}
+    total_runs = 0
+    seeds = range(first, first + n)
+    for machine in ROSS_MACHINES:
+        script = os.path.join(bc.ROOT, "scripts", "ross_unseen.py")
+        listing = subprocess.run([sys.executable, script, "--machine", machine, "--cases"],
+                                 check=True, capture_output=True, text=True).stdout.split()
+        cases = [c for c in listing if c.startswith("clean-") and re.search(only, f"{machine} {c}")]
+        if not cases:
+            continue
+        where = os.path.join(runs_dir, machine)
+        missing = [c for c in cases
+                   if any(not os.path.isdir(os.path.join(where, f"{c}-{s}")) for s in seeds)]
+        if missing:
+            subprocess.run([sys.executable, script, "--machine", machine, where, ",".join(missing),
+                            *[str(s) for s in seeds]], check=True, stdout=subprocess.DEVNULL)
+        for case in cases:
+            if not os.path.exists(os.path.join(where, f"{case}-{first}", "measurements.csv")):
+                print(f"  {machine} {case}: not a run directory (a field case to import), left out",
+                      flush=True)
+                continue
+
+            def one(seed, case=case, where=where):
+                return (seed, *plinth.identify(os.path.join(where, f"{case}-{seed}")))
+
+            counts = {r: 0 for r in RULES + ["any", "undetermined"]}
+            for seed, ident, code in bc.parallel(one, seeds):
+                f = flags(ident, code)
+                for r in RULES:
+                    counts[r] += f[r]
+                counts["any"] += any(f.values())
+                counts["undetermined"] += undetermined(ident)
+                if any(f.values()):
+                    fired = [r for r in RULES if f[r]]
+                    print(f"    flagged: {machine} {case} seed {seed}: {fired}", flush=True)
+            row(f"{machine} {case}", n, counts)
+            for r in counts:
+                total[r] += counts[r]
+            total_runs += n
+    row("ALL CLEAN ROSS RUNS", total_runs, total)
+
+
+def stored_false_alarms(plinth, parent):
+    """`false_alarms` over the run directories under `parent` (module docs)."""
+    header(f"FALSE ALARMS per run on the clean runs under {parent} (flagged %, by rule)")
+    runs = sorted(d for d in os.listdir(parent)
+                  if os.path.exists(os.path.join(parent, d, "measurements.csv")))
+    counts = {r: 0 for r in RULES + ["any", "undetermined"]}
+    for name, (ident, code) in zip(runs, bc.parallel(
+            lambda d: plinth.identify(os.path.join(parent, d)), runs)):
+        f = flags(ident, code)
+        for r in RULES:
+            counts[r] += f[r]
+        counts["any"] += any(f.values())
+        counts["undetermined"] += undetermined(ident)
+        if any(f.values()):
+            print(f"    flagged: {name}: {[r for r in RULES if f[r]]}", flush=True)
+    row(os.path.basename(os.path.normpath(parent)), len(runs), counts)
+
+
+def sub_base(plinth, n, first=1):
     """A pedestal on its own sub-base: untrusted (lack of fit) at that bearing
     only. Three machines: a machine file with the base element under `mid`,
     the simulator's pedestal_sub_base effect, the ROSS reference machine d."""
@@ -151,7 +248,7 @@ def sub_base(plinth, n):
                         wrong += untrusted
                 return seed, hit, wrong
 
-            results = bc.parallel(one, range(1, runs + 1))
+            results = bc.parallel(one, range(first, first + runs))
             hit = sum(r[1] for r in results)
             wrong = sum(r[2] for r in results)
             missed = [r[0] for r in results if not r[1]]
@@ -160,7 +257,7 @@ def sub_base(plinth, n):
                   + (f" (missed seeds {missed})" if missed and runs > 1 else ""), flush=True)
 
 
-def flips_and_outliers(plinth, n):
+def flips_and_outliers(plinth, n, first=1):
     """Keyphasor flips (three speeds of one bearing negated) and one bad
     reading: listed exactly."""
     exact = plinth.path("exact-three")
@@ -185,7 +282,7 @@ def flips_and_outliers(plinth, n):
                 exact_list &= not got
         return exact_list, named
 
-    results = bc.parallel(flip, range(1, n + 1))
+    results = bc.parallel(flip, range(first, first + n))
     print(f"  keyphasor flip, 3 speeds of `mid`, 1 % noise: listed exactly in"
           f" {sum(r[0] for r in results)}/{n} runs, keyphasor_flip named in"
           f" {sum(r[1] for r in results)}/{n}", flush=True)
@@ -205,7 +302,7 @@ def flips_and_outliers(plinth, n):
                   if p["bearing"] != "drive")
         return ok
 
-    hits = sum(bc.parallel(outlier, range(1, n + 1)))
+    hits = sum(bc.parallel(outlier, range(first, first + n)))
     print(f"  one outlier speed of `drive` (0.2 x channel RMS), 1 % noise: listed exactly in"
           f" {hits}/{n} runs", flush=True)
 
@@ -278,7 +375,7 @@ def channel_rms(run):
     return {k: math.sqrt(sum(v) / len(v)) for k, v in acc.items()}
 
 
-def scatter_level(plinth, n):
+def scatter_level(plinth, n, first=1):
     """The noise level identify measures without the model (the `scatter`
     source, before the fit's χ²/dof rescaling: sd / sqrt(variance_scale))
     against the true sd of the white noise trust_data.py added (1 % of each
@@ -304,7 +401,7 @@ def scatter_level(plinth, n):
                         for c in CHANNELS]
                     for b, nr in ident["noise"].items() if nr["source"] == "scatter"}
 
-        results = bc.parallel(one, range(1, n + 1))
+        results = bc.parallel(one, range(first, first + n))
         for b in sorted({b for r in results for b in r}):
             cells = []
             for i, c in enumerate(CHANNELS):
@@ -313,23 +410,38 @@ def scatter_level(plinth, n):
             print(f"    {name:24s} {b:9s} " + "  ".join(cells), flush=True)
 
 
-def detections(plinth, n):
+def detections(plinth, n, first=1):
     print("\nDETECTIONS")
     n = max(n // 10, 5)
-    scatter_level(plinth, n)
-    sub_base(plinth, n)
-    flips_and_outliers(plinth, n)
+    scatter_level(plinth, n, first)
+    sub_base(plinth, n, first)
+    flips_and_outliers(plinth, n, first)
     conventions(plinth)
 
 
 def main(argv=None):
-    binary, n, only = bc.arguments(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    dirs = {}
+    for flag in ("--ross", "--runs"):
+        if flag in argv:
+            i = argv.index(flag)
+            if i + 1 >= len(argv):
+                raise SystemExit(f"{flag} needs a directory")
+            dirs[flag] = argv[i + 1]
+            del argv[i:i + 2]
+    binary, n, only, first = bc.arguments(argv, first_seed=True)
     plinth = bc.Plinth(binary, "bench-trust-")
     t0 = time.time()
     try:
+        if "--ross" in dirs:
+            ross_false_alarms(plinth, n, only, first, dirs["--ross"])
+            return
+        if "--runs" in dirs:
+            stored_false_alarms(plinth, dirs["--runs"])
+            return
         if not only:
-            detections(plinth, n)
-        false_alarms(plinth, n, only)
+            detections(plinth, n, first)
+        false_alarms(plinth, n, only, first)
     finally:
         print(f"\n({time.time() - t0:.0f} s)")
         plinth.close()

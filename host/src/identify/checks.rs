@@ -89,6 +89,11 @@ pub(super) fn warnings(
             .iter()
             .zip(solution.theta.iter().zip(&solution.std_err))
         {
+            // No standard error known (estimator.rs: the errors-in-variables
+            // rule withheld it): that fit's own warning says so, once.
+            if se.is_infinite() {
+                continue;
+            }
             let damping = matches!(c, Parameter::Cy | Parameter::Cz);
             // A damping is resolved when it differs from zero by 2σ; a
             // stiffness or mass is determined when its σ is below its value.

@@ -422,6 +422,11 @@ pub(crate) fn fit_ml_checked(
     // The covariance with the regressors' noise (estimate::ml::eiv): F⁻¹ of
     // the measured phasors counts their noise as information, which matters
     // where a pedestal is read near or below its noise.
+    // Where it is withheld (the remaining information too close to its own
+    // noise) no ± is known: the fit's F⁻¹ is short there (docs/estimation.md
+    // "Session 43 (eivpm17)"), so none is shown (infinite, `null` in JSON,
+    // no covariance) rather than one that does not mean what it says.
+    let mut withheld = false;
     if let Some(e) = ml::eiv_covariance(&obs, &columns, &ml_fit.theta, ml_fit.equation_var) {
         match e.excess {
             // Added to the fit's covariance: a widening it already carries
@@ -433,24 +438,36 @@ pub(crate) fn fit_ml_checked(
                     }
                 }
             }
-            None => extra.push(Warning {
-                kind: WarningKind::Undetermined,
-                message: format!(
-                    "the pedestal is read near or below its noise: the noise of its phasors carries {:.0} % of the fit's information on some combination of the parameters (errors in variables), and what remains is {:.1} standard deviations of its own noise (below {}), so their standard errors are not known; those shown are the asymptotic ones",
-                    100.0 * e.noise_share,
-                    e.information_sigmas.max(0.0),
-                    ml::MIN_INFORMATION_SIGMAS
-                ),
-            }),
+            None => {
+                withheld = true;
+                extra.push(Warning {
+                    kind: WarningKind::Undetermined,
+                    message: format!(
+                        "the pedestal is read near or below its noise: the noise of its phasors carries {:.0} % of the fit's information on some combination of the parameters (errors in variables), and what remains is {:.1} standard deviations of its own noise (below {}), {STD_ERR_WITHHELD} (± ∞, `null` in JSON): the asymptotic ones are too short here",
+                        100.0 * e.noise_share,
+                        e.information_sigmas.max(0.0),
+                        ml::MIN_INFORMATION_SIGMAS
+                    ),
+                })
+            }
         }
     }
-    let se = ml_fit.std_err(variance_scale);
+    let mut se = ml_fit.std_err(variance_scale);
+    if withheld {
+        for &c in &columns {
+            se[c as usize] = f64::INFINITY;
+        }
+    }
     let mut fit = ols_fit.clone();
     fit.pedestal = crate::estimate::Pedestal::from_theta(ml_fit.theta);
     fit.std_err = crate::estimate::Pedestal::from_theta(se);
     fit.residual_rms = ml_fit.residual_rms;
     fit.condition_number = ml_fit.condition_number;
-    fit.covariance = scaled_covariance(&ml_fit.covariance, variance_scale);
+    fit.covariance = if withheld {
+        None
+    } else {
+        scaled_covariance(&ml_fit.covariance, variance_scale)
+    };
     let mut view = solution.clone();
     for (k, &c) in columns.iter().enumerate() {
         view.theta[k] = ml_fit.theta[c as usize];
@@ -508,6 +525,13 @@ pub(crate) fn fit_ml_checked(
     );
     Ok((fit, report))
 }
+
+/// The words of the [`WarningKind::Undetermined`] warning of a fit whose
+/// standard errors the errors-in-variables rule withheld
+/// ([`ml::MIN_INFORMATION_SIGMAS`]): they are then infinite (`null` in
+/// JSON) and the fit has no covariance.
+pub(crate) const STD_ERR_WITHHELD: &str =
+    "so their standard errors are not known and none is given";
 
 /// `covariance` × `scale` when every entry is finite (the covariance a
 /// fit reports), else `None`.

@@ -192,6 +192,13 @@ pub fn violations_in_family(
                     -value / sigma
                 ),
             });
+        } else if what != "damping" && !sigma.is_finite() {
+            out.push(Warning {
+                kind: WarningKind::Undetermined,
+                message: format!(
+                    "{name} = {value:.4e} {unit} is negative and no standard error is known: the {what} {NOT_DETERMINED}"
+                ),
+            });
         } else if what != "damping" {
             out.push(Warning {
                 kind: WarningKind::Undetermined,
@@ -319,10 +326,16 @@ pub struct NonFiniteResult {
 /// Checks that every figure of `fit` is a number: the parameters and the
 /// residual always; the standard errors and the condition number unless the
 /// fit is already untrusted because the data do not determine it (then +∞
-/// means "not estimable" and is written as `null`).
+/// means "not estimable" and is written as `null`); the standard errors also
+/// where the errors-in-variables rule withheld them
+/// ([`super::estimator::STD_ERR_WITHHELD`]).
 pub fn check_finite(fit: &PedestalFit) -> Result<(), NonFiniteResult> {
-    let undetermined =
-        fit.has_warning(WarningKind::RankDeficient) || fit.has_warning(WarningKind::TooFewSpeeds);
+    let undetermined = fit.has_warning(WarningKind::RankDeficient)
+        || fit.has_warning(WarningKind::TooFewSpeeds)
+        || fit.warnings.iter().any(|w| {
+            w.kind == WarningKind::Undetermined
+                && w.message.contains(super::estimator::STD_ERR_WITHHELD)
+        });
     let error = |quantity: String, value: f64| NonFiniteResult {
         bearing: fit.bearing.clone(),
         quantity,
