@@ -3,7 +3,7 @@
 //! `MIN_INFORMATION_SIGMAS`: what remains of the fit's information is too
 //! close to its own noise, where the asymptotic F⁻¹ is short), identify
 //! shows no ± at all (infinite, `null` in JSON, no covariance, no modal ±)
-//! instead of F⁻¹'s. docs/session44-farate17.md.
+//! instead of F⁻¹'s. docs/trust.md, Session 44 (farate17).
 //!
 //! The run: `tests/data/lowsnr-null-train-1509` (ROSS unseen-train's B1, a
 //! stiff pedestal read near its noise; scripts/make_lowsnr_null.py). Main
