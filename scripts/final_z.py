@@ -23,6 +23,8 @@ values beyond 3 ± (seed, z). The final dampings printed without a ± (held at
 zero) whose truth is not zero are listed (seed, bearing, value, truth). Then the pooled tails of k_y, k_z, m: counts
 beyond 2 and 3 ± against the normal law's expectation. --trusted: only runs
 whose verdict is trusted (the ones "never confidently wrong" is about).
+--pooled: every CASE given as one group, each parameter's values at every
+bearing together (bearing "all"; a value beyond 3 ± named CASE-SEED BEARING).
 """
 import glob
 import json
@@ -81,19 +83,25 @@ def main():
         sys.exit(__doc__)
     only_trusted = "--trusted" in sys.argv
     jd, rd, cases = args[0], args[1], args[2:]
-    for case in cases:
+    pooled = "--pooled" in sys.argv
+    # each case alone, or (--pooled) every case together, every bearing's value of a parameter as one
+    for group in ([cases] if pooled else [[c] for c in cases]):
         z, runs, trusted, held = {}, 0, 0, []
-        for seed, d in runs_of(jd, case):
+        for case, seed, d in ((c, s, d) for c in group for s, d in runs_of(jd, c)):
             runs += 1
             trusted += d["trusted"]
             if only_trusted and not d["trusted"]:
                 continue
             with open(os.path.join(rd, f"{case}-{seed}", "truth.json")) as fh:
                 truth = json.load(fh)
-            for key, v in z_values(d, truth).items():
-                z.setdefault(key, []).append((seed, v))
-            held += [f"{seed} {b} {k} = {v:g} (truth {tp:g})" for b, k, v in held_values(d, truth)
+            for (b, k), v in z_values(d, truth).items():
+                if pooled:
+                    z.setdefault(("all", k), []).append((f"{case}-{seed} {b}", v))
+                else:
+                    z.setdefault((b, k), []).append((seed, v))
+            held += [f"{case}-{seed} {b} {k} = {v:g} (truth {tp:g})" for b, k, v in held_values(d, truth)
                      for tp in [next(p[k] for p in truth["pedestals"] if p["bearing"] == b)]]
+        case = " + ".join(group)
         print(f"{case}: {runs} runs, {trusted} trusted{' (trusted only below)' if only_trusted else ''}")
         print("| bearing | parameter | n | mean z (95 %) | RMS z (95 %) | beyond 3 ± |")
         print("|---|---|---|---|---|---|")
