@@ -62,7 +62,8 @@ def z_values(d, truth):
         for q in s.get("parameters", []):
             truth_of = eff.get((s["effect"], s["bearing"]), {})
             # a sub-base's k_y is reported as sub_k_y (the pedestal's own is k_y)
-            tv = truth_of.get(q["name"], truth_of.get(q["name"].removeprefix("sub_")))
+            # and a delay's tau [s] is the truth's tau_s
+            tv = truth_of.get(q["name"], truth_of.get(q["name"].removeprefix("sub_"), truth_of.get(q["name"] + "_s")))
             if tv is not None and q["std_err"] > 0:
                 out[(s["bearing"], q["name"])] = (q["value"] - tv) / q["std_err"]
     return out
