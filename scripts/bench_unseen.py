@@ -30,7 +30,8 @@ diagnose: named right (exactly the expected effects, each at its bearing,
   wrong); untrusted verdicts; the worst k/m error of the
   named-right runs' final pedestals; runs whose verdict is trusted while
   a final pedestal (`pedestals_after`) has k_y, k_z or m more than 3 of
-  its ± from the truth (confidently off); the flipped speeds diagnose lists
+  its ± from the truth (confidently off), and the same for c_y, c_z
+  (those given with a ±); the flipped speeds diagnose lists
   (`flipped_speeds_hz`: exactly the truth's on the flips case, any listed
   on the others); seconds per run.
 """
@@ -160,6 +161,14 @@ def worst_z(ped, truth):
     return max(abs(ped[k] - t[k]) / se[k] if se.get(k, 0) > 0 else math.inf for k in ("k_y", "k_z", "m"))
 
 
+def worst_c_z(ped, truth):
+    """Largest |value − truth|/± of c_y, c_z among those given with a ± (a
+    damping held at zero has none; 0 when neither has one)."""
+    t = next(t for t in truth["pedestals"] if t["bearing"] == ped["bearing"])
+    se = ped["std_err"]
+    return max([abs(ped[k] - t[k]) / se[k] for k in ("c_y", "c_z") if se.get(k, 0) > 0], default=0.0)
+
+
 def worst_rel(ped, truth, get):
     """Largest relative error of k_y, k_z, m against the truth."""
     t = next(t for t in truth["pedestals"] if t["bearing"] == ped["bearing"])
@@ -219,6 +228,9 @@ def one(b, run):
         r["after_z"] = {p["bearing"]: worst_z(p, truth) for p in diag["pedestals_after"]}
         # the final pedestals more than 3 ± off while the verdict is trusted (confidently wrong)
         r["after_off"] = sorted(bb for bb, z in r["after_z"].items() if z > 3.0) if diag["trusted"] else []
+        # the same for the final dampings (a missed phase error reads as one)
+        r["after_c_z"] = {p["bearing"]: worst_c_z(p, truth) for p in diag["pedestals_after"]}
+        r["after_c_off"] = sorted(bb for bb, z in r["after_c_z"].items() if z > 3.0) if diag["trusted"] else []
     return r
 
 
@@ -318,8 +330,9 @@ def main():
     how = " ".join(["--json"] + [os.path.basename(a) for a in DIAGNOSE_MACHINE])
     print(f"diagnose (plinth diagnose {how}):")
     print("| case | runs | named right | named wrong | wrong and trusted | partly | missed | untrusted "
-          "| worst k/m error after (right runs) | trusted, after > 3 ± off | flips listed exactly | s/run |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "| worst k/m error after (right runs) | trusted, after > 3 ± off | trusted, a damping after > 3 ± off "
+          "| flips listed exactly | s/run |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for case in cases:
         rs = by[case]
         n = len(rs)
@@ -335,8 +348,11 @@ def main():
         wt = sum(j == "wrong" and r.get("dtrusted", False) for r, j in zip(rs, v))
         off = sum(bool(r.get("after_off")) for r in rs)
         off_b = sorted({bb for r in rs for bb in r.get("after_off", [])})
+        coff = sum(bool(r.get("after_c_off")) for r in rs)
+        coff_b = sorted({bb for r in rs for bb in r.get("after_c_off", [])})
         print(f"| {case} | {n} | {v.count('right')} | {v.count('wrong')} | {wt} | {v.count('partly')} | "
-              f"{v.count('missed')} | {untr} | {worst} | {off} {off_b if off_b else ''} | {fl} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
+              f"{v.count('missed')} | {untr} | {worst} | {off} {off_b if off_b else ''} | "
+              f"{coff} {coff_b if coff_b else ''} | {fl} | {sec:.0f} |" + (f" {'; '.join(wrong)}" if wrong else ""))
     for case, r in results:
         if r["err"]:
             print(f"ERROR {r['run']}: {r['err']}")
@@ -349,6 +365,7 @@ def main():
               f"listed {listed} ok_wrong {r.get('ok_wrong')}; diagnose {r.get('named')} trusted "
               f"{r.get('dtrusted')} gap {gap[0]:.3g}->{gap[1]:.3g} after {100 * r.get('after_err', math.nan):.2f} % "
               f"z {max(r.get('after_z', {}).values(), default=math.nan):.2f} "
+              f"c z {max(r.get('after_c_z', {}).values(), default=math.nan):.2f} "
               f"({r['it']:.1f} + {r['dt']:.0f} s)")
     print(f"total {time.time() - t0:.0f} s wall")
 

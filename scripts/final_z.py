@@ -19,9 +19,12 @@ c_y, c_z where the value has a ± > 0; a held damping has none) and each
 named effect's parameters whose truth the run's truth.json gives (k_yz,
 a runout's r_*, a sub-base's sub_k_y … as its k_y …): n, mean z with its 95 % interval (t-free: ±1.96 sd/√n), RMS z with
 its 95 % interval (χ² with n degrees of freedom, the truth known), and the
-values beyond 3 ± (seed, z). Then the pooled tails of k_y, k_z, m: counts
+values beyond 3 ± (seed, z). The final dampings printed without a ± (held at
+zero) whose truth is not zero are listed (seed, bearing, value, truth). Then the pooled tails of k_y, k_z, m: counts
 beyond 2 and 3 ± against the normal law's expectation. --trusted: only runs
 whose verdict is trusted (the ones "never confidently wrong" is about).
+--pooled: every CASE given as one group, each parameter's values at every
+bearing together (bearing "all"; a value beyond 3 ± named CASE-SEED BEARING).
 """
 import glob
 import json
@@ -59,10 +62,20 @@ def z_values(d, truth):
         for q in s.get("parameters", []):
             truth_of = eff.get((s["effect"], s["bearing"]), {})
             # a sub-base's k_y is reported as sub_k_y (the pedestal's own is k_y)
-            tv = truth_of.get(q["name"], truth_of.get(q["name"].removeprefix("sub_")))
+            # and a delay's tau [s] is the truth's tau_s
+            tv = truth_of.get(q["name"], truth_of.get(q["name"].removeprefix("sub_"), truth_of.get(q["name"] + "_s")))
             if tv is not None and q["std_err"] > 0:
                 out[(s["bearing"], q["name"])] = (q["value"] - tv) / q["std_err"]
     return out
+
+
+def held_values(d, truth):
+    """[(bearing, parameter, value)] of the final pedestals' dampings printed
+    without a ± (held at zero) whose truth is not zero: a value the data never
+    gave, so no z exists for it."""
+    ped = {p["bearing"]: p for p in truth["pedestals"]}
+    return [(p["bearing"], k, p.get(k, 0.0)) for p in d["pedestals_after"] for k in ("c_y", "c_z")
+            if p["std_err"].get(k, 0.0) <= 0 and ped[p["bearing"]][k] != 0]
 
 
 def main():
@@ -71,17 +84,25 @@ def main():
         sys.exit(__doc__)
     only_trusted = "--trusted" in sys.argv
     jd, rd, cases = args[0], args[1], args[2:]
-    for case in cases:
-        z, runs, trusted = {}, 0, 0
-        for seed, d in runs_of(jd, case):
+    pooled = "--pooled" in sys.argv
+    # each case alone, or (--pooled) every case together, every bearing's value of a parameter as one
+    for group in ([cases] if pooled else [[c] for c in cases]):
+        z, runs, trusted, held = {}, 0, 0, []
+        for case, seed, d in ((c, s, d) for c in group for s, d in runs_of(jd, c)):
             runs += 1
             trusted += d["trusted"]
             if only_trusted and not d["trusted"]:
                 continue
             with open(os.path.join(rd, f"{case}-{seed}", "truth.json")) as fh:
                 truth = json.load(fh)
-            for key, v in z_values(d, truth).items():
-                z.setdefault(key, []).append((seed, v))
+            for (b, k), v in z_values(d, truth).items():
+                if pooled:
+                    z.setdefault(("all", k), []).append((f"{case}-{seed} {b}", v))
+                else:
+                    z.setdefault((b, k), []).append((seed, v))
+            held += [f"{case}-{seed} {b} {k} = {v:g} (truth {tp:g})" for b, k, v in held_values(d, truth)
+                     for tp in [next(p[k] for p in truth["pedestals"] if p["bearing"] == b)]]
+        case = " + ".join(group)
         print(f"{case}: {runs} runs, {trusted} trusted{' (trusted only below)' if only_trusted else ''}")
         print("| bearing | parameter | n | mean z (95 %) | RMS z (95 %) | beyond 3 ± |")
         print("|---|---|---|---|---|---|")
@@ -96,6 +117,8 @@ def main():
             big = [f"{s} ({x:+.2f})" for s, x in v if abs(x) > 3]
             print(f"| {b} | {k} | {n} | {mean:+.2f} ({mean - half:+.2f}..{mean + half:+.2f}) "
                   f"| {rms:.2f} ({lo:.2f}..{hi:.2f}) | {len(big)}{' ' + ', '.join(big) if big else ''} |")
+        if held:
+            print(f"\nheld without a ± where the truth is not zero: {len(held)}: {'; '.join(held)}")
         km = [x for (b, k), v in z.items() if k in ("k_y", "k_z", "m") for _, x in v]
         if km:
             n = len(km)
