@@ -324,8 +324,18 @@ impl MachineCheck {
                 != crate::diagnose::trust::MachineCheck::Agrees
         });
         let named = scale_like_effects(outcome);
-        let unit_scale = if fails || !named.is_empty() {
-            super::unit_scale::find(machine, prep, first, fails, &named)
+        let support = crate::diagnose::trust::base_model_findings(prep);
+        // The bearings whose base model identify's tests find poor: one
+        // channel in the wrong unit does that (`unit_scale::channel`).
+        let poor: Vec<usize> = support
+            .iter()
+            .filter_map(|(b, _, _)| prep.bearing_index(b))
+            .collect();
+        // A final model the simulator cannot hold is judged by nothing:
+        // every reading is asked, as when it fails.
+        let unjudged = !outcome.after_steps.is_empty() && after.is_none();
+        let unit_scale = if fails || unjudged || !named.is_empty() || !poor.is_empty() {
+            super::unit_scale::find(machine, prep, first, fails || unjudged, &named, &poor)
         } else {
             None
         };
@@ -341,7 +351,7 @@ impl MachineCheck {
             unit_scale,
             blind,
             replaced: replaced_bases(machine, &prep.bearings, foundation),
-            support: crate::diagnose::trust::base_model_findings(prep)
+            support: support
                 .into_iter()
                 .map(|(bearing, why, _)| (bearing, why))
                 .collect(),
