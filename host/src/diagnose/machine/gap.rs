@@ -314,12 +314,12 @@ impl MachineCheck {
         // A model that fails the check (or that the check cannot judge) is
         // asked for a unit mistake anywhere; one that passes, at the
         // bearings of its scale-like effects (`unit_scale::find`).
-        let fails = match (outcome.after_steps.is_empty(), &after) {
+        let final_gap = match (outcome.after_steps.is_empty(), &after) {
             (true, _) => gap_before,
             (false, Some(_)) => gaps_after.last().copied().flatten(),
             (false, None) => None,
-        }
-        .is_some_and(|g| {
+        };
+        let fails = final_gap.is_some_and(|g| {
             crate::diagnose::trust::MachineCheck::of(g, floor)
                 != crate::diagnose::trust::MachineCheck::Agrees
         });
@@ -335,7 +335,10 @@ impl MachineCheck {
         // every reading is asked, as when it fails.
         let unjudged = !outcome.after_steps.is_empty() && after.is_none();
         let unit_scale = if fails || unjudged || !named.is_empty() || !poor.is_empty() {
-            super::unit_scale::find(machine, prep, first, fails || unjudged, &named, &poor)
+            // The final model's gap when it passes: a channel reading
+            // competes with it only where the data tell them apart.
+            let passes = final_gap.filter(|_| !(fails || unjudged));
+            super::unit_scale::find(machine, prep, first, passes, &named, &poor)
         } else {
             None
         };

@@ -353,9 +353,11 @@ pub(super) fn refine(
     }
 }
 
-/// The common unit factor within [`evidence::TOLERANCE`] (10 %) of `s` (or
-/// of 1/s), named.
-pub fn nearest_common(s: f64) -> Option<String> {
+/// The common unit factor nearest `s` when within [`evidence::TOLERANCE`]
+/// (10 %) of it, either way: that factor as `s` reads it (f, or 1/f when
+/// `s` < 1) [-], and the mistake it stands for. The one definition of the
+/// unit list's window ([`nearest_common`], [`channel::window`]).
+pub fn nearest_listed(s: f64) -> Option<(f64, &'static str)> {
     let (f, what) = COMMON
         .iter()
         .min_by(|a, b| {
@@ -364,19 +366,26 @@ pub fn nearest_common(s: f64) -> Option<String> {
             da.total_cmp(&db)
         })
         .copied()?;
-    ((s.ln().abs() - f.ln()).abs() < evidence::TOLERANCE.ln()).then(|| {
-        let shown = if f == std::f64::consts::SQRT_2 {
-            "√2".to_string()
-        } else if f == 2.0 * std::f64::consts::SQRT_2 {
-            "2√2".to_string()
-        } else {
-            format!("{f}")
-        };
-        if s >= 1.0 {
-            format!("×{shown} ({what})")
-        } else {
-            format!("×1/{shown} ({what})")
-        }
+    ((s.ln().abs() - f.ln()).abs() < evidence::TOLERANCE.ln())
+        .then_some((if s >= 1.0 { f } else { 1.0 / f }, what))
+}
+
+/// The common unit factor within [`evidence::TOLERANCE`] (10 %) of `s` (or
+/// of 1/s), named.
+pub fn nearest_common(s: f64) -> Option<String> {
+    let (f, what) = nearest_listed(s)?;
+    let g = if s >= 1.0 { f } else { 1.0 / f };
+    let shown = if g == std::f64::consts::SQRT_2 {
+        "√2".to_string()
+    } else if g == 2.0 * std::f64::consts::SQRT_2 {
+        "2√2".to_string()
+    } else {
+        format!("{g}")
+    };
+    Some(if s >= 1.0 {
+        format!("×{shown} ({what})")
+    } else {
+        format!("×1/{shown} ({what})")
     })
 }
 
@@ -489,17 +498,29 @@ pub fn examine(
 /// The hypothesis `reading` at its best s, when it brings the base model
 /// `state` within the machine-level check's limit ([`MachineCheck::of`]
 /// agrees, its own floor) and is named ([`examine`]).
+///
+/// One channel is named only as a unit mistake ([`channel::told_apart`]):
+/// its factor within its ± lies within the window of one listed factor,
+/// and, when the final model passes the check with gap `rival` [-] (the
+/// physical effects it names explain the run too), that gap fails the
+/// yardstick under which the channel passes ([`channel::beats`]).
 fn passing(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
     reading: Reading,
+    rival: Option<f64>,
 ) -> Option<UnitScale> {
     let e = examine(machine, prep, state, reading, true)?;
     if !e.named {
         return None;
     }
     let s = e.factor;
+    if reading.dir.is_some()
+        && !(channel::told_apart(s, e.log_sd) && channel::beats(rival, e.floor))
+    {
+        return None;
+    }
     Some(UnitScale {
         kind: reading.kind,
         bearing: reading.bearing.and_then(|b| prep.bearings.get(b).cloned()),
@@ -536,8 +557,9 @@ impl UnitScale {
 /// bearing's, or one bearing's one channel) that the machine file finds,
 /// for the base model `state`.
 ///
-/// `fails`: the final model fails the machine-level check or the check
-/// cannot judge it (its limit is too wide). Then every
+/// `passes`: the final model's gap when it passes the machine-level check
+/// [-]; `None`: it fails it, or the check cannot judge it (its limit is
+/// too wide) or the final model cannot be simulated. Then every
 /// reading is tried ([`Reading::all`]: every bearing's `rel`, `ped`, then
 /// each bearing's, then each bearing's four channels),
 /// and the one whose best s brings the base model within the check's limit
@@ -555,18 +577,23 @@ impl UnitScale {
 /// model identify's tests find poor, [`crate::diagnose::trust::base_model_findings`]:
 /// one channel in the wrong unit leaves its bearing's fit poor); a passing
 /// one is returned with the named effects in `also_fits`: the machine file
-/// cannot tell the two readings apart, and neither is to be trusted.
+/// cannot tell the two readings apart, and neither is to be trusted. A
+/// channel competes with the final model only where the data tell them
+/// apart ([`passing`]: its factor told apart as a unit mistake, and the
+/// final model's gap failing the channel's yardstick; session 44,
+/// docs/session44-unit17b.md).
 pub fn find(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
-    fails: bool,
+    passes: Option<f64>,
     named: &[(String, Vec<usize>)],
     poor: &[usize],
 ) -> Option<UnitScale> {
     let nb = prep.bearings.len();
     let mut readings: Vec<Reading> = Vec::new();
     let kinds = [Kind::Rel, Kind::Ped];
+    let fails = passes.is_none();
     if fails {
         let r = resimulate(machine, prep, state, None).ok()?;
         let gap = machine_gap(prep, &r);
@@ -596,7 +623,7 @@ pub fn find(
     }
     let mut found: Vec<(Reading, UnitScale)> = readings
         .into_iter()
-        .filter_map(|r| passing(machine, prep, state, r).map(|u| (r, u)))
+        .filter_map(|r| passing(machine, prep, state, r, passes).map(|u| (r, u)))
         .collect();
     found.sort_by(|a, b| a.1.gap.total_cmp(&b.1.gap));
     let (reading, first) = found.first()?;

@@ -21,10 +21,28 @@
 //! that is no unit factor is a calibration matter
 //! ([`super::evidence`]). At s = 1 the hypothesis is the refit of the
 //! readings as they are, so the evidence rule compares like with like.
+//!
+//! A channel is named only as a unit mistake (session 44,
+//! docs/session44-unit17b.md): a field engineer's unit mistake is a factor
+//! from the short list, so the factor found must lie within
+//! the window of one listed factor within their ± ([`window`],
+//! [`told_apart`]: e^(ln ŝ ± 3 sd) within ×/÷ 1.1 of the factor; that
+//! window excludes 1, the smallest listed factor being √2). A channel
+//! whose factor is a range (unseen-overhung's real `table-film`: B2
+//! `ped_z` ÷ 0.6428 ± 8.8 %, 0.47 to 0.84 within 3 ±, factors 0.49 to 0.87
+//! pass the check) or whose best factor sits at the window's edge (the
+//! optimum lies beyond it, far from every listed factor: B1 `rel_y`
+//! ÷ 1.5556 ± 5.9 % on `table-scale`) is not told from a range of scales,
+//! and a range is no unit mistake. And where the final model,
+//! with the physical effects it names, passes the check too, the channel
+//! must beat it by the evidence rule ([`beats`]), not merely pass beside
+//! it.
 
-use super::{refine, Kind, Reading, COMMON};
+use super::evidence::{TOLERANCE, Z_EVIDENCE};
+use super::{nearest_listed, refine, Kind, Reading, COMMON};
 use crate::diagnose::data::Prepared;
 use crate::diagnose::state::State;
+use crate::diagnose::trust::MachineCheck;
 
 /// The contract's column name of the channel `dir` (0: y, 1: z) of `kind`:
 /// `rel_y` [text].
@@ -100,8 +118,41 @@ pub fn best_factor(g: impl Fn(f64) -> Option<f64>, reading: Reading) -> Option<(
     Some(refine(&g, best_l, best_g, half))
 }
 
+/// The window of the listed unit factor nearest `s` (or 1/s): log10 of
+/// f/[`TOLERANCE`] and f·[`TOLERANCE`] [-]; `None` when `s` is near no
+/// listed factor ([`nearest_listed`]).
+pub fn window(s: f64) -> Option<[f64; 2]> {
+    let (f, _) = nearest_listed(s)?;
+    let half = TOLERANCE.log10();
+    Some([f.log10() - half, f.log10() + half])
+}
+
+/// Whether the factor `s` [-] with ln-standard-deviation `sd` [-]
+/// ([`super::evidence::log_sd`]) is told apart as a unit mistake: s
+/// within [`Z_EVIDENCE`] of its ± (e^(ln s ± 3 sd)) lies within the
+/// [`window`] of one listed factor, and so excludes 1 (the smallest listed
+/// factor is √2, its window starts at 1.29). A NaN or infinite sd tells
+/// nothing apart.
+pub fn told_apart(s: f64, sd: f64) -> bool {
+    let Some([lo, hi]) = window(s) else {
+        return false;
+    };
+    let (l, half) = (s.log10(), Z_EVIDENCE * sd / std::f64::consts::LN_10);
+    half.is_finite() && lo < l - half && l + half < hi && (l - half > 0.0 || l + half < 0.0)
+}
+
+/// Whether a channel whose hypothesis passes with noise floor `floor` [-]
+/// beats the final model that passes the check with gap `rival` [-] by the
+/// evidence rule: that gap fails the channel's yardstick
+/// ([`MachineCheck::of`] at `floor` does not agree). No rival (the final
+/// model fails the check or cannot be judged): true.
+pub fn beats(rival: Option<f64>, floor: f64) -> bool {
+    rival.is_none_or(|g| MachineCheck::of(g, floor) != MachineCheck::Agrees)
+}
+
 #[cfg(test)]
 mod tests {
+    use super::{beats, told_apart, window};
     use super::{candidates, column};
     use crate::diagnose::machine::unit_scale::Kind;
 
@@ -116,5 +167,24 @@ mod tests {
                 "{f} is not tried"
             );
         }
+    }
+
+    #[test]
+    fn a_channel_is_told_apart_only_within_one_listed_factors_window() {
+        let [lo, hi] = window(25.9).expect("near 25.4");
+        assert!((10f64.powf(lo) - 25.4 / 1.1).abs() < 1e-9);
+        assert!((10f64.powf(hi) - 25.4 * 1.1).abs() < 1e-9);
+        let [lo, hi] = window(0.70).expect("near 1/√2");
+        assert!(10f64.powf(hi) < 1.0, "the window of 1/√2 excludes 1");
+        assert!(lo < hi);
+        assert_eq!(window(1.7), None, "near no listed factor");
+        assert!(told_apart(25.76, 0.021), "25.76 ± 2.1 %: 24.2 to 27.4");
+        assert!(!told_apart(0.6428, 0.088), "÷ 0.6428 ± 8.8 %: a range");
+        assert!(!told_apart(1.5556, 0.059), "at the window's edge of √2");
+        assert!(!told_apart(25.4, f64::NAN));
+        assert!(!told_apart(1.7, 0.001), "near no listed factor");
+        assert!(beats(None, 0.1));
+        assert!(!beats(Some(0.05), 0.1), "the final model passes there too");
+        assert!(beats(Some(10.0), 0.1));
     }
 }
