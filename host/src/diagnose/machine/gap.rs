@@ -335,10 +335,23 @@ impl MachineCheck {
         // every reading is asked, as when it fails.
         let unjudged = !outcome.after_steps.is_empty() && after.is_none();
         let unit_scale = if fails || unjudged || !named.is_empty() || !poor.is_empty() {
-            // The final model's gap when it passes: a channel reading
-            // competes with it only where the data tell them apart.
-            let passes = final_gap.filter(|_| !(fails || unjudged));
-            super::unit_scale::find(machine, prep, first, passes, &named, &poor)
+            // The final model's gap when the check does not find it
+            // failing (it agrees, or cannot judge it; infinite: the
+            // simulator cannot hold it): a physical reading a channel
+            // competes with only where the data tell them apart.
+            let disagrees = final_gap.is_some_and(|g| {
+                matches!(
+                    crate::diagnose::trust::MachineCheck::of(g, floor),
+                    crate::diagnose::trust::MachineCheck::Disagrees { .. }
+                )
+            });
+            let rival = match final_gap {
+                _ if unjudged => Some(f64::INFINITY),
+                _ if disagrees => None,
+                g => g,
+            };
+            let fails = fails || unjudged;
+            super::unit_scale::find(machine, prep, first, fails, rival, &named, &poor)
         } else {
             None
         };

@@ -499,11 +499,10 @@ pub fn examine(
 /// `state` within the machine-level check's limit ([`MachineCheck::of`]
 /// agrees, its own floor) and is named ([`examine`]).
 ///
-/// One channel is named only as a unit mistake ([`channel::told_apart`]):
-/// its factor within its ± lies within the window of one listed factor,
-/// and, when the final model passes the check with gap `rival` [-] (the
-/// physical effects it names explain the run too), that gap fails the
-/// yardstick under which the channel passes ([`channel::beats`]).
+/// One channel is named only as a unit mistake
+/// ([`channel::a_unit_mistake`]): near a listed factor, and, when the final
+/// model is not found failing the check (its gap `rival` [-]: the physical
+/// effects it names may explain the run), told apart from it by the data.
 fn passing(
     machine: &Machine,
     prep: &Prepared,
@@ -516,9 +515,7 @@ fn passing(
         return None;
     }
     let s = e.factor;
-    if reading.dir.is_some()
-        && !(channel::told_apart(s, e.log_sd) && channel::beats(rival, e.floor))
-    {
+    if reading.dir.is_some() && !channel::a_unit_mistake(s, e.log_sd, e.floor, rival) {
         return None;
     }
     Some(UnitScale {
@@ -557,9 +554,8 @@ impl UnitScale {
 /// bearing's, or one bearing's one channel) that the machine file finds,
 /// for the base model `state`.
 ///
-/// `passes`: the final model's gap when it passes the machine-level check
-/// [-]; `None`: it fails it, or the check cannot judge it (its limit is
-/// too wide) or the final model cannot be simulated. Then every
+/// `fails`: the final model fails the machine-level check or the check
+/// cannot judge it (its limit is too wide) or it cannot be simulated. Then every
 /// reading is tried ([`Reading::all`]: every bearing's `rel`, `ped`, then
 /// each bearing's, then each bearing's four channels),
 /// and the one whose best s brings the base model within the check's limit
@@ -577,23 +573,25 @@ impl UnitScale {
 /// model identify's tests find poor, [`crate::diagnose::trust::base_model_findings`]:
 /// one channel in the wrong unit leaves its bearing's fit poor); a passing
 /// one is returned with the named effects in `also_fits`: the machine file
-/// cannot tell the two readings apart, and neither is to be trusted. A
-/// channel competes with the final model only where the data tell them
-/// apart ([`passing`]: its factor told apart as a unit mistake, and the
-/// final model's gap failing the channel's yardstick; session 44,
-/// docs/session44-unit17b.md).
+/// cannot tell the two readings apart, and neither is to be trusted.
+///
+/// `rival`: the final model's gap [-] when the check does not find it
+/// failing (it agrees or cannot judge; infinite: it cannot be simulated),
+/// a physical reading of the run that a channel competes with only where
+/// the data tell them apart ([`channel::a_unit_mistake`]; session 44,
+/// docs/session44-unit17b.md); `None`: the check finds it failing.
 pub fn find(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
-    passes: Option<f64>,
+    fails: bool,
+    rival: Option<f64>,
     named: &[(String, Vec<usize>)],
     poor: &[usize],
 ) -> Option<UnitScale> {
     let nb = prep.bearings.len();
     let mut readings: Vec<Reading> = Vec::new();
     let kinds = [Kind::Rel, Kind::Ped];
-    let fails = passes.is_none();
     if fails {
         let r = resimulate(machine, prep, state, None).ok()?;
         let gap = machine_gap(prep, &r);
@@ -623,7 +621,7 @@ pub fn find(
     }
     let mut found: Vec<(Reading, UnitScale)> = readings
         .into_iter()
-        .filter_map(|r| passing(machine, prep, state, r, passes).map(|u| (r, u)))
+        .filter_map(|r| passing(machine, prep, state, r, rival).map(|u| (r, u)))
         .collect();
     found.sort_by(|a, b| a.1.gap.total_cmp(&b.1.gap));
     let (reading, first) = found.first()?;

@@ -23,20 +23,19 @@
 //! readings as they are, so the evidence rule compares like with like.
 //!
 //! A channel is named only as a unit mistake (session 44,
-//! docs/session44-unit17b.md): a field engineer's unit mistake is a factor
-//! from the short list, so the factor found must lie within
-//! the window of one listed factor within their ± ([`window`],
-//! [`told_apart`]: e^(ln ŝ ± 3 sd) within ×/÷ 1.1 of the factor; that
-//! window excludes 1, the smallest listed factor being √2). A channel
-//! whose factor is a range (unseen-overhung's real `table-film`: B2
-//! `ped_z` ÷ 0.6428 ± 8.8 %, 0.47 to 0.84 within 3 ±, factors 0.49 to 0.87
-//! pass the check) or whose best factor sits at the window's edge (the
-//! optimum lies beyond it, far from every listed factor: B1 `rel_y`
-//! ÷ 1.5556 ± 5.9 % on `table-scale`) is not told from a range of scales,
-//! and a range is no unit mistake. And where the final model,
-//! with the physical effects it names, passes the check too, the channel
-//! must beat it by the evidence rule ([`beats`]), not merely pass beside
-//! it.
+//! docs/session44-unit17b.md, [`a_unit_mistake`]): a field engineer's unit
+//! mistake is a factor from the short list, so the factor found must lie
+//! near one. Where the check does not find the final model, with the
+//! physical effects it names, failing, naming the channel would overturn it, and the
+//! data must tell the two apart: the factor within its ± (e^(ln ŝ ± 3 sd))
+//! inside one listed factor's window ×/÷ 1.1 ([`window`], [`told_apart`];
+//! the window excludes 1, the smallest listed factor being √2), and the
+//! final model's gap failing the channel's yardstick ([`beats`]), not the
+//! channel merely passing beside it. A channel whose factor is a range
+//! (unseen-overhung's real `table-film`: B2 `ped_z` ÷ 0.6428 ± 8.8 %,
+//! 0.49 to 0.84 within 3 ±, factors 0.49 to 0.87 pass the check) or whose
+//! best factor sits at the window's edge (the optimum lies beyond it: B1
+//! `rel_y` ÷ 1.5556 ± 5.9 % on `table-scale`) is no unit mistake there.
 
 use super::evidence::{TOLERANCE, Z_EVIDENCE};
 use super::{nearest_listed, refine, Kind, Reading, COMMON};
@@ -144,15 +143,33 @@ pub fn told_apart(s: f64, sd: f64) -> bool {
 /// Whether a channel whose hypothesis passes with noise floor `floor` [-]
 /// beats the final model that passes the check with gap `rival` [-] by the
 /// evidence rule: that gap fails the channel's yardstick
-/// ([`MachineCheck::of`] at `floor` does not agree). No rival (the final
-/// model fails the check or cannot be judged): true.
+/// ([`MachineCheck::of`] at `floor` does not agree). No rival (the check
+/// finds the final model failing): true.
 pub fn beats(rival: Option<f64>, floor: f64) -> bool {
     rival.is_none_or(|g| MachineCheck::of(g, floor) != MachineCheck::Agrees)
 }
 
+/// Whether a channel found at factor `s` [-] (ln-standard-deviation `sd`
+/// [-], its hypothesis's noise floor `floor` [-]) is named as a unit
+/// mistake. When the check does not find the final model failing (its gap
+/// `rival` [-]; infinite when it cannot be simulated), naming the channel
+/// would overturn a physical reading of the run (and may untrust a
+/// diagnosis otherwise trusted): the factor must be told apart from a range
+/// of scales ([`told_apart`]) and the channel beat that reading by the
+/// evidence rule ([`beats`]). When the check finds the final model failing
+/// (`rival` `None`: the diagnosis is untrusted either way, the channel only
+/// says the likely cause), it is named when `s` is near a listed factor
+/// ([`nearest_listed`]).
+pub fn a_unit_mistake(s: f64, sd: f64, floor: f64, rival: Option<f64>) -> bool {
+    match rival {
+        Some(_) => told_apart(s, sd) && beats(rival, floor),
+        None => nearest_listed(s).is_some(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{beats, told_apart, window};
+    use super::{a_unit_mistake, beats, told_apart, window};
     use super::{candidates, column};
     use crate::diagnose::machine::unit_scale::Kind;
 
@@ -184,6 +201,11 @@ mod tests {
         assert!(!told_apart(25.4, f64::NAN));
         assert!(!told_apart(1.7, 0.001), "near no listed factor");
         assert!(beats(None, 0.1));
+        assert!(a_unit_mistake(26.5, 0.05, 0.1, None), "nothing passes");
+        assert!(!a_unit_mistake(26.5, 0.05, 0.1, Some(10.0)), "± wider than the window");
+        assert!(a_unit_mistake(25.6, 0.02, 0.1, Some(10.0)));
+        assert!(!a_unit_mistake(25.6, 0.02, 0.1, Some(0.05)), "beside a passing model");
+        assert!(!a_unit_mistake(1.7, 0.001, 0.1, None), "near no listed factor");
         assert!(!beats(Some(0.05), 0.1), "the final model passes there too");
         assert!(beats(Some(10.0), 0.1));
     }
