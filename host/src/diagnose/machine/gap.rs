@@ -336,20 +336,17 @@ impl MachineCheck {
         let unjudged = !outcome.after_steps.is_empty() && after.is_none();
         let unit_scale = if fails || unjudged || !named.is_empty() || !poor.is_empty() {
             // The final model's gap when the check does not find it
-            // failing (it agrees, or cannot judge it; infinite: the
-            // simulator cannot hold it): a physical reading a channel
-            // competes with only where the data tell them apart.
+            // failing (it agrees, or cannot judge it): a physical reading
+            // a channel competes with only where the data tell them
+            // apart. A final model the simulator cannot hold is no such
+            // reading (`unit_scale::channel::a_unit_mistake`).
             let disagrees = final_gap.is_some_and(|g| {
                 matches!(
                     crate::diagnose::trust::MachineCheck::of(g, floor),
                     crate::diagnose::trust::MachineCheck::Disagrees { .. }
                 )
             });
-            let rival = match final_gap {
-                _ if unjudged => Some(f64::INFINITY),
-                _ if disagrees => None,
-                g => g,
-            };
+            let rival = final_gap.filter(|_| !(unjudged || disagrees));
             let fails = fails || unjudged;
             super::unit_scale::find(machine, prep, first, fails, rival, &named, &poor)
         } else {

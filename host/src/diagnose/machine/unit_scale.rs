@@ -576,10 +576,10 @@ impl UnitScale {
 /// cannot tell the two readings apart, and neither is to be trusted.
 ///
 /// `rival`: the final model's gap [-] when the check does not find it
-/// failing (it agrees or cannot judge; infinite: it cannot be simulated),
-/// a physical reading of the run that a channel competes with only where
-/// the data tell them apart ([`channel::a_unit_mistake`]; session 44,
-/// docs/session44-unit17b.md); `None`: the check finds it failing.
+/// failing (it agrees or cannot judge), a physical reading of the run that
+/// a channel competes with only where the data tell them apart
+/// ([`channel::a_unit_mistake`]; session 44, docs/session44-unit17b.md);
+/// `None`: the check finds it failing, or it cannot be simulated.
 pub fn find(
     machine: &Machine,
     prep: &Prepared,

@@ -152,14 +152,14 @@ pub fn beats(rival: Option<f64>, floor: f64) -> bool {
 /// Whether a channel found at factor `s` [-] (ln-standard-deviation `sd`
 /// [-], its hypothesis's noise floor `floor` [-]) is named as a unit
 /// mistake. When the check does not find the final model failing (its gap
-/// `rival` [-]; infinite when it cannot be simulated), naming the channel
-/// would overturn a physical reading of the run (and may untrust a
-/// diagnosis otherwise trusted): the factor must be told apart from a range
-/// of scales ([`told_apart`]) and the channel beat that reading by the
-/// evidence rule ([`beats`]). When the check finds the final model failing
-/// (`rival` `None`: the diagnosis is untrusted either way, the channel only
-/// says the likely cause), it is named when `s` is near a listed factor
-/// ([`nearest_listed`]).
+/// `rival` [-]), naming the channel would overturn a physical reading of
+/// the run (and may untrust a diagnosis otherwise trusted): the factor
+/// must be told apart from a range of scales ([`told_apart`]) and the
+/// channel beat that reading by the evidence rule ([`beats`]). When the
+/// check finds the final model failing, or the simulator cannot hold it
+/// (`rival` `None`: no physical reading the machine file accepts; session
+/// 43 asked every reading there), it is named when `s` is near a listed
+/// factor ([`nearest_listed`]).
 pub fn a_unit_mistake(s: f64, sd: f64, floor: f64, rival: Option<f64>) -> bool {
     match rival {
         Some(_) => told_apart(s, sd) && beats(rival, floor),
