@@ -202,10 +202,19 @@ mod tests {
         assert!(!told_apart(1.7, 0.001), "near no listed factor");
         assert!(beats(None, 0.1));
         assert!(a_unit_mistake(26.5, 0.05, 0.1, None), "nothing passes");
-        assert!(!a_unit_mistake(26.5, 0.05, 0.1, Some(10.0)), "± wider than the window");
+        assert!(
+            !a_unit_mistake(26.5, 0.05, 0.1, Some(10.0)),
+            "± wider than the window"
+        );
         assert!(a_unit_mistake(25.6, 0.02, 0.1, Some(10.0)));
-        assert!(!a_unit_mistake(25.6, 0.02, 0.1, Some(0.05)), "beside a passing model");
-        assert!(!a_unit_mistake(1.7, 0.001, 0.1, None), "near no listed factor");
+        assert!(
+            !a_unit_mistake(25.6, 0.02, 0.1, Some(0.05)),
+            "beside a passing model"
+        );
+        assert!(
+            !a_unit_mistake(1.7, 0.001, 0.1, None),
+            "near no listed factor"
+        );
         assert!(!beats(Some(0.05), 0.1), "the final model passes there too");
         assert!(beats(Some(10.0), 0.1));
     }
