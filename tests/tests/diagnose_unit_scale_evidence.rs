@@ -25,10 +25,7 @@ fn a_noise_sized_scale_on_a_clean_run_is_not_named() {
     // The scale main named, with its ± from the machine-level fit (printed
     // for the session's docs).
     let first = out.states.first().expect("a base model");
-    let b3 = Reading {
-        kind: Kind::Rel,
-        bearing: Some(2),
-    };
+    let b3 = Reading::bearing(Kind::Rel, 2);
     let sd = evidence::log_sd(&machine, &out.prep, first, b3, 1.0072).expect("the scale's ±");
     println!("B3 rel × 1.0072: sd of ln s = {sd}");
     assert!(!evidence::named(1.0072, sd));

@@ -217,7 +217,18 @@ pub fn judge_machine(
     floor: f64,
     unit_scale: Option<&super::machine::unit_scale::UnitScale>,
 ) {
-    let Some(gap) = gap else { return };
+    let Some(gap) = gap else {
+        // Not simulated, but the base model with one reading rescaled
+        // passes the check (`machine::unit_scale::find`).
+        if let Some(u) = unit_scale {
+            let why = super::machine::unit_scale::reason(u, None, floor, MachineCheck::Agrees);
+            d.verdict += &format!(" But {why}.");
+            d.trust_reasons.push(why);
+            d.trusted = false;
+            d.unit_scale = Some(u.clone());
+        }
+        return;
+    };
     let check = MachineCheck::of(gap, floor);
     d.machine_check_informative = Some(!matches!(check, MachineCheck::CannotJudge { .. }));
     match check {
@@ -225,7 +236,7 @@ pub fn judge_machine(
         // cannot tell the two readings apart (`machine::unit_scale::find`).
         MachineCheck::Agrees => {
             if let Some(u) = unit_scale {
-                let why = super::machine::unit_scale::reason(u, gap, floor, check);
+                let why = super::machine::unit_scale::reason(u, Some(gap), floor, check);
                 d.verdict += &format!(" But {why}.");
                 d.trust_reasons.push(why);
                 d.trusted = false;
@@ -236,7 +247,7 @@ pub fn judge_machine(
         // to have judged, rather than read as a confirmation.
         MachineCheck::CannotJudge { .. } if unit_scale.is_some() => {
             if let Some(u) = unit_scale {
-                let why = super::machine::unit_scale::reason(u, gap, floor, check);
+                let why = super::machine::unit_scale::reason(u, Some(gap), floor, check);
                 d.verdict +=
                     &format!(" But {why}, so the identified parameters are not to be trusted.");
                 d.trust_reasons.push(why);
@@ -251,7 +262,7 @@ pub fn judge_machine(
         }
         MachineCheck::Disagrees { limit } => {
             let why = match unit_scale {
-                Some(u) => super::machine::unit_scale::reason(u, gap, floor, check),
+                Some(u) => super::machine::unit_scale::reason(u, Some(gap), floor, check),
                 None => format!(
                     "the machine re-simulated with the identified model does not reproduce the measurements: machine-level gap {gap:.4} (noise floor {floor:.4}, limit {limit:.4}); the machine file (rotor, unbalance, bearing table or base) does not describe the machine of this run"
                 ),

@@ -314,18 +314,41 @@ impl MachineCheck {
         // A model that fails the check (or that the check cannot judge) is
         // asked for a unit mistake anywhere; one that passes, at the
         // bearings of its scale-like effects (`unit_scale::find`).
-        let fails = match (outcome.after_steps.is_empty(), &after) {
+        let final_gap = match (outcome.after_steps.is_empty(), &after) {
             (true, _) => gap_before,
             (false, Some(_)) => gaps_after.last().copied().flatten(),
             (false, None) => None,
-        }
-        .is_some_and(|g| {
+        };
+        let fails = final_gap.is_some_and(|g| {
             crate::diagnose::trust::MachineCheck::of(g, floor)
                 != crate::diagnose::trust::MachineCheck::Agrees
         });
         let named = scale_like_effects(outcome);
-        let unit_scale = if fails || !named.is_empty() {
-            super::unit_scale::find(machine, prep, first, fails, &named)
+        let support = crate::diagnose::trust::base_model_findings(prep);
+        // The bearings whose base model identify's tests find poor: one
+        // channel in the wrong unit does that (`unit_scale::channel`).
+        let poor: Vec<usize> = support
+            .iter()
+            .filter_map(|(b, _, _)| prep.bearing_index(b))
+            .collect();
+        // A final model the simulator cannot hold is judged by nothing:
+        // every reading is asked, as when it fails.
+        let unjudged = !outcome.after_steps.is_empty() && after.is_none();
+        let unit_scale = if fails || unjudged || !named.is_empty() || !poor.is_empty() {
+            // The final model's gap when the check does not find it
+            // failing (it agrees, or cannot judge it): a physical reading
+            // a channel competes with only where the data tell them
+            // apart. A final model the simulator cannot hold is no such
+            // reading (`unit_scale::channel::a_unit_mistake`).
+            let disagrees = final_gap.is_some_and(|g| {
+                matches!(
+                    crate::diagnose::trust::MachineCheck::of(g, floor),
+                    crate::diagnose::trust::MachineCheck::Disagrees { .. }
+                )
+            });
+            let rival = final_gap.filter(|_| !(unjudged || disagrees));
+            let fails = fails || unjudged;
+            super::unit_scale::find(machine, prep, first, fails, rival, &named, &poor)
         } else {
             None
         };
@@ -341,7 +364,7 @@ impl MachineCheck {
             unit_scale,
             blind,
             replaced: replaced_bases(machine, &prep.bearings, foundation),
-            support: crate::diagnose::trust::base_model_findings(prep)
+            support: support
                 .into_iter()
                 .map(|(bearing, why, _)| (bearing, why))
                 .collect(),

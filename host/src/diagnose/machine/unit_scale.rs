@@ -42,9 +42,15 @@ use crate::sim::Machine;
 use serde::Serialize;
 
 pub mod blind;
+pub mod channel;
 pub mod evidence;
+mod factors;
+mod reason;
 mod table;
 pub use blind::Blind;
+use factors::{minimise, refine, COMMON, LOG_RANGE, LOG_RANGE_ONE};
+pub use factors::{nearest_common, nearest_listed};
+pub use reason::reason;
 pub use table::TableScale;
 
 /// The transducers a scale is put on.
@@ -76,6 +82,11 @@ pub struct UnitScale {
     /// bearing's.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bearing: Option<String>,
+    /// The one channel of `bearing` that looks scaled, by the data
+    /// contract's column name (`rel_y`, `rel_z`, `ped_y`, `ped_z`:
+    /// [`channel`]); absent: both directions of `kind`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub channel: Option<String>,
     /// The factor s the readings look to carry: measured = s × true [-].
     pub factor: f64,
     /// Standard deviation of ln `factor` from the machine-level fit
@@ -117,45 +128,83 @@ pub struct Reading {
     pub kind: Kind,
     /// The bearing (index into the run's bearings); `None`: every bearing.
     pub bearing: Option<usize>,
+    /// One direction of `bearing` only (0: y, 1: z; [`channel`]); `None`:
+    /// both. Only with a bearing.
+    pub dir: Option<usize>,
 }
 
-/// Common unit factors of vibration transducers [-] and the mistakes they
-/// stand for (each also read as its inverse).
-const COMMON: [(f64, &str); 6] = [
-    (25.4, "mil against µm"),
-    (1000.0, "mm against µm"),
-    (1.0e6, "m against µm"),
-    (2.0, "0-peak against peak-to-peak"),
-    (std::f64::consts::SQRT_2, "rms against peak"),
-    (2.0 * std::f64::consts::SQRT_2, "rms against peak-to-peak"),
-];
+impl Reading {
+    /// Every bearing's transducers of `kind`.
+    pub fn every(kind: Kind) -> Self {
+        Self {
+            kind,
+            bearing: None,
+            dir: None,
+        }
+    }
 
-/// The search range of s: 10^±LOG_RANGE [-] (beyond m against µm).
-const LOG_RANGE: f64 = 6.5;
+    /// Bearing `b`'s transducers of `kind`.
+    pub fn bearing(kind: Kind, b: usize) -> Self {
+        Self {
+            kind,
+            bearing: Some(b),
+            dir: None,
+        }
+    }
 
-/// The search range of one bearing's s: 10^±LOG_RANGE_ONE [-] (beyond mm
-/// against µm; m against µm on one bearing alone puts its |ped|/|rel|
-/// beyond what machines give, and the reader names it:
-/// docs/identify.md "Physical plausibility").
-const LOG_RANGE_ONE: f64 = 3.5;
+    /// Bearing `b`'s channel `dir` (0: y, 1: z) of `kind`.
+    pub fn channel(kind: Kind, b: usize, dir: usize) -> Self {
+        Self {
+            kind,
+            bearing: Some(b),
+            dir: Some(dir),
+        }
+    }
+
+    /// Every reading of a run of `nb` bearings: every bearing's `rel` and
+    /// `ped`, then (more than one bearing) each bearing's, then each
+    /// bearing's four channels.
+    pub fn all(nb: usize) -> Vec<Self> {
+        let kinds = [Kind::Rel, Kind::Ped];
+        let mut out: Vec<Self> = kinds.map(Self::every).to_vec();
+        if nb > 1 {
+            for b in 0..nb {
+                out.extend(kinds.map(|k| Self::bearing(k, b)));
+            }
+        }
+        out.extend((0..nb).flat_map(Self::channels));
+        out
+    }
+
+    /// Bearing `b`'s four channels (`rel_y`, `rel_z`, `ped_y`, `ped_z`).
+    pub fn channels(b: usize) -> [Self; 4] {
+        [
+            Self::channel(Kind::Rel, b, 0),
+            Self::channel(Kind::Rel, b, 1),
+            Self::channel(Kind::Ped, b, 0),
+            Self::channel(Kind::Ped, b, 1),
+        ]
+    }
+}
 
 /// Step of log10 s of the factor's interval walk [-] (0.46 % in s).
 const INTERVAL_STEP: f64 = 0.002;
 
-/// Grid step of log10 s before the golden-section refinement [-]: 0.93 %
-/// in s. The open-loop re-simulation makes the gap's valley around the
-/// right s narrow where a lightly damped resonance lies in the run
-/// (unseen-train: a pedestal scale 5 % off gives a gap of about 1, as wrong
-/// as no model; docs/robustness-hostile.md ("Session 39")): a step of 0.1 (26 %) missed
-/// √2 there. About 3 250 re-simulations per kind, 0.6 ms each on that
-/// machine.
-const LOG_STEP: f64 = 0.004;
-
 /// `prep` and the base model `state` as hypothesis s on `reading` makes
 /// them (module docs): its readings divided by s (variances by s²), its
 /// bearings' pedestal terms and runouts scaled as the equation's
-/// homogeneity says, the noise weights propagated afresh.
-pub fn hypothesis(prep: &Prepared, state: &State, reading: Reading, s: f64) -> (Prepared, State) {
+/// homogeneity says, the noise weights propagated afresh. One channel
+/// ([`Reading::dir`]): the pedestals refitted instead ([`channel`]);
+/// `None` where that refit fails.
+pub fn hypothesis(
+    prep: &Prepared,
+    state: &State,
+    reading: Reading,
+    s: f64,
+) -> Option<(Prepared, State)> {
+    if let (Some(b), Some(dir)) = (reading.bearing, reading.dir) {
+        return channel::hypothesis(prep, state, reading.kind, b, dir, s);
+    }
     let mut p = prep.clone();
     let kind = reading.kind;
     let range = match kind {
@@ -194,7 +243,7 @@ pub fn hypothesis(prep: &Prepared, state: &State, reading: Reading, s: f64) -> (
         };
     }
     st.weights = Weights::propagate(&p, &st.model, &st.params);
-    (p, st)
+    Some((p, st))
 }
 
 /// The machine-level gap of hypothesis s on `kind` (`None` where that
@@ -206,89 +255,30 @@ fn gap_of(
     reading: Reading,
     s: f64,
 ) -> Option<f64> {
-    let (p, st) = hypothesis(prep, state, reading, s);
+    let (p, st) = hypothesis(prep, state, reading, s)?;
     let r: Readings = resimulate(machine, &p, &st, None).ok()?;
     Some(machine_gap(&p, &r)).filter(|g| g.is_finite())
 }
 
 /// The s of `reading` that minimises the base model's machine-level gap:
 /// [`minimise`] over log10 s within ±[`LOG_RANGE`] (one bearing:
-/// ±[`LOG_RANGE_ONE`]).
+/// ±[`LOG_RANGE_ONE`]); one channel: [`channel::best_factor`].
 fn best_factor(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
     reading: Reading,
 ) -> Option<(f64, f64)> {
+    let g = |l: f64| gap_of(machine, prep, state, reading, 10f64.powf(l));
+    if reading.dir.is_some() {
+        return channel::best_factor(g, reading);
+    }
     let range = if reading.bearing.is_some() {
         LOG_RANGE_ONE
     } else {
         LOG_RANGE
     };
-    minimise(
-        |l| gap_of(machine, prep, state, reading, 10f64.powf(l)),
-        range,
-    )
-}
-
-/// The factor 10^l, |l| ≤ `range`, that minimises the gap `g(l)` [-], with
-/// that gap: a grid of l in steps of [`LOG_STEP`], then a golden-section
-/// search within a step either side of the grid's best. `None` when the
-/// unscaled model (l = 0) cannot be simulated.
-pub(super) fn minimise(g: impl Fn(f64) -> Option<f64>, range: f64) -> Option<(f64, f64)> {
-    let n = (2.0 * range / LOG_STEP).round() as i32;
-    let (mut best_l, mut best_g) = (0.0, g(0.0)?);
-    for i in 0..=n {
-        let l = -range + LOG_STEP * f64::from(i);
-        if let Some(v) = g(l) {
-            if v < best_g {
-                (best_l, best_g) = (l, v);
-            }
-        }
-    }
-    let (mut a, mut b) = (best_l - LOG_STEP, best_l + LOG_STEP);
-    let phi = 0.5 * (5f64.sqrt() - 1.0);
-    for _ in 0..30 {
-        let (c, d) = (b - phi * (b - a), a + phi * (b - a));
-        let (gc, gd) = (g(c).unwrap_or(f64::INFINITY), g(d).unwrap_or(f64::INFINITY));
-        if gc < gd {
-            b = d;
-        } else {
-            a = c;
-        }
-    }
-    let l = 0.5 * (a + b);
-    match g(l) {
-        Some(v) if v < best_g => Some((10f64.powf(l), v)),
-        _ => Some((10f64.powf(best_l), best_g)),
-    }
-}
-
-/// The common unit factor within [`evidence::TOLERANCE`] (10 %) of `s` (or
-/// of 1/s), named.
-pub fn nearest_common(s: f64) -> Option<String> {
-    let (f, what) = COMMON
-        .iter()
-        .min_by(|a, b| {
-            let da = (s.ln().abs() - a.0.ln()).abs();
-            let db = (s.ln().abs() - b.0.ln()).abs();
-            da.total_cmp(&db)
-        })
-        .copied()?;
-    ((s.ln().abs() - f.ln()).abs() < evidence::TOLERANCE.ln()).then(|| {
-        let shown = if f == std::f64::consts::SQRT_2 {
-            "√2".to_string()
-        } else if f == 2.0 * std::f64::consts::SQRT_2 {
-            "2√2".to_string()
-        } else {
-            format!("{f}")
-        };
-        if s >= 1.0 {
-            format!("×{shown} ({what})")
-        } else {
-            format!("×1/{shown} ({what})")
-        }
-    })
+    minimise(g, range)
 }
 
 /// The factors around `s` [-] whose hypothesis on `reading` stays within
@@ -321,44 +311,115 @@ fn interval(
     [edge(-1.0), edge(1.0)]
 }
 
+/// What the search finds of one reading on a run: its best factor and the
+/// three tests a named scale passes ([`passing`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Examined {
+    /// The reading.
+    pub reading: Reading,
+    /// Its best factor s [-].
+    pub factor: f64,
+    /// The machine-level gap at s [-].
+    pub gap: f64,
+    /// That model's floor [-].
+    pub floor: f64,
+    /// Whether s passes the check (its own floor).
+    pub passes: bool,
+    /// The gap of the hypothesis at s = 1 (the readings as they are; one
+    /// channel: the refit of them) [-].
+    pub as_read_gap: f64,
+    /// Whether that gap fails the yardstick under which s passes (the
+    /// evidence that the readings are not right as they are).
+    pub as_read_fails: bool,
+    /// sd of ln s ([`evidence::log_sd`]); NaN where not computed [-].
+    pub log_sd: f64,
+    /// Whether s is named: it passes, the readings as read fail, and
+    /// [`evidence::named`].
+    pub named: bool,
+}
+
+/// [`Examined`] of `reading` on the base model `state`. `stop`: leave off
+/// at the first test it fails (the search's way: `log_sd` NaN, `as_read`
+/// NaN where not reached); otherwise every number is computed (the
+/// false-alarm measurement's, docs/session43-unitfa17.md).
+pub fn examine(
+    machine: &Machine,
+    prep: &Prepared,
+    state: &State,
+    reading: Reading,
+    stop: bool,
+) -> Option<Examined> {
+    let (s, g) = best_factor(machine, prep, state, reading)?;
+    let (p, st) = hypothesis(prep, state, reading, s)?;
+    let r = resimulate(machine, &p, &st, None).ok()?;
+    let f = machine_floor(machine, &p, &st, None, &r).ok()?;
+    let mut e = Examined {
+        reading,
+        factor: s,
+        gap: g,
+        floor: f,
+        passes: MachineCheck::of(g, f) == MachineCheck::Agrees,
+        as_read_gap: f64::NAN,
+        as_read_fails: false,
+        log_sd: f64::NAN,
+        named: false,
+    };
+    if stop && !e.passes {
+        return Some(e);
+    }
+    // The evidence: the readings as they are (s = 1) fail the yardstick
+    // under which s passes. A wide limit of the model as read (the check
+    // cannot judge it) is no evidence for a scale that merely narrows it.
+    // One channel: the refit of the readings as read; where the simulator
+    // cannot hold it, the base model itself (the readings as read too).
+    e.as_read_gap = gap_of(machine, prep, state, reading, 1.0).or_else(|| {
+        let r = resimulate(machine, prep, state, None).ok()?;
+        Some(machine_gap(prep, &r)).filter(|g| g.is_finite())
+    })?;
+    e.as_read_fails = MachineCheck::of(e.as_read_gap, f) != MachineCheck::Agrees;
+    if stop && !e.as_read_fails {
+        return Some(e);
+    }
+    // A scale within its own ± of 1, or within a transducer's calibration
+    // tolerance, is no unit mistake ([`evidence`]).
+    e.log_sd = evidence::log_sd(machine, prep, state, reading, s).unwrap_or(f64::NAN);
+    e.named = e.passes && e.as_read_fails && evidence::named(s, e.log_sd);
+    Some(e)
+}
+
 /// The hypothesis `reading` at its best s, when it brings the base model
 /// `state` within the machine-level check's limit ([`MachineCheck::of`]
-/// agrees, its own floor).
+/// agrees, its own floor) and is named ([`examine`]).
+///
+/// One channel is named only as a unit mistake
+/// ([`channel::a_unit_mistake`]): near a listed factor, and, when the final
+/// model is not found failing the check (its gap `rival` [-]: the physical
+/// effects it names may explain the run), told apart from it by the data.
 fn passing(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
     reading: Reading,
+    rival: Option<f64>,
 ) -> Option<UnitScale> {
-    let (s, g) = best_factor(machine, prep, state, reading)?;
-    let (p, st) = hypothesis(prep, state, reading, s);
-    let r = resimulate(machine, &p, &st, None).ok()?;
-    let f = machine_floor(machine, &p, &st, None, &r).ok()?;
-    if MachineCheck::of(g, f) != MachineCheck::Agrees {
+    let e = examine(machine, prep, state, reading, true)?;
+    if !e.named {
         return None;
     }
-    // The evidence: the readings as they are (s = 1) fail the yardstick
-    // under which s passes. A wide limit of the model as read (the check
-    // cannot judge it) is no evidence for a scale that merely narrows it.
-    let as_read = gap_of(machine, prep, state, reading, 1.0)?;
-    if MachineCheck::of(as_read, f) == MachineCheck::Agrees {
-        return None;
-    }
-    // A scale within its own ± of 1, or within a transducer's calibration
-    // tolerance, is no unit mistake ([`evidence`]).
-    let sd = evidence::log_sd(machine, prep, state, reading, s)?;
-    if !evidence::named(s, sd) {
+    let s = e.factor;
+    if reading.dir.is_some() && !channel::a_unit_mistake(s, e.log_sd, e.floor, rival) {
         return None;
     }
     Some(UnitScale {
         kind: reading.kind,
         bearing: reading.bearing.and_then(|b| prep.bearings.get(b).cloned()),
+        channel: reading.dir.map(|d| channel::column(reading.kind, d)),
         factor: s,
-        log_sd: sd,
-        gap: g,
-        floor: f,
+        log_sd: e.log_sd,
+        gap: e.gap,
+        floor: e.floor,
         nearest: nearest_common(s),
-        factor_interval: interval(machine, prep, state, reading, s, f),
+        factor_interval: interval(machine, prep, state, reading, s, e.floor),
         also_fits: Vec::new(),
         table: None,
     })
@@ -370,15 +431,25 @@ fn short(u: &UnitScale) -> String {
         .bearing
         .as_deref()
         .map_or(" (every bearing)".to_string(), |b| format!(" of {b}"));
-    format!("`{}`{at} ÷ {:.4}", u.kind.columns(), u.factor)
+    format!("`{}`{at} ÷ {:.4}", u.columns(), u.factor)
+}
+
+impl UnitScale {
+    /// The columns the scale is on: the channel's name, or the kind's
+    /// prefix (`rel_y`, `rel`) [text].
+    pub fn columns(&self) -> &str {
+        self.channel.as_deref().unwrap_or(self.kind.columns())
+    }
 }
 
 /// A scale on the transducers of one kind (every bearing's, or one
-/// bearing's) that the machine file finds, for the base model `state`.
+/// bearing's, or one bearing's one channel) that the machine file finds,
+/// for the base model `state`.
 ///
 /// `fails`: the final model fails the machine-level check or the check
-/// cannot judge it (its limit is too wide). Then every
-/// reading is tried (every bearing's `rel`, `ped`, then each bearing's),
+/// cannot judge it (its limit is too wide) or it cannot be simulated. Then every
+/// reading is tried ([`Reading::all`]: every bearing's `rel`, `ped`, then
+/// each bearing's, then each bearing's four channels),
 /// and the one whose best s brings the base model within the check's limit
 /// with the smallest gap is returned, the other passing ones in
 /// `also_fits`. `None` when the base model already agrees (s = 1 passes)
@@ -389,15 +460,26 @@ fn short(u: &UnitScale) -> String {
 /// model carries that a scale at one bearing also explains at the pedestal
 /// level (`bearing_coefficients`, `pedestal_sub_base`,
 /// `foundation_coupling`), each as (its words, its bearings' indices).
-/// Each of their bearings' `rel` and `ped` is tried; a passing one is
-/// returned with the named effects in `also_fits`: the machine file cannot
-/// tell the two readings apart, and neither is to be trusted.
+/// Each of their bearings' `rel` and `ped` is tried, and the four
+/// channels of those bearings and of the bearings in `poor` (whose base
+/// model identify's tests find poor, [`crate::diagnose::trust::base_model_findings`]:
+/// one channel in the wrong unit leaves its bearing's fit poor); a passing
+/// one is returned with the named effects in `also_fits`: the machine file
+/// cannot tell the two readings apart, and neither is to be trusted.
+///
+/// `rival`: the final model's gap [-] when the check does not find it
+/// failing (it agrees or cannot judge), a physical reading of the run that
+/// a channel competes with only where the data tell them apart
+/// ([`channel::a_unit_mistake`]; session 44, docs/session44-unit17b.md);
+/// `None`: the check finds it failing, or it cannot be simulated.
 pub fn find(
     machine: &Machine,
     prep: &Prepared,
     state: &State,
     fails: bool,
+    rival: Option<f64>,
     named: &[(String, Vec<usize>)],
+    poor: &[usize],
 ) -> Option<UnitScale> {
     let nb = prep.bearings.len();
     let mut readings: Vec<Reading> = Vec::new();
@@ -409,33 +491,29 @@ pub fn find(
         if MachineCheck::of(gap, floor) == MachineCheck::Agrees {
             return None;
         }
-        readings.extend(kinds.map(|kind| Reading {
-            kind,
-            bearing: None,
-        }));
-        // One bearing of a one-bearing run is every bearing.
-        if nb > 1 {
-            for b in 0..nb {
-                readings.extend(kinds.map(|kind| Reading {
-                    kind,
-                    bearing: Some(b),
-                }));
-            }
-        }
+        readings = Reading::all(nb);
     } else {
         let mut at: Vec<usize> = named.iter().flat_map(|(_, b)| b.clone()).collect();
         at.sort_unstable();
         at.dedup();
-        for b in at.into_iter().filter(|&b| b < nb) {
-            readings.extend(kinds.map(|kind| Reading {
-                kind,
-                bearing: Some(b),
-            }));
+        for &b in at.iter().filter(|&&b| b < nb) {
+            readings.extend(kinds.map(|kind| Reading::bearing(kind, b)));
         }
+        // One channel in the wrong unit leaves its bearing's pedestal fit
+        // poor (identify untrusts it) and may pass the check with another
+        // effect named: its channels are tried at those bearings too.
+        at.extend(poor);
+        at.sort_unstable();
+        at.dedup();
+        readings.extend(
+            at.into_iter()
+                .filter(|&b| b < nb)
+                .flat_map(Reading::channels),
+        );
     }
     let mut found: Vec<(Reading, UnitScale)> = readings
         .into_iter()
-        .filter_map(|r| passing(machine, prep, state, r).map(|u| (r, u)))
+        .filter_map(|r| passing(machine, prep, state, r, rival).map(|u| (r, u)))
         .collect();
     found.sort_by(|a, b| a.1.gap.total_cmp(&b.1.gap));
     let (reading, first) = found.first()?;
@@ -453,129 +531,4 @@ pub fn find(
             .map(|(_, u)| format!("{} (gap {:.4})", short(u), u.gap)),
     );
     Some(first)
-}
-
-/// The reason of a machine-level check that a scale on some transducers
-/// explains: `final_gap` (the final model's) against its `floor` as
-/// `check` judged it [text].
-pub fn reason(u: &UnitScale, final_gap: f64, floor: f64, check: MachineCheck) -> String {
-    let limit = match check {
-        MachineCheck::Disagrees { limit } | MachineCheck::CannotJudge { limit } => limit,
-        MachineCheck::Agrees => MachineCheck::limit(floor),
-    };
-    let kind = u.kind.columns();
-    let s = u.factor;
-    let (readings, transducers) = match &u.bearing {
-        Some(b) => (
-            format!("{b}'s `{kind}` readings"),
-            format!("the `{kind}` transducers of {b}"),
-        ),
-        None => (
-            format!("every `{kind}` reading"),
-            format!("every `{kind}` transducer"),
-        ),
-    };
-    let at = u
-        .bearing
-        .as_deref()
-        .map_or(String::new(), |b| format!(" at {b}"));
-    let pedestals = match u.kind {
-        Kind::Rel => format!("pedestals{at} k, m, c and runouts ÷ {s:.3}"),
-        Kind::Ped => format!("pedestals{at} k, m, c × {s:.3}"),
-    };
-    let nearest = match &u.nearest {
-        Some(n) => format!(": the common unit factor {n}"),
-        None => ", near no common unit factor".to_string(),
-    };
-    let [lo, hi] = u.factor_interval;
-    let scale = format!(
-        "with {readings} divided by {s:.4} ± {:.2} % (gap {:.4}, noise floor {:.4}; {pedestals}; factors {lo:.4} to {hi:.4} pass){nearest}",
-        100.0 * u.log_sd,
-        u.gap,
-        u.floor
-    );
-    if check == MachineCheck::Agrees {
-        return format!(
-            "the machine-level check cannot tell the named {} from a unit or scale mistake on {transducers}: the identified model passes it (machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), and so does the base model {scale}. Check the units of {transducers} (an import's unit or peak convention); neither reading is trusted",
-            u.also_fits.join(", ")
-        );
-    }
-    let others = if u.also_fits.is_empty() {
-        String::new()
-    } else {
-        format!(" (these pass too: {})", u.also_fits.join("; "))
-    };
-    let tables = match &u.bearing {
-        Some(b) => format!("{b}'s bearing table"),
-        None => "every bearing table".to_string(),
-    };
-    let (likely, twin) = match &u.table {
-        Some(t) if t.passes => (
-            format!(
-                "The machine-level check cannot tell a unit or scale mistake on {transducers} from {tables} {:.4} times the file's: check the `{kind}` columns' units and the table; neither reading is trusted, and the pedestals{at} identified from these readings are off by one factor or the other",
-                t.factor
-            ),
-            format!(
-                ", and so does the base model with {tables} × {:.4} (stiffness and damping, the pedestals{at} with it; gap {:.4}, noise floor {:.4})",
-                t.factor, t.gap, t.floor
-            ),
-        ),
-        Some(t) => (
-            format!(
-                "A unit or scale mistake on {transducers} is likely (an import's unit or peak convention; {tables} scaled instead, the twin reading at the pedestal level, leaves at best gap {:.4} at × {:.4}, above the limit {:.4} of its noise floor {:.4}): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor",
-                t.gap,
-                t.factor,
-                MachineCheck::limit(t.floor),
-                t.floor
-            ),
-            String::new(),
-        ),
-        None => (
-            format!(
-                "A unit or scale mistake on {transducers} is likely (an import's unit or peak convention): check the `{kind}` columns' units; the pedestals identified from these readings are off by that factor"
-            ),
-            String::new(),
-        ),
-    };
-    let (as_read, but) = if matches!(check, MachineCheck::CannotJudge { .. }) {
-        (
-            "the machine-level check cannot judge the identified model (its limit is too wide: ",
-            "the base model passes it",
-        )
-    } else {
-        (
-            "the machine re-simulated with the identified model does not reproduce the measurements (",
-            "it does",
-        )
-    };
-    format!(
-        "{as_read}machine-level gap {final_gap:.4}, noise floor {floor:.4}, limit {limit:.4}), but {but} {scale}{others}{twin}. {likely}"
-    )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::nearest_common;
-
-    #[test]
-    fn the_nearest_common_factor_is_named_within_ten_percent() {
-        assert_eq!(
-            nearest_common(25.9).as_deref(),
-            Some("×25.4 (mil against µm)")
-        );
-        assert_eq!(
-            nearest_common(1.0 / 25.0).as_deref(),
-            Some("×1/25.4 (mil against µm)")
-        );
-        assert_eq!(
-            nearest_common(0.70).as_deref(),
-            Some("×1/√2 (rms against peak)")
-        );
-        assert_eq!(
-            nearest_common(1980.0).as_deref(),
-            None,
-            "2 × 1000 is no common factor"
-        );
-        assert_eq!(nearest_common(1.7), None);
-    }
 }

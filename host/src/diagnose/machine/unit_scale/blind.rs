@@ -83,10 +83,7 @@ pub fn blind(
     let mut out = Vec::new();
     for (b, name) in prep.bearings.iter().enumerate() {
         for kind in [Kind::Rel, Kind::Ped] {
-            let reading = Reading {
-                kind,
-                bearing: Some(b),
-            };
+            let reading = Reading::bearing(kind, b);
             let passes = |l: f64| {
                 gap_of(machine, prep, state, reading, 10f64.powf(l))
                     .is_some_and(|g| MachineCheck::of(g, floor) == MachineCheck::Agrees)

@@ -77,7 +77,7 @@ fn residuals(
     reading: Reading,
     s: f64,
 ) -> Option<Residuals> {
-    let (p, st) = hypothesis(prep, state, reading, s);
+    let (p, st) = hypothesis(prep, state, reading, s)?;
     let x: Readings = resimulate(machine, &p, &st, None).ok()?;
     let (mut r, mut var) = (Vec::new(), Vec::new());
     for (b, row) in x.iter().enumerate() {
