@@ -1,7 +1,7 @@
 //! One channel in the wrong unit (one probe in mil, the others in µm) is
 //! named at its bearing and channel by the machine-level check
 //! (`plinth::diagnose::machine::unit_scale::channel`, session 43,
-//! docs/session43-unitfa17.md), and the scale search's own false-alarm rate
+//! docs/robustness-hostile.md, Session 43 (unitfa17)), and the scale search's own false-alarm rate
 //! is measured where it is forced to run on every reading
 //! (`forced_search_on_listed_runs`, ignored: a measuring tool).
 
@@ -40,7 +40,7 @@ fn one_probe_in_mil_is_named_at_its_bearing_and_channel() {
     );
 }
 
-/// The false-alarm measurement (docs/session43-unitfa17.md): for each line
+/// The false-alarm measurement (docs/robustness-hostile.md, Session 43 (unitfa17)): for each line
 /// `RUN TOML` of the file `$UNIT_SCALE_FORCED`, the run is diagnosed and
 /// every reading ([`Reading::all`]: every bearing's kinds, each bearing's,
 /// each channel) is examined on its base model whether or not the check

@@ -341,7 +341,7 @@ pub struct Examined {
 /// [`Examined`] of `reading` on the base model `state`. `stop`: leave off
 /// at the first test it fails (the search's way: `log_sd` NaN, `as_read`
 /// NaN where not reached); otherwise every number is computed (the
-/// false-alarm measurement's, docs/session43-unitfa17.md).
+/// false-alarm measurement's, docs/robustness-hostile.md, Session 43 (unitfa17)).
 pub fn examine(
     machine: &Machine,
     prep: &Prepared,
@@ -470,7 +470,7 @@ impl UnitScale {
 /// `rival`: the final model's gap [-] when the check does not find it
 /// failing (it agrees or cannot judge), a physical reading of the run that
 /// a channel competes with only where the data tell them apart
-/// ([`channel::a_unit_mistake`]; session 44, docs/session44-unit17b.md);
+/// ([`channel::a_unit_mistake`]; session 44, docs/robustness-hostile.md, Session 44 (unit17b));
 /// `None`: the check finds it failing, or it cannot be simulated.
 pub fn find(
     machine: &Machine,

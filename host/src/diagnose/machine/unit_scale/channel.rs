@@ -1,6 +1,6 @@
 //! One channel in the wrong unit: one bearing's `rel_y`, `rel_z`, `ped_y`
 //! or `ped_z` (the data contract's column names, docs/formats.md) s times
-//! its true value, the others right (session 43, docs/session43-unitfa17.md:
+//! its true value, the others right (session 43, docs/robustness-hostile.md, Session 43 (unitfa17):
 //! one probe in mil while the others are in µm, one pick-up in inches).
 //!
 //! A scale on one direction is no scale of the pedestal: the pedestal
@@ -23,7 +23,7 @@
 //! readings as they are, so the evidence rule compares like with like.
 //!
 //! A channel is named only as a unit mistake (session 44,
-//! docs/session44-unit17b.md, [`a_unit_mistake`]): a field engineer's unit
+//! docs/robustness-hostile.md, Session 44 (unit17b), [`a_unit_mistake`]): a field engineer's unit
 //! mistake is a factor from the short list, so the factor found must lie
 //! near one. Where the check does not find the final model, with the
 //! physical effects it names, failing, naming the channel would overturn it, and the
