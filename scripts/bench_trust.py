@@ -101,6 +101,22 @@ def undetermined(ident):
     return int(any(w["kind"] == "undetermined" for p in ident["pedestals"] for w in p["warnings"]))
 
 
+def tally(results, label):
+    """Counts per rule (and "any", "undetermined") over `results`, an
+    iterable of (name, identify JSON, exit code); prints each flagged run as
+    "flagged: LABEL NAME: [rules]"."""
+    counts = {r: 0 for r in RULES + ["any", "undetermined"]}
+    for name, ident, code in results:
+        f = flags(ident, code)
+        for r in RULES:
+            counts[r] += f[r]
+        counts["any"] += any(f.values())
+        counts["undetermined"] += undetermined(ident)
+        if any(f.values()):
+            print(f"    flagged: {label}{name}: {[r for r in RULES if f[r]]}", flush=True)
+    return counts
+
+
 def row(case, runs, counts, extremes=None):
     if counts.get("undetermined"):
         print(f"    runs with a pedestal `undetermined` (not a false alarm: no fault claimed):"
@@ -124,19 +140,12 @@ def false_alarms(plinth, n, only, first=1):
     total = {r: 0 for r in RULES + ["any", "undetermined"]}
     total_runs = 0
     for case, runs, results in bc.clean_identifications(plinth, n, only, first):
-        counts = {r: 0 for r in RULES + ["any", "undetermined"]}
+        results = list(results)
         extremes = [0.0, 1.0]
-        for seed, ident, code in results:
+        for _, ident, _ in results:
             level, p = lack_of_fit_figures(ident)
             extremes = [max(extremes[0], level), min(extremes[1], p)]
-            f = flags(ident, code)
-            for r in RULES:
-                counts[r] += f[r]
-            counts["any"] += any(f.values())
-            counts["undetermined"] += undetermined(ident)
-            if any(f.values()):
-                print(f"    flagged: {case} seed {seed}: {[r for r in RULES if f[r]]}",
-                      flush=True)
+        counts = tally(results, f"{case} seed ")
         row(case, runs, counts, extremes)
         for r in counts:
             total[r] += counts[r]
@@ -179,16 +188,7 @@ def ross_false_alarms(plinth, n, only, first, runs_dir):
             def one(seed, case=case, where=where):
                 return (seed, *plinth.identify(os.path.join(where, f"{case}-{seed}")))
 
-            counts = {r: 0 for r in RULES + ["any", "undetermined"]}
-            for seed, ident, code in bc.parallel(one, seeds):
-                f = flags(ident, code)
-                for r in RULES:
-                    counts[r] += f[r]
-                counts["any"] += any(f.values())
-                counts["undetermined"] += undetermined(ident)
-                if any(f.values()):
-                    fired = [r for r in RULES if f[r]]
-                    print(f"    flagged: {machine} {case} seed {seed}: {fired}", flush=True)
+            counts = tally(bc.parallel(one, seeds), f"{machine} {case} seed ")
             row(f"{machine} {case}", n, counts)
             for r in counts:
                 total[r] += counts[r]
@@ -201,16 +201,8 @@ def stored_false_alarms(plinth, parent):
     header(f"FALSE ALARMS per run on the clean runs under {parent} (flagged %, by rule)")
     runs = sorted(d for d in os.listdir(parent)
                   if os.path.exists(os.path.join(parent, d, "measurements.csv")))
-    counts = {r: 0 for r in RULES + ["any", "undetermined"]}
-    for name, (ident, code) in zip(runs, bc.parallel(
-            lambda d: plinth.identify(os.path.join(parent, d)), runs)):
-        f = flags(ident, code)
-        for r in RULES:
-            counts[r] += f[r]
-        counts["any"] += any(f.values())
-        counts["undetermined"] += undetermined(ident)
-        if any(f.values()):
-            print(f"    flagged: {name}: {[r for r in RULES if f[r]]}", flush=True)
+    results = bc.parallel(lambda d: plinth.identify(os.path.join(parent, d)), runs)
+    counts = tally(((name, *r) for name, r in zip(runs, results)), "")
     row(os.path.basename(os.path.normpath(parent)), len(runs), counts)
 
 

@@ -3,7 +3,7 @@
 //! identify-side trust tests (identify_plausibility, identify_trust).
 
 use crate::write_run;
-use plinth::identify::{identify_run, Identification, Options, WarningKind};
+use plinth::identify::{identify_run, Identification, Options, PedestalFit, WarningKind};
 use plinth::rundir::RunDir;
 use plinth::sim::{unbalance_response, EffectSet, Machine, Noise};
 use std::path::Path;
@@ -31,6 +31,19 @@ pub fn run(machine: &Machine, noise: Option<(f64, u64)>, digits: Option<u32>) ->
 /// `identify` with its default options.
 pub fn identify(run: &RunDir) -> Identification {
     identify_run(run, &Options::default()).expect("identify")
+}
+
+/// `identify` with its default options on the run directory at `dir`.
+pub fn identify_dir(dir: &Path) -> Identification {
+    identify(&RunDir::read(dir).expect("reading the run directory"))
+}
+
+/// The pedestal fit of `bearing` in `id`.
+pub fn pedestal<'a>(id: &'a Identification, bearing: &str) -> &'a PedestalFit {
+    id.pedestals
+        .iter()
+        .find(|p| p.bearing == bearing)
+        .expect("pedestal")
 }
 
 /// The warnings of the kinds in `rules` that fired on `id`, as

@@ -7,24 +7,12 @@
 //! −347 ± 4710 kg; main at 296e18c exited 2 on it.
 
 use plinth::identify::physical::NotPhysical;
-use plinth::identify::{identify_run, Identification, Options, PedestalFit, WarningKind};
-use plinth::rundir::RunDir;
+use plinth::identify::WarningKind;
+use plinth_tests::rundown::{identify_dir, pedestal};
 use std::path::{Path, PathBuf};
 
 fn stored() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("data/ross-recording-flex-sign")
-}
-
-fn identify(dir: &Path) -> Identification {
-    let run = RunDir::read(dir).expect("reading the run directory");
-    identify_run(&run, &Options::default()).expect("identification")
-}
-
-fn pedestal<'a>(id: &'a Identification, bearing: &str) -> &'a PedestalFit {
-    id.pedestals
-        .iter()
-        .find(|p| p.bearing == bearing)
-        .expect("pedestal")
 }
 
 /// A copy of the stored run with every rel phasor negated in the CSV text
@@ -65,7 +53,7 @@ fn rel_negated_copy() -> tempfile::TempDir {
 
 #[test]
 fn a_mass_negative_within_its_noise_is_undetermined_not_impossible() {
-    let id = identify(&stored());
+    let id = identify_dir(&stored());
     let b1 = pedestal(&id, "B1");
     assert!(
         b1.pedestal.m < 0.0 && b1.pedestal.m > -b1.std_err.m,
@@ -97,7 +85,7 @@ fn a_mass_negative_within_its_noise_is_undetermined_not_impossible() {
 #[test]
 fn probes_of_the_wrong_sign_are_still_impossible_where_the_forces_are_measured() {
     let dir = rel_negated_copy();
-    let id = identify(dir.path());
+    let id = identify_dir(dir.path());
     // B2 resonates in the band: its forces are well above the noise, and its
     // pedestal comes out negative by many standard errors.
     let b2 = pedestal(&id, "B2");

@@ -11,24 +11,17 @@
 //! (truth 900: 5.8 of its ±), m 1070 ± 168 kg (truth 320: 4.5 ±) and
 //! f_n,y 164 ± 10 Hz (truth 267: 10 ±), in text and JSON.
 
-use plinth::identify::{identify_run, Identification, Options, PedestalFit};
+use plinth::identify::Identification;
 use plinth::present::table::value_pm;
-use plinth::rundir::RunDir;
+use plinth_tests::rundown::{identify_dir, pedestal};
 use std::path::Path;
 
 fn identify(name: &str) -> Identification {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
-        .join(name);
-    let run = RunDir::read(&dir).expect("reading the run directory");
-    identify_run(&run, &Options::default()).expect("identification")
-}
-
-fn pedestal<'a>(id: &'a Identification, bearing: &str) -> &'a PedestalFit {
-    id.pedestals
-        .iter()
-        .find(|p| p.bearing == bearing)
-        .expect("pedestal")
+    identify_dir(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("data")
+            .join(name),
+    )
 }
 
 /// The withheld ± is shown as unknown everywhere identify shows one: the
