@@ -126,16 +126,20 @@ KEYS = ("kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz")
 
 def noise_sd(m, channel, v, speeds):
     """sigma [m] of each phasor of one channel: a fraction of |phasor| plus
-    a floor (a fraction of the channel's RMS), per machine, or per kind of
-    channel (rel / ped) where the machine gives them apart; plus, where the
+    a floor (a fraction of the channel's RMS), per machine, per kind of
+    channel (rel / ped) or per channel (rel_y ...) where the machine gives
+    them apart; plus "grow" [m/sqrt(Hz)] times sqrt(speed); plus, where the
     law gives them, an absolute floor "abs" [m] and a velocity floor "vel"
     [m/s] (a seismic pick-up's: vel / Omega in displacement, largest at low
     speed) at `speeds` [Hz]."""
     law = m["noise"]
-    if "rel" in law and isinstance(law["rel"], dict):
+    if channel in law:
+        law = law[channel]
+    elif "rel" in law and isinstance(law["rel"], dict):
         law = law[channel.split("_")[0]]
+    f = np.asarray(speeds)
     return (law["rel"] * np.abs(v) + law["floor"] * math.sqrt(float(np.mean(np.abs(v) ** 2)))
-            + law.get("abs", 0.0) + law.get("vel", 0.0) / (2 * math.pi * np.asarray(speeds)))
+            + law.get("abs", 0.0) + law.get("vel", 0.0) / (2 * math.pi * f) + law.get("grow", 0.0) * np.sqrt(f))
 
 
 def cases_of(machine=DEFAULT):
