@@ -12,8 +12,8 @@ Usage:
   python3 scripts/ross_unseen.py --compare RUN_A RUN_B
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
-NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex or
-unseen-five.
+NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex,
+unseen-five or unseen-six (described in ross_unseen_machines.py).
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and

@@ -221,6 +221,13 @@ MACHINES["unseen-five"] = {
     "repo": ("clean-n3", "clean-n3c", "cross", "sub-base"),
 }
 DEFAULT = "unseen-four"
+# unseen-six (session 45) is tests/data/ross-unseen-6/unseen-six.toml: a fan
+# line shaft on three bearings, B1 and B3 rolling-element tables (nearly
+# constant, y stiffer than z, no cross-coupling, little damping), B2 a short
+# sleeve steady bearing, the 140 kg wheel between B2 and B3; light soft
+# pedestals (30-60 kg, k_y/k_z about 6) whose horizontal resonances (45, 22,
+# 38 Hz) and B2's vertical one (52 Hz) lie inside the run-down; the rotor's
+# own modes at 15, 25, 34, 42-44 and 46-48 Hz (ROSS, log dec 0.04-0.07).
 SUB_BASE_SIX = {"bearing": "B2", "m_y": 80.0, "m_z": 80.0, "k_y": 1.5e7, "k_z": 5.0e6,
                 "c_y": 1500.0, "c_z": 600.0}
 FRAME_SIX = {"name": "fan-frame", "bearings": ["B2", "B3"], "m_y": 250.0, "m_z": 250.0,
