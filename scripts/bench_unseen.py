@@ -109,8 +109,22 @@ EXPECT_FIVE = {
     "outlier": ([], set()),
     "base": ([("foundation_coupling", "")], None),
 }
+EXPECT_SIX = {
+    "clean-w1": ([], set()),
+    "sub-base": ([("pedestal_sub_base", "B2")], {"B2"}),
+    "table-film": ([("bearing_coefficients", "B2")], {"B2"}),
+    "table-scale": ([("bearing_coefficients", "B3")], {"B3"}),
+    "cross": ([("pedestal_cross_coupling", "B1")], {"B1"}),
+    "runout": ([("probe_runout", "B3")], {"B3"}),
+    "delay": ([("sensor_delay", "B2")], {"B2"}),
+    "flips": ([], set()),
+    "outlier": ([], set()),
+    "base": ([("foundation_coupling", "")], None),
+    "base-delay": ([("foundation_coupling", ""), ("sensor_delay", "B1")], None),
+    "cross-runout": ([("pedestal_cross_coupling", "B3"), ("probe_runout", "B1")], {"B1", "B3"}),
+}
 EXPECT = {"unseen-four": EXPECT_FOUR, "unseen-overhung": EXPECT_OVERHUNG, "unseen-train": EXPECT_TRAIN,
-          "unseen-flex": EXPECT_FLEX, "unseen-five": EXPECT_FIVE}
+          "unseen-flex": EXPECT_FLEX, "unseen-five": EXPECT_FIVE, "unseen-six": EXPECT_SIX}
 
 
 sys.path.insert(0, os.path.join(ROOT, "scripts"))

@@ -12,8 +12,8 @@ Usage:
   python3 scripts/ross_unseen.py --compare RUN_A RUN_B
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
-NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex or
-unseen-five.
+NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex,
+unseen-five or unseen-six (described in ross_unseen_machines.py).
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and
@@ -126,16 +126,20 @@ KEYS = ("kyy", "kyz", "kzy", "kzz", "cyy", "cyz", "czy", "czz")
 
 def noise_sd(m, channel, v, speeds):
     """sigma [m] of each phasor of one channel: a fraction of |phasor| plus
-    a floor (a fraction of the channel's RMS), per machine, or per kind of
-    channel (rel / ped) where the machine gives them apart; plus, where the
+    a floor (a fraction of the channel's RMS), per machine, per kind of
+    channel (rel / ped) or per channel (rel_y ...) where the machine gives
+    them apart; plus "grow" [m/sqrt(Hz)] times sqrt(speed); plus, where the
     law gives them, an absolute floor "abs" [m] and a velocity floor "vel"
     [m/s] (a seismic pick-up's: vel / Omega in displacement, largest at low
     speed) at `speeds` [Hz]."""
     law = m["noise"]
-    if "rel" in law and isinstance(law["rel"], dict):
+    if channel in law:
+        law = law[channel]
+    elif "rel" in law and isinstance(law["rel"], dict):
         law = law[channel.split("_")[0]]
+    f = np.asarray(speeds)
     return (law["rel"] * np.abs(v) + law["floor"] * math.sqrt(float(np.mean(np.abs(v) ** 2)))
-            + law.get("abs", 0.0) + law.get("vel", 0.0) / (2 * math.pi * np.asarray(speeds)))
+            + law.get("abs", 0.0) + law.get("vel", 0.0) / (2 * math.pi * f) + law.get("grow", 0.0) * np.sqrt(f))
 
 
 def cases_of(machine=DEFAULT):

@@ -221,3 +221,51 @@ MACHINES["unseen-five"] = {
     "repo": ("clean-n3", "clean-n3c", "cross", "sub-base"),
 }
 DEFAULT = "unseen-four"
+# unseen-six (session 45) is tests/data/ross-unseen-6/unseen-six.toml: a fan
+# line shaft on three bearings, B1 and B3 rolling-element tables (nearly
+# constant, y stiffer than z, no cross-coupling, little damping), B2 a short
+# sleeve steady bearing, the 140 kg wheel between B2 and B3; light soft
+# pedestals (30-60 kg, k_y/k_z about 6) whose horizontal resonances (45, 22,
+# 38 Hz) and B2's vertical one (52 Hz) lie inside the run-down; the rotor's
+# own modes at 15, 25, 34, 42-44 and 46-48 Hz (ROSS, log dec 0.04-0.07).
+SUB_BASE_SIX = {"bearing": "B2", "m_y": 80.0, "m_z": 80.0, "k_y": 1.5e7, "k_z": 5.0e6,
+                "c_y": 1500.0, "c_z": 600.0}
+FRAME_SIX = {"name": "fan-frame", "bearings": ["B2", "B3"], "m_y": 250.0, "m_z": 250.0,
+             "k_y": 3.0e7, "k_z": 1.2e7, "c_y": 3000.0, "c_z": 1500.0}
+MACHINES["unseen-six"] = {
+    "data": os.path.join(ROOT, "tests", "data", "ross-unseen-6"),
+    "file": "unseen-six.toml",
+    # a run-down logged unevenly (steps 0.3-1.7 of the mean, fixed), 62 Hz
+    # down to 4 Hz, 58 speeds, no drop-out: through every horizontal
+    # pedestal resonance (22, 38, 45 Hz) and B2's vertical one (52 Hz)
+    "grid": run_down_grid(62.0, 4.0, 58, (0.0, 0.0), seed=6_606),
+    # per channel, each sensor its own floor (a fraction of that channel's
+    # RMS: B-side probes read 0.3 %/1 % (y/z: the z probe sits on a rough
+    # band), pick-ups 0.5 %/2 % (z: the soft horizontal frame rattles)),
+    # 0.5 % of |phasor|, and a broadband term a tracking filter of a fixed
+    # number of revolutions passes: its bandwidth grows with speed, so
+    # sigma grows as sqrt(speed) ("grow" [m/sqrt(Hz)])
+    "noise": {"rel_y": {"rel": 0.005, "floor": 0.003, "grow": 5e-10},
+              "rel_z": {"rel": 0.005, "floor": 0.01, "grow": 5e-10},
+              "ped_y": {"rel": 0.005, "floor": 0.005, "grow": 1e-8},
+              "ped_z": {"rel": 0.005, "floor": 0.02, "grow": 1e-8}},
+    "noisy": "s1",
+    "digits": ("d2", "dmix", "d12"),
+    "mixed_digits": {"B1": 4, "B2": 2, "B3": 3},
+    "rng": 36_000,
+    "effects": {
+        "sub-base": [("sub_base", SUB_BASE_SIX)],
+        "table-film": [("worn_film", "B2", 1.0 / 0.85)],
+        "table-scale": [("table_scale", "B3", 1.0 / 1.25, 1.0)],
+        "cross": [("cross", "B1", 0.2)],
+        "runout": [("runout", "B3")],
+        "delay": [("delay", "B2", 150e-6)],
+        "flips": [("flips", ["B1", "B3"])],
+        "outlier": [("outlier", "B1")],
+        "base": [("frame", FRAME_SIX)],
+        "base-delay": [("frame", FRAME_SIX), ("delay", "B1", 150e-6)],
+        "cross-runout": [("cross", "B3", 0.2), ("runout", "B1")],
+    },
+    "d3_effects": False,
+    "repo": ("clean-s1c", "cross"),
+}
