@@ -274,10 +274,10 @@ enum LawTerms {
 /// extrapolated to it, where it makes the readings nearly exact. Measured
 /// (docs/session45-before17.md): bench_trust's three-bearing machine at
 /// 0.3 % white noise, seed 2521, `outboard` rel_y: 35 of 79 samples kept,
-/// |X| 4.1e-7 to 7.2e-6 m (the resonance's peak kept, every sample below
-/// it left out), law 0.22 % of |X| with no floor; the same channel at
-/// seeds 2522 and 2523 keeps |X| from 2.4e-9 m and a floor of 8.0e-9 and
-/// 9.5e-9 m (true sd 8.9e-9).
+/// √along 4.1e-7 to 7.2e-6 m (the resonance's peak kept, all 23 samples
+/// below it left out), law 0.22 % of |X| with no floor; the same channel
+/// at seeds 2522 and 2523 keeps √along from 2.4e-9 m and 2.8e-9 m and a
+/// floor of 8.0e-9 and 9.5e-9 m (true sd 8.9e-9).
 fn disowns_low_end(samples: &[Sample], kept: &[bool]) -> bool {
     // |X|² of a sample: its window's Σ c_r²·m_r² per unit Σ c_r².
     let x2 = |s: &Sample| s.along / s.floor;
