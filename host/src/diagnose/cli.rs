@@ -206,8 +206,13 @@ fn modal_view(
                     Some((inf, at(&names[0])?, names.each_ref().map(at)))
                 })
             });
+            // No ± of f_n or ζ where one of k, m, c has none (withheld:
+            // `super::summaries::withhold_std_errs`).
+            let known = names
+                .iter()
+                .all(|n| p.std_err.get(n).is_none_or(|s| s.is_finite()));
             crate::present::modal::direction_by_gradient(v(0), v(1), v(2), |g| {
-                let Some((inf, _, at)) = found else {
+                let Some((inf, _, at)) = found.filter(|_| known) else {
                     return f64::NAN;
                 };
                 let mut c = vec![0.0; inf.estimate.len()];

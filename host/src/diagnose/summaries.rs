@@ -5,7 +5,7 @@ use super::candidates::Candidate;
 use super::data::Prepared;
 use super::forward::Evaluated;
 use super::model::Model;
-use super::report::{CandidateSummary, Estimate};
+use super::report::{CandidateSummary, Estimate, Pedestal};
 use super::state::State;
 use crate::effects::EffectKind;
 use anyhow::Result;
@@ -223,4 +223,40 @@ impl HeldDamping {
             );
         }
     }
+}
+
+/// Every reported standard error of the pedestals in `pedestals` whose
+/// base-model fit by `plinth identify` ([`Prepared::base_fits`]) had its
+/// standard errors withheld by the errors-in-variables rule
+/// ([`crate::identify::std_err_withheld`]) made infinite (`± ∞` in text,
+/// `null` in JSON): such a pedestal is read so near the noise of its phasors
+/// that the asymptotic ± of any fit of it is short, and no ± is known.
+/// Returns a sentence for the verdict naming those pedestals (empty when
+/// none).
+pub(super) fn withhold_std_errs(prep: &Prepared, pedestals: &mut [Pedestal]) -> String {
+    let withheld: Vec<&str> = prep
+        .base_fits
+        .iter()
+        .filter(|f| crate::identify::std_err_withheld(f))
+        .map(|f| f.bearing.as_str())
+        .collect();
+    let mut named = Vec::new();
+    for p in pedestals
+        .iter_mut()
+        .filter(|p| withheld.contains(&p.bearing.as_str()))
+    {
+        for se in p.std_err.values_mut() {
+            *se = f64::INFINITY;
+        }
+        if !named.contains(&p.bearing) {
+            named.push(p.bearing.clone());
+        }
+    }
+    if named.is_empty() {
+        return String::new();
+    }
+    format!(
+        " At {}: the pedestal is read near or below the noise of its phasors (errors in variables, as `plinth identify` finds), so its standard errors are not known and none is given (± ∞, `null` in JSON).",
+        named.join(", ")
+    )
 }

@@ -6,6 +6,24 @@ use crate::estimate::Observation;
 use plinth_shared::phasor::Complex;
 use plinth_shared::regression::Parameter;
 
+/// The words of the [`WarningKind::Undetermined`] warning of a fit whose
+/// standard errors the errors-in-variables rule withheld
+/// ([`crate::estimate::ml::MIN_INFORMATION_SIGMAS`], `super::estimator`):
+/// they are then infinite (`null` in JSON) and the fit has no covariance.
+pub(crate) const STD_ERR_WITHHELD: &str =
+    "so their standard errors are not known and none is given";
+
+/// Whether the errors-in-variables rule withheld `fit`'s standard errors
+/// (its [`WarningKind::Undetermined`] warning says [`STD_ERR_WITHHELD`]):
+/// the pedestal is read so near its noise that no ± is known. The one test
+/// of it, for identify and for every other report of the same pedestal
+/// (`plinth diagnose`).
+pub fn std_err_withheld(fit: &PedestalFit) -> bool {
+    fit.warnings
+        .iter()
+        .any(|w| w.kind == WarningKind::Undetermined && w.message.contains(STD_ERR_WITHHELD))
+}
+
 /// All warnings for `fit`, made from the points it used (sorted by speed),
 /// the number of non-finite points left out and the least-squares solution
 /// over `columns` (the estimated parameters, in θ order).

@@ -4,7 +4,8 @@
 //! of the noise scale and, on request, OLS's efficiency against the
 //! Cramér–Rao bound.
 
-use super::{checks, ols_solution, Options, PedestalFit, Warning, WarningKind};
+use super::checks::{self, STD_ERR_WITHHELD};
+use super::{ols_solution, Options, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::{self, LackOfFit};
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::noise::{
@@ -525,13 +526,6 @@ pub(crate) fn fit_ml_checked(
     );
     Ok((fit, report))
 }
-
-/// The words of the [`WarningKind::Undetermined`] warning of a fit whose
-/// standard errors the errors-in-variables rule withheld
-/// ([`ml::MIN_INFORMATION_SIGMAS`]): they are then infinite (`null` in
-/// JSON) and the fit has no covariance.
-pub(crate) const STD_ERR_WITHHELD: &str =
-    "so their standard errors are not known and none is given";
 
 /// `covariance` × `scale` when every entry is finite (the covariance a
 /// fit reports), else `None`.

@@ -32,6 +32,7 @@ pub mod plausibility;
 pub mod synthetic;
 pub mod trust;
 
+pub use checks::std_err_withheld;
 pub use estimator::{Estimator, NoiseReport, OlsComparison};
 pub use model::{mode_label, mode_name, parse_mode, Model, ModelError};
 pub use plinth_shared::regression::{EquationMode, Parameter};

@@ -328,14 +328,11 @@ pub struct NonFiniteResult {
 /// fit is already untrusted because the data do not determine it (then +∞
 /// means "not estimable" and is written as `null`); the standard errors also
 /// where the errors-in-variables rule withheld them
-/// ([`super::estimator::STD_ERR_WITHHELD`]).
+/// ([`super::checks::std_err_withheld`]).
 pub fn check_finite(fit: &PedestalFit) -> Result<(), NonFiniteResult> {
     let undetermined = fit.has_warning(WarningKind::RankDeficient)
         || fit.has_warning(WarningKind::TooFewSpeeds)
-        || fit.warnings.iter().any(|w| {
-            w.kind == WarningKind::Undetermined
-                && w.message.contains(super::estimator::STD_ERR_WITHHELD)
-        });
+        || super::checks::std_err_withheld(fit);
     let error = |quantity: String, value: f64| NonFiniteResult {
         bearing: fit.bearing.clone(),
         quantity,

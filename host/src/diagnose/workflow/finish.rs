@@ -12,6 +12,7 @@ use crate::diagnose::locate::{locate, unexplained};
 use crate::diagnose::ml_final;
 use crate::diagnose::report::{Diagnosis, NoiseSummary};
 use crate::diagnose::state::{pedestals, State};
+use crate::diagnose::summaries;
 use crate::diagnose::trust::{self, as_pedestal_fit, conclude};
 use crate::rundir::RunDir;
 use anyhow::Result;
@@ -195,6 +196,10 @@ impl Search<'_> {
         if let Some(f) = &foundation {
             f.report_into(&mut diagnosis, prep);
         }
+        // No ± where identify withholds it (errors in variables).
+        let note = summaries::withhold_std_errs(prep, &mut diagnosis.pedestals_before);
+        summaries::withhold_std_errs(prep, &mut diagnosis.pedestals_after);
+        diagnosis.verdict += &note;
         Ok(Found {
             diagnosis,
             states: self.states,

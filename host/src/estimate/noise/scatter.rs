@@ -233,21 +233,77 @@ pub(super) fn scatter_law_with(
     if !(sd > 0.0 && sd.is_finite()) {
         return sd.is_finite().then_some(Scatter::Absolute(sd.max(0.0)));
     }
-    let (law, _) = settle(
-        &samples,
-        windows,
-        Law {
-            alpha: 0.0,
-            beta: sd * sd,
-        },
-    );
+    let start = Law {
+        alpha: 0.0,
+        beta: sd * sd,
+    };
+    let (law, kept) = settle(&samples, windows, start, LawTerms::Both);
+    // A law with no floor that left out the low-|X| end of the series is
+    // not a law of these data's noise (`disowns_low_end`): the law of a
+    // floor alone instead.
+    if law.alpha > 0.0 && law.beta <= 0.0 && disowns_low_end(&samples, &kept) {
+        return Some(
+            settle(&samples, windows, start, LawTerms::FloorOnly)
+                .0
+                .scatter(),
+        );
+    }
     Some(law.scatter())
+}
+
+/// Whether a law keeps its fraction term when the likelihood needs it
+/// ([`fit_law`]) or is the floor alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LawTerms {
+    /// v = α·|X|² + β, the fraction kept by its test.
+    Both,
+    /// v = β.
+    FloorOnly,
+}
+
+/// Whether at least [`ADEQUACY_WINDOW`] samples whose |X| is below that of
+/// every sample `kept` were left out: the law was fitted only above the
+/// series' low-|X| end and judged every window there inadequate.
+///
+/// Windows are left out where the local fits cannot follow the response
+/// (a resonance: residuals that grow with |X|). Under a law with no floor,
+/// v = α·|X|², white noise at the small |X| of a series' quiet end looks
+/// like such a misfit (its residuals are many times α·|X|²), while a
+/// resonance's misfit, which grows with |X|, looks like noise: the rounds
+/// of [`settle`] can end there, with the low end left out and the law
+/// extrapolated to it, where it makes the readings nearly exact. Measured
+/// (docs/session45-before17.md): bench_trust's three-bearing machine at
+/// 0.3 % white noise, seed 2521, `outboard` rel_y: 35 of 79 samples kept,
+/// √along 4.1e-7 to 7.2e-6 m (the resonance's peak kept, all 23 samples
+/// below it left out), law 0.22 % of |X| with no floor; the same channel
+/// at seeds 2522 and 2523 keeps √along from 2.4e-9 m and 2.8e-9 m and a
+/// floor of 8.0e-9 and 9.5e-9 m (true sd 8.9e-9).
+fn disowns_low_end(samples: &[Sample], kept: &[bool]) -> bool {
+    // |X|² of a sample: its window's Σ c_r²·m_r² per unit Σ c_r².
+    let x2 = |s: &Sample| s.along / s.floor;
+    let lowest_kept = samples
+        .iter()
+        .zip(kept)
+        .filter(|(_, k)| **k)
+        .map(|(s, _)| x2(s))
+        .fold(f64::INFINITY, f64::min);
+    samples
+        .iter()
+        .zip(kept)
+        .filter(|(s, k)| !**k && x2(s) < lowest_kept)
+        .count()
+        >= ADEQUACY_WINDOW
 }
 
 /// From `law`, rounds of (windows judged under the law, law fitted to the
 /// points kept) until the points kept and the law settle: the law and the
 /// points it keeps.
-fn settle(samples: &[Sample], windows: &[Window], mut law: Law) -> (Law, Vec<bool>) {
+fn settle(
+    samples: &[Sample],
+    windows: &[Window],
+    mut law: Law,
+    terms: LawTerms,
+) -> (Law, Vec<bool>) {
     let mut kept_before: Vec<bool> = Vec::new();
     // The previous round's fit: the start it read (`None`: it read none,
     // [`two_terms`] reads it only with both terms positive) and its law.
@@ -267,7 +323,7 @@ fn settle(samples: &[Sample], windows: &[Window], mut law: Law) -> (Law, Vec<boo
         // which [`fit_law`] would repeat exactly.
         let next = match fitted_before {
             Some((read, fitted)) if kept == kept_before && read == start => fitted,
-            _ => match fit_law(&chosen, law) {
+            _ => match fit_law(&chosen, law, terms == LawTerms::Both) {
                 Some(next) => next,
                 None => return (law, kept),
             },

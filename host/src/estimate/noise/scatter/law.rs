@@ -74,9 +74,10 @@ const LAW_ITERATIONS: usize = 200;
 /// leaves residuals that grow with |X|, which α would take up). The floor
 /// is never dropped by the test (only where the maximum puts it at zero):
 /// a law without it makes the readings of small |X| nearly exact (the
-/// session-23 failure, docs/trust-noise-law.md). `start` seeds the iteration. `None`
-/// when nothing is finite.
-pub(super) fn fit_law(samples: &[&Sample], start: Law) -> Option<Law> {
+/// session-23 failure, docs/trust-noise-law.md). `start` seeds the iteration;
+/// without `fraction` the floor-only law is given. `None` when nothing is
+/// finite.
+pub(super) fn fit_law(samples: &[&Sample], start: Law, fraction: bool) -> Option<Law> {
     let n = samples.len() as f64;
     let floor_only = Law {
         alpha: 0.0,
@@ -84,6 +85,9 @@ pub(super) fn fit_law(samples: &[&Sample], start: Law) -> Option<Law> {
     };
     if !(floor_only.beta.is_finite()) {
         return None;
+    }
+    if !fraction {
+        return Some(floor_only);
     }
     let fraction_only = Law {
         alpha: samples.iter().map(|s| s.nsq / (2.0 * s.along)).sum::<f64>() / n,
