@@ -5,7 +5,7 @@
 //! `plinth diagnose` shows none either, by the same test
 //! (`plinth::identify::std_err_withheld` of its base fit): not in the base
 //! model's pedestals, the final model's, nor their modal view.
-//! docs/session45-before17.md.
+//! docs/trust.md, Session 45 (before17).
 //!
 //! The run: `tests/data/lowsnr-null-train-1509` (ROSS unseen-train's B1, a
 //! stiff pedestal read near its noise; scripts/make_lowsnr_null.py; truth

@@ -5,7 +5,7 @@
 //! window of the low-|X| end left out (`disowns_low_end`), the floor-only
 //! law is taken, so the readings of small |X| are not taken as nearly
 //! exact and the lack-of-fit level test is not failed by a wrong noise
-//! model. docs/session45-before17.md (the data and this test first made by
+//! model. docs/trust.md, Session 45 (before17) (the data and this test first made by
 //! session 44's farate17b, whose fix was not landed).
 //!
 //! The run: `tests/data/three-bearing/white-0.3-2521`, bench_trust's clean

@@ -12,7 +12,7 @@
 //! scripts/ross_unseen.py's (`--machine unseen-six`), seed 1 of each case
 //! kept in tests/data/ross-unseen-6/<case>/; only the reading is Plinth's.
 //! The rates over seeds are measured by `scripts/bench_unseen.py --machine
-//! unseen-six` (docs/session45-six17.md).
+//! unseen-six` (docs/unseen-six.md).
 
 use plinth::diagnose::report::Diagnosis;
 use plinth::rundir::RunDir;
@@ -38,7 +38,7 @@ fn diagnosis(run: &RunDir) -> Diagnosis {
 /// within 3 of its ± of ROSS's; diagnose names nothing, is trusted, and its
 /// final pedestals are within 3 ± too. Measured (`BENCH_JOBS=1 python3
 /// scripts/bench_unseen.py --machine unseen-six PLINTH DIR 3631-3670
-/// clean-s1 clean-s1c`, and seeds 3601-3603, 3611-3630; docs/session45-six17.md):
+/// clean-s1 clean-s1c`, and seeds 3601-3603, 3611-3630; docs/unseen-six.md):
 /// 0/175 clean runs flagged by identify or diagnose; with the noise columns
 /// 0/63 trusted runs with a final value beyond 3 ± (without them 8/63:
 /// finding 2 there).

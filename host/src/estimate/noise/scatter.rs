@@ -272,7 +272,7 @@ enum LawTerms {
 /// resonance's misfit, which grows with |X|, looks like noise: the rounds
 /// of [`settle`] can end there, with the low end left out and the law
 /// extrapolated to it, where it makes the readings nearly exact. Measured
-/// (docs/session45-before17.md): bench_trust's three-bearing machine at
+/// (docs/trust.md, Session 45 (before17)): bench_trust's three-bearing machine at
 /// 0.3 % white noise, seed 2521, `outboard` rel_y: 35 of 79 samples kept,
 /// √along 4.1e-7 to 7.2e-6 m (the resonance's peak kept, all 23 samples
 /// below it left out), law 0.22 % of |X| with no floor; the same channel
