@@ -26,10 +26,10 @@
 //! The design's inflation factor of a parameter, ρ = √(C_marg/C_cond) (its
 //! variance with μ free over its variance with μ = 0), is what counting
 //! the base as unknown does to its ±, whatever the noise's level. One rule:
-//! the base is **excluded** at a pedestal when ρ ≤ [`EXCLUDED_WITHIN`] for
-//! its k_y, k_z and m (the base's share of the variance at most the
+//! the base is **excluded** when ρ ≤ [`EXCLUDED_WITHIN`] for the k_y, k_z
+//! and m of every pedestal on it (the base's share of the variance at most the
 //! pedestal's own: a base at its one-σ bound moves the value by at most one
-//! σ). Where it is not, that pedestal's values are those of the joint
+//! σ). Where it is not, every such pedestal's values are those of the joint
 //! fit (one Gauss–Newton step from the reported ones with μ free) and its
 //! ± are multiplied by ρ (every parameter: the marginal ±), and the
 //! verdict says so; where the design is
@@ -261,33 +261,43 @@ pub fn judge_confounded(
         .filter_map(|&b| prep.bearings.get(b).map(String::as_str))
         .collect();
     let on = names.join(", ");
-    let mut widened = Vec::new();
-    let mut unbounded = Vec::new();
-    for (name, (r, shift)) in names.iter().zip(&rho) {
-        let judged = JUDGED.map(|q| r[column_of(q)]);
-        if std::env::var_os("PLINTH_DBG").is_some() {
+    let judged = |r: &[f64; 5]| JUDGED.map(|q| r[column_of(q)]);
+    if std::env::var_os("PLINTH_DBG").is_some() {
+        for (name, (r, shift)) in names.iter().zip(&rho) {
             eprintln!("DBG confounded {name} rho={r:?} shift={shift:?}");
         }
-        if judged.iter().all(|v| *v <= EXCLUDED_WITHIN) {
-            continue;
-        }
-        if judged.iter().any(|v| !v.is_finite()) {
-            unbounded.push(name.to_string());
-            continue;
-        }
-        let Some(p) = pedestals.iter_mut().find(|p| p.bearing == *name) else {
-            continue;
-        };
-        for ((q, f), dv) in Parameter::ALL.iter().zip(r).zip(shift) {
-            if let Some(se) = p.std_err.get_mut(q.name()) {
-                *se *= f;
+    }
+    // The base is one unknown: excluded only where it is at every pedestal
+    // on it; otherwise every pedestal on it takes the joint fit.
+    if rho
+        .iter()
+        .all(|(r, _)| judged(r).iter().all(|v| *v <= EXCLUDED_WITHIN))
+    {
+        return;
+    }
+    let unbounded: Vec<&str> = names
+        .iter()
+        .zip(&rho)
+        .filter(|(_, (r, _))| judged(r).iter().any(|v| !v.is_finite()))
+        .map(|(n, _)| *n)
+        .collect();
+    let mut widened = Vec::new();
+    if unbounded.is_empty() {
+        for (name, (r, shift)) in names.iter().zip(&rho) {
+            let Some(p) = pedestals.iter_mut().find(|p| p.bearing == *name) else {
+                continue;
+            };
+            for ((q, f), dv) in Parameter::ALL.iter().zip(r).zip(shift) {
+                if let Some(se) = p.std_err.get_mut(q.name()) {
+                    *se *= f;
+                }
+                if let Some(v) = p.values.get_mut(q.name()) {
+                    *v += dv;
+                }
             }
-            if let Some(v) = p.values.get_mut(q.name()) {
-                *v += dv;
-            }
+            let worst = judged(r).iter().copied().fold(1.0, f64::max);
+            widened.push(format!("{name} (± up to {worst:.1}×)"));
         }
-        let worst = judged.iter().copied().fold(1.0, f64::max);
-        widened.push(format!("{name} ({worst:.1}×)"));
     }
     if !unbounded.is_empty() {
         conclusion.verdict += &format!(
