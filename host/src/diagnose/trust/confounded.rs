@@ -29,8 +29,9 @@
 //! the base is **excluded** when ρ ≤ [`EXCLUDED_WITHIN`] for the k_y, k_z
 //! and m of every pedestal on it (the base's share of the variance at most the
 //! pedestal's own: a base at its one-σ bound moves the value by at most one
-//! σ). Where it is not, every such pedestal's values are those of the joint
-//! fit (one Gauss–Newton step from the reported ones with μ free) and its
+//! σ). Where it is not, every such pedestal's values move by what freeing
+//! μ changes in them (one Gauss–Newton step from the reported values with μ
+//! free less the same step with μ held at 0) and its
 //! ± are multiplied by ρ (every parameter: the marginal ±), and the
 //! verdict says so; where the design is
 //! singular with μ free (the data bound neither), the diagnosis is
@@ -170,12 +171,22 @@ pub fn inflation(
     let cond = info.view((0, 0), (cols - 2, cols - 2)).into_owned();
     let c_cond = cond.cholesky()?.inverse();
     let c_marg = info.clone().cholesky().map(|ch| ch.inverse());
-    // One Gauss–Newton step from the reported values with μ free: the
-    // joint fit's values, linearised at rigid ground.
+    // What freeing μ changes in the values: one Gauss–Newton step from the
+    // reported values with μ free less the same step with μ held at 0
+    // (the part of the step that is this design's own re-weighting of the
+    // rigid fit is not the base's).
+    let b = nalgebra::DVector::from_vec(rhs);
+    let jtb = js.transpose() * &b;
     let step: Vec<f64> = match &c_marg {
         Some(m) => {
-            let delta = m * (js.transpose() * nalgebra::DVector::from_vec(rhs));
-            (0..cols).map(|c| delta[c] / norms[c]).collect()
+            let full = m * &jtb;
+            let held = &c_cond * jtb.rows(0, cols - 2);
+            (0..cols)
+                .map(|c| {
+                    let held = if c < cols - 2 { held[c] } else { 0.0 };
+                    (full[c] - held) / norms[c]
+                })
+                .collect()
         }
         None => vec![0.0; cols],
     };
