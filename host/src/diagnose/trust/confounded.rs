@@ -29,11 +29,12 @@
 //! the base is **excluded** when ρ ≤ [`EXCLUDED_WITHIN`] for the k_y, k_z
 //! and m of every pedestal on it (the base's share of the variance at most the
 //! pedestal's own: a base at its one-σ bound moves the value by at most one
-//! σ). Where it is not, every such pedestal's values move by what freeing
-//! μ changes in them (one Gauss–Newton step from the reported values with μ
-//! free less the same step with μ held at 0) and its
-//! ± are multiplied by ρ (every parameter: the marginal ±), and the
-//! verdict says so; where the design is
+//! σ). Where it is not, every such pedestal keeps its value and takes the
+//! interval about it that holds the joint fit: √((ρ·σ)² + Δ²), Δ what
+//! freeing μ changes in the value (one Gauss–Newton step from the reported
+//! values with μ free less the same step with μ held at 0; the linearised
+//! change overshot B2 on 1603/1604, so it widens, it does not move; every
+//! parameter), and the verdict says so; where the design is
 //! singular with μ free (the data bound neither), the diagnosis is
 //! untrusted.
 
@@ -117,7 +118,11 @@ pub fn inflation(
                 let t = &theta[i];
                 Complex::new(t[column_of(k_of(d))], omega * t[column_of(c_of(d))])
             };
-            let total: Complex<f64> = at.iter().enumerate().map(|(i, o)| spring(i) * o.ped[d]).sum();
+            let total: Complex<f64> = at
+                .iter()
+                .enumerate()
+                .map(|(i, o)| spring(i) * o.ped[d])
+                .sum();
             for (i, o) in at.iter().enumerate() {
                 let t = &theta[i];
                 let (k, c) = (t[column_of(k_of(d))], t[column_of(c_of(d))]);
@@ -190,15 +195,6 @@ pub fn inflation(
         }
         None => vec![0.0; cols],
     };
-    if std::env::var_os("PLINTH_DBG").is_some() {
-        if let Some(m) = &c_marg {
-            for d in 0..2 {
-                let a = cols - 2 + d;
-                let se = m[(a, a)].sqrt() / norms[a];
-                eprintln!("DBG mu[{d}] = {:.4e} ± {se:.4e}", step[a]);
-            }
-        }
-    }
     Some(
         (0..bearings.len())
             .map(|i| {
@@ -261,7 +257,11 @@ pub fn judge_confounded(
         }
         Some(t)
     };
-    let Some(theta) = bearings.iter().map(|&b| reported(b)).collect::<Option<Vec<_>>>() else {
+    let Some(theta) = bearings
+        .iter()
+        .map(|&b| reported(b))
+        .collect::<Option<Vec<_>>>()
+    else {
         return;
     };
     let Some(rho) = inflation(prep, bearings, &theta, runouts) else {
@@ -273,11 +273,6 @@ pub fn judge_confounded(
         .collect();
     let on = names.join(", ");
     let judged = |r: &[f64; 5]| JUDGED.map(|q| r[column_of(q)]);
-    if std::env::var_os("PLINTH_DBG").is_some() {
-        for (name, (r, shift)) in names.iter().zip(&rho) {
-            eprintln!("DBG confounded {name} rho={r:?} shift={shift:?}");
-        }
-    }
     // The base is one unknown: excluded only where it is at every pedestal
     // on it; otherwise every pedestal on it takes the joint fit.
     if rho
@@ -300,10 +295,7 @@ pub fn judge_confounded(
             };
             for ((q, f), dv) in Parameter::ALL.iter().zip(r).zip(shift) {
                 if let Some(se) = p.std_err.get_mut(q.name()) {
-                    *se *= f;
-                }
-                if let Some(v) = p.values.get_mut(q.name()) {
-                    *v += dv;
+                    *se = (*se * f).hypot(*dv);
                 }
             }
             let worst = judged(r).iter().copied().fold(1.0, f64::max);
@@ -323,7 +315,7 @@ pub fn judge_confounded(
     }
     if !widened.is_empty() {
         conclusion.verdict += &format!(
-            " A base under {on} is neither found nor excluded by these data (the kept `probe_runout` can take its part above its modes): the values and ± of {} are those of the joint fit with it unknown.",
+            " A base under {on} is neither found nor excluded by these data (the kept `probe_runout` can take its part above its modes): the ± of {} hold the joint fit with it unknown.",
             widened.join(", ")
         );
     }

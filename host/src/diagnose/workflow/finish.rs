@@ -10,15 +10,15 @@ use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::Agreement;
 use crate::diagnose::locate::{locate, unexplained};
 use crate::diagnose::ml_final;
-use crate::diagnose::report::{Diagnosis, NoiseSummary};
-use crate::diagnose::state::{pedestals, State};
-use crate::diagnose::report::{Pedestal, Step};
-use crate::diagnose::trust::{self, as_pedestal_fit, conclude, confounded, Conclusion};
 use crate::diagnose::model::Term;
+use crate::diagnose::report::{Diagnosis, NoiseSummary};
+use crate::diagnose::report::{Pedestal, Step};
+use crate::diagnose::state::{pedestals, State};
+use crate::diagnose::trust::{self, as_pedestal_fit, conclude, confounded, Conclusion};
 use crate::effects::EffectKind;
-use num_complex::Complex;
 use crate::rundir::RunDir;
 use anyhow::Result;
+use num_complex::Complex;
 use plinth_shared::regression::Parameter;
 use std::collections::BTreeMap;
 
@@ -242,7 +242,10 @@ impl Search<'_> {
             .iter()
             .map(|&bearing| {
                 let r = |dir, imag| value(Term::Runout { bearing, dir, imag });
-                (bearing, std::array::from_fn(|d| Complex::new(r(d, false), r(d, true))))
+                (
+                    bearing,
+                    std::array::from_fn(|d| Complex::new(r(d, false), r(d, true))),
+                )
             })
             .collect();
         confounded::judge_confounded(conclusion, pedestals_after, self.prep, &bearings, &runouts);
