@@ -54,18 +54,25 @@ pub const EXCLUDED_WITHIN: f64 = std::f64::consts::SQRT_2;
 /// The values a pedestal is judged by (its k and m).
 const JUDGED: [Parameter; 3] = [Parameter::Ky, Parameter::Kz, Parameter::M];
 
-/// The bearings of `groups` (a base trial's favoured grouping, bearing
-/// indices) that stand on a base with a bearing in `acted` (where a kept
-/// runout acts), sorted.
-pub fn confounded_bearings(groups: &[Vec<usize>], acted: &[usize]) -> Vec<usize> {
-    let mut out: Vec<usize> = groups
-        .iter()
-        .filter(|g| g.iter().any(|b| acted.contains(b)))
-        .flatten()
-        .copied()
+/// The largest number of bearings whose candidate bases are enumerated
+/// (2^n subsets).
+const MAX_ENUMERATED: usize = 12;
+
+/// Every shared base a kept runout can take for itself: each set of at
+/// least two of the `n` bearings (indices) that holds a bearing in `acted`
+/// (where a kept runout acts), all `n` on one frame among them; sorted
+/// sets, smaller first. Independent of the base model's trial: which
+/// grouping that trial favoured says nothing once the runout has taken the
+/// base's part. Empty when nothing acts or `n` is above [`MAX_ENUMERATED`].
+pub fn candidate_bases(n: usize, acted: &[usize]) -> Vec<Vec<usize>> {
+    if acted.is_empty() || n > MAX_ENUMERATED {
+        return Vec::new();
+    }
+    let mut out: Vec<Vec<usize>> = (1u32..(1 << n))
+        .map(|mask| (0..n).filter(|b| mask & (1 << b) != 0).collect::<Vec<_>>())
+        .filter(|set| set.len() >= 2 && set.iter().any(|b| acted.contains(b)))
         .collect();
-    out.sort_unstable();
-    out.dedup();
+    out.sort_by(|a, b| a.len().cmp(&b.len()).then_with(|| a.cmp(b)));
     out
 }
 
@@ -235,88 +242,185 @@ fn c_of(d: usize) -> Parameter {
     }
 }
 
-/// Judges the reported `pedestals` of `bearings` (indices of `prep`, on
-/// one base the base model's trial fitted, with a kept runout at
-/// `runouts`, each with its runout (y, z) [m]) with that base as an unknown nuisance (module docs): widens
-/// the ± where the base is not excluded and says so in the verdict;
-/// untrusts where the design with the base is singular. Nothing when the
+/// What one candidate base does to the pedestals on it.
+enum OnBase {
+    /// The data exclude it at every pedestal on it (ρ ≤ [`EXCLUDED_WITHIN`]).
+    Excluded,
+    /// With its compliance free the design is singular at these bearings.
+    Unbounded(Vec<usize>),
+    /// Not excluded: each bearing's ± holding the joint fit [SI] (k_y,
+    /// k_z, m, c_y, c_z) and its largest ρ over k_y, k_z, m.
+    Widened(Vec<(usize, [f64; 5], f64)>),
+}
+
+/// The reported value and ± of a bearing's pedestal (k_y, k_z, m, c_y,
+/// c_z) [SI]; `None` when not reported.
+fn reported(prep: &Prepared, pedestals: &[Pedestal], b: usize) -> Option<([f64; 5], [f64; 5])> {
+    let name = prep.bearings.get(b)?;
+    let p = pedestals.iter().find(|p| &p.bearing == name)?;
+    let mut t = [0.0; 5];
+    let mut se = [0.0; 5];
+    for (k, q) in Parameter::ALL.iter().enumerate() {
+        t[k] = *p.values.get(q.name())?;
+        se[k] = *p.std_err.get(q.name())?;
+    }
+    Some((t, se))
+}
+
+/// Judges one candidate base under `set` (module docs); `None` when the
 /// design cannot be built (a pedestal not reported, no common speed).
+fn judge_one(
+    prep: &Prepared,
+    pedestals: &[Pedestal],
+    set: &[usize],
+    runouts: &[(usize, [Complex<f64>; 2])],
+) -> Option<OnBase> {
+    let at: Vec<([f64; 5], [f64; 5])> = set
+        .iter()
+        .map(|&b| reported(prep, pedestals, b))
+        .collect::<Option<_>>()?;
+    let theta: Vec<[f64; 5]> = at.iter().map(|(t, _)| *t).collect();
+    let joint = inflation(prep, set, &theta, runouts)?;
+    let judged = |r: &[f64; 5]| JUDGED.map(|q| r[column_of(q)]);
+    // The base is one unknown: excluded only where it is at every pedestal
+    // on it; otherwise every pedestal on it takes the joint fit.
+    if joint
+        .iter()
+        .all(|(r, _)| judged(r).iter().all(|v| *v <= EXCLUDED_WITHIN))
+    {
+        return Some(OnBase::Excluded);
+    }
+    let unbounded: Vec<usize> = set
+        .iter()
+        .zip(&joint)
+        .filter(|(_, (r, _))| judged(r).iter().any(|v| !v.is_finite()))
+        .map(|(b, _)| *b)
+        .collect();
+    if !unbounded.is_empty() {
+        return Some(OnBase::Unbounded(unbounded));
+    }
+    Some(OnBase::Widened(
+        set.iter()
+            .zip(&joint)
+            .zip(&at)
+            .map(|((&b, (r, shift)), (_, se))| {
+                let wide = std::array::from_fn(|q| (se[q] * r[q]).hypot(shift[q]));
+                (b, wide, judged(r).iter().copied().fold(1.0, f64::max))
+            })
+            .collect(),
+    ))
+}
+
+/// The names of bearings `set` (indices of `prep`) joined by `sep`.
+fn names_of(prep: &Prepared, set: &[usize], sep: &str) -> String {
+    set.iter()
+        .filter_map(|&b| prep.bearings.get(b).map(String::as_str))
+        .collect::<Vec<_>>()
+        .join(sep)
+}
+
+/// Judges the reported `pedestals` with every base of `candidates` (sets
+/// of bearing indices of `prep`, [`candidate_bases`]) as an unknown
+/// nuisance beside the kept runouts `runouts` (bearing, runout (y, z) [m])
+/// (module docs). A pedestal on a base that is not excluded takes the
+/// widest ± over those bases (the interval holds the joint fit whichever
+/// of them stands under it), and the verdict names them; where one makes
+/// the design singular the diagnosis is untrusted. Nothing when every
+/// candidate is excluded or cannot be built.
 pub fn judge_confounded(
     conclusion: &mut Conclusion,
     pedestals: &mut [Pedestal],
     prep: &Prepared,
-    bearings: &[usize],
+    candidates: &[Vec<usize>],
     runouts: &[(usize, [Complex<f64>; 2])],
 ) {
-    let reported = |b: usize| -> Option<[f64; 5]> {
-        let name = prep.bearings.get(b)?;
-        let p = pedestals.iter().find(|p| &p.bearing == name)?;
-        let mut t = [0.0; 5];
-        for (k, q) in Parameter::ALL.iter().enumerate() {
-            t[k] = *p.values.get(q.name())?;
-        }
-        Some(t)
-    };
-    let Some(theta) = bearings
-        .iter()
-        .map(|&b| reported(b))
-        .collect::<Option<Vec<_>>>()
-    else {
-        return;
-    };
-    let Some(rho) = inflation(prep, bearings, &theta, runouts) else {
-        return;
-    };
-    let names: Vec<&str> = bearings
-        .iter()
-        .filter_map(|&b| prep.bearings.get(b).map(String::as_str))
-        .collect();
-    let on = names.join(", ");
-    let judged = |r: &[f64; 5]| JUDGED.map(|q| r[column_of(q)]);
-    // The base is one unknown: excluded only where it is at every pedestal
-    // on it; otherwise every pedestal on it takes the joint fit.
-    if rho
-        .iter()
-        .all(|(r, _)| judged(r).iter().all(|v| *v <= EXCLUDED_WITHIN))
-    {
-        return;
-    }
-    let unbounded: Vec<&str> = names
-        .iter()
-        .zip(&rho)
-        .filter(|(_, (r, _))| judged(r).iter().any(|v| !v.is_finite()))
-        .map(|(n, _)| *n)
-        .collect();
-    let mut widened = Vec::new();
-    if unbounded.is_empty() {
-        for (name, (r, shift)) in names.iter().zip(&rho) {
-            let Some(p) = pedestals.iter_mut().find(|p| p.bearing == *name) else {
-                continue;
-            };
-            for ((q, f), dv) in Parameter::ALL.iter().zip(r).zip(shift) {
-                if let Some(se) = p.std_err.get_mut(q.name()) {
-                    *se = (*se * f).hypot(*dv);
+    let mut open: Vec<String> = Vec::new();
+    let mut unbounded: Vec<usize> = Vec::new();
+    let mut widest: Vec<(usize, [f64; 5], f64)> = Vec::new();
+    for set in candidates {
+        match judge_one(prep, pedestals, set, runouts) {
+            None | Some(OnBase::Excluded) => continue,
+            Some(OnBase::Unbounded(at)) => unbounded.extend(at),
+            Some(OnBase::Widened(at)) => {
+                for (b, se, rho) in at {
+                    match widest.iter_mut().find(|(w, _, _)| *w == b) {
+                        Some((_, w, r)) => {
+                            for (w, s) in w.iter_mut().zip(se) {
+                                *w = w.max(s);
+                            }
+                            *r = r.max(rho);
+                        }
+                        None => widest.push((b, se, rho)),
+                    }
                 }
             }
-            let worst = judged(r).iter().copied().fold(1.0, f64::max);
-            widened.push(format!("{name} (± up to {worst:.1}×)"));
         }
+        open.push(names_of(prep, set, "+"));
     }
+    if open.is_empty() {
+        return;
+    }
+    let bases = open.join(", ");
+    unbounded.sort_unstable();
+    unbounded.dedup();
     if !unbounded.is_empty() {
+        let at = names_of(prep, &unbounded, ", ");
         conclusion.verdict += &format!(
-            " But a base under {on} is neither found nor excluded by these data, and with it unknown beside the kept `probe_runout` the data do not bound the pedestals of {} (reasons below): the identified parameters are not to be trusted.",
-            unbounded.join(", ")
+            " But a shared base (under {bases}) is neither found nor excluded by these data, and with it unknown beside the kept `probe_runout` the data do not bound the pedestals of {at} (reasons below): the identified parameters are not to be trusted."
         );
         conclusion.reasons.push(format!(
-            "a base under {on} (the base model's trial fitted one) is neither found nor excluded: a runout takes its part above its modes, and with its compliance free the pedestals of {} are not determined",
-            unbounded.join(", ")
+            "a shared base (under {bases}) is neither found nor excluded: a runout takes its part above its modes, and with its compliance free the pedestals of {at} are not determined"
         ));
         conclusion.trusted = false;
+        return;
     }
-    if !widened.is_empty() {
-        conclusion.verdict += &format!(
-            " A base under {on} is neither found nor excluded by these data (the kept `probe_runout` can take its part above its modes): the ± of {} hold the joint fit with it unknown.",
-            widened.join(", ")
+    widest.sort_by_key(|(b, _, _)| *b);
+    let mut widened = Vec::new();
+    for (b, se, rho) in &widest {
+        let Some(name) = prep.bearings.get(*b) else {
+            continue;
+        };
+        let Some(p) = pedestals.iter_mut().find(|p| &p.bearing == name) else {
+            continue;
+        };
+        for (q, w) in Parameter::ALL.iter().zip(se) {
+            if let Some(s) = p.std_err.get_mut(q.name()) {
+                *s = s.max(*w);
+            }
+        }
+        widened.push(format!("{name} (ρ up to {rho:.1})"));
+    }
+    conclusion.verdict += &format!(
+        " A shared base (under {bases}) is neither found nor excluded by these data (the kept `probe_runout` can take its part above its modes): the ± of {} hold the joint fit with it unknown.",
+        widened.join(", ")
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::candidate_bases;
+
+    /// Four bearings, a runout at the second: every set of two or more
+    /// holding it (three pairs, three triples, all four), whatever a base
+    /// trial favoured; none without it.
+    #[test]
+    fn every_shared_base_under_the_runout_bearing_is_a_candidate() {
+        let c = candidate_bases(4, &[1]);
+        assert_eq!(
+            c,
+            vec![
+                vec![0, 1],
+                vec![1, 2],
+                vec![1, 3],
+                vec![0, 1, 2],
+                vec![0, 1, 3],
+                vec![1, 2, 3],
+                vec![0, 1, 2, 3],
+            ]
         );
+        assert!(candidate_bases(4, &[]).is_empty());
+        assert!(candidate_bases(1, &[0]).is_empty());
+        // Two runouts: a set holding either.
+        assert_eq!(candidate_bases(3, &[0, 2]).len(), 4);
     }
 }

@@ -210,26 +210,24 @@ impl Search<'_> {
         })
     }
 
-    /// A shared base the base model's trial fitted under a bearing where a
-    /// kept `probe_runout` acts, not chosen: judged as an unknown nuisance
-    /// beside the runouts ([`confounded::judge_confounded`]: the pedestals'
-    /// ± counting it, or no trust). Nothing when no such base was fitted.
+    /// Every shared base under a bearing where a kept `probe_runout` acts
+    /// (any grouping holding it, all bearings on one frame among them),
+    /// none chosen: judged as an unknown nuisance beside the runouts
+    /// ([`confounded::judge_confounded`]: the pedestals' ± counting it, or
+    /// no trust). Nothing when no runout is kept.
     fn judge_confounded(
         &self,
         conclusion: &mut Conclusion,
         pedestals_after: &mut [Pedestal],
         kept: &[Step],
     ) {
-        let Some(tried) = &self.foundation_tried else {
-            return;
-        };
         let acted: Vec<usize> = kept
             .iter()
             .filter(|s| s.effect == EffectKind::ProbeRunout.name())
             .filter_map(|s| self.prep.bearing_index(&s.bearing))
             .collect();
-        let bearings = confounded::confounded_bearings(&tried.grouping.groups, &acted);
-        if bearings.is_empty() {
+        let candidates = confounded::candidate_bases(self.prep.bearings.len(), &acted);
+        if candidates.is_empty() {
             return;
         }
         let value = |t: Term| {
@@ -248,6 +246,12 @@ impl Search<'_> {
                 )
             })
             .collect();
-        confounded::judge_confounded(conclusion, pedestals_after, self.prep, &bearings, &runouts);
+        confounded::judge_confounded(
+            conclusion,
+            pedestals_after,
+            self.prep,
+            &candidates,
+            &runouts,
+        );
     }
 }
