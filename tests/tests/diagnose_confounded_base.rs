@@ -53,3 +53,12 @@ fn a_base_the_runout_can_take_is_counted(name: &str) {
 fn a_base_a_runout_can_take_is_counted_in_the_pedestals_on_it() {
     a_base_the_runout_can_take_is_counted("base-runout-d3-1602");
 }
+
+/// Seed 1852 (grid 259-379 Hz), where the base model's trial favoured
+/// B1+B4, a grouping without B2, so session 44's rule (the trial's grouping
+/// only) did not judge the base. Main: trusted, runout at B2, B1 k_y 3.3 ±
+/// off.
+#[test]
+fn a_base_the_base_trial_did_not_group_with_the_runout_is_counted() {
+    a_base_the_runout_can_take_is_counted("base-runout-d3-1852");
+}
