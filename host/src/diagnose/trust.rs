@@ -379,6 +379,7 @@ pub fn as_pedestal_fit(prep: &Prepared, p: &Pedestal) -> Option<PedestalFit> {
     })
 }
 
+pub mod confounded;
 pub mod held;
 #[cfg(test)]
 mod tests;

@@ -10,12 +10,16 @@ use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::Agreement;
 use crate::diagnose::locate::{locate, unexplained};
 use crate::diagnose::ml_final;
+use crate::diagnose::model::Term;
 use crate::diagnose::report::{Diagnosis, NoiseSummary};
+use crate::diagnose::report::{Pedestal, Step};
 use crate::diagnose::state::{pedestals, State};
 use crate::diagnose::summaries;
-use crate::diagnose::trust::{self, as_pedestal_fit, conclude};
+use crate::diagnose::trust::{self, as_pedestal_fit, conclude, confounded, Conclusion};
+use crate::effects::EffectKind;
 use crate::rundir::RunDir;
 use anyhow::Result;
+use num_complex::Complex;
 use plinth_shared::regression::Parameter;
 use std::collections::BTreeMap;
 
@@ -141,6 +145,9 @@ impl Search<'_> {
             &where_after,
         );
         trust::judge_support(&mut conclusion, prep, &self.steps);
+        if foundation.is_none() {
+            self.judge_confounded(&mut conclusion, &mut pedestals_after, &kept);
+        }
         trust::held::judge_held(&mut conclusion, &prep.bearings, &ml_refits);
         let unexplained = if conclusion.verdict.contains(trust::UNEXPLAINED) {
             unexplained(&where_after, trust::AT_THE_FLOOR)
@@ -206,5 +213,50 @@ impl Search<'_> {
             foundation,
             after_steps: self.after_steps,
         })
+    }
+
+    /// Every shared base under a bearing where a kept `probe_runout` acts
+    /// (any grouping holding it, all bearings on one frame among them),
+    /// none chosen: judged as an unknown nuisance beside the runouts
+    /// ([`confounded::judge_confounded`]: the pedestals' ± counting it, or
+    /// no trust). Nothing when no runout is kept.
+    fn judge_confounded(
+        &self,
+        conclusion: &mut Conclusion,
+        pedestals_after: &mut [Pedestal],
+        kept: &[Step],
+    ) {
+        let acted: Vec<usize> = kept
+            .iter()
+            .filter(|s| s.effect == EffectKind::ProbeRunout.name())
+            .filter_map(|s| self.prep.bearing_index(&s.bearing))
+            .collect();
+        let candidates = confounded::candidate_bases(self.prep.bearings.len(), &acted);
+        if candidates.is_empty() {
+            return;
+        }
+        let value = |t: Term| {
+            let m = &self.state.model.terms;
+            m.iter()
+                .position(|u| *u == t)
+                .map_or(0.0, |i| self.state.params.beta[i])
+        };
+        let runouts: Vec<(usize, [Complex<f64>; 2])> = acted
+            .iter()
+            .map(|&bearing| {
+                let r = |dir, imag| value(Term::Runout { bearing, dir, imag });
+                (
+                    bearing,
+                    std::array::from_fn(|d| Complex::new(r(d, false), r(d, true))),
+                )
+            })
+            .collect();
+        confounded::judge_confounded(
+            conclusion,
+            pedestals_after,
+            self.prep,
+            &candidates,
+            &runouts,
+        );
     }
 }
