@@ -16,10 +16,11 @@
 //! rejected candidate: k_y·σ_τ ≈ 1700 N·s/m against that ± 800
 //! (docs/unseen.md, Session 44 (sweep17b), finding 1).
 //!
-//! Here, at every bearing of a group on rigid ground whose final model has
-//! no delay (the search tried one there at every step,
-//! [`crate::diagnose::candidates`]), the group's equations are extended by a
-//! delay on both `rel` probes at τ = 0 and linearised at the final values
+//! Here, at every bearing of a group on rigid ground (the search tried a
+//! delay there at every step, [`crate::diagnose::candidates`]), the group's
+//! equations are extended by a delay at τ = 0 on the `rel` probes whose
+//! phase no delay of the final model frees (both where it has none,
+//! `undelayed_probes`) and linearised at the final values
 //! (the same construction as [`super::held_delay`] and [`super::held_free`],
 //! the nuisance the other way round: Baarda's external reliability). With
 //! the inference ([`Inference`]) of the fit with τ held at zero (C_held) and
@@ -44,12 +45,30 @@ use nalgebra::DVector;
 /// Standard normal quantile of the delay's two-sided 95 % interval [-].
 const Z_INTERVAL: f64 = 1.96;
 
-/// The channels of the delay counted as unknown: both `rel` probes (the
-/// library's `rel` variant, [`DelayChannels::VARIANTS`]).
-const REL: DelayChannels = DelayChannels {
-    rel: [true, true],
-    ped: [false, false],
-};
+/// The `rel` probes of bearing `b` whose phase no delay of `model` at `b`
+/// frees (a delay on the probe, or on the pedestal channel of its
+/// direction: only the relative phase of force and motion enters), as the
+/// channels of the delay counted as unknown; `None` where every probe's
+/// phase is free already. Both probes is the library's `rel` variant; one
+/// probe where the search named a one-probe delay there (unseen-five
+/// `delay` seed 2946: `rel_z` named, the delay on both probes, B1 c_y
+/// 3.75 ± off).
+fn undelayed_probes(model: &Model, b: usize) -> Option<DelayChannels> {
+    let mut rel = [true, true];
+    for p in &model.nonlinear {
+        if let Nonlinear::Delay { bearing, channels } = p {
+            if *bearing == b {
+                for (d, free) in rel.iter_mut().enumerate() {
+                    *free &= !(channels.rel[d] || channels.ped[d]);
+                }
+            }
+        }
+    }
+    (rel[0] || rel[1]).then_some(DelayChannels {
+        rel,
+        ped: [false, false],
+    })
+}
 
 /// One pedestal value's ± with the delay held at zero and free.
 #[derive(Clone, Debug, PartialEq)]
@@ -79,6 +98,8 @@ impl Widened {
 pub struct DelayUnknown {
     /// Bearing index of the delay.
     pub bearing: usize,
+    /// Its channels (`rel` probes only).
+    pub channels: DelayChannels,
     /// One Gauss–Newton step's τ from τ = 0 [s].
     pub tau: f64,
     /// Its ± [s] ([`Inference::std_err`]).
@@ -102,23 +123,22 @@ pub(super) fn delays_unknown(
 ) -> Vec<DelayUnknown> {
     group
         .iter()
-        .filter(|&&b| {
-            !model
-                .nonlinear
-                .iter()
-                .any(|p| matches!(p, Nonlinear::Delay { bearing, .. } if *bearing == b))
+        .filter_map(|&b| {
+            let channels = undelayed_probes(model, b)?;
+            delay_unknown(prep, model, group, b, channels, beta, nl, scale)
         })
-        .filter_map(|&b| delay_unknown(prep, model, group, b, beta, nl, scale))
         .collect()
 }
 
-/// [`delays_unknown`] at bearing `b`: `None` where the data exclude the
-/// delay or the linearisation fails.
+/// [`delays_unknown`] at bearing `b`, the delay on `channels`: `None`
+/// where the data exclude it or the linearisation fails.
+#[allow(clippy::too_many_arguments)]
 fn delay_unknown(
     prep: &Prepared,
     model: &Model,
     group: &[usize],
     b: usize,
+    channels: DelayChannels,
     beta: &[f64],
     nl: &[f64],
     scale: &[f64],
@@ -126,7 +146,7 @@ fn delay_unknown(
     let mut extended = model.clone();
     extended.nonlinear.push(Nonlinear::Delay {
         bearing: b,
-        channels: REL,
+        channels,
     });
     let k = extended.nonlinear.len() - 1;
     let mut ext_nl = nl.to_vec();
@@ -184,6 +204,7 @@ fn delay_unknown(
     }
     Some(DelayUnknown {
         bearing: b,
+        channels,
         tau,
         tau_std_err: tau_se,
         widened,

@@ -75,7 +75,8 @@ pub fn judge_held(conclusion: &mut Conclusion, bearings: &[String], refits: &[Gr
             .collect::<Vec<_>>()
             .join(", ");
         conclusion.verdict += &format!(
-            " At bearing {name} the data do not exclude a sensor delay on the rel probes (τ {:.0} ± {:.0} µs, linearised at τ = 0), which reads as a pedestal damping c − τ·(k − Ω²m): the pedestal ± count it as unknown ({widened}).",
+            " At bearing {name} the data do not exclude a sensor delay on `{}` (τ {:.0} ± {:.0} µs, linearised at τ = 0), which reads as a pedestal damping c − τ·(k − Ω²m): the pedestal ± count it as unknown ({widened}).",
+            d.channels.label(),
             d.tau * 1e6,
             d.tau_std_err * 1e6
         );
