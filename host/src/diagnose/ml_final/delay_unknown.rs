@@ -32,8 +32,19 @@
 //! Gauss–Newton step from τ = 0, clipped at τ ≥ 0: a delay is causal)
 //! moves every damping of the bearing by at most its held ±:
 //! |b|·max(0, τ̂ + 1.96 σ_τ) ≤ σ_held. Then nothing changes. Otherwise the
-//! reported ± of every pedestal value at the bearing is multiplied by its ρ
+//! reported ± of every pedestal value of the group is multiplied by its ρ
 //! (the ± with τ unknown); the values stay the final fit's.
+//!
+//! **Only where a damping of the bearing comes out below zero.** A passive
+//! pedestal's damping is ≥ 0, and a delay on the `rel` probes (τ > 0)
+//! lowers the apparent damping below the resonance: a negative estimate is
+//! the data's sign of a phase error. Elsewhere the delay is rarely excluded
+//! either (a stiff block's c cannot be told from τ·k by any run-down: on
+//! unseen-train's B1, 900 MN/m, ρ ≈ 20), and counting it there made every
+//! such damping unknown on clean runs (docs/session45-delay17.md: widening
+//! everywhere, measured, B1 c_y ± ×20 on clean `clean-p2`). Measured on
+//! unseen-five `delay` (seeds 3401-3420) the gated rule widens every run
+//! whose B1 c_y was beyond 3 ± (12/20), and no clean run of that machine.
 
 use super::{linearised, GroupEquations};
 use crate::diagnose::criterion::Inference;
@@ -109,7 +120,7 @@ pub struct DelayUnknown {
 }
 
 /// The delays on `rel` probes the data do not exclude at the bearings of
-/// `group` of `model` without a delay (module docs), with the group's
+/// `group` of `model` where a damping comes out below zero (module docs), with the group's
 /// pedestal ± with each unknown; `beta`, `nl`: the model's final values;
 /// `scale`: per parameter of the group's equations (its terms, then its
 /// scalars) a size [SI] for the difference steps.
@@ -131,7 +142,8 @@ pub(super) fn delays_unknown(
 }
 
 /// [`delays_unknown`] at bearing `b`, the delay on `channels`: `None`
-/// where the data exclude it or the linearisation fails.
+/// where no damping of `b` is below zero, the data exclude the delay or
+/// the linearisation fails.
 #[allow(clippy::too_many_arguments)]
 fn delay_unknown(
     prep: &Prepared,
@@ -143,6 +155,14 @@ fn delay_unknown(
     nl: &[f64],
     scale: &[f64],
 ) -> Option<DelayUnknown> {
+    let negative = model
+        .terms
+        .iter()
+        .zip(beta)
+        .any(|(t, v)| matches!(t, Term::Damping { bearing, .. } if *bearing == b) && *v < 0.0);
+    if !negative {
+        return None;
+    }
     let mut extended = model.clone();
     extended.nonlinear.push(Nonlinear::Delay {
         bearing: b,
