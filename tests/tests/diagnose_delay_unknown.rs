@@ -48,7 +48,9 @@ fn an_unexcluded_delay_is_counted_unknown_in_the_dampings_error() {
     }
     let named = d.effects_added.iter().any(|e| e == "sensor_delay");
     assert!(
-        named || d.verdict.contains("At bearing B1 the data do not exclude a sensor delay on `rel`"),
+        named
+            || d.verdict
+                .contains("At bearing B1 the data do not exclude a sensor delay on `rel`"),
         "{}",
         d.verdict
     );

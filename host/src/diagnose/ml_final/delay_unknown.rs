@@ -219,7 +219,10 @@ fn delay_unknown(
         let b_abs = w.held * (w.ratio().powi(2) - 1.0).sqrt() / tau_se;
         b_abs * tau_max > w.held
     };
-    if !widened.iter().any(|w| w.damping && w.bearing == b && moves(w)) {
+    if !widened
+        .iter()
+        .any(|w| w.damping && w.bearing == b && moves(w))
+    {
         return None;
     }
     Some(DelayUnknown {
