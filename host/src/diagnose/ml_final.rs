@@ -43,7 +43,7 @@ use super::report::{Pedestal, Step};
 use super::state::State;
 use crate::estimate::base::put;
 use crate::estimate::gauss_helmert::{self as gh, Equations};
-use delay_unknown::{delays_unknown, DelayUnknown};
+use delay_unknown::{with_delays_unknown, DelayUnknown};
 use held_delay::{held_delays, HeldDelay};
 use held_free::{free_held, Held, HeldAgainstData, HeldUnknown};
 use nalgebra::{DMatrix, DVector};
@@ -483,64 +483,6 @@ pub fn refit(prep: &Prepared, base: &Model, state: &mut State, alpha: f64) -> Ve
     }
     with_delays_unknown(prep, state, &mut out);
     out
-}
-
-/// Adds to `refits` the delays on `rel` probes the data do not exclude at
-/// every group of `state` ([`delay_unknown`]), linearised at the state's
-/// final values: a refitted group's entry takes them, a group not refitted
-/// gets an entry of its own carrying only them.
-fn with_delays_unknown(prep: &Prepared, state: &State, refits: &mut Vec<GroupRefit>) {
-    let inferences = state.inference(prep).unwrap_or_default();
-    for group in state.model.groups(prep.bearings.len()) {
-        let eq = GroupEquations::new(prep, &state.model, &group, state);
-        let p = eq.pack(&state.params.beta, &state.params.nl);
-        let at = refits.iter().position(|r| r.group == group);
-        let inference = match at {
-            Some(i) => &refits[i].inference,
-            None => match inferences.iter().find(|(g, _, _)| *g == group) {
-                Some((_, inf, _)) => inf,
-                None => continue,
-            },
-        };
-        if inference.estimate.len() != p.len() {
-            continue;
-        }
-        // Units: each parameter's scale is the larger of its size and its ±
-        // (as in `refit`).
-        let scale: Vec<f64> = p
-            .iter()
-            .enumerate()
-            .map(|(i, v)| v.abs().max(inference.std_err(i)).max(f64::MIN_POSITIVE))
-            .collect();
-        let unknown = delays_unknown(
-            prep,
-            &state.model,
-            &group,
-            &state.params.beta,
-            &state.params.nl,
-            &scale,
-        );
-        if unknown.is_empty() {
-            continue;
-        }
-        match at {
-            Some(i) => refits[i].delay_unknown = unknown,
-            None => {
-                let inference = inference.clone();
-                refits.push(GroupRefit {
-                    group,
-                    terms: Vec::new(),
-                    nonlinear: Vec::new(),
-                    inference,
-                    held_delays: Vec::new(),
-                    held_against_data: Vec::new(),
-                    freed: Vec::new(),
-                    held_unknown: None,
-                    delay_unknown: unknown,
-                })
-            }
-        }
-    }
 }
 
 /// Writes the refits of [`refit`] into the reported pedestals and the kept

@@ -46,11 +46,12 @@
 //! unseen-five `delay` (seeds 3401-3420) the gated rule widens every run
 //! whose B1 c_y was beyond 3 ± (12/20), and no clean run of that machine.
 
-use super::{linearised, GroupEquations};
+use super::{linearised, GroupEquations, GroupRefit};
 use crate::diagnose::criterion::Inference;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::fit::search_interval;
 use crate::diagnose::model::{DelayChannels, Model, Nonlinear, Term};
+use crate::diagnose::state::State;
 use nalgebra::DVector;
 
 /// Standard normal quantile of the delay's two-sided 95 % interval [-].
@@ -232,4 +233,62 @@ fn delay_unknown(
         tau_std_err: tau_se,
         widened,
     })
+}
+
+/// Adds to `refits` the delays on `rel` probes the data do not exclude at
+/// every group of `state` ([`delay_unknown`]), linearised at the state's
+/// final values: a refitted group's entry takes them, a group not refitted
+/// gets an entry of its own carrying only them.
+pub(super) fn with_delays_unknown(prep: &Prepared, state: &State, refits: &mut Vec<GroupRefit>) {
+    let inferences = state.inference(prep).unwrap_or_default();
+    for group in state.model.groups(prep.bearings.len()) {
+        let eq = GroupEquations::new(prep, &state.model, &group, state);
+        let p = eq.pack(&state.params.beta, &state.params.nl);
+        let at = refits.iter().position(|r| r.group == group);
+        let inference = match at {
+            Some(i) => &refits[i].inference,
+            None => match inferences.iter().find(|(g, _, _)| *g == group) {
+                Some((_, inf, _)) => inf,
+                None => continue,
+            },
+        };
+        if inference.estimate.len() != p.len() {
+            continue;
+        }
+        // Units: each parameter's scale is the larger of its size and its ±
+        // (as in `refit`).
+        let scale: Vec<f64> = p
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v.abs().max(inference.std_err(i)).max(f64::MIN_POSITIVE))
+            .collect();
+        let unknown = delays_unknown(
+            prep,
+            &state.model,
+            &group,
+            &state.params.beta,
+            &state.params.nl,
+            &scale,
+        );
+        if unknown.is_empty() {
+            continue;
+        }
+        match at {
+            Some(i) => refits[i].delay_unknown = unknown,
+            None => {
+                let inference = inference.clone();
+                refits.push(GroupRefit {
+                    group,
+                    terms: Vec::new(),
+                    nonlinear: Vec::new(),
+                    inference,
+                    held_delays: Vec::new(),
+                    held_against_data: Vec::new(),
+                    freed: Vec::new(),
+                    held_unknown: None,
+                    delay_unknown: unknown,
+                })
+            }
+        }
+    }
 }
