@@ -43,11 +43,14 @@ use super::report::{Pedestal, Step};
 use super::state::State;
 use crate::estimate::base::put;
 use crate::estimate::gauss_helmert::{self as gh, Equations};
+use delay_unknown::{with_delays_unknown, DelayUnknown};
 use held_delay::{held_delays, HeldDelay};
 use held_free::{free_held, Held, HeldAgainstData, HeldUnknown};
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
+use std::collections::BTreeMap;
 
+pub mod delay_unknown;
 pub mod held_delay;
 pub mod held_free;
 
@@ -83,6 +86,11 @@ pub struct GroupRefit {
     /// reported where the group carries a bearing-table scalar, which
     /// trades with them ([`held_free`]).
     pub held_unknown: Option<HeldUnknown>,
+    /// Delays on `rel` probes the search tried and the data do not exclude,
+    /// with the group's pedestal ± counting each as unknown
+    /// ([`delay_unknown`]). A group not refitted carries only these (no
+    /// terms, no scalars: its values stay the state's).
+    pub delay_unknown: Vec<DelayUnknown>,
 }
 
 /// The equations of one group of a [`Model`] as a Gauss–Helmert system:
@@ -444,6 +452,7 @@ pub fn refit(prep: &Prepared, base: &Model, state: &mut State, alpha: f64) -> Ve
                 held_against_data: Vec::new(),
                 freed: terms,
                 held_unknown: None,
+                delay_unknown: Vec::new(),
             });
             continue;
         }
@@ -466,11 +475,13 @@ pub fn refit(prep: &Prepared, base: &Model, state: &mut State, alpha: f64) -> Ve
                 _ => Vec::new(),
             },
             freed: Vec::new(),
+            delay_unknown: Vec::new(),
         });
     }
     if !out.is_empty() {
         state.weights = Weights::propagate(prep, &state.model, &state.params);
     }
+    with_delays_unknown(prep, state, &mut out);
     out
 }
 
@@ -553,6 +564,25 @@ pub fn report(
                         sh.tau_std_err_damping_zero = Some(h.std_err_held);
                     }
                 }
+            }
+        }
+        // The ± with an unexcluded delay unknown: each reported pedestal ±
+        // times its ρ = σ_free/σ_held, the largest over the group's delays.
+        let mut rho: BTreeMap<(usize, &str), f64> = BTreeMap::new();
+        for w in r.delay_unknown.iter().flat_map(|d| &d.widened) {
+            let e = rho.entry((w.bearing, w.name.as_str())).or_insert(1.0);
+            *e = e.max(w.ratio());
+        }
+        for ((b, name), ratio) in rho {
+            let Some(p) = prep
+                .bearings
+                .get(b)
+                .and_then(|n| pedestals.iter_mut().find(|p| &p.bearing == n))
+            else {
+                continue;
+            };
+            if let Some(se) = p.std_err.get_mut(name) {
+                *se *= ratio;
             }
         }
     }

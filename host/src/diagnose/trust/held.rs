@@ -12,6 +12,11 @@
 //! B3 k_y 6.8 % = 9.7 ± off, trusted). A hold within the noise (a truly
 //! undamped pedestal, a damping that trades with a delay) leaves the
 //! verdict as it was.
+//!
+//! A delay on a bearing's `rel` probes that the data do not exclude
+//! ([`crate::diagnose::ml_final::delay_unknown`]) leaves the verdict as it
+//! was too (the values are within their widened ±) but the verdict says it:
+//! the pedestal ± at that bearing count the delay as unknown.
 
 use super::Conclusion;
 use crate::diagnose::ml_final::GroupRefit;
@@ -54,6 +59,28 @@ pub fn judge_held(conclusion: &mut Conclusion, bearings: &[String], refits: &[Gr
             conclusion.trusted = false;
         }
     }
+    for d in refits.iter().flat_map(|r| &r.delay_unknown) {
+        let Some(name) = bearings.get(d.bearing) else {
+            continue;
+        };
+        // The dampings always, any other value whose ± moved by 10 % or more.
+        let widened = d
+            .widened
+            .iter()
+            .filter(|w| w.damping || w.ratio() >= 1.1)
+            .map(|w| {
+                let at = bearings.get(w.bearing).map_or("?", String::as_str);
+                format!("{at} {} ±×{:.3}", w.name, w.ratio())
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        conclusion.verdict += &format!(
+            " At bearing {name} the data do not exclude a sensor delay on `{}` (τ {:.0} ± {:.0} µs, linearised at τ = 0), which reads as a pedestal damping c − τ·(k − Ω²m): the pedestal ± count it as unknown ({widened}).",
+            d.channels.label(),
+            d.tau * 1e6,
+            d.tau_std_err * 1e6
+        );
+    }
 }
 
 #[cfg(test)]
@@ -77,6 +104,7 @@ mod tests {
             held_against_data: held,
             freed: Vec::new(),
             held_unknown: None,
+            delay_unknown: Vec::new(),
         }
     }
 
