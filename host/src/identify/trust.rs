@@ -36,6 +36,12 @@
 //!   against the noise columns (made only with them), p below
 //!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (docs/trust-support-mode.md,
 //!   sessions 29 and 35, for its measured rates).
+//! - **sensor delay**: the two-sided score test of a delay τ on each
+//!   bearing's `rel` probes ([`crate::estimate::lack_of_fit::sensor_delay`]:
+//!   a phase error growing with speed, which the one-mass fit takes into its
+//!   damping, c − τ(k − Ω²m)), against the noise columns (made only with
+//!   them), χ²(1), p below [`DELAY_FALSE_ALARM`]/D, D the bearings tested
+//!   (docs/session45-idelay17.md for its measured rates).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
 //! machines, detections on a pedestal with its own sub-base): docs/trust.md.
@@ -198,7 +204,7 @@ pub fn lack_of_fit_findings(
         if let Some(t) = l.sensor_delay {
             if t.p_value < alpha_delay {
                 found.sensor_delay = Some(format!(
-                    "a phase error growing with speed: a sensor delay of about {:.0} ± {:.0} µs on its rel probes (negative: on its ped pick-ups) explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model (in units of its noise columns; p = {:.1e}, limit {alpha_delay:.1e}: {DELAY_FALSE_ALARM} over the {delay_tested} bearing(s) tested); the one-mass fit takes it into its damping (c − τ(k − Ω²m)); run plinth diagnose",
+                    "a phase error growing with speed: a sensor delay of about {:.0} ± {:.0} µs on its rel probes (negative: on its ped pick-ups) explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model (in units of its noise columns; p = {:.1e}, limit {alpha_delay:.1e}: {DELAY_FALSE_ALARM} over the {delay_tested} bearing(s) tested); the one-mass fit takes a delay into its damping (c − τ(k − Ω²m)), and other model error (a sub-base, a frame) can show as one too; run plinth diagnose",
                     t.delay_us, t.delay_std_us, t.statistic, t.p_value
                 ));
             }
