@@ -41,11 +41,14 @@
 //! and detection rates (measured by `scripts/bench-trust.sh`) are in
 //! docs/trust-lack-of-fit.md.
 
+mod delay;
 mod mean;
+mod score;
 mod structure;
 mod support;
 mod window;
 
+pub use delay::{sensor_delay, SensorDelay};
 pub use structure::{
     structure, Structure, BLOCK, LEVEL_WINDOW, PERMUTATIONS, STOP_AFTER_EXCEEDANCES,
 };
@@ -95,6 +98,11 @@ pub struct LackOfFit {
     /// noise is known from noise columns (`None` otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support_mode: Option<SupportMode>,
+    /// The sensor-delay test ([`sensor_delay`]: a phase error of the `rel`
+    /// probes growing linearly with speed), made when the noise is known
+    /// from noise columns (`None` otherwise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensor_delay: Option<SensorDelay>,
 }
 
 /// The lack-of-fit evidence of a fit at `theta` (θ units) to `obs` whose
@@ -103,8 +111,8 @@ pub struct LackOfFit {
 /// estimated `columns`, with χ² = `chi2` on `dof`; `None` when the noise
 /// is known (digits or columns) and explains χ² (upper-tail p ≥ `p_limit`)
 /// and, for noise columns, the support-mode test cannot be made: then
-/// nothing could pass for noise. With noise columns the support-mode test
-/// is always made (a second support mode just above the range leaves a
+/// nothing could pass for noise. With noise columns the support-mode and
+/// sensor-delay tests are always made (a second support mode just above the range leaves a
 /// χ² excess the level test cannot see; its own test can); the structure
 /// scan only under the level gate above.
 pub fn assess(
@@ -135,7 +143,12 @@ pub fn assess(
     let support_mode = (source == NoiseSource::Columns)
         .then(|| support_mode(&eq, theta, &speeds))
         .flatten();
-    if !scanned && support_mode.is_none() {
+    // The same with the sensor-delay test (columns only, as above).
+    let omega: Vec<f64> = obs.iter().map(|o| o.omega()).collect();
+    let sensor_delay = (source == NoiseSource::Columns)
+        .then(|| sensor_delay(&eq, theta, &omega))
+        .flatten();
+    if !scanned && support_mode.is_none() && sensor_delay.is_none() {
         return None;
     }
     let w = gh::whitened(&eq, theta, None)?;
@@ -149,6 +162,7 @@ pub fn assess(
             None
         },
         support_mode,
+        sensor_delay,
         level_from: source,
         level_ratio: chi2 / dof as f64,
         level_p,

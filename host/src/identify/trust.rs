@@ -36,6 +36,12 @@
 //!   against the noise columns (made only with them), p below
 //!   [`SUPPORT_FALSE_ALARM`]/U, U the bearings tested (docs/trust-support-mode.md,
 //!   sessions 29 and 35, for its measured rates).
+//! - **sensor delay**: the two-sided score test of a delay τ on each
+//!   bearing's `rel` probes ([`crate::estimate::lack_of_fit::sensor_delay`]:
+//!   a phase error growing with speed, which the one-mass fit takes into its
+//!   damping, c − τ(k − Ω²m)), against the noise columns (made only with
+//!   them), χ²(1), p below [`DELAY_FALSE_ALARM`]/D, D the bearings tested
+//!   (docs/session45-idelay17.md for its measured rates).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
 //! machines, detections on a pedestal with its own sub-base): docs/trust.md.
@@ -64,6 +70,12 @@ pub const STRUCTURE_LEVEL: f64 = crate::estimate::lack_of_fit::EXCESS_LEVEL;
 /// third unseen machine (5/96 at this rate).
 pub const SUPPORT_FALSE_ALARM: f64 = 0.005;
 
+/// False-alarm rate per run of the sensor-delay test
+/// ([`crate::estimate::lack_of_fit::sensor_delay`]), Bonferroni over the
+/// bearings tested [-]: a fifth of the clean budget of 1 % per run
+/// (session 45, docs/session45-idelay17.md for its measured rates).
+pub const DELAY_FALSE_ALARM: f64 = 0.002;
+
 /// The support-mode test's limit on one bearing's p-value when it was made
 /// at `tested` bearings of the run: [`SUPPORT_FALSE_ALARM`] shared among
 /// them (Bonferroni) [-]. One rule for identify and diagnose.
@@ -79,12 +91,14 @@ pub struct Findings {
     pub model_error: Vec<String>,
     /// The support-mode test: an Ω⁴ fall of the stiffness.
     pub support_mode: Option<String>,
+    /// The sensor-delay test: a phase error growing with speed.
+    pub sensor_delay: Option<String>,
 }
 
 impl Findings {
     /// Whether any rule flagged the bearing.
     pub fn any(&self) -> bool {
-        !self.model_error.is_empty() || self.support_mode.is_some()
+        !self.model_error.is_empty() || self.support_mode.is_some() || self.sensor_delay.is_some()
     }
 }
 
@@ -116,6 +130,13 @@ pub fn lack_of_fit_findings(
         .filter(|l| l.support_mode.is_some())
         .count();
     let alpha_support = support_limit(support_tested);
+    // The sensor-delay test's share: over the bearings it was made at.
+    let delay_tested = noise
+        .values()
+        .filter_map(|n| n.lack_of_fit)
+        .filter(|l| l.sensor_delay.is_some())
+        .count();
+    let alpha_delay = DELAY_FALSE_ALARM / delay_tested.max(1) as f64;
     let mut flagged = std::collections::BTreeMap::new();
     for (bearing, n) in noise {
         let Some(l) = n.lack_of_fit else {
@@ -180,6 +201,14 @@ pub fn lack_of_fit_findings(
                 ));
             }
         }
+        if let Some(t) = l.sensor_delay {
+            if t.p_value < alpha_delay {
+                found.sensor_delay = Some(format!(
+                    "a phase error growing with speed: a sensor delay of about {:.0} ± {:.0} µs on its rel probes (negative: on its ped pick-ups) explains {:.1} of its whitened residuals' sum of squares beyond the one-mass model (in units of its noise columns; p = {:.1e}, limit {alpha_delay:.1e}: {DELAY_FALSE_ALARM} over the {delay_tested} bearing(s) tested); the one-mass fit takes a delay into its damping (c − τ(k − Ω²m)), and other model error (a sub-base, a frame) can show as one too; run plinth diagnose",
+                    t.delay_us, t.delay_std_us, t.statistic, t.p_value
+                ));
+            }
+        }
         if found.any() {
             flagged.insert(bearing.clone(), found);
         }
@@ -205,6 +234,7 @@ pub fn mark_lack_of_fit(identification: &mut Identification) {
             .model_error
             .iter()
             .chain(&found.support_mode)
+            .chain(&found.sensor_delay)
             .map(String::as_str)
             .collect();
         let others: Vec<String> = levels

@@ -55,8 +55,9 @@
 //! neighbouring speeds (docs/trust-support-mode.md). Nothing in the test is tuned to a
 //! machine.
 
-use super::super::gauss_helmert::{self as gh, Equations};
-use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
+use super::super::gauss_helmert::Equations;
+use super::score::{efficient_score, Extension};
+use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
@@ -87,79 +88,26 @@ pub fn support_mode<E: Equations + ?Sized>(
     theta: &[f64],
     speeds_hz: &[f64],
 ) -> Option<SupportMode> {
-    let n = eq.speeds();
-    let np = theta.len();
-    if n != speeds_hz.len() || n * 4 <= np + EXTRA + 1 || np < 2 {
+    if eq.speeds() != speeds_hz.len() || theta.len() < EXTRA {
         return None;
     }
     let top = speeds_hz.iter().copied().fold(0.0_f64, f64::max);
     if top.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
-    let mut x = DMatrix::<f64>::zeros(4 * n, np);
-    let mut x2 = DMatrix::<f64>::zeros(4 * n, EXTRA);
-    let mut w = DVector::<f64>::zeros(4 * n);
-    // Half the gradient of the Gauss-Helmert criterion Σ_s |L_s⁻¹e_s|², its
-    // weights L_s(θ) moving with θ (module docs, "The score"): one-mass
-    // parameters (per unit of each) and the extension.
-    let mut grad = DVector::<f64>::zeros(np);
-    let mut grad2 = Vector2::<f64>::zeros();
-    for (s, &speed) in speeds_hz.iter().enumerate() {
-        let l = gh::whitening(eq, s, theta)?;
-        let e0 = eq.error(s, theta);
-        let ws = l.solve_lower_triangular(&e0)?;
-        w.rows_mut(4 * s, 4).copy_from(&ws);
-        // (Ω/Ω_max)⁴: the extension's column, scaled to order one.
-        let r4 = (speed / top).powi(4);
-        for k in 0..np {
-            let step = theta[k].abs().max(1e-30) * 1e-3;
-            let mut p = theta.to_vec();
-            p[k] += step;
-            let a = (eq.error(s, &p) - &e0) / step;
-            let col = l.solve_lower_triangular(&a)?;
-            x.view_mut((4 * s, k), (4, 1)).copy_from(&col);
-            if k < EXTRA {
-                x2.view_mut((4 * s, k), (4, 1)).copy_from(&(col * (-r4)));
-            }
-            let half = criterion_slope(eq, s, theta, k, step)?;
-            grad[k] += half;
-            if k < EXTRA {
-                grad2[k] -= r4 * half;
-            }
-        }
-    }
-    // The one-mass columns' span (orthonormal, columns scaled first: their
-    // units differ by many orders), and what lies outside it.
-    let norms: Vec<f64> = x.column_iter().map(|c| c.norm()).collect();
-    for (mut c, &norm) in x.column_iter_mut().zip(&norms) {
-        if norm > 0.0 {
-            c /= norm;
-        }
-    }
-    let svd = x.svd(true, true);
-    let (u, v_t) = (svd.u?, svd.v_t?);
-    let smax = svd.singular_values.max();
-    let keep: Vec<usize> = (0..svd.singular_values.len())
-        .filter(|&i| svd.singular_values[i] > 1e-10 * smax)
-        .collect();
-    let u = u.select_columns(&keep);
-    let v_t = v_t.select_rows(&keep);
-    let x2_out = &x2 - &u * (u.transpose() * &x2);
-    let g: Matrix2<f64> = Matrix2::from_fn(|i, j| x2_out.column(i).dot(&x2_out.column(j)));
-    // The extension's score with the one-mass parameters' taken out
-    // (efficient score g_q − X₂ᵀU·S⁻¹Vᵀ·g_θ, g_θ per unit of the scaled
-    // columns): the frozen-weight form X₂⊥ᵀw⊥ when the weights do not move.
-    let mut g_scaled = v_t.clone()
-        * grad.component_div(&DVector::from_iterator(
-            np,
-            norms.iter().map(|&n| if n > 0.0 { n } else { 1.0 }),
-        ));
-    for (i, c) in g_scaled.iter_mut().enumerate() {
-        *c /= svd.singular_values[keep[i]];
-    }
-    let nuisance = x2.transpose() * (&u * g_scaled);
-    let b = Vector2::from_fn(|i, _| grad2[i] - nuisance[i]);
-    let gamma = g.try_inverse()? * b;
+    // The extension's columns: −(Ω/Ω_max)⁴ times the stiffness's, scaled to
+    // order one, and so its criterion slope (the weights move with it as
+    // with the stiffness).
+    let score = efficient_score(eq, theta, EXTRA, |at| {
+        let r4 = (speeds_hz[at.s] / top).powi(4);
+        Some(Extension {
+            columns: (0..EXTRA).map(|k| &at.columns[k] * (-r4)).collect(),
+            half_gradient: (0..EXTRA).map(|k| -r4 * at.half_gradient[k]).collect(),
+        })
+    })?;
+    let g = Matrix2::from_fn(|i, j| score.g[(i, j)]);
+    let b = Vector2::from_fn(|i, _| score.b[i]);
+    let gamma = Vector2::from_fn(|i, _| score.gamma[i]);
     let two_sided = b.dot(&gamma).max(0.0);
     // The extension's coefficient is −γ (a Gauss-Newton step: w ≈ Xβ is the
     // residual the parameters' change −β removes), Ω_max⁴q in the
@@ -183,21 +131,9 @@ pub fn support_mode<E: Equations + ?Sized>(
     } else {
         1.0
     };
-    // The refitted stiffness θ − β: its change is the one-mass columns'
-    // coefficient once the extension is taken out of w.
-    let resid = &w - &x2 * gamma;
-    let mut coef = u.transpose() * resid;
-    for (i, c) in coef.iter_mut().enumerate() {
-        *c /= svd.singular_values[keep[i]];
-    }
-    let scaled = v_t.transpose() * coef;
+    // The refitted stiffness θ − β.
     let drop_at_top = std::array::from_fn(|k| {
-        let beta = if norms[k] > 0.0 {
-            scaled[k] / norms[k]
-        } else {
-            0.0
-        };
-        let kk = theta[k] - beta;
+        let kk = theta[k] - score.beta[k];
         if kk != 0.0 {
             -gamma[k] / kk
         } else {
@@ -211,29 +147,11 @@ pub fn support_mode<E: Equations + ?Sized>(
     })
 }
 
-/// ½∂/∂θ_k of speed `s`'s term |L_s⁻¹e_s|² of the Gauss-Helmert criterion
-/// at `theta`, its weights L_s(θ) recomputed (central difference of step
-/// `step` in θ_k's units) [criterion per unit of θ_k]; `None` when a
-/// weight cannot be formed.
-fn criterion_slope<E: Equations + ?Sized>(
-    eq: &E,
-    s: usize,
-    theta: &[f64],
-    k: usize,
-    step: f64,
-) -> Option<f64> {
-    let term = |delta: f64| -> Option<f64> {
-        let mut p = theta.to_vec();
-        p[k] += delta;
-        let l = gh::whitening(eq, s, &p)?;
-        Some(l.solve_lower_triangular(&eq.error(s, &p))?.norm_squared())
-    };
-    Some(0.25 * (term(step)? - term(-step)?) / step)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::estimate::gauss_helmert as gh;
+    use nalgebra::{DMatrix, DVector};
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
     use std::f64::consts::TAU;
