@@ -6,7 +6,7 @@
 //! c − τ(k − Ω²m). The stored run is ROSS 2.3.0's
 //! (`/tmp/rossvenv/bin/python scripts/ross_unseen.py --machine unseen-six
 //! OUT delay 4301`, copied to tests/data/ross-unseen-6/delay-4301/). Rates
-//! over seeds: docs/session45-idelay17.md.
+//! over seeds: docs/trust.md, Session 45 (idelay17).
 
 use plinth_tests::rundown::identify;
 use plinth_tests::unseen::{self, ok_but_wrong, untrusted};

@@ -41,7 +41,7 @@
 //!   a phase error growing with speed, which the one-mass fit takes into its
 //!   damping, c − τ(k − Ω²m)), against the noise columns (made only with
 //!   them), χ²(1), p below [`DELAY_FALSE_ALARM`]/D, D the bearings tested
-//!   (docs/session45-idelay17.md for its measured rates).
+//!   (docs/trust.md, Session 45 (idelay17) for its measured rates).
 //!
 //! The rates are measured by `scripts/bench-trust.sh` (false alarms on clean
 //! machines, detections on a pedestal with its own sub-base): docs/trust.md.
@@ -73,7 +73,7 @@ pub const SUPPORT_FALSE_ALARM: f64 = 0.005;
 /// False-alarm rate per run of the sensor-delay test
 /// ([`crate::estimate::lack_of_fit::sensor_delay`]), Bonferroni over the
 /// bearings tested [-]: a fifth of the clean budget of 1 % per run
-/// (session 45, docs/session45-idelay17.md for its measured rates).
+/// (session 45, docs/trust.md, Session 45 (idelay17) for its measured rates).
 pub const DELAY_FALSE_ALARM: f64 = 0.002;
 
 /// The support-mode test's limit on one bearing's p-value when it was made

@@ -41,7 +41,7 @@
 //! the data's sign of a phase error. Elsewhere the delay is rarely excluded
 //! either (a stiff block's c cannot be told from τ·k by any run-down: on
 //! unseen-train's B1, 900 MN/m, ρ ≈ 20), and counting it there made every
-//! such damping unknown on clean runs (docs/session45-delay17.md: widening
+//! such damping unknown on clean runs (docs/unseen.md, Session 45 (delay17): widening
 //! everywhere, measured, B1 c_y ± ×20 on clean `clean-p2`). Measured on
 //! unseen-five `delay` (seeds 3401-3420) the gated rule widens every run
 //! whose B1 c_y was beyond 3 ± (12/20), and no clean run of that machine.
