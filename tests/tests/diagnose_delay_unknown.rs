@@ -10,6 +10,7 @@
 use plinth_tests::unseen::{diagnosis_with_machine_check, stored, truth_of};
 
 const FIVE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-5");
+const SIX: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-6");
 
 /// unseen-five `delay` seed 3405 (ROSS; 150 µs on B1's rel probes; B1 k_y
 /// 40 MN/m, c_y 2000 N·s/m, resonance 71 Hz above the 9.6-56 Hz band; 3 %
@@ -20,10 +21,46 @@ const FIVE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-5");
 /// of the truth, and the verdict must say that B1's ± count the delay.
 #[test]
 fn an_unexcluded_delay_is_counted_unknown_in_the_dampings_error() {
-    let run = stored(FIVE, "delay-3405");
-    let d = diagnosis_with_machine_check(FIVE, "unseen-five.toml", &run);
+    let verdict = trusted_within_three_errors(FIVE, "unseen-five.toml", "delay-3405");
+    if let Some((named, verdict)) = verdict {
+        assert!(
+            named
+                || verdict
+                    .contains("At bearing B1 the data do not exclude a sensor delay on `rel`"),
+            "{verdict}"
+        );
+    }
+}
+
+/// unseen-six `delay` seed 3615 (ROSS; 150 µs on B2's rel probes; B2's
+/// resonances at 52 Hz (y) and 22 Hz (z) inside the 4-62 Hz run, so its
+/// dampings stay positive: c_y 474 against 800, c_z 655 against 330 N·s/m;
+/// made by `scripts/ross_unseen.py --machine unseen-six DIR delay 3615`).
+/// The search rejects the delay (adjusted p 1.2e-3 against 0.001) but the
+/// data favour it at 2.5 of its ±: main with the gate "a damping below
+/// zero" alone printed the run trusted with B2 c_y 3.5 and c_z 3.6 of
+/// their ± off (docs/unseen-six.md, finding 1).
+#[test]
+fn a_delay_the_data_favour_is_counted_unknown_where_the_dampings_stay_positive() {
+    let verdict = trusted_within_three_errors(SIX, "unseen-six.toml", "delay-3615");
+    if let Some((named, verdict)) = verdict {
+        assert!(
+            named
+                || verdict
+                    .contains("At bearing B2 the data do not exclude a sensor delay on `rel`"),
+            "{verdict}"
+        );
+    }
+}
+
+/// Diagnoses stored run `case` of the machine in `dir`; where the verdict is
+/// trusted, asserts every final pedestal value, dampings included, within 3
+/// of its ± of the truth and returns (a delay named, the verdict).
+fn trusted_within_three_errors(dir: &str, toml: &str, case: &str) -> Option<(bool, String)> {
+    let run = stored(dir, case);
+    let d = diagnosis_with_machine_check(dir, toml, &run);
     if !d.trusted {
-        return;
+        return None;
     }
     for after in &d.pedestals_after {
         let t = truth_of(&run, &after.bearing);
@@ -39,7 +76,7 @@ fn an_unexcluded_delay_is_counted_unknown_in_the_dampings_error() {
             };
             assert!(
                 ((v - truth) / se).abs() < 3.0,
-                "{} {key}: {v:.4e} ± {se:.2e}, truth {truth:.4e} ({:.1} ±), trusted\n{}",
+                "{case} {} {key}: {v:.4e} ± {se:.2e}, truth {truth:.4e} ({:.1} ±), trusted\n{}",
                 after.bearing,
                 (v - truth) / se,
                 d.to_text()
@@ -47,11 +84,5 @@ fn an_unexcluded_delay_is_counted_unknown_in_the_dampings_error() {
         }
     }
     let named = d.effects_added.iter().any(|e| e == "sensor_delay");
-    assert!(
-        named
-            || d.verdict
-                .contains("At bearing B1 the data do not exclude a sensor delay on `rel`"),
-        "{}",
-        d.verdict
-    );
+    Some((named, d.verdict.clone()))
 }
