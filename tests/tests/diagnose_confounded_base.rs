@@ -6,7 +6,7 @@
 //! shared base under the runout's bearing is judged, whichever grouping the
 //! base model's trial favoured.
 
-use plinth_tests::unseen::{diagnosis_with_machine_check, named, truth_of};
+use plinth_tests::unseen::{assert_trusted_means_right, diagnosis_with_machine_check, named};
 
 const FOUR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen");
 
@@ -29,22 +29,7 @@ fn a_base_the_runout_can_take_is_counted(name: &str) {
         "no shared base under B2 judged\n{}",
         d.to_text()
     );
-    if !d.trusted {
-        return;
-    }
-    for after in &d.pedestals_after {
-        let truth = truth_of(&run, &after.bearing);
-        for (key, t) in [("k_y", truth.k_y), ("k_z", truth.k_z), ("m", truth.m)] {
-            let (v, se) = (after.values[key], after.std_err[key]);
-            assert!(
-                ((v - t) / se).abs() < 3.0,
-                "{} {key}: {v:.6e} ± {se:.2e}, truth {t:.6e} ({:.1} ±), trusted\n{}",
-                after.bearing,
-                (v - t) / se,
-                d.to_text()
-            );
-        }
-    }
+    assert_trusted_means_right(&run, &d);
 }
 
 /// Seed 1602 (grid 225-345 Hz). Main: trusted, runout at B2, B1 k_y
