@@ -9,7 +9,7 @@
 # binary runs next to each case and the line says whether the two outputs
 # are byte-identical (the speed-ups of session 34 must not change a number).
 #   scripts/bench-diagnose-base.sh
-#   PLINTH=/tmp/new/plinth BASELINE=/tmp/old/plinth scripts/bench-diagnose-base.sh
+#   PLINTH=NEW/plinth BASELINE=OLD/plinth scripts/bench-diagnose-base.sh
 #   CASES=identify scripts/bench-diagnose-base.sh     # only identify's fits
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -10,8 +10,8 @@
 # speeds ≤ 1 s, OLS ≤ 0.3 s, accuracy ≤ 10 s on 2 cores.
 #   scripts/bench-identify.sh            # all
 #   SKIP_ACCURACY=1 scripts/bench-identify.sh
-#   PLINTH=/tmp/old/plinth scripts/bench-identify.sh    # another build
-#   BASELINE=/tmp/old/plinth SKIP_ACCURACY=1 scripts/bench-identify.sh  # both, interleaved
+#   PLINTH=OLD/plinth scripts/bench-identify.sh    # another build
+#   BASELINE=OLD/plinth SKIP_ACCURACY=1 scripts/bench-identify.sh  # both, interleaved
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # PLINTH=path/to/plinth times that binary instead of building this tree's.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """A noise-free run of scripts/ross_unseen.py's effect case, at 15 digits.
 
-Usage: /tmp/rossvenv/bin/python scripts/ross_unseen_exact.py MACHINE CASE OUTDIR
+Usage: python3 scripts/ross_unseen_exact.py MACHINE CASE OUTDIR
 
 The same ROSS response, effect and speed grid as `ross_unseen.py --machine
 MACHINE OUTDIR CASE 1`, written without noise, without noise columns and at

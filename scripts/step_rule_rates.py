@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The step rule of `plinth diagnose --machine` on ROSS runs (docs/diagnose-verdict.md "Session 41 (stepsd17b)").
 
-Usage: /tmp/rossvenv/bin/python scripts/step_rule_rates.py MACHINE:OUTDIR ...
+Usage: python3 scripts/step_rule_rates.py MACHINE:OUTDIR ...
 
 OUTDIR holds, per run CASE-SEED (made by scripts/ross_unseen.py --machine
 MACHINE), CASE-SEED.json, the output of `plinth diagnose RUN --json --machine

@@ -1,11 +1,13 @@
 """Null draws of the unseen-train recording: columns rejected? B1 trusted and > 3 ± off?
 usage: nullrun.py FIRST LAST PLINTH... ; prints one line per seed and binary."""
 import json, subprocess, sys, os
+import tempfile
+SCRATCH = os.environ.get("SCRATCH", os.path.join(tempfile.gettempdir(), "columns_null"))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the repository
-# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
+# Scratch: $SCRATCH (default: the system temp directory + /columns_null; holds the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
 first, last = int(sys.argv[1]), int(sys.argv[2]); bins = sys.argv[3:]
-PY = "/tmp/rossvenv/bin/python"; SCRIPT = os.path.join(ROOT, "scripts", "ross_recording.py")
-os.chdir("/tmp/lowsnr17")
+PY = os.environ.get("PYTHON", "python3")  # one with ROSS 2.3.0; SCRIPT = os.path.join(ROOT, "scripts", "ross_recording.py")
+os.chdir(SCRATCH)
 for seed in range(first, last + 1):
     d = f"nulls/NULL-{seed}"
     if not os.path.exists(d + "/measurements.csv"):

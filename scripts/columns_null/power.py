@@ -6,12 +6,14 @@ proportional to |X| with the same RMS), small3 (noise FRAC*RMS, ped_y's column 3
 too small), true (noise FRAC*RMS, true columns). Noise complex, sd split on re/im.
 Prints per seed and binary: per bearing rejected (shape) and max |z| of k,m if trusted."""
 import csv, json, math, os, random, subprocess, sys
+import tempfile
+SCRATCH = os.environ.get("SCRATCH", os.path.join(tempfile.gettempdir(), "columns_null"))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the repository
-# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
+# Scratch: $SCRATCH (default: the system temp directory + /columns_null; holds the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
 machine, mode, frac, first, last = sys.argv[1], sys.argv[2], float(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
 bins = sys.argv[6:]
 tag = os.path.basename(machine).replace(".toml", "")
-work = f"/tmp/lowsnr17/pow-{tag}"; os.makedirs(work, exist_ok=True)
+work = f"{SCRATCH}/pow-{tag}"; os.makedirs(work, exist_ok=True)
 clean = f"{work}/clean"
 if not os.path.exists(clean + "/measurements.csv"):
     subprocess.run([bins[0], "simulate", machine, "--out", clean], check=True, capture_output=True)

@@ -1,10 +1,12 @@
 """ROSS unseen runs with true noise columns: columns' shape rejected? ok beyond 3 ±?
 usage: rossnull.py PLINTH -> one line per run."""
 import glob, json, os, subprocess, sys
+import tempfile
+SCRATCH = os.environ.get("SCRATCH", os.path.join(tempfile.gettempdir(), "columns_null"))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the repository
-# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
+# Scratch: $SCRATCH (default: the system temp directory + /columns_null; holds the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
 plinth = sys.argv[1]
-for d in sorted(glob.glob("/tmp/lowsnr17/ross/*/*-7??")):
+for d in sorted(glob.glob(os.path.join(SCRATCH, "ross", "*", "*-7??"))):
     if not os.path.exists(d + "/measurements.csv"):
         continue
     truth = {p["bearing"]: p for p in json.load(open(d + "/truth.json"))["pedestals"]}

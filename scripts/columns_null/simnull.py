@@ -4,12 +4,14 @@ the true columns (FRAC x the clean RMS) written into measurements.csv.
 usage: simnull.py MACHINE.toml FIRST LAST PLINTH [FRAC] -> one line per seed:
 seed, per bearing: rejected (noise_scale_mismatch), trusted, max |z|."""
 import csv, json, math, os, subprocess, sys
+import tempfile
+SCRATCH = os.environ.get("SCRATCH", os.path.join(tempfile.gettempdir(), "columns_null"))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # the repository
-# Scratch: /tmp/lowsnr17 (the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
+# Scratch: $SCRATCH (default: the system temp directory + /columns_null; holds the recording REC/RUN of docs/estimation.md "Session 41 (lowsnr17)", ross/ runs, null draws).
 machine, first, last, plinth = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 frac = float(sys.argv[5]) if len(sys.argv) > 5 else 0.01
 tag = os.path.basename(machine).replace(".toml", "")
-work = f"/tmp/lowsnr17/sim-{tag}"; os.makedirs(work, exist_ok=True)
+work = f"{SCRATCH}/sim-{tag}"; os.makedirs(work, exist_ok=True)
 clean = f"{work}/clean"
 if not os.path.exists(clean + "/measurements.csv"):
     subprocess.run([plinth, "simulate", machine, "--out", clean], check=True, capture_output=True)

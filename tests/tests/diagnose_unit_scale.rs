@@ -8,7 +8,7 @@
 //! every `rel` column divided by 25.4 (`clean-n3-rel-mil`: probes in mil pp
 //! read as µm pp) or every `ped` column divided by √2
 //! (`clean-p2-ped-rms`: pick-ups in rms read as peak), digits kept
-//! (/tmp/unitmix17/scale.py, quoted in the session's page).
+//! (a scratch script, scale.py, quoted in the session's page).
 
 use plinth::diagnose::report::Diagnosis;
 use plinth_tests::rundown::identify;

@@ -4,7 +4,7 @@
 //! unseen-six.toml; B2's pedestal resonances, 22 and 52 Hz, inside the
 //! run) turns the apparent pedestal into Z·(1 − iΩτ), its dampings
 //! c − τ(k − Ω²m). The stored run is ROSS 2.3.0's
-//! (`/tmp/rossvenv/bin/python scripts/ross_unseen.py --machine unseen-six
+//! (`python3 scripts/ross_unseen.py --machine unseen-six
 //! OUT delay 4301`, copied to tests/data/ross-unseen-6/delay-4301/). Rates
 //! over seeds: docs/trust.md, Session 45 (idelay17).
 
