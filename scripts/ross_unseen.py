@@ -69,6 +69,18 @@ Its speeds are a coarse run-down table, one speed every 1.5 Hz from 56.1 Hz
 down to 9.6 Hz (32 speeds, below the oil whip onset at 59 Hz); its noise is the largest of the five: 3 % of |phasor|
 plus a floor of 0.3 % of the channel's RMS.
 
+unseen-seven is tests/data/ross-unseen-7/unseen-seven.toml: a steam
+turbine-generator set on three heavily loaded plain journals (short oil
+films, strongly cross-coupled), a single-bearing generator rigidly coupled
+to the turbine, heavy pedestals whose horizontal resonances and the rotor's
+criticals lie inside a trip coast-down logged every 0.75 Hz (50 to 5 Hz);
+probes 0.4 % of |phasor| + 0.05 um, velocity pick-ups 1 % + 5 um/s. Its
+three departures: "thermal" (the films' viscosity rising as the speed falls,
+bearings.csv at the design viscosity), "ped_delay" (one bearing's pedestal
+pick-ups read late: sensor_delay on the ped channels) and "sweep" (each
+phasor the mean over the speeds a tracking filter's block of revolutions
+spans in a fast coast-down).
+
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
 BearingElement from the shaft node to a PointMass (n_link, the pedestal),
