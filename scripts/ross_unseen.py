@@ -13,7 +13,8 @@ Usage:
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
 NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex,
-unseen-five or unseen-six (described in ross_unseen_machines.py).
+unseen-five, unseen-six or unseen-seven (described in
+ross_unseen_machines.py).
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and
@@ -67,6 +68,18 @@ horizontally, their horizontal resonances (29, 36 Hz) inside the run.
 Its speeds are a coarse run-down table, one speed every 1.5 Hz from 56.1 Hz
 down to 9.6 Hz (32 speeds, below the oil whip onset at 59 Hz); its noise is the largest of the five: 3 % of |phasor|
 plus a floor of 0.3 % of the channel's RMS.
+
+unseen-seven is tests/data/ross-unseen-7/unseen-seven.toml: a steam
+turbine-generator set on three heavily loaded plain journals (short oil
+films, strongly cross-coupled), a single-bearing generator rigidly coupled
+to the turbine, heavy pedestals whose horizontal resonances and the rotor's
+criticals lie inside a trip coast-down logged every 0.75 Hz (50 to 5 Hz);
+probes 0.4 % of |phasor| + 0.05 um, velocity pick-ups 1 % + 5 um/s. Its
+three departures: "thermal" (the films' viscosity rising as the speed falls,
+bearings.csv at the design viscosity), "ped_delay" (one bearing's pedestal
+pick-ups read late: sensor_delay on the ped channels) and "sweep" (each
+phasor the mean over the speeds a tracking filter's block of revolutions
+spans in a fast coast-down).
 
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
@@ -196,16 +209,30 @@ def film_row(of, s, clearance):
             "cyy": C[0][0], "cyz": C[0][1], "czy": C[1][0], "czz": C[1][1]}
 
 
+def thermal_factor(thermal, s):
+    """The film's viscosity at speed s [Hz] over the design (top speed's)
+    one [-] for a "thermal" effect: the effective film temperature's rise
+    over the inlet falls as the shear heating, (s / top)^2, so mu grows
+    from 1 at the top speed to `ratio` at standstill, exponentially in the
+    temperature (ross_unseen_machines.THERMAL_SEVEN)."""
+    return thermal["ratio"] ** (1.0 - min(s / thermal["top_hz"], 1.0) ** 2)
+
+
 def coefficients(spec, speeds, effects):
     """(true, written) coefficients per bearing: lists of dicts per speed."""
     worn = {e[1]: e[2] for e in effects if e[0] == "worn_film"}
+    thermal = next((e[1] for e in effects if e[0] == "thermal"), None)
     scale = {e[1]: (e[2], e[3]) for e in effects if e[0] == "table_scale"}
     true, written = {}, {}
     for b in spec["bearings"]:
         name = b["name"]
         if "oil_film" in b:
             of = b["oil_film"]
-            true[name] = [film_row(of, s, of["clearance"] * worn.get(name, 1.0)) for s in speeds]
+            if thermal is not None and name in thermal["bearings"]:
+                true[name] = [film_row(dict(of, viscosity=of["viscosity"] * thermal_factor(thermal, s)), s,
+                                       of["clearance"] * worn.get(name, 1.0)) for s in speeds]
+            else:
+                true[name] = [film_row(of, s, of["clearance"] * worn.get(name, 1.0)) for s in speeds]
             written[name] = [film_row(of, s, of["clearance"]) for s in speeds]
         else:
             written[name] = [table_row(b, s) for s in speeds]
@@ -309,6 +336,46 @@ def add_delay(resp, bearing, speeds, tau):
     return {"tau_s": tau}
 
 
+def add_ped_delay(resp, bearing, speeds, tau):
+    """Both pedestal pick-ups of `bearing` read tau [s] late (their own
+    signal conditioner's filters): P e^{-i Omega tau}; the probes on time."""
+    lag = np.exp(-1j * 2 * math.pi * np.asarray(speeds) * tau)
+    for c in ("ped_y", "ped_z"):
+        resp[bearing][c] = resp[bearing][c] * lag
+    return {"tau_s": tau}
+
+
+def sweep_speeds(speeds, sweep):
+    """The speeds [Hz] the revolutions of each vector span in a coast-down
+    at a constant deceleration a = `rate_hz_per_s`: a block of N =
+    `revolutions` revolutions whose mean speed is the logged one, f_j,
+    lasts N / f_j and spans f_j +- a N / (2 f_j); sampled at `points`
+    equal steps of the revolution count (the filter weighs each revolution
+    alike): f^2 = f_hi^2 - 2 a theta. Returns an array (len(speeds),
+    points)."""
+    a, n, k = sweep["rate_hz_per_s"], sweep["revolutions"], sweep["points"]
+    out = []
+    for f in np.asarray(speeds, dtype=float):
+        hi = f + a * n / (2 * f)
+        theta = (np.arange(k) + 0.5) * n / k
+        out.append(np.sqrt(np.maximum(hi * hi - 2 * a * theta, 1e-6)))
+    return np.array(out)
+
+
+def swept(spec, speeds, physical, sweep):
+    """respond()'s phasors as a tracking filter reads them during a fast
+    coast-down (`sweep`: sweep_speeds): each the mean of the steady-state
+    phasors at the speeds its revolutions span (the quasi-static part of
+    the sweep; the transient, a resonance's ring-down lagging the speed,
+    is not modelled). The table written is the logged speeds'."""
+    sub = sweep_speeds(speeds, sweep)
+    grid, where = np.unique(sub.ravel(), return_inverse=True)  # ROSS wants rising speeds
+    resp, _ = respond(spec, grid, physical)
+    written = coefficients(spec, speeds, physical)[1]
+    return {b: {c: np.asarray(v)[where].reshape(sub.shape).mean(axis=1) for c, v in ch.items()}
+            for b, ch in resp.items()}, written
+
+
 def sig(v, digits):
     return f"{v:.{digits - 1}e}"
 
@@ -327,6 +394,12 @@ def physical_detail(effect, spec):
     if what == "table_scale":
         return {"name": "bearing_coefficients", "bearing": effect[1],
                 "parameters": {"k_scale": effect[2], "c_scale": effect[3]}}
+    if what == "thermal":
+        return {"name": "oil_thermal", "bearing": ",".join(effect[1]["bearings"]),
+                "parameters": {"viscosity_ratio_at_rest": effect[1]["ratio"], "top_hz": effect[1]["top_hz"]}}
+    if what == "sweep":
+        return {"name": "sweep_average", "bearing": "",
+                "parameters": {k: float(v) for k, v in effect[1].items()}}
     if what == "cross":
         p = next(b for b in spec["bearings"] if b["name"] == effect[1])["pedestal"]
         return {"name": "pedestal_cross_coupling", "bearing": effect[1],
@@ -345,10 +418,12 @@ def make(out, case, seed, machine=DEFAULT):
     speeds = speeds_of(case, seed, machine)
     effect, noise_kind = kind(case, machine)
     effects = effects_of(case, machine)
-    physical = [e for e in effects if e[0] in ("frame", "sub_base", "worn_film", "table_scale", "cross")]
+    physical = [e for e in effects if e[0] in ("frame", "sub_base", "worn_film", "table_scale", "cross",
+                                               "thermal")]
+    sweep = next((e[1] for e in effects if e[0] == "sweep"), None)
     key = (machine, effect, tuple(speeds))
     if key not in _CACHE:  # ROSS's response depends on the effect and grid only
-        _CACHE[key] = respond(spec, speeds, physical)
+        _CACHE[key] = respond(spec, speeds, physical) if sweep is None else swept(spec, speeds, physical, sweep)
     resp, written = _CACHE[key]
     resp = {b: dict(v) for b, v in resp.items()}
     names = [b["name"] for b in spec["bearings"]]
@@ -359,7 +434,10 @@ def make(out, case, seed, machine=DEFAULT):
         elif e[0] == "delay":
             details.append({"name": "sensor_delay", "bearing": e[1],
                             "parameters": add_delay(resp, e[1], speeds, e[2])})
-        elif e in physical:
+        elif e[0] == "ped_delay":
+            details.append({"name": "sensor_delay", "bearing": e[1],
+                            "parameters": add_ped_delay(resp, e[1], speeds, e[2])})
+        elif e in physical or e[0] == "sweep":
             details.append(physical_detail(e, spec))
     rng = np.random.default_rng(m["rng"] + 101 * cases_of(machine).index(case) + seed)
     noisy = not noise_kind.startswith("d")

@@ -269,3 +269,91 @@ MACHINES["unseen-six"] = {
     "d3_effects": False,
     "repo": ("clean-s1c", "cross"),
 }
+
+
+def delta_rpm_grid(top, bottom, step):
+    """A coast-down logged by a monitoring system that stores a vector
+    every `step` [Hz] of speed change (a "delta rpm" trigger): speeds from
+    `bottom` to `top` [Hz] in equal steps (listed rising); the trigger's
+    phase shifted by a fraction of a step per seed in the digit cases
+    (bounded, unlike uniform_grid's shift)."""
+    n = int(round((top - bottom) / step)) + 1
+    def speeds(shifted, seed):
+        frac = (0.37 * (seed - 1)) % 1.0 if shifted else 0.0
+        v = bottom + step * (np.arange(n) + frac)
+        return np.round(v[v <= top + 1e-9], 4)
+    return speeds
+
+
+# unseen-seven (session 46) is tests/data/ross-unseen-7/unseen-seven.toml: a
+# small steam turbine-generator set (about 8 MW, 3000 rpm) on three plain
+# cylindrical journals (short oil films, L/D 0.5, heavily loaded: strongly
+# cross-coupled, stiffness rising steeply at low speed); the turbine rotor
+# (three wheels) on B1 and B2, rigidly coupled to a single-bearing
+# generator (a 5 t slotted body) whose far end runs in B3, an exciter
+# overhung beyond it. Pedestals heavy (0.8-1.5 t), vertical resonances
+# above the run (71-80 Hz), horizontal ones inside it (47, 39, 36 Hz); the
+# rotor's criticals at 17 and 24-30 Hz (ROSS run_modal, log dec 0.06-0.3;
+# none below zero up to 67 Hz at 10, 30 and 50 Hz: no whip in the run).
+SUB_BASE_SEVEN = {"bearing": "B1", "m_y": 400.0, "m_z": 400.0, "k_y": 3.0e8, "k_z": 1.5e8,
+                  "c_y": 2.0e4, "c_z": 1.2e4}
+# a spring-mounted table-top foundation deck under all three pedestals
+DECK_SEVEN = {"name": "deck", "bearings": ["B1", "B2", "B3"], "m_y": 8000.0, "m_z": 8000.0,
+              "k_y": 2.5e9, "k_z": 6.0e8, "c_y": 1.5e5, "c_z": 6.0e4}
+# table-thermal: the effective film temperature falls as the shear heating
+# (about mu Omega^2) falls during the coast-down: Delta T = Delta T_top
+# (f / f_top)^2 above the controlled inlet, mu = mu_top exp(beta (Delta
+# T_top - Delta T)), beta Delta T_top = ln 1.3 (about 6 C on an ISO VG 32
+# oil): +30 % at standstill, +29 % at 5 Hz, 0 at the top speed (50 Hz),
+# on every bearing (one oil system); bearings.csv and the machine file
+# are at the design viscosity (the top speed's)
+THERMAL_SEVEN = {"bearings": ["B1", "B2", "B3"], "top_hz": 50.0, "ratio": 1.3}
+# sweep: a trip with the condenser vacuum broken (50 Hz to rest in about
+# 100 s: 0.5 Hz/s, an estimate for a small set) and a monitoring system
+# whose 1X vector is the average over 32 revolutions (the tracking
+# filter's block): each phasor the mean of the steady-state phasors over
+# the speeds those revolutions span (the quasi-static part of the sweep)
+SWEEP_SEVEN = {"rate_hz_per_s": 0.5, "revolutions": 32, "points": 9}
+MACHINES["unseen-seven"] = {
+    "data": os.path.join(ROOT, "tests", "data", "ross-unseen-7"),
+    "file": "unseen-seven.toml",
+    # a coast-down after a trip from 3000 rpm, a vector stored every 45 rpm
+    # (0.75 Hz, a common delta-rpm setting of transient logging), 50 Hz
+    # down to 5 Hz (below it the turning-gear approach, not logged): 61
+    # speeds, through the rotor's criticals (17, 24-30 Hz) and the three
+    # horizontal pedestal resonances
+    "grid": delta_rpm_grid(50.0, 5.0, 0.75),
+    # proximity probes (API 670 systems): 0.4 % of |phasor| (the 1X
+    # filter's scatter) plus an absolute floor of 0.05 um (electrical noise
+    # through the tracking filter); casing velocity pick-ups: 1 % of
+    # |phasor| plus a velocity floor of 5 um/s (the pick-up's noise in the
+    # filter's band, 1.6e-7 m at 5 Hz: the pick-ups read near it below
+    # 8 Hz)
+    "noise": {"rel": {"rel": 0.004, "floor": 0.0, "abs": 5e-8},
+              "ped": {"rel": 0.01, "floor": 0.0, "vel": 5e-6}},
+    "noisy": "t1",
+    "digits": ("d3", "dmix", "d12"),
+    "mixed_digits": {"B1": 3, "B2": 2, "B3": 4},
+    "rng": 46_000,
+    "effects": {
+        "sub-base": [("sub_base", SUB_BASE_SEVEN)],
+        "table-film": [("worn_film", "B3", 1.0 / 0.85)],
+        "cross": [("cross", "B2", 0.2)],
+        "runout": [("runout", "B1")],
+        "delay": [("delay", "B2", 150e-6)],
+        "flips": [("flips", ["B2", "B3"])],
+        "outlier": [("outlier", "B3")],
+        "base": [("frame", DECK_SEVEN)],
+        "base-runout": [("frame", DECK_SEVEN), ("runout", "B3")],
+        "cross-delay": [("cross", "B3", 0.2), ("delay", "B1", 150e-6)],
+        # departures no library effect names
+        "table-thermal": [("thermal", THERMAL_SEVEN)],
+        # B3's casing pick-ups wired to the generator's own monitoring rack,
+        # whose anti-alias and integrating filters read 200 us later than
+        # the probes' (3.6 deg at 50 Hz)
+        "ped-delay": [("ped_delay", "B3", 200e-6)],
+        "sweep": [("sweep", SWEEP_SEVEN)],
+    },
+    "d3_effects": False,
+    "repo": ("clean-t1c", "ped-delay"),
+}
