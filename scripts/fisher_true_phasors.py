@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The Cramér–Rao bound of one pedestal from its true phasors, computed apart
 from plinth (numpy), and the identify ± and errors of noise redraws against it
-(docs/session46-lowsnr17.md).
+(docs/unseen-six.md "Session 46 (lowsnr17)").
 
 Usage: python3 scripts/fisher_true_phasors.py EXACT BEARING [IDENTIFY.json...]
        python3 scripts/fisher_true_phasors.py --diagonal EXACT BEARING

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Noise redraws of one of scripts/ross_unseen.py's cases: its noiseless ROSS
 response, fresh complex Gaussian noise at the machine's noise law, the exact
-sd as the noise columns (docs/session46-lowsnr17.md).
+sd as the noise columns (docs/unseen-six.md "Session 46 (lowsnr17)").
 
 Usage: python3 scripts/ross_unseen_redraw.py MACHINE CASE GRIDSEED FIRST LAST OUT
 
