@@ -73,16 +73,8 @@ pub fn sensor_delay<E: Equations + ?Sized>(
     if eq.speeds() != omega.len() {
         return None;
     }
-    let zero = vec![0.0; theta.len()];
     let score = efficient_score(eq, theta, 1, |at| {
-        // iΩ·e(0) per direction, per µs of τ.
-        let f = eq.error(at.s, &zero);
-        if f.len() != 4 {
-            return None;
-        }
-        let w = omega[at.s] * MICROSECOND;
-        let raw = DVector::from_vec(vec![-w * f[1], w * f[0], -w * f[3], w * f[2]]);
-        let col = at.l.solve_lower_triangular(&raw)?;
+        let col = delay_column(eq, at.s, omega[at.s], at.l)?;
         let wres = at.l.solve_lower_triangular(at.e0)?;
         let half = col.dot(&wres);
         Some(Extension {
@@ -104,6 +96,27 @@ pub fn sensor_delay<E: Equations + ?Sized>(
         delay_std_us: 1.0 / g.sqrt(),
     };
     (statistic.is_finite() && p_value.is_finite() && out.delay_us.is_finite()).then_some(out)
+}
+
+/// The whitened column of a delay on both `rel` probes at τ = 0 at speed
+/// `s` of `eq` (4 rows: y re, y im, z re, z im), per µs of τ: L_s⁻¹·iΩ·e_s(0)
+/// (module docs), `omega` the speed [rad/s], `l` the speed's whitening
+/// factor; `None` when the speed's block is not 4 rows or L is singular.
+pub(super) fn delay_column<E: Equations + ?Sized>(
+    eq: &E,
+    s: usize,
+    omega: f64,
+    l: &nalgebra::DMatrix<f64>,
+) -> Option<DVector<f64>> {
+    // e at θ = 0 is −K*·rel (the equations are linear in θ).
+    let zero = vec![0.0; plinth_shared::regression::PARAMETERS];
+    let f = eq.error(s, &zero);
+    if f.len() != 4 {
+        return None;
+    }
+    let w = omega * MICROSECOND;
+    let raw = DVector::from_vec(vec![-w * f[1], w * f[0], -w * f[3], w * f[2]]);
+    l.solve_lower_triangular(&raw)
 }
 
 #[cfg(test)]
