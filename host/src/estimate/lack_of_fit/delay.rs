@@ -224,6 +224,38 @@ mod tests {
         assert!((rms - 1.0).abs() < 0.15, "RMS z {rms}");
     }
 
+    /// The linearisation of the shared delay rule
+    /// ([`super::super::delay_unknown::delay_nuisance`]) on the same runs:
+    /// without a delay τ̂/σ_τ has mean 0 and RMS 1 over 200 runs (its ± is
+    /// right) and ρ ≥ 1; with 150 µs on the `rel` probes τ̂ is within 3 σ_τ
+    /// of it (the sign is a delay's, not an advance's).
+    #[test]
+    fn the_linearised_delay_is_calibrated_and_finds_a_delay() {
+        use super::super::delay_unknown::delay_nuisance;
+        use plinth_shared::regression::Parameter;
+        let nuisance = |obs: &[Observation]| {
+            let eq = Rigid::new(obs, &Weighting::default());
+            let omega: Vec<f64> = obs.iter().map(|o| o.omega()).collect();
+            delay_nuisance(&eq, &THETA, &omega, &Parameter::ALL).expect("linearised")
+        };
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5100);
+        let runs = 200;
+        let (mut sum, mut sum2) = (0.0, 0.0);
+        for _ in 0..runs {
+            let d = nuisance(&run(0.0, 0.0, &mut rng));
+            assert!(d.ratio.iter().all(|r| *r >= 1.0), "{d:?}");
+            let z = d.delay_us / d.delay_std_us;
+            sum += z;
+            sum2 += z * z;
+        }
+        let mean = sum / runs as f64;
+        let rms = (sum2 / runs as f64).sqrt();
+        assert!(mean.abs() < 0.25, "mean z {mean}");
+        assert!((rms - 1.0).abs() < 0.15, "RMS z {rms}");
+        let d = nuisance(&run(150e-6, 0.0, &mut rng));
+        assert!((d.delay_us - 150.0).abs() < 3.0 * d.delay_std_us, "{d:?}");
+    }
+
     /// 150 µs on the `rel` probes is found with its value (within 3 σ) and
     /// the same on the `ped` pick-ups shows as −150 µs; 150 µs on both
     /// leaves Z alone and is not seen.

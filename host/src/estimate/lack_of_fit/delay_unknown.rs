@@ -301,3 +301,53 @@ pub fn delay_nuisance<E: Equations + ?Sized>(
         ratio,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The exclusion and the gate: a delay whose interval moves no damping
+    /// by its ± is excluded; one that does counts only with a negative
+    /// damping or τ̂ beyond 2 σ_τ; τ̂ ≤ 0 leaves the widening at ρ.
+    #[test]
+    fn the_gate_the_exclusion_and_the_widening() {
+        // ρ 1.1: |b|σ_τ = 0.458 σ_held; τ_max = 1.96 σ_τ at τ̂ = 0 moves c
+        // by 0.90 σ_held: excluded even with a negative damping.
+        assert!(!counted_unknown(0.0, 1.0, [1.1], true));
+        // ρ 1.6: 1.25 σ_held per σ_τ: not excluded, counted only where gated.
+        assert!(counted_unknown(0.0, 1.0, [1.6], true));
+        assert!(!counted_unknown(1.9, 1.0, [1.6], false));
+        assert!(counted_unknown(2.1, 1.0, [1.6], false));
+        // A τ̂ far below zero: the causal interval is empty.
+        assert!(!counted_unknown(-3.0, 1.0, [5.0], true));
+        assert!(!counted_unknown(f64::NAN, 1.0, [5.0], true));
+        assert_eq!(widening(1.6, -2.0, 1.0), 1.6);
+        // τ̂ = 3 σ_τ: √(1 + (ρ² − 1)·10).
+        let w = widening(1.6, 3.0, 1.0);
+        assert!((w - (1.0 + 1.56 * 10.0f64).sqrt()).abs() < 1e-12, "{w}");
+        assert_eq!(ratio(2.0, 1.0), 1.0);
+    }
+
+    /// The information ± of a straight-line fit y = a + b·x with unit
+    /// noise: var(b) = 1/Σ(x − x̄)², var(a) = Σx²/(n·Σ(x − x̄)²); the delay's
+    /// column at j, held and free.
+    #[test]
+    fn information_errors_and_the_linearisation() {
+        let x = [0.0, 1.0, 2.0, 3.0, 5.0];
+        let jac = DMatrix::from_fn(5, 2, |r, c| if c == 0 { 1.0 } else { x[r] });
+        let se = information_std_errs(&jac).expect("se");
+        let mean = x.iter().sum::<f64>() / 5.0;
+        let sxx: f64 = x.iter().map(|v| (v - mean).powi(2)).sum();
+        let sx2: f64 = x.iter().map(|v| v * v).sum();
+        assert!((se[1] - (1.0 / sxx).sqrt()).abs() < 1e-12);
+        assert!((se[0] - (sx2 / (5.0 * sxx)).sqrt()).abs() < 1e-12);
+        // Residual 2 + 0.5·x: the step from zero is (−2, −0.5); b is τ.
+        let resid = DVector::from_iterator(5, x.iter().map(|v| 2.0 + 0.5 * v));
+        let lin = linearise(&jac, &resid, 1, information_std_errs).expect("lin");
+        assert!((lin.tau + 0.5).abs() < 1e-12);
+        assert!((lin.tau_std_err - se[1]).abs() < 1e-12);
+        assert!((lin.free[0] - se[0]).abs() < 1e-12);
+        assert!((lin.held[0] - (1.0f64 / 5.0).sqrt()).abs() < 1e-12);
+        assert!(information_std_errs(&DMatrix::from_element(3, 2, 1.0)).is_none());
+    }
+}
