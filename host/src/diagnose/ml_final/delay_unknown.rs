@@ -20,7 +20,7 @@
 //! fit's. Measured on unseen-five `delay` (seeds
 //! 3401-3420) the gated rule widens every run whose B1 c_y was beyond 3 ±
 //! (12/20), and no clean run of that machine (docs/unseen.md, Session 45
-//! (delay17)); unseen-six `delay` seed 2928 (150 µs on B1's probes, truth
+//! (delay17)); unseen-five `delay` seed 2928 (150 µs on B1's probes, truth
 //! c_y 2000 N·s/m) printed B1 c_y −1729 ± 800 before, trusted (z −4.66),
 //! with τ 162 ± 43 µs the best rejected candidate.
 
@@ -107,7 +107,7 @@ pub struct DelayUnknown {
 }
 
 /// The delays on `rel` probes the data do not exclude at the bearings of
-/// `group` of `model` where a damping comes out below zero (module docs), with the group's
+/// `group` of `model` that pass the shared gate (module docs), with the group's
 /// pedestal ± with each unknown; `beta`, `nl`: the model's final values;
 /// `scale`: per parameter of the group's equations (its terms, then its
 /// scalars) a size [SI] for the difference steps.
@@ -129,7 +129,8 @@ pub(super) fn delays_unknown(
 }
 
 /// [`delays_unknown`] at bearing `b`, the delay on `channels`: `None`
-/// where no damping of `b` is below zero, the data exclude the delay or
+/// where the gate is shut (no damping of `b` below zero, τ̂ within 2 σ_τ),
+/// the data exclude the delay or
 /// the linearisation fails.
 #[allow(clippy::too_many_arguments)]
 fn delay_unknown(

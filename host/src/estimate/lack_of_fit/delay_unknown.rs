@@ -267,7 +267,7 @@ pub fn delay_nuisance<E: Equations + ?Sized>(
     }
     let mut jac = DMatrix::<f64>::zeros(4 * n, p + 1);
     let mut resid = DVector::<f64>::zeros(4 * n);
-    for s in 0..n {
+    for (s, &w) in omega.iter().enumerate() {
         let l = gh::whitening(eq, s, theta)?;
         let e0 = eq.error(s, theta);
         if e0.len() != 4 {
@@ -284,7 +284,7 @@ pub fn delay_nuisance<E: Equations + ?Sized>(
             jac.view_mut((4 * s, k), (4, 1)).copy_from(&col);
         }
         jac.view_mut((4 * s, p), (4, 1))
-            .copy_from(&delay_column(eq, s, omega[s], &l)?);
+            .copy_from(&delay_column(eq, s, w, &l)?);
     }
     let dof = (4 * n).checked_sub(p + 1).filter(|&d| d > 0)? as f64;
     let excess = (resid.norm_squared() / dof).max(1.0).sqrt();
