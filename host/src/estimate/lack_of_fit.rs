@@ -42,6 +42,7 @@
 //! docs/trust-lack-of-fit.md.
 
 mod delay;
+pub mod delay_unknown;
 mod mean;
 mod score;
 mod structure;
@@ -49,6 +50,7 @@ mod support;
 mod window;
 
 pub use delay::{sensor_delay, SensorDelay};
+pub use delay_unknown::{delay_nuisance, DelayNuisance};
 pub use structure::{
     structure, Structure, BLOCK, LEVEL_WINDOW, PERMUTATIONS, STOP_AFTER_EXCEEDANCES,
 };
@@ -103,6 +105,12 @@ pub struct LackOfFit {
     /// from noise columns (`None` otherwise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensor_delay: Option<SensorDelay>,
+    /// The fit linearised with a delay on the `rel` probes
+    /// ([`delay_nuisance`]: τ̂, its ±, each parameter's ρ): what
+    /// [`crate::identify`] counts in the pedestal ± where the data do not
+    /// exclude the delay ([`delay_unknown`]); with every noise source.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delay_unknown: Option<DelayNuisance>,
 }
 
 /// The lack-of-fit evidence of a fit at `theta` (θ units) to `obs` whose
@@ -151,6 +159,7 @@ pub fn assess(
     if !scanned && support_mode.is_none() && sensor_delay.is_none() {
         return None;
     }
+    let delay_unknown = delay_nuisance(&eq, theta, &omega, columns);
     let w = gh::whitened(&eq, theta, None)?;
     let rows: Vec<[f64; 4]> = (0..obs.len())
         .map(|j| std::array::from_fn(|c| w[4 * j + c]))
@@ -163,6 +172,7 @@ pub fn assess(
         },
         support_mode,
         sensor_delay,
+        delay_unknown,
         level_from: source,
         level_ratio: chi2 / dof as f64,
         level_p,

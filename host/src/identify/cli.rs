@@ -198,6 +198,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         print!("{}", table(&identification, run.truth.as_ref()));
         print!("{}", super::on_base::describe(&identification.bases));
         print!("{}", untrusted_reasons(&identification));
+        print!("{}", super::delay_unknown::describe(&identification));
         print!("{}", conditional.to_text());
     }
     if let Some(dir) = &args.plots {

@@ -21,6 +21,7 @@ pub mod cli;
 pub mod conditional;
 pub mod convention;
 pub mod data;
+pub mod delay_unknown;
 pub mod estimator;
 pub mod flips;
 pub mod lsq;
@@ -172,6 +173,10 @@ pub enum WarningKind {
     /// Every channel of the bearing looks flipped by 180° at some speeds: a
     /// likely keyphasor fault ([`crate::estimate::robust`]). Informative.
     KeyphasorFlip,
+    /// The data do not exclude a sensor delay on the bearing's `rel` probes,
+    /// which reads as a damping: the ± count it as unknown
+    /// ([`delay_unknown`]). Informative.
+    DelayNotExcluded,
 }
 
 impl WarningKind {
@@ -517,6 +522,7 @@ pub fn identify_prepared(
     physical::recheck_run(&mut identification, &relative_residuals);
     trust::mark_lack_of_fit(&mut identification);
     plausibility::mark(run, &mut identification);
+    delay_unknown::mark(&mut identification);
     Ok(identification)
 }
 

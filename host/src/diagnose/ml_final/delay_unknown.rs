@@ -2,54 +2,27 @@
 //! its `rel` probes, which the search tried and the data do not exclude,
 //! as unknown.
 //!
-//! A delay τ on a bearing's rotor-relative probes multiplies the measured
-//! bearing force by e^{−iΩτ}: the apparent pedestal impedance is
-//! Z·(1 − iΩτ), i.e. the damping c − τ·(k − Ω²m) in place of c
-//! ([`crate::diagnose::forward::non_physical_dampings`]). Where the
-//! pedestal's resonance lies above the band, k − Ω²m is nearly k over it and
-//! τ and c trade almost one for one; only the Ω³τm curvature and the link
-//! between the two directions tell them apart. The search rejects the
-//! delay at its Bonferroni level, and the final ± of c are then
-//! conditional on τ = 0 exactly, a value the data did not give: unseen-five
-//! `delay` seed 2928 (150 µs on B1's probes, truth c_y 2000 N·s/m) printed
-//! B1 c_y −1729 ± 800, trusted (z −4.66), with τ 162 ± 43 µs the best
-//! rejected candidate: k_y·σ_τ ≈ 1700 N·s/m against that ± 800
-//! (docs/unseen.md, Session 44 (sweep17b), finding 1).
-//!
+//! The physics, the linearisation, the exclusion and the gate are one
+//! definition shared with `plinth identify`
+//! ([`crate::estimate::lack_of_fit::delay_unknown`], module docs there).
 //! Here, at every bearing of a group on rigid ground (the search tried a
 //! delay there at every step, [`crate::diagnose::candidates`]), the group's
 //! equations are extended by a delay at τ = 0 on the `rel` probes whose
 //! phase no delay of the final model frees (both where it has none,
-//! `undelayed_probes`) and linearised at the final values
-//! (the same construction as [`super::held_delay`] and [`super::held_free`],
-//! the nuisance the other way round: Baarda's external reliability). With
-//! the inference ([`Inference`]) of the fit with τ held at zero (C_held) and
-//! with τ free (C_free), each parameter's ρ = σ_free/σ_held ≥ 1; the held
-//! value of a damping c moves by b·τ for a true delay τ, with
-//! |b|·σ_τ = σ_held·√(ρ² − 1).
-//!
-//! **Excluded**: the data's interval of τ (τ̂ ± 1.96 σ_τ, τ̂ one
-//! Gauss–Newton step from τ = 0, clipped at τ ≥ 0: a delay is causal)
-//! moves every damping of the bearing by at most its held ±:
-//! |b|·max(0, τ̂ + 1.96 σ_τ) ≤ σ_held. Then nothing changes. Otherwise the
-//! reported ± of every pedestal value of the group is multiplied by its ρ
-//! (the ± with τ unknown); the values stay the final fit's.
-//!
-//! **Only where a damping of the bearing comes out below zero, or where the
-//! data favour a delay** (τ̂ > 2 σ_τ, one-sided: a delay the search's
-//! Bonferroni level rejected but these data do not call chance; unseen-six
-//! `delay`, B2's resonances inside the run, seeds 3615 and 3617: τ̂ at
-//! 2.5 and 2.1 of its ±, the dampings positive and 3.5-4.2 ± off, trusted;
-//! docs/unseen-six.md). A passive
-//! pedestal's damping is ≥ 0, and a delay on the `rel` probes (τ > 0)
-//! lowers the apparent damping below the resonance: a negative estimate is
-//! the data's sign of a phase error. Elsewhere the delay is rarely excluded
-//! either (a stiff block's c cannot be told from τ·k by any run-down: on
-//! unseen-train's B1, 900 MN/m, ρ ≈ 20), and counting it there made every
-//! such damping unknown on clean runs (docs/unseen.md, Session 45 (delay17): widening
-//! everywhere, measured, B1 c_y ± ×20 on clean `clean-p2`). Measured on
-//! unseen-five `delay` (seeds 3401-3420) the gated rule widens every run
-//! whose B1 c_y was beyond 3 ± (12/20), and no clean run of that machine.
+//! `undelayed_probes`) and linearised at the final values (the same
+//! construction as [`super::held_delay`] and [`super::held_free`], the
+//! nuisance the other way round), each fit's ± this tool's own
+//! ([`Inference::std_err`]: the larger of the floor and the
+//! autocorrelation-robust value). Where the delay is counted as unknown the
+//! reported ± of every pedestal value of the group is multiplied by the
+//! shared widening ([`shared::widening`]: its ρ = σ(τ free)/σ(τ held) where
+//! τ̂ ≤ 0, more where the data put τ̂ above zero); the values stay the final
+//! fit's. Measured on unseen-five `delay` (seeds
+//! 3401-3420) the gated rule widens every run whose B1 c_y was beyond 3 ±
+//! (12/20), and no clean run of that machine (docs/unseen.md, Session 45
+//! (delay17)); unseen-five `delay` seed 2928 (150 µs on B1's probes, truth
+//! c_y 2000 N·s/m) printed B1 c_y −1729 ± 800 before, trusted (z −4.66),
+//! with τ 162 ± 43 µs the best rejected candidate.
 
 use super::{linearised, GroupEquations, GroupRefit};
 use crate::diagnose::criterion::Inference;
@@ -57,15 +30,8 @@ use crate::diagnose::data::Prepared;
 use crate::diagnose::fit::search_interval;
 use crate::diagnose::model::{DelayChannels, Model, Nonlinear, Term};
 use crate::diagnose::state::State;
+use crate::estimate::lack_of_fit::delay_unknown::{self as shared, linearise};
 use nalgebra::DVector;
-
-/// Standard normal quantile of the delay's two-sided 95 % interval [-].
-const Z_INTERVAL: f64 = 1.96;
-
-/// A delay the data favour: τ̂ beyond this many of its ± [-] (one-sided,
-/// 2.3 % per bearing under the null; τ̂/σ_τ on 180 clean bearings of five
-/// ROSS machines: RMS 0.98, 4 beyond 2).
-const Z_FAVOURED: f64 = 2.0;
 
 /// The `rel` probes of bearing `b` whose phase no delay of `model` at `b`
 /// frees (a delay on the probe, or on the pedestal channel of its
@@ -105,12 +71,22 @@ pub struct Widened {
     pub free: f64,
     /// Whether it is a damping (c_y, c_z).
     pub damping: bool,
+    /// The factor its reported ± is multiplied by
+    /// ([`shared::widening`] of ρ and the delay's τ̂/σ_τ) [-].
+    pub factor: f64,
 }
 
 impl Widened {
-    /// ρ = σ_free/σ_held [-], at least 1.
+    /// The factor [-] its reported ± is multiplied by where the delay is
+    /// counted as unknown ([`shared::widening`]: ρ = σ_free/σ_held at
+    /// τ̂ ≤ 0, more where the data put τ̂ above zero), at least 1.
     pub fn ratio(&self) -> f64 {
-        (self.free / self.held).max(1.0)
+        self.factor
+    }
+
+    /// ρ = σ_free/σ_held [-], at least 1.
+    pub fn rho(&self) -> f64 {
+        shared::ratio(self.held, self.free)
     }
 }
 
@@ -131,7 +107,7 @@ pub struct DelayUnknown {
 }
 
 /// The delays on `rel` probes the data do not exclude at the bearings of
-/// `group` of `model` where a damping comes out below zero (module docs), with the group's
+/// `group` of `model` that pass the shared gate (module docs), with the group's
 /// pedestal ± with each unknown; `beta`, `nl`: the model's final values;
 /// `scale`: per parameter of the group's equations (its terms, then its
 /// scalars) a size [SI] for the difference steps.
@@ -153,7 +129,8 @@ pub(super) fn delays_unknown(
 }
 
 /// [`delays_unknown`] at bearing `b`, the delay on `channels`: `None`
-/// where no damping of `b` is below zero, the data exclude the delay or
+/// where the gate is shut (no damping of `b` below zero, τ̂ within 2 σ_τ),
+/// the data exclude the delay or
 /// the linearisation fails.
 #[allow(clippy::too_many_arguments)]
 fn delay_unknown(
@@ -190,15 +167,15 @@ fn delay_unknown(
         return None;
     }
     let (jac, resid, row_speed) = linearised(&eq, &p, &ext_scale)?;
-    let free = Inference::new(&jac, &resid, &row_speed, DVector::from_vec(p.clone())).ok()?;
-    let held_jac = jac.clone().remove_column(j);
-    let mut held_p = p.clone();
-    held_p.remove(j);
-    let held = Inference::new(&held_jac, &resid, &row_speed, DVector::from_vec(held_p)).ok()?;
-    // One Gauss–Newton step of the whitened equations from τ = 0.
-    let step = jac.clone().svd(true, true).solve(&(-&resid), 1e-14).ok()?;
-    let (tau, tau_se) = (step[j], free.std_err(j));
-    let tau_max = (tau + Z_INTERVAL * tau_se).max(0.0);
+    let lin = linearise(&jac, &resid, j, |jac| {
+        let mut estimate = p.clone();
+        if jac.ncols() < estimate.len() {
+            estimate.remove(j);
+        }
+        let inf = Inference::new(jac, &resid, &row_speed, DVector::from_vec(estimate)).ok()?;
+        Some((0..jac.ncols()).map(|i| inf.std_err(i)).collect())
+    })?;
+    // The parameters of the group less τ, in order (τ's column is j).
     let widened: Vec<Widened> = eq
         .terms
         .iter()
@@ -208,36 +185,32 @@ fn delay_unknown(
             let [Some(bearing), None] = term.bearings() else {
                 return None;
             };
+            let at = if i < j { i } else { i - 1 };
             term.is_pedestal().then(|| Widened {
                 bearing,
                 name: term.name(),
-                held: held.std_err(i),
-                free: free.std_err(i),
+                held: lin.held[at],
+                free: lin.free[at],
                 damping: matches!(term, Term::Damping { .. }),
+                factor: shared::widening(
+                    shared::ratio(lin.held[at], lin.free[at]),
+                    lin.tau,
+                    lin.tau_std_err,
+                ),
             })
         })
         .collect();
-    let finite = tau.is_finite() && tau_se.is_finite() && tau_se > 0.0;
-    if !finite || !widened.iter().all(|w| w.held > 0.0 && w.free.is_finite()) {
+    if !widened.iter().all(|w| w.held > 0.0 && w.free.is_finite()) {
         return None;
     }
-    // The gate (module docs): a damping below zero, or the data favour a
-    // causal delay beyond [`Z_FAVOURED`] of its ±.
-    if !negative && tau <= Z_FAVOURED * tau_se {
-        return None;
-    }
-    // Excluded: no τ in the data's interval moves a damping of the bearing
-    // by more than its held ± (|b|·σ_τ = σ_held·√(ρ² − 1)).
-    let moves = |w: &Widened| {
-        let b_abs = w.held * (w.ratio().powi(2) - 1.0).sqrt() / tau_se;
-        b_abs * tau_max > w.held
-    };
-    if !widened
+    let dampings = widened
         .iter()
-        .any(|w| w.damping && w.bearing == b && moves(w))
-    {
+        .filter(|w| w.damping && w.bearing == b)
+        .map(Widened::rho);
+    if !shared::counted_unknown(lin.tau, lin.tau_std_err, dampings, negative) {
         return None;
     }
+    let (tau, tau_se) = (lin.tau, lin.tau_std_err);
     Some(DelayUnknown {
         bearing: b,
         channels,
