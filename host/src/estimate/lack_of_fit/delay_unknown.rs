@@ -53,7 +53,7 @@
 //! values stay the fit's, so where the data put τ̂ away from zero the held
 //! value sits b·τ̂ from the τ-free one and ρ alone does not cover it
 //! (unseen-five `delay`, identify: B1 c_y 6.5 ± off with τ̂ 120 ± 39 µs,
-//! ρ 1.60, still 4.1 ρ-widened ± off; docs/session46-idcoll17.md).
+//! ρ 1.60, still 4.1 ρ-widened ± off; docs/trust.md, Session 46 (idcoll17)).
 
 use super::super::gauss_helmert::{self as gh, Equations};
 use super::delay::delay_column;
