@@ -346,33 +346,45 @@ fn leverage_parts(
     inverses: &[Matrix4<f64>],
     columns: &[Parameter],
 ) -> Option<Vec<Matrix4<f64>>> {
-    let p = columns.len();
-    if p == 0 {
-        return Some(vec![Matrix4::zeros(); speeds.len()]);
-    }
-    let rows: Vec<DMatrix<f64>> = speeds
+    // Fixed-size throughout (a fine sweep has 20 001 speeds): A's columns of
+    // the parameters not fitted are zero, and F's rows and columns of them
+    // (zero) get a unit diagonal, which leaves the fitted block's inverse
+    // as it is and meets only A's zero columns.
+    let fitted: [bool; PARAMETERS] =
+        std::array::from_fn(|k| columns.iter().any(|c| *c as usize == k));
+    let rows: Vec<SMatrix<f64, 4, PARAMETERS>> = speeds
         .iter()
-        .map(|s| DMatrix::<f64>::from_fn(4, p, |r, c| s.a[(r, columns[c] as usize)]))
+        .map(|s| SMatrix::from_fn(|r, c| if fitted[c] { s.a[(r, c)] } else { 0.0 }))
         .collect();
-    let mut f = DMatrix::<f64>::zeros(p, p);
+    let mut f = SMatrix::<f64, PARAMETERS, PARAMETERS>::zeros();
     let mut wa = Vec::with_capacity(speeds.len());
     for (a, w) in rows.iter().zip(inverses) {
-        let w = DMatrix::<f64>::from_fn(4, 4, |r, c| w[(r, c)]);
-        let x = &w * a;
-        f += a.transpose() * &x;
+        let x = w * a;
+        f += a.transpose() * x;
         wa.push(x);
     }
-    let d = jacobi_scaling(&f);
-    let scaled = DMatrix::<f64>::from_fn(p, p, |r, c| d[r] * f[(r, c)] * d[c]);
+    let d: [f64; PARAMETERS] = std::array::from_fn(|k| {
+        let x = f[(k, k)];
+        if fitted[k] && x > 0.0 && x.is_finite() {
+            1.0 / x.sqrt()
+        } else {
+            1.0
+        }
+    });
+    let scaled = SMatrix::<f64, PARAMETERS, PARAMETERS>::from_fn(|r, c| {
+        if !fitted[r] || !fitted[c] {
+            if r == c {
+                1.0
+            } else {
+                0.0
+            }
+        } else {
+            d[r] * f[(r, c)] * d[c]
+        }
+    });
     let inv = scaled.try_inverse()?;
-    let f_inv = DMatrix::<f64>::from_fn(p, p, |r, c| d[r] * inv[(r, c)] * d[c]);
-    let out: Vec<Matrix4<f64>> = wa
-        .iter()
-        .map(|x| {
-            let h = x * &f_inv * x.transpose();
-            Matrix4::from_fn(|r, c| h[(r, c)])
-        })
-        .collect();
+    let f_inv = SMatrix::<f64, PARAMETERS, PARAMETERS>::from_fn(|r, c| d[r] * inv[(r, c)] * d[c]);
+    let out: Vec<Matrix4<f64>> = wa.iter().map(|x| x * f_inv * x.transpose()).collect();
     out.iter()
         .all(|h| h.iter().all(|v| v.is_finite()))
         .then_some(out)
