@@ -33,13 +33,22 @@
 //! product per channel per speed (the α and β of a channel share G_ch), and
 //! at most [`MAX_TEST_SPEEDS`] evenly spaced speeds.
 //!
-//! **Fit** ([`fit_variance_function`]): the pseudo-likelihood of the residuals
-//! maximised over (α, β) ≥ 0 by the multiplicative fixed point of its score,
-//! p_k ← p_k·Σ_s uᵀM_s,k·u / Σ_s tr(Σ_s⁻¹M_s,k) with u = Σ_s⁻¹e_s.
+//! **Fit** ([`fit_variance_function`]): the restricted (REML) pseudo-likelihood
+//! of the residuals maximised over (α, β) ≥ 0 by the multiplicative fixed
+//! point of its score, p_k ← p_k·Σ_s uᵀM_s,k·u / Σ_s tr(P_s·M_s,k) with
+//! u = Σ_s⁻¹e_s and P_s = Σ_s⁻¹ − Σ_s⁻¹·A_s·F⁻¹·A_sᵀ·Σ_s⁻¹ (A_s the speed's
+//! regression rows, F = Σ_s A_sᵀ·Σ_s⁻¹·A_s over the fitted parameters).
+//! The residuals are the fit's own: E[e_s·e_sᵀ] = Σ_s − A_s·F⁻¹·A_sᵀ, and a
+//! speed the fit leans on (a resonance: most of k − Ω²m's information in
+//! 1-3 speeds) shows far less than its noise. The plain pseudo-likelihood
+//! (tr(Σ_s⁻¹M_s,k) in the denominator) read that shortfall as a small
+//! fraction α, often 0, and weighted those speeds up to 3× above their
+//! noise (unseen-six `clean-s1`: α = 0 on rel z or ped z in 15-16 of 68
+//! B1 fits, 5 of 68 with the leverage allowed for; docs/session46-noise17.md).
 
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::Observation;
-use nalgebra::{DMatrix, Matrix4, Vector4};
+use nalgebra::{DMatrix, Matrix4, SMatrix, Vector4};
 use plinth_shared::regression::{Parameter, PARAMETERS};
 
 /// Parameters of the variance function: (α, β, γ) of each of the four
@@ -115,6 +124,8 @@ struct Speed {
     inv_omega_sq: f64,
     /// Σ under the observation's own variances [N²].
     own: Matrix4<f64>,
+    /// The regression rows A [N per θ unit] (eq. 4, all five parameters).
+    a: SMatrix<f64, 4, PARAMETERS>,
 }
 
 impl Speed {
@@ -186,6 +197,7 @@ fn speeds<'a>(
             magnitude_sq: magnitude.map(|m| m * m),
             inv_omega_sq: inv_omega_sq(o),
             own,
+            a: ml::rows(o).0,
         };
         let finite = speed.e.iter().all(|v| v.is_finite())
             && speed.own.iter().all(|v| v.is_finite())
@@ -250,13 +262,15 @@ pub fn homoscedasticity_p(
 }
 
 /// The variance function (α, β per channel, module docs) maximising the
-/// Gaussian pseudo-likelihood of the residuals of the fit `theta` on `obs`
-/// over the `family`'s components (the others 0), started from the
+/// Gaussian restricted pseudo-likelihood of the residuals of the fit `theta`
+/// (parameters `columns`) on `obs` over the `family`'s components (the
+/// others 0), started from the
 /// observations' own noise; `None` when a speed's numbers are not finite or
 /// the iteration leaves the finite numbers.
 pub fn fit_variance_function(
     obs: &[Observation],
     theta: &[f64; PARAMETERS],
+    columns: &[Parameter],
     family: Family,
 ) -> Option<[f64; COMPONENTS]> {
     let speeds = speeds(obs.iter(), theta)?;
@@ -287,12 +301,17 @@ pub fn fit_variance_function(
     for _ in 0..MAX_ITERATIONS {
         let mut num = [0.0; COMPONENTS];
         let mut den = [0.0; COMPONENTS];
-        for s in &speeds {
-            let a = s.sigma(&p).try_inverse()?;
+        let inverses: Vec<Matrix4<f64>> = speeds
+            .iter()
+            .map(|s| s.sigma(&p).try_inverse())
+            .collect::<Option<_>>()?;
+        let leverage = leverage_parts(&speeds, &inverses, columns)?;
+        for ((s, a), h) in speeds.iter().zip(&inverses).zip(&leverage) {
             let w = a * s.e;
+            let projection = a - h;
             for ch in 0..4 {
                 let quadratic = (w.transpose() * s.g[ch] * w)[0];
-                let trace = (a * s.g[ch]).trace();
+                let trace = (projection * s.g[ch]).trace();
                 for k in PER_CHANNEL * ch..PER_CHANNEL * (ch + 1) {
                     num[k] += s.factor(k) * quadratic;
                     den[k] += s.factor(k) * trace;
@@ -315,6 +334,60 @@ pub fn fit_variance_function(
         }
     }
     Some(p)
+}
+
+/// Per speed, the part W_s·A_s·F⁻¹·A_sᵀ·W_s [1/N²] of the weights the fit
+/// of the parameters `columns` takes up (F = Σ_s A_sᵀ·W_s·A_s over those
+/// columns, W_s = `inverses`): the expected e_s·e_sᵀ of a fitted residual
+/// is Σ_s − A_s·F⁻¹·A_sᵀ, so a speed of high leverage (a resonance the
+/// fit follows) shows less than its noise. `None` when F is singular.
+fn leverage_parts(
+    speeds: &[Speed],
+    inverses: &[Matrix4<f64>],
+    columns: &[Parameter],
+) -> Option<Vec<Matrix4<f64>>> {
+    // Fixed-size throughout (a fine sweep has 20 001 speeds): A's columns of
+    // the parameters not fitted are zero, and F's rows and columns of them
+    // (zero) get a unit diagonal, which leaves the fitted block's inverse
+    // as it is and meets only A's zero columns.
+    let fitted: [bool; PARAMETERS] =
+        std::array::from_fn(|k| columns.iter().any(|c| *c as usize == k));
+    let rows: Vec<SMatrix<f64, 4, PARAMETERS>> = speeds
+        .iter()
+        .map(|s| SMatrix::from_fn(|r, c| if fitted[c] { s.a[(r, c)] } else { 0.0 }))
+        .collect();
+    let mut f = SMatrix::<f64, PARAMETERS, PARAMETERS>::zeros();
+    let mut wa = Vec::with_capacity(speeds.len());
+    for (a, w) in rows.iter().zip(inverses) {
+        let x = w * a;
+        f += a.transpose() * x;
+        wa.push(x);
+    }
+    let d: [f64; PARAMETERS] = std::array::from_fn(|k| {
+        let x = f[(k, k)];
+        if fitted[k] && x > 0.0 && x.is_finite() {
+            1.0 / x.sqrt()
+        } else {
+            1.0
+        }
+    });
+    let scaled = SMatrix::<f64, PARAMETERS, PARAMETERS>::from_fn(|r, c| {
+        if !fitted[r] || !fitted[c] {
+            if r == c {
+                1.0
+            } else {
+                0.0
+            }
+        } else {
+            d[r] * f[(r, c)] * d[c]
+        }
+    });
+    let inv = scaled.try_inverse()?;
+    let f_inv = SMatrix::<f64, PARAMETERS, PARAMETERS>::from_fn(|r, c| d[r] * inv[(r, c)] * d[c]);
+    let out: Vec<Matrix4<f64>> = wa.iter().map(|x| x * f_inv * x.transpose()).collect();
+    out.iter()
+        .all(|h| h.iter().all(|v| v.is_finite()))
+        .then_some(out)
 }
 
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
@@ -354,7 +427,7 @@ pub fn refit_under(
     let mut current: Option<(MlFit, [f64; COMPONENTS])> = None;
     for _ in 0..ROUNDS {
         let theta = current.as_ref().map_or(fit.theta, |c| c.0.theta);
-        let p = fit_variance_function(&obs, &theta, family)?;
+        let p = fit_variance_function(&obs, &theta, columns, family)?;
         for o in obs.iter_mut() {
             o.var = variances(o, &p, &floor(o));
         }

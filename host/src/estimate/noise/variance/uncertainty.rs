@@ -14,8 +14,13 @@
 //! the variance function. A small error δp moves it by
 //! δθ = F⁻¹·Σ_s Aᵀ·(∂W_s/∂p_k)·e_s·δp_k with ∂W_s/∂p_k = −W_s·M_sk·W_s
 //! (M_sk = f_k·G_s,ch the covariance component k adds, [`super::Speed`]).
-//! With δp of covariance V_p (the inverse of the pseudo-likelihood's
-//! information, I_kl = ½·Σ_s tr(W_s·M_sk·W_s·M_sl)) and e_s of covariance
+//! With δp of covariance V_p (the inverse of the restricted
+//! pseudo-likelihood's information, I_kl = ½·tr(P·M_k·P·M_l) with
+//! P = W − W·A·F⁻¹·Aᵀ·W over all speeds: the residuals are the fit's own,
+//! [`super::fit_variance_function`]; with B_s = W_s·A_s it is
+//! ½·Σ_s tr(W_s·M_sk·W_s·M_sl) − ½·tr(F⁻¹·R_kl) − ½·tr(F⁻¹·R_lk) +
+//! ½·tr(F⁻¹·Q_k·F⁻¹·Q_l), Q_k = Σ_s B_sᵀ·M_sk·B_s,
+//! R_kl = Σ_s B_sᵀ·M_sl·W_s·M_sk·B_s) and e_s of covariance
 //! Σ_s, the expected covariance this adds is F⁻¹·Δ·F⁻¹ with
 //! Δ = Σ_kl V_p,kl·Σ_s Aᵀ·W_s·M_sk·W_s·M_sl·W_s·A. For one variance scale
 //! (M = Σ, V = 2s²/(4n)) Δ = F·2/(4n): the Student-t factor ν/(ν − 2) to
@@ -54,12 +59,19 @@ pub fn with_law_uncertainty(
     let mut wa: Vec<DMatrix<f64>> = Vec::with_capacity(speeds.len());
     let mut a_rows: Vec<DMatrix<f64>> = Vec::with_capacity(speeds.len());
     let mut info = DMatrix::<f64>::zeros(m, m);
+    let c = DMatrix::<f64>::from_fn(p, p, |r, k| {
+        covariance[columns[r] as usize][columns[k] as usize]
+    });
+    let mut q = vec![DMatrix::<f64>::zeros(p, p); m];
+    let mut r_kl = vec![DMatrix::<f64>::zeros(p, p); m * m];
     for (s, o) in speeds.iter().zip(obs) {
         let w = s.own.try_inverse()?;
-        let mk: Vec<Matrix4<f64>> = free
+        // M_k (each free component) and W·M_k.
+        let raw: Vec<Matrix4<f64>> = free
             .iter()
-            .map(|&k| w * s.g[k / PER_CHANNEL] * s.factor(k))
+            .map(|&k| s.g[k / PER_CHANNEL] * s.factor(k))
             .collect();
+        let mk: Vec<Matrix4<f64>> = raw.iter().map(|x| w * x).collect();
         for i in 0..m {
             for j in i..m {
                 let v = 0.5 * mk[i].component_mul(&mk[j].transpose()).sum();
@@ -71,9 +83,30 @@ pub fn with_law_uncertainty(
         let a: SMatrix<f64, 4, PARAMETERS> = a;
         let a = DMatrix::<f64>::from_fn(4, p, |r, c| a[(r, columns[c] as usize)]);
         let w = DMatrix::<f64>::from_fn(4, 4, |r, c| w[(r, c)]);
-        wa.push(&w * &a);
+        let wa_s = &w * &a;
+        // M_k·W·A and W·M_k·W·A: the parts of the REML information.
+        let x: Vec<DMatrix<f64>> = raw.iter().map(|r| dense(r) * &wa_s).collect();
+        let y: Vec<DMatrix<f64>> = mk.iter().map(|r| dense(r) * &wa_s).collect();
+        for i in 0..m {
+            q[i] += wa_s.transpose() * &x[i];
+            for j in 0..m {
+                r_kl[i * m + j] += x[j].transpose() * &y[i];
+            }
+        }
+        wa.push(wa_s);
         a_rows.push(a);
         wm.push(mk);
+    }
+    // The residuals are the fit's own: their covariance is P = W − W·A·F⁻¹·Aᵀ·W
+    // in the weights, and the information ½·tr(P·M_k·P·M_l) is the ML one
+    // less the cross terms ½·tr(F⁻¹·R_kl) + ½·tr(F⁻¹·R_lk) plus
+    // ½·tr(F⁻¹·Q_k·F⁻¹·Q_l) (module docs).
+    let cq: Vec<DMatrix<f64>> = q.iter().map(|x| &c * x).collect();
+    for i in 0..m {
+        for j in 0..m {
+            let cross = (&c * &r_kl[i * m + j]).trace() + (&c * &r_kl[j * m + i]).trace();
+            info[(i, j)] += 0.5 * ((&cq[i] * &cq[j]).trace() - cross);
+        }
     }
     let v = pseudo_inverse(&info)?;
     let mut delta = DMatrix::<f64>::zeros(p, p);
@@ -90,9 +123,6 @@ pub fn with_law_uncertainty(
         let sum = DMatrix::<f64>::from_fn(4, 4, |r, c| sum[(r, c)]);
         delta += a.transpose() * sum * wa;
     }
-    let c = DMatrix::<f64>::from_fn(p, p, |r, k| {
-        covariance[columns[r] as usize][columns[k] as usize]
-    });
     let added = &c * (0.5 * (&delta + delta.transpose())) * &c;
     let mut out = *covariance;
     for (r, &pr) in columns.iter().enumerate() {
@@ -115,4 +145,9 @@ fn pseudo_inverse(info: &DMatrix<f64>) -> Option<DMatrix<f64>> {
     Some(DMatrix::<f64>::from_fn(n, n, |r, c| {
         d[r] * inv[(r, c)] * d[c]
     }))
+}
+
+/// A 4×4 matrix as a dynamic one.
+fn dense(m: &Matrix4<f64>) -> DMatrix<f64> {
+    DMatrix::<f64>::from_fn(4, 4, |r, c| m[(r, c)])
 }
