@@ -84,7 +84,7 @@ fn noisy(exact: &RunDir, seed: u64) -> RunDir {
 /// mean their ±: the RMS of (estimate − truth)/± of k_y, k_z, m, c_y, c_z
 /// over them within 0.92-1.08 (its sampling sd about 0.015) and at most
 /// 1 % of the values beyond 3 of their ± (0.27 % for a normal z). Measured
-/// (docs/session46-noise17.md): main's code (840c9e1) FAILS; this
+/// (docs/estimation-scatter.md, Session 46 (noise17)): main's code (840c9e1) FAILS; this
 /// branch's passes.
 #[test]
 fn an_estimated_noise_law_on_58_speeds_keeps_its_promise() {

@@ -44,7 +44,7 @@
 //! (tr(Σ_s⁻¹M_s,k) in the denominator) read that shortfall as a small
 //! fraction α, often 0, and weighted those speeds up to 3× above their
 //! noise (unseen-six `clean-s1`: α = 0 on rel z or ped z in 15-16 of 68
-//! B1 fits, 5 of 68 with the leverage allowed for; docs/session46-noise17.md).
+//! B1 fits, 5 of 68 with the leverage allowed for; docs/estimation-scatter.md, Session 46 (noise17)).
 
 use crate::estimate::ml::{self, MlFit};
 use crate::estimate::Observation;
