@@ -356,6 +356,29 @@ fn linearised(
     ok.then(|| (jac, DVector::from_vec(resid), speed))
 }
 
+/// The inference of `group` of `state` at the state's own values by the
+/// maximum-likelihood engine of [`refit`] (each speed's equations whitened
+/// by their full Σ, [`linearised`]), without refitting them: the ± of
+/// values that are an ML fit's already (the base model's, `plinth
+/// identify`'s fit). `scale`: per parameter (the group's terms, then its
+/// scalars) the unit of the central differences, in its SI unit. `None`
+/// where `scale` does not match, a Σ or the Jacobian is not finite, or the
+/// inference fails.
+pub fn inference_at(
+    prep: &Prepared,
+    state: &State,
+    group: &[usize],
+    scale: &[f64],
+) -> Option<Inference> {
+    let eq = GroupEquations::new(prep, &state.model, group, state);
+    let p = eq.pack(&state.params.beta, &state.params.nl);
+    if scale.len() != p.len() {
+        return None;
+    }
+    let (jac, resid, row_speed) = linearised(&eq, &p, scale)?;
+    Inference::new(&jac, &resid, &row_speed, DVector::from_vec(p)).ok()
+}
+
 /// Refits by maximum likelihood every group of `state` (when its final
 /// model carries an effect, [`refittable`]) on its own observations; the state's
 /// values of the group are replaced by the fit's (and the weights

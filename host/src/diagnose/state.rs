@@ -7,6 +7,7 @@ use super::criterion::Inference;
 use super::data::Prepared;
 use super::fit::{fit_group, jacobian, profile, search_interval, Weights};
 use super::gap::{Gap, Prediction};
+use super::ml_final;
 use super::model::{Model, Params, Term};
 use super::report::Pedestal;
 use anyhow::Result;
@@ -198,9 +199,28 @@ fn infer_group(
 }
 
 /// The pedestal parameters (k, m, c terms) of every bearing with their
-/// reported standard errors ([`crate::diagnose::criterion::Inference::reported_std_err`]).
+/// reported standard errors ([`crate::diagnose::criterion::Inference::reported_std_err`]):
+/// of the weighted fit's inference, or, at a pedestal whose values are the
+/// base model's maximum-likelihood fit ([`ml_values`]), of the ML engine's
+/// at those values ([`ml_final::inference_at`]).
 pub fn pedestals(prep: &Prepared, state: &State) -> Result<Vec<Pedestal>> {
     let infs = state.inference(prep)?;
+    let infs: Vec<GroupInference> = infs
+        .into_iter()
+        .map(|(group, inf, refs)| {
+            let inf = ml_values(prep, state, &group)
+                .then(|| {
+                    let p = &inf.estimate;
+                    let scale: Vec<f64> = (0..p.len())
+                        .map(|i| p[i].abs().max(inf.std_err(i)).max(f64::MIN_POSITIVE))
+                        .collect();
+                    ml_final::inference_at(prep, state, &group, &scale)
+                })
+                .flatten()
+                .unwrap_or(inf);
+            (group, inf, refs)
+        })
+        .collect();
     let mut out: Vec<Pedestal> = prep
         .bearings
         .iter()
@@ -224,4 +244,43 @@ pub fn pedestals(prep: &Prepared, state: &State) -> Result<Vec<Pedestal>> {
         }
     }
     Ok(out)
+}
+
+/// Whether the values of `group` in `state` are the maximum-likelihood fit
+/// of the paper's five-parameter model that `plinth identify` makes
+/// ([`Prepared::base_fits`], taken over by [`State::base`]): one bearing,
+/// no scalar, its five base terms valued exactly as that fit. Their ± are
+/// then the ML engine's, with each speed's four real equations whitened by
+/// their full covariance: the search's weights ([`Weights`]) give each
+/// real equation its own variance and leave out the correlation a film's
+/// cross terms put between the y and z equations, which left diagnose's ±
+/// of such a pedestal 1.1-1.8 times identify's for the same values
+/// (docs/unseen-six.md, "Session 46 (lowsnr17)", "4. Seen on the way").
+fn ml_values(prep: &Prepared, state: &State, group: &[usize]) -> bool {
+    let &[b] = group else {
+        return false;
+    };
+    let Some(fit) = prep.base_fits.get(b) else {
+        return false;
+    };
+    if prep.bearings.get(b) != Some(&fit.bearing) || !state.model.group_nonlinear(group).is_empty()
+    {
+        return false;
+    }
+    let terms = state.model.group_terms(group);
+    let five = base_model(&Parameter::ALL, prep.bearings.len());
+    let own: Vec<Term> = five
+        .terms
+        .iter()
+        .filter(|t| t.bearings() == [Some(b), None])
+        .copied()
+        .collect();
+    let theta = fit.pedestal.theta();
+    terms.len() == own.len()
+        && terms.len() == theta.len()
+        && terms
+            .iter()
+            .zip(&own)
+            .zip(&theta)
+            .all(|((&t, u), v)| state.model.terms[t] == *u && state.params.beta[t] == *v)
 }
