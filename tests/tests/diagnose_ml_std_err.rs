@@ -6,7 +6,7 @@
 //! out the correlation a film's cross terms put between a pedestal's y and
 //! z equations; at such a bearing that floor was 1.36-2.04 times the ML
 //! bound (docs/unseen-six.md, "Session 46 (lowsnr17)", "4. Seen on the
-//! way"; docs/session46-mlse17.md).
+//! way"; docs/diagnose-verdict.md, Session 46 (mlse17)).
 //!
 //! The run: `tests/data/ross-unseen-6/clean-s1c` (ROSS unseen-six, clean,
 //! noise columns; `scripts/ross_unseen.py --machine unseen-six`). B2 sits
