@@ -45,7 +45,10 @@ use statrs::distribution::ContinuousCDF;
 ///   more likely than negated ([`Limits::agrees_unnegated`]).
 ///
 /// Two bearings or more; a speed named at two bearings or more is not
-/// judged (the machine's keyphasor negates them together, and the test
+/// judged, nor one at which the other bearings are confirmed flipped with
+/// this one ([`super::followed_flips`]: the machine's keyphasor, measured
+/// on tests/tests/identify_flips.rs's three-bearing run flipped at 45 Hz)
+/// (the machine's keyphasor negates them together, and the test
 /// across bearings sees only their relative sign: measured on the sixth
 /// unseen machine, B1 and B3 flipped together at 41.9 Hz, seed 6105, which
 /// judged one at a time were withheld and B2 named instead).
@@ -61,6 +64,9 @@ pub fn resonance_turns(bearings: &[&[Observation]], named: &[&[f64]]) -> Vec<Vec
         .map(|(obs, flips)| off_unflipped(obs, flips))
         .collect();
     let none = vec![&[][..]; nb];
+    // The machine's keyphasor: with this bearing's flip negated back, the
+    // other bearings are negated against it ([`super::followed_flips`]).
+    let followed = super::followed_flips(bearings, &none, named, named);
     let stack = Stack::of(bearings, &none, named);
     let dims = 2 * nb;
     let side = CROSS_SIDE.max(dims);
@@ -90,7 +96,7 @@ pub fn resonance_turns(bearings: &[&[Observation]], named: &[&[f64]]) -> Vec<Vec
             let named_elsewhere = named
                 .iter()
                 .enumerate()
-                .any(|(o, other)| o != b && other.contains(&f));
+                .any(|(o, other)| o != b && (other.contains(&f) || followed[o].contains(&f)));
             if !others_turn || named_elsewhere {
                 continue;
             }
