@@ -53,6 +53,7 @@ mod flips;
 mod jumps;
 mod rational;
 mod scales;
+mod turns;
 
 pub use confirm::{confirmed_across, followed_flips};
 pub use cross::{cross_bearing_flips, CROSS_MIN_BEARINGS, CROSS_SIDE};
@@ -64,6 +65,7 @@ pub use jumps::{jump_speeds, FLIP_NEIGHBOURS};
 pub use rational::LocalRational;
 use scales::median;
 pub use scales::{local_scales, window_medians, OUTLIER_WINDOW};
+pub use turns::resonance_turns;
 
 /// Chance per fit that some good speed is flagged (Bonferroni over the
 /// speeds) [-]: 0.25 %, so that a run of up to four pedestals lists a good

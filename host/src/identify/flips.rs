@@ -31,10 +31,11 @@ use crate::estimate::{robust, Observation};
 /// ([`super::trust::bad_speeds`], with the outlier speeds), the others in
 /// [`mark_cross_bearing_flips`].
 pub fn flipped_speeds(bearings: &[&[Observation]]) -> Vec<Vec<f64>> {
-    let searches: Vec<robust::FlipSearch> = bearings
+    let mut searches: Vec<robust::FlipSearch> = bearings
         .iter()
         .map(|obs| robust::flip_search(obs))
         .collect();
+    withhold_resonances(bearings, &mut searches);
     let mut found: Vec<Vec<f64>> = searches.iter().map(|s| s.flipped_hz.clone()).collect();
     let flipped: Vec<&[f64]> = found.iter().map(Vec::as_slice).collect();
     let none = vec![&[][..]; bearings.len()];
@@ -45,6 +46,22 @@ pub fn flipped_speeds(bearings: &[&[Observation]]) -> Vec<Vec<f64>> {
     let followed = followed(bearings, &searches, &none, &found);
     merge(&mut found, followed);
     found
+}
+
+/// Takes out of each bearing's flips found in speed (`searches`, per
+/// bearing) the speeds at which another bearing's reading turns with a
+/// resonance ([`robust::resonance_turns`]: a mode between two logged
+/// speeds, not a flip), returning them per bearing [Hz].
+fn withhold_resonances(
+    bearings: &[&[Observation]],
+    searches: &mut [robust::FlipSearch],
+) -> Vec<Vec<f64>> {
+    let named: Vec<&[f64]> = searches.iter().map(|s| s.flipped_hz.as_slice()).collect();
+    let withheld = robust::resonance_turns(bearings, &named);
+    for (search, out) in searches.iter_mut().zip(&withheld) {
+        search.flipped_hz.retain(|f| !out.contains(f));
+    }
+    withheld
 }
 
 /// Adds `more` (per bearing, [Hz]) to `found` (per bearing, ascending, no
@@ -172,15 +189,41 @@ pub fn mark_cross_bearing_flips(
     if usable.len() < 2 || (usable.len() < robust::CROSS_MIN_BEARINGS && !complete) {
         return;
     }
-    let listed = listed_speeds(identification, &usable);
     let observations: Vec<&[Observation]> = usable.iter().map(|(_, o)| *o).collect();
     // The flips each bearing's fit found in speed (the report merges them
     // with the outliers) are negated back, the outliers left out.
-    let searches: Vec<robust::FlipSearch> = stored
+    let mut searches: Vec<robust::FlipSearch> = stored
         .into_iter()
         .zip(&observations)
         .map(|(s, o)| s.unwrap_or_else(|| robust::flip_search(o)))
         .collect();
+    // A flip found in speed where another bearing turns with a resonance
+    // is withheld: out of the listing, its warning said again without it.
+    let withheld = withhold_resonances(&observations, &mut searches);
+    for (((name, _), out), search) in usable.iter().zip(&withheld).zip(&searches) {
+        // Without the fits' own findings nothing was listed in speed.
+        if out.is_empty() || !complete {
+            continue;
+        }
+        if let Some(report) = identification.noise.get_mut(*name) {
+            report.outlier_speeds_hz.retain(|f| !out.contains(f));
+        }
+        if let Some(p) = identification
+            .pedestals
+            .iter_mut()
+            .find(|p| p.bearing == *name)
+        {
+            p.warnings.retain(|w| w.kind != WarningKind::KeyphasorFlip);
+        }
+        add_flips(
+            identification,
+            name,
+            &search.flipped_hz,
+            "against its neighbouring speeds",
+            "the speeds withheld from this list turn with a resonance: against the other bearings at the same speed they agree as read and only as read, as when a mode between two logged speeds turns every bearing's phase (a flip negates one bearing alone)",
+        );
+    }
+    let listed = listed_speeds(identification, &usable);
     let mut flipped: Vec<Vec<f64>> = searches.iter().map(|s| s.flipped_hz.clone()).collect();
     let outliers: Vec<Vec<f64>> = listed
         .iter()

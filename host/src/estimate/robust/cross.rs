@@ -283,7 +283,7 @@ pub(super) fn screened_scales(
 }
 
 /// `y` with the four channels of each bearing in `which` negated.
-fn signed(y: &[Complex<f64>], which: &[usize]) -> Vec<Complex<f64>> {
+pub(super) fn signed(y: &[Complex<f64>], which: &[usize]) -> Vec<Complex<f64>> {
     let mut out = y.to_vec();
     for &b in which {
         out[4 * b..4 * b + 4].iter_mut().for_each(|z| *z = -*z);

@@ -243,7 +243,7 @@ pub(super) fn channel_weights(s: &[Reading]) -> [f64; 4] {
 /// errors `loo`: their median over [`FLIP_WINDOW`] speeds on each side
 /// ([`window_medians`]) over ln 2 (the median of |z|² of a complex Gaussian
 /// of variance σ² is σ²·ln 2).
-fn scales(loo: &[Option<[f64; 4]>]) -> Vec<[f64; 4]> {
+pub(super) fn scales(loo: &[Option<[f64; 4]>]) -> Vec<[f64; 4]> {
     let per_channel: [Vec<f64>; 4] = std::array::from_fn(|c| {
         let e: Vec<f64> = loo.iter().map(|e| e.map_or(f64::NAN, |e| e[c])).collect();
         window_medians(&e, FLIP_WINDOW)
@@ -258,7 +258,7 @@ fn scales(loo: &[Option<[f64; 4]>]) -> Vec<[f64; 4]> {
 
 /// |±q−p|² per channel [m²] of speed `j` (the speeds in `negated`
 /// negated, and `j` once more when `flip`) against the prediction `p`.
-fn errors(
+pub(super) fn errors(
     s: &[Reading],
     negated: &[bool],
     j: usize,
@@ -274,7 +274,7 @@ fn errors(
 /// the speeds `gap` (the speeds in `negated` negated), its worst speeds
 /// left out ([`TRIM_FACTOR`], [`MAX_TRIMMED`]); `None` with fewer than
 /// [`MIN_SIDE`] speeds on a side or when the fit fails.
-fn predict(
+pub(super) fn predict(
     s: &[Reading],
     negated: &[bool],
     weights: &[f64; 4],

@@ -82,6 +82,25 @@ impl Limits {
             .then_some(best)
     }
 
+    /// Whether the weighted phasors `y` of one speed agree with the
+    /// subspace `u` as they are and not with the bearings `which` negated:
+    /// as they are, the studentised r/((1 + ℓ)·s′) (`scale_s` the scale s′
+    /// of that speed) is within the χ²(2(C − D)) quantile
+    /// [`CONSISTENT_QUANTILE`], and their −2 ln L ([`Limits::judge`]) is
+    /// lower than negated: the mirror of the conditions that name a flip.
+    pub(in crate::estimate::robust) fn agrees_unnegated(
+        &self,
+        u: &Subspace,
+        y: &[Complex<f64>],
+        which: &[usize],
+        scale_s: f64,
+    ) -> bool {
+        let studentised = |(r, l): (f64, f64)| r / ((1.0 + l) * scale_s);
+        let nll = |(r, l): (f64, f64)| studentised((r, l)) + self.dof * l.ln_1p();
+        let (read, negated) = (u.residual(y), u.residual(&signed(y, which)));
+        studentised(read) <= self.consistent && nll(read) < nll(negated)
+    }
+
     /// The hypothesis "the bearings `which` are negated at the speeds
     /// `block`" against the subspace `u` of the window around the block,
     /// the weighted phasors `y` (per speed), the scales `scale` of r and
