@@ -1,5 +1,5 @@
 //! A lightly damped rotor critical between two logged speeds is not a
-//! keyphasor flip (docs/session46-flipcrit17.md). On the seventh unseen
+//! keyphasor flip (docs/trust-flips.md, Session 46 (flipcrit17)). On the seventh unseen
 //! machine (tests/data/ross-unseen-7/unseen-seven.toml, a turbine-generator
 //! set) the first critical sits at 17.2 Hz with a log dec of 0.06: its
 //! half-power band (0.33 Hz) is narrower than the 0.75 Hz logging step, so

@@ -15,7 +15,7 @@
 //! their neighbours (or, the machine's keyphasor, negates each of them)
 //! and takes the bearing out of that subspace, which only its negation
 //! puts back. Measured on the seventh unseen machine
-//! (docs/session46-flipcrit17.md): its first critical at 17.2 Hz (log dec
+//! (docs/trust-flips.md, Session 46 (flipcrit17)): its first critical at 17.2 Hz (log dec
 //! 0.06, half-power band 0.33 Hz against a 0.75 Hz step), named in speed at
 //! B1, near that mode's node.
 
