@@ -53,10 +53,8 @@ fn clean_run_is_flagged_by_nothing_and_ok_means_right() {
 /// probes on time): identify's delay test sees it at B3 as a delay on the
 /// rel probes with τ̂ below zero, which it reads as one on the ped
 /// pick-ups, untrusts B3 and only B3, and B1's and B2's `ok` values are
-/// right (dampings too). What does not hold is not asserted here
-/// (finding 2 of docs/unseen-seven.md): diagnose names nothing on this run
-/// and trusts B3's damping c_y about 5 ± off. Over seeds 5400-5402 and
-/// 5410-5429 identify untrusts B3 in 21 of 23 runs.
+/// right (dampings too). Over seeds 5400-5402 and 5410-5429 identify
+/// untrusts B3 in 21 of 23 runs. diagnose on the same run: the next test.
 #[test]
 fn a_delay_on_b3s_pick_ups_untrusts_b3_in_identify() {
     let run = stored("ped-delay");
