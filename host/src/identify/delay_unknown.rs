@@ -1,5 +1,6 @@
-//! A sensor delay on a bearing's `rel` probes that the data do not exclude,
-//! counted in its pedestal ± as unknown: the one rule of
+//! A sensor delay on a bearing's `rel` probes or (τ̂ < 0) its `ped`
+//! pick-ups that the data do not exclude, counted in its pedestal ± as
+//! unknown: the one rule of
 //! [`crate::estimate::lack_of_fit::delay_unknown`] (shared with
 //! `plinth diagnose`'s final ±) on identify's one-mass fit.
 //!
@@ -11,7 +12,8 @@
 //! off, docs/trust.md, Session 45 (idelay17)). Here, per bearing on rigid
 //! ground, the fit linearised with τ free ([`DelayNuisance`], made with the
 //! lack-of-fit evidence) is judged by the shared gate (a damping of the
-//! reported fit below zero, or τ̂ > 2σ_τ) and exclusion; where the delay is
+//! reported fit below zero, or |τ̂| > 2σ_τ, two-sided: a delay on the
+//! pick-ups reads as τ̂ < 0 on the probes) and exclusion; where the delay is
 //! counted as unknown every pedestal ± and the covariance are multiplied by
 //! the shared widening (from ρ = σ(τ free)/σ(τ held) and τ̂/σ_τ,
 //! [`crate::estimate::lack_of_fit::delay_unknown::widening`]; the modal
@@ -84,12 +86,12 @@ fn widen(p: &mut PedestalFit, d: &DelayNuisance, negative: bool) {
     let why = if negative {
         "a damping comes out below zero, which a delay on the rel probes makes of a passive pedestal's"
     } else {
-        "the data favour a delay (τ̂ beyond 2 of its ±, one-sided)"
+        "the data favour a delay (|τ̂| beyond 2 of its ±, two-sided)"
     };
     p.warnings.push(Warning {
         kind: WarningKind::DelayNotExcluded,
         message: format!(
-            "the data do not exclude a sensor delay on its rel probes (τ {:.0} ± {:.0} µs, linearised at τ = 0; {why}), which reads as a pedestal damping c − τ·(k − Ω²m): its ± count the delay as unknown, multiplied by √(1 + (ρ² − 1)·(1 + (τ̂/σ_τ)²)), ρ = σ(τ free)/σ(τ held) ({}); the values are the fit's",
+            "the data do not exclude a sensor delay on its rel probes or (τ̂ < 0) its ped pick-ups (τ {:.0} ± {:.0} µs, linearised at τ = 0; {why}), which reads as a pedestal damping c − τ·(k − Ω²m): its ± count the delay as unknown, multiplied by √(1 + (ρ² − 1)·(1 + (τ̂/σ_τ)²)), ρ = σ(τ free)/σ(τ held) ({}); the values are the fit's",
             d.delay_us,
             d.delay_std_us,
             widened.join(", ")

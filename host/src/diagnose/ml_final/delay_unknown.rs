@@ -1,6 +1,6 @@
 //! The ± of a bearing's final pedestal values counting a sensor delay on
-//! its `rel` probes, which the search tried and the data do not exclude,
-//! as unknown.
+//! its `rel` probes or (τ̂ < 0) its `ped` pick-ups, which the search tried
+//! and the data do not exclude, as unknown.
 //!
 //! The physics, the linearisation, the exclusion and the gate are one
 //! definition shared with `plinth identify`
@@ -15,9 +15,14 @@
 //! ([`Inference::std_err`]: the larger of the floor and the
 //! autocorrelation-robust value). Where the delay is counted as unknown the
 //! reported ± of every pedestal value of the group is multiplied by the
-//! shared widening ([`shared::widening`]: its ρ = σ(τ free)/σ(τ held) where
-//! τ̂ ≤ 0, more where the data put τ̂ above zero); the values stay the final
-//! fit's. Measured on unseen-five `delay` (seeds
+//! shared widening ([`shared::widening`]: its ρ = σ(τ free)/σ(τ held) at
+//! τ̂ = 0, more where the data put τ̂ away from zero, on either side); the
+//! values stay the final fit's. Only the relative phase of force and motion
+//! enters the equations, so a delay on the `ped` pick-ups is one of −τ on
+//! the probes: the delay is linearised on the probes and read two-sided
+//! (unseen-seven `ped-delay`, 200 µs on B3's pick-ups: not counted while
+//! the rule took τ ≥ 0 only, B3 c_y trusted 3.5-10.8 ± off in 20 of 23
+//! runs, docs/unseen-seven.md finding 2). Measured on unseen-five `delay` (seeds
 //! 3401-3420) the gated rule widens every run whose B1 c_y was beyond 3 ±
 //! (12/20), and no clean run of that machine (docs/unseen.md, Session 45
 //! (delay17)); unseen-five `delay` seed 2928 (150 µs on B1's probes, truth
@@ -79,7 +84,7 @@ pub struct Widened {
 impl Widened {
     /// The factor [-] its reported ± is multiplied by where the delay is
     /// counted as unknown ([`shared::widening`]: ρ = σ_free/σ_held at
-    /// τ̂ ≤ 0, more where the data put τ̂ above zero), at least 1.
+    /// τ̂ = 0, more where the data put τ̂ away from zero), at least 1.
     pub fn ratio(&self) -> f64 {
         self.factor
     }
@@ -90,15 +95,18 @@ impl Widened {
     }
 }
 
-/// A delay on a bearing's `rel` probes the data do not exclude, and the ±
-/// of the group's pedestal values with it unknown.
+/// A delay on a bearing's `rel` probes or (τ̂ < 0) its `ped` pick-ups the
+/// data do not exclude, and the ± of the group's pedestal values with it
+/// unknown.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DelayUnknown {
     /// Bearing index of the delay.
     pub bearing: usize,
-    /// Its channels (`rel` probes only).
+    /// Its channels (`rel` probes only: a delay on the `ped` pick-ups is
+    /// one of −τ there).
     pub channels: DelayChannels,
-    /// One Gauss–Newton step's τ from τ = 0 [s].
+    /// One Gauss–Newton step's τ from τ = 0 [s] (below zero: a delay on
+    /// the `ped` pick-ups).
     pub tau: f64,
     /// Its ± [s] ([`Inference::std_err`]).
     pub tau_std_err: f64,
@@ -129,7 +137,8 @@ pub(super) fn delays_unknown(
 }
 
 /// [`delays_unknown`] at bearing `b`, the delay on `channels`: `None`
-/// where the gate is shut (no damping of `b` below zero, τ̂ within 2 σ_τ),
+/// where the gate is shut (no damping of `b` below zero, |τ̂| within
+/// 2 σ_τ),
 /// the data exclude the delay or
 /// the linearisation fails.
 #[allow(clippy::too_many_arguments)]
@@ -167,12 +176,12 @@ fn delay_unknown(
         return None;
     }
     let (jac, resid, row_speed) = linearised(&eq, &p, &ext_scale)?;
-    let lin = linearise(&jac, &resid, j, |jac| {
+    let lin = linearise(&jac, &resid, j, |jac, resid| {
         let mut estimate = p.clone();
         if jac.ncols() < estimate.len() {
             estimate.remove(j);
         }
-        let inf = Inference::new(jac, &resid, &row_speed, DVector::from_vec(estimate)).ok()?;
+        let inf = Inference::new(jac, resid, &row_speed, DVector::from_vec(estimate)).ok()?;
         Some((0..jac.ncols()).map(|i| inf.std_err(i)).collect())
     })?;
     // The parameters of the group less τ, in order (τ's column is j).

@@ -23,18 +23,31 @@
 //! a damping c moves by b·τ for a true delay τ, with
 //! |b|·σ_τ = σ_held·√(ρ² − 1). τ̂ is one Gauss–Newton step from τ = 0.
 //!
+//! **Both signs are causal.** A delay on the `rel` probes is τ > 0; a
+//! delay on the bearing's `ped` pick-ups delays the pedestal motion, and
+//! for the relative phase of force and motion the equations see it is a
+//! delay of −τ on the probes: τ < 0 (unseen-seven `ped-delay`, 200 µs on
+//! B3's pick-ups: identify's score test reads τ̂ −107 … −292 ± 38 µs,
+//! docs/unseen-seven.md, finding 2). The rule is two-sided: "a delay on its
+//! rel probes or (τ̂ < 0) its ped pick-ups". Until session 46 (pdelay17) it
+//! took τ ≥ 0 only, so a pick-up delay never opened the gate and its
+//! interval was clipped away (diagnose trusted B3's c_y 3.5-10.8 ± off in
+//! 20 of 23 runs).
+//!
 //! **Excluded** ([`counted_unknown`]): the data's interval of τ
-//! (τ̂ ± [`Z_INTERVAL`]·σ_τ, clipped at τ ≥ 0: a delay is causal) moves
-//! every damping of the bearing by at most its held ±:
-//! |b|·max(0, τ̂ + 1.96 σ_τ) ≤ σ_held, i.e.
-//! √(ρ² − 1)·max(0, τ̂ + 1.96 σ_τ)/σ_τ ≤ 1. Then nothing changes.
+//! (τ̂ ± [`Z_INTERVAL`]·σ_τ, widened to hold τ = 0, the sensors on time:
+//! [min(0, τ̂ − 1.96σ_τ), max(0, τ̂ + 1.96σ_τ)]) moves every damping of the
+//! bearing by at most its held ±: |b|·|τ|_max ≤ σ_held, i.e.
+//! √(ρ² − 1)·|τ|_max/σ_τ ≤ 1, |τ|_max the interval's end farthest from
+//! zero. Then nothing changes.
 //!
 //! **The gate**: only where a damping of the bearing comes out below zero,
-//! or where the data favour a delay (τ̂ > [`Z_FAVOURED`]·σ_τ, one-sided: a
-//! delay a test at a family-wise level did not name but these data do not
+//! or where the data favour a delay (|τ̂| > [`Z_FAVOURED`]·σ_τ, two-sided:
+//! a delay a test at a family-wise level did not name but these data do not
 //! call chance; unseen-six `delay`, B2's resonances inside the run, seeds
 //! 3615 and 3617: τ̂ at 2.5 and 2.1 of its ±, the dampings positive and
-//! 3.5-4.2 ± off in diagnose, docs/unseen-six.md). A passive pedestal's
+//! 3.5-4.2 ± off in diagnose, docs/unseen-six.md; unseen-seven
+//! `ped-delay`, τ̂ below zero, B3's c_y high). A passive pedestal's
 //! damping is ≥ 0, and a delay on the `rel` probes (τ > 0) lowers the
 //! apparent damping below the resonance: a negative estimate is the data's
 //! sign of a phase error. Elsewhere the delay is rarely excluded either (a
@@ -42,18 +55,23 @@
 //! unseen-train's B1, 900 MN/m, ρ ≈ 20), and counting it there made every
 //! such damping unknown on clean runs (docs/unseen.md, Session 45
 //! (delay17): widening everywhere, measured, B1 c_y ± ×20 on clean
-//! `clean-p2`).
+//! `clean-p2`). Two-sided, the gate's false-alarm rate per bearing under
+//! the null is twice the one-sided 2.3 %: 4.6 %, and only bearings whose
+//! delay the data do not exclude are widened (measured in
+//! docs/session46-pdelay17.md).
 //!
 //! **The widening** ([`widening`]): where counted, every reported pedestal
-//! ± of the fit is multiplied by √(1 + (ρ² − 1)·(1 + (τ̂₊/σ_τ)²)),
-//! τ̂₊ = max(0, τ̂): the root-mean-square error of the held value when the
-//! true delay is as the data give it (mean τ̂₊, spread σ_τ): its offset b·τ
-//! has mean square b²(τ̂₊² + σ_τ²) = σ_held²(ρ² − 1)(1 + (τ̂₊/σ_τ)²). At
-//! τ̂₊ = 0 it is ρ (the ± of the fit with τ free, session 45's widening); the
-//! values stay the fit's, so where the data put τ̂ away from zero the held
-//! value sits b·τ̂ from the τ-free one and ρ alone does not cover it
-//! (unseen-five `delay`, identify: B1 c_y 6.5 ± off with τ̂ 120 ± 39 µs,
-//! ρ 1.60, still 4.1 ρ-widened ± off; docs/trust.md, Session 46 (idcoll17)).
+//! ± of the fit is multiplied by √(1 + (ρ² − 1)·(1 + (τ̂/σ_τ)²)): the
+//! root-mean-square error of the held value when the true delay is as the
+//! data give it (mean τ̂, of either sign, spread σ_τ): its offset b·τ has
+//! mean square b²(τ̂² + σ_τ²) = σ_held²(ρ² − 1)(1 + (τ̂/σ_τ)²). At τ̂ = 0 it
+//! is ρ (the ± of the fit with τ free, session 45's widening); the values
+//! stay the fit's, so where the data put τ̂ away from zero the held value
+//! sits b·τ̂ from the τ-free one and ρ alone does not cover it (unseen-five
+//! `delay`, identify: B1 c_y 6.5 ± off with τ̂ 120 ± 39 µs, ρ 1.60, still
+//! 4.1 ρ-widened ± off; docs/trust.md, Session 46 (idcoll17)). (Session 46
+//! (idcoll17) took τ̂₊ = max(0, τ̂) here; a τ̂ below zero is a pick-up
+//! delay, as far from the held value on its side.)
 
 use super::super::gauss_helmert::{self as gh, Equations};
 use super::delay::delay_column;
@@ -64,9 +82,10 @@ use serde::{Deserialize, Serialize};
 /// Standard normal quantile of the delay's two-sided 95 % interval [-].
 pub const Z_INTERVAL: f64 = 1.96;
 
-/// A delay the data favour: τ̂ beyond this many of its ± [-] (one-sided,
-/// 2.3 % per bearing under the null; τ̂/σ_τ on 180 clean bearings of five
-/// ROSS machines: RMS 0.98, 4 beyond 2, docs/unseen.md).
+/// A delay the data favour: |τ̂| beyond this many of its ± [-] (two-sided:
+/// τ̂ > 0 a delay on the `rel` probes, τ̂ < 0 on the `ped` pick-ups; 4.6 %
+/// per bearing under the null; τ̂/σ_τ on 180 clean bearings of five ROSS
+/// machines: RMS 0.98, 4 beyond 2, docs/unseen.md).
 pub const Z_FAVOURED: f64 = 2.0;
 
 /// A fit linearised with a delay at τ = 0 ([`linearise`]).
@@ -99,7 +118,7 @@ pub fn ratio(held: f64, free: f64) -> f64 {
 /// ρ = σ_free/σ_held being `rho` (module docs, "The widening"): ≥ ρ ≥ 1;
 /// 1 where a figure is not finite.
 pub fn widening(rho: f64, tau: f64, tau_std_err: f64) -> f64 {
-    let t = tau.max(0.0) / tau_std_err;
+    let t = tau.abs() / tau_std_err;
     let w = (1.0 + (rho * rho - 1.0).max(0.0) * (1.0 + t * t)).sqrt();
     if w.is_finite() {
         w
@@ -111,29 +130,37 @@ pub fn widening(rho: f64, tau: f64, tau_std_err: f64) -> f64 {
 /// The fit whose whitened Jacobian is `jac` (rows: real equations; column
 /// `j` τ's, at τ = 0) and whitened residual `resid`, linearised with τ
 /// free and held (module docs); `std_errs` gives the ± of every column of
-/// a whitened Jacobian (each tool's own covariance: diagnose's floor and
-/// autocorrelation-robust one, identify's [`information_std_errs`]).
+/// a whitened Jacobian from the whitened residual it is given (each tool's
+/// own covariance: diagnose's floor and autocorrelation-robust one,
+/// identify's [`information_std_errs`]). Both fits' ± are formed from the
+/// residual after the step, resid + J·Δ (the larger model's, as an F test
+/// takes its variance): the residual at τ = 0 carries the delay's own
+/// signature where there is one, and an autocorrelation-robust ± from it
+/// is inflated by the very effect it measures (unseen-seven `ped-delay`,
+/// diagnose: σ_τ 72-187 µs from it against 38 µs from the residual after
+/// the step, identify's 38-44 µs on the same runs; docs/session46-pdelay17.md).
 /// `None` when a covariance or the step cannot be formed or a figure is
 /// not finite.
 pub fn linearise(
     jac: &DMatrix<f64>,
     resid: &DVector<f64>,
     j: usize,
-    mut std_errs: impl FnMut(&DMatrix<f64>) -> Option<Vec<f64>>,
+    mut std_errs: impl FnMut(&DMatrix<f64>, &DVector<f64>) -> Option<Vec<f64>>,
 ) -> Option<Linearised> {
     let p = jac.ncols();
     if j >= p || jac.nrows() != resid.len() {
         return None;
     }
-    let mut free = std_errs(jac)?;
-    let held = std_errs(&jac.clone().remove_column(j))?;
+    // One Gauss–Newton step of the whitened equations from τ = 0.
+    let step = jac.clone().svd(true, true).solve(&(-resid), 1e-14).ok()?;
+    let tau = step[j];
+    let after = resid + jac * &step;
+    let mut free = std_errs(jac, &after)?;
+    let held = std_errs(&jac.clone().remove_column(j), &after)?;
     if free.len() != p || held.len() + 1 != p {
         return None;
     }
     let tau_std_err = free.remove(j);
-    // One Gauss–Newton step of the whitened equations from τ = 0.
-    let step = jac.clone().svd(true, true).solve(&(-resid), 1e-14).ok()?;
-    let tau = step[j];
     let finite = tau.is_finite()
         && tau_std_err.is_finite()
         && tau_std_err > 0.0
@@ -148,9 +175,10 @@ pub fn linearise(
 
 /// Whether a delay of estimate `tau` ± `tau_std_err` (one unit) is counted
 /// as unknown (module docs): the gate (`negative`: a damping of the bearing
-/// below zero, or τ̂ > [`Z_FAVOURED`]·σ_τ) and not excluded (some damping of
-/// the bearing, its ρ in `damping_ratios`, moved by more than its held ±
-/// by a τ in the data's interval).
+/// below zero, or |τ̂| > [`Z_FAVOURED`]·σ_τ: τ̂ > 0 on the `rel` probes,
+/// τ̂ < 0 on the `ped` pick-ups) and not excluded (some damping of the
+/// bearing, its ρ in `damping_ratios`, moved by more than its held ± by a
+/// τ in the data's interval, which holds τ = 0).
 pub fn counted_unknown(
     tau: f64,
     tau_std_err: f64,
@@ -160,11 +188,15 @@ pub fn counted_unknown(
     if !(tau.is_finite() && tau_std_err.is_finite() && tau_std_err > 0.0) {
         return false;
     }
-    if !negative && tau <= Z_FAVOURED * tau_std_err {
+    if !negative && tau.abs() <= Z_FAVOURED * tau_std_err {
         return false;
     }
-    let tau_max = (tau + Z_INTERVAL * tau_std_err).max(0.0);
-    // |b|·τ_max > σ_held with |b|·σ_τ = σ_held·√(ρ² − 1).
+    // The interval [min(0, τ̂ − 1.96σ_τ), max(0, τ̂ + 1.96σ_τ)]: its end
+    // farthest from zero.
+    let tau_max = (tau + Z_INTERVAL * tau_std_err)
+        .max(0.0)
+        .max(-(tau - Z_INTERVAL * tau_std_err).min(0.0));
+    // |b|·|τ|_max > σ_held with |b|·σ_τ = σ_held·√(ρ² − 1).
     damping_ratios
         .into_iter()
         .any(|r| r.is_finite() && (r * r - 1.0).max(0.0).sqrt() * tau_max > tau_std_err)
@@ -206,11 +238,13 @@ pub fn information_std_errs(jac: &DMatrix<f64>) -> Option<Vec<f64>> {
 }
 
 /// What identify's one-mass fit of a bearing says about a delay on its
-/// `rel` probes ([`delay_nuisance`]; `identify --json`:
+/// `rel` probes or (τ̂ < 0) its `ped` pick-ups ([`delay_nuisance`];
+/// `identify --json`:
 /// `noise.<bearing>.lack_of_fit.delay_unknown`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DelayNuisance {
-    /// τ̂, one Gauss–Newton step from τ = 0 [µs].
+    /// τ̂, one Gauss–Newton step from τ = 0 [µs] (below zero: a delay on
+    /// the `ped` pick-ups).
     pub delay_us: f64,
     /// Its ± [µs].
     pub delay_std_us: f64,
@@ -288,7 +322,7 @@ pub fn delay_nuisance<E: Equations + ?Sized>(
     }
     let dof = (4 * n).checked_sub(p + 1).filter(|&d| d > 0)? as f64;
     let excess = (resid.norm_squared() / dof).max(1.0).sqrt();
-    let lin = linearise(&jac, &resid, p, |j| {
+    let lin = linearise(&jac, &resid, p, |j, _| {
         information_std_errs(j).map(|v| v.into_iter().map(|s| s * excess).collect())
     })?;
     let mut ratio = [1.0; PARAMETERS];
@@ -308,7 +342,8 @@ mod tests {
 
     /// The exclusion and the gate: a delay whose interval moves no damping
     /// by its ± is excluded; one that does counts only with a negative
-    /// damping or τ̂ beyond 2 σ_τ; τ̂ ≤ 0 leaves the widening at ρ.
+    /// damping or |τ̂| beyond 2 σ_τ, either sign; τ̂ = 0 leaves the
+    /// widening at ρ, |τ̂| widens it the same on both sides.
     #[test]
     fn the_gate_the_exclusion_and_the_widening() {
         // ρ 1.1: |b|σ_τ = 0.458 σ_held; τ_max = 1.96 σ_τ at τ̂ = 0 moves c
@@ -318,13 +353,23 @@ mod tests {
         assert!(counted_unknown(0.0, 1.0, [1.6], true));
         assert!(!counted_unknown(1.9, 1.0, [1.6], false));
         assert!(counted_unknown(2.1, 1.0, [1.6], false));
-        // A τ̂ far below zero: the causal interval is empty.
-        assert!(!counted_unknown(-3.0, 1.0, [5.0], true));
+        // Two-sided: τ̂ below zero is a delay on the ped pick-ups, causal
+        // too; the gate opens at |τ̂| > 2 σ_τ on either side.
+        assert!(!counted_unknown(-1.9, 1.0, [1.6], false));
+        assert!(counted_unknown(-2.1, 1.0, [1.6], false));
+        assert!(counted_unknown(-3.0, 1.0, [5.0], true));
+        // The interval holds zero and reaches |τ̂| + 1.96 σ_τ on τ̂'s side:
+        // ρ 1.05 (|b|σ_τ = 0.32 σ_held) is excluded at τ̂ = −1 (|τ|_max
+        // 2.96: 0.95 σ_held), not at τ̂ = −2.5 (4.46: 1.43 σ_held).
+        assert!(!counted_unknown(-1.0, 1.0, [1.05], true));
+        assert!(counted_unknown(-2.5, 1.0, [1.05], false));
         assert!(!counted_unknown(f64::NAN, 1.0, [5.0], true));
-        assert_eq!(widening(1.6, -2.0, 1.0), 1.6);
-        // τ̂ = 3 σ_τ: √(1 + (ρ² − 1)·10).
-        let w = widening(1.6, 3.0, 1.0);
-        assert!((w - (1.0 + 1.56 * 10.0f64).sqrt()).abs() < 1e-12, "{w}");
+        assert_eq!(widening(1.6, 0.0, 1.0), 1.6);
+        // |τ̂| = 3 σ_τ, either side: √(1 + (ρ² − 1)·10).
+        for tau in [3.0, -3.0] {
+            let w = widening(1.6, tau, 1.0);
+            assert!((w - (1.0 + 1.56 * 10.0f64).sqrt()).abs() < 1e-12, "{w}");
+        }
         assert_eq!(ratio(2.0, 1.0), 1.0);
     }
 
@@ -343,7 +388,7 @@ mod tests {
         assert!((se[0] - (sx2 / (5.0 * sxx)).sqrt()).abs() < 1e-12);
         // Residual 2 + 0.5·x: the step from zero is (−2, −0.5); b is τ.
         let resid = DVector::from_iterator(5, x.iter().map(|v| 2.0 + 0.5 * v));
-        let lin = linearise(&jac, &resid, 1, information_std_errs).expect("lin");
+        let lin = linearise(&jac, &resid, 1, |j, _| information_std_errs(j)).expect("lin");
         assert!((lin.tau + 0.5).abs() < 1e-12);
         assert!((lin.tau_std_err - se[1]).abs() < 1e-12);
         assert!((lin.free[0] - se[0]).abs() < 1e-12);
