@@ -34,20 +34,19 @@ fn a_delay_the_score_test_misses_is_counted_in_the_dampings_error() {
 }
 
 /// The stored clean run of the same machine with noise columns
-/// (`clean-n3c`): no bearing's ± count a delay (the gate: no damping below
-/// zero, no τ̂ beyond 2 of its ±), and every value printed `ok` is within 3
-/// of its ± of the truth.
+/// (`clean-n3c`): every bearing stays trusted and every value printed `ok`
+/// is within 3 of its ± of the truth. The two-sided gate (|τ̂| beyond 2 of
+/// its ±, session 46: a delay on the `ped` pick-ups reads as τ̂ < 0) opens
+/// at about 4.6 % of clean bearings by design; on this run it opens at B2
+/// by chance (τ̂ −79 ± 31 µs, c_y ± × 2.27, c_z ± × 1.79), which may widen
+/// a ± but must never move a value or the trust. Rates over clean runs:
+/// docs/trust.md "Session 46 (pdelay17)".
 #[test]
-fn a_clean_run_keeps_its_dampings_error() {
+fn a_clean_run_stays_trusted_and_right_within_its_errors() {
     let run = stored(FIVE, "clean-n3c");
     let id = identify(&run);
     assert!(ok_but_wrong(&run, &id, true).is_empty());
     for p in &id.pedestals {
-        assert!(
-            !p.has_warning(WarningKind::DelayNotExcluded),
-            "{}: {:?}",
-            p.bearing,
-            p.warnings
-        );
+        assert!(p.trusted, "{}: {:?}", p.bearing, p.warnings);
     }
 }

@@ -98,7 +98,7 @@ fn a_delay_on_b3s_pick_ups_untrusts_b3_in_identify() {
 /// (+4.9 ±): its unexcluded-delay rule took a delay on the `rel` probes
 /// only (τ ≥ 0), and a delay on the `ped` pick-ups reads as τ̂ < 0 there.
 /// With the rule two-sided (session 46, pdelay17) the delay is counted
-/// unknown in B3's ± (docs/session46-pdelay17.md).
+/// unknown in B3's ± (docs/trust.md, Session 46 (pdelay17)).
 #[test]
 fn a_delay_on_b3s_pick_ups_is_named_or_not_trusted() {
     let run = stored("ped-delay");

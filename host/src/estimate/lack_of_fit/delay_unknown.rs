@@ -58,7 +58,7 @@
 //! `clean-p2`). Two-sided, the gate's false-alarm rate per bearing under
 //! the null is twice the one-sided 2.3 %: 4.6 %, and only bearings whose
 //! delay the data do not exclude are widened (measured in
-//! docs/session46-pdelay17.md).
+//! docs/trust.md, Session 46 (pdelay17)).
 //!
 //! **The widening** ([`widening`]): where counted, every reported pedestal
 //! ± of the fit is multiplied by √(1 + (ρ² − 1)·(1 + (τ̂/σ_τ)²)): the
@@ -138,7 +138,7 @@ pub fn widening(rho: f64, tau: f64, tau_std_err: f64) -> f64 {
 /// signature where there is one, and an autocorrelation-robust ± from it
 /// is inflated by the very effect it measures (unseen-seven `ped-delay`,
 /// diagnose: σ_τ 72-187 µs from it against 38 µs from the residual after
-/// the step, identify's 38-44 µs on the same runs; docs/session46-pdelay17.md).
+/// the step, identify's 38-44 µs on the same runs; docs/trust.md, Session 46 (pdelay17)).
 /// `None` when a covariance or the step cannot be formed or a figure is
 /// not finite.
 pub fn linearise(
