@@ -57,7 +57,8 @@ fn is_fixed(p: &PedestalFit, c: Parameter) -> bool {
     p.fixed.iter().any(|f| f == c.name())
 }
 
-/// Multiplies `p`'s ± and covariance by `d`'s ρ and says so.
+/// Multiplies `p`'s ± and covariance by `d`'s widening (from ρ and τ̂/σ_τ,
+/// [`DelayNuisance::widening`]) and says so.
 fn widen(p: &mut PedestalFit, d: &DelayNuisance, negative: bool) {
     let w = d.widening();
     let se = p.std_err.theta();
