@@ -429,5 +429,5 @@ MACHINES["unseen-eight"] = {
     # bearings.csv at the tables' own rows (90, 175, 260 Hz), not at the
     # 376 speeds: the same coefficients, the stored runs a third the size
     "table_rows": True,
-    "repo": ("clean-g1c", "probe-axes", "kp-lag"),
+    "repo": ("clean-g1c", "cross"),
 }
