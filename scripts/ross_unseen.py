@@ -13,7 +13,7 @@ Usage:
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
 NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex,
-unseen-five, unseen-six or unseen-seven (described in
+unseen-five, unseen-six, unseen-seven or unseen-eight (described in
 ross_unseen_machines.py).
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
@@ -81,6 +81,18 @@ pick-ups read late: sensor_delay on the ped channels) and "sweep" (each
 phasor the mean over the speeds a tracking filter's block of revolutions
 spans in a fast coast-down).
 
+unseen-eight is tests/data/ross-unseen-8/unseen-eight.toml: a high-speed
+centrifugal gas compressor on two tilting-pad journals (tables, no
+cross-coupling), light stiff pedestals on a common skid, the rotor's first
+criticals (about 184 and 242 Hz) inside a fast trip run-down logged every
+0.4 Hz from 250 to 100 Hz (376 speeds); probes 0.5 % of |phasor| +
+0.02 um, casing accelerometers 1 % + 5 mm/s^2. Its three departures:
+"probe_axes" (both bearings' probes at +-45 deg from the vertical, written
+as they read, not resolved to y and z), "speed_lag" (the speed column
+0.25 Hz high: the speed filter's lag in the 5 Hz/s run-down) and
+"corr_noise" (the tracking filter's time constant longer than the time
+between vectors: each channel's noise an AR(1) along the run, rho 0.80).
+
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
 BearingElement from the shaft node to a PointMass (n_link, the pedestal),
@@ -144,7 +156,8 @@ def noise_sd(m, channel, v, speeds):
     them apart; plus "grow" [m/sqrt(Hz)] times sqrt(speed); plus, where the
     law gives them, an absolute floor "abs" [m] and a velocity floor "vel"
     [m/s] (a seismic pick-up's: vel / Omega in displacement, largest at low
-    speed) at `speeds` [Hz]."""
+    speed) and an acceleration floor "acc" [m/s^2] (an accelerometer's:
+    acc / Omega^2) at `speeds` [Hz]."""
     law = m["noise"]
     if channel in law:
         law = law[channel]
@@ -152,7 +165,8 @@ def noise_sd(m, channel, v, speeds):
         law = law[channel.split("_")[0]]
     f = np.asarray(speeds)
     return (law["rel"] * np.abs(v) + law["floor"] * math.sqrt(float(np.mean(np.abs(v) ** 2)))
-            + law.get("abs", 0.0) + law.get("vel", 0.0) / (2 * math.pi * f) + law.get("grow", 0.0) * np.sqrt(f))
+            + law.get("abs", 0.0) + law.get("vel", 0.0) / (2 * math.pi * f) + law.get("grow", 0.0) * np.sqrt(f)
+            + law.get("acc", 0.0) / (2 * math.pi * f) ** 2)
 
 
 def cases_of(machine=DEFAULT):
@@ -345,6 +359,42 @@ def add_ped_delay(resp, bearing, speeds, tau):
     return {"tau_s": tau}
 
 
+def add_probe_axes(resp, axes):
+    """The proximity probes of `axes["bearings"]` mounted at +-a
+    (`angle_deg`) from the vertical and written as they read, not resolved
+    to y and z: rel_y holds the probe at -a (towards -z), rel_z the one at
+    +a, each reading the displacement along its own axis (cos a y -+ sin a
+    z): the rel vector rotated by a (a proper rotation for a = 45 deg)."""
+    a = math.radians(axes["angle_deg"])
+    for b in axes["bearings"]:
+        y, z = resp[b]["rel_y"], resp[b]["rel_z"]
+        resp[b]["rel_y"] = math.cos(a) * y - math.sin(a) * z
+        resp[b]["rel_z"] = math.sin(a) * y + math.cos(a) * z
+    return {"angle_deg": axes["angle_deg"]}
+
+
+def speed_lag_hz(lag):
+    """How far [Hz] the speed column of a "speed_lag" effect reads above the
+    true speed in a run-down at `rate_hz_per_s`: the monitoring system's
+    speed is the keyphasor's pulse rate through a first-order filter of
+    time constant `lag_s` [s], which lags a ramp by lag_s, so the speed
+    stamped on a vector is that of lag_s earlier."""
+    return lag["rate_hz_per_s"] * lag["lag_s"]
+
+
+def correlated(w, corr):
+    """White complex draws `w` (along the run) made an AR(1) of the same
+    marginal sigma: n_j = rho n_{j-1} + sqrt(1 - rho^2) w_j, rho =
+    exp(-dt / tau) with dt = step_hz / rate_hz_per_s [s] between stored
+    vectors and tau = filter_tau_s [s] (a "corr_noise" effect)."""
+    rho = math.exp(-corr["step_hz"] / corr["rate_hz_per_s"] / corr["filter_tau_s"])
+    out = np.empty_like(w)
+    out[0] = w[0]
+    for j in range(1, len(w)):
+        out[j] = rho * out[j - 1] + math.sqrt(1.0 - rho * rho) * w[j]
+    return out
+
+
 def sweep_speeds(speeds, sweep):
     """The speeds [Hz] the revolutions of each vector span in a coast-down
     at a constant deceleration a = `rate_hz_per_s`: a block of N =
@@ -421,8 +471,8 @@ def make(out, case, seed, machine=DEFAULT):
     physical = [e for e in effects if e[0] in ("frame", "sub_base", "worn_film", "table_scale", "cross",
                                                "thermal")]
     sweep = next((e[1] for e in effects if e[0] == "sweep"), None)
-    key = (machine, effect, tuple(speeds))
-    if key not in _CACHE:  # ROSS's response depends on the effect and grid only
+    key = (machine, repr(physical), repr(sweep), tuple(speeds))
+    if key not in _CACHE:  # ROSS's response depends on the physical effects and grid only
         _CACHE[key] = respond(spec, speeds, physical) if sweep is None else swept(spec, speeds, physical, sweep)
     resp, written = _CACHE[key]
     resp = {b: dict(v) for b, v in resp.items()}
@@ -437,6 +487,14 @@ def make(out, case, seed, machine=DEFAULT):
         elif e[0] == "ped_delay":
             details.append({"name": "sensor_delay", "bearing": e[1],
                             "parameters": add_ped_delay(resp, e[1], speeds, e[2])})
+        elif e[0] == "probe_axes":
+            details.append({"name": "probe_axes", "bearing": ",".join(e[1]["bearings"]),
+                            "parameters": add_probe_axes(resp, e[1])})
+        elif e[0] == "speed_lag":
+            details.append({"name": "speed_lag", "bearing": "",
+                            "parameters": {"lag_hz": speed_lag_hz(e[1]), **e[1]}})
+        elif e[0] == "corr_noise":
+            details.append({"name": "correlated_noise", "bearing": "", "parameters": dict(e[1])})
         elif e in physical or e[0] == "sweep":
             details.append(physical_detail(e, spec))
     rng = np.random.default_rng(m["rng"] + 101 * cases_of(machine).index(case) + seed)
@@ -448,6 +506,7 @@ def make(out, case, seed, machine=DEFAULT):
         digits = m["mixed_digits"]
     else:
         digits = {b: int(noise_kind[1:]) for b in names}
+    corr = next((e[1] for e in effects if e[0] == "corr_noise"), None)
     data, sd = {}, {}
     for b in names:
         for c in CHANNELS:
@@ -457,7 +516,10 @@ def make(out, case, seed, machine=DEFAULT):
             else:
                 s = np.zeros(len(v))
             sd[(b, c)] = s
-            noise = (rng.standard_normal(len(v)) + 1j * rng.standard_normal(len(v))) * s / math.sqrt(2)
+            w = rng.standard_normal(len(v)) + 1j * rng.standard_normal(len(v))
+            if corr is not None:
+                w = correlated(w, corr)
+            noise = w * s / math.sqrt(2)
             data[(b, c)] = v + noise
     for e in effects:
         if e[0] == "flips":
@@ -475,10 +537,15 @@ def make(out, case, seed, machine=DEFAULT):
                 data[(e[1], c)][i] += OUTLIER * rms * np.exp(2j * math.pi * rng.random())
             details.append({"name": "outlier_speed", "bearing": e[1],
                             "parameters": {"speed_0_hz": float(speeds[i])}})
+    lag = next((e[1] for e in effects if e[0] == "speed_lag"), None)
+    if lag is not None:  # the speed column (and the table written there) read high
+        speeds = speeds + speed_lag_hz(lag)
+        written = coefficients(spec, speeds, physical)[1]
     if noise_kind == "vel":
         write_field(out, speeds, names, data, written)
     else:
-        write(out, speeds, names, data, sd if columns else None, digits, written)
+        write(out, speeds, names, data, sd if columns else None, digits, written,
+              table_rows(spec) if m.get("table_rows") else None)
     truth = {"pedestals": nominal_truth(machine),
              "effects": [d["name"] for d in details if d["name"] not in ("keyphasor_flip", "outlier_speed")],
              "effect_details": details}
@@ -506,9 +573,24 @@ def nominal_truth(machine=DEFAULT):
              "c_z": b["pedestal"].get("c_z", 0.0)} for b in spec["bearings"]]
 
 
-def write(out, speeds, names, data, sd, digits, written):
+def table_rows(spec):
+    """bearings.csv's rows as the machine file tabulates them: (speed [Hz],
+    bearing, row) at each table's own speeds, where every bearing is a
+    table (a reader interpolates linearly between rows, as table_row
+    does, so these give the same coefficients at every speed in range as
+    rows at the run's speeds would, in a file a fraction of the size)."""
+    rows = []
+    for b in spec["bearings"]:
+        if "coefficients" not in b:
+            raise ValueError(f"{b['name']}: table_rows needs every bearing tabulated")
+        rows += [(r["speed_hz"], b["name"], {k: float(r.get(k, 0.0)) for k in KEYS}) for r in b["coefficients"]]
+    return sorted(rows, key=lambda r: r[0])
+
+
+def write(out, speeds, names, data, sd, digits, written, rows=None):
     """measurements.csv (sd: the *_sd columns, or None; digits: significant
-    digits per bearing) and bearings.csv."""
+    digits per bearing) and bearings.csv (at the run's speeds, or `rows`:
+    table_rows's)."""
     os.makedirs(out, exist_ok=True)
     fmt = lambda s: f"{s:.6g}"  # noqa: E731
     with open(os.path.join(out, "measurements.csv"), "w") as f:
@@ -527,6 +609,10 @@ def write(out, speeds, names, data, sd, digits, written):
                 f.write(",".join(row) + "\n")
     with open(os.path.join(out, "bearings.csv"), "w") as f:
         f.write("speed_hz,bearing," + ",".join(KEYS) + "\n")
+        if rows is not None:
+            for s, b, r in rows:
+                f.write(",".join([fmt(s), b] + [sig(r[k], 10) for k in KEYS]) + "\n")
+            return
         for j, s in enumerate(speeds):
             for b in names:
                 f.write(",".join([fmt(s), b] + [sig(written[b][j][k], 10) for k in KEYS]) + "\n")

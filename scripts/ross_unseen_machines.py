@@ -357,3 +357,77 @@ MACHINES["unseen-seven"] = {
     "d3_effects": False,
     "repo": ("clean-t1c", "ped-delay"),
 }
+
+
+# unseen-eight (session 47) is tests/data/ross-unseen-8/unseen-eight.toml: a
+# high-speed centrifugal gas compressor (a between-bearings barrel machine,
+# five 40 kg impellers, 15 000 rpm at the top) on two five-pad tilting-pad
+# journals (tables: no cross-coupling, k rising and c falling with speed,
+# y stiffer than z), light stiff pedestals (70-90 kg, resonances 290-430 Hz,
+# above the run) on a common skid; the rotor's first criticals (about
+# 184 Hz horizontal, 242 Hz vertical, ROSS's response peaks) inside a fast
+# trip run-down from 250 to 100 Hz logged every 0.4 Hz (376 speeds).
+SUB_BASE_EIGHT = {"bearing": "B2", "m_y": 150.0, "m_z": 150.0, "k_y": 4.0e8, "k_z": 2.0e8,
+                  "c_y": 8.0e3, "c_z": 5.0e3}
+# the common skid on its anti-vibration mounts (its own modes 159 Hz y,
+# 100 Hz z: inside the run)
+SKID_EIGHT = {"name": "skid", "bearings": ["B1", "B2"], "m_y": 1500.0, "m_z": 1500.0,
+              "k_y": 1.5e9, "k_z": 6.0e8, "c_y": 1.5e5, "c_z": 9.5e4}
+# the trip: gas load and windage bring the rotor from 250 Hz to 100 Hz in
+# about 30 s (5 Hz/s, an estimate); a vector stored every 0.4 Hz (24 rpm),
+# one every 0.08 s
+RATE_EIGHT = 5.0
+# probe-axes: both bearings' proximity probes mounted at 45 deg either side
+# of the vertical (the usual X-Y pair of API 670) and written as they read,
+# the left-hand probe (-45 deg, towards -z) as rel_y and the right-hand one
+# (+45 deg) as rel_z, not resolved to y and z: the rel vector rotated by
+# 45 deg; the casing pick-ups at 0 and 90 deg as formats.md wants
+PROBE_AXES_EIGHT = {"bearings": ["B1", "B2"], "angle_deg": 45.0}
+# kp-lag: the monitoring system's speed is the keyphasor's pulse rate
+# through a first-order filter of 0.05 s (its own speed filter), which
+# lags a ramp by 0.05 s, so in the 5 Hz/s run-down the speed column reads
+# 5 * 0.05 = 0.25 Hz high (0.6 of the 0.4 Hz logging step); bearings.csv
+# written at the stamped speeds (the table interpolated there)
+KP_LAG_EIGHT = {"rate_hz_per_s": RATE_EIGHT, "lag_s": 0.05}
+# corr-noise: the tracking filter's time constant (0.36 s) longer than the
+# 0.08 s between stored vectors: the noise of successive vectors of a
+# channel is correlated, rho = exp(-0.08 / 0.36) = 0.80 (an AR(1) along
+# the run, the same marginal sigma the *_sd columns give)
+CORR_NOISE_EIGHT = {"rate_hz_per_s": RATE_EIGHT, "step_hz": 0.4, "filter_tau_s": 0.36}
+MACHINES["unseen-eight"] = {
+    "data": os.path.join(ROOT, "tests", "data", "ross-unseen-8"),
+    "file": "unseen-eight.toml",
+    "grid": delta_rpm_grid(250.0, 100.0, 0.4),
+    # proximity probes: 0.5 % of |phasor| + 0.02 um (electrical noise
+    # through the tracking filter); casing accelerometers: 1 % of |phasor|
+    # + an acceleration floor of 5 mm/s^2 (1.3e-8 m at 100 Hz, 2e-9 m at
+    # 250 Hz: B2's vertical pick-up reads near it at the bottom of the run)
+    "noise": {"rel": {"rel": 0.005, "floor": 0.0, "abs": 2e-8},
+              "ped": {"rel": 0.01, "floor": 0.0, "acc": 5e-3}},
+    "noisy": "g1",
+    "digits": ("d3", "dmix", "d12"),
+    "mixed_digits": {"B1": 3, "B2": 2},
+    "rng": 47_000,
+    "effects": {
+        "sub-base": [("sub_base", SUB_BASE_EIGHT)],
+        "table-scale": [("table_scale", "B1", 1.0 / 1.25, 1.0)],
+        "cross": [("cross", "B2", 0.2)],
+        "runout": [("runout", "B1")],
+        # 40 us on B2's probes (3.6 deg at 250 Hz)
+        "delay": [("delay", "B2", 40e-6)],
+        "flips": [("flips", ["B1", "B2"])],
+        "outlier": [("outlier", "B1")],
+        "base": [("frame", SKID_EIGHT)],
+        "base-runout": [("frame", SKID_EIGHT), ("runout", "B2")],
+        "cross-delay": [("cross", "B1", 0.2), ("delay", "B2", 40e-6)],
+        # departures no machine had (no library name)
+        "probe-axes": [("probe_axes", PROBE_AXES_EIGHT)],
+        "kp-lag": [("speed_lag", KP_LAG_EIGHT)],
+        "corr-noise": [("corr_noise", CORR_NOISE_EIGHT)],
+    },
+    "d3_effects": False,
+    # bearings.csv at the tables' own rows (90, 175, 260 Hz), not at the
+    # 376 speeds: the same coefficients, the stored runs a third the size
+    "table_rows": True,
+    "repo": ("clean-g1c", "cross"),
+}
