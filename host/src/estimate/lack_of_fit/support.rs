@@ -393,8 +393,8 @@ mod tests {
             let eq = pedestal([0.0; 2], 2e-8, 20.0, Some(&mut rng));
             let t = support_mode(&eq, &THETA, &speeds_hz(&eq)).expect("test");
             *d = t.drop_at_top;
-            for k in 0..2 {
-                se[k] += t.drop_at_top_std_err[k] / runs as f64;
+            for (s, v) in se.iter_mut().zip(t.drop_at_top_std_err) {
+                *s += v / runs as f64;
             }
         }
         for k in 0..2 {
