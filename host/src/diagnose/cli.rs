@@ -149,18 +149,33 @@ pub fn run(args: &Args) -> Result<()> {
         plots.commit()?;
     }
     ticker.finish();
+    // What the values are conditional on: the support as a whole
+    // (`super::trust::apparent`), after the report in text, `conditional_on`
+    // in JSON.
+    let conditional = super::trust::apparent::of(&outcome.prep, &outcome.diagnosis);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&outcome.diagnosis)?);
+        let mut json = serde_json::to_value(&outcome.diagnosis)?;
+        if let Some(map) = json.as_object_mut() {
+            map.insert("conditional_on".into(), serde_json::to_value(&conditional)?);
+        }
+        println!("{}", serde_json::to_string_pretty(&json)?);
     } else {
-        print!("{}", outcome.diagnosis.to_text_with(&modal_views(&outcome)));
+        print!(
+            "{}{}",
+            outcome.diagnosis.to_text_with(&modal_views(&outcome)),
+            conditional.to_text()
+        );
     }
     Ok(())
 }
 
-/// The modal view (f_n, ζ with ± by the delta method through each fit's
-/// own covariance, [`super::criterion::Inference::std_err_of`]) of the
+/// The modal view (f_n, ζ with ± by the delta method through the
+/// covariance whose ± the pedestals report, [`super::state::reported_inference`],
+/// by the same rule, [`super::criterion::Inference::reported_std_err_of`]) of the
 /// pedestals of the base model (first state) and of the final model (last
 /// state; values only, ± unknown, when `foundation_coupling` refitted them).
+/// Where the values are identify's (the base model's ML fit) the ± are
+/// identify's modal ± (docs/diagnose-verdict.md, "Session 47 (apparent17)").
 pub fn modal_views(outcome: &super::Outcome) -> super::report::ModalViews {
     let last = outcome
         .states
@@ -180,7 +195,8 @@ fn modal_view(
     list: &[super::report::Pedestal],
 ) -> std::collections::BTreeMap<String, crate::present::modal::PedestalModal> {
     use super::candidates::ParamRef;
-    let infs = state.and_then(|s| Some((s, s.inference(&outcome.prep).ok()?)));
+    let infs =
+        state.and_then(|s| Some((s, super::state::reported_inference(&outcome.prep, s).ok()?)));
     let mut out = std::collections::BTreeMap::new();
     for (b, p) in list.iter().enumerate() {
         let direction = |d: &str| {
@@ -221,7 +237,7 @@ fn modal_view(
                         c[a] = *gi;
                     }
                 }
-                inf.std_err_of(&c)
+                inf.reported_std_err_of(&c)
             })
         };
         if p.values.contains_key("k_y") && p.values.contains_key("k_z") {

@@ -180,10 +180,25 @@ impl Inference {
 
     /// Standard error of a linear combination cᵀθ [SI].
     pub fn std_err_of(&self, c: &[f64]) -> f64 {
+        let (f, r) = self.variances_of(c);
+        f.max(r).sqrt()
+    }
+
+    /// Standard error of a linear combination cᵀθ as reported [SI]: the
+    /// rule of [`Self::reported_std_err`] (the floor at the residuals'
+    /// level, or the robust value, the larger), so a value derived from
+    /// reported parameters (a pedestal's f_n, ζ) has the ± they have.
+    pub fn reported_std_err_of(&self, c: &[f64]) -> f64 {
+        let (f, r) = self.variances_of(c);
+        (self.reported_scale * f).max(r).sqrt()
+    }
+
+    /// cᵀθ's variance [SI²] under the noise floor and robustly.
+    fn variances_of(&self, c: &[f64]) -> (f64, f64) {
         let cn = DVector::from_iterator(c.len(), c.iter().zip(&self.norms).map(|(a, s)| a / s));
         let f = (cn.transpose() * &self.cov_floor * &cn)[(0, 0)];
         let r = (cn.transpose() * &self.cov_robust * &cn)[(0, 0)];
-        f.max(r).sqrt()
+        (f, r)
     }
 
     /// Variance [SI²] of the change g(θ̂_a) − g(θ̂_b) of a function g

@@ -198,14 +198,15 @@ fn infer_group(
     Ok((inf, refs))
 }
 
-/// The pedestal parameters (k, m, c terms) of every bearing with their
-/// reported standard errors ([`crate::diagnose::criterion::Inference::reported_std_err`]):
-/// of the weighted fit's inference, or, at a pedestal whose values are the
-/// base model's maximum-likelihood fit ([`ml_values`]), of the ML engine's
-/// at those values ([`ml_final::inference_at`]).
-pub fn pedestals(prep: &Prepared, state: &State) -> Result<Vec<Pedestal>> {
-    let infs = state.inference(prep)?;
-    let infs: Vec<GroupInference> = infs
+/// The inference per group whose ± [`pedestals`] reports, and whose
+/// covariance every value derived from them uses (the modal view's f_n, ζ,
+/// `super::cli::modal_views`): the weighted fit's ([`State::inference`]),
+/// or, for a group whose values are the base model's maximum-likelihood fit
+/// ([`ml_values`]), the ML engine's at those values
+/// ([`ml_final::inference_at`]).
+pub fn reported_inference(prep: &Prepared, state: &State) -> Result<Vec<GroupInference>> {
+    Ok(state
+        .inference(prep)?
         .into_iter()
         .map(|(group, inf, refs)| {
             let inf = ml_values(prep, state, &group)
@@ -220,7 +221,16 @@ pub fn pedestals(prep: &Prepared, state: &State) -> Result<Vec<Pedestal>> {
                 .unwrap_or(inf);
             (group, inf, refs)
         })
-        .collect();
+        .collect())
+}
+
+/// The pedestal parameters (k, m, c terms) of every bearing with their
+/// reported standard errors ([`crate::diagnose::criterion::Inference::reported_std_err`]):
+/// of the weighted fit's inference, or, at a pedestal whose values are the
+/// base model's maximum-likelihood fit ([`ml_values`]), of the ML engine's
+/// at those values ([`ml_final::inference_at`]).
+pub fn pedestals(prep: &Prepared, state: &State) -> Result<Vec<Pedestal>> {
+    let infs = reported_inference(prep, state)?;
     let mut out: Vec<Pedestal> = prep
         .bearings
         .iter()

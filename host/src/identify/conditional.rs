@@ -35,6 +35,15 @@
 use super::{Identification, PedestalFit};
 use crate::rundir::RunDir;
 use serde::Serialize;
+use sub_base::SubBaseBound;
+
+pub mod sub_base;
+
+/// The first promise of every value printed as a support's k, c, m
+/// (`plinth identify`'s and `plinth diagnose`'s "Conditional on"): they
+/// are the support's apparent values, and where the support-mode test was
+/// made what the data exclude of a sub-base above the run ([`sub_base`]).
+pub const APPARENT: &str = "k, c, m are each support's apparent (equivalent) values over the speeds it was measured at: a support with more inside it (a sub-base, a frame) whose own resonances lie outside that range moves as one mass-spring-damper there, and that is what is fitted (below its modes a pedestal on a sub-base is one mass on the series stiffness of the two springs, so the pedestal's own k can be well above the printed one). Where the support-mode test was made (noise columns), the lines below say how far the pedestal's own k and m could lie from the printed ones if a sub-base whose own mode lies above the run exists (what the run's Ω⁴ term excludes).";
 
 /// Largest ratio ‖ΩC_b‖/‖K_b‖ (Frobenius norms, over the measured speeds)
 /// of a bearing whose pedestal values "scale with its table" [-]: a
@@ -61,6 +70,9 @@ pub struct Conditional {
     pub table_uncertainty: Option<f64>,
     /// Per bearing, how its pedestal values depend on its table.
     pub bearings: Vec<TableDependence>,
+    /// Per bearing with a support-mode test, what the data exclude of a
+    /// sub-base above the run ([`sub_base`]).
+    pub sub_base: Vec<SubBaseBound>,
 }
 
 impl Conditional {
@@ -72,6 +84,9 @@ impl Conditional {
             if let Some(m) = b.message() {
                 out.push_str(&format!("  {m}\n"));
             }
+        }
+        for b in &self.sub_base {
+            out.push_str(&format!("  {}\n", b.message()));
         }
         out
     }
@@ -172,12 +187,33 @@ pub fn of(
         ),
         None => "The ± are the noise's alone, the bearing table (bearings.csv) taken as exact: every pedestal value is proportional to the table's common scale (a table 10 % too stiff and too damped gives k, c, m all 10 % high, with the same fit), so give the table's own uncertainty with --table-uncertainty PCT to carry it into the ±; f_n and ζ do not depend on it.".to_string(),
     };
+    let sub_base = identification
+        .pedestals
+        .iter()
+        .filter_map(|p| {
+            let t = identification
+                .noise
+                .get(&p.bearing)?
+                .lack_of_fit
+                .as_ref()?
+                .support_mode?;
+            let q = &p.pedestal;
+            sub_base::bound(
+                &p.bearing,
+                [q.k_y, q.k_z],
+                [q.m, q.m],
+                p.speed_range_hz[1],
+                &t,
+            )
+        })
+        .collect();
     Conditional {
         statement: format!(
-            "k, c, m are each support's apparent (equivalent) values over the speeds it was measured at: a support with more inside it (a sub-base, a frame) whose own resonances lie outside that range moves as one mass-spring-damper there, and that is what is fitted. {doubt} The transducers' units and sensitivities are taken as given too: one scale on every rel reading (or every ped reading), say mil pp read as µm pp, scales k, c, m alike with the same fit; only `plinth diagnose --machine` (the rotor and its unbalance) can see it."
+            "{APPARENT} {doubt} The transducers' units and sensitivities are taken as given too: one scale on every rel reading (or every ped reading), say mil pp read as µm pp, scales k, c, m alike with the same fit; only `plinth diagnose --machine` (the rotor and its unbalance) can see it."
         ),
         table_uncertainty,
         bearings,
+        sub_base,
     }
 }
 
