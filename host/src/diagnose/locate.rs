@@ -20,6 +20,13 @@ pub struct Band {
     pub gap: f64,
     /// Share of the channel's squared disagreement in the band [-].
     pub share: f64,
+    /// The relative RMS disagreement the noise alone would give in the band
+    /// (the model's noise variances over the band's squared readings) [-].
+    pub floor: f64,
+    /// The band's squared disagreement beyond its noise (squared
+    /// disagreement less the noise variances, zero where below), as a share
+    /// of the channel's total excess [-].
+    pub excess_share: f64,
 }
 
 /// The disagreement of one pedestal channel (bearing, direction).
@@ -60,6 +67,7 @@ pub fn locate(prep: &Prepared, model: &Model, params: &Params, pred: &Prediction
         for d in 0..2 {
             let mut num = [0.0; BANDS];
             let mut den = [0.0; BANDS];
+            let mut var = [0.0; BANDS];
             let (mut n_all, mut d_all, mut v_all) = (0.0, 0.0, 0.0);
             let mut peak = (0.0, f_lo);
             let mut rel: Vec<(f64, f64)> = Vec::new();
@@ -74,7 +82,9 @@ pub fn locate(prep: &Prepared, model: &Model, params: &Params, pred: &Prediction
                 den[band] += p.ped[d].norm_sqr();
                 n_all += diff;
                 d_all += p.ped[d].norm_sqr();
-                v_all += pred.noise_var[b][j].map_or(0.0, |v| v[d]);
+                let v = pred.noise_var[b][j].map_or(0.0, |v| v[d]);
+                var[band] += v;
+                v_all += v;
                 if diff > peak.0 {
                     peak = (diff, p.speed_hz);
                 }
@@ -83,16 +93,27 @@ pub fn locate(prep: &Prepared, model: &Model, params: &Params, pred: &Prediction
                 }
             }
             total += n_all;
+            let excess: [f64; BANDS] = std::array::from_fn(|i| (num[i] - var[i]).max(0.0));
+            let excess_all: f64 = excess.iter().sum();
+            let relative = |x: f64, i: usize| {
+                if den[i] > 0.0 {
+                    (x / den[i]).sqrt()
+                } else {
+                    0.0
+                }
+            };
             let bands = (0..BANDS)
                 .map(|i| Band {
                     from_hz: f_lo + width * i as f64,
                     to_hz: f_lo + width * (i + 1) as f64,
-                    gap: if den[i] > 0.0 {
-                        (num[i] / den[i]).sqrt()
+                    gap: relative(num[i], i),
+                    share: if n_all > 0.0 { num[i] / n_all } else { 0.0 },
+                    floor: relative(var[i], i),
+                    excess_share: if excess_all > 0.0 {
+                        excess[i] / excess_all
                     } else {
                         0.0
                     },
-                    share: if n_all > 0.0 { num[i] / n_all } else { 0.0 },
                 })
                 .collect();
             out.push(Location {
@@ -209,9 +230,24 @@ fn describe(l: &Location, band_width: f64) -> String {
     s
 }
 
+/// Why a pedestal channel is in the "unexplained" report.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnexplainedBecause {
+    /// Its own gap is more than [`crate::diagnose::trust::AT_THE_FLOOR`]
+    /// times its noise floor.
+    AboveFloor,
+    /// Its bearing is untrusted for a model error there (a trust reason
+    /// `bearing NAME: ...`: the support-mode or lack-of-fit test of the base
+    /// model where no effect acts, a sub-base above the range, dampings held
+    /// at zero against the data), whatever its gap against the floor.
+    ModelErrorAtBearing,
+}
+
 /// Where an unexplained disagreement lies: one pedestal channel whose own
-/// gap is more than `factor` times its noise floor, with the speed bands
-/// that hold most of it.
+/// gap is more than a factor times its noise floor, or one at a bearing
+/// the verdict untrusts for a model error, with the speed bands that hold
+/// most of its disagreement beyond the noise.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Unexplained {
     /// Bearing name.
@@ -223,61 +259,109 @@ pub struct Unexplained {
     /// The channel's gap over its noise floor [-].
     pub times_floor: f64,
     /// The speed bands [from, to] [Hz] that together hold at least 70 % of
-    /// the channel's squared disagreement, largest first.
+    /// the channel's squared disagreement beyond its noise
+    /// ([`Band::excess_share`]), largest first; empty when no band's
+    /// disagreement exceeds its noise.
     pub bands_hz: Vec<[f64; 2]>,
+    /// Why the channel is listed.
+    pub because: UnexplainedBecause,
 }
 
 /// The channels of `locations` that hold a disagreement above `factor`
-/// times their noise floor, largest share first (module docs of
-/// [`Unexplained`]).
-pub fn unexplained(locations: &[Location], factor: f64) -> Vec<Unexplained> {
+/// times their noise floor, then the other channels of the bearings in
+/// `untrusted_bearings` (untrusted for a model error there), largest share
+/// first within each kind (module docs of [`Unexplained`]).
+pub fn unexplained(
+    locations: &[Location],
+    factor: f64,
+    untrusted_bearings: &[String],
+) -> Vec<Unexplained> {
+    let entry = |l: &Location, because| {
+        let mut bands: Vec<&Band> = l.bands.iter().filter(|b| b.excess_share > 0.0).collect();
+        bands.sort_by(|a, b| b.excess_share.total_cmp(&a.excess_share));
+        let mut held = 0.0;
+        let mut bands_hz = Vec::new();
+        for b in bands {
+            if held >= 0.7 {
+                break;
+            }
+            held += b.excess_share;
+            bands_hz.push([b.from_hz, b.to_hz]);
+        }
+        Unexplained {
+            bearing: l.bearing.clone(),
+            direction: l.direction.clone(),
+            share: l.share,
+            times_floor: if l.floor > 0.0 {
+                l.gap / l.floor
+            } else {
+                f64::INFINITY
+            },
+            bands_hz,
+            because,
+        }
+    };
+    let above = |l: &&Location| l.gap > factor * l.floor;
     let mut out: Vec<Unexplained> = locations
         .iter()
-        .filter(|l| l.gap > factor * l.floor)
-        .map(|l| {
-            let mut bands: Vec<&Band> = l.bands.iter().filter(|b| b.share > 0.0).collect();
-            bands.sort_by(|a, b| b.share.total_cmp(&a.share));
-            let mut held = 0.0;
-            let mut bands_hz = Vec::new();
-            for b in bands {
-                if held >= 0.7 {
-                    break;
-                }
-                held += b.share;
-                bands_hz.push([b.from_hz, b.to_hz]);
-            }
-            Unexplained {
-                bearing: l.bearing.clone(),
-                direction: l.direction.clone(),
-                share: l.share,
-                times_floor: if l.floor > 0.0 {
-                    l.gap / l.floor
-                } else {
-                    f64::INFINITY
-                },
-                bands_hz,
-            }
-        })
+        .filter(above)
+        .map(|l| entry(l, UnexplainedBecause::AboveFloor))
         .collect();
     out.sort_by(|a, b| b.share.total_cmp(&a.share));
+    let mut at: Vec<Unexplained> = locations
+        .iter()
+        .filter(|l| !above(l) && untrusted_bearings.contains(&l.bearing))
+        .map(|l| entry(l, UnexplainedBecause::ModelErrorAtBearing))
+        .collect();
+    at.sort_by(|a, b| b.share.total_cmp(&a.share));
+    out.extend(at);
     out
 }
 
+/// The bearings `reasons` (a verdict's trust reasons) untrust for a model
+/// error there: those with a reason `bearing NAME: ...`, the form every
+/// bearing-level model-error reason of [`crate::diagnose::trust`] takes
+/// (support-mode and lack-of-fit tests where no effect acts, a sub-base
+/// above the range, dampings held at zero against the data). A physically
+/// impossible pedestal (`pedestal NAME: ...`) is not one.
+pub fn untrusted_bearings(bearings: &[String], reasons: &[String]) -> Vec<String> {
+    bearings
+        .iter()
+        .filter(|name| {
+            let prefix = format!("bearing {name}: ");
+            reasons.iter().any(|r| r.starts_with(&prefix))
+        })
+        .cloned()
+        .collect()
+}
+
 impl Unexplained {
-    /// One line: `B3 z: 62 % of the disagreement, 14× its floor, at 45-60 Hz, 90-105 Hz`.
+    /// One line: `B3 z: 62 % of the disagreement, 14× its floor, at 45-60 Hz, 90-105 Hz`
+    /// (a channel listed for its bearing's model error says so; one with no
+    /// band above its noise says that).
     pub fn summary(&self) -> String {
         let bands: Vec<String> = self
             .bands_hz
             .iter()
             .map(|[a, b]| format!("{a:.0}-{b:.0} Hz"))
             .collect();
+        let at = if bands.is_empty() {
+            "within its noise in every speed band".to_string()
+        } else {
+            format!("beyond its noise at {}", bands.join(", "))
+        };
+        let why = match self.because {
+            UnexplainedBecause::AboveFloor => "",
+            UnexplainedBecause::ModelErrorAtBearing => {
+                " (its bearing is untrusted for a model error there)"
+            }
+        };
         format!(
-            "{} {}: {:.0} % of the disagreement, {:.1}× its noise floor, at {}",
+            "{} {}: {:.0} % of the disagreement, {:.1}× its noise floor, {at}{why}",
             self.bearing,
             self.direction,
             100.0 * self.share,
             self.times_floor,
-            bands.join(", ")
         )
     }
 }
@@ -304,6 +388,8 @@ mod tests {
                     to_hz: 10.0 * (i + 1) as f64,
                     gap: 0.0,
                     share: *s,
+                    floor: 0.0,
+                    excess_share: *s,
                 })
                 .collect(),
             summary: String::new(),
@@ -316,10 +402,55 @@ mod tests {
             location("A", 0.01, 0.01, 0.1, [0.2; BANDS]),
             location("B", 0.5, 0.01, 0.9, [0.05, 0.6, 0.25, 0.05, 0.05]),
         ];
-        let u = unexplained(&locs, 3.0);
+        let u = unexplained(&locs, 3.0, &[]);
         assert_eq!(u.len(), 1);
         assert_eq!(u[0].bearing, "B");
         assert_eq!(u[0].bands_hz, vec![[10.0, 20.0], [20.0, 30.0]]);
+        assert_eq!(u[0].because, UnexplainedBecause::AboveFloor);
         assert!(u[0].summary().contains("B y: 90 %"), "{}", u[0].summary());
+    }
+
+    #[test]
+    fn names_the_channels_of_a_bearing_untrusted_for_a_model_error() {
+        let mut quiet = location("C", 0.01, 0.01, 0.05, [0.2; BANDS]);
+        for b in &mut quiet.bands {
+            b.excess_share = 0.0;
+        }
+        let locs = [
+            location("A", 0.012, 0.01, 0.3, [0.0, 0.0, 0.1, 0.2, 0.7]),
+            location("B", 0.5, 0.01, 0.65, [0.05, 0.6, 0.25, 0.05, 0.05]),
+            quiet,
+        ];
+        let reasons = [
+            "bearing A: its base model's fit fails the rule".to_string(),
+            "pedestal C: negative mass".to_string(),
+        ];
+        let names = ["A".to_string(), "B".to_string(), "C".to_string()];
+        let flagged = untrusted_bearings(&names, &reasons);
+        assert_eq!(flagged, ["A"]);
+        let u = unexplained(&locs, 3.0, &flagged);
+        assert_eq!(u.len(), 2);
+        assert_eq!(
+            (u[0].bearing.as_str(), u[0].because),
+            ("B", UnexplainedBecause::AboveFloor)
+        );
+        assert_eq!(u[1].bearing, "A");
+        assert_eq!(u[1].because, UnexplainedBecause::ModelErrorAtBearing);
+        assert_eq!(u[1].bands_hz, vec![[40.0, 50.0]]);
+        assert!(
+            u[1].summary().contains("untrusted for a model error"),
+            "{}",
+            u[1].summary()
+        );
+        // A bearing listed for its model error with no band above its noise
+        // says so.
+        let v = unexplained(&locs[2..], 3.0, &["C".to_string()]);
+        assert!(v[0].bands_hz.is_empty());
+        assert!(
+            v[0].summary()
+                .contains("within its noise in every speed band"),
+            "{}",
+            v[0].summary()
+        );
     }
 }

@@ -294,6 +294,11 @@ pub struct Diagnosis {
     /// negative, or held dampings and a worse fit than the final model).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub passed_over_at_stop: Vec<PassedOver>,
+    /// Set when the search stopped because a round brought the model back
+    /// to one an earlier round had left (forward and backward steps
+    /// cycling): the statement, also a trust reason.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search_cycle: Option<String>,
     /// `foundation_coupling` as tried on the base model (its bases and
     /// test), whether chosen or not; absent when not tried (one bearing, a
     /// reduced `--base`, or a base model already at the noise floor).
@@ -310,8 +315,10 @@ pub struct Diagnosis {
     pub trusted: bool,
     /// Why the parameters are not to be trusted (empty when trusted).
     pub trust_reasons: Vec<String>,
-    /// When the final model leaves a disagreement above the floor: the
-    /// pedestal channels and speed bands that hold it (where to look).
+    /// When the final model leaves a disagreement above the floor, or a
+    /// bearing is untrusted for a model error there: the pedestal channels
+    /// and speed bands that hold it (where to look;
+    /// [`Diagnosis::locate_unexplained`]).
     pub unexplained: Vec<super::locate::Unexplained>,
     /// Convention mistakes the data most likely carry, per pedestal
     /// (`identify::convention`): with one, every other finding is suspect.
@@ -347,6 +354,29 @@ pub struct ModalViews {
 }
 
 impl Diagnosis {
+    /// Sets `unexplained` from the verdict as it stands: the pedestal
+    /// channels above [`super::trust::AT_THE_FLOOR`] times their floor when
+    /// the verdict says the disagreement is unexplained, and the channels
+    /// of every bearing a trust reason untrusts for a model error there
+    /// ([`super::locate::untrusted_bearings`]), whatever else was named.
+    /// Called once the verdict is concluded and again after the
+    /// machine-level check has added its reasons.
+    pub fn locate_unexplained(&mut self) {
+        let mut names: Vec<String> = Vec::new();
+        for l in &self.where_after {
+            if !names.contains(&l.bearing) {
+                names.push(l.bearing.clone());
+            }
+        }
+        let flagged = super::locate::untrusted_bearings(&names, &self.trust_reasons);
+        self.unexplained =
+            if self.verdict.contains(super::trust::UNEXPLAINED) || !flagged.is_empty() {
+                super::locate::unexplained(&self.where_after, super::trust::AT_THE_FLOOR, &flagged)
+            } else {
+                Vec::new()
+            };
+    }
+
     /// The text report.
     pub fn to_text(&self) -> String {
         self.to_text_with(&ModalViews::default())

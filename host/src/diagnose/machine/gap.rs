@@ -413,6 +413,7 @@ impl MachineCheck {
             self.floor,
             self.unit_scale.as_ref(),
         );
+        d.locate_unexplained();
         if let Some(note) = super::unit_scale::blind::sentence(&self.blind) {
             d.verdict += &format!(" Note: {note}.");
             d.unit_scale_blind.clone_from(&self.blind);

@@ -8,7 +8,7 @@ use crate::diagnose::bases::{joint_on_base, scale_to_misfit, widen_by_correction
 use crate::diagnose::bearing_table;
 use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::Agreement;
-use crate::diagnose::locate::{locate, unexplained};
+use crate::diagnose::locate::locate;
 use crate::diagnose::ml_final;
 use crate::diagnose::model::Term;
 use crate::diagnose::report::{Diagnosis, NoiseSummary};
@@ -149,11 +149,13 @@ impl Search<'_> {
             self.judge_confounded(&mut conclusion, &mut pedestals_after, &kept);
         }
         trust::held::judge_held(&mut conclusion, &prep.bearings, &ml_refits);
-        let unexplained = if conclusion.verdict.contains(trust::UNEXPLAINED) {
-            unexplained(&where_after, trust::AT_THE_FLOOR)
-        } else {
-            Vec::new()
-        };
+        if let Some(why) = &self.cycle {
+            conclusion.verdict += &format!(
+                " But {why} (reasons below): the identified parameters are not to be trusted."
+            );
+            conclusion.reasons.push(why.clone());
+            conclusion.trusted = false;
+        }
         let mut bearings_noise = BTreeMap::new();
         for (b, name) in prep.bearings.iter().enumerate() {
             if let Some(summary) = prep.noise.summary(b) {
@@ -184,12 +186,13 @@ impl Search<'_> {
             pedestals_after,
             best_rejected: self.best_rejected,
             passed_over_at_stop: self.passed_over_at_stop,
+            search_cycle: self.cycle,
             foundation: self.foundation_tried.as_ref().map(|f| f.report(prep)),
             significance_level: opts.alpha,
             verdict: conclusion.verdict,
             trusted: conclusion.trusted,
             trust_reasons: conclusion.reasons,
-            unexplained,
+            unexplained: Vec::new(),
             suspected_convention_errors: crate::identify::convention::findings_for_run(
                 run, &opts.base,
             ),
@@ -203,6 +206,7 @@ impl Search<'_> {
         if let Some(f) = &foundation {
             f.report_into(&mut diagnosis, prep);
         }
+        diagnosis.locate_unexplained();
         // No ± where identify withholds it (errors in variables).
         let note = summaries::withhold_std_errs(prep, &mut diagnosis.pedestals_before);
         summaries::withhold_std_errs(prep, &mut diagnosis.pedestals_after);

@@ -46,7 +46,15 @@ pub(super) struct Search<'a> {
     /// The chosen base, refitted on the data the chosen corrections
     /// (sensor, table and cross-coupling effects) correct.
     pub(super) on_base: Option<BaseOn>,
+    /// Set when a round brought the model back to one an earlier round had
+    /// left ([`Search::came_back`]): the search stopped there, and why.
+    pub(super) cycle: Option<String>,
 }
+
+/// The model as the search's steps define it: the kept steps' effect,
+/// bearing and variant (channels), sorted. Two rounds that end with the
+/// same set hold the same model (the joint refit of the same terms).
+type Kept = Vec<(String, String, Option<String>)>;
 
 /// What a round decided.
 pub(super) enum Round {
@@ -66,6 +74,58 @@ pub(super) struct Before {
     pub(super) located: Vec<Location>,
     /// Its pedestals.
     pub(super) pedestals: Vec<Pedestal>,
+}
+
+impl Search<'_> {
+    /// The model the kept steps define ([`Kept`]).
+    fn kept(&self) -> Kept {
+        let mut k: Kept = self
+            .steps
+            .iter()
+            .filter(|s| s.dropped.is_none())
+            .map(|s| (s.effect.clone(), s.bearing.clone(), s.channels.clone()))
+            .collect();
+        k.sort();
+        k
+    }
+
+    /// Whether the round just ended brought the model back to one held
+    /// after an earlier round (`visited`: each model with the step count it
+    /// was reached at; this one is added when new). The forward step and
+    /// the backward check are deterministic in the model, so from there
+    /// they would add and remove the same effects again (two effects each
+    /// significant alone and not beside the other: the data do not choose
+    /// between them); the search stops at the model it came back to, and
+    /// the statement says so.
+    fn came_back(&self, visited: &mut Vec<(Kept, usize)>) -> Option<String> {
+        let now = self.kept();
+        let n = self.steps.len();
+        let Some((_, m)) = visited.iter().find(|(k, _)| *k == now) else {
+            visited.push((now, n));
+            return None;
+        };
+        let model = if now.is_empty() {
+            "the base model".to_string()
+        } else {
+            now.iter()
+                .map(|(e, b, _)| format!("{e} at {b}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let earlier = if *m == 0 {
+            "before step 1".to_string()
+        } else {
+            format!("after step {m}")
+        };
+        let between: Vec<String> = self.steps[*m..]
+            .iter()
+            .map(|s| format!("{} at {}", s.effect, s.bearing))
+            .collect();
+        Some(format!(
+            "the search cycled: after step {n} its model ({model}) is the one it had {earlier}; the forward selection and the backward check would add and remove the same effects again ({}), each significant alone and not beside the others, so the data do not choose between these models; the search stopped at that model, and the values fitted at those effects' bearings depend on that choice",
+            between.join(", ")
+        ))
+    }
 }
 
 /// The search of [`super::diagnose`] on the arranged data `prep` of `run`.
@@ -91,6 +151,7 @@ pub(super) fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Out
         foundation_tried: None,
         chosen: Vec::new(),
         on_base: None,
+        cycle: None,
     };
     let try_bases = opts.base == Parameter::ALL.as_slice() && opts.foundation_replicates > 0;
     let mut ticker = crate::progress::Ticker::new(
@@ -98,6 +159,7 @@ pub(super) fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Out
         opts.max_steps,
         opts.progress,
     );
+    let mut visited: Vec<(Kept, usize)> = vec![(s.kept(), 0)];
     for round in 0..opts.max_steps {
         ticker.tick(round);
         let outcome = step(&prep, &s.state, opts.alpha);
@@ -109,6 +171,10 @@ pub(super) fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Out
             None => s.round_on_ground(&outcome, round == 0, try_bases)?,
         };
         if let Round::Stop = decided {
+            break;
+        }
+        if let Some(why) = s.came_back(&mut visited) {
+            s.cycle = Some(why);
             break;
         }
     }
