@@ -11,15 +11,20 @@
 //! (unseen-five `delay`, 3 of 10 runs: B1 printed `ok` with c_y 5.2-6.4 ±
 //! off, docs/trust.md, Session 45 (idelay17)). Here, per bearing on rigid
 //! ground, the fit linearised with τ free ([`DelayNuisance`], made with the
-//! lack-of-fit evidence) is judged by the shared gate (a damping of the
-//! reported fit below zero, or |τ̂| > 2σ_τ, two-sided: a delay on the
-//! pick-ups reads as τ̂ < 0 on the probes) and exclusion; where the delay is
+//! lack-of-fit evidence) is judged by the shared gate (the data favour a
+//! delay with the reported dampings held passive: the likelihood ratio of
+//! τ with c ≥ 0 in both fits beyond 4, which is |τ̂| > 2σ_τ, two-sided,
+//! where the dampings are well above zero; a delay on the pick-ups reads
+//! as τ̂ < 0 on the probes) and exclusion; where the delay is
 //! counted as unknown every pedestal ± and the covariance are multiplied by
 //! the shared widening (from ρ = σ(τ free)/σ(τ held) and τ̂/σ_τ,
 //! [`crate::estimate::lack_of_fit::delay_unknown::widening`]; the modal
 //! view's ζ ± with them), the
 //! values and the trust verdict are left as they are, and an informative
-//! warning names the delay and the ρ.
+//! warning names the delay, the channels its sign implies (τ̂ < 0: the
+//! `ped` pick-ups) and the ρ; a τ the data do not estimate (its interval
+//! spans more than 1 rad of phase at the top speed) is printed as such, not
+//! as a number ([`delay_figure`]).
 
 use super::{Identification, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::DelayNuisance;
@@ -44,11 +49,9 @@ pub fn mark(identification: &mut Identification) {
             continue;
         };
         let theta = p.pedestal.theta();
-        let negative = [Parameter::Cy, Parameter::Cz]
-            .iter()
-            .any(|&c| !is_fixed(p, c) && theta[c as usize] < 0.0);
-        if d.counted_unknown(negative) {
-            widen(p, &d, negative);
+        if d.counted_unknown(&theta) {
+            let evidence = d.evidence(&theta);
+            widen(p, &d, evidence);
         }
     }
 }
@@ -58,8 +61,10 @@ fn is_fixed(p: &PedestalFit, c: Parameter) -> bool {
 }
 
 /// Multiplies `p`'s ± and covariance by `d`'s widening (from ρ and τ̂/σ_τ,
-/// [`DelayNuisance::widening`]) and says so.
-fn widen(p: &mut PedestalFit, d: &DelayNuisance, negative: bool) {
+/// [`DelayNuisance::widening`]) and says so; `evidence` is the data's
+/// evidence for the delay with the pedestal passive
+/// ([`DelayNuisance::evidence`]).
+fn widen(p: &mut PedestalFit, d: &DelayNuisance, evidence: f64) {
     let w = d.widening();
     let se = p.std_err.theta();
     p.std_err = Pedestal::from_theta(std::array::from_fn(|i| se[i] * w[i]));
@@ -84,20 +89,58 @@ fn widen(p: &mut PedestalFit, d: &DelayNuisance, negative: bool) {
             format!("{} ±×{:.3} (ρ {:.3})", c.name(), w[i], d.ratio[i])
         })
         .collect();
-    let why = if negative {
-        "a damping comes out below zero, which a delay on the rel probes makes of a passive pedestal's"
-    } else {
-        "the data favour a delay (|τ̂| beyond 2 of its ±, two-sided)"
-    };
     p.warnings.push(Warning {
         kind: WarningKind::DelayNotExcluded,
         message: format!(
-            "the data do not exclude a sensor delay on its rel probes or (τ̂ < 0) its ped pick-ups (τ {:.0} ± {:.0} µs, linearised at τ = 0; {why}), which reads as a pedestal damping c − τ·(k − Ω²m): its ± count the delay as unknown, multiplied by √(1 + (ρ² − 1)·(1 + (τ̂/σ_τ)²)), ρ = σ(τ free)/σ(τ held) ({}); the values are the fit's",
-            d.delay_us,
-            d.delay_std_us,
+            "the data do not exclude a sensor delay on {} ({}, linearised at τ = 0; the data favour it: likelihood ratio {evidence:.1} > 4 with the dampings held passive, c ≥ 0), which reads as a pedestal damping c − τ·(k − Ω²m): its ± count the delay as unknown, multiplied by √(1 + (ρ² − 1)·(1 + (τ̂/σ_τ)²)), ρ = σ(τ free)/σ(τ held) ({}); the values are the fit's",
+            delay_channels(d),
+            delay_figure(d),
             widened.join(", ")
         ),
     });
+}
+
+/// The channels a delay of `d`'s sign is on (only the relative phase of
+/// force and motion enters: τ̂ > 0 the `rel` probes read late, τ̂ < 0 the
+/// `ped` pick-ups); both where the data do not estimate τ.
+fn delay_channels(d: &DelayNuisance) -> &'static str {
+    if !d.estimable() {
+        "its rel probes or its ped pick-ups"
+    } else if d.delay_us < 0.0 {
+        "its ped pick-ups"
+    } else {
+        "its rel probes"
+    }
+}
+
+/// τ̂ ± σ_τ as text: of the channels [`delay_channels`] names (a delay of
+/// |τ̂| on the pick-ups where τ̂ < 0); where the data do not estimate τ
+/// ([`DelayNuisance::estimable`]) its ± as a phase at the top speed
+/// instead of a number.
+pub fn delay_figure(d: &DelayNuisance) -> String {
+    if !d.estimable() {
+        let phase = d.delay_std_us * 1e-6 * d.top_speed_rad_s;
+        return format!(
+            "τ not estimable from these data: its ± {:.0} µs is {:.2} rad of phase at the top speed {:.1} Hz, where the linearisation at τ = 0 fails",
+            d.delay_std_us,
+            phase,
+            d.top_speed_rad_s / std::f64::consts::TAU
+        );
+    }
+    // A τ̂ that rounds to zero is printed 0, never −0.
+    let tau = if d.delay_us.abs() < 0.5 {
+        0.0
+    } else {
+        d.delay_us
+    };
+    if tau < 0.0 {
+        format!(
+            "the pick-ups {:.0} ± {:.0} µs late: τ {:.0} µs on the rel probes",
+            -tau, d.delay_std_us, tau
+        )
+    } else {
+        format!("τ {:.0} ± {:.0} µs", tau, d.delay_std_us)
+    }
 }
 
 /// Under the table: one line per pedestal whose ± count a delay as unknown
@@ -114,4 +157,51 @@ pub fn describe(identification: &Identification) -> String {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nuisance(delay_us: f64, delay_std_us: f64, top_hz: f64) -> DelayNuisance {
+        DelayNuisance {
+            delay_us,
+            delay_std_us,
+            ratio: [1.0; 5],
+            held_std_err: [0.0; 5],
+            path_per_us: [0.0; 5],
+            top_speed_rad_s: std::f64::consts::TAU * top_hz,
+        }
+    }
+
+    /// A τ the data do not estimate (the paper machine on 5-60 Hz: ± 1.8 ms,
+    /// main printed "τ -0 ± 1815 µs") is printed as such; an estimable one
+    /// as a number, never −0, on the channels its sign implies.
+    #[test]
+    fn an_unestimable_delay_is_printed_as_such() {
+        let d = nuisance(-0.4, 1815.0, 60.0);
+        let text = delay_figure(&d);
+        assert!(
+            text.starts_with("τ not estimable from these data"),
+            "{text}"
+        );
+        assert!(
+            text.contains("0.68 rad of phase at the top speed 60.0 Hz"),
+            "{text}"
+        );
+        assert!(!text.contains("-0"), "{text}");
+        assert_eq!(delay_channels(&d), "its rel probes or its ped pick-ups");
+        let d = nuisance(-0.4, 39.0, 56.1);
+        assert_eq!(delay_figure(&d), "τ 0 ± 39 µs");
+        let d = nuisance(-203.0, 38.0, 50.0);
+        assert_eq!(
+            delay_figure(&d),
+            "the pick-ups 203 ± 38 µs late: τ -203 µs on the rel probes"
+        );
+        assert_eq!(delay_channels(&d), "its ped pick-ups");
+        assert_eq!(
+            delay_channels(&nuisance(120.0, 39.0, 56.1)),
+            "its rel probes"
+        );
+    }
 }

@@ -137,8 +137,8 @@ pub(super) fn delays_unknown(
 }
 
 /// [`delays_unknown`] at bearing `b`, the delay on `channels`: `None`
-/// where the gate is shut (no damping of `b` below zero, |τ̂| within
-/// 2 σ_τ),
+/// where the gate is shut (the data do not favour a delay with the
+/// dampings of `b` held passive, [`shared::evidence`]),
 /// the data exclude the delay or
 /// the linearisation fails.
 #[allow(clippy::too_many_arguments)]
@@ -152,11 +152,6 @@ fn delay_unknown(
     nl: &[f64],
     scale: &[f64],
 ) -> Option<DelayUnknown> {
-    let negative = model
-        .terms
-        .iter()
-        .zip(beta)
-        .any(|(t, v)| matches!(t, Term::Damping { bearing, .. } if *bearing == b) && *v < 0.0);
     let mut extended = model.clone();
     extended.nonlinear.push(Nonlinear::Delay {
         bearing: b,
@@ -212,11 +207,26 @@ fn delay_unknown(
     if !widened.iter().all(|w| w.held > 0.0 && w.free.is_finite()) {
         return None;
     }
-    let dampings = widened
+    // The dampings of b as the shared gate reads them (value, held ±, ρ,
+    // shift per unit τ).
+    let dampings: Vec<shared::HeldDamping> = eq
+        .terms
         .iter()
-        .filter(|w| w.damping && w.bearing == b)
-        .map(Widened::rho);
-    if !shared::counted_unknown(lin.tau, lin.tau_std_err, dampings, negative) {
+        .enumerate()
+        .filter(
+            |&(_, &t)| matches!(extended.terms[t], Term::Damping { bearing, .. } if bearing == b),
+        )
+        .map(|(i, _)| {
+            let at = if i < j { i } else { i - 1 };
+            shared::HeldDamping {
+                value: p[i],
+                std_err: lin.held[at],
+                ratio: shared::ratio(lin.held[at], lin.free[at]),
+                path: lin.path[at],
+            }
+        })
+        .collect();
+    if !shared::counted_unknown(lin.tau, lin.tau_std_err, &dampings) {
         return None;
     }
     let (tau, tau_se) = (lin.tau, lin.tau_std_err);

@@ -13,12 +13,14 @@
 //! undamped pedestal, a damping that trades with a delay) leaves the
 //! verdict as it was.
 //!
-//! A delay on a bearing's `rel` probes that the data do not exclude
-//! ([`crate::diagnose::ml_final::delay_unknown`]) leaves the verdict as it
-//! was too (the values are within their widened ±) but the verdict says it:
-//! the pedestal ± at that bearing count the delay as unknown.
+//! A delay on a bearing's `rel` probes or (τ̂ < 0) its `ped` pick-ups that
+//! the data do not exclude ([`crate::diagnose::ml_final::delay_unknown`])
+//! leaves the verdict as it was too (the values are within their widened
+//! ±) but the verdict says it, naming the channels the sign implies: the
+//! pedestal ± at that bearing count the delay as unknown.
 
 use super::Conclusion;
+use crate::diagnose::ml_final::delay_unknown::DelayUnknown;
 use crate::diagnose::ml_final::GroupRefit;
 
 /// Untrusts `conclusion` for every damping of `refits` held at zero
@@ -75,11 +77,30 @@ pub fn judge_held(conclusion: &mut Conclusion, bearings: &[String], refits: &[Gr
             .collect::<Vec<_>>()
             .join(", ");
         conclusion.verdict += &format!(
-            " At bearing {name} the data do not exclude a sensor delay on `{}` (τ {:.0} ± {:.0} µs, linearised at τ = 0), which reads as a pedestal damping c − τ·(k − Ω²m): the pedestal ± count it as unknown ({widened}).",
-            d.channels.label(),
-            d.tau * 1e6,
-            d.tau_std_err * 1e6
+            " At bearing {name} the data do not exclude a sensor delay on {}, linearised at τ = 0), which reads as a pedestal damping c − τ·(k − Ω²m): the pedestal ± count it as unknown ({widened}).",
+            delay_text(d)
         );
+    }
+}
+
+/// The channels and size of `d`'s delay as the verdict names them: only
+/// the relative phase of force and motion enters, so the delay is
+/// linearised on the `rel` probes and τ̂ < 0 there is the `ped` pick-ups
+/// of the same directions read |τ̂| late (unseen-seven `ped-delay`).
+fn delay_text(d: &DelayUnknown) -> String {
+    let (tau, sd) = (d.tau * 1e6, d.tau_std_err * 1e6);
+    // A τ̂ that rounds to zero is printed 0, never −0.
+    let tau = if tau.abs() < 0.5 { 0.0 } else { tau };
+    let rel = d.channels.label();
+    if tau < 0.0 {
+        format!(
+            "`{}` (its pick-ups {:.0} ± {:.0} µs late: τ {tau:.0} µs on `{rel}`",
+            rel.replace("rel", "ped"),
+            -tau,
+            sd
+        )
+    } else {
+        format!("`{rel}` (τ {tau:.0} ± {sd:.0} µs")
     }
 }
 
@@ -148,5 +169,48 @@ mod tests {
         let mut c = trusted();
         judge_held(&mut c, &["B1".into(), "B2".into()], &[refit(Vec::new())]);
         assert_eq!(c, trusted());
+    }
+
+    /// A delay read as τ̂ < 0 on the probes is named on the `ped`
+    /// pick-ups, late by |τ̂|; τ̂ > 0 on the `rel` probes.
+    #[test]
+    fn the_verdict_names_the_channels_the_sign_implies() {
+        use crate::diagnose::ml_final::delay_unknown::Widened;
+        use crate::diagnose::model::DelayChannels;
+        let delay = |tau: f64| {
+            let mut r = refit(Vec::new());
+            r.delay_unknown = vec![DelayUnknown {
+                bearing: 1,
+                channels: DelayChannels {
+                    rel: [true, true],
+                    ped: [false, false],
+                },
+                tau,
+                tau_std_err: 38e-6,
+                widened: vec![Widened {
+                    bearing: 1,
+                    name: "c_y".into(),
+                    held: 1.0e3,
+                    free: 2.0e3,
+                    damping: true,
+                    factor: 6.0,
+                }],
+            }];
+            let mut c = trusted();
+            judge_held(&mut c, &["B1".into(), "B2".into()], &[r]);
+            assert!(c.trusted);
+            c.verdict
+        };
+        let ped = delay(-203e-6);
+        assert!(
+            ped.contains("sensor delay on `ped` (its pick-ups 203 ± 38 µs late"),
+            "{ped}"
+        );
+        let rel = delay(150e-6);
+        assert!(
+            rel.contains("sensor delay on `rel` (τ 150 ± 38 µs"),
+            "{rel}"
+        );
+        assert!(!delay(-0.2e-6).contains("-0"), "{}", delay(-0.2e-6));
     }
 }
