@@ -316,20 +316,18 @@ impl BearingNoise {
             let speeds: Vec<f64> = order.iter().map(|&i| rows[i].speed_hz).collect();
             local_fits(&speeds)
         };
-        let mut scatter = [None; 4];
-        let mut scatter_left_out = [0; 4];
         // The channels' samples are at the same points as a rule: one set of windows.
         let mut windows = WindowCache::default();
-        for ch in 0..4 {
-            (scatter[ch], scatter_left_out[ch]) = match known[ch] {
-                Some(law) => law,
-                None => {
-                    let values: Vec<Complex<f64>> =
-                        order.iter().map(|&i| complex_value(rows[i], ch)).collect();
-                    scatter_law_with(&fits, &values, &mut windows)
-                }
-            };
-        }
+        let laws: [(Option<Scatter>, usize); 4] = std::array::from_fn(|ch| match known[ch] {
+            Some(law) => law,
+            None => {
+                let values: Vec<Complex<f64>> =
+                    order.iter().map(|&i| complex_value(rows[i], ch)).collect();
+                scatter_law_with(&fits, &values, &mut windows)
+            }
+        });
+        let scatter = laws.map(|l| l.0);
+        let scatter_left_out = laws.map(|l| l.1);
         let scatter_var = rows
             .iter()
             .zip(&digits_var)
