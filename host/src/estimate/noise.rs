@@ -227,6 +227,11 @@ pub struct BearingNoise {
     pub var: Vec<[f64; 8]>,
     /// The scatter law found per complex channel (`None`: too few speeds).
     pub scatter: [Option<Scatter>; 4],
+    /// Per complex channel, how many speeds the scatter's windows left out
+    /// (a response the local fits cannot follow there, e.g. a resonance the
+    /// speed steps do not resolve): its law is carried to them from the
+    /// other speeds, not measured there.
+    pub scatter_left_out: [usize; 4],
     /// The variances under the scatter law (floored by the digits), while
     /// the source is still the digits.
     pub scatter_var: Option<Vec<[f64; 8]>>,
@@ -282,6 +287,7 @@ impl BearingNoise {
                 quantisation,
                 var,
                 scatter: [None; 4],
+                scatter_left_out: [0; 4],
                 scatter_var: None,
                 digits_var,
                 variance_scale: 1.0,
@@ -293,12 +299,13 @@ impl BearingNoise {
     /// The noise of `rows` under the digits, whose variances `digits_var`
     /// (row for row) are given, with the scatter law of each complex channel
     /// estimated from `rows`, or taken from `known` where given (a channel
-    /// whose values and speeds are those the law was estimated from).
+    /// whose values and speeds are those the law was estimated from: its
+    /// law and the speeds its windows left out).
     fn with_scatter(
         rows: &[&Measurement],
         digits_var: Vec<[f64; 8]>,
         quantisation: Quantisation,
-        known: [Option<Option<Scatter>>; 4],
+        known: [Option<(Option<Scatter>, usize)>; 4],
     ) -> Self {
         let mut order: Vec<usize> = (0..rows.len()).collect();
         order.sort_by(|&a, &b| rows[a].speed_hz.total_cmp(&rows[b].speed_hz));
@@ -309,19 +316,18 @@ impl BearingNoise {
             let speeds: Vec<f64> = order.iter().map(|&i| rows[i].speed_hz).collect();
             local_fits(&speeds)
         };
-        let mut scatter = [None; 4];
         // The channels' samples are at the same points as a rule: one set of windows.
         let mut windows = WindowCache::default();
-        for (ch, slot) in scatter.iter_mut().enumerate() {
-            *slot = match known[ch] {
-                Some(law) => law,
-                None => {
-                    let values: Vec<Complex<f64>> =
-                        order.iter().map(|&i| complex_value(rows[i], ch)).collect();
-                    scatter_law_with(&fits, &values, &mut windows)
-                }
-            };
-        }
+        let laws: [(Option<Scatter>, usize); 4] = std::array::from_fn(|ch| match known[ch] {
+            Some(law) => law,
+            None => {
+                let values: Vec<Complex<f64>> =
+                    order.iter().map(|&i| complex_value(rows[i], ch)).collect();
+                scatter_law_with(&fits, &values, &mut windows)
+            }
+        });
+        let scatter = laws.map(|l| l.0);
+        let scatter_left_out = laws.map(|l| l.1);
         let scatter_var = rows
             .iter()
             .zip(&digits_var)
@@ -341,6 +347,7 @@ impl BearingNoise {
             quantisation,
             var: digits_var.clone(),
             scatter,
+            scatter_left_out,
             scatter_var: Some(scatter_var),
             digits_var,
             variance_scale: 1.0,
@@ -399,6 +406,17 @@ impl BearingNoise {
         }
     }
 
+    /// True when on some channel the scatter's windows left out more
+    /// speeds than they kept ([`BearingNoise::scatter_left_out`]): its law
+    /// there is carried from a minority of the speeds more than measured.
+    pub fn scatter_mostly_carried(&self) -> bool {
+        let n = self.var.len();
+        self.scatter
+            .iter()
+            .zip(&self.scatter_left_out)
+            .any(|(law, &left)| law.is_some() && 2 * left > n)
+    }
+
     /// RMS over rows of each complex channel's noise sd, sqrt(mean E|n|²)
     /// [m], in [`CHANNELS`] order.
     pub fn sd(&self) -> [f64; 4] {
@@ -428,6 +446,7 @@ impl BearingNoise {
         Self {
             var: self.var.iter().map(swap).collect(),
             scatter: [1, 0, 3, 2].map(|ch| self.scatter[ch]),
+            scatter_left_out: [1, 0, 3, 2].map(|ch| self.scatter_left_out[ch]),
             scatter_var: self
                 .scatter_var
                 .as_ref()

@@ -241,7 +241,7 @@ pub(crate) fn fit_ml_checked(
     let mut function = None;
     if let Ok(f) = &attempt {
         if noise.source.pattern_on_trial() && f.chi2_per_dof() <= SCATTER_LEVEL_TOLERANCE {
-            function = columns::refit(noise.source, &obs, floor, &columns, f);
+            function = columns::refit(noise, &obs, floor, &columns, f);
         }
         let (test_obs, test_fit) = match &function {
             Some(r) => (r.obs.as_slice(), &r.fit),
@@ -313,7 +313,7 @@ pub(crate) fn fit_ml_checked(
         // Computed above on these observations and this fit unless speeds
         // were left out since.
         let refit = if fresh {
-            columns::refit(noise.source, &obs, floor, &columns, &ml_fit)
+            columns::refit(noise, &obs, floor, &columns, &ml_fit)
         } else {
             function
         };

@@ -47,7 +47,7 @@
 //! verdicts do not move. Measured figures: docs/estimation.md "Session 29".
 
 use super::variance::{self, columns_shape_p, Family, Refit};
-use super::NoiseSource;
+use super::{BearingNoise, NoiseSource};
 use crate::estimate::ml::MlFit;
 use crate::estimate::{robust, Observation};
 use plinth_shared::regression::{Parameter, PARAMETERS};
@@ -61,8 +61,9 @@ pub const COLUMNS_P: f64 = 1e-3;
 
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
 /// function of its residuals when they reject the pattern of its noise
-/// `source` ([`NoiseSource::pattern_on_trial`]): the scatter's law at
-/// [`variance::HETEROSCEDASTIC_P`] ([`variance::refit`]); noise columns'
+/// `noise`'s source ([`NoiseSource::pattern_on_trial`]): the scatter's law
+/// at [`variance::HETEROSCEDASTIC_P`], or always where it is mostly carried
+/// ([`BearingNoise::scatter_mostly_carried`], [`variance::refit`]); noise columns'
 /// shape at [`COLUMNS_P`] ([`variance::columns_shape_p`]), refitted under
 /// [`Family::VelocityFloor`] ([`variance::refit_under`]) with ± never
 /// below the residuals' ([`widen_to_residuals`]); `floor` gives each
@@ -70,14 +71,16 @@ pub const COLUMNS_P: f64 = 1e-3;
 /// `None` when the source is not on trial, the test does not reject or a
 /// step fails.
 pub fn refit(
-    source: NoiseSource,
+    noise: &BearingNoise,
     obs: &[Observation],
     floor: impl Fn(&Observation) -> [f64; 8],
     columns: &[Parameter],
     fit: &MlFit,
 ) -> Option<Refit> {
-    match source {
-        NoiseSource::Scatter => variance::refit(obs, floor, columns, fit),
+    match noise.source {
+        NoiseSource::Scatter => {
+            variance::refit(obs, floor, columns, fit, !noise.scatter_mostly_carried())
+        }
         NoiseSource::Columns => {
             let p_value = columns_shape_p(obs, &fit.theta, columns)?;
             if p_value <= COLUMNS_P {

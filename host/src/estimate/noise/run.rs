@@ -97,7 +97,7 @@ impl RunNoise {
                         BearingNoise::estimate(&rows, &columns, self.quantisation)
                     }
                     _ => {
-                        let s = noise.scatter;
+                        let (s, left) = (noise.scatter, noise.scatter_left_out);
                         // `digits_variances`, from the digits counted above.
                         let digits_var = index
                             .iter()
@@ -114,7 +114,7 @@ impl RunNoise {
                             &rows,
                             digits_var,
                             self.quantisation,
-                            [Some(s[0]), Some(s[1]), None, None],
+                            [Some((s[0], left[0])), Some((s[1], left[1])), None, None],
                         )
                     }
                 };

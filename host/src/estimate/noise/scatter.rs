@@ -185,7 +185,7 @@ pub(super) fn scatter_law_of(
     fits: &[Option<LocalFit>],
     values: &[Complex<f64>],
 ) -> Option<Scatter> {
-    scatter_law_with(fits, values, &mut WindowCache::default())
+    scatter_law_with(fits, values, &mut WindowCache::default()).0
 }
 
 /// The windows of one series' samples ([`windows_of`]) and the points those
@@ -200,15 +200,16 @@ pub(super) struct WindowCache {
 
 /// [`scatter_law_of`] with the windows taken from `cache` when the samples
 /// are at the points they were made for (the same `fits`), else made and
-/// kept there.
+/// kept there; and how many of the series' samples its windows left out
+/// (the law carried to them from the rest: not measured there).
 pub(super) fn scatter_law_with(
     fits: &[Option<LocalFit>],
     values: &[Complex<f64>],
     cache: &mut WindowCache,
-) -> Option<Scatter> {
+) -> (Option<Scatter>, usize) {
     let samples = samples_of(fits, values);
     if samples.len() < 2 {
-        return None;
+        return (None, 0);
     }
     let points: Vec<usize> = samples.iter().map(|s| s.point).collect();
     let windows = match cache.made.take() {
@@ -231,7 +232,7 @@ pub(super) fn scatter_law_with(
         .collect();
     let sd = robust_sd(&mut u);
     if !(sd > 0.0 && sd.is_finite()) {
-        return sd.is_finite().then_some(Scatter::Absolute(sd.max(0.0)));
+        return (sd.is_finite().then_some(Scatter::Absolute(sd.max(0.0))), 0);
     }
     let start = Law {
         alpha: 0.0,
@@ -241,14 +242,12 @@ pub(super) fn scatter_law_with(
     // A law with no floor that left out the low-|X| end of the series is
     // not a law of these data's noise (`disowns_low_end`): the law of a
     // floor alone instead.
+    let left_out = |kept: &[bool]| kept.iter().filter(|k| !**k).count();
     if law.alpha > 0.0 && law.beta <= 0.0 && disowns_low_end(&samples, &kept) {
-        return Some(
-            settle(&samples, windows, start, LawTerms::FloorOnly)
-                .0
-                .scatter(),
-        );
+        let (law, kept) = settle(&samples, windows, start, LawTerms::FloorOnly);
+        return (Some(law.scatter()), left_out(&kept));
     }
-    Some(law.scatter())
+    (Some(law.scatter()), left_out(&kept))
 }
 
 /// Whether a law keeps its fraction term when the likelihood needs it

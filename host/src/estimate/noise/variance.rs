@@ -31,7 +31,14 @@
 //! every fit whose noise came from the scatter (either law) and the model
 //! fits, so it is written for cost: the residuals the fit already has, one
 //! product per channel per speed (the α and β of a channel share G_ch), and
-//! at most [`MAX_TEST_SPEEDS`] evenly spaced speeds.
+//! at most [`MAX_TEST_SPEEDS`] evenly spaced speeds. The test is evidence
+//! for the scatter's law only where that law was measured: where its
+//! windows left out most speeds of a channel (resonances its local fits do
+//! not follow, [`super::BearingNoise::scatter_mostly_carried`]) the law is
+//! carried to the speeds the fit leans on, whose residuals show less than
+//! their noise, and the variance function is used whatever the test says
+//! ([`refit`]; unseen-six: the scatter's law kept gave RMS z 1.45-1.73,
+//! docs/estimation-scatter.md, Session 47 (scatlaw17)).
 //!
 //! **Fit** ([`fit_variance_function`]): the restricted (REML) pseudo-likelihood
 //! of the residuals maximised over (α, β) ≥ 0 by the multiplicative fixed
@@ -393,16 +400,18 @@ fn leverage_parts(
 /// The fit `fit` of `obs` (parameters `columns`) redone under the variance
 /// function ([`Family::FractionFloor`]) of its residuals when the score test
 /// ([`homoscedasticity_p`]) rejects the observations' own noise law at
-/// [`HETEROSCEDASTIC_P`] ([`refit_under`]); `None` when the test does not
-/// reject or a step fails.
+/// [`HETEROSCEDASTIC_P`], or whatever its p when that law was not
+/// `law_measured` on most speeds (module docs) ([`refit_under`]); `None`
+/// when the law is kept or a step fails.
 pub fn refit(
     obs: &[Observation],
     floor: impl Fn(&Observation) -> [f64; 8],
     columns: &[Parameter],
     fit: &MlFit,
+    law_measured: bool,
 ) -> Option<Refit> {
     let p_value = homoscedasticity_p(obs, &fit.theta, Family::FractionFloor)?;
-    if p_value >= HETEROSCEDASTIC_P {
+    if law_measured && p_value >= HETEROSCEDASTIC_P {
         return None;
     }
     refit_under(obs, floor, columns, fit, Family::FractionFloor, p_value)
