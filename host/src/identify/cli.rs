@@ -367,11 +367,18 @@ pub fn table(identification: &Identification, truth: Option<&Truth>) -> String {
                 "noise {}: {}{}, sd [m] {}; χ²/dof {}\n",
                 fit.bearing,
                 n.source.name(),
-                if n.variance_function.is_some() {
-                    format!(
-                        " (variance function from the fit's residuals: {} rejected)",
-                        n.source.pattern_name()
-                    )
+                if let Some(v) = &n.variance_function {
+                    if v.p_value < crate::estimate::noise::variance::HETEROSCEDASTIC_P {
+                        format!(
+                            " (variance function from the fit's residuals: {} rejected)",
+                            n.source.pattern_name()
+                        )
+                    } else {
+                        format!(
+                            " (variance function from the fit's residuals: {} carried to speeds it was not measured on)",
+                            n.source.pattern_name()
+                        )
+                    }
                 } else if n.scale_estimated {
                     " (level from the fit's χ²)".to_string()
                 } else {

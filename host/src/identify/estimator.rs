@@ -106,7 +106,11 @@ pub struct VarianceLaw {
     /// (noise columns on trial, [`variance::Family::VelocityFloor`]).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub velocity_floor_sd: BTreeMap<String, f64>,
-    /// p-value of the score test that rejected the scatter's law [-].
+    /// p-value of the score test of the source's own law [-]: below
+    /// [`variance::HETEROSCEDASTIC_P`] it rejected that law; at or above it
+    /// the variance function was taken because the scatter's law was carried
+    /// to most speeds rather than measured there
+    /// ([`crate::estimate::noise::BearingNoise::scatter_mostly_carried`]).
     pub p_value: f64,
 }
 
