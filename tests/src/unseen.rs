@@ -155,16 +155,39 @@ pub fn ok_but_wrong(run: &RunDir, id: &Identification, damping: bool) -> Vec<Str
 /// within 3 of its ± of the truth in k_y, k_z and m (the method's promise;
 /// nothing is asserted of an untrusted verdict).
 pub fn assert_trusted_means_right(run: &RunDir, d: &Diagnosis) {
+    trusted_within_three(run, d, "", false);
+}
+
+/// [`assert_trusted_means_right`] with the dampings c_y, c_z too, where the
+/// verdict gives them a ± (`case` names the run in the message).
+pub fn assert_trusted_dampings_right_too(run: &RunDir, d: &Diagnosis, case: &str) {
+    trusted_within_three(run, d, case, true);
+}
+
+/// The check of [`assert_trusted_means_right`]: k_y, k_z, m always, and
+/// c_y, c_z with `dampings` where they have a ±.
+fn trusted_within_three(run: &RunDir, d: &Diagnosis, case: &str, dampings: bool) {
     if !d.trusted {
         return;
     }
     for after in &d.pedestals_after {
         let truth = truth_of(run, &after.bearing);
-        for (key, t) in [("k_y", truth.k_y), ("k_z", truth.k_z), ("m", truth.m)] {
-            let (v, se) = (after.values[key], after.std_err[key]);
+        let mut keys = vec![("k_y", truth.k_y), ("k_z", truth.k_z), ("m", truth.m)];
+        if dampings {
+            keys.extend([("c_y", truth.c_y), ("c_z", truth.c_z)]);
+        }
+        for (key, t) in keys {
+            let (v, se) = if key.starts_with('c') {
+                match (after.values.get(key), after.std_err.get(key)) {
+                    (Some(v), Some(se)) => (*v, *se),
+                    _ => continue,
+                }
+            } else {
+                (after.values[key], after.std_err[key])
+            };
             assert!(
                 ((v - t) / se).abs() < 3.0,
-                "{} {key}: {v:.6e} ± {se:.2e}, truth {t:.6e} ({:.1} ±), trusted\n{}",
+                "{case} {} {key}: {v:.6e} ± {se:.2e}, truth {t:.6e} ({:.1} ±), trusted\n{}",
                 after.bearing,
                 (v - t) / se,
                 d.to_text()

@@ -11,7 +11,9 @@
 //! (`diagnose::ml_final::delay_unknown`, the group's own refit beside the
 //! named effect elsewhere).
 
-use plinth_tests::unseen::{diagnosis_with_machine_check, named, stored, truth_of};
+use plinth_tests::unseen::{
+    assert_trusted_dampings_right_too, diagnosis_with_machine_check, named, stored,
+};
 
 const SEVEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-7");
 
@@ -41,27 +43,7 @@ fn a_delay_beside_an_effect_named_elsewhere_is_counted_in_its_bearings_error() {
     if !d.trusted {
         return;
     }
-    for after in &d.pedestals_after {
-        let t = truth_of(&run, &after.bearing);
-        for (key, truth) in [
-            ("k_y", t.k_y),
-            ("k_z", t.k_z),
-            ("m", t.m),
-            ("c_y", t.c_y),
-            ("c_z", t.c_z),
-        ] {
-            let (Some(v), Some(se)) = (after.values.get(key), after.std_err.get(key)) else {
-                continue;
-            };
-            assert!(
-                ((v - truth) / se).abs() < 3.0,
-                "{} {key}: {v:.4e} ± {se:.2e}, truth {truth:.4e} ({:.1} ±), trusted\n{}",
-                after.bearing,
-                (v - truth) / se,
-                d.to_text()
-            );
-        }
-    }
+    assert_trusted_dampings_right_too(&run, &d, "cross-delay-6803");
     let delay_named = names.contains(&("sensor_delay".to_string(), "B1".to_string()));
     assert!(
         delay_named

@@ -7,7 +7,9 @@
 //! (sweep17b)", finding 1). The final ± now count such a delay as unknown
 //! (`diagnose::ml_final::delay_unknown`).
 
-use plinth_tests::unseen::{diagnosis_with_machine_check, stored, truth_of};
+use plinth_tests::unseen::{
+    assert_trusted_dampings_right_too, diagnosis_with_machine_check, stored,
+};
 
 const FIVE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-5");
 const SIX: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-6");
@@ -62,27 +64,7 @@ fn trusted_within_three_errors(dir: &str, toml: &str, case: &str) -> Option<(boo
     if !d.trusted {
         return None;
     }
-    for after in &d.pedestals_after {
-        let t = truth_of(&run, &after.bearing);
-        for (key, truth) in [
-            ("k_y", t.k_y),
-            ("k_z", t.k_z),
-            ("m", t.m),
-            ("c_y", t.c_y),
-            ("c_z", t.c_z),
-        ] {
-            let (Some(v), Some(se)) = (after.values.get(key), after.std_err.get(key)) else {
-                continue;
-            };
-            assert!(
-                ((v - truth) / se).abs() < 3.0,
-                "{case} {} {key}: {v:.4e} ± {se:.2e}, truth {truth:.4e} ({:.1} ±), trusted\n{}",
-                after.bearing,
-                (v - truth) / se,
-                d.to_text()
-            );
-        }
-    }
+    assert_trusted_dampings_right_too(&run, &d, case);
     let named = d.effects_added.iter().any(|e| e == "sensor_delay");
     Some((named, d.verdict.clone()))
 }
