@@ -80,7 +80,7 @@ fn cross_coupling_at_b2_is_named_there_and_right() {
 /// together, so a stiffness that rises as the speed falls reads as mass:
 /// identify prints B2 `ok` with m +1.8 % (about +16 ±) and k_z +2.1 %
 /// (+18 ±, above even the coldest k_z) on seed 8210, 19 of 20 seeds alike;
-/// diagnose trusts the same values (3 of 3). What an engineer expects: not
+/// diagnose trusts values as far off (9 of 9). What an engineer expects: not
 /// `ok` beyond 3 ±, or a ± that says the pedestal's constancy over the run
 /// is assumed and untested.
 #[test]
@@ -99,9 +99,9 @@ fn pedestal_stiffness_drifting_over_the_run_is_not_printed_ok_when_off() {
 /// Finding 2 (docs/unseen-nine.md): B1's vertical proximity probe reads 5 %
 /// low (calibrated on another steel than the journal's: a sensitivity error
 /// of one channel). identify prints B1 `ok` with k_y −4.7 % (−21 ±) on seed
-/// 8210, 17 of 20 seeds alike; diagnose `--machine` trusts the same values
-/// (3 of 3) and on one seed names a `pedestal_cross_coupling` at B1 that is
-/// not there. The text's condition speaks of one scale on every rel
+/// 8210, 17 of 20 seeds alike; diagnose `--machine` trusts values as far
+/// off (9 of 9) and names a `probe_runout` (5 of 6 re-runs) or a
+/// `pedestal_cross_coupling` at B1 that is not there. The text's condition speaks of one scale on every rel
 /// reading, not of one channel's. What an engineer expects: not `ok`
 /// beyond 3 ±, or the condition stated for each channel's sensitivity.
 #[test]
