@@ -13,8 +13,8 @@ Usage:
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
 NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex,
-unseen-five, unseen-six, unseen-seven or unseen-eight (described in
-ross_unseen_machines.py).
+unseen-five, unseen-six, unseen-seven, unseen-eight or unseen-nine
+(described in ross_unseen_machines.py).
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and
@@ -92,6 +92,18 @@ as they read, not resolved to y and z), "speed_lag" (the speed column
 0.25 Hz high: the speed filter's lag in the 5 Hz/s run-down) and
 "corr_noise" (the tracking filter's time constant longer than the time
 between vectors: each channel's noise an AR(1) along the run, rho 0.80).
+
+unseen-nine is tests/data/ross-unseen-9/unseen-nine.toml: a large
+turbocharger, both wheels overhung outboard of two floating-ring journals
+(a strongly speed-dependent, cross-coupled table), B1's housing end light
+and stiff, B2's (hot turbine end) softer with its resonances inside an
+exponential coast-down from 500 Hz to 100 Hz (90 speeds, a vector a
+second); probes 0.5 % of |phasor| + 0.01 um, accelerometers 1 % +
+2 mm/s^2. Its three departures, each following the turbine end's cooling
+after the engine stops (cooling_fraction): "ped_drift" (B2's pedestal
+stiffness rising 4 % over the run), "runout_drift" (B2's probe runout
+growing 1.8-fold and turning 40 deg over the run), and "probe_gain" (B1's
+vertical probe reading 5 % low: calibrated on another steel).
 
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
@@ -232,6 +244,24 @@ def thermal_factor(thermal, s):
     return thermal["ratio"] ** (1.0 - min(s / thermal["top_hz"], 1.0) ** 2)
 
 
+def cooling_fraction(cool, speeds):
+    """How far the hot end has cooled [-] (0 at the top of the run, 1 at its
+    bottom) at each of `speeds` [Hz] of an exponential coast-down: the speed
+    falls as exp(-t / T') from `top_hz` to `bottom_hz` in `duration_s`
+    [s], so t(f) = duration ln(top / f) / ln(top / bottom); the temperature
+    follows a first-order lag of `tau_s` [s]: (1 - exp(-t / tau)) over its
+    value at the end of the run (ross_unseen_machines.COOLING_NINE)."""
+    f = np.asarray(speeds, dtype=float)
+    t = cool["duration_s"] * np.log(cool["top_hz"] / f) / math.log(cool["top_hz"] / cool["bottom_hz"])
+    return (1.0 - np.exp(-t / cool["tau_s"])) / (1.0 - math.exp(-cool["duration_s"] / cool["tau_s"]))
+
+
+def drift_factor(drift, speeds):
+    """The pedestal's stiffness over the machine file's [-] at `speeds` [Hz]
+    of a "ped_drift" effect: 1 + span (x - 1/2), x the cooling fraction."""
+    return 1.0 + drift["span"] * (cooling_fraction(drift, speeds) - 0.5)
+
+
 def coefficients(spec, speeds, effects):
     """(true, written) coefficients per bearing: lists of dicts per speed."""
     worn = {e[1]: e[2] for e in effects if e[0] == "worn_film"}
@@ -276,6 +306,7 @@ def respond(spec, speeds, effects):
     frame = next((e[1] for e in effects if e[0] == "frame"), None)
     sub = next((e[1] for e in effects if e[0] == "sub_base"), None)
     cross = {e[1]: e[2] for e in effects if e[0] == "cross"}
+    drift = {e[1]["bearing"]: e[1] for e in effects if e[0] == "ped_drift"}
     w = 2 * math.pi * np.asarray(speeds)
     nn = len(x)
     names = [b["name"] for b in spec["bearings"]]
@@ -306,6 +337,10 @@ def respond(spec, speeds, effects):
                   cyy=p.get("c_z", 0.0), tag=f"ground_{b['name']}")
         if link is not None:
             kw["n_link"] = link
+        if b["name"] in drift:  # the pedestal's stiffness following the run (ped_drift)
+            g = drift_factor(drift[b["name"]], speeds)
+            kw = dict(kw, frequency=w, kxx=p["k_y"] * g, kyy=p["k_z"] * g,
+                      **{k: np.full(len(w), float(kw[k])) for k in ("kxy", "kyx", "cxx", "cyy")})
         elements.append(rs.BearingElement(n=pn, **kw))
     for node, body in ((base_node, frame), (sub_node, sub)):
         if node is None:
@@ -371,6 +406,29 @@ def add_probe_axes(resp, axes):
         resp[b]["rel_y"] = math.cos(a) * y - math.sin(a) * z
         resp[b]["rel_z"] = math.sin(a) * y + math.cos(a) * z
     return {"angle_deg": axes["angle_deg"]}
+
+
+def add_runout_drift(resp, drift, speeds):
+    """probe_runout's vector on both rel probes of `drift["bearing"]` [m] at
+    the top of the run, changing with the journal's temperature: times
+    (1 + growth x) e^{i turn x}, x the cooling fraction at each speed."""
+    b = drift["bearing"]
+    x = cooling_fraction(drift, speeds)
+    top = {c: np.array(resp[b][c]) for c in ("rel_y", "rel_z")}
+    params = add_runout(resp, b)
+    factor = (1.0 + drift["growth"] * x) * np.exp(1j * math.radians(drift["turn_deg"]) * x)
+    for c in ("rel_y", "rel_z"):
+        resp[b][c] = top[c] + (resp[b][c] - top[c]) * factor
+    return dict(params, growth=drift["growth"], turn_deg=drift["turn_deg"])
+
+
+def add_probe_gain(resp, gain):
+    """One channel (`gain["channel"]` of `gain["bearing"]`) read with a
+    sensitivity `gain["gain"]` times the one assumed (a calibration error:
+    the signal scaled, its phase right)."""
+    b, c = gain["bearing"], gain["channel"]
+    resp[b][c] = resp[b][c] * gain["gain"]
+    return {f"{c}_gain": gain["gain"]}
 
 
 def speed_lag_hz(lag):
@@ -447,6 +505,13 @@ def physical_detail(effect, spec):
     if what == "thermal":
         return {"name": "oil_thermal", "bearing": ",".join(effect[1]["bearings"]),
                 "parameters": {"viscosity_ratio_at_rest": effect[1]["ratio"], "top_hz": effect[1]["top_hz"]}}
+    if what == "ped_drift":
+        p = next(b for b in spec["bearings"] if b["name"] == effect[1]["bearing"])["pedestal"]
+        lo, hi = drift_factor(effect[1], [effect[1]["top_hz"], effect[1]["bottom_hz"]])
+        return {"name": "pedestal_drift", "bearing": effect[1]["bearing"],
+                "parameters": {"k_y_top": p["k_y"] * lo, "k_y_bottom": p["k_y"] * hi,
+                               "k_z_top": p["k_z"] * lo, "k_z_bottom": p["k_z"] * hi,
+                               **{k: v for k, v in effect[1].items() if k != "bearing"}}}
     if what == "sweep":
         return {"name": "sweep_average", "bearing": "",
                 "parameters": {k: float(v) for k, v in effect[1].items()}}
@@ -461,10 +526,12 @@ def physical_detail(effect, spec):
 # data contract); a departure no library effect names stays in
 # `effect_details` under its own name. The oil's viscosity following the
 # speed is a bearing table that does not describe the bearing in the machine
-# ("temperature off"), so it is listed as `bearing_coefficients`.
+# ("temperature off"), so it is listed as `bearing_coefficients`; a probe
+# runout that changes with the journal's temperature is a runout
+# (`probe_runout`, the library's being constant).
 LIBRARY = ("pedestal_damping", "structural_damping", "pedestal_cross_coupling", "pedestal_mass_anisotropy",
            "probe_runout", "sensor_delay", "foundation_coupling", "pedestal_sub_base", "bearing_coefficients")
-AS_LIBRARY = {"oil_thermal": "bearing_coefficients"}
+AS_LIBRARY = {"oil_thermal": "bearing_coefficients", "probe_runout_drift": "probe_runout"}
 
 
 def library_names(details):
@@ -485,7 +552,7 @@ def make(out, case, seed, machine=DEFAULT):
     effect, noise_kind = kind(case, machine)
     effects = effects_of(case, machine)
     physical = [e for e in effects if e[0] in ("frame", "sub_base", "worn_film", "table_scale", "cross",
-                                               "thermal")]
+                                               "thermal", "ped_drift")]
     sweep = next((e[1] for e in effects if e[0] == "sweep"), None)
     key = (machine, repr(physical), repr(sweep), tuple(speeds))
     if key not in _CACHE:  # ROSS's response depends on the physical effects and grid only
@@ -509,6 +576,12 @@ def make(out, case, seed, machine=DEFAULT):
         elif e[0] == "speed_lag":
             details.append({"name": "speed_lag", "bearing": "",
                             "parameters": {"lag_hz": speed_lag_hz(e[1]), **e[1]}})
+        elif e[0] == "runout_drift":
+            details.append({"name": "probe_runout_drift", "bearing": e[1]["bearing"],
+                            "parameters": add_runout_drift(resp, e[1], speeds)})
+        elif e[0] == "probe_gain":
+            details.append({"name": "probe_gain", "bearing": e[1]["bearing"],
+                            "parameters": add_probe_gain(resp, e[1])})
         elif e[0] == "corr_noise":
             details.append({"name": "correlated_noise", "bearing": "", "parameters": dict(e[1])})
         elif e in physical or e[0] == "sweep":

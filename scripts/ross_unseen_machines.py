@@ -431,3 +431,82 @@ MACHINES["unseen-eight"] = {
     "table_rows": True,
     "repo": ("clean-g1c", "cross"),
 }
+
+
+# unseen-nine (session 48) is tests/data/ross-unseen-9/unseen-nine.toml: a
+# large turbocharger (of a gas engine of about 2 MW, 30 000 rpm at the
+# top): a short stiff rotor with both wheels overhung outboard of two
+# floating-ring journals (a table: stiffness rising 3.4-fold, damping
+# falling 2.7-fold with speed, strongly cross-coupled, k_yz = -k_zy about
+# 0.35 k_yy), strong gyroscopic coupling (the wheels' polar inertia); the
+# pedestals the two ends of the bearing housing: B1 (compressor end) light
+# and stiff (resonances 650-840 Hz, above the run), B2 (turbine end, hot,
+# on a fabricated support) heavier and softer (275 Hz horizontal, 367 Hz
+# vertical, inside the run); a coast-down after the engine stops, 500 Hz
+# to 100 Hz.
+SUB_BASE_NINE = {"bearing": "B2", "m_y": 40.0, "m_z": 40.0, "k_y": 2.5e8, "k_z": 1.5e8,
+                 "c_y": 6000.0, "c_z": 4000.0}
+# the turbocharger's mounting foot on the engine: both housing ends on one
+# cast bracket (its own modes 410 Hz y, 252 Hz z: inside the run)
+FOOT_NINE = {"name": "foot", "bearings": ["B1", "B2"], "m_y": 120.0, "m_z": 120.0,
+             "k_y": 8.0e8, "k_z": 3.0e8, "c_y": 2.0e4, "c_z": 1.2e4}
+# the coast-down's clock: the rotor decelerates by its bearings' drag (a
+# torque about proportional to the speed), so the speed falls exponentially
+# in time, 500 Hz to 100 Hz in 90 s, and a vector logged every second
+# makes the grid geometric; the turbine end cools with the exhaust gas
+# gone, a first-order lag of 60 s (scripts/ross_unseen.py, cooling_fraction)
+COOLING_NINE = {"top_hz": 500.0, "bottom_hz": 100.0, "duration_s": 90.0, "tau_s": 60.0}
+# ped-drift: the turbine-end housing and its support cool by about 130 K
+# during the coast-down and their stiffness (E of the cast steel about
+# +3 % per 100 K of cooling, the bolted joints' preload) rises by 4 % from
+# the top of the run to its bottom, k(f) = k_file (1 + 0.04 (x(f) - 1/2)),
+# x the cooling fraction (0 at the top, 1 at the bottom): the machine
+# file's k is the value half way through the cooling
+PED_DRIFT_NINE = dict(COOLING_NINE, bearing="B2", span=0.04)
+# probe-gain: B1's vertical proximity probe calibrated on a target of
+# another steel than the compressor-end journal's (API 670 asks for the
+# shaft's own): on this shaft it reads 5 % low (a sensitivity error of one
+# channel, not a unit mistake)
+PROBE_GAIN_NINE = {"bearing": "B1", "channel": "rel_y", "gain": 0.95}
+# runout-drift: the electrical runout of B2's probes (the turbine-end
+# journal's magnetic and electrical properties vary round it and with its
+# temperature) changes as the journal cools: the runout vector of
+# probe_runout at the top of the run, growing 1.8-fold and turning 40 deg
+# by the bottom, with the cooling fraction
+RUNOUT_DRIFT_NINE = dict(COOLING_NINE, bearing="B2", growth=0.8, turn_deg=40.0)
+MACHINES["unseen-nine"] = {
+    "data": os.path.join(ROOT, "tests", "data", "ross-unseen-9"),
+    "file": "unseen-nine.toml",
+    # a vector a second in an exponential coast-down: 90 speeds from
+    # 500 Hz down to 100 Hz in a constant ratio (1.8 % per step)
+    "grid": coast_down_grid(500.0, 100.0, 90),
+    # proximity probes: 0.5 % of |phasor| + 0.01 um; casing accelerometers
+    # 1 % of |phasor| + an acceleration floor of 2 mm/s^2 (5e-9 m at
+    # 100 Hz: B1's pick-ups, on the stiff end, read 2-4e-8 m there)
+    "noise": {"rel": {"rel": 0.005, "floor": 0.0, "abs": 1e-8},
+              "ped": {"rel": 0.01, "floor": 0.0, "acc": 2e-3}},
+    "noisy": "r1",
+    "digits": ("d3", "dmix", "d12"),
+    "mixed_digits": {"B1": 3, "B2": 2},
+    "rng": 48_000,
+    "effects": {
+        "sub-base": [("sub_base", SUB_BASE_NINE)],
+        "table-scale": [("table_scale", "B1", 1.0 / 1.25, 1.0)],
+        "cross": [("cross", "B2", 0.2)],
+        "runout": [("runout", "B1")],
+        # 30 us on B2's probes (5.4 deg at 500 Hz)
+        "delay": [("delay", "B2", 30e-6)],
+        "flips": [("flips", ["B1", "B2"])],
+        "outlier": [("outlier", "B2")],
+        "base": [("frame", FOOT_NINE)],
+        "base-runout": [("frame", FOOT_NINE), ("runout", "B2")],
+        "cross-delay": [("cross", "B1", 0.2), ("delay", "B2", 30e-6)],
+        # departures no machine had
+        "ped-drift": [("ped_drift", PED_DRIFT_NINE)],
+        "probe-gain": [("probe_gain", PROBE_GAIN_NINE)],
+        "runout-drift": [("runout_drift", RUNOUT_DRIFT_NINE)],
+    },
+    "d3_effects": False,
+    "table_rows": True,
+    "repo": ("clean-r1c", "cross"),
+}

@@ -1,0 +1,118 @@
+//! Issue 17 on a ninth machine nobody tuned to (session 48, helper nine17):
+//! a large turbocharger (tests/data/ross-unseen-9/unseen-nine.toml): a short
+//! stiff rotor with both wheels overhung outboard of two floating-ring
+//! journals (a table: stiffness rising 3.4-fold and damping falling 2.7-fold
+//! with speed, strongly cross-coupled, k_yz = −k_zy about 0.35 k_yy), strong
+//! gyroscopic coupling; B1's housing end light and stiff (resonances
+//! 650-840 Hz, above the run), B2's (the hot turbine end) softer, its
+//! resonances (275, 367 Hz) inside an exponential coast-down from 500 Hz to
+//! 100 Hz (90 speeds, a vector a second); probes 0.5 % of |phasor| +
+//! 0.01 µm, casing accelerometers 1 % + 2 mm/s². Every phasor and the truth
+//! are ROSS 2.3.0's and scripts/ross_unseen.py's (`--machine unseen-nine`):
+//! seed 1 of `clean-r1c` and `cross` (`--repo`), and seed 8210 of two
+//! departures no machine had (`python3 scripts/ross_unseen.py --machine
+//! unseen-nine tests/data/ross-unseen-9 ped-drift,probe-gain 8210`); only the
+//! reading is Plinth's. The rates over seeds are measured by
+//! `scripts/bench_unseen.py --machine unseen-nine` (docs/unseen-nine.md).
+
+use plinth::diagnose::report::Diagnosis;
+use plinth::rundir::RunDir;
+use plinth_tests::rundown::identify;
+use plinth_tests::unseen::{self, named, ok_but_wrong, untrusted};
+
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-9");
+
+/// The stored run directory of `case`.
+fn stored(case: &str) -> RunDir {
+    unseen::stored(DATA, case)
+}
+
+/// `plinth diagnose RUN --machine unseen-nine.toml` as the command line
+/// runs it: the search, then the machine-level check applied to the
+/// verdict.
+fn diagnosis(run: &RunDir) -> Diagnosis {
+    unseen::diagnosis_with_machine_check(DATA, "unseen-nine.toml", run)
+}
+
+/// Clean data with the noise columns: identify untrusts nothing, lists no
+/// speed, and every value it prints `ok` (k_y, k_z, m and the dampings) is
+/// within 3 of its ± of ROSS's; diagnose names nothing, is trusted, and its
+/// final pedestals are within 3 ± too. Over fresh seeds: identify flags
+/// 0 of 46 clean runs with noise (docs/unseen-nine.md).
+#[test]
+fn clean_run_is_flagged_by_nothing_and_ok_means_right() {
+    let run = stored("clean-r1c");
+    let id = identify(&run);
+    let d = diagnosis(&run);
+    unseen::assert_flagged_by_nothing(&run, &id, &d, "clean-r1c");
+    let wrong = ok_but_wrong(&run, &id, true);
+    assert!(wrong.is_empty(), "clean-r1c, dampings too: {wrong:?}");
+    unseen::assert_trusted_means_right(&run, &d);
+}
+
+/// Pedestal cross-coupling at B2 (k_yz = k_zy = 0.2 √(k_y k_z), the
+/// library's `pedestal_cross_coupling`), on the soft turbine-end housing
+/// whose resonances lie inside the run: identify untrusts B2 and only B2,
+/// B1's `ok` values within 3 ±; diagnose names exactly that effect at B2,
+/// trusts its verdict, and its final pedestals are within 3 ± of ROSS's.
+#[test]
+fn cross_coupling_at_b2_is_named_there_and_right() {
+    let run = stored("cross");
+    let id = identify(&run);
+    assert_eq!(untrusted(&id), ["B2"]);
+    let wrong = ok_but_wrong(&run, &id, true);
+    assert!(wrong.is_empty(), "cross, B1: {wrong:?}");
+    let d = diagnosis(&run);
+    assert_eq!(
+        named(&d),
+        [("pedestal_cross_coupling".to_string(), "B2".to_string())],
+        "{}",
+        d.to_text()
+    );
+    assert!(d.trusted, "{:?}\n{}", d.trust_reasons, d.to_text());
+    unseen::assert_trusted_means_right(&run, &d);
+}
+
+/// Finding 1 (docs/unseen-nine.md): B2's pedestal stiffness rises 4 %
+/// over the coast-down (the turbine end cooling; the truth's k is the value
+/// half way through the cooling, k_y 156.8-163.2 MN/m, k_z 88.2-91.8 MN/m
+/// over the run, m 30 kg throughout). In a run-down time and speed go
+/// together, so a stiffness that rises as the speed falls reads as mass:
+/// identify prints B2 `ok` with m +1.8 % (about +16 ±) and k_z +2.1 %
+/// (+18 ±, above even the coldest k_z) on seed 8210, 19 of 20 seeds alike;
+/// diagnose trusts values as far off (9 of 9). What an engineer expects: not
+/// `ok` beyond 3 ±, or a ± that says the pedestal's constancy over the run
+/// is assumed and untested.
+#[test]
+#[ignore = "finding 1: a pedestal stiffness drifting with time over a run-down reads as mass; B2 printed ok 10-18 ± off (m +1.8 %)"]
+fn pedestal_stiffness_drifting_over_the_run_is_not_printed_ok_when_off() {
+    let run = stored("ped-drift-8210");
+    let id = identify(&run);
+    let wrong = ok_but_wrong(&run, &id, false);
+    assert!(
+        wrong.is_empty(),
+        "ped-drift-8210 (untrusted {:?}): {wrong:?}",
+        untrusted(&id)
+    );
+}
+
+/// Finding 2 (docs/unseen-nine.md): B1's vertical proximity probe reads 5 %
+/// low (calibrated on another steel than the journal's: a sensitivity error
+/// of one channel). identify prints B1 `ok` with k_y −4.7 % (−21 ±) on seed
+/// 8210, 17 of 20 seeds alike; diagnose `--machine` trusts values as far
+/// off (9 of 9) and names a `probe_runout` (5 of 6 re-runs) or a
+/// `pedestal_cross_coupling` at B1 that is not there. The text's condition speaks of one scale on every rel
+/// reading, not of one channel's. What an engineer expects: not `ok`
+/// beyond 3 ±, or the condition stated for each channel's sensitivity.
+#[test]
+#[ignore = "finding 2: one probe's sensitivity 5 % off is taken into that direction's stiffness; B1 k_y printed ok -4.7 % (-21 ±)"]
+fn one_probe_read_five_percent_low_is_not_printed_ok_when_off() {
+    let run = stored("probe-gain-8210");
+    let id = identify(&run);
+    let wrong = ok_but_wrong(&run, &id, false);
+    assert!(
+        wrong.is_empty(),
+        "probe-gain-8210 (untrusted {:?}): {wrong:?}",
+        untrusted(&id)
+    );
+}
