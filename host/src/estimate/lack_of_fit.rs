@@ -164,6 +164,13 @@ pub fn assess(
     let rows: Vec<[f64; 4]> = (0..obs.len())
         .map(|j| std::array::from_fn(|c| w[4 * j + c]))
         .collect();
+    // Noise correlated along the run is not model error: where the
+    // residuals show a correlation beyond what white noise gives, the scan
+    // judges them prewhitened by it ([`super::serial`]).
+    let rows = match super::serial::measured(&speeds, &rows) {
+        Some((rho, _, _)) if scanned => super::serial::prewhitened(&rows, rho),
+        _ => rows,
+    };
     Some(LackOfFit {
         structure: if scanned {
             structure(&speeds, &rows)
