@@ -190,6 +190,26 @@ pub fn measured(speeds_hz: &[f64], rows: &[[f64; 4]]) -> Option<(f64, f64, f64)>
     (rho > limit).then_some((rho.min(MAX_RHO), rho, limit))
 }
 
+/// The largest factor by which an AR(1) noise of lag-one correlation
+/// `rho` [-] along the run inflates the variance of a projection of the
+/// residuals on a column smooth in speed, over the white noise's: its
+/// spectrum at frequency zero, (1 + ρ)/(1 − ρ) [-].
+pub fn long_run_factor(rho: f64) -> f64 {
+    (1.0 + rho) / (1.0 - rho)
+}
+
+/// Upper-tail p-value of a fit's χ² = `chi2` on `dof` [-] when its
+/// whitened residuals are an AR(1) of lag-one correlation `rho` along the
+/// run [-]: the mean of χ² stays dof, its variance grows by
+/// F = (1 + ρ²)/(1 − ρ²) (Σ_{t,s} ρ^{2|t−s|} per term), so χ²/F is taken
+/// as χ²(dof/F) (Satterthwaite); `rho` 0 gives the plain χ²(dof) tail.
+pub fn level_p(chi2: f64, dof: usize, rho: f64) -> f64 {
+    let f = (1.0 + rho * rho) / (1.0 - rho * rho);
+    statrs::distribution::ChiSquared::new(dof as f64 / f)
+        .map(|d| 1.0 - statrs::distribution::ContinuousCDF::cdf(&d, chi2 / f))
+        .unwrap_or(f64::NAN)
+}
+
 /// `rows` (speed order) prewhitened by the AR(1) of lag-one correlation
 /// `rho` [-]: (w_t − ρw_{t−1})/√(1 − ρ²), the first row as it is.
 pub fn prewhitened(rows: &[[f64; 4]], rho: f64) -> Vec<[f64; 4]> {
@@ -345,7 +365,7 @@ impl SerialCorrelation {
     /// What identify says of it.
     pub fn message(&self) -> String {
         format!(
-            "the noise is correlated along the run (lag-one ρ = {:.2} of the whitened residuals over {} speeds, above {:.2}, its {} % limit for white noise): neighbouring speeds do not average out as independent ones, and the ± are widened ×{:.2} at most for it (the long-run covariance of an AR(1) noise along the run); the lack-of-fit scan judges the residuals prewhitened by it",
+            "the noise is correlated along the run (lag-one ρ = {:.2} of the whitened residuals over {} speeds, above {:.2}, its {} % limit for white noise): neighbouring speeds do not average out as independent ones, and the ± are widened ×{:.2} at most for it (the long-run covariance of an AR(1) noise along the run); the lack-of-fit tests allow for it (χ² on the degrees of freedom it leaves, the scan on the residuals prewhitened by it, the support-mode and sensor-delay scores deflated by (1 + ρ)/(1 − ρ))",
             self.lag_one,
             self.speeds,
             self.white_limit,
