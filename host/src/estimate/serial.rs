@@ -240,7 +240,7 @@ pub fn ar1_widening(jac: &DMatrix<f64>, rho: f64) -> Option<Vec<f64>> {
     let mut m = DMatrix::<f64>::zeros(p, p);
     for t in 0..n {
         let jt = jac.rows(4 * t, 4);
-        f = &jt + f * rho;
+        f = jt + f * rho;
         let cross = jt.tr_mul(&f);
         m += &cross + cross.transpose() - jt.tr_mul(&jt);
     }
