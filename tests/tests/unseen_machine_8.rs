@@ -82,7 +82,6 @@ fn cross_coupling_at_b2_is_named_there_and_right() {
 /// printed `ok` with k_y −7.6 ±, k_z −6.1 ±, m −6.0 ± (−1.0 %, −1.3 %,
 /// −2.7 %) on main 48c03f6.
 #[test]
-#[ignore = "finding 1: identify's ± take the noise as independent between speeds; noise correlated along the run (rho 0.8) leaves B2 `ok` 6-7.6 ± off"]
 fn correlated_noise_between_speeds_ok_means_right() {
     let run = stored("corr-noise-7325");
     let id = identify(&run);

@@ -87,7 +87,9 @@ pub struct LackOfFit {
     /// χ²/dof of the fit against that level [-].
     pub level_ratio: f64,
     /// Upper-tail p-value of χ² under χ²(dof): exact for noise columns,
-    /// informative only for the other sources.
+    /// informative only for the other sources; where the residuals are
+    /// correlated along the run ([`super::serial`]) with the degrees of
+    /// freedom that correlation leaves ([`super::serial::level_p`]).
     pub level_p: f64,
     /// Standard errors of c_y and c_z [N·s/m] from the residuals themselves
     /// (the sandwich of [`super::robust::sandwich_std_errs`]: right whatever
@@ -135,11 +137,22 @@ pub fn assess(
     if dof == 0 || !chi2.is_finite() {
         return None;
     }
-    let level_p = ChiSquared::new(dof as f64)
-        .map(|d| 1.0 - d.cdf(chi2))
-        .unwrap_or(f64::NAN);
     let eq = Rigid::new(obs, &Weighting::default());
     let speeds: Vec<f64> = obs.iter().map(|o| o.speed_hz).collect();
+    let w = gh::whitened(&eq, theta, None)?;
+    let rows: Vec<[f64; 4]> = (0..obs.len())
+        .map(|j| std::array::from_fn(|c| w[4 * j + c]))
+        .collect();
+    // Noise correlated along the run is not model error: where the
+    // residuals show a correlation beyond what white noise gives
+    // ([`super::serial`]), χ² is judged with the degrees of freedom that
+    // correlation leaves ([`super::serial::level_p`]), the scan is made on
+    // the residuals prewhitened by it, and the score tests of a support mode
+    // and of a sensor delay (whose columns are smooth in speed: their
+    // statistics grow by up to (1 + ρ)/(1 − ρ) under the correlation) are
+    // deflated by that largest factor.
+    let rho = super::serial::measured(&speeds, &rows).map(|(rho, _, _)| rho);
+    let level_p = super::serial::level_p(chi2, dof, rho.unwrap_or(0.0));
     let scanned = source.scale_estimated() || level_p < p_limit;
     // With noise columns only. A form without them (the score over the
     // extended fit's residual variance) was measured and is not made: on
@@ -148,22 +161,31 @@ pub fn assess(
     // 29): neighbouring speeds' rounding errors are alike, a smooth Ω⁴
     // column collects them, and a residual variance does not see that
     // correlation (the structure scan's block shuffles do).
-    let support_mode = (source == NoiseSource::Columns)
+    let mut support_mode = (source == NoiseSource::Columns)
         .then(|| support_mode(&eq, theta, &speeds))
         .flatten();
     // The same with the sensor-delay test (columns only, as above).
     let omega: Vec<f64> = obs.iter().map(|o| o.omega()).collect();
-    let sensor_delay = (source == NoiseSource::Columns)
+    let mut sensor_delay = (source == NoiseSource::Columns)
         .then(|| sensor_delay(&eq, theta, &omega))
         .flatten();
     if !scanned && support_mode.is_none() && sensor_delay.is_none() {
         return None;
     }
     let delay_unknown = delay_nuisance(&eq, theta, &omega, columns);
-    let w = gh::whitened(&eq, theta, None)?;
-    let rows: Vec<[f64; 4]> = (0..obs.len())
-        .map(|j| std::array::from_fn(|c| w[4 * j + c]))
-        .collect();
+    if let Some(rho) = rho {
+        let inflation = super::serial::long_run_factor(rho);
+        if let Some(s) = &mut support_mode {
+            s.deflate(inflation);
+        }
+        if let Some(d) = &mut sensor_delay {
+            d.deflate(inflation);
+        }
+    }
+    let rows = match rho {
+        Some(rho) if scanned => super::serial::prewhitened(&rows, rho),
+        _ => rows,
+    };
     Some(LackOfFit {
         structure: if scanned {
             structure(&speeds, &rows)
@@ -179,4 +201,41 @@ pub fn assess(
         damping_std_err_from_residuals: super::robust::sandwich_std_errs(obs, theta, columns)
             .map(|se| [se[Parameter::Cy as usize], se[Parameter::Cz as usize]]),
     })
+}
+
+impl SupportMode {
+    /// The test under noise correlated along the run, whose statistic it
+    /// inflates by up to `inflation` [-] ([`super::serial::long_run_factor`]):
+    /// the statistic divided by it, the p-value the chi-bar-squared one with
+    /// the χ²₂ weight at its largest, ½ (never smaller than the exact one:
+    /// conservative), the ± of the drop widened by √`inflation`.
+    fn deflate(&mut self, inflation: f64) {
+        self.statistic /= inflation;
+        self.p_value = if self.statistic > 0.0 {
+            let tail = |q: f64| {
+                ChiSquared::new(q)
+                    .map(|d| 1.0 - d.cdf(self.statistic))
+                    .unwrap_or(1.0)
+            };
+            (0.5 * tail(1.0) + 0.5 * tail(2.0)).min(1.0)
+        } else {
+            1.0
+        };
+        for v in &mut self.drop_at_top_std_err {
+            *v *= inflation.sqrt();
+        }
+    }
+}
+
+impl SensorDelay {
+    /// The test under noise correlated along the run, whose statistic it
+    /// inflates by up to `inflation` [-]: the statistic divided by it, its
+    /// χ²(1) p-value, the delay's ± widened by √`inflation`.
+    fn deflate(&mut self, inflation: f64) {
+        self.statistic /= inflation;
+        self.p_value = ChiSquared::new(1.0)
+            .map(|d| 1.0 - d.cdf(self.statistic))
+            .unwrap_or(1.0);
+        self.delay_std_us *= inflation.sqrt();
+    }
 }

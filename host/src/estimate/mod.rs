@@ -23,6 +23,7 @@ pub mod noise;
 pub mod params;
 pub mod pedestal;
 pub mod robust;
+pub mod serial;
 
 pub use params::Pedestal;
 

@@ -96,7 +96,7 @@ fn chi2_4() -> ChiSquared {
 /// zero L_i changes fast with θ, and ∂L_i⁻¹/∂θ·e_i (a term of the noise, not
 /// of the model) would point the fit's pull the wrong way. `None` when a
 /// figure is not finite or the sizes disagree.
-fn whitened_jacobian(
+pub(crate) fn whitened_jacobian(
     obs: &[Observation],
     theta: &[f64; PARAMETERS],
     columns: &[Parameter],

@@ -85,6 +85,10 @@ pub struct NoiseReport {
     /// standard errors are those under it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub variance_function: Option<VarianceLaw>,
+    /// The noise's correlation along the run when the residuals show it
+    /// ([`crate::estimate::serial`]): the ± are widened for it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub serial_correlation: Option<crate::estimate::serial::SerialCorrelation>,
     /// What the ML fit's test in speed found ([`robust::flip_search`]),
     /// for the test across bearings that follows it
     /// ([`super::flips::mark_cross_bearing_flips`], which takes it): not
@@ -457,6 +461,16 @@ pub(crate) fn fit_ml_checked(
             }
         }
     }
+    // Noise correlated along the run (estimate::serial): the ± widened for it.
+    let serial =
+        crate::estimate::serial::assess(&obs, &ml_fit.theta, &columns, ml_fit.equation_var);
+    if let Some(s) = &serial {
+        s.widen(&mut ml_fit.covariance);
+        extra.push(Warning {
+            kind: WarningKind::NoiseScaleMismatch,
+            message: s.message(),
+        });
+    }
     let mut se = ml_fit.std_err(variance_scale);
     if withheld {
         for &c in &columns {
@@ -511,6 +525,7 @@ pub(crate) fn fit_ml_checked(
     let mut report = report(noise, chi2, dof, variance_scale, ml_fit.equation_var.sqrt());
     report.outlier_speeds_hz = outlier_speeds_hz;
     report.flip_search = flip_search;
+    report.serial_correlation = serial;
     report.variance_function = law.map(|(p, p_value)| VarianceLaw::of(&p, variance_scale, p_value));
     // The lack-of-fit tests see the fit under the scatter's law: its
     // residuals, χ² and dof (before any equation error), as without a
@@ -575,6 +590,7 @@ pub(crate) fn report(
         lack_of_fit: None,
         outlier_speeds_hz: Vec::new(),
         variance_function: None,
+        serial_correlation: None,
         flip_search: None,
     }
 }
