@@ -535,6 +535,9 @@ impl Diagnosis {
                         "     k_scale: the table's stiffness relative to its damping (c_scale held at 1: pedestal data see only the ratio; the pedestal values assume the damping as written)"
                     );
                 }
+                if let Some(n) = super::bearing_table::viscosity::note(&st.parameters) {
+                    let _ = writeln!(s, "{n}");
+                }
                 if let Some(g) = st.machine_gap_before {
                     let after = st
                         .machine_gap_after

@@ -31,8 +31,13 @@
 //! A change of clearance is different: it moves the modified Sommerfeld
 //! number S_s = DΩμL³/(8Wc²) and with it the *shape* of the coefficients
 //! over speed, which the data do see, and the scale W/c then follows from
-//! the physics. A viscosity error moves only S_s, so at this level it is
-//! the clearance correction less its scale and is not offered separately.
+//! the physics. A constant viscosity error moves only S_s, so at this
+//! level it is the clearance correction less its scale and is not offered
+//! separately; a viscosity that follows the speed (the film's temperature
+//! following its shear heating) is ([`viscosity`]): where the clearance
+//! correction is confirmed and the bearing's only effect, [`refine`] tests
+//! the oil's viscosity law against it and reports the law where its slope
+//! is significant.
 //!
 //! **Telling a stiffness ratio from a sensor delay.** A wrong ratio turns
 //! the bearing force by arg(s_k·K + iΩC) − arg(K + iΩC) ≈ (1/s_k − 1)·ΩC/K
@@ -52,13 +57,18 @@
 //! a pair as alternatives.
 
 pub mod film;
+mod reported;
 pub mod scale;
+pub mod viscosity;
 
 pub use film::{film_kstar, WrittenTable};
+pub(super) use reported::report_delta;
+use reported::report_law;
+pub use reported::report_refits;
 
 use super::data::{Complex2x2, Prepared};
 use super::model::{Nonlinear, Term};
-use super::report::{Pedestal, Step};
+use super::report::Step;
 use super::state::State;
 use crate::estimate::{ml, Observation};
 use plinth_shared::regression::{Parameter, PARAMETERS};
@@ -117,6 +127,11 @@ pub struct MlCorrection {
     /// readings, whose errors are deterministic functions of the smooth
     /// signal) and the curvature overstates the information.
     pub robust_ratio: f64,
+    /// The oil's viscosity following the speed, where an oil-film
+    /// clearance correction is the bearing's only effect and the law's
+    /// slope is significant against it ([`viscosity`]): then the pedestal
+    /// reported is the law's (the clearance as drawn).
+    pub law: Option<viscosity::ViscosityFit>,
 }
 
 /// Step of the central differences in δ for the curvature of the profile
@@ -237,6 +252,7 @@ pub fn ml_corrected(
         dof,
         chi2_null: null.chi2,
         robust_ratio,
+        law: None,
     })
 }
 
@@ -380,6 +396,13 @@ pub fn confirmed(
 /// kept, the other effects' values were estimated with them). One not
 /// confirmed, or whose refit fails, is withdrawn: its step marked dropped
 /// with the reason and the state refitted without it.
+/// Where a confirmed correction is an oil film's clearance and the
+/// bearing's only effect, the oil's viscosity law ([`viscosity::fit`]) is
+/// tested against it ([`viscosity::confirmed`], Bonferroni over the
+/// bearings it is tried at); a significant law replaces the clearance in
+/// the step's parameters and its pedestal is the one reported (the state,
+/// its gap and the machine-level check keep the constant correction, whose
+/// likelihood differs from the law's only by the slope's).
 /// Returns the refits (bearing index, fit) for the pedestals reported
 /// ([`report_refits`]).
 pub fn refine(
@@ -436,7 +459,18 @@ pub fn refine(
         *state = State::fit(prep, model, nl)?;
     }
     let mut out = Vec::new();
-    for r in refittable(prep, state).into_iter().filter(|r| r.only) {
+    let only: Vec<Refittable> = refittable(prep, state)
+        .into_iter()
+        .filter(|r| r.only)
+        .collect();
+    // The viscosity law is tried at every bearing whose confirmed
+    // correction is an oil film's clearance (the Bonferroni count).
+    let laws_tried = only
+        .iter()
+        .filter(|r| matches!(r.table, TableCorrection::Film(_)))
+        .filter(|r| kept.iter().any(|(p, _)| *p == r.p))
+        .count();
+    for r in only {
         let Some((_, fit)) = kept.iter().find(|(p, _)| *p == r.p) else {
             continue;
         };
@@ -447,68 +481,23 @@ pub fn refine(
                 state.params.beta[*t] = fit.theta[i];
             }
         }
-        out.push((b, *fit));
-        report_delta(prep, &state.model, r.p, fit.delta, fit.delta_std_err, steps);
+        let mut fit = *fit;
+        if let TableCorrection::Film(table) = r.table {
+            fit.law = viscosity::fit(&table, &r.points, &fit.theta)
+                .filter(|law| viscosity::confirmed(law, laws_tried, n_total, alpha).is_ok());
+            if let Some(law) = &fit.law {
+                report_law(prep, b, &table, law, steps);
+            }
+        }
+        if fit.law.is_none() {
+            report_delta(prep, &state.model, r.p, fit.delta, fit.delta_std_err, steps);
+        }
+        out.push((b, fit));
     }
     if !out.is_empty() {
         state.weights = super::fit::Weights::propagate(prep, &state.model, &state.params);
     }
     Ok(out)
-}
-
-/// Writes a table correction's δ [-] and its ± [-] (`p`: the nonlinear
-/// scalar of `model`) into the kept `bearing_coefficients` steps at its
-/// bearing, as reported (`k_scale` or `clearance_ratio` = 1 + δ, with the
-/// clearances when the table is an oil film).
-pub(super) fn report_delta(
-    prep: &Prepared,
-    model: &super::model::Model,
-    p: Nonlinear,
-    delta: f64,
-    std_err: f64,
-    steps: &mut [Step],
-) {
-    let b = p.bearing();
-    let Some(kind) = crate::effects::EffectKind::from_name(super::candidates::BEARING_COEFFICIENTS)
-    else {
-        return;
-    };
-    for s in steps.iter_mut().filter(|s| {
-        s.effect == super::candidates::BEARING_COEFFICIENTS
-            && prep.bearings.get(b) == Some(&s.bearing)
-            && s.dropped.is_none()
-    }) {
-        s.parameters = super::summaries::as_reported(
-            model,
-            b,
-            kind,
-            vec![super::report::Estimate {
-                name: p.name().into(),
-                value: delta,
-                std_err,
-            }],
-        );
-    }
-}
-
-/// The pedestals reported after [`refine`]: each refitted bearing's values
-/// and ± (δ's uncertainty included) from its maximum-likelihood refit.
-pub fn report_refits(
-    prep: &Prepared,
-    refits: &[(usize, MlCorrection)],
-    pedestals: &mut [Pedestal],
-) {
-    for (b, fit) in refits {
-        let Some(name) = prep.bearings.get(*b) else {
-            continue;
-        };
-        if let Some(p) = pedestals.iter_mut().find(|p| &p.bearing == name) {
-            for (i, q) in Parameter::ALL.iter().enumerate() {
-                p.values.insert(q.name().to_string(), fit.theta[i]);
-                p.std_err.insert(q.name().to_string(), fit.std_err[i]);
-            }
-        }
-    }
 }
 
 #[cfg(test)]
