@@ -199,6 +199,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         print!("{}", super::on_base::describe(&identification.bases));
         print!("{}", untrusted_reasons(&identification));
         print!("{}", super::delay_unknown::describe(&identification));
+        print!("{}", super::speed_lag::describe(&identification));
         print!("{}", conditional.to_text());
     }
     if let Some(dir) = &args.plots {

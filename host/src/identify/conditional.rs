@@ -37,6 +37,7 @@ use crate::rundir::RunDir;
 use serde::Serialize;
 use sub_base::SubBaseBound;
 
+pub mod speed;
 pub mod sub_base;
 
 /// The first promise of every value printed as a support's k, c, m
@@ -73,6 +74,9 @@ pub struct Conditional {
     /// Per bearing with a support-mode test, what the data exclude of a
     /// sub-base above the run ([`sub_base`]).
     pub sub_base: Vec<SubBaseBound>,
+    /// Per bearing, how right the speed column must be for its values to
+    /// hold ([`speed`]).
+    pub speed_column: Vec<speed::SpeedBound>,
 }
 
 impl Conditional {
@@ -86,6 +90,9 @@ impl Conditional {
             }
         }
         for b in &self.sub_base {
+            out.push_str(&format!("  {}\n", b.message()));
+        }
+        for b in self.speed_column.iter().filter(|b| b.said) {
             out.push_str(&format!("  {}\n", b.message()));
         }
         out
@@ -214,6 +221,7 @@ pub fn of(
         table_uncertainty,
         bearings,
         sub_base,
+        speed_column: speed::of(identification),
     }
 }
 
