@@ -77,6 +77,10 @@ pub struct Conditional {
     /// Per bearing, how right the speed column must be for its values to
     /// hold ([`speed`]).
     pub speed_column: Vec<speed::SpeedBound>,
+    /// Standard uncertainty of the speed column folded into `std_err` and
+    /// `covariance` [Hz] (`--speed-uncertainty`; `null`: the ± take the
+    /// speed column as right).
+    pub speed_uncertainty_hz: Option<f64>,
 }
 
 impl Conditional {
@@ -91,6 +95,9 @@ impl Conditional {
         }
         for b in &self.sub_base {
             out.push_str(&format!("  {}\n", b.message()));
+        }
+        if let Some(sd) = self.speed_uncertainty_hz {
+            out.push_str(&format!("  The ± include a {sd} Hz standard uncertainty of the speed column (--speed-uncertainty): σ² = σ_noise² + (b·σ_f)², b each value's shift per Hz of speed error.\n"));
         }
         for b in self.speed_column.iter().filter(|b| b.said) {
             out.push_str(&format!("  {}\n", b.message()));
@@ -222,6 +229,7 @@ pub fn of(
         bearings,
         sub_base,
         speed_column: speed::of(identification),
+        speed_uncertainty_hz: None,
     }
 }
 
