@@ -48,11 +48,21 @@
 //! ([`widening`]), with a warning that names Δ̂ ± σ_Δ and the factors; the
 //! values and the trust verdict stay as they are.
 //!
-//! **Which bearings estimate Δ**: the trusted ones on rigid ground. A
-//! bearing untrusted for a model error (a sub-base, a wrong table) leaves
-//! a residual smooth in speed that the Δ column would take as a speed
-//! error and carry to the other bearings; its own ± are already said to
-//! exclude model error.
+//! **Which bearings estimate Δ**: the trusted ones on rigid ground whose
+//! noise is known from noise columns. A bearing untrusted for a model
+//! error (a sub-base, a wrong table) leaves a residual smooth in speed
+//! that the Δ column would take as a speed error and carry to the other
+//! bearings; its own ± are already said to exclude model error. The
+//! column ∂e/∂f is made of the measured phasors, so its product with the
+//! residual has a mean under the noise (errors in variables): the
+//! gradient of the fit's cost with its weights moving with Δ takes it
+//! back only where the noise's split between the channels is known (the
+//! columns); with the noise estimated from the scatter it is not, and
+//! Δ̂/σ_Δ came out 2.7-4.8 in 5 of 6 clean unseen-eight runs without
+//! columns (docs/trust-lack-of-fit.md, Session 48 (kplag17)). The same
+//! restriction as the support-mode and sensor-delay tests
+//! ([`crate::estimate::lack_of_fit`]). Without columns Δ is not estimated;
+//! the speed accuracy the values need is still said.
 //!
 //! **The speed accuracy the values need** ([`BearingLag::tolerance_hz`]):
 //! the smallest speed error that moves some value of the bearing by its
@@ -64,6 +74,7 @@ pub mod linearise;
 
 use super::{Identification, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::delay_unknown::{ratio, widening, Z_FAVOURED, Z_INTERVAL};
+use crate::estimate::noise::NoiseSource;
 use crate::estimate::Pedestal;
 use crate::rundir::RunDir;
 use plinth_shared::regression::{Parameter, PARAMETERS};
@@ -80,21 +91,29 @@ pub const TOLERANCE_SAID: f64 = 0.01;
 /// (`speed_lag` in `plinth identify --json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SpeedLag {
+    /// Δ as the data give it, where estimated (`null`: no trusted
+    /// bearing on rigid ground has its noise from noise columns).
+    pub offset: Option<Offset>,
+    /// The run's top speed [Hz].
+    pub top_speed_hz: f64,
+    /// Per bearing on rigid ground, what Δ does to its values.
+    pub bearings: Vec<BearingLag>,
+}
+
+/// Δ estimated from the data ([`linearise::joint`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Offset {
     /// Δ̂: the speed column minus the speed of the revolutions the vectors
     /// are made of [Hz] (above zero: the column reads high, a lagging
-    /// speed in a run-down), one step from Δ = 0 ([`linearise::joint`]).
+    /// speed in a run-down), one step from Δ = 0.
     pub offset_hz: f64,
     /// Its ± [Hz].
     pub offset_std_hz: f64,
     /// The likelihood ratio (Δ̂/σ_Δ)² [-]; the gate opens beyond 4.
     pub evidence: f64,
     /// The bearings Δ was estimated from (the trusted ones on rigid
-    /// ground).
+    /// ground whose noise is known from noise columns).
     pub from_bearings: Vec<String>,
-    /// The run's top speed [Hz].
-    pub top_speed_hz: f64,
-    /// Per bearing on rigid ground, what Δ does to its values.
-    pub bearings: Vec<BearingLag>,
 }
 
 /// What an offset of the speed column does to one bearing's values.
@@ -118,7 +137,7 @@ pub struct BearingLag {
     pub widened: bool,
 }
 
-impl SpeedLag {
+impl Offset {
     /// Whether the gate is open ((Δ̂/σ_Δ)² > 4).
     pub fn favoured(&self) -> bool {
         self.evidence > Z_FAVOURED * Z_FAVOURED
@@ -135,6 +154,15 @@ impl SpeedLag {
     pub fn widening(&self, b: &BearingLag) -> [f64; PARAMETERS] {
         b.ratio
             .map(|r| widening(r, self.offset_hz, self.offset_std_hz))
+    }
+
+    /// ρ = σ(Δ free)/σ(Δ held) of a value whose Δ-held ± is `held` and
+    /// shift per Hz `path` [-].
+    pub fn ratio(&self, held: f64, path: f64) -> f64 {
+        ratio(
+            held,
+            (held * held + (path * self.offset_std_hz).powi(2)).sqrt(),
+        )
     }
 
     /// Whether Δ's interval moves some value of `b` by more than its ±.
@@ -169,9 +197,10 @@ fn estimated(p: &PedestalFit) -> Vec<Parameter> {
 
 /// Δ of `identification` (of `run`, whose bearings' observations are
 /// `bearings`, [`super::data::Prepared`]) estimated from its trusted
-/// pedestals on rigid ground, with what it does to every pedestal on
-/// rigid ground; `None` where no trusted pedestal is on rigid ground or the
-/// figures cannot be formed.
+/// pedestals on rigid ground whose noise is known from noise columns
+/// (module docs), with what it does to every pedestal on rigid ground;
+/// `None` where no pedestal is on rigid ground or the figures cannot be
+/// formed.
 pub fn estimate(
     run: &RunDir,
     bearings: &[super::data::BearingObservations],
@@ -191,24 +220,36 @@ pub fn estimate(
         let t = linearise::terms(obs, schedule, &p.pedestal.theta(), &columns)?;
         all.push((p, columns, t));
     }
-    let from: Vec<&(&PedestalFit, Vec<Parameter>, linearise::Terms)> =
-        all.iter().filter(|(p, _, _)| p.trusted).collect();
-    if from.is_empty() {
+    if all.is_empty() {
         return None;
     }
-    let terms: Vec<linearise::Terms> = from.iter().map(|(_, _, t)| t.clone()).collect();
-    let joint = linearise::joint(&terms)?;
-    // Every bearing's b and σ_held, its ρ at the joint σ_Δ.
+    let columns_noise = |p: &PedestalFit| {
+        identification
+            .noise
+            .get(&p.bearing)
+            .is_some_and(|n| n.source == NoiseSource::Columns)
+    };
+    let from: Vec<&(&PedestalFit, Vec<Parameter>, linearise::Terms)> = all
+        .iter()
+        .filter(|(p, _, _)| p.trusted && columns_noise(p))
+        .collect();
+    let offset = if from.is_empty() {
+        None
+    } else {
+        let terms: Vec<linearise::Terms> = from.iter().map(|(_, _, t)| t.clone()).collect();
+        linearise::joint(&terms).map(|j| Offset {
+            offset_hz: j.offset_hz,
+            offset_std_hz: j.offset_std_hz,
+            evidence: (j.offset_hz / j.offset_std_hz).powi(2),
+            from_bearings: from.iter().map(|(p, _, _)| p.bearing.clone()).collect(),
+        })
+    };
+    // Every bearing's b and σ_held from its own fit, its ρ at σ_Δ.
     let mut out = Vec::new();
     for (p, columns, t) in &all {
-        // A trusted bearing's share of the joint step; an untrusted one's
-        // from its own fit (the same formulas, Δ not estimated from it).
-        let share = match from.iter().position(|(q, _, _)| q.bearing == p.bearing) {
-            Some(k) => joint.bearings[k].clone(),
-            None => linearise::joint(std::slice::from_ref(t))?
-                .bearings
-                .remove(0),
-        };
+        let share = linearise::joint(std::slice::from_ref(t))?
+            .bearings
+            .remove(0);
         let mut path_per_hz = [0.0; PARAMETERS];
         let mut held_std_err = [0.0; PARAMETERS];
         let mut rho = [1.0; PARAMETERS];
@@ -216,9 +257,9 @@ pub fn estimate(
             let i = c as usize;
             path_per_hz[i] = share.path[k];
             held_std_err[i] = share.held[k];
-            let free =
-                (share.held[k].powi(2) + (share.path[k] * joint.offset_std_hz).powi(2)).sqrt();
-            rho[i] = ratio(share.held[k], free);
+            if let Some(o) = &offset {
+                rho[i] = o.ratio(share.held[k], share.path[k]);
+            }
         }
         let (tolerance_hz, tolerance_of) = columns
             .iter()
@@ -244,10 +285,7 @@ pub fn estimate(
         .map(|p| p.speed_range_hz[1])
         .fold(0.0, f64::max);
     Some(SpeedLag {
-        offset_hz: joint.offset_hz,
-        offset_std_hz: joint.offset_std_hz,
-        evidence: (joint.offset_hz / joint.offset_std_hz).powi(2),
-        from_bearings: from.iter().map(|(p, _, _)| p.bearing.clone()).collect(),
+        offset,
         top_speed_hz,
         bearings: out,
     })
@@ -265,7 +303,7 @@ pub fn mark(
     let Some(mut lag) = estimate(run, bearings, identification) else {
         return;
     };
-    if lag.favoured() {
+    if let Some(offset) = lag.offset.clone().filter(Offset::favoured) {
         for k in 0..lag.bearings.len() {
             let b = &lag.bearings[k];
             let Some(p) = identification
@@ -275,8 +313,8 @@ pub fn mark(
             else {
                 continue;
             };
-            if lag.not_excluded(b) {
-                widen(p, &lag, b);
+            if offset.not_excluded(b) {
+                widen(p, &offset, b);
                 lag.bearings[k].widened = true;
             }
         }
@@ -286,7 +324,7 @@ pub fn mark(
 
 /// Multiplies `p`'s ± and covariance by `lag`'s widening for `b` and says
 /// so.
-fn widen(p: &mut PedestalFit, lag: &SpeedLag, b: &BearingLag) {
+fn widen(p: &mut PedestalFit, lag: &Offset, b: &BearingLag) {
     let w = lag.widening(b);
     let se = p.std_err.theta();
     p.std_err = Pedestal::from_theta(std::array::from_fn(|i| se[i] * w[i]));
@@ -325,7 +363,10 @@ fn widen(p: &mut PedestalFit, lag: &SpeedLag, b: &BearingLag) {
 /// Under the table: the estimate where the gate is open (one line), then
 /// one line per pedestal widened for it; empty when the gate is shut.
 pub fn describe(identification: &Identification) -> String {
-    let Some(lag) = identification.speed_lag.as_ref().filter(|l| l.favoured()) else {
+    let Some(lag) = (identification.speed_lag.as_ref())
+        .and_then(|l| l.offset.as_ref())
+        .filter(|o| o.favoured())
+    else {
         return String::new();
     };
     let mut out = format!(
@@ -350,14 +391,12 @@ pub fn describe(identification: &Identification) -> String {
 mod tests {
     use super::*;
 
-    fn lag(offset: f64, std: f64) -> SpeedLag {
-        SpeedLag {
+    fn lag(offset: f64, std: f64) -> Offset {
+        Offset {
             offset_hz: offset,
             offset_std_hz: std,
             evidence: (offset / std).powi(2),
             from_bearings: vec!["B1".into()],
-            top_speed_hz: 250.0,
-            bearings: Vec::new(),
         }
     }
 

@@ -117,10 +117,7 @@ mod tests {
 
     fn lag(tolerance: f64) -> SpeedLag {
         SpeedLag {
-            offset_hz: 0.1,
-            offset_std_hz: 2.0,
-            evidence: 0.0025,
-            from_bearings: vec!["B1".into()],
+            offset: None,
             top_speed_hz: 250.0,
             bearings: vec![BearingLag {
                 bearing: "B1".into(),
