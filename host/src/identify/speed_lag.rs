@@ -130,6 +130,7 @@ pub struct BearingLag {
     pub ratio: [f64; PARAMETERS],
     /// The smallest speed error that moves some value by its ±,
     /// min σ_held/|b| [Hz] (∞, `null`, where Δ moves nothing).
+    #[serde(deserialize_with = "crate::estimate::params::null_is_infinite")]
     pub tolerance_hz: f64,
     /// The parameter that sets `tolerance_hz`.
     pub tolerance_of: String,
