@@ -45,7 +45,11 @@ fn corrected_within(run: &RunDir, id: &Identification, tolerance: f64) {
     for f in findings {
         let t = truth_of(run, &f.bearing);
         let p = &f.corrected_fit.pedestal;
-        for (name, got, want) in [("k_y", p.k_y, t.k_y), ("k_z", p.k_z, t.k_z), ("m", p.m, t.m)] {
+        for (name, got, want) in [
+            ("k_y", p.k_y, t.k_y),
+            ("k_z", p.k_z, t.k_z),
+            ("m", p.m, t.m),
+        ] {
             let e = (got - want).abs() / want;
             assert!(
                 e <= tolerance,
@@ -76,7 +80,10 @@ fn probes_at_45_degrees_are_named_with_their_angle() {
         let w = p
             .warnings
             .iter()
-            .find(|w| w.message.contains("suspected convention error `rel_rotated 45°`"))
+            .find(|w| {
+                w.message
+                    .contains("suspected convention error `rel_rotated 45°`")
+            })
             .expect("the suspicion's warning");
         assert!(w.message.contains("Were they written as they read?"));
         assert!(w.message.contains("y = cos a·rel_y + sin a·rel_z"));

@@ -75,7 +75,9 @@ impl<'de> Deserialize<'de> for Angle {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let deg = f64::deserialize(d)?;
         if !deg.is_finite() {
-            return Err(serde::de::Error::custom("an angle in degrees must be finite"));
+            return Err(serde::de::Error::custom(
+                "an angle in degrees must be finite",
+            ));
         }
         Ok(Angle::from_deg(deg))
     }
