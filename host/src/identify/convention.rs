@@ -147,8 +147,9 @@ impl Reading {
         self.chi2 / self.dof.max(1) as f64
     }
 
-    fn label(&self) -> &'static str {
-        self.convention.map_or("as found", Convention::name)
+    fn label(&self) -> String {
+        self.convention
+            .map_or("as found".to_string(), |c| c.to_string())
     }
 }
 
@@ -400,6 +401,7 @@ mod decide;
 mod judge;
 mod mistake;
 mod refit;
+mod rotation;
 mod rows;
 mod screen;
 
@@ -409,5 +411,6 @@ use decide::{decide, run_prefers};
 use judge::Judge;
 
 pub use mistake::Convention;
+pub use rotation::Angle;
 #[cfg(test)]
 mod tests;

@@ -7,6 +7,11 @@ use super::*;
 pub struct Candidate<'a> {
     /// The mistake undone.
     pub convention: Convention,
+    /// The bearings it is read at (`None`: every bearing). A turned pair's
+    /// angle is found bearing by bearing ([`super::rotation`]): it is read
+    /// only where it was found, so that two bearings' estimates of one
+    /// arrangement (45.0° and 45.1°) do not stand as rival readings.
+    pub only: Option<Vec<String>>,
     /// The run with the mistake undone, once a reading needed it (its
     /// noise re-estimated, its ML refit).
     pub fixed: Option<RunDir>,
@@ -32,6 +37,15 @@ pub struct Candidate<'a> {
     pub bounds: Vec<Option<f64>>,
 }
 
+impl Candidate<'_> {
+    /// Whether the correction is read at `bearing` ([`Candidate::only`]).
+    pub fn reads_at(&self, bearing: &str) -> bool {
+        self.only
+            .as_ref()
+            .is_none_or(|at| at.iter().any(|b| b == bearing))
+    }
+}
+
 /// The noise of `run` with mistake `c` undone (`fixed`), from the noise
 /// of the run as found: the same where the correction changes only signs
 /// (each channel's scatter and each column's digits are blind to them),
@@ -54,6 +68,11 @@ pub(super) fn corrected_noise<'a>(
         | Convention::CrossCouplingSign
         | Convention::SpeedInRpm => return Cow::Borrowed(noise),
         Convention::SwappedYz => noise.swapped_yz(),
+        // A turned pair's channels are each a mix of the pair's written
+        // channels: the noise as found stands for it (the floor of y and z
+        // alike within the factor [`super::FLOOR_CHI2_PER_DOF`] allows;
+        // the noise columns, where present, are turned with the data).
+        Convention::RelRotated(_) | Convention::PedRotated(_) => return Cow::Borrowed(noise),
         Convention::PedVelocity => {
             // The noise reads the values of the measurements only: their
             // corrected copies without the bearing names are enough, and

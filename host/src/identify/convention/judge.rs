@@ -124,6 +124,9 @@ impl<'a> Judge<'a> {
         self.pedestals
             .iter()
             .map(|p| {
+                if !k.reads_at(&p.bearing) {
+                    return None;
+                }
                 let q = fits.iter().find(|q| q.bearing == p.bearing)?;
                 let r = self.reading(rows, &k.sigma, q, Some(k.convention))?;
                 Some((r, q.clone()))
@@ -199,9 +202,15 @@ impl<'a> Judge<'a> {
             k.readings = screened;
             k.shown = true;
         } else {
+            // A bearing it is not read at never asks for its refit.
             k.bounds = screened
                 .iter()
-                .map(|r| r.as_ref().map(|(r, _)| r.relative_residual * (1.0 - 1e-9)))
+                .zip(self.pedestals)
+                .map(|(r, p)| match r {
+                    Some((r, _)) => Some(r.relative_residual * (1.0 - 1e-9)),
+                    None if !k.reads_at(&p.bearing) => Some(f64::INFINITY),
+                    None => None,
+                })
                 .collect();
         }
     }
@@ -214,7 +223,11 @@ impl<'a> Judge<'a> {
     /// per pedestal, and `ped_velocity`'s its noise estimated anew.
     pub fn candidates(&self) -> Vec<Candidate<'a>> {
         let mut candidates: Vec<Candidate<'a>> = Vec::new();
-        for c in Convention::ALL {
+        let fixed_form = Convention::ALL.into_iter().map(|c| (c, None));
+        let turned = super::rotation::candidates(self)
+            .into_iter()
+            .map(|(c, at)| (c, Some(at)));
+        for (c, only) in fixed_form.chain(turned) {
             if !c.changes_with(self.run, &self.schedules) {
                 continue; // the mistake changes nothing in these data
             }
@@ -225,6 +238,7 @@ impl<'a> Judge<'a> {
             let deferred = self.ols && !screen.iter().any(|q| self.plausible_fit(q));
             let mut k = Candidate {
                 convention: c,
+                only,
                 fit: None,
                 readings: Vec::new(),
                 shown: false,

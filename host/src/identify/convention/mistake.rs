@@ -1,6 +1,7 @@
 //! The convention mistakes field data commonly carry, and how each is
 //! undone on a run (its data, its bearing table, its noise).
 
+use super::rotation::Angle;
 use super::*;
 
 /// A convention mistake that field data commonly carry (formats.md names
@@ -24,10 +25,18 @@ pub enum Convention {
     PedConjugated,
     /// Pedestal velocity written as displacement.
     PedVelocity,
+    /// The proximity probes (`rel`) mounted at an angle and written as they
+    /// read: the pair turned by the angle [deg] ([`super::rotation`]).
+    RelRotated(Angle),
+    /// The casing pick-ups (`ped`) mounted at an angle and written as they
+    /// read: the pair turned by the angle [deg] ([`super::rotation`]).
+    PedRotated(Angle),
 }
 
 impl Convention {
-    /// Every mistake tried, in report order.
+    /// Every mistake of fixed form tried, in report order (the turned
+    /// pairs, whose angle the data give, are tried after them:
+    /// [`super::rotation::candidates`]).
     pub const ALL: [Convention; 8] = [
         Convention::Conjugated,
         Convention::SwappedYz,
@@ -60,12 +69,33 @@ impl Convention {
             Convention::SpeedInRpm => "speed_in_rpm",
             Convention::PedConjugated => "ped_conjugated",
             Convention::PedVelocity => "ped_velocity",
+            Convention::RelRotated(_) => "rel_rotated",
+            Convention::PedRotated(_) => "ped_rotated",
         }
     }
 
     /// What the mistake is, for people.
-    pub fn describe(self) -> &'static str {
-        match self {
+    pub fn describe(self) -> Cow<'static, str> {
+        let turned = |what: &str, y: &str, z: &str, a: Angle| {
+            let arrangement = if a.is_field_arrangement() {
+                " (a field arrangement: the X-Y pair of API 670 is at ±45° from the vertical)"
+            } else {
+                ""
+            };
+            let d = a.deg();
+            Cow::Owned(format!(
+                "the {what} read as a pair turned by {a} from y (vertical) and z (horizontal){arrangement}: `{y}` reads along {}° and `{z}` along {}° from the vertical (towards +z). Were they written as they read? Resolve them to y and z: y = cos a·{y} + sin a·{z}, z = −sin a·{y} + cos a·{z} with a = {a} (docs/formats.md: y vertical, z horizontal; `plinth import` resolves probe angles)",
+                Angle::from_deg(-d).deg(),
+                Angle::from_deg(90.0 - d).deg(),
+            ))
+        };
+        Cow::Borrowed(match self {
+            Convention::RelRotated(a) => {
+                return turned("proximity probes (rel)", "rel_y", "rel_z", a)
+            }
+            Convention::PedRotated(a) => {
+                return turned("casing pick-ups (ped)", "ped_y", "ped_z", a)
+            }
             Convention::Conjugated => {
                 "the phasors are conjugated (phase lag read as lead: docs/formats.md wants q(t) = Re{Q·e^{iΩt}})"
             }
@@ -88,7 +118,7 @@ impl Convention {
             Convention::PedVelocity => {
                 "the pedestal readings are velocities written as displacements (formats.md: ped in m; divide a velocity by iΩ)"
             }
-        }
+        })
     }
 
     /// The run as it would be had the mistake not been made: the mistake
@@ -198,6 +228,8 @@ impl Convention {
                     *z /= num_complex::Complex::new(0.0, omega);
                 }
             }
+            Convention::RelRotated(a) => super::rotation::rotate(rel, -a.deg()),
+            Convention::PedRotated(a) => super::rotation::rotate(ped, -a.deg()),
             Convention::BearingTransposed
             | Convention::CrossCouplingSign
             | Convention::SpeedInRpm => {}
@@ -217,6 +249,8 @@ impl Convention {
                 sd[2] /= omega;
                 sd[3] /= omega;
             }
+            Convention::RelRotated(a) => super::rotation::rotate_sd(&mut sd[..2], -a.deg()),
+            Convention::PedRotated(a) => super::rotation::rotate_sd(&mut sd[2..], -a.deg()),
             _ => {}
         }
     }
@@ -268,8 +302,14 @@ pub(super) fn rpm_schedules(run: &RunDir, schedules: &Schedules) -> Schedules {
 }
 
 impl fmt::Display for Convention {
+    /// The name, and a turned pair's angle after it (`rel_rotated 45°`).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+        match self {
+            Convention::RelRotated(a) | Convention::PedRotated(a) => {
+                write!(f, "{} {a}", self.name())
+            }
+            _ => f.write_str(self.name()),
+        }
     }
 }
 

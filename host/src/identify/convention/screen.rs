@@ -52,6 +52,29 @@ pub fn exact(points: &[Observation], options: &Options, bearing: &str) -> Option
     super::super::fit_pedestal(bearing, points, &options.ols()).ok()
 }
 
+/// The relative residual Σ|e|²/Σ|F|² [-] of the OLS screen of `bearing`'s
+/// observations `points` and its degrees of freedom (equations − parameters),
+/// `found` the pedestals as found ([`screen`]); `None` when the screen
+/// cannot be made. With R&I equations Σ|e|² is the screen's residual sum of
+/// squares and Σ|F|² that of its right-hand sides.
+pub fn relative_residual(
+    points: &[Observation],
+    options: &Options,
+    found: &[PedestalFit],
+    bearing: &str,
+) -> Option<(f64, usize)> {
+    let template = found.iter().find(|p| p.bearing == bearing)?;
+    let fit = normal(points, options, template).or_else(|| exact(points, options, bearing))?;
+    let forces: f64 = points
+        .iter()
+        .map(|p| p.force().iter().map(|f| f.norm_sqr()).sum::<f64>())
+        .sum();
+    let rss = fit.residual_rms * fit.residual_rms * fit.equations as f64;
+    let parameters = options.model().parameters().len();
+    (forces > 0.0 && rss.is_finite())
+        .then(|| (rss / forces, fit.equations.saturating_sub(parameters)))
+}
+
 /// The OLS fit of the pedestal of `template.bearing` from the normal
 /// equations of its observations `points` (module docs); `None` when they
 /// are not well conditioned or a figure is not finite.
