@@ -42,6 +42,47 @@ pub fn diagnosis_with_machine_check(data: &str, file: &str, run: &RunDir) -> Dia
     d
 }
 
+/// A clean stored run `case` of the machine in `data` (machine file
+/// `file`): [`assert_flagged_by_nothing`], every value identify prints `ok`
+/// (the dampings too) within 3 of its ±, and diagnose's trusted pedestals
+/// within 3 ± ([`assert_trusted_means_right`]).
+pub fn assert_clean_run_right(data: &str, file: &str, case: &str) {
+    let run = stored(data, case);
+    let id = crate::rundown::identify(&run);
+    let d = diagnosis_with_machine_check(data, file, &run);
+    assert_flagged_by_nothing(&run, &id, &d, case);
+    let wrong = ok_but_wrong(&run, &id, true);
+    assert!(wrong.is_empty(), "{case}, dampings too: {wrong:?}");
+    assert_trusted_means_right(&run, &d);
+}
+
+/// A stored run `case` with one library `effect` at `bearing`: identify
+/// untrusts that bearing and only it, the other bearings' `ok` values (the
+/// dampings too) within 3 ±; diagnose names exactly `effect` at `bearing`,
+/// trusts its verdict, and its final pedestals are within 3 ± of the truth.
+pub fn assert_one_effect_named_right(
+    data: &str,
+    file: &str,
+    case: &str,
+    effect: &str,
+    bearing: &str,
+) {
+    let run = stored(data, case);
+    let id = crate::rundown::identify(&run);
+    assert_eq!(untrusted(&id), [bearing], "{case}");
+    let wrong = ok_but_wrong(&run, &id, true);
+    assert!(wrong.is_empty(), "{case}, the other bearings: {wrong:?}");
+    let d = diagnosis_with_machine_check(data, file, &run);
+    assert_eq!(
+        named(&d),
+        [(effect.to_string(), bearing.to_string())],
+        "{case}: {}",
+        d.to_text()
+    );
+    assert!(d.trusted, "{case}: {:?}\n{}", d.trust_reasons, d.to_text());
+    assert_trusted_means_right(&run, &d);
+}
+
 /// The speeds identify listed as outliers at `bearing` [Hz], sorted.
 pub fn listed(id: &Identification, bearing: &str) -> Vec<f64> {
     let mut v = id.noise[bearing].outlier_speeds_hz.clone();

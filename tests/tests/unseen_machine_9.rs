@@ -15,10 +15,9 @@
 //! reading is Plinth's. The rates over seeds are measured by
 //! `scripts/bench_unseen.py --machine unseen-nine` (docs/unseen-nine.md).
 
-use plinth::diagnose::report::Diagnosis;
 use plinth::rundir::RunDir;
 use plinth_tests::rundown::identify;
-use plinth_tests::unseen::{self, named, ok_but_wrong, untrusted};
+use plinth_tests::unseen::{self, ok_but_wrong, untrusted};
 
 const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-9");
 
@@ -27,12 +26,10 @@ fn stored(case: &str) -> RunDir {
     unseen::stored(DATA, case)
 }
 
-/// `plinth diagnose RUN --machine unseen-nine.toml` as the command line
-/// runs it: the search, then the machine-level check applied to the
-/// verdict.
-fn diagnosis(run: &RunDir) -> Diagnosis {
-    unseen::diagnosis_with_machine_check(DATA, "unseen-nine.toml", run)
-}
+/// The machine file a user would have, beside the runs: `plinth diagnose
+/// RUN --machine unseen-nine.toml` (the search, then the machine-level
+/// check applied to the verdict) is what these tests judge.
+const MACHINE: &str = "unseen-nine.toml";
 
 /// Clean data with the noise columns: identify untrusts nothing, lists no
 /// speed, and every value it prints `ok` (k_y, k_z, m and the dampings) is
@@ -41,13 +38,7 @@ fn diagnosis(run: &RunDir) -> Diagnosis {
 /// 0 of 46 clean runs with noise (docs/unseen-nine.md).
 #[test]
 fn clean_run_is_flagged_by_nothing_and_ok_means_right() {
-    let run = stored("clean-r1c");
-    let id = identify(&run);
-    let d = diagnosis(&run);
-    unseen::assert_flagged_by_nothing(&run, &id, &d, "clean-r1c");
-    let wrong = ok_but_wrong(&run, &id, true);
-    assert!(wrong.is_empty(), "clean-r1c, dampings too: {wrong:?}");
-    unseen::assert_trusted_means_right(&run, &d);
+    unseen::assert_clean_run_right(DATA, MACHINE, "clean-r1c");
 }
 
 /// Pedestal cross-coupling at B2 (k_yz = k_zy = 0.2 √(k_y k_z), the
@@ -57,20 +48,7 @@ fn clean_run_is_flagged_by_nothing_and_ok_means_right() {
 /// trusts its verdict, and its final pedestals are within 3 ± of ROSS's.
 #[test]
 fn cross_coupling_at_b2_is_named_there_and_right() {
-    let run = stored("cross");
-    let id = identify(&run);
-    assert_eq!(untrusted(&id), ["B2"]);
-    let wrong = ok_but_wrong(&run, &id, true);
-    assert!(wrong.is_empty(), "cross, B1: {wrong:?}");
-    let d = diagnosis(&run);
-    assert_eq!(
-        named(&d),
-        [("pedestal_cross_coupling".to_string(), "B2".to_string())],
-        "{}",
-        d.to_text()
-    );
-    assert!(d.trusted, "{:?}\n{}", d.trust_reasons, d.to_text());
-    unseen::assert_trusted_means_right(&run, &d);
+    unseen::assert_one_effect_named_right(DATA, MACHINE, "cross", "pedestal_cross_coupling", "B2");
 }
 
 /// Finding 1 (docs/unseen-nine.md): B2's pedestal stiffness rises 4 %
