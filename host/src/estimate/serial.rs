@@ -88,10 +88,11 @@ pub struct SerialCorrelation {
     pub widening: [f64; 5],
 }
 
-/// Each component of `rows` (speed order, `speeds_hz` ascending) cleared of
-/// a least-squares Legendre polynomial of degree [`DETREND_DEGREE`] over the run.
-fn detrended(speeds_hz: &[f64], rows: &[[f64; 4]]) -> Vec<[f64; 4]> {
-    let n = rows.len();
+/// An orthonormal basis (columns) of the Legendre polynomials of degree
+/// ≤ [`DETREND_DEGREE`] over the run at `speeds_hz` [Hz]: what
+/// [`detrended`] clears from each component (one QR per set of speeds).
+fn detrend_basis(speeds_hz: &[f64]) -> DMatrix<f64> {
+    let n = speeds_hz.len();
     let lo = speeds_hz.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = speeds_hz.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let span = (hi - lo).max(f64::MIN_POSITIVE);
@@ -113,11 +114,17 @@ fn detrended(speeds_hz: &[f64], rows: &[[f64; 4]]) -> Vec<[f64; 4]> {
             }
         }
     });
-    let q = basis.qr().q();
+    basis.qr().q()
+}
+
+/// Each component of `rows` (speed order) cleared of its least-squares
+/// fit on the orthonormal basis `q` ([`detrend_basis`] of the run's speeds).
+fn detrended(q: &DMatrix<f64>, rows: &[[f64; 4]]) -> Vec<[f64; 4]> {
+    let n = rows.len();
     let mut out = rows.to_vec();
     for c in 0..4 {
         let y = DVector::from_iterator(n, rows.iter().map(|r| r[c]));
-        let fit = &q * (q.tr_mul(&y));
+        let fit = q * (q.tr_mul(&y));
         for (o, f) in out.iter_mut().zip(fit.iter()) {
             o[c] -= f;
         }
@@ -156,7 +163,7 @@ pub fn lag_one_correlation(speeds_hz: &[f64], rows: &[[f64; 4]]) -> Option<f64> 
     {
         return None;
     }
-    let r = pooled_lag_one(&detrended(speeds_hz, rows));
+    let r = pooled_lag_one(&detrended(&detrend_basis(speeds_hz), rows));
     r.is_finite().then_some(r)
 }
 
@@ -167,12 +174,13 @@ pub fn lag_one_correlation(speeds_hz: &[f64], rows: &[[f64; 4]]) -> Option<f64> 
 pub fn white_quantile(speeds_hz: &[f64]) -> f64 {
     let n = speeds_hz.len();
     let mut rng = StdRng::seed_from_u64(0x5e71_a1c0 ^ n as u64);
+    let q = detrend_basis(speeds_hz);
     let draws: Vec<f64> = (0..WHITE_DRAWS)
         .map(|_| {
             let rows: Vec<[f64; 4]> = (0..n)
                 .map(|_| std::array::from_fn(|_| StandardNormal.sample(&mut rng)))
                 .collect();
-            pooled_lag_one(&detrended(speeds_hz, &rows))
+            pooled_lag_one(&detrended(&q, &rows))
         })
         .collect();
     let mean = draws.iter().sum::<f64>() / draws.len() as f64;

@@ -228,8 +228,8 @@ impl Convention {
                     *z /= num_complex::Complex::new(0.0, omega);
                 }
             }
-            Convention::RelRotated(a) => super::rotation::rotate(rel, -a.deg()),
-            Convention::PedRotated(a) => super::rotation::rotate(ped, -a.deg()),
+            Convention::RelRotated(a) => super::rotation::resolve_turned(rel, a.deg()),
+            Convention::PedRotated(a) => super::rotation::resolve_turned(ped, a.deg()),
             Convention::BearingTransposed
             | Convention::CrossCouplingSign
             | Convention::SpeedInRpm => {}
@@ -249,8 +249,8 @@ impl Convention {
                 sd[2] /= omega;
                 sd[3] /= omega;
             }
-            Convention::RelRotated(a) => super::rotation::rotate_sd(&mut sd[..2], -a.deg()),
-            Convention::PedRotated(a) => super::rotation::rotate_sd(&mut sd[2..], -a.deg()),
+            Convention::RelRotated(a) => super::rotation::resolve_turned_sd(&mut sd[..2], a.deg()),
+            Convention::PedRotated(a) => super::rotation::resolve_turned_sd(&mut sd[2..], a.deg()),
             _ => {}
         }
     }

@@ -27,6 +27,8 @@
 use super::judge::Judge;
 use super::{Convention, DECISIVE_DELTA_CHI2};
 use crate::estimate::Observation;
+use crate::field::angle::resolve;
+use num_complex::Complex;
 use plinth_shared::phasor::Phasor2;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::fmt;
@@ -83,21 +85,27 @@ impl<'de> Deserialize<'de> for Angle {
     }
 }
 
-/// `v` (y, z) turned by `deg` [deg]: (cos·y − sin·z, sin·y + cos·z).
-pub fn rotate(v: &mut Phasor2<f64>, deg: f64) {
-    let (s, c) = deg.to_radians().sin_cos();
-    let [y, z] = *v;
-    *v = [y * c - z * s, y * s + z * c];
+/// The axes [deg from +y towards +z] along which a pair turned by `deg`
+/// [deg] reads: −deg and 90° − deg (module docs).
+fn turned_axes(deg: f64) -> [f64; 2] {
+    [-deg, 90.0 - deg]
 }
 
-/// The noise sds `sd` [m] of a pair (y, z) turned by `deg` [deg], each
-/// channel's noise independent: √(cos²·σ_y² + sin²·σ_z²) and
-/// √(sin²·σ_y² + cos²·σ_z²).
-pub fn rotate_sd(sd: &mut [f64], deg: f64) {
-    let (s, c) = deg.to_radians().sin_cos();
-    let (vy, vz) = (sd[0] * sd[0], sd[1] * sd[1]);
-    sd[0] = (c * c * vy + s * s * vz).sqrt();
-    sd[1] = (s * s * vy + c * c * vz).sqrt();
+/// `v`, a pair written as it read when turned by `deg` [deg], resolved to
+/// (y, z): the import's resolution of transducers at known angles
+/// ([`crate::field::angle::resolve`]), here at [`turned_axes`].
+pub fn resolve_turned(v: &mut Phasor2<f64>, deg: f64) {
+    *v = resolve(&turned_axes(deg), v, None).0;
+}
+
+/// The noise sds `sd` [m] of such a pair (each channel's noise
+/// independent) resolved with it ([`resolve_turned`]):
+/// √(cos²·σ₁² + sin²·σ₂²) and √(sin²·σ₁² + cos²·σ₂²).
+pub fn resolve_turned_sd(sd: &mut [f64], deg: f64) {
+    let zero = [Complex::new(0.0, 0.0); 2];
+    if let (_, Some(resolved)) = resolve(&turned_axes(deg), &zero, Some(sd)) {
+        sd[..2].copy_from_slice(&resolved);
+    }
 }
 
 /// Which pair of a bearing is turned.
@@ -133,8 +141,8 @@ fn residual_at(
         .map(|&o| {
             let mut o = o;
             match pair {
-                Pair::Rel => rotate(&mut o.rel, -deg),
-                Pair::Ped => rotate(&mut o.ped, -deg),
+                Pair::Rel => resolve_turned(&mut o.rel, deg),
+                Pair::Ped => resolve_turned(&mut o.ped, deg),
             }
             o
         })
