@@ -105,7 +105,8 @@ pub fn compare(a: &PedestalFit, b: &PedestalFit, alpha: f64) -> Agreement {
         f64::NAN
     };
     let p_value = ChiSquared::new(n.max(1) as f64).map_or(f64::NAN, |c| c.sf(chi2));
-    let agree = !(p_value < alpha);
+    // A χ² that cannot be formed (NaN) is not a disagreement.
+    let agree = p_value.is_nan() || p_value >= alpha;
     let trusted = [a.trusted, b.trusted];
     let message = message(&a.bearing, &parameters, chi2, n, p_value, agree);
     Agreement {
