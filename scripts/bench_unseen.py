@@ -181,6 +181,7 @@ EXPECT_NINE = {
     "ped-drift": ([], None),
     "probe-gain": ([], None),
     "runout-drift": ([("probe_runout", "B2")], {"B2"}),
+    "ped-drift-up": ([], None),
 }
 EXPECT = {"unseen-four": EXPECT_FOUR, "unseen-overhung": EXPECT_OVERHUNG, "unseen-train": EXPECT_TRAIN,
           "unseen-flex": EXPECT_FLEX, "unseen-five": EXPECT_FIVE, "unseen-six": EXPECT_SIX,

@@ -103,7 +103,9 @@ second); probes 0.5 % of |phasor| + 0.01 um, accelerometers 1 % +
 after the engine stops (cooling_fraction): "ped_drift" (B2's pedestal
 stiffness rising 4 % over the run), "runout_drift" (B2's probe runout
 growing 1.8-fold and turning 40 deg over the run), and "probe_gain" (B1's
-vertical probe reading 5 % low: calibrated on another steel).
+vertical probe reading 5 % low: calibrated on another steel); and
+"ped-drift-up", ped-drift's machine run up instead (the drift following
+time, so reversed in speed: the second run a compare needs).
 
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
@@ -258,8 +260,15 @@ def cooling_fraction(cool, speeds):
 
 def drift_factor(drift, speeds):
     """The pedestal's stiffness over the machine file's [-] at `speeds` [Hz]
-    of a "ped_drift" effect: 1 + span (x - 1/2), x the cooling fraction."""
-    return 1.0 + drift["span"] * (cooling_fraction(drift, speeds) - 0.5)
+    of a "ped_drift" effect: 1 + span (x - 1/2), x the cooling fraction.
+    With `run_up` the run's clock goes the other way in speed (a run-up by
+    the same exponential law, bottom to top in `duration_s`): the time at
+    f is the coast-down's time at the mirrored speed top bottom / f, so the
+    drift follows time as before and is reversed in speed."""
+    f = np.asarray(speeds, dtype=float)
+    if drift.get("run_up"):
+        f = drift["top_hz"] * drift["bottom_hz"] / f
+    return 1.0 + drift["span"] * (cooling_fraction(drift, f) - 0.5)
 
 
 def coefficients(spec, speeds, effects):
@@ -511,7 +520,7 @@ def physical_detail(effect, spec):
         return {"name": "pedestal_drift", "bearing": effect[1]["bearing"],
                 "parameters": {"k_y_top": p["k_y"] * lo, "k_y_bottom": p["k_y"] * hi,
                                "k_z_top": p["k_z"] * lo, "k_z_bottom": p["k_z"] * hi,
-                               **{k: v for k, v in effect[1].items() if k != "bearing"}}}
+                               **{k: float(v) for k, v in effect[1].items() if k != "bearing"}}}
     if what == "sweep":
         return {"name": "sweep_average", "bearing": "",
                 "parameters": {k: float(v) for k, v in effect[1].items()}}

@@ -463,6 +463,13 @@ COOLING_NINE = {"top_hz": 500.0, "bottom_hz": 100.0, "duration_s": 90.0, "tau_s"
 # x the cooling fraction (0 at the top, 1 at the bottom): the machine
 # file's k is the value half way through the cooling
 PED_DRIFT_NINE = dict(COOLING_NINE, bearing="B2", span=0.04)
+# ped-drift-up: the same machine run up right after the coast-down (a
+# restart at idle: the exhaust gas still cooler than the turbine end, which
+# goes on cooling), by the same exponential clock reversed, 100 Hz to
+# 500 Hz in 90 s; B2's stiffness again rises 4 % over the run, following
+# time, so now rising with speed (ross_unseen.drift_factor, run_up): the
+# second run in which time runs the other way in speed (`plinth compare`)
+PED_DRIFT_UP_NINE = dict(PED_DRIFT_NINE, run_up=True)
 # probe-gain: B1's vertical proximity probe calibrated on a target of
 # another steel than the compressor-end journal's (API 670 asks for the
 # shaft's own): on this shaft it reads 5 % low (a sensitivity error of one
@@ -505,6 +512,8 @@ MACHINES["unseen-nine"] = {
         "ped-drift": [("ped_drift", PED_DRIFT_NINE)],
         "probe-gain": [("probe_gain", PROBE_GAIN_NINE)],
         "runout-drift": [("runout_drift", RUNOUT_DRIFT_NINE)],
+        # appended last: the other cases' random numbers stay as they were
+        "ped-drift-up": [("ped_drift", PED_DRIFT_UP_NINE)],
     },
     "d3_effects": False,
     "table_rows": True,

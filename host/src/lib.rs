@@ -6,6 +6,7 @@
 pub mod accuracy;
 pub mod args;
 pub mod base_csv;
+pub mod compare;
 pub mod csv_layout;
 pub mod demo;
 pub mod diagnose;

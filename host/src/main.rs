@@ -26,6 +26,8 @@ enum Command {
     Signals(plinth::sim::cli::SignalsCommand),
     /// Re-predict a machine with identified pedestals and compare with a run.
     Predict(plinth::sim::cli::PredictArgs),
+    /// Two runs of one machine (a run-down and a run-up, two temperatures): each pedestal's values tested for agreement.
+    Compare(plinth::compare::Args),
     /// Reproduce Feng & Hahn (1997): Tables 1 and 2 and the figures.
     Paper(plinth::paper::Args),
     /// Stream from the field box over a serial port.
@@ -57,6 +59,7 @@ fn main() -> ExitCode {
         Command::Simulate(a) => plinth::sim::cli::simulate(&a),
         Command::Signals(a) => plinth::sim::cli::signals(a),
         Command::Predict(a) => plinth::sim::cli::predict(&a),
+        Command::Compare(a) => plinth::compare::run(&a),
         Command::Paper(a) => plinth::paper::run(&a),
         Command::Stream(mut a) => {
             a.quiet |= quiet;

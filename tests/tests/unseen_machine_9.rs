@@ -57,21 +57,45 @@ fn cross_coupling_at_b2_is_named_there_and_right() {
 /// over the run, m 30 kg throughout). In a run-down time and speed go
 /// together, so a stiffness that rises as the speed falls reads as mass:
 /// identify prints B2 `ok` with m +1.8 % (about +16 ±) and k_z +2.1 %
-/// (+18 ±, above even the coldest k_z) on seed 8210, 19 of 20 seeds alike;
-/// diagnose trusts values as far off (9 of 9). What an engineer expects: not
-/// `ok` beyond 3 ±, or a ± that says the pedestal's constancy over the run
-/// is assumed and untested.
+/// (+18 ±) on seed 8210, 19 of 20 seeds alike.
+///
+/// Re-stated in session 49 (drift17): the earlier assertion (no value
+/// printed `ok` beyond 3 ±) cannot be met by one run: the drift is, to the
+/// fit, a mass term with a perfect fit, and each half of the run is biased
+/// alike (docs/unseen-nine.md). What the output must say instead is the
+/// condition with its numbers: identify's "Conditional on" states, for B2,
+/// how far a 1 % drift of its support over the run would move m, k_y, k_z,
+/// and that a drift well below this run's 4 % moves a value by its ± (on
+/// main nothing is said). The test one run cannot make is `plinth
+/// compare` with a run-up (tests/tests/compare_runs.rs).
 #[test]
-#[ignore = "finding 1: a pedestal stiffness drifting with time over a run-down reads as mass; B2 printed ok 10-18 ± off (m +1.8 %)"]
-fn pedestal_stiffness_drifting_over_the_run_is_not_printed_ok_when_off() {
+fn pedestal_stiffness_drifting_over_the_run_is_stated_as_a_condition_with_its_size() {
     let run = stored("ped-drift-8210");
     let id = identify(&run);
-    let wrong = ok_but_wrong(&run, &id, false);
+    let c = plinth::identify::conditional::of(&run, &id, None);
+    let b2 = c
+        .support_drift
+        .iter()
+        .find(|d| d.bearing == "B2")
+        .expect("B2's drift sensitivity");
+    assert!(b2.matters(), "{b2:?}");
+    // The drift that moves one of B2's values by its ± lies far below the
+    // 4 % of this run (0.27 % here: m).
+    assert!(b2.drift_at_one_std_err < 0.01, "{b2:?}");
+    // m read high under a stiffness rising as the speed falls, as measured.
     assert!(
-        wrong.is_empty(),
-        "ped-drift-8210 (untrusted {:?}): {wrong:?}",
-        untrusted(&id)
+        b2.shift_relative.m > 0.0 && b2.shift_in_std_err.m > 1.0,
+        "{b2:?}"
     );
+    let text = c.to_text();
+    assert!(
+        text.contains("B2: a support whose stiffness") && text.contains("plinth compare"),
+        "{text}"
+    );
+    let json = serde_json::to_value(&c).expect("json");
+    assert!(json["support_drift"]
+        .as_array()
+        .is_some_and(|a| !a.is_empty()));
 }
 
 /// Finding 2 (docs/unseen-nine.md): B1's vertical proximity probe reads 5 %

@@ -37,6 +37,7 @@ use crate::rundir::RunDir;
 use serde::Serialize;
 use sub_base::SubBaseBound;
 
+pub mod drift;
 pub mod sub_base;
 
 /// The first promise of every value printed as a support's k, c, m
@@ -73,6 +74,9 @@ pub struct Conditional {
     /// Per bearing with a support-mode test, what the data exclude of a
     /// sub-base above the run ([`sub_base`]).
     pub sub_base: Vec<SubBaseBound>,
+    /// Per pedestal on rigid ground, how far a drift of its support's
+    /// stiffness over the run would move its values ([`drift`]).
+    pub support_drift: Vec<drift::DriftSensitivity>,
 }
 
 impl Conditional {
@@ -87,6 +91,9 @@ impl Conditional {
         }
         for b in &self.sub_base {
             out.push_str(&format!("  {}\n", b.message()));
+        }
+        for d in self.support_drift.iter().filter(|d| d.matters()) {
+            out.push_str(&format!("  {}\n", d.message()));
         }
         out
     }
@@ -209,11 +216,13 @@ pub fn of(
         .collect();
     Conditional {
         statement: format!(
-            "{APPARENT} {doubt} The transducers' units and sensitivities are taken as given too: one scale on every rel reading (or every ped reading), say mil pp read as µm pp, scales k, c, m alike with the same fit; only `plinth diagnose --machine` (the rotor and its unbalance) can see it."
+            "{APPARENT} {doubt} The transducers' units and sensitivities are taken as given too: one scale on every rel reading (or every ped reading), say mil pp read as µm pp, scales k, c, m alike with the same fit; only `plinth diagnose --machine` (the rotor and its unbalance) can see it. {}",
+            drift::STATEMENT
         ),
         table_uncertainty,
         bearings,
         sub_base,
+        support_drift: drift::of(run, identification),
     }
 }
 
