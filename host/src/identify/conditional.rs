@@ -37,6 +37,7 @@ use crate::rundir::RunDir;
 use serde::Serialize;
 use sub_base::SubBaseBound;
 
+pub mod speed;
 pub mod sub_base;
 
 /// The first promise of every value printed as a support's k, c, m
@@ -73,6 +74,13 @@ pub struct Conditional {
     /// Per bearing with a support-mode test, what the data exclude of a
     /// sub-base above the run ([`sub_base`]).
     pub sub_base: Vec<SubBaseBound>,
+    /// Per bearing, how right the speed column must be for its values to
+    /// hold ([`speed`]).
+    pub speed_column: Vec<speed::SpeedBound>,
+    /// Standard uncertainty of the speed column folded into `std_err` and
+    /// `covariance` [Hz] (`--speed-uncertainty`; `null`: the ± take the
+    /// speed column as right).
+    pub speed_uncertainty_hz: Option<f64>,
 }
 
 impl Conditional {
@@ -86,6 +94,12 @@ impl Conditional {
             }
         }
         for b in &self.sub_base {
+            out.push_str(&format!("  {}\n", b.message()));
+        }
+        if let Some(sd) = self.speed_uncertainty_hz {
+            out.push_str(&format!("  The ± include a {sd} Hz standard uncertainty of the speed column (--speed-uncertainty): σ² = σ_noise² + (b·σ_f)², b each value's shift per Hz of speed error.\n"));
+        }
+        for b in self.speed_column.iter().filter(|b| b.said) {
             out.push_str(&format!("  {}\n", b.message()));
         }
         out
@@ -214,6 +228,8 @@ pub fn of(
         table_uncertainty,
         bearings,
         sub_base,
+        speed_column: speed::of(identification),
+        speed_uncertainty_hz: None,
     }
 }
 
