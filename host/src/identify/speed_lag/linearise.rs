@@ -44,6 +44,14 @@ pub struct Terms {
     /// share of the Δ column's squared norm [-], taken off its
     /// information.
     pub column_noise: f64,
+    /// The speed column's value at each speed, in the rows' order (4 rows
+    /// per speed) [Hz].
+    pub speeds: Vec<f64>,
+    /// `weight_terms` speed by speed (one row per speed, the columns as
+    /// in `weight_terms`) [-]: what each speed adds.
+    pub weight_by_speed: DMatrix<f64>,
+    /// `column_noise` speed by speed [-].
+    pub column_noise_by_speed: Vec<f64>,
 }
 
 /// `obs` (one bearing's observations, speeds as stamped) with every speed
@@ -103,8 +111,8 @@ pub fn terms(
     let mut jac = DMatrix::<f64>::zeros(4 * n, p);
     let mut column = DVector::<f64>::zeros(4 * n);
     let mut resid = DVector::<f64>::zeros(4 * n);
-    let mut weight_terms = vec![0.0; p + 1];
-    let mut column_noise = 0.0;
+    let mut weight_by_speed = DMatrix::<f64>::zeros(n, p + 1);
+    let mut column_noise_by_speed = vec![0.0; n];
     for (s, h) in span.iter().enumerate() {
         let l = gh::whitening(&eq, s, theta)?;
         let (e0, b) = eq.residual(s, theta);
@@ -132,7 +140,7 @@ pub fn terms(
             let (e1, b1) = eq.residual(s, &t);
             let col = l.solve_lower_triangular(&(e1 - &e0))?;
             jac.view_mut((4 * s, k), (4, 1)).copy_from(&col);
-            weight_terms[k] += weight(&(b1 - &b));
+            weight_by_speed[(s, k)] = weight(&(b1 - &b));
         }
         // ∂e/∂Δ = −∂e/∂f, and ∂B/∂Δ likewise.
         let (e_minus, b_minus) = eq_minus.residual(s, theta);
@@ -142,19 +150,21 @@ pub fn terms(
         column
             .rows_mut(4 * s, 4)
             .copy_from(&l.solve_lower_triangular(&de)?);
-        weight_terms[p] += weight(&db);
+        weight_by_speed[(s, p)] = weight(&db);
         let ldb = l.solve_lower_triangular(&db)?;
-        column_noise += ldb
+        column_noise_by_speed[s] = ldb
             .column_iter()
             .zip(var)
             .map(|(c, v)| c.norm_squared() * v)
             .sum::<f64>();
     }
+    let weight_terms: Vec<f64> = weight_by_speed.row_sum().iter().copied().collect();
+    let column_noise = column_noise_by_speed.iter().sum::<f64>();
     let finite = jac
         .iter()
         .chain(column.iter())
         .chain(resid.iter())
-        .chain(&weight_terms)
+        .chain(weight_by_speed.iter())
         .all(|v| v.is_finite())
         && column_noise.is_finite();
     finite.then_some(Terms {
@@ -163,6 +173,9 @@ pub fn terms(
         resid,
         weight_terms,
         column_noise,
+        speeds: obs.iter().map(|o| o.speed_hz).collect(),
+        weight_by_speed,
+        column_noise_by_speed,
     })
 }
 
@@ -188,6 +201,10 @@ pub struct Joint {
     pub offset_std_hz: f64,
     /// Per bearing, in the order given.
     pub bearings: Vec<BearingShare>,
+    /// Every bearing's speeds, what each pulls on Δ and its information
+    /// (each bearing's scaled by its excess s²): Δ̂ is their pulls' sum
+    /// over their informations' sum ([`super::spread`]).
+    pub by_speed: Vec<super::spread::SpeedShare>,
 }
 
 /// One bearing's share of the joint step: its Δ column with the θ columns
@@ -204,6 +221,10 @@ struct Projected {
     path: Vec<f64>,
     info_std: Vec<f64>,
     dof: f64,
+    /// `score`, `info` and the score's variance |t̃ₛ|² speed by speed, in
+    /// the order of `Terms::speeds` (the first two sum to `score` and
+    /// `info`) [-].
+    by_speed: Vec<(f64, f64, f64)>,
 }
 
 fn project(t: &Terms) -> Option<Projected> {
@@ -235,6 +256,23 @@ fn project(t: &Terms) -> Option<Projected> {
             .map(|k| path[k] * g(t.jac.column(k).into_owned(), k))
             .sum::<f64>();
     let info = column.norm_squared() - t.column_noise;
+    // Speed by speed: t̃ₛ·rₛ less the weights' share along the same
+    // projection (t̃ = t + X·b), and |t̃ₛ|² less the noise's share.
+    let by_speed = (0..t.speeds.len())
+        .map(|s| {
+            let rows = 4 * s..4 * s + 4;
+            let tt = column.rows(rows.start, 4);
+            let w = t.weight_by_speed[(s, p_theta)]
+                + (0..p_theta)
+                    .map(|k| path[k] * t.weight_by_speed[(s, k)])
+                    .sum::<f64>();
+            (
+                tt.dot(&t.resid.rows(rows.start, 4)) - w,
+                tt.norm_squared() - t.column_noise_by_speed[s],
+                tt.norm_squared(),
+            )
+        })
+        .collect();
     Some(Projected {
         column,
         resid,
@@ -243,6 +281,7 @@ fn project(t: &Terms) -> Option<Projected> {
         path,
         info_std,
         dof,
+        by_speed,
     })
 }
 
@@ -288,11 +327,30 @@ pub fn joint(terms: &[Terms]) -> Option<Joint> {
             held: q.info_std.iter().map(|v| v * s2.sqrt()).collect(),
         })
         .collect();
+    let by_speed = projected
+        .iter()
+        .zip(&scale)
+        .zip(terms)
+        .flat_map(|((q, s2), t)| {
+            q.by_speed
+                .iter()
+                .zip(&t.speeds)
+                .map(
+                    move |(&(score, info, var), &speed_hz)| super::spread::SpeedShare {
+                        speed_hz,
+                        pull: -score / s2,
+                        info: info / s2,
+                        var: var / s2,
+                    },
+                )
+        })
+        .collect();
     let finite = info > 0.0 && offset_hz.is_finite() && offset_std_hz.is_finite();
     finite.then_some(Joint {
         offset_hz,
         offset_std_hz,
         bearings,
+        by_speed,
     })
 }
 
@@ -320,6 +378,9 @@ mod tests {
                 resid,
                 weight_terms: vec![0.0; 3],
                 column_noise: 0.0,
+                speeds: Vec::new(),
+                weight_by_speed: DMatrix::zeros(0, 3),
+                column_noise_by_speed: Vec::new(),
             }
         };
         let x = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
