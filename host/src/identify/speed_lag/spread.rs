@@ -245,7 +245,7 @@ pub fn spread(shares: &[SpeedShare]) -> Option<Spread> {
     if total <= 0.0 {
         return None;
     }
-    let mut sums = vec![(f64::INFINITY, f64::NEG_INFINITY, 0.0, 0.0); BANDS];
+    let mut sums = [(f64::INFINITY, f64::NEG_INFINITY, 0.0, 0.0); BANDS];
     let mut before = 0.0;
     for x in &s {
         let w = x.info.max(0.0);
@@ -257,7 +257,7 @@ pub fn spread(shares: &[SpeedShare]) -> Option<Spread> {
         b.2 += x.pull;
         b.3 += x.info;
     }
-    if sums.iter().any(|b| !(b.3 > 0.0)) {
+    if sums.iter().any(|b| b.3.is_nan() || b.3 <= 0.0) {
         return None;
     }
     let pull: f64 = sums.iter().map(|b| b.2).sum();
