@@ -105,7 +105,7 @@ fn the_demos_sweep_through_sharp_resonances_is_not_read_as_an_offset() {
     use plinth::identify::{identify_run, Options};
     use plinth::sim::signals::RunDown;
     let dir = tempfile::tempdir().expect("temporary directory");
-    let mut opts = DemoOptions::bundled(&dir.path().join("demo")).expect("bundled machine");
+    let mut opts = DemoOptions::bundled(dir.path().join("demo")).expect("bundled machine");
     opts.rundown = RunDown {
         start_hz: 150.0,
         end_hz: 20.0,
