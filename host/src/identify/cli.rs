@@ -125,6 +125,15 @@ pub struct Args {
     /// is conditional on the table being exact.
     #[arg(long, value_name = "PCT", value_parser = super::conditional::parse_table_uncertainty)]
     pub table_uncertainty: Option<f64>,
+    /// Standard uncertainty of the speed column [Hz]: how far the speed
+    /// stamped on each vector may lie from the speed of the revolutions
+    /// it is made of (a speed filter's lag times the run-down rate), one
+    /// offset for the whole run, carried into every ± of the pedestals on
+    /// rigid ground (σ² = σ_noise² + (b·σ_f)², b a value's shift per Hz;
+    /// the noise-only ± stays in the JSON as `std_err_noise`). Without it
+    /// the ± is conditional on the speed column being right.
+    #[arg(long, value_name = "HZ", value_parser = crate::args::positive)]
+    pub speed_uncertainty: Option<f64>,
 }
 
 impl Args {
@@ -168,12 +177,23 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let (run, mut identification) = identify_args(args)?;
     let table_sd = args.table_uncertainty.map(|pct| pct / 100.0);
-    let noise_only = table_sd.map(|sd| {
-        let noise = super::conditional::widen(&mut identification, sd);
+    let noise_before = identification
+        .pedestals
+        .iter()
+        .map(|p| p.std_err)
+        .collect::<Vec<_>>();
+    if let Some(sd) = table_sd {
+        super::conditional::widen(&mut identification, sd);
+    }
+    if let Some(sd) = args.speed_uncertainty {
+        super::conditional::speed::widen(&mut identification, sd);
+    }
+    let noise_only = (table_sd.is_some() || args.speed_uncertainty.is_some()).then(|| {
         crate::present::modal::attach(&mut identification);
-        noise
+        noise_before
     });
-    let conditional = super::conditional::of(&run, &identification, table_sd);
+    let mut conditional = super::conditional::of(&run, &identification, table_sd);
+    conditional.speed_uncertainty_hz = args.speed_uncertainty;
     for p in &identification.pedestals {
         for w in &p.warnings {
             eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
@@ -199,6 +219,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         print!("{}", super::on_base::describe(&identification.bases));
         print!("{}", untrusted_reasons(&identification));
         print!("{}", super::delay_unknown::describe(&identification));
+        print!("{}", super::speed_lag::describe(&identification));
         print!("{}", conditional.to_text());
     }
     if let Some(dir) = &args.plots {

@@ -38,6 +38,7 @@ use serde::Serialize;
 use sub_base::SubBaseBound;
 
 pub mod drift;
+pub mod speed;
 pub mod sub_base;
 
 /// The first promise of every value printed as a support's k, c, m
@@ -77,6 +78,13 @@ pub struct Conditional {
     /// Per pedestal on rigid ground, how far a drift of its support's
     /// stiffness over the run would move its values ([`drift`]).
     pub support_drift: Vec<drift::DriftSensitivity>,
+    /// Per bearing, how right the speed column must be for its values to
+    /// hold ([`speed`]).
+    pub speed_column: Vec<speed::SpeedBound>,
+    /// Standard uncertainty of the speed column folded into `std_err` and
+    /// `covariance` [Hz] (`--speed-uncertainty`; `null`: the ± take the
+    /// speed column as right).
+    pub speed_uncertainty_hz: Option<f64>,
 }
 
 impl Conditional {
@@ -94,6 +102,12 @@ impl Conditional {
         }
         for d in self.support_drift.iter().filter(|d| d.matters()) {
             out.push_str(&format!("  {}\n", d.message()));
+        }
+        if let Some(sd) = self.speed_uncertainty_hz {
+            out.push_str(&format!("  The ± include a {sd} Hz standard uncertainty of the speed column (--speed-uncertainty): σ² = σ_noise² + (b·σ_f)², b each value's shift per Hz of speed error.\n"));
+        }
+        for b in self.speed_column.iter().filter(|b| b.said) {
+            out.push_str(&format!("  {}\n", b.message()));
         }
         out
     }
@@ -223,6 +237,8 @@ pub fn of(
         bearings,
         sub_base,
         support_drift: drift::of(run, identification),
+        speed_column: speed::of(identification),
+        speed_uncertainty_hz: None,
     }
 }
 

@@ -30,6 +30,7 @@ pub mod model;
 pub mod on_base;
 pub mod physical;
 pub mod plausibility;
+pub mod speed_lag;
 pub mod synthetic;
 pub mod trust;
 
@@ -177,6 +178,11 @@ pub enum WarningKind {
     /// which reads as a damping: the ± count it as unknown
     /// ([`delay_unknown`]). Informative.
     DelayNotExcluded,
+    /// The data do not exclude an offset of the speed column (the speed
+    /// of the vectors' revolutions read late or early) that moves the
+    /// values by more than their ±: the ± count it as unknown
+    /// ([`speed_lag`]). Informative.
+    SpeedLagNotExcluded,
 }
 
 impl WarningKind {
@@ -288,6 +294,10 @@ pub struct Identification {
     /// The bases pedestals were identified on ([`on_base`]); empty: rigid ground.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bases: Vec<on_base::BaseReport>,
+    /// What the data say of an offset of the speed column shared by every
+    /// bearing ([`speed_lag`]); `None` where it was not estimated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_lag: Option<speed_lag::SpeedLag>,
 }
 
 fn ols_name() -> String {
@@ -523,6 +533,7 @@ pub fn identify_prepared(
     trust::mark_lack_of_fit(&mut identification);
     plausibility::mark(run, &mut identification);
     delay_unknown::mark(&mut identification);
+    speed_lag::mark(run, &prepared.bearings, &mut identification);
     Ok(identification)
 }
 
@@ -591,6 +602,7 @@ fn fit_observed(
         pedestals,
         noise: noise_reports,
         bases: Vec::new(),
+        speed_lag: None,
     })
 }
 
