@@ -172,7 +172,9 @@ pub fn assess(
     if !scanned && support_mode.is_none() && sensor_delay.is_none() {
         return None;
     }
-    let delay_unknown = delay_nuisance(&eq, theta, &omega, columns);
+    // The delay's linearisation under the same AR(1) (its equations
+    // prewhitened by ρ: the generalised fit's τ̂, σ_τ and ρ).
+    let delay_unknown = delay_nuisance(&eq, theta, &omega, columns, rho);
     if let Some(rho) = rho {
         let inflation = super::serial::long_run_factor(rho);
         if let Some(s) = &mut support_mode {
