@@ -25,9 +25,12 @@
 //! in all but [`SERIAL_P`] of bearings. The detrending takes some of the
 //! AR(1)'s low-frequency power with the trend, so ρ̂ is biased low (376
 //! speeds at ρ = 0.80: 0.777 expected; 50 speeds: 0.59): the AR(1)'s ρ
-//! used below is the one whose expected ρ̂ is the measured one
-//! ([`ar1_rho`], the expectation in closed form to second order,
-//! [`expected_lag_one`]).
+//! the widening (and the delay's linearisation,
+//! [`super::lack_of_fit::delay_unknown`]) use is the one whose expected ρ̂
+//! is the measured one ([`ar1_rho`], the expectation in closed form to
+//! second order, [`expected_lag_one`]); the lack-of-fit tests take ρ̂ as
+//! it is (a local model error's residual is correlated too, and the
+//! larger ρ would take it for noise).
 //!
 //! **Widening** ([`ar1_widening`]). With the noise an AR(1) of lag-one
 //! correlation ρ along the run (the same for every whitened component, as
@@ -224,7 +227,8 @@ pub fn measured(speeds_hz: &[f64], rows: &[[f64; 4]]) -> Option<(f64, f64, f64)>
 /// AR(1)'s low-frequency power with the trend, so E[ρ̂] < ρ (376 speeds:
 /// 0.777 at ρ = 0.80; 50 speeds: 0.59; white: −4/n, the basis's share).
 /// Σ is applied by its recursions (Σx = f + g − x, f_t = x_t + ρf_{t−1},
-/// g_t = x_t + ρg_{t+1}): O(n²) per call.
+/// g_t = x_t + ρg_{t+1}): O(n²) per call; [`ar1_rho`] inverts it by regula
+/// falsi in a handful of calls.
 fn expected_lag_one(q: &DMatrix<f64>, mam: &DMatrix<f64>, rho: f64) -> f64 {
     let n = q.nrows();
     // Σ applied to each column of x (n × k).
@@ -247,8 +251,8 @@ fn expected_lag_one(q: &DMatrix<f64>, mam: &DMatrix<f64>, rho: f64) -> f64 {
         out
     };
     // MΣ = Σ − Q(ΣQ)ᵀ (Σ symmetric); (MAM)Σ = (Σ(MAM))ᵀ (both symmetric).
-    let identity = DMatrix::<f64>::identity(n, n);
-    let s = sigma(&identity);
+    let powers: Vec<f64> = (0..n).map(|d| rho.powi(d as i32)).collect();
+    let s = DMatrix::from_fn(n, n, |i, j| powers[i.abs_diff(j)]);
     let sq = sigma(q);
     let ms = &s - q * sq.transpose();
     let p = sigma(mam).transpose();
@@ -264,7 +268,7 @@ fn expected_lag_one(q: &DMatrix<f64>, mam: &DMatrix<f64>, rho: f64) -> f64 {
 /// `speeds_hz` [Hz] are expected to show `observed` [-]
 /// ([`lag_one_correlation`]): the root in [0, [`MAX_RHO`]] of
 /// E[ρ̂](ρ) = `observed` ([`expected_lag_one`], increasing in ρ), by
-/// bisection; 0 below E[ρ̂](0), [`MAX_RHO`] above E[ρ̂]([`MAX_RHO`]). The
+/// regula falsi; 0 below E[ρ̂](0), [`MAX_RHO`] above E[ρ̂]([`MAX_RHO`]). The
 /// measured ρ̂ is biased low by the detrending (ROSS unseen-eight
 /// `corr-noise`, ρ = 0.80: ρ̂ 0.77 on average, the ± 5-8 % short,
 /// docs/estimation-scatter.md, Session 49 (corr17b)); this removes it.
@@ -293,13 +297,29 @@ pub fn ar1_rho(speeds_hz: &[f64], observed: f64) -> f64 {
     if observed >= e(MAX_RHO) {
         return MAX_RHO;
     }
+    // Regula falsi (Illinois) on the bracket [0, MAX_RHO]: E is smooth
+    // and increasing, a handful of evaluations reach 1e-9.
     let (mut lo, mut hi) = (0.0, MAX_RHO);
-    for _ in 0..30 {
-        let mid = 0.5 * (lo + hi);
-        if e(mid) < observed {
-            lo = mid;
+    let (mut f_lo, mut f_hi) = (e(lo) - observed, e(hi) - observed);
+    let mut side = 0;
+    for _ in 0..40 {
+        let mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let f_mid = e(mid) - observed;
+        if f_mid.abs() < 1e-9 || hi - lo < 1e-9 {
+            return mid;
+        }
+        if f_mid < 0.0 {
+            (lo, f_lo) = (mid, f_mid);
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
         } else {
-            hi = mid;
+            (hi, f_hi) = (mid, f_mid);
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
         }
     }
     0.5 * (lo + hi)
