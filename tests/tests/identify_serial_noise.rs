@@ -7,7 +7,9 @@
 //! each made by the line in its own docs page); only the reading is Plinth's.
 
 use plinth::identify::Identification;
-use plinth_tests::rundown::identify_dir;
+use plinth::identify::WarningKind;
+use plinth_tests::rundown::{identify, identify_dir};
+use plinth_tests::unseen::{ok_but_wrong, stored};
 use std::path::PathBuf;
 
 fn data(dir: &str) -> PathBuf {
@@ -83,5 +85,54 @@ fn correlated_noise_is_measured_and_the_plus_minus_widened() {
             "{}",
             p.bearing
         );
+    }
+}
+
+/// A fresh `corr-noise` run of the eighth machine (seed 9068, ROSS; made by
+/// `python3 scripts/ross_unseen.py --machine unseen-eight DIR corr-noise
+/// 9068`), chosen among 40 fresh seeds 9040-9079 as one where main e805765
+/// prints a value `ok` beyond 3 ± (three there: 9041 B1 k_y −3.05, 9061 B2
+/// k_y +3.7, this one's B1 k_z +3.06; docs/estimation-scatter.md, Session 49
+/// (corr17b)). The measured ρ̂ (B1 0.78, B2 0.75) is biased low by the
+/// detrending, and main widened by it; the AR(1)'s ρ it implies (0.80,
+/// 0.77) is used here: every value printed `ok` (dampings too) within 3 of
+/// its ±, both bearings trusted, and the ρ used above ρ̂. Fails on main (a
+/// margin of 6 %: what the bias costs; 9061 stays at +3.5 ±, what is left).
+#[test]
+fn the_detrending_bias_of_the_correlation_is_removed() {
+    let run = stored(&data("ross-unseen-8").to_string_lossy(), "corr-noise-9068");
+    let id = identify(&run);
+    let wrong = ok_but_wrong(&run, &id, true);
+    assert!(wrong.is_empty(), "{wrong:?}");
+    for (b, n) in &id.noise {
+        let s = n.serial_correlation.expect("measured");
+        assert!(s.ar1_rho > s.lag_one + 0.01, "{b}: {s:?}");
+        assert!((0.72..0.9).contains(&s.ar1_rho), "{b}: {s:?}");
+    }
+    for p in &id.pedestals {
+        assert!(p.trusted, "{}: {:?}", p.bearing, p.warnings);
+    }
+}
+
+/// The delay rule under the same correlation: its likelihood ratio is
+/// taken on the equations prewhitened by the AR(1) measured, so the noise's
+/// slow wander is not read as a sensor delay. On main e805765 the gate
+/// opened on 7325's B2 (τ̂ −2.6 of its white-noise ±) and widened its
+/// dampings' ± ×13.9 and ×9.5 (and on 24 of 32 bearings of the fresh seeds
+/// 9000-9015, ×7-39). Here the delay is not counted on these two runs'
+/// four bearings (τ̂ within 1 of its ± under the AR(1); the gate's chance
+/// rate under its null is 4.6 % per bearing). Fails on main.
+#[test]
+fn correlated_noise_is_not_read_as_a_sensor_delay() {
+    for case in ["corr-noise-7325", "corr-noise-9068"] {
+        let id = identify_dir(&data("ross-unseen-8").join(case));
+        for p in &id.pedestals {
+            assert!(
+                !p.has_warning(WarningKind::DelayNotExcluded),
+                "{case} {}: {:?}",
+                p.bearing,
+                p.warnings
+            );
+        }
     }
 }

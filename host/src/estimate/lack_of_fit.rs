@@ -151,7 +151,17 @@ pub fn assess(
     // and of a sensor delay (whose columns are smooth in speed: their
     // statistics grow by up to (1 + ρ)/(1 − ρ) under the correlation) are
     // deflated by that largest factor.
-    let rho = super::serial::measured(&speeds, &rows).map(|(rho, _, _)| rho);
+    //
+    // These tests take the measured ρ̂ as it is; the AR(1)'s ρ with the
+    // detrending's bias removed ([`super::serial::ar1_rho`], larger) is for
+    // the ± (the widening, the delay's linearisation below). A model error
+    // local in speed leaves a correlated residual too, and prewhitening it
+    // by the larger ρ took it for noise: the scan found the ROSS machine-d
+    // sub-base alone in 3 of 20 runs instead of 6 or more
+    // (`identify_trust`, a_local_model_error_inside_the_level_limit_is_found_by_the_scan;
+    // docs/estimation-scatter.md, Session 49 (corr17b)).
+    let measured = super::serial::measured(&speeds, &rows);
+    let rho = measured.map(|(_, lag_one, _)| lag_one.min(super::serial::MAX_RHO));
     let level_p = super::serial::level_p(chi2, dof, rho.unwrap_or(0.0));
     let scanned = source.scale_estimated() || level_p < p_limit;
     // With noise columns only. A form without them (the score over the
@@ -172,7 +182,9 @@ pub fn assess(
     if !scanned && support_mode.is_none() && sensor_delay.is_none() {
         return None;
     }
-    let delay_unknown = delay_nuisance(&eq, theta, &omega, columns);
+    // The delay's linearisation under the same AR(1) (its equations
+    // prewhitened by ρ: the generalised fit's τ̂, σ_τ and ρ).
+    let delay_unknown = delay_nuisance(&eq, theta, &omega, columns, measured.map(|m| m.0));
     if let Some(rho) = rho {
         let inflation = super::serial::long_run_factor(rho);
         if let Some(s) = &mut support_mode {

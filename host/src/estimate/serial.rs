@@ -22,7 +22,15 @@
 //! [`SERIAL_P`] quantile of the same figure over white residuals of as
 //! many speeds ([`white_quantile`]: simulated, a fixed seed, the
 //! detrending included), so that a run of white noise keeps its ± exactly
-//! in all but [`SERIAL_P`] of bearings.
+//! in all but [`SERIAL_P`] of bearings. The detrending takes some of the
+//! AR(1)'s low-frequency power with the trend, so ρ̂ is biased low (376
+//! speeds at ρ = 0.80: 0.777 expected; 50 speeds: 0.59): the AR(1)'s ρ
+//! the widening (and the delay's linearisation,
+//! [`super::lack_of_fit::delay_unknown`]) use is the one whose expected ρ̂
+//! is the measured one ([`ar1_rho`], the expectation in closed form to
+//! second order, [`expected_lag_one`]); the lack-of-fit tests take ρ̂ as
+//! it is (a local model error's residual is correlated too, and the
+//! larger ρ would take it for noise).
 //!
 //! **Widening** ([`ar1_widening`]). With the noise an AR(1) of lag-one
 //! correlation ρ along the run (the same for every whitened component, as
@@ -51,6 +59,7 @@ use nalgebra::{DMatrix, DVector};
 use rand::{rngs::StdRng, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
+use statrs::distribution::ContinuousCDF;
 
 /// One-sided size of the test "the residuals are correlated along the run"
 /// [-]: a white run's ± are widened in this share of bearings.
@@ -80,6 +89,11 @@ pub struct SerialCorrelation {
     /// Its one-sided [`SERIAL_P`] quantile for white residuals of as many
     /// speeds [-]: above it the correlation is taken as there.
     pub white_limit: f64,
+    /// The AR(1)'s lag-one correlation that `lag_one` implies once the
+    /// detrending's bias is removed ([`ar1_rho`]; at most [`MAX_RHO`]) [-]:
+    /// what the widening and the lack-of-fit tests use.
+    #[serde(default)]
+    pub ar1_rho: f64,
     /// Speeds it was measured on.
     pub speeds: usize,
     /// Each parameter's ± widened by this factor (k_y, k_z, m, c_y, c_z; 1
@@ -168,9 +182,10 @@ pub fn lag_one_correlation(speeds_hz: &[f64], rows: &[[f64; 4]]) -> Option<f64> 
 }
 
 /// The one-sided 1 − [`SERIAL_P`] quantile of [`lag_one_correlation`] over
-/// white unit residuals at `speeds_hz` [Hz] [-]: the mean plus 2.326 sd over
-/// [`WHITE_DRAWS`] simulated runs (a fixed seed; the pooled correlation of
-/// 4n numbers is close to normal).
+/// white unit residuals at `speeds_hz` [Hz] [-]: the mean plus z sd over
+/// [`WHITE_DRAWS`] simulated runs, z the standard normal's 1 − [`SERIAL_P`]
+/// quantile (2.326 at 1 %; a fixed seed; the pooled correlation of 4n
+/// numbers is close to normal).
 pub fn white_quantile(speeds_hz: &[f64]) -> f64 {
     let n = speeds_hz.len();
     let mut rng = StdRng::seed_from_u64(0x5e71_a1c0 ^ n as u64);
@@ -185,17 +200,129 @@ pub fn white_quantile(speeds_hz: &[f64]) -> f64 {
         .collect();
     let mean = draws.iter().sum::<f64>() / draws.len() as f64;
     let var = draws.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (draws.len() - 1) as f64;
-    // z of the one-sided SERIAL_P = 1 % quantile of N(0, 1).
-    mean + 2.326 * var.sqrt()
+    let z = statrs::distribution::Normal::standard().inverse_cdf(1.0 - SERIAL_P);
+    mean + z * var.sqrt()
 }
 
-/// The correlation of `rows` at `speeds_hz` when it is there (above its
-/// white limit), as (ρ̂ clamped to [`MAX_RHO`], ρ̂, the limit); `None` when
-/// it is not or cannot be measured.
+/// The correlation of `rows` at `speeds_hz` when it is there (ρ̂ above its
+/// white limit), as (the AR(1)'s ρ that ρ̂ implies, [`ar1_rho`], at most
+/// [`MAX_RHO`]; ρ̂; the limit); `None` when it is not or cannot be
+/// measured.
 pub fn measured(speeds_hz: &[f64], rows: &[[f64; 4]]) -> Option<(f64, f64, f64)> {
     let rho = lag_one_correlation(speeds_hz, rows)?;
     let limit = white_quantile(speeds_hz);
-    (rho > limit).then_some((rho.min(MAX_RHO), rho, limit))
+    (rho > limit).then(|| (ar1_rho(speeds_hz, rho), rho, limit))
+}
+
+/// The expected [`lag_one_correlation`] [-] of an AR(1) noise of lag-one
+/// correlation `rho` [-] (stationary, unit variance, the same in each of
+/// the four components) at the speeds whose detrending basis is `q`
+/// ([`detrend_basis`]): with e = Mw (M = I − QQᵀ, what the detrending
+/// leaves), ρ̂ = a/b, a = Σ_c e_cᵀAe_c (A the lag-one pairs, ½ either side
+/// of the diagonal) and b = Σ_c e_cᵀe_c; to second order (the delta method
+/// of a ratio over the four independent components)
+/// E[ρ̂] ≈ E a/E b − cov(a, b)/(E b)² + E a·var(b)/(E b)³, with
+/// E a = 4 tr(MAMΣ), E b = 4 tr(MΣ), cov(a, b) = 8 tr(MAMΣMΣ),
+/// var(b) = 8 tr((MΣ)²), Σ_ts = ρ^|t−s|. The detrending takes some of the
+/// AR(1)'s low-frequency power with the trend, so E[ρ̂] < ρ (376 speeds:
+/// 0.777 at ρ = 0.80; 50 speeds: 0.59; white: −4/n, the basis's share).
+/// Σ is applied by its recursions (Σx = f + g − x, f_t = x_t + ρf_{t−1},
+/// g_t = x_t + ρg_{t+1}): O(n²) per call; [`ar1_rho`] inverts it by regula
+/// falsi in a handful of calls.
+fn expected_lag_one(q: &DMatrix<f64>, mam: &DMatrix<f64>, rho: f64) -> f64 {
+    let n = q.nrows();
+    // Σ applied to each column of x (n × k).
+    let sigma = |x: &DMatrix<f64>| {
+        let mut out = x.clone();
+        for mut col in out.column_iter_mut() {
+            let x: Vec<f64> = col.iter().copied().collect();
+            let mut f = vec![0.0; n];
+            let mut g = vec![0.0; n];
+            for t in 0..n {
+                f[t] = x[t] + if t > 0 { rho * f[t - 1] } else { 0.0 };
+            }
+            for t in (0..n).rev() {
+                g[t] = x[t] + if t + 1 < n { rho * g[t + 1] } else { 0.0 };
+            }
+            for t in 0..n {
+                col[t] = f[t] + g[t] - x[t];
+            }
+        }
+        out
+    };
+    // MΣ = Σ − Q(ΣQ)ᵀ (Σ symmetric); (MAM)Σ = (Σ(MAM))ᵀ (both symmetric).
+    let powers: Vec<f64> = (0..n).map(|d| rho.powi(d as i32)).collect();
+    let s = DMatrix::from_fn(n, n, |i, j| powers[i.abs_diff(j)]);
+    let sq = sigma(q);
+    let ms = &s - q * sq.transpose();
+    let p = sigma(mam).transpose();
+    let e_a = p.trace();
+    let e_b = ms.trace();
+    let cov_ab = 2.0 * p.component_mul(&ms.transpose()).sum();
+    let var_b = 2.0 * ms.component_mul(&ms.transpose()).sum();
+    let k = 4.0;
+    e_a / e_b - cov_ab / (k * e_b * e_b) + e_a * var_b / (k * e_b.powi(3))
+}
+
+/// The lag-one correlation [-] of the AR(1) whose detrended residuals at
+/// `speeds_hz` [Hz] are expected to show `observed` [-]
+/// ([`lag_one_correlation`]): the root in [0, [`MAX_RHO`]] of
+/// E[ρ̂](ρ) = `observed` ([`expected_lag_one`], increasing in ρ), by
+/// regula falsi; 0 below E[ρ̂](0), [`MAX_RHO`] above E[ρ̂]([`MAX_RHO`]). The
+/// measured ρ̂ is biased low by the detrending (ROSS unseen-eight
+/// `corr-noise`, ρ = 0.80: ρ̂ 0.77 on average, the ± 5-8 % short,
+/// docs/estimation-scatter.md, Session 49 (corr17b)); this removes it.
+pub fn ar1_rho(speeds_hz: &[f64], observed: f64) -> f64 {
+    let n = speeds_hz.len();
+    if n < MIN_SPEEDS || !observed.is_finite() {
+        return observed.clamp(0.0, MAX_RHO);
+    }
+    let q = detrend_basis(speeds_hz);
+    // MAM, with A the lag-one pairs (½ either side of the diagonal).
+    let mut am = DMatrix::<f64>::zeros(n, n);
+    for t in 0..n {
+        if t > 0 {
+            am[(t, t - 1)] = 0.5;
+        }
+        if t + 1 < n {
+            am[(t, t + 1)] = 0.5;
+        }
+    }
+    let am = &am - (&am * &q) * q.transpose();
+    let mam = &am - &q * (q.tr_mul(&am));
+    let e = |rho: f64| expected_lag_one(&q, &mam, rho);
+    if observed <= e(0.0) {
+        return 0.0;
+    }
+    if observed >= e(MAX_RHO) {
+        return MAX_RHO;
+    }
+    // Regula falsi (Illinois) on the bracket [0, MAX_RHO]: E is smooth
+    // and increasing, a handful of evaluations reach 1e-9.
+    let (mut lo, mut hi) = (0.0, MAX_RHO);
+    let (mut f_lo, mut f_hi) = (e(lo) - observed, e(hi) - observed);
+    let mut side = 0;
+    for _ in 0..40 {
+        let mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        let f_mid = e(mid) - observed;
+        if f_mid.abs() < 1e-9 || hi - lo < 1e-9 {
+            return mid;
+        }
+        if f_mid < 0.0 {
+            (lo, f_lo) = (mid, f_mid);
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        } else {
+            (hi, f_hi) = (mid, f_mid);
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// The largest factor by which an AR(1) noise of lag-one correlation
@@ -218,20 +345,43 @@ pub fn level_p(chi2: f64, dof: usize, rho: f64) -> f64 {
         .unwrap_or(f64::NAN)
 }
 
+/// One whitened figure `x` of a speed prewhitened by the AR(1) of lag-one
+/// correlation `rho` [-] given the same figure `previous` of the speed
+/// before: (x − ρ·previous)/√(1 − ρ²).
+fn prewhiten(x: f64, previous: f64, rho: f64) -> f64 {
+    (x - rho * previous) / (1.0 - rho * rho).sqrt()
+}
+
 /// `rows` (speed order) prewhitened by the AR(1) of lag-one correlation
 /// `rho` [-]: (w_t − ρw_{t−1})/√(1 − ρ²), the first row as it is.
 pub fn prewhitened(rows: &[[f64; 4]], rho: f64) -> Vec<[f64; 4]> {
-    let k = 1.0 / (1.0 - rho * rho).sqrt();
     rows.iter()
         .enumerate()
         .map(|(t, r)| {
             if t == 0 {
                 *r
             } else {
-                std::array::from_fn(|c| (r[c] - rho * rows[t - 1][c]) * k)
+                std::array::from_fn(|c| prewhiten(r[c], rows[t - 1][c], rho))
             }
         })
         .collect()
+}
+
+/// Whitened equations (4 rows per speed, speed order: a Jacobian or a
+/// residual, any number of columns) prewhitened by the AR(1) of lag-one
+/// correlation `rho` [-] as [`prewhitened`] does the residuals: each row
+/// of speed t less ρ times the same row of speed t − 1, over √(1 − ρ²);
+/// the first speed's rows as they are. A least-squares fit of the
+/// prewhitened equations is the generalised one under the AR(1) (its ±
+/// the AR(1)'s, its likelihood ratios the AR(1)'s).
+pub fn prewhitened_equations(m: &DMatrix<f64>, rho: f64) -> DMatrix<f64> {
+    let mut out = m.clone();
+    for r in 4..m.nrows() {
+        for c in 0..m.ncols() {
+            out[(r, c)] = prewhiten(m[(r, c)], m[(r - 4, c)], rho);
+        }
+    }
+    out
 }
 
 /// Per column of the whitened Jacobian `jac` (4 rows per speed, speed
@@ -323,6 +473,25 @@ fn andrews_bandwidth(scores: &[DVector<f64>]) -> f64 {
     (1.1447 * (alpha * t as f64).cbrt()).min((t - 1) as f64)
 }
 
+/// [`measured`] on the whitened residuals of the fit at `theta` (θ units)
+/// to `obs` (speed order) over the estimated `columns` under `weighting`,
+/// with the fit's whitened Jacobian: (ρ, ρ̂, its white limit, J); `None`
+/// where the correlation is not there or cannot be measured.
+pub fn measured_fit(
+    obs: &[super::Observation],
+    theta: &[f64; plinth_shared::regression::PARAMETERS],
+    columns: &[plinth_shared::regression::Parameter],
+    weighting: &super::ml::Weighting,
+) -> Option<(f64, f64, f64, DMatrix<f64>)> {
+    let (w, jac) = super::robust::whitened_jacobian(obs, theta, columns, weighting)?;
+    let speeds: Vec<f64> = obs.iter().map(|o| o.speed_hz).collect();
+    let rows: Vec<[f64; 4]> = (0..obs.len())
+        .map(|t| std::array::from_fn(|c| w[4 * t + c]))
+        .collect();
+    let (rho, lag_one, white_limit) = measured(&speeds, &rows)?;
+    Some((rho, lag_one, white_limit, jac))
+}
+
 /// The correlation along the run of the residuals of the fit at `theta`
 /// (θ units) to `obs` (speed order) over the estimated `columns`, with an
 /// equation error of variance `equation_var` [N²] (module docs): `None` when
@@ -335,12 +504,7 @@ pub fn assess(
     equation_var: f64,
 ) -> Option<SerialCorrelation> {
     let weighting = super::ml::Weighting::equation_error(equation_var);
-    let (w, jac) = super::robust::whitened_jacobian(obs, theta, columns, &weighting)?;
-    let speeds: Vec<f64> = obs.iter().map(|o| o.speed_hz).collect();
-    let rows: Vec<[f64; 4]> = (0..obs.len())
-        .map(|t| std::array::from_fn(|c| w[4 * t + c]))
-        .collect();
-    let (rho, lag_one, white_limit) = measured(&speeds, &rows)?;
+    let (rho, lag_one, white_limit, jac) = measured_fit(obs, theta, columns, &weighting)?;
     let factors = ar1_widening(&jac, rho)?;
     let mut widening = [1.0; 5];
     for (&c, f) in columns.iter().zip(&factors) {
@@ -349,6 +513,7 @@ pub fn assess(
     Some(SerialCorrelation {
         lag_one,
         white_limit,
+        ar1_rho: rho,
         speeds: obs.len(),
         widening,
     })
@@ -373,11 +538,12 @@ impl SerialCorrelation {
     /// What identify says of it.
     pub fn message(&self) -> String {
         format!(
-            "the noise is correlated along the run (lag-one ρ = {:.2} of the whitened residuals over {} speeds, above {:.2}, its {} % limit for white noise): neighbouring speeds do not average out as independent ones, and the ± are widened ×{:.2} at most for it (the long-run covariance of an AR(1) noise along the run); the lack-of-fit tests allow for it (χ² on the degrees of freedom it leaves, the scan on the residuals prewhitened by it, the support-mode and sensor-delay scores deflated by (1 + ρ)/(1 − ρ))",
+            "the noise is correlated along the run (lag-one ρ̂ = {:.2} of the whitened residuals over {} speeds, above {:.2}, its {} % limit for white noise; an AR(1) of ρ = {:.2} once the detrending's bias is removed): neighbouring speeds do not average out as independent ones, and the ± are widened ×{:.2} at most for it (the long-run covariance of an AR(1) noise along the run); the lack-of-fit tests allow for it (χ² on the degrees of freedom it leaves, the scan on the residuals prewhitened by it, the support-mode and sensor-delay scores deflated by (1 + ρ)/(1 − ρ))",
             self.lag_one,
             self.speeds,
             self.white_limit,
             100.0 * SERIAL_P,
+            self.ar1_rho,
             self.largest_widening()
         )
     }
@@ -431,6 +597,57 @@ mod tests {
             r[0] += 5.0 * (t as f64 / 376.0 * 2.0 - 1.0).powi(3);
         }
         assert!(measured(&s, &w).is_none());
+    }
+
+    #[test]
+    fn the_detrending_bias_is_removed() {
+        // The expected ρ̂ in closed form against 400 simulated runs (32 and
+        // 376 speeds, ρ 0, 0.5, 0.8): within 0.01 (the simulation's own sd
+        // of a mean: 0.004 at 32 speeds), and ρ̂ well below ρ at 32 speeds.
+        for n in [32, 376] {
+            let s = speeds(n);
+            for rho in [0.0, 0.5, 0.8] {
+                let draws: Vec<f64> = (0..400)
+                    .map(|seed| lag_one_correlation(&s, &ar1(n, rho, 5000 + seed)).expect("ρ̂"))
+                    .collect();
+                let mean = draws.iter().sum::<f64>() / draws.len() as f64;
+                // ar1_rho inverts the closed form: the mean of many ρ̂ maps
+                // back to ρ.
+                let back = ar1_rho(&s, mean);
+                assert!(
+                    (back - rho).abs() < if n == 32 { 0.04 } else { 0.01 },
+                    "{n} speeds, ρ {rho}: mean ρ̂ {mean}, back {back}"
+                );
+            }
+        }
+        let s = speeds(32);
+        assert!(ar1_rho(&s, 0.45) > 0.75, "{}", ar1_rho(&s, 0.45));
+        // 376 speeds at ρ̂ 0.777 (the ROSS runs' mean 0.77): ρ 0.80.
+        let back = ar1_rho(&speeds(376), 0.777);
+        assert!((back - 0.80).abs() < 0.005, "{back}");
+        // Monotone, clamped.
+        assert_eq!(ar1_rho(&speeds(376), 0.99), MAX_RHO);
+        assert_eq!(ar1_rho(&speeds(376), -0.5), 0.0);
+    }
+
+    #[test]
+    fn prewhitened_equations_are_the_rows_prewhitened() {
+        let w = ar1(20, 0.8, 11);
+        let m = DMatrix::from_fn(80, 1, |r, _| w[r / 4][r % 4]);
+        let p = prewhitened_equations(&m, 0.7);
+        let rows = prewhitened(&w, 0.7);
+        for r in 0..80 {
+            assert!((p[(r, 0)] - rows[r / 4][r % 4]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_white_limit_is_at_serial_p() {
+        // 2.326 sd above the mean at 1 %: the limit over 376 speeds is
+        // about −4/376 + 2.326/√(4·376) (the pooled ρ̂'s sd for white noise).
+        let limit = white_quantile(&speeds(376));
+        let approx = -4.0 / 376.0 + 2.326 / (4.0f64 * 376.0).sqrt();
+        assert!((limit - approx).abs() < 0.01, "{limit} against {approx}");
     }
 
     #[test]

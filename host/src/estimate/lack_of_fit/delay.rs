@@ -236,7 +236,7 @@ mod tests {
         let nuisance = |obs: &[Observation]| {
             let eq = Rigid::new(obs, &Weighting::default());
             let omega: Vec<f64> = obs.iter().map(|o| o.omega()).collect();
-            delay_nuisance(&eq, &THETA, &omega, &Parameter::ALL).expect("linearised")
+            delay_nuisance(&eq, &THETA, &omega, &Parameter::ALL, None).expect("linearised")
         };
         let mut rng = rand::rngs::StdRng::seed_from_u64(5100);
         let runs = 200;

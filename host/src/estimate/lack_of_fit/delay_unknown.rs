@@ -433,12 +433,22 @@ impl DelayNuisance {
 /// delay on both `rel` probes, τ in µs; the ± from the information under
 /// the weights of `eq` (frozen at θ), times √(χ²/dof) where the fit leaves
 /// more than them (as diagnose takes the larger of its floor and robust ±).
+/// Where the noise is correlated along the run, an AR(1) of lag-one
+/// correlation `serial` [-] ([`super::super::serial`]), the whitened
+/// equations are first prewhitened by it
+/// ([`super::super::serial::prewhitened_equations`]): τ̂, σ_τ, the ρ and the
+/// paths are then the generalised fit's under that noise. Without it the
+/// white-noise figures read a correlated noise's slow wander as a delay:
+/// on ROSS unseen-eight `corr-noise` (ρ 0.80) τ̂/σ_τ was about three times
+/// what the AR(1) allows, the gate opened and the dampings' ± were widened
+/// ×8-36 (docs/estimation-scatter.md, Session 49 (corr17b)).
 /// `None` where no damping is estimated or the figures cannot be formed.
 pub fn delay_nuisance<E: Equations + ?Sized>(
     eq: &E,
     theta: &[f64; PARAMETERS],
     omega: &[f64],
     columns: &[Parameter],
+    serial: Option<f64>,
 ) -> Option<DelayNuisance> {
     let n = eq.speeds();
     let p = columns.len();
@@ -469,6 +479,15 @@ pub fn delay_nuisance<E: Equations + ?Sized>(
         }
         jac.view_mut((4 * s, p), (4, 1))
             .copy_from(&delay_column(eq, s, w, &l)?);
+    }
+    if let Some(rho) = serial {
+        jac = super::super::serial::prewhitened_equations(&jac, rho);
+        resid = super::super::serial::prewhitened_equations(
+            &DMatrix::from_column_slice(4 * n, 1, resid.as_slice()),
+            rho,
+        )
+        .column(0)
+        .into_owned();
     }
     let dof = (4 * n).checked_sub(p + 1).filter(|&d| d > 0)? as f64;
     let excess = (resid.norm_squared() / dof).max(1.0).sqrt();

@@ -248,13 +248,26 @@ pub fn columns_shape_p(
         })
         .collect();
     let draws = Draws::new(&speeds, &scores[0], rows)?;
+    // Noise correlated along the run (an AR(1) of ρ between neighbouring
+    // speeds, [`crate::estimate::serial`]): the draws carry it, ρ^stride
+    // between the speeds tested. A white bootstrap takes the correlated
+    // noise's clustered squares for a pattern of level the columns miss
+    // (ROSS unseen-eight `corr-noise`: every bearing's columns rejected,
+    // docs/estimation-scatter.md, Session 49 (corr17b)).
+    let phi = crate::estimate::serial::measured_fit(
+        obs,
+        theta,
+        columns,
+        &crate::estimate::ml::Weighting::default(),
+    )
+    .map_or(0.0, |(rho, ..)| rho.powi(stride as i32));
     // A fixed seed: the same data give the same verdict.
     let mut rng = StdRng::seed_from_u64(0x05EE_DC01_u64 ^ speeds.len() as u64);
     let mut buffer = vec![Vector4::zeros(); speeds.len()];
     let mut reached = [0usize; 2];
     let mut made = 0;
     while made < BOOTSTRAP_DRAWS && reached.iter().any(|&r| r < EXCEEDANCES) {
-        draws.draw(&mut rng, &mut buffer);
+        draws.draw(&mut rng, &mut buffer, phi);
         made += 1;
         for (i, score) in scores.iter().enumerate() {
             if score.statistic(&speeds, &buffer)? >= observed[i] {
@@ -327,14 +340,24 @@ impl Draws {
 
     /// One draw of the statistic under the columns: residuals N(0, Σ_own)
     /// less their linearised refit; `buffer` holds them (one per speed).
-    fn draw(&self, rng: &mut StdRng, buffer: &mut [Vector4<f64>]) {
+    /// Their whitened parts are an AR(1) of lag-one correlation `phi` [-]
+    /// along the speeds (0: independent).
+    fn draw(&self, rng: &mut StdRng, buffer: &mut [Vector4<f64>], phi: f64) {
         let mut gradient = SVector::<f64, PARAMETERS>::zeros();
-        for ((e, l), ar) in buffer
+        let innovation = (1.0 - phi * phi).sqrt();
+        let mut z = Vector4::<f64>::zeros();
+        for (t, ((e, l), ar)) in buffer
             .iter_mut()
             .zip(&self.factors)
             .zip(&self.weighted_rows)
+            .enumerate()
         {
-            let z = Vector4::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
+            let fresh = Vector4::from_fn(|_, _| rng.sample::<f64, _>(StandardNormal));
+            z = if t == 0 {
+                fresh
+            } else {
+                z * phi + fresh * innovation
+            };
             *e = l * z;
             gradient += ar.tr_mul(e);
         }
