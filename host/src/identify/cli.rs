@@ -125,6 +125,14 @@ pub struct Args {
     /// is conditional on the table being exact.
     #[arg(long, value_name = "PCT", value_parser = super::conditional::parse_table_uncertainty)]
     pub table_uncertainty: Option<f64>,
+    /// Relative standard uncertainty of each channel's sensitivity [%],
+    /// independent between channels: one PCT for every channel or
+    /// `rel=PCT,ped=PCT`; carried into every ± through each value's
+    /// sensitivity to each channel (σ² = σ_noise² + Σ_c (σ_c·b_c)²; the
+    /// noise-only ± stays in the JSON as `std_err_noise`). Without it the ±
+    /// is conditional on every sensitivity being exact.
+    #[arg(long, value_name = "PCT", value_parser = super::conditional::sensor::parse_sensor_uncertainty)]
+    pub sensor_uncertainty: Option<super::conditional::sensor::SensorUncertainty>,
 }
 
 impl Args {
@@ -168,12 +176,22 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let (run, mut identification) = identify_args(args)?;
     let table_sd = args.table_uncertainty.map(|pct| pct / 100.0);
-    let noise_only = table_sd.map(|sd| {
-        let noise = super::conditional::widen(&mut identification, sd);
+    // The channels' sensitivities against the noise-only ±, before any
+    // widening.
+    let sensors = super::conditional::sensor::of(&identification);
+    let noise_only = (table_sd.is_some() || args.sensor_uncertainty.is_some()).then(|| {
+        let noise: Vec<_> = identification.pedestals.iter().map(|p| p.std_err).collect();
+        if let Some(sd) = table_sd {
+            super::conditional::widen(&mut identification, sd);
+        }
+        if let Some(u) = args.sensor_uncertainty {
+            super::conditional::sensor::widen(&mut identification, u);
+        }
         crate::present::modal::attach(&mut identification);
         noise
     });
-    let conditional = super::conditional::of(&run, &identification, table_sd);
+    let conditional = super::conditional::of(&run, &identification, table_sd)
+        .with_sensors(sensors, args.sensor_uncertainty);
     for p in &identification.pedestals {
         for w in &p.warnings {
             eprintln!("warning: pedestal `{}`: {}", p.bearing, w.message);
@@ -199,6 +217,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         print!("{}", super::on_base::describe(&identification.bases));
         print!("{}", untrusted_reasons(&identification));
         print!("{}", super::delay_unknown::describe(&identification));
+        print!("{}", super::sensor_gain::describe(&identification));
         print!("{}", conditional.to_text());
     }
     if let Some(dir) = &args.plots {

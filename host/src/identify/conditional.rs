@@ -37,6 +37,7 @@ use crate::rundir::RunDir;
 use serde::Serialize;
 use sub_base::SubBaseBound;
 
+pub mod sensor;
 pub mod sub_base;
 
 /// The first promise of every value printed as a support's k, c, m
@@ -73,6 +74,12 @@ pub struct Conditional {
     /// Per bearing with a support-mode test, what the data exclude of a
     /// sub-base above the run ([`sub_base`]).
     pub sub_base: Vec<SubBaseBound>,
+    /// Per bearing judged, how far a 1 % error in each channel's
+    /// sensitivity moves each value ([`sensor`]).
+    pub sensor_sensitivity: Vec<sensor::BearingSensitivity>,
+    /// `--sensor-uncertainty` folded into the ± (`null`: the channels'
+    /// sensitivities taken as exact) ([`sensor`]).
+    pub sensor_uncertainty: Option<sensor::SensorUncertainty>,
 }
 
 impl Conditional {
@@ -86,6 +93,9 @@ impl Conditional {
             }
         }
         for b in &self.sub_base {
+            out.push_str(&format!("  {}\n", b.message()));
+        }
+        for b in &self.sensor_sensitivity {
             out.push_str(&format!("  {}\n", b.message()));
         }
         out
@@ -214,6 +224,8 @@ pub fn of(
         table_uncertainty,
         bearings,
         sub_base,
+        sensor_sensitivity: Vec::new(),
+        sensor_uncertainty: None,
     }
 }
 

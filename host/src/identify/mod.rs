@@ -30,6 +30,7 @@ pub mod model;
 pub mod on_base;
 pub mod physical;
 pub mod plausibility;
+pub mod sensor_gain;
 pub mod synthetic;
 pub mod trust;
 
@@ -177,6 +178,14 @@ pub enum WarningKind {
     /// which reads as a damping: the ± count it as unknown
     /// ([`delay_unknown`]). Informative.
     DelayNotExcluded,
+    /// One channel's sensitivity reads off against its partner's in the
+    /// other direction (rel_y against rel_z, ped_y against ped_z) beyond
+    /// what the noise gives ([`sensor_gain`]). Fit not trusted.
+    SensorGain,
+    /// The data favour and do not exclude a sensitivity ratio between the
+    /// y and z channels: the ± count it as unknown ([`sensor_gain`]).
+    /// Informative.
+    SensorGainNotExcluded,
 }
 
 impl WarningKind {
@@ -192,6 +201,7 @@ impl WarningKind {
                 | WarningKind::SuspectedConventionError
                 | WarningKind::LackOfFit
                 | WarningKind::Implausible
+                | WarningKind::SensorGain
         )
     }
 }
@@ -288,6 +298,10 @@ pub struct Identification {
     /// The bases pedestals were identified on ([`on_base`]); empty: rigid ground.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bases: Vec<on_base::BaseReport>,
+    /// What each bearing's data say of its channels' sensitivities
+    /// ([`sensor_gain`]); empty where not judged.
+    #[serde(default, skip_deserializing, skip_serializing_if = "Vec::is_empty")]
+    pub sensor_gain: Vec<sensor_gain::GainEvidence>,
 }
 
 fn ols_name() -> String {
@@ -523,6 +537,7 @@ pub fn identify_prepared(
     trust::mark_lack_of_fit(&mut identification);
     plausibility::mark(run, &mut identification);
     delay_unknown::mark(&mut identification);
+    sensor_gain::mark(prepared, &mut identification);
     Ok(identification)
 }
 
@@ -591,6 +606,7 @@ fn fit_observed(
         pedestals,
         noise: noise_reports,
         bases: Vec::new(),
+        sensor_gain: Vec::new(),
     })
 }
 

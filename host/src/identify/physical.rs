@@ -516,6 +516,7 @@ mod tests {
             pedestals: vec![f],
             noise: Default::default(),
             bases: Vec::new(),
+            sensor_gain: Vec::new(),
         };
         recheck_run(&mut run, &Default::default());
         recheck_run(&mut run, &Default::default());
@@ -570,6 +571,7 @@ mod tests {
             pedestals: vec![lone, fit([6e6, 8e6, 60.0, 10.0, 5.0], SE)],
             noise: Default::default(),
             bases: Vec::new(),
+            sensor_gain: Vec::new(),
         };
         recheck_run(&mut run, &Default::default());
         assert!(run
