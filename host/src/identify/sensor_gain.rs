@@ -67,22 +67,31 @@ pub const CHANNELS: [&str; 4] = ["rel_y", "rel_z", "ped_y", "ped_z"];
 /// The two gain ratios tested: (channel, the channel it is read against).
 pub const RATIOS: [(usize, usize); 2] = [(0, 1), (2, 3)];
 
-/// χ²₂'s upper 5 % point [-]: beyond it the data favour a gain ratio (the
-/// gate of the widening, as the delay's 2σ).
-pub const FAVOURED: f64 = 5.991;
+/// The level at which the data favour a gain ratio [-] (the gate of the
+/// widening, as the delay's 2σ): χ²_k's upper 5 % point.
+pub const FAVOURED_LEVEL: f64 = 0.05;
 
 /// The family-wise false-alarm rate per run of the untrusting rule [-].
 pub const RUN_LEVEL: f64 = 0.01;
 
-/// The statistic beyond which a ratio is significant in a run of
-/// `bearings` bearings tested [-]: χ²₂'s upper RUN_LEVEL/bearings point,
-/// −2·ln(RUN_LEVEL/bearings) (Bonferroni; 10.6 for two bearings).
-pub fn significant(bearings: usize) -> f64 {
-    -2.0 * (RUN_LEVEL / bearings.max(1) as f64).ln()
+/// Largest ± of a direction of the two ratios that is tested [-]: beyond
+/// it the data do not estimate it (the linearisation 1/(1 + ε) ≈ 1 − ε is
+/// off by a tenth of ε at ε = 10 %, within 2σ of a ± of 5 %).
+pub const MAX_RATIO_STD_ERR: f64 = 0.05;
+
+/// χ²_`dof`'s upper `level` point [-].
+fn chi2_upper(level: f64, dof: usize) -> f64 {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    ChiSquared::new(dof.max(1) as f64).map_or(f64::INFINITY, |d| d.inverse_cdf(1.0 - level))
 }
 
-/// χ²₂'s 95 % point, the region of the ratios the data allow [-].
-const REGION: f64 = FAVOURED;
+/// The statistic beyond which the ratios are significant in a run of
+/// `bearings` bearings tested, on `dof` estimable directions [-]:
+/// χ²_dof's upper RUN_LEVEL/bearings point (Bonferroni; 10.6 for two
+/// bearings and two directions).
+pub fn significant(bearings: usize, dof: usize) -> f64 {
+    chi2_upper(RUN_LEVEL / bearings.max(1) as f64, dof)
+}
 
 /// What the data say of one bearing's channel gains (module docs;
 /// `sensor_gain` in `plinth identify --json`).
@@ -103,15 +112,19 @@ pub struct GainEvidence {
     pub ratio_correlation: f64,
     /// ε̂ᵀC⁻¹ε̂, χ²₂ under the null [-].
     pub statistic: f64,
+    /// The estimable directions of the two ratios tested (0-2) [-].
+    pub dof: usize,
     /// The run's significance point [`significant`] [-].
     pub threshold: f64,
+    /// The point beyond which the data favour a ratio, χ²_dof at 5 % [-].
+    pub favoured: f64,
     /// ρ = σ(ratios free)/σ(ratios held) per θ [-] (1 for a fixed value).
     pub rho: [f64; PARAMETERS],
     /// t² = (bᵀε̂)²/(bᵀCb) per θ, the ratios' estimate along the value's
     /// path in units of its spread [-].
     pub t_squared: [f64; PARAMETERS],
-    /// `untrusted` (significant), `widened` (favoured, not excluded) or
-    /// `none`.
+    /// `untrusted` (significant), `widened` (favoured, not excluded),
+    /// `none`, or `not_judged` (the noise not measured: no noise columns).
     pub verdict: &'static str,
 }
 
@@ -127,20 +140,22 @@ impl GainEvidence {
     pub fn excluded(&self) -> bool {
         (0..PARAMETERS).all(|i| {
             let spread = (self.rho[i] * self.rho[i] - 1.0).max(0.0).sqrt();
-            spread * (self.t_squared[i].sqrt() + REGION.sqrt()) <= 1.0
+            spread * (self.t_squared[i].sqrt() + self.favoured.sqrt()) <= 1.0
         })
     }
 
     /// The ratio that shows most, in words: "rel_y reads about −5.0 ± 0.4 %
     /// relative to rel_z".
     pub fn strongest(&self) -> String {
-        let j = if (self.ratio[0] / self.ratio_std_err[0]).abs()
-            >= (self.ratio[1] / self.ratio_std_err[1]).abs()
-        {
-            0
-        } else {
-            1
+        let z = |j: usize| {
+            let v = (self.ratio[j] / self.ratio_std_err[j]).abs();
+            if v.is_finite() {
+                v
+            } else {
+                0.0
+            }
         };
+        let j = if z(0) >= z(1) { 0 } else { 1 };
         let (a, b) = RATIOS[j];
         format!(
             "{} reads about {:+.1} ± {:.1} % relative to {}",
@@ -275,29 +290,13 @@ fn objective(
     Rigid::new(&undone, weighting).objective(theta)
 }
 
-/// (FᵀF)⁻¹ of `f` with its columns scaled to unit norm for the inversion
-/// [each column's unit⁻²]; `None` where it is singular.
-fn scaled_inverse(f: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-    let norms: Vec<f64> = f.column_iter().map(|c| c.norm()).collect();
-    if !norms.iter().all(|v| v.is_finite() && *v > 0.0) {
-        return None;
-    }
-    let mut scaled = f.clone();
-    for (mut c, s) in scaled.column_iter_mut().zip(&norms) {
-        c /= *s;
-    }
-    let inv = (scaled.transpose() * &scaled).try_inverse()?;
-    Some(DMatrix::from_fn(inv.nrows(), inv.ncols(), |i, j| {
-        inv[(i, j)] / (norms[i] * norms[j])
-    }))
-}
-
 /// What the data of `obs` (one bearing, as observed) say of its channel
 /// gains at the fit `fit` (module docs); `outliers` the speeds the fit left
 /// out [Hz], `variance_scale` and `equation_error_sd` [N] the fit's noise
 /// level and equation error, `inflation` the long-run factor of a serial
-/// correlation of its residuals (1 without), `threshold` the run's
-/// significance point. `None` where a figure cannot be formed.
+/// correlation of its residuals (1 without), `bearings` the number of
+/// bearings of the run tested. `None` where a figure cannot be formed or
+/// no direction of the ratios is estimable.
 #[allow(clippy::too_many_arguments)]
 pub fn evidence(
     fit: &PedestalFit,
@@ -306,7 +305,7 @@ pub fn evidence(
     variance_scale: f64,
     equation_error_sd: f64,
     inflation: f64,
-    threshold: f64,
+    bearings: usize,
 ) -> Option<GainEvidence> {
     let columns: Vec<Parameter> = Parameter::ALL
         .into_iter()
@@ -331,51 +330,109 @@ pub fn evidence(
             path[c][q as usize] = paths[(k, c)];
         }
     }
-    // The two ratios: the y channels' columns with θ free. The step is
-    // one Newton step of J from (θ̂, ε = 0) under the Gauss–Newton
-    // information FᵀF, F = [X T_y], with J's exact gradient (module docs:
-    // its Σ(ε) term removes the errors-in-variables bias a column made of
-    // noisy phasors gives).
-    let mut free = DMatrix::zeros(4 * n, p + 2);
-    free.columns_mut(0, p).copy_from(&x);
-    for (j, &(a, _)) in RATIOS.iter().enumerate() {
-        free.column_mut(p + j).copy_from(&t.column(a));
-    }
+    // The two ratios, with θ free: one Newton step of J from (θ̂, ε = 0)
+    // with J's exact gradient and Hessian (module docs: J's Σ(ε) term
+    // removes the errors-in-variables bias and the information a
+    // Gauss–Newton form would give a direction J does not see).
     let weighting = Weighting::equation_error(tau2);
-    let cost = |th: &[f64; PARAMETERS], eps: [f64; 4]| objective(&obs, &weighting, th, eps);
-    let j0 = cost(&theta, [0.0; 4])?;
     let held_se = information_std_errs(&x)?;
-    let mut half_grad = DVector::zeros(p + 2);
-    for (k, &q) in columns.iter().enumerate() {
-        let i = q as usize;
-        let h = 1e-3 * held_se[k].max(1e-6 * theta[i].abs());
-        let (mut up, mut dn) = (theta, theta);
-        up[i] += h;
-        dn[i] -= h;
-        half_grad[k] = (cost(&up, [0.0; 4])? - cost(&dn, [0.0; 4])?) / (4.0 * h);
+    // J's gradient and Hessian over (θ free, ε_rel_y, ε_ped_y) by central
+    // differences of the one definition of J (module docs), each step a
+    // tenth of the value's ± (ε: 1e-3).
+    let m = p + 2;
+    let steps: Vec<f64> = (0..m)
+        .map(|k| if k < p { 0.1 * held_se[k] } else { 1e-3 })
+        .collect();
+    let at = |d: &[f64]| -> Option<f64> {
+        let mut th = theta;
+        for (k, &c) in columns.iter().enumerate() {
+            th[c as usize] += d[k];
+        }
+        let mut eps = [0.0; 4];
+        for (j, &(a, _)) in RATIOS.iter().enumerate() {
+            eps[a] = d[p + j];
+        }
+        objective(&obs, &weighting, &th, eps)
+    };
+    let zero = vec![0.0; m];
+    let j0 = at(&zero)?;
+    let mut grad = DVector::zeros(m);
+    let mut hess = DMatrix::zeros(m, m);
+    let mut plus = vec![0.0; m];
+    let mut minus = vec![0.0; m];
+    for k in 0..m {
+        let mut d = zero.clone();
+        d[k] = steps[k];
+        plus[k] = at(&d)?;
+        d[k] = -steps[k];
+        minus[k] = at(&d)?;
+        grad[k] = (plus[k] - minus[k]) / (2.0 * steps[k]);
+        hess[(k, k)] = (plus[k] - 2.0 * j0 + minus[k]) / (steps[k] * steps[k]);
     }
-    for (j, &(a, _)) in RATIOS.iter().enumerate() {
-        let h = 1e-4;
-        let (mut up, mut dn) = ([0.0; 4], [0.0; 4]);
-        up[a] = h;
-        dn[a] = -h;
-        half_grad[p + j] = (cost(&theta, up)? - cost(&theta, dn)?) / (4.0 * h);
+    for k in 0..m {
+        for l in (k + 1)..m {
+            let mut d = zero.clone();
+            d[k] = steps[k];
+            d[l] = steps[l];
+            let pp = at(&d)?;
+            d[k] = -steps[k];
+            d[l] = -steps[l];
+            let mm = at(&d)?;
+            // f(+,+) + f(−,−) = 2f + h_k²f_kk + h_l²f_ll + 2h_kh_lf_kl.
+            let v = (pp + mm
+                - 2.0 * j0
+                - steps[k] * steps[k] * hess[(k, k)]
+                - steps[l] * steps[l] * hess[(l, l)])
+                / (2.0 * steps[k] * steps[l]);
+            hess[(k, l)] = v;
+            hess[(l, k)] = v;
+        }
     }
-    let inverse = scaled_inverse(&free)?;
-    let step = -(&inverse * &half_grad);
-    let g = [step[p], step[p + 1]];
+    // θ profiled out: H_eff = H_εε − H_εθ·H_θθ⁻¹·H_θε, g_eff likewise.
+    let h_tt = hess.view((0, 0), (p, p)).into_owned();
+    let h_te = hess.view((0, p), (p, 2)).into_owned();
+    let h_ee = hess.view((p, p), (2, 2)).into_owned();
+    let h_tt_inv = h_tt.clone().try_inverse()?;
+    let h_eff = &h_ee - h_te.transpose() * &h_tt_inv * &h_te;
+    let g_eff = grad.rows(p, 2).into_owned() - h_te.transpose() * &h_tt_inv * grad.rows(0, p);
     let excess = (j0 / dof).max(1.0).sqrt() * inflation.max(1.0).sqrt();
-    let tr = DMatrix::from_fn(4 * n, 2, |i, j| t[(i, RATIOS[j].0)]);
-    let c = inverse.view((p, p), (2, 2)).into_owned() * (excess * excess);
-    let (c00, c01, c11) = (c[(0, 0)], c[(0, 1)], c[(1, 1)]);
-    let det = c00 * c11 - c01 * c01;
-    if !(c00 > 0.0 && c11 > 0.0 && det > 0.0) {
+    // Per eigen-direction of H_eff: estimable where its ± (√(2/λ)·excess)
+    // is below MAX_RATIO_STD_ERR; the others (e.g. all y channels alike at
+    // a bearing whose table has no cross terms: J does not change) are
+    // left out and the test has that many fewer degrees of freedom.
+    let eig = h_eff.clone().symmetric_eigen();
+    let mut g = [0.0; 2];
+    let mut statistic = 0.0;
+    let mut dof_test = 0usize;
+    let mut c = DMatrix::<f64>::zeros(2, 2);
+    for k in 0..2 {
+        let lambda = eig.eigenvalues[k];
+        let v = eig.eigenvectors.column(k).into_owned();
+        let sd = (2.0 / lambda).sqrt() * excess;
+        if !(lambda > 0.0 && sd.is_finite() && sd <= MAX_RATIO_STD_ERR) {
+            continue;
+        }
+        // Newton step along v: −(vᵀg)/λ; its variance sd².
+        let along = -(v.dot(&g_eff)) / lambda;
+        g[0] += along * v[0];
+        g[1] += along * v[1];
+        statistic += (along / sd).powi(2);
+        c += &v * v.transpose() * (sd * sd);
+        dof_test += 1;
+    }
+    if dof_test == 0 {
         return None;
     }
-    let statistic = (g[0] * g[0] * c11 - 2.0 * g[0] * g[1] * c01 + g[1] * g[1] * c00) / det;
+    let threshold = significant(bearings, dof_test);
+    let favoured = chi2_upper(FAVOURED_LEVEL, dof_test);
+    let tr = DMatrix::from_fn(4 * n, 2, |i, j| t[(i, RATIOS[j].0)]);
+    let (c00, c01, c11) = (c[(0, 0)], c[(0, 1)], c[(1, 1)]);
     // ρ and t² per θ from the ratios' joint path B = −X⁺T'.
     let joint = -solve(&x, &tr)?;
     let held = held_se;
+    let mut free = DMatrix::zeros(4 * n, p + 2);
+    free.columns_mut(0, p).copy_from(&x);
+    free.columns_mut(p, 2).copy_from(&tr);
     let free_se = information_std_errs(&free)?;
     let mut rho = [1.0; PARAMETERS];
     let mut t_squared = [0.0; PARAMETERS];
@@ -401,14 +458,16 @@ pub fn evidence(
         ratio_std_err: [c00.sqrt(), c11.sqrt()],
         ratio_correlation: c01 / (c00 * c11).sqrt(),
         statistic,
+        dof: dof_test,
         threshold,
+        favoured,
         rho,
         t_squared,
         verdict: "none",
     };
     e.verdict = if statistic > threshold {
         "untrusted"
-    } else if statistic > FAVOURED && !e.excluded() {
+    } else if statistic > favoured && !e.excluded() {
         "widened"
     } else {
         "none"
@@ -432,7 +491,7 @@ pub fn mark(prepared: &super::data::Prepared, identification: &mut Identificatio
         .filter(|(_, p)| p.base.is_none())
         .map(|(i, _)| i)
         .collect();
-    let threshold = significant(tested.len());
+    let bearings = tested.len();
     let mut found = Vec::new();
     for i in tested {
         let p = &identification.pedestals[i];
@@ -458,21 +517,30 @@ pub fn mark(prepared: &super::data::Prepared, identification: &mut Identificatio
             report.variance_scale,
             report.equation_error_sd,
             inflation,
-            threshold,
+            bearings,
         ) else {
             continue;
         };
+        // Acted on only where the noise was measured (noise columns): with
+        // the level from digits or from the scatter the statistic is not
+        // calibrated (docs/trust.md, Session 49 (gain17): the 12-digit
+        // runs' simulator spline, unseen-eight's scatter-level runs).
+        let mut e = e;
+        if report.source != crate::estimate::noise::NoiseSource::Columns {
+            e.verdict = "not_judged";
+        }
         let p = &mut identification.pedestals[i];
         match e.verdict {
             "untrusted" => {
                 p.warnings.push(Warning {
                     kind: WarningKind::SensorGain,
                     message: format!(
-                        "{} {} (the y/z sensitivity ratios' statistic {:.1} > {:.1}, χ²₂ at 1 % per run across the bearings): check the probe's calibration (a probe calibrated on another steel than the journal's reads 5-10 % off; a pick-up's sensitivity moves a few % with temperature); a channel's sensitivity error goes into that direction's k and c",
+                        "{} {} (the y/z sensitivity ratios' statistic {:.1} > {:.1}, χ² on {} at 1 % per run across the bearings): check the probe's calibration (a probe calibrated on another steel than the journal's reads 5-10 % off; a pick-up's sensitivity moves a few % with temperature); a channel's sensitivity error goes into that direction's k and c",
                         p.bearing,
                         e.strongest(),
                         e.statistic,
-                        e.threshold
+                        e.threshold,
+                        e.dof
                     ),
                 });
                 p.trusted = false;
@@ -509,9 +577,10 @@ fn widen(p: &mut PedestalFit, e: &GainEvidence) {
     p.warnings.push(Warning {
         kind: WarningKind::SensorGainNotExcluded,
         message: format!(
-            "the data do not exclude a sensitivity error between its y and z channels ({}; statistic {:.1} > {FAVOURED}, below the {:.1} that untrusts): its ± count the ratios as unknown, multiplied by √(1 + (ρ² − 1)·(1 + t²)) ({}); the values are the fit's",
+            "the data do not exclude a sensitivity error between its y and z channels ({}; statistic {:.1} > {:.1}, below the {:.1} that untrusts): its ± count the ratios as unknown, multiplied by √(1 + (ρ² − 1)·(1 + t²)) ({}); the values are the fit's",
             e.strongest(),
             e.statistic,
+            e.favoured,
             e.threshold,
             if widened.is_empty() {
                 "every factor below 1.05".to_string()
