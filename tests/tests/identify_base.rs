@@ -129,6 +129,7 @@ fn identify(dir: &Path, groups: Option<&str>) -> anyhow::Result<(RunDir, Identif
         figure_style: plinth::plots::StyleArgs::default(),
         speeds: None,
         table_uncertainty: None,
+        sensor_uncertainty: None,
     };
     identify_args(&args)
 }

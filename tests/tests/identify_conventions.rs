@@ -230,6 +230,7 @@ fn identify_exit_code(dir: &Path) -> u8 {
         figure_style: plinth::plots::StyleArgs::default(),
         speeds: None,
         table_uncertainty: None,
+        sensor_uncertainty: None,
     };
     match identify_cli(&args) {
         Ok(()) => 0,
