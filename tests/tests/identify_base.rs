@@ -130,6 +130,7 @@ fn identify(dir: &Path, groups: Option<&str>) -> anyhow::Result<(RunDir, Identif
         speeds: None,
         table_uncertainty: None,
         speed_uncertainty: None,
+        sensor_uncertainty: None,
     };
     identify_args(&args)
 }

@@ -231,6 +231,7 @@ fn identify_exit_code(dir: &Path) -> u8 {
         speeds: None,
         table_uncertainty: None,
         speed_uncertainty: None,
+        sensor_uncertainty: None,
     };
     match identify_cli(&args) {
         Ok(()) => 0,

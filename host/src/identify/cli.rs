@@ -134,6 +134,14 @@ pub struct Args {
     /// the ± is conditional on the speed column being right.
     #[arg(long, value_name = "HZ", value_parser = crate::args::positive)]
     pub speed_uncertainty: Option<f64>,
+    /// Relative standard uncertainty of each channel's sensitivity [%],
+    /// independent between channels: one PCT for every channel or
+    /// `rel=PCT,ped=PCT`; carried into every ± through each value's
+    /// sensitivity to each channel (σ² = σ_noise² + Σ_c (σ_c·b_c)²; the
+    /// noise-only ± stays in the JSON as `std_err_noise`). Without it the ±
+    /// is conditional on every sensitivity being exact.
+    #[arg(long, value_name = "PCT", value_parser = super::conditional::sensor::parse_sensor_uncertainty)]
+    pub sensor_uncertainty: Option<super::conditional::sensor::SensorUncertainty>,
 }
 
 impl Args {
@@ -177,6 +185,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let (run, mut identification) = identify_args(args)?;
     let table_sd = args.table_uncertainty.map(|pct| pct / 100.0);
+    // The channels' sensitivities against the noise-only ±, before any
+    // widening.
+    let sensors = super::conditional::sensor::of(&identification);
     let noise_before = identification
         .pedestals
         .iter()
@@ -188,11 +199,18 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(sd) = args.speed_uncertainty {
         super::conditional::speed::widen(&mut identification, sd);
     }
-    let noise_only = (table_sd.is_some() || args.speed_uncertainty.is_some()).then(|| {
+    if let Some(u) = args.sensor_uncertainty {
+        super::conditional::sensor::widen(&mut identification, u);
+    }
+    let widened = table_sd.is_some()
+        || args.speed_uncertainty.is_some()
+        || args.sensor_uncertainty.is_some();
+    let noise_only = widened.then(|| {
         crate::present::modal::attach(&mut identification);
         noise_before
     });
-    let mut conditional = super::conditional::of(&run, &identification, table_sd);
+    let mut conditional = super::conditional::of(&run, &identification, table_sd)
+        .with_sensors(sensors, args.sensor_uncertainty);
     conditional.speed_uncertainty_hz = args.speed_uncertainty;
     for p in &identification.pedestals {
         for w in &p.warnings {
@@ -220,6 +238,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         print!("{}", untrusted_reasons(&identification));
         print!("{}", super::delay_unknown::describe(&identification));
         print!("{}", super::speed_lag::describe(&identification));
+        print!("{}", super::sensor_gain::describe(&identification));
         print!("{}", conditional.to_text());
     }
     if let Some(dir) = &args.plots {

@@ -39,6 +39,7 @@ use sub_base::SubBaseBound;
 
 pub mod drift;
 pub mod speed;
+pub mod sensor;
 pub mod sub_base;
 
 /// The first promise of every value printed as a support's k, c, m
@@ -85,6 +86,12 @@ pub struct Conditional {
     /// `covariance` [Hz] (`--speed-uncertainty`; `null`: the ± take the
     /// speed column as right).
     pub speed_uncertainty_hz: Option<f64>,
+    /// Per bearing judged, how far a 1 % error in each channel's
+    /// sensitivity moves each value ([`sensor`]).
+    pub sensor_sensitivity: Vec<sensor::BearingSensitivity>,
+    /// `--sensor-uncertainty` folded into the ± (`null`: the channels'
+    /// sensitivities taken as exact) ([`sensor`]).
+    pub sensor_uncertainty: Option<sensor::SensorUncertainty>,
 }
 
 impl Conditional {
@@ -107,6 +114,9 @@ impl Conditional {
             out.push_str(&format!("  The ± include a {sd} Hz standard uncertainty of the speed column (--speed-uncertainty): σ² = σ_noise² + (b·σ_f)², b each value's shift per Hz of speed error.\n"));
         }
         for b in self.speed_column.iter().filter(|b| b.said) {
+            out.push_str(&format!("  {}\n", b.message()));
+        }
+        for b in &self.sensor_sensitivity {
             out.push_str(&format!("  {}\n", b.message()));
         }
         out
@@ -239,6 +249,8 @@ pub fn of(
         support_drift: drift::of(run, identification),
         speed_column: speed::of(identification),
         speed_uncertainty_hz: None,
+        sensor_sensitivity: Vec::new(),
+        sensor_uncertainty: None,
     }
 }
 

@@ -31,6 +31,7 @@ pub mod on_base;
 pub mod physical;
 pub mod plausibility;
 pub mod speed_lag;
+pub mod sensor_gain;
 pub mod synthetic;
 pub mod trust;
 
@@ -183,6 +184,14 @@ pub enum WarningKind {
     /// values by more than their ±: the ± count it as unknown
     /// ([`speed_lag`]). Informative.
     SpeedLagNotExcluded,
+    /// One channel's sensitivity reads off against its partner's in the
+    /// other direction (rel_y against rel_z, ped_y against ped_z) beyond
+    /// what the noise gives ([`sensor_gain`]). Fit not trusted.
+    SensorGain,
+    /// The data favour and do not exclude a sensitivity ratio between the
+    /// y and z channels: the ± count it as unknown ([`sensor_gain`]).
+    /// Informative.
+    SensorGainNotExcluded,
 }
 
 impl WarningKind {
@@ -198,6 +207,7 @@ impl WarningKind {
                 | WarningKind::SuspectedConventionError
                 | WarningKind::LackOfFit
                 | WarningKind::Implausible
+                | WarningKind::SensorGain
         )
     }
 }
@@ -298,6 +308,10 @@ pub struct Identification {
     /// bearing ([`speed_lag`]); `None` where it was not estimated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub speed_lag: Option<speed_lag::SpeedLag>,
+    /// What each bearing's data say of its channels' sensitivities
+    /// ([`sensor_gain`]); empty where not judged.
+    #[serde(default, skip_deserializing, skip_serializing_if = "Vec::is_empty")]
+    pub sensor_gain: Vec<sensor_gain::GainEvidence>,
 }
 
 fn ols_name() -> String {
@@ -533,6 +547,7 @@ pub fn identify_prepared(
     trust::mark_lack_of_fit(&mut identification);
     plausibility::mark(run, &mut identification);
     delay_unknown::mark(&mut identification);
+    sensor_gain::mark(prepared, &mut identification);
     speed_lag::mark(run, &prepared.bearings, &mut identification);
     Ok(identification)
 }
@@ -603,6 +618,7 @@ fn fit_observed(
         noise: noise_reports,
         bases: Vec::new(),
         speed_lag: None,
+        sensor_gain: Vec::new(),
     })
 }
 

@@ -517,6 +517,7 @@ mod tests {
             noise: Default::default(),
             bases: Vec::new(),
             speed_lag: None,
+            sensor_gain: Vec::new(),
         };
         recheck_run(&mut run, &Default::default());
         recheck_run(&mut run, &Default::default());
@@ -572,6 +573,7 @@ mod tests {
             noise: Default::default(),
             bases: Vec::new(),
             speed_lag: None,
+            sensor_gain: Vec::new(),
         };
         recheck_run(&mut run, &Default::default());
         assert!(run
