@@ -202,9 +202,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(u) = args.sensor_uncertainty {
         super::conditional::sensor::widen(&mut identification, u);
     }
-    let widened = table_sd.is_some()
-        || args.speed_uncertainty.is_some()
-        || args.sensor_uncertainty.is_some();
+    let widened =
+        table_sd.is_some() || args.speed_uncertainty.is_some() || args.sensor_uncertainty.is_some();
     let noise_only = widened.then(|| {
         crate::present::modal::attach(&mut identification);
         noise_before

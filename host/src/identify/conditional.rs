@@ -38,8 +38,8 @@ use serde::Serialize;
 use sub_base::SubBaseBound;
 
 pub mod drift;
-pub mod speed;
 pub mod sensor;
+pub mod speed;
 pub mod sub_base;
 
 /// The first promise of every value printed as a support's k, c, m

@@ -30,8 +30,8 @@ pub mod model;
 pub mod on_base;
 pub mod physical;
 pub mod plausibility;
-pub mod speed_lag;
 pub mod sensor_gain;
+pub mod speed_lag;
 pub mod synthetic;
 pub mod trust;
 
