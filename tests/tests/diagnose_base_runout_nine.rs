@@ -23,6 +23,7 @@ const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ross-unseen-9");
 /// it: a runout chosen by a likelihood ratio in the tens of thousands is
 /// many of its ± from zero in every component.
 #[test]
+#[ignore = "slow: 340 s of wall time at load 9-13 (the joint fit's Newton steps on 90 speeds), above the 30 s a test may take; run with --ignored"]
 fn base_and_runout_at_b2_trusted_only_when_right_and_runout_error_matches_its_evidence() {
     let run = unseen::stored(DATA, "base-runout-8201");
     let (_, options) = machine_and_options(DATA, "unseen-nine.toml");
