@@ -26,8 +26,12 @@ pub(super) struct Chosen {
     pub(super) step: usize,
     /// Bearing index.
     bearing: usize,
-    /// Its parameters.
+    /// The effect.
+    pub(super) effect: crate::effects::EffectKind,
+    /// Its parameters, with the names the step reports them by.
     params: Vec<Param>,
+    /// The names of `params` (`Candidate::parameters`).
+    names: Vec<String>,
     /// Null hypothesis: Σ coef·param = 0 per row.
     null: Vec<Vec<(Param, f64)>>,
 }
@@ -41,7 +45,9 @@ impl Chosen {
         Self {
             step,
             bearing: c.bearing,
+            effect: c.effect,
             params: c.parameters.iter().map(|(_, r)| id(r)).collect(),
+            names: c.parameters.iter().map(|(n, _)| n.clone()).collect(),
             null: c
                 .null
                 .iter()
@@ -60,6 +66,19 @@ impl Chosen {
         n_total: usize,
     ) -> Option<Evidence> {
         evidence_against(prep, state, self.bearing, &self.null, checked, n_total)
+    }
+
+    /// Its bearing's index.
+    pub(super) fn bearing(&self) -> usize {
+        self.bearing
+    }
+
+    /// Its parameters with their names, by identity.
+    pub(super) fn named_params(&self) -> impl Iterator<Item = (&str, Param)> + '_ {
+        self.names
+            .iter()
+            .map(String::as_str)
+            .zip(self.params.iter().copied())
     }
 
     /// Number of constraints of its null hypothesis (its q).

@@ -15,7 +15,9 @@ use anyhow::Result;
 use plinth_shared::regression::Parameter;
 
 pub(super) use corrections::{correction_on_base, lr_test, weakest_on_base};
-pub(super) use joint::{joint_on_base, scale_to_misfit, widen_by_corrections};
+pub(super) use joint::{
+    joint_on_base, scale_to_misfit, widen_by_corrections, CarriedVariance, JointCorrections,
+};
 
 mod corrections;
 mod held;

@@ -21,6 +21,7 @@
 
 use super::held::{correction_slots, set_slot, slot_step_of, slot_value, Slot};
 use super::BaseOn;
+use crate::diagnose::backward::Param;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::state::State;
@@ -31,6 +32,11 @@ use nalgebra::{DMatrix, DVector};
 /// Newton iterations on the profile χ² (each costs 1 + 2n + n(n−1)/2
 /// base refits for n corrections).
 const JOINT_ITERATIONS: usize = 3;
+
+/// The corrections' values and standard errors in the joint fit of the
+/// base and the corrections: each correcting parameter by identity, its
+/// value and its ± from the profile χ²'s Hessian, Cov(s) = 2·H⁻¹ (SI).
+pub(in crate::diagnose) type JointCorrections = Vec<(Param, f64, f64)>;
 
 /// The extra variance of each bearing's pedestal θ (k_y, k_z, m, c_y, c_z
 /// in their units squared) that the corrections' uncertainty carries in.
@@ -56,7 +62,7 @@ pub(in crate::diagnose) fn joint_on_base(
     state: &State,
     on: &BaseOn,
     opts: &Options,
-) -> (State, BaseOn, CarriedVariance) {
+) -> (State, BaseOn, CarriedVariance, JointCorrections) {
     let slots = correction_slots(state);
     let mut cur = state.clone();
     // The profile χ² at the corrections as they are: the base refitted from
@@ -74,7 +80,7 @@ pub(in crate::diagnose) fn joint_on_base(
         BaseOn::refit(prep, &cur, &on.fit, opts)
     };
     let Some(mut probe) = refit else {
-        return (state.clone(), on.clone(), Vec::new());
+        return (state.clone(), on.clone(), Vec::new(), Vec::new());
     };
     let mut best = if probe.chi2 < on.chi2 {
         probe.clone()
@@ -116,16 +122,52 @@ pub(in crate::diagnose) fn joint_on_base(
     }
     // The derivatives at the final point (those of the last iteration when
     // it did not move).
+    let taken = last.clone();
     let d = match last {
         Some(d) if d.at_chi2 == probe.chi2 => Some(d),
         _ => derivatives(prep, &cur, &probe, &slots, opts),
     };
-    let carried = d.map_or_else(Vec::new, |d| carried_variance(&d, n));
-    (cur, best, carried)
+    let carried = d.as_ref().map_or_else(Vec::new, |d| carried_variance(d, n));
+    // The corrections' ± from the derivatives at the final point, else
+    // from the last ones taken on the way (the profile χ² is nearly
+    // quadratic in the corrections: a runout's exactly, with the base held).
+    // Only the reported ± of the corrections use the latter; the pedestals'
+    // ± are widened only by derivatives at the final point.
+    let errors = d
+        .or(taken)
+        .map_or_else(Vec::new, |d| joint_corrections(&cur, &slots, &d));
+    (cur, best, carried, errors)
 }
+
+/// The corrections of `state` at `slots` with their ± from the profile
+/// χ²'s Hessian in `d` ([`JointCorrections`]); none when it is not
+/// positive definite.
+fn joint_corrections(state: &State, slots: &[Slot], d: &Derivatives) -> JointCorrections {
+    let Some(ch) = d.hess.clone().cholesky() else {
+        return Vec::new();
+    };
+    let cov = ch.inverse() * 2.0;
+    slots
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| {
+            let id = match s {
+                Slot::Term(k) => Param::Term(state.model.terms[k]),
+                Slot::Nonlinear(k) => Param::Nonlinear(state.model.nonlinear[k]),
+            };
+            (id, slot_value(state, s), cov[(i, i)].max(0.0).sqrt())
+        })
+        .collect()
+}
+
+/// Times a finite-difference step is shrunk (by [`STEP_SHRINK`]) when the
+/// base refit at a trial point fails or ends non-physical.
+const STEP_RETRIES: usize = 3;
+const STEP_SHRINK: f64 = 4.0;
 
 /// Finite-difference derivatives of the profile χ² and of the refitted
 /// pedestals in the corrections.
+#[derive(Clone)]
 struct Derivatives {
     /// The profile χ² where they were taken.
     at_chi2: f64,
@@ -149,7 +191,7 @@ fn derivatives(
     opts: &Options,
 ) -> Option<Derivatives> {
     let n = slots.len();
-    let h: Vec<f64> = slots.iter().map(|&s| slot_step_of(state, s)).collect();
+    let mut h: Vec<f64> = slots.iter().map(|&s| slot_step_of(state, s)).collect();
     let eval = |moves: &[(usize, f64)]| {
         let mut s = state.clone();
         for &(i, d) in moves {
@@ -166,19 +208,29 @@ fn derivatives(
         .map(|(b, _)| (*b, DMatrix::zeros(5, n)))
         .collect();
     for i in 0..n {
-        let p = eval(&[(i, h[i])])?;
-        let m = eval(&[(i, -h[i])])?;
-        let (tp, tm) = (thetas(&p.fit), thetas(&m.fit));
-        if tp.len() != theta0.len() || tm.len() != theta0.len() {
-            return None;
+        // The base refit starts from the settled base and can fall into
+        // another optimum (a non-physical one) at a trial point; a
+        // smaller step stays in the settled one's basin.
+        let mut pair = None;
+        for _ in 0..=STEP_RETRIES {
+            let (p, m) = (eval(&[(i, h[i])]), eval(&[(i, -h[i])]));
+            if let (Some(p), Some(m)) = (p, m) {
+                let (tp, tm) = (thetas(&p.fit), thetas(&m.fit));
+                if tp.len() == theta0.len() && tm.len() == theta0.len() {
+                    pair = Some((p.chi2, m.chi2, tp, tm));
+                    break;
+                }
+            }
+            h[i] /= STEP_SHRINK;
         }
+        let (pc, mc, tp, tm) = pair?;
         for (k, (_, s)) in sens.iter_mut().enumerate() {
             for q in 0..5 {
                 s[(q, i)] = (tp[k].1[q] - tm[k].1[q]) / (2.0 * h[i]);
             }
         }
-        plus.push(p.chi2);
-        minus.push(m.chi2);
+        plus.push(pc);
+        minus.push(mc);
     }
     let mut grad = DVector::zeros(n);
     let mut hess = DMatrix::zeros(n, n);
@@ -186,8 +238,14 @@ fn derivatives(
         grad[i] = (plus[i] - minus[i]) / (2.0 * h[i]);
         hess[(i, i)] = (plus[i] - 2.0 * f0 + minus[i]) / (h[i] * h[i]);
         for j in 0..i {
-            let both = eval(&[(i, h[i]), (j, h[j])])?.chi2;
-            let v = (both - plus[i] - plus[j] + f0) / (h[i] * h[j]);
+            // The mixed difference on the plus side, else on the minus side.
+            let v = match eval(&[(i, h[i]), (j, h[j])]) {
+                Some(b) => (b.chi2 - plus[i] - plus[j] + f0) / (h[i] * h[j]),
+                None => {
+                    let b = eval(&[(i, -h[i]), (j, -h[j])])?;
+                    (b.chi2 - minus[i] - minus[j] + f0) / (h[i] * h[j])
+                }
+            };
             hess[(i, j)] = v;
             hess[(j, i)] = v;
         }
