@@ -310,7 +310,7 @@ pub struct Identification {
     pub speed_lag: Option<speed_lag::SpeedLag>,
     /// What each bearing's data say of its channels' sensitivities
     /// ([`sensor_gain`]); empty where not judged.
-    #[serde(default, skip_deserializing, skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub sensor_gain: Vec<sensor_gain::GainEvidence>,
 }
 
@@ -547,8 +547,8 @@ pub fn identify_prepared(
     trust::mark_lack_of_fit(&mut identification);
     plausibility::mark(run, &mut identification);
     delay_unknown::mark(&mut identification);
-    sensor_gain::mark(prepared, &mut identification);
     speed_lag::mark(run, &prepared.bearings, &mut identification);
+    sensor_gain::mark(prepared, &mut identification);
     Ok(identification)
 }
 

@@ -59,7 +59,7 @@ use crate::estimate::Observation;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex;
 use plinth_shared::regression::{Parameter, PARAMETERS};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The four channels of a bearing, in the order of [`GainEvidence::path`].
 pub const CHANNELS: [&str; 4] = ["rel_y", "rel_z", "ped_y", "ped_z"];
@@ -95,7 +95,7 @@ pub fn significant(bearings: usize, dof: usize) -> f64 {
 
 /// What the data say of one bearing's channel gains (module docs;
 /// `sensor_gain` in `plinth identify --json`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GainEvidence {
     /// Bearing name.
     pub bearing: String,
@@ -125,7 +125,7 @@ pub struct GainEvidence {
     pub t_squared: [f64; PARAMETERS],
     /// `untrusted` (significant), `widened` (favoured, not excluded),
     /// `none`, or `not_judged` (the noise not measured: no noise columns).
-    pub verdict: &'static str,
+    pub verdict: std::borrow::Cow<'static, str>,
 }
 
 impl GainEvidence {
@@ -463,7 +463,7 @@ pub fn evidence(
         favoured,
         rho,
         t_squared,
-        verdict: "none",
+        verdict: "none".into(),
     };
     e.verdict = if statistic > threshold {
         "untrusted"
@@ -471,7 +471,8 @@ pub fn evidence(
         "widened"
     } else {
         "none"
-    };
+    }
+    .into();
     Some(e)
 }
 
@@ -527,10 +528,10 @@ pub fn mark(prepared: &super::data::Prepared, identification: &mut Identificatio
         // runs' simulator spline, unseen-eight's scatter-level runs).
         let mut e = e;
         if report.source != crate::estimate::noise::NoiseSource::Columns {
-            e.verdict = "not_judged";
+            e.verdict = "not_judged".into();
         }
         let p = &mut identification.pedestals[i];
-        match e.verdict {
+        match e.verdict.as_ref() {
             "untrusted" => {
                 p.warnings.push(Warning {
                     kind: WarningKind::SensorGain,
