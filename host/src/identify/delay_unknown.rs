@@ -66,19 +66,7 @@ fn is_fixed(p: &PedestalFit, c: Parameter) -> bool {
 /// ([`DelayNuisance::evidence`]).
 fn widen(p: &mut PedestalFit, d: &DelayNuisance, evidence: f64) {
     let w = d.widening();
-    let se = p.std_err.theta();
-    p.std_err = Pedestal::from_theta(std::array::from_fn(|i| se[i] * w[i]));
-    if let Some(cov) = &mut p.covariance {
-        for (i, row) in cov.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
-                *v *= w[i] * w[j];
-            }
-        }
-    }
-    p.modal = Some(crate::present::modal::pedestal(
-        &p.pedestal.theta(),
-        p.covariance.as_ref(),
-    ));
+    p.widen_by(w);
     // The dampings always, any other value whose ± moved by 10 % or more.
     let widened: Vec<String> = Parameter::ALL
         .iter()

@@ -283,6 +283,26 @@ impl PedestalFit {
     pub fn has_warning(&self, kind: WarningKind) -> bool {
         self.warnings.iter().any(|w| w.kind == kind)
     }
+
+    /// Multiplies each value's ± by its factor `w` [-] (k_y, k_z, m, c_y,
+    /// c_z order), the covariance by w_i·w_j, and recomputes the modal
+    /// view from them: how a nuisance the data do not exclude (a sensor
+    /// delay, a speed offset, a sensitivity ratio) is counted in the ±.
+    pub fn widen_by(&mut self, w: [f64; PARAMETERS]) {
+        let se = self.std_err.theta();
+        self.std_err = Pedestal::from_theta(std::array::from_fn(|i| se[i] * w[i]));
+        if let Some(cov) = &mut self.covariance {
+            for (i, row) in cov.iter_mut().enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    *v *= w[i] * w[j];
+                }
+            }
+        }
+        self.modal = Some(crate::present::modal::pedestal(
+            &self.pedestal.theta(),
+            self.covariance.as_ref(),
+        ));
+    }
 }
 
 /// The identification of every pedestal in a run: formats.md's output of

@@ -557,19 +557,7 @@ pub fn mark(prepared: &super::data::Prepared, identification: &mut Identificatio
 /// Multiplies `p`'s ± and covariance by `e`'s widening and says so.
 fn widen(p: &mut PedestalFit, e: &GainEvidence) {
     let w = e.widening();
-    let se = p.std_err.theta();
-    p.std_err = crate::estimate::Pedestal::from_theta(std::array::from_fn(|i| se[i] * w[i]));
-    if let Some(cov) = &mut p.covariance {
-        for (i, row) in cov.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
-                *v *= w[i] * w[j];
-            }
-        }
-    }
-    p.modal = Some(crate::present::modal::pedestal(
-        &p.pedestal.theta(),
-        p.covariance.as_ref(),
-    ));
+    p.widen_by(w);
     let widened: Vec<String> = Parameter::ALL
         .iter()
         .filter(|&&c| w[c as usize] >= 1.05)
