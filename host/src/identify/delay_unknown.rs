@@ -28,7 +28,6 @@
 
 use super::{Identification, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::DelayNuisance;
-use crate::estimate::Pedestal;
 use plinth_shared::regression::Parameter;
 
 /// Widens the ± of every pedestal of `identification` on rigid ground
@@ -134,17 +133,10 @@ pub fn delay_figure(d: &DelayNuisance) -> String {
 /// Under the table: one line per pedestal whose ± count a delay as unknown
 /// (its [`WarningKind::DelayNotExcluded`] warning); empty when none.
 pub fn describe(identification: &Identification) -> String {
-    let mut out = String::new();
-    for p in &identification.pedestals {
-        for w in p
-            .warnings
-            .iter()
-            .filter(|w| w.kind == WarningKind::DelayNotExcluded)
-        {
-            out.push_str(&format!("\n{}: {}\n", p.bearing, w.message));
-        }
-    }
-    out
+    identification
+        .warnings_of(WarningKind::DelayNotExcluded)
+        .map(|(bearing, w)| format!("\n{bearing}: {}\n", w.message))
+        .collect()
 }
 
 #[cfg(test)]

@@ -303,6 +303,32 @@ impl PedestalFit {
             self.covariance.as_ref(),
         ));
     }
+
+    /// Adds `add` (k_y, k_z, m, c_y, c_z order, their units squared) to
+    /// the covariance and each variance: a stated uncertainty of an input
+    /// the fit took as exact, carried in to first order (Σ' = Σ + Σ_k
+    /// σ_k²·b_k·b_kᵀ, b_k the values' shift per unit of input k). A value
+    /// fixed by the model (± 0) or whose ± is not finite keeps its ±.
+    pub fn add_covariance(&mut self, add: &[[f64; PARAMETERS]; PARAMETERS]) {
+        let se = self.std_err.theta();
+        let kept = |i: usize| se[i] > 0.0 && se[i].is_finite();
+        self.std_err = Pedestal::from_theta(std::array::from_fn(|i| {
+            if kept(i) {
+                (se[i] * se[i] + add[i][i]).sqrt()
+            } else {
+                se[i]
+            }
+        }));
+        if let Some(cov) = &mut self.covariance {
+            for (i, row) in cov.iter_mut().enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    if kept(i) && kept(j) {
+                        *v += add[i][j];
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// The identification of every pedestal in a run: formats.md's output of
@@ -342,6 +368,17 @@ impl Identification {
     /// The fit of the pedestal at `bearing`.
     pub fn pedestal(&self, bearing: &str) -> Option<&PedestalFit> {
         self.pedestals.iter().find(|p| p.bearing == bearing)
+    }
+
+    /// Every warning of `kind`, with its pedestal's bearing, in the
+    /// pedestals' order: what the lines under the table say.
+    pub fn warnings_of(&self, kind: WarningKind) -> impl Iterator<Item = (&str, &Warning)> {
+        self.pedestals.iter().flat_map(move |p| {
+            p.warnings
+                .iter()
+                .filter(move |w| w.kind == kind)
+                .map(|w| (p.bearing.as_str(), w))
+        })
     }
 }
 

@@ -583,15 +583,8 @@ fn widen(p: &mut PedestalFit, e: &GainEvidence) {
 /// Under the table: one line per pedestal whose ± count a sensitivity
 /// ratio as unknown; empty when none.
 pub fn describe(identification: &Identification) -> String {
-    let mut out = String::new();
-    for p in &identification.pedestals {
-        for w in p
-            .warnings
-            .iter()
-            .filter(|w| w.kind == WarningKind::SensorGainNotExcluded)
-        {
-            out.push_str(&format!("\n{}: {}\n", p.bearing, w.message));
-        }
-    }
-    out
+    identification
+        .warnings_of(WarningKind::SensorGainNotExcluded)
+        .map(|(bearing, w)| format!("\n{bearing}: {}\n", w.message))
+        .collect()
 }

@@ -81,7 +81,6 @@ pub mod spread;
 use super::{Identification, PedestalFit, Warning, WarningKind};
 use crate::estimate::lack_of_fit::delay_unknown::{ratio, widening, Z_INTERVAL};
 use crate::estimate::noise::NoiseSource;
-use crate::estimate::Pedestal;
 use crate::rundir::RunDir;
 use plinth_shared::regression::{Parameter, PARAMETERS};
 use serde::{Deserialize, Serialize};
@@ -482,14 +481,8 @@ pub fn describe(identification: &Identification) -> String {
         lag.evidence,
         lag.from_bearings.join(", ")
     );
-    for p in &identification.pedestals {
-        for w in p
-            .warnings
-            .iter()
-            .filter(|w| w.kind == WarningKind::SpeedLagNotExcluded)
-        {
-            out.push_str(&format!("{}: {}\n", p.bearing, w.message));
-        }
+    for (bearing, w) in identification.warnings_of(WarningKind::SpeedLagNotExcluded) {
+        out.push_str(&format!("{bearing}: {}\n", w.message));
     }
     out
 }

@@ -225,23 +225,7 @@ pub fn widen(identification: &mut Identification, u: SensorUncertainty) {
                 }
             }
         }
-        let se = p.std_err.theta();
-        p.std_err = crate::estimate::Pedestal::from_theta(std::array::from_fn(|i| {
-            if se[i].is_finite() && se[i] > 0.0 {
-                (se[i] * se[i] + add[i][i]).sqrt()
-            } else {
-                se[i]
-            }
-        }));
-        if let Some(cov) = &mut p.covariance {
-            for (i, row) in cov.iter_mut().enumerate() {
-                for (j, v) in row.iter_mut().enumerate() {
-                    if se[i] > 0.0 && se[j] > 0.0 {
-                        *v += add[i][j];
-                    }
-                }
-            }
-        }
+        p.add_covariance(&add);
     }
 }
 

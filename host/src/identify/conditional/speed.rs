@@ -84,29 +84,10 @@ pub fn widen(identification: &mut Identification, sd: f64) {
         else {
             continue;
         };
-        widen_one(p, &b.path_per_hz, sd);
-    }
-}
-
-fn widen_one(
-    p: &mut crate::identify::PedestalFit,
-    path: &[f64; plinth_shared::regression::PARAMETERS],
-    sd: f64,
-) {
-    let se = p.std_err.theta();
-    p.std_err = crate::estimate::Pedestal::from_theta(std::array::from_fn(|i| {
-        if se[i] > 0.0 && se[i].is_finite() {
-            (se[i] * se[i] + (sd * path[i]).powi(2)).sqrt()
-        } else {
-            se[i]
-        }
-    }));
-    if let Some(cov) = &mut p.covariance {
-        for (i, row) in cov.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
-                *v += sd * sd * path[i] * path[j];
-            }
-        }
+        let path = &b.path_per_hz;
+        p.add_covariance(&std::array::from_fn(|i| {
+            std::array::from_fn(|j| sd * sd * path[i] * path[j])
+        }));
     }
 }
 
