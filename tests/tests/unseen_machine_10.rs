@@ -100,7 +100,7 @@ fn sub_base_at_b2_is_untrusted_by_identify_and_named_by_diagnose() {
 /// so B2's y values after the step are still the support's apparent ones
 /// (the pedestal in series with the sub-base's spring, their masses
 /// lumped), yet the verdict is trusted: k_y −18.8 % (−35 ±), m +16 %
-/// (+19 ±), k_z −7 % (−6 ±) on seed 9500; 3 of 16 seeds alike. What a
+/// (+19 ±), k_z −7 % (−6 ±) on seed 9500; 3 of 17 seeds alike. What a
 /// user must get: a trusted verdict only where the final values are right
 /// within 3 ±.
 #[test]
