@@ -13,8 +13,8 @@ Usage:
         worst |A - B| per bearing and channel, in % of B's peak (the check
         of a ROSS run against `plinth simulate` of the machine file)
 NAME: unseen-four (default), unseen-overhung, unseen-train, unseen-flex,
-unseen-five, unseen-six, unseen-seven, unseen-eight or unseen-nine
-(described in ross_unseen_machines.py).
+unseen-five, unseen-six, unseen-seven, unseen-eight, unseen-nine or
+unseen-ten (described in ross_unseen_machines.py).
 
 Needs ROSS 2.3.0 (`pip install ross-rotordynamics==2.3.0 "plotly<6"`).
 Deterministic: the seed fixes the noise, the flipped and outlier speeds and
@@ -106,6 +106,15 @@ growing 1.8-fold and turning 40 deg over the run), and "probe_gain" (B1's
 vertical probe reading 5 % low: calibrated on another steel); and
 "ped-drift-up", ped-drift's machine run up instead (the drift following
 time, so reversed in speed: the second run a compare needs).
+
+unseen-ten is tests/data/ross-unseen-10/unseen-ten.toml: a two-pole
+induction motor on a variable-frequency drive, the first symmetric machine:
+isotropic ball-bearing tables (no cross-coupling, almost no damping),
+nearly isotropic end-shield pedestals (k_z 6-7 % below k_y) whose
+resonances (76-87 Hz) and the rotor's first critical lie inside the drive's
+ramp-down from 100 Hz to 10 Hz, a vector every 2 Hz (46 speeds): near
+circular orbits. Probes 0.5 % of |phasor| + 0.03 um, velocity pick-ups 1 %
++ 2 um/s.
 
 Each machine is built in ROSS here, not by Plinth: Timoshenko shaft elements
 (shear, rotary inertia, gyroscopics), DiskElements, each bearing a
