@@ -50,6 +50,11 @@
 //! value's path, √(1 + (ρ² − 1)(1 + t²)), t² = (bᵀε̂)²/(bᵀCb): the
 //! root-mean-square error of the held value when the ratios are as the data
 //! give them.
+//!
+//! **A speed column off is not a gain** ([`speed`]): where the
+//! speed-offset rule's gate is open, the ratios are tested on the
+//! equations at the speed column less its offset, the offset's ± counted
+//! in theirs; elsewhere at the speed column.
 
 pub mod evidence;
 pub mod speed;
