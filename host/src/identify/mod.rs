@@ -605,7 +605,7 @@ pub fn identify_prepared(
     plausibility::mark(run, &mut identification);
     delay_unknown::mark(&mut identification);
     speed_lag::mark(run, &prepared.bearings, &mut identification);
-    sensor_gain::mark(prepared, &mut identification);
+    sensor_gain::mark(run, prepared, &mut identification);
     Ok(identification)
 }
 

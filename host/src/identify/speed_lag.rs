@@ -31,7 +31,10 @@
 //! equations at f − Δ, to first order in Δ, through the table's
 //! interpolation and Ω; Δ estimated from all bearings at once with each
 //! bearing's θ free (one Gauss–Newton step from Δ = 0), σ_Δ from the
-//! information scaled by each bearing's excess. As for a delay
+//! information scaled by each bearing's excess (or the speeds' scatter,
+//! [`spread`], where larger), with θ̂'s own error in the column added
+//! ([`regressor`]: 0.6 % of σ_Δ on a clean unseen-eight run; measured,
+//! docs/trust-speed.md, Session 50 (speed50)). As for a delay
 //! ([`crate::estimate::lack_of_fit::delay_unknown`], whose widening this
 //! calls), each parameter's ρ = σ(Δ free)/σ(Δ held) follows from b (its
 //! shift per Hz of Δ): ρ² = 1 + (b·σ_Δ/σ_held)².
@@ -76,6 +79,7 @@
 //! [`TOLERANCE_SAID`] of the top speed.
 
 pub mod linearise;
+pub mod regressor;
 pub mod spread;
 
 use super::{Identification, PedestalFit, Warning, WarningKind};
@@ -127,8 +131,13 @@ pub struct Offset {
     /// ground whose noise is known from noise columns).
     pub from_bearings: Vec<String>,
     /// σ_Δ from the information alone [Hz]; `offset_std_hz` is the
-    /// larger of it and the speeds' own scatter ([`spread::scatter_std`]).
+    /// larger of it and the speeds' own scatter ([`spread::scatter_std`]),
+    /// with θ̂'s share ([`regressor`]) added in quadrature.
     pub information_std_hz: f64,
+    /// Δ̂'s ± from the bearings' θ̂ errors alone [Hz] (the column is
+    /// made at θ̂, [`regressor::theta_variance`]); 0 where not formed.
+    #[serde(default)]
+    pub theta_std_hz: f64,
     /// The speeds whose pull on Δ departs from an offset's beyond what
     /// the noise gives any speed of the run in 1 % of runs
     /// ([`spread::set_aside`]) [Hz]: said, not used by the gate.
@@ -272,7 +281,7 @@ pub fn estimate(
             .copied()
             .collect();
         let t = linearise::terms(&obs, schedule, &p.pedestal.theta(), &columns)?;
-        all.push((p, columns, t));
+        all.push((p, columns, t, obs, schedule));
     }
     if all.is_empty() {
         return None;
@@ -283,24 +292,40 @@ pub fn estimate(
             .get(&p.bearing)
             .is_some_and(|n| n.source == NoiseSource::Columns)
     };
-    let from: Vec<&(&PedestalFit, Vec<Parameter>, linearise::Terms)> = all
+    let from: Vec<_> = all
         .iter()
-        .filter(|(p, _, _)| p.trusted && columns_noise(p))
+        .filter(|(p, _, _, _, _)| p.trusted && columns_noise(p))
         .collect();
     let offset = if from.is_empty() {
         None
     } else {
-        let terms: Vec<linearise::Terms> = from.iter().map(|(_, _, t)| t.clone()).collect();
+        let terms: Vec<linearise::Terms> = from.iter().map(|(_, _, t, _, _)| t.clone()).collect();
+        let fitted: Vec<regressor::Fitted<'_>> = from
+            .iter()
+            .map(|(p, columns, t, obs, schedule)| regressor::Fitted {
+                obs,
+                schedule,
+                theta: p.pedestal.theta(),
+                columns,
+                terms: t,
+            })
+            .collect();
+        let theta_var = regressor::theta_variance(&fitted).unwrap_or(0.0);
         linearise::joint(&terms).map(|j| {
             let kept = spread::set_aside(&j.by_speed);
-            let offset_std_hz = spread::scatter_std(&j.by_speed, j.offset_hz)
+            let noise_std = spread::scatter_std(&j.by_speed, j.offset_hz)
                 .map_or(j.offset_std_hz, |s| s.max(j.offset_std_hz));
+            let offset_std_hz = (noise_std * noise_std + theta_var).sqrt();
             Offset {
                 offset_hz: j.offset_hz,
                 offset_std_hz,
                 evidence: (j.offset_hz / offset_std_hz).powi(2),
-                from_bearings: from.iter().map(|(p, _, _)| p.bearing.clone()).collect(),
+                from_bearings: from
+                    .iter()
+                    .map(|(p, _, _, _, _)| p.bearing.clone())
+                    .collect(),
                 information_std_hz: j.offset_std_hz,
+                theta_std_hz: theta_var.sqrt(),
                 local_speeds_hz: kept
                     .as_ref()
                     .map(|k| k.local_speeds_hz.clone())
@@ -312,7 +337,7 @@ pub fn estimate(
     };
     // Every bearing's b and σ_held from its own fit, its ρ at σ_Δ.
     let mut out = Vec::new();
-    for (p, columns, t) in &all {
+    for (p, columns, t, _, _) in &all {
         let share = linearise::joint(std::slice::from_ref(t))?
             .bearings
             .remove(0);
@@ -498,6 +523,7 @@ mod tests {
             evidence: (offset / std).powi(2),
             from_bearings: vec!["B1".into()],
             information_std_hz: std,
+            theta_std_hz: 0.0,
             local_speeds_hz: Vec::new(),
             without_local_hz: None,
             spread: None,

@@ -58,7 +58,11 @@ pub struct Terms {
 /// moved by `shift` [Hz] and the bearing's complex stiffness read from
 /// `schedule` there; an observation whose moved speed lies outside the
 /// table stays where it is (`None` in its place).
-fn moved(obs: &[Observation], schedule: &BearingSchedule, shift: f64) -> Vec<Option<Observation>> {
+pub fn moved(
+    obs: &[Observation],
+    schedule: &BearingSchedule,
+    shift: f64,
+) -> Vec<Option<Observation>> {
     obs.iter()
         .map(|o| {
             let f = o.speed_hz + shift;
