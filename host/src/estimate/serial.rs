@@ -140,7 +140,7 @@ pub fn measured_of(speeds_hz: &[f64], rows: &[f64], width: usize) -> Option<(f64
 /// speeds.
 pub fn measured_equations(speeds_hz: &[f64], resid: &DVector<f64>) -> Option<(f64, f64, f64)> {
     let n = speeds_hz.len();
-    if n == 0 || resid.len() % n != 0 {
+    if n == 0 || !resid.len().is_multiple_of(n) {
         return None;
     }
     measured_of(speeds_hz, resid.as_slice(), resid.len() / n)
@@ -231,7 +231,7 @@ fn ar1_sandwich(
 ) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
     let p = jac.ncols();
     let r = rows_per_speed;
-    if r == 0 || jac.nrows() % r != 0 {
+    if r == 0 || !jac.nrows().is_multiple_of(r) {
         return None;
     }
     let n = jac.nrows() / r;
