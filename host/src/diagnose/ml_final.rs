@@ -27,39 +27,39 @@
 //! search and every other ± of diagnose use: the larger of the noise
 //! floor's (inverse Fisher information of the whitened Jacobian at the
 //! estimate's Σ) and the autocorrelation-robust sandwich built from the
-//! fit's own whitened residuals.
+//! fit's own whitened residuals; where those residuals are correlated along
+//! the run beyond what white noise gives, on the equations prewhitened by
+//! the AR(1) `plinth identify` measures, each ± the sandwich of that AR(1)
+//! ([`serial`]).
 //!
 //! Groups with a bearing-table scalar are left to
 //! [`super::bearing_table::refine`], which refits them by ML itself, unless
 //! they hold a damping at zero (which `refine` does not refit; [`refittable`]).
 
-use super::bearing_table::report_delta;
 use super::criterion::Inference;
 use super::data::Prepared;
 use super::fit::{search_interval, Weights};
 use super::forward::held_terms;
 use super::model::{Model, Term};
-use super::report::{Pedestal, Step};
 use super::state::State;
-use crate::estimate::base::put;
-use crate::estimate::gauss_helmert::{self as gh, Equations};
+use crate::estimate::gauss_helmert as gh;
 use delay_unknown::{with_delays_unknown, DelayUnknown};
+use equations::{linearised, with_freed, GroupEquations};
 use held_delay::{held_delays, HeldDelay};
 use held_free::{free_held, Held, HeldAgainstData, HeldUnknown};
-use nalgebra::{DMatrix, DVector};
-use num_complex::Complex;
-use std::collections::BTreeMap;
+use nalgebra::DVector;
 
 pub mod delay_unknown;
+mod equations;
 pub mod held_delay;
 pub mod held_free;
+mod report;
+mod serial;
+
+pub use report::report;
 
 /// Most Levenberg–Marquardt iterations of a refit.
 const ITERATIONS: usize = 200;
-
-/// Measured real numbers per bearing and speed (rel y, rel z, ped y, ped z;
-/// real and imaginary parts, the order of [`crate::estimate::Observation::var`]).
-const MEASURED: usize = 8;
 
 /// One group's ML refit: its terms and scalars (global indices) and the
 /// inference at the ML values (estimate entries: the terms, then the scalars).
@@ -91,199 +91,6 @@ pub struct GroupRefit {
     /// ([`delay_unknown`]). A group not refitted carries only these (no
     /// terms, no scalars: its values stay the state's).
     pub delay_unknown: Vec<DelayUnknown>,
-}
-
-/// The equations of one group of a [`Model`] as a Gauss–Helmert system:
-/// p = (the group's linear terms, then its nonlinear scalars), the other
-/// groups' values held (they do not enter).
-struct GroupEquations<'a> {
-    prep: &'a Prepared,
-    model: &'a Model,
-    group: &'a [usize],
-    speeds: Vec<usize>,
-    terms: Vec<usize>,
-    nonlinear: Vec<usize>,
-    beta: Vec<f64>,
-    nl: Vec<f64>,
-    var: Vec<Vec<f64>>,
-}
-
-impl<'a> GroupEquations<'a> {
-    fn new(prep: &'a Prepared, model: &'a Model, group: &'a [usize], state: &State) -> Self {
-        Self::from_values(prep, model, group, &state.params.beta, &state.params.nl)
-    }
-
-    /// The equations of `group` of `model` at the values (β, nl) of the
-    /// whole model (β one entry per term of `model`).
-    fn from_values(
-        prep: &'a Prepared,
-        model: &'a Model,
-        group: &'a [usize],
-        beta: &[f64],
-        nl: &[f64],
-    ) -> Self {
-        let speeds = Model::group_speeds(prep, group);
-        let var = speeds
-            .iter()
-            .map(|&j| {
-                group
-                    .iter()
-                    .flat_map(|&b| {
-                        prep.points[b][j]
-                            .as_ref()
-                            .map_or([0.0; MEASURED], |o| o.var)
-                    })
-                    .collect()
-            })
-            .collect();
-        Self {
-            prep,
-            model,
-            group,
-            speeds,
-            terms: model.group_terms(group),
-            nonlinear: model.group_nonlinear(group),
-            beta: beta.to_vec(),
-            nl: nl.to_vec(),
-            var,
-        }
-    }
-
-    /// The model's (β, nl) with the group's entries set from `p`.
-    fn unpack(&self, p: &[f64]) -> (Vec<f64>, Vec<f64>) {
-        let (mut beta, mut nl) = (self.beta.clone(), self.nl.clone());
-        for (t, v) in self.terms.iter().zip(p) {
-            beta[*t] = *v;
-        }
-        for (k, v) in self.nonlinear.iter().zip(&p[self.terms.len()..]) {
-            nl[*k] = *v;
-        }
-        (beta, nl)
-    }
-
-    /// The values of `state` as p.
-    fn pack(&self, beta: &[f64], nl: &[f64]) -> Vec<f64> {
-        self.terms
-            .iter()
-            .map(|&t| beta[t])
-            .chain(self.nonlinear.iter().map(|&k| nl[k]))
-            .collect()
-    }
-
-    /// The start p and per-parameter scales of these equations when they
-    /// are those of `held_model` with held dampings appended
-    /// ([`with_freed`]): the group's terms and scalars are scaled by the
-    /// larger of their size and their ± in `held_fit` (the held model's
-    /// group refit), each appended damping by `freed_scale(bearing, dir, k)`
-    /// [N·s/m] (k: that bearing's stiffness in that direction in
-    /// `held_beta` [N/m]). `None` where a start value or a scale is not a
-    /// finite number, or `freed_scale` gives none.
-    fn freed_start(
-        &self,
-        held_model: &Model,
-        held_beta: &[f64],
-        held_fit: &Inference,
-        mut freed_scale: impl FnMut(usize, usize, f64) -> Option<f64>,
-    ) -> Option<(Vec<f64>, Vec<f64>)> {
-        let n_held = held_model.group_terms(self.group).len();
-        let n_terms = self.terms.len();
-        let n_new = n_terms - n_held;
-        let start = self.pack(&self.beta, &self.nl);
-        let stiffness = |bearing: usize, dir: usize| {
-            let i = held_model
-                .terms
-                .iter()
-                .position(|u| *u == Term::Stiffness { bearing, dir })?;
-            held_beta.get(i).copied()
-        };
-        let mut scale = Vec::with_capacity(start.len());
-        for (i, v) in start.iter().enumerate() {
-            let s = if i < n_held {
-                v.abs().max(held_fit.std_err(i))
-            } else if i < n_terms {
-                let Term::Damping { bearing, dir } = self.model.terms[self.terms[i]] else {
-                    return None;
-                };
-                freed_scale(bearing, dir, stiffness(bearing, dir).unwrap_or(0.0))?
-            } else {
-                v.abs().max(held_fit.std_err(i - n_new))
-            };
-            if !s.is_finite() {
-                return None;
-            }
-            scale.push(s.max(f64::MIN_POSITIVE));
-        }
-        start
-            .iter()
-            .all(|v| v.is_finite())
-            .then_some((start, scale))
-    }
-}
-
-/// `model` with the held dampings `freed` appended to its terms, and its
-/// values β with a zero for each: the group's terms keep their order, the
-/// freed ones follow them in p, then the scalars (what
-/// [`held_delay`] and [`held_free`] refit).
-fn with_freed(model: &Model, beta: &[f64], freed: &[Term]) -> (Model, Vec<f64>) {
-    let mut extended = model.clone();
-    extended.terms.extend(freed.iter().copied());
-    let mut ext_beta = beta.to_vec();
-    ext_beta.resize(extended.terms.len(), 0.0);
-    (extended, ext_beta)
-}
-
-impl Equations for GroupEquations<'_> {
-    fn speeds(&self) -> usize {
-        self.speeds.len()
-    }
-
-    fn variance(&self, s: usize) -> &[f64] {
-        &self.var[s]
-    }
-
-    fn residual(&self, s: usize, p: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
-        let n = 2 * self.group.len();
-        let (beta, nl) = self.unpack(p);
-        let assembled =
-            self.model
-                .assemble(self.prep, self.group, self.speeds[s], &nl, Some(&beta));
-        let Some((a, m)) = assembled.and_then(|a| a.matrix.clone().map(|m| (a, m))) else {
-            // Not finite: J cannot be evaluated here.
-            return (
-                DVector::from_element(2 * n, f64::NAN),
-                DMatrix::zeros(2 * n, MEASURED * self.group.len()),
-            );
-        };
-        let mut e = DVector::zeros(2 * n);
-        let mut b = DMatrix::zeros(2 * n, MEASURED * self.group.len());
-        for (pb, _) in self.group.iter().enumerate() {
-            for d in 0..2 {
-                let row = 2 * pb + d;
-                let mut v = -a.force[row];
-                for (k, col) in &a.columns {
-                    v += beta[*k] * col[row];
-                }
-                e[2 * row] = v.re;
-                e[2 * row + 1] = v.im;
-                for (qc, _) in self.group.iter().enumerate() {
-                    for dc in 0..2 {
-                        let c = 2 * qc + dc;
-                        put(
-                            &mut b,
-                            2 * row,
-                            MEASURED * qc + 4 + 2 * dc,
-                            m[(row, c)] * a.ped_phase[c],
-                        );
-                    }
-                }
-                for dc in 0..2 {
-                    let coef: Complex<f64> = -a.kstar[pb][d][dc] * a.rel_phase[2 * pb + dc];
-                    put(&mut b, 2 * row, MEASURED * pb + 2 * dc, coef);
-                }
-            }
-        }
-        (e, b)
-    }
 }
 
 /// Whether the scalars `nonlinear` of `model` include a bearing table's.
@@ -323,39 +130,6 @@ fn refittable(model: &Model, base: &Model, group: &[usize], nonlinear: &[usize])
     effect && (!table || holds)
 }
 
-/// The whitened Jacobian L_s⁻¹·∂e_s/∂p at fixed Σ(p̂) (central differences,
-/// steps 1e-6·`scale`), the whitened residuals L_s⁻¹e_s and the speed of
-/// every row, stacked over speeds: what [`Inference::new`] takes.
-fn linearised(
-    eq: &GroupEquations<'_>,
-    p: &[f64],
-    scale: &[f64],
-) -> Option<(DMatrix<f64>, DVector<f64>, Vec<usize>)> {
-    let (mut rows, mut resid, mut speed) = (Vec::new(), Vec::new(), Vec::new());
-    for s in 0..eq.speeds() {
-        let l = gh::whitening(eq, s, p)?;
-        let e = eq.error(s, p);
-        let mut a = DMatrix::zeros(e.len(), p.len());
-        for (k, sc) in scale.iter().enumerate() {
-            let h = 1e-6 * sc;
-            let (mut up, mut dn) = (p.to_vec(), p.to_vec());
-            up[k] += h;
-            dn[k] -= h;
-            a.set_column(k, &((eq.error(s, &up) - eq.error(s, &dn)) / (2.0 * h)));
-        }
-        let wa = l.solve_lower_triangular(&a)?;
-        let we = l.solve_lower_triangular(&e)?;
-        for r in 0..wa.nrows() {
-            rows.push(wa.row(r).clone_owned());
-            resid.push(we[r]);
-            speed.push(eq.speeds[s]);
-        }
-    }
-    let jac = DMatrix::from_rows(&rows);
-    let ok = jac.iter().chain(&resid).all(|v| v.is_finite());
-    ok.then(|| (jac, DVector::from_vec(resid), speed))
-}
-
 /// The inference of `group` of `state` at the state's own values by the
 /// maximum-likelihood engine of [`refit`] (each speed's equations whitened
 /// by their full Σ, [`linearised`]), without refitting them: the ± of
@@ -376,7 +150,15 @@ pub fn inference_at(
         return None;
     }
     let (jac, resid, row_speed) = linearised(&eq, &p, scale)?;
-    Inference::new(&jac, &resid, &row_speed, DVector::from_vec(p)).ok()
+    serial::inference(
+        prep,
+        &eq.speeds,
+        &jac,
+        &resid,
+        &row_speed,
+        DVector::from_vec(p),
+    )
+    .ok()
 }
 
 /// Refits by maximum likelihood every group of `state` (when its final
@@ -437,9 +219,14 @@ pub fn refit(prep: &Prepared, base: &Model, state: &mut State, alpha: f64) -> Ve
         let Some((jac, resid, row_speed)) = linearised(&eq, &m.p, &scale) else {
             continue;
         };
-        let Ok(inference) =
-            Inference::new(&jac, &resid, &row_speed, DVector::from_vec(m.p.clone()))
-        else {
+        let Ok(inference) = serial::inference(
+            prep,
+            &eq.speeds,
+            &jac,
+            &resid,
+            &row_speed,
+            DVector::from_vec(m.p.clone()),
+        ) else {
             continue;
         };
         let (beta, nl) = eq.unpack(&m.p);
@@ -506,109 +293,6 @@ pub fn refit(prep: &Prepared, base: &Model, state: &mut State, alpha: f64) -> Ve
     }
     with_delays_unknown(prep, state, &mut out);
     out
-}
-
-/// Writes the refits of [`refit`] into the reported pedestals and the kept
-/// steps at their bearings: values and ± ([`Inference::std_err`]) of every
-/// pedestal term and of every effect parameter the steps list by name. A
-/// delay fitted beside a damping held at zero gets the ± with that damping
-/// free ([`HeldDelay::std_err`]); the held fit's own ± goes under the
-/// step's `held` ([`super::summaries::HeldDamping::tau_std_err_damping_zero`]).
-pub fn report(
-    prep: &Prepared,
-    model: &Model,
-    refits: &[GroupRefit],
-    pedestals: &mut [Pedestal],
-    steps: &mut [Step],
-) {
-    for r in refits {
-        // Dampings the search held and the refit freed are no longer held.
-        for dir in r.freed.iter().filter_map(|t| match *t {
-            Term::Damping { bearing, dir } => Some((bearing, dir)),
-            _ => None,
-        }) {
-            let Some(bname) = prep.bearings.get(dir.0) else {
-                continue;
-            };
-            for s in steps.iter_mut().filter(|s| &s.bearing == bname) {
-                s.held = None;
-            }
-        }
-        let entries = r
-            .terms
-            .iter()
-            .map(|&t| {
-                let term = model.terms[t];
-                (term.bearings()[0], term.name(), term.is_pedestal(), None)
-            })
-            .chain(r.nonlinear.iter().map(|&k| {
-                let p = model.nonlinear[k];
-                let held = r.held_delays.iter().find(|h| h.nonlinear == k);
-                (Some(p.bearing()), p.name().to_string(), false, held)
-            }));
-        for (i, (bearing, name, is_pedestal, held)) in entries.enumerate() {
-            let Some(bname) = bearing.and_then(|b| prep.bearings.get(b)) else {
-                continue;
-            };
-            let value = r.inference.estimate[i];
-            let unknown = r.held_unknown.as_ref();
-            let se = held.map_or(r.inference.std_err(i), |h| h.std_err);
-            let se = unknown.map_or(se, |u| se.max(u.std_err[i]));
-            // A table's δ is reported as its ratio (1 + δ), by the one
-            // writer of the `bearing_coefficients` step's parameters.
-            let table = i
-                .checked_sub(r.terms.len())
-                .map(|j| model.nonlinear[r.nonlinear[j]])
-                .filter(|p| model.table_correction(p).is_some());
-            if let Some(p) = table {
-                report_delta(prep, model, p, value, se, steps);
-                continue;
-            }
-            if is_pedestal {
-                if let Some(p) = pedestals.iter_mut().find(|p| &p.bearing == bname) {
-                    p.values.insert(name.clone(), value);
-                    // Reported by the one rule of every pedestal's ±
-                    // (`Inference::reported_std_err`); the effects' ± below
-                    // stay those the tests use.
-                    let reported = held.map_or(r.inference.reported_std_err(i), |h| h.std_err);
-                    let reported =
-                        unknown.map_or(reported, |u| reported.max(u.reported_std_err[i]));
-                    p.std_err.insert(name.clone(), reported);
-                }
-            }
-            for s in steps
-                .iter_mut()
-                .filter(|s| &s.bearing == bname && s.dropped.is_none())
-            {
-                if let Some(e) = s.parameters.iter_mut().find(|e| e.name == name) {
-                    e.value = value;
-                    e.std_err = se;
-                    if let (Some(h), Some(sh)) = (held, s.held.as_mut()) {
-                        sh.tau_std_err_damping_zero = Some(h.std_err_held);
-                    }
-                }
-            }
-        }
-        // The ± with an unexcluded delay unknown: each reported pedestal ±
-        // times its ρ = σ_free/σ_held, the largest over the group's delays.
-        let mut rho: BTreeMap<(usize, &str), f64> = BTreeMap::new();
-        for w in r.delay_unknown.iter().flat_map(|d| &d.widened) {
-            let e = rho.entry((w.bearing, w.name.as_str())).or_insert(1.0);
-            *e = e.max(w.ratio());
-        }
-        for ((b, name), ratio) in rho {
-            let Some(p) = prep
-                .bearings
-                .get(b)
-                .and_then(|n| pedestals.iter_mut().find(|p| &p.bearing == n))
-            else {
-                continue;
-            };
-            if let Some(se) = p.std_err.get_mut(name) {
-                *se *= ratio;
-            }
-        }
-    }
 }
 
 #[cfg(test)]

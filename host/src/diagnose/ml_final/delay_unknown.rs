@@ -17,7 +17,9 @@
 //! reported ± of every pedestal value of the group is multiplied by the
 //! shared widening ([`shared::widening`]: its ρ = σ(τ free)/σ(τ held) at
 //! τ̂ = 0, more where the data put τ̂ away from zero, on either side); the
-//! values stay the final fit's. Only the relative phase of force and motion
+//! values stay the final fit's. Where the noise is correlated along the
+//! run, the equations are first prewhitened by the AR(1) measured on the
+//! final fit's residuals ([`super::serial`]), as identify's rule does. Only the relative phase of force and motion
 //! enters the equations, so a delay on the `ped` pick-ups is one of −τ on
 //! the probes: the delay is linearised on the probes and read two-sided
 //! (unseen-seven `ped-delay`, 200 µs on B3's pick-ups: not counted while
@@ -29,7 +31,7 @@
 //! c_y 2000 N·s/m) printed B1 c_y −1729 ± 800 before, trusted (z −4.66),
 //! with τ 162 ± 43 µs the best rejected candidate.
 
-use super::{linearised, GroupEquations, GroupRefit};
+use super::{linearised, serial, GroupEquations, GroupRefit};
 use crate::diagnose::criterion::Inference;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::fit::search_interval;
@@ -171,6 +173,14 @@ fn delay_unknown(
         return None;
     }
     let (jac, resid, row_speed) = linearised(&eq, &p, &ext_scale)?;
+    // Under noise correlated along the run, the equations prewhitened by
+    // the AR(1) measured on the final fit's residuals (τ = 0 here), as
+    // identify's rule takes them: the generalised fit's τ̂, σ_τ and ρ, so
+    // a slowly wandering noise is not read as a delay ([`super::serial`]).
+    let (jac, resid) = match serial::measured(prep, &eq.speeds, &resid) {
+        Some((rho, rows)) => serial::prewhitened(&jac, &resid, rows, rho),
+        None => (jac, resid),
+    };
     let lin = linearise(&jac, &resid, j, |jac, resid| {
         let mut estimate = p.clone();
         if jac.ncols() < estimate.len() {

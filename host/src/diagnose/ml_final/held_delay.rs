@@ -18,7 +18,7 @@
 //! the held fit's values (c = 0, its residuals). The value stays the held
 //! fit's, a lower bound of the delay for a passive pedestal (c ≥ 0).
 
-use super::{linearised, with_freed, GroupEquations};
+use super::{linearised, serial, with_freed, GroupEquations};
 use crate::diagnose::criterion::Inference;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::forward::held_terms;
@@ -98,7 +98,14 @@ pub(super) fn held_delays(
     let Some((jac, resid, row_speed)) = linearised(&eq, &p, &scale) else {
         return Vec::new();
     };
-    let Ok(inf) = Inference::new(&jac, &resid, &row_speed, DVector::from_vec(p.clone())) else {
+    let Ok(inf) = serial::inference(
+        prep,
+        &eq.speeds,
+        &jac,
+        &resid,
+        &row_speed,
+        DVector::from_vec(p.clone()),
+    ) else {
         return Vec::new();
     };
     delays

@@ -66,7 +66,7 @@
 //! damping not impossible estimated), and reports [`HeldUnknown`] where the
 //! hold stays (docs/diagnose-verdict.md, Session 43 (heldtable17)).
 
-use super::{linearised, with_freed, GroupEquations, ITERATIONS};
+use super::{linearised, serial, with_freed, GroupEquations, ITERATIONS};
 use crate::diagnose::criterion::Inference;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::forward::held_terms;
@@ -211,8 +211,14 @@ pub(super) fn free_held(
     let Some((jac, resid, row_speed)) = linearised(&eq, &free.p, &scale) else {
         return Held::Kept;
     };
-    let Ok(inf) = Inference::new(&jac, &resid, &row_speed, DVector::from_vec(free.p.clone()))
-    else {
+    let Ok(inf) = serial::inference(
+        prep,
+        &eq.speeds,
+        &jac,
+        &resid,
+        &row_speed,
+        DVector::from_vec(free.p.clone()),
+    ) else {
         return Held::Kept;
     };
     // The joint constraint "every freed damping is zero", by the ratio.
@@ -265,8 +271,15 @@ pub(super) fn free_held(
     // narrow (module docs).
     let unknown = || {
         let (jac, resid, row_speed) = linearised(&eq, &start, &scale)?;
-        let at_held =
-            Inference::new(&jac, &resid, &row_speed, DVector::from_vec(start.clone())).ok()?;
+        let at_held = serial::inference(
+            prep,
+            &eq.speeds,
+            &jac,
+            &resid,
+            &row_speed,
+            DVector::from_vec(start.clone()),
+        )
+        .ok()?;
         let kept: Vec<usize> = (0..start.len())
             .filter(|i| !(n_held..n_terms).contains(i))
             .collect();
