@@ -304,9 +304,9 @@ pub struct Diagnosis {
     /// such speeds.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub outliers_explained_hz: BTreeMap<String, Vec<f64>>,
-    /// With `--machine`: steps an earlier search chose that the
-    /// machine-level check refuted, dropped and searched again without
-    /// (`super::refute`); each keeps the diagnosis untrusted.
+    /// With `--machine`: the steps the first search chose from the first
+    /// one the machine-level check refuted on, dropped (`super::refute`);
+    /// each keeps the diagnosis untrusted.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub refuted_steps: Vec<super::refute::RefutedStep>,
 }

@@ -433,9 +433,9 @@ pub fn judge_steps(d: &mut super::report::Diagnosis, support: &[(String, String)
         d.trusted = false;
         unexplained.extend(support.iter().filter(|(b, _)| acts_at(s, b)).cloned());
     }
-    // Steps an earlier search chose and the machine-level check refuted,
-    // dropped and searched again without (`super::refute`): what they were
-    // chosen on is not explained by the library.
+    // Steps the first search chose from the first one the machine-level
+    // check refuted on, dropped (`super::refute`): what they were chosen on
+    // is not explained by the library.
     for r in &d.refuted_steps {
         let why = r.reason();
         d.verdict += &format!(" {why}; the identified parameters are not to be trusted.");

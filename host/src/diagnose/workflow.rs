@@ -47,11 +47,6 @@ pub struct Options {
     /// `bearing_coefficients` candidate of those bearings
     /// ([`super::bearing_table`]).
     pub oil_films: Vec<(String, OilFilmBearing)>,
-    /// (effect, bearing) pairs (as a step names them) the search never
-    /// chooses: steps an earlier search chose and the machine-level check
-    /// refuted ([`super::refute`]). They are still tried and count in a
-    /// round's Bonferroni count on rigid ground.
-    pub excluded: Vec<(String, String)>,
 }
 
 impl Default for Options {
@@ -64,7 +59,6 @@ impl Default for Options {
             foundation_replicates: foundation::REPLICATES,
             foundation_seed: foundation::SEED,
             oil_films: Vec::new(),
-            excluded: Vec::new(),
         }
     }
 }

@@ -162,7 +162,7 @@ impl Diagnosis {
     }
 
     /// The steps (or that there are none), then the steps the
-    /// machine-level check refuted in an earlier search.
+    /// machine-level check dropped (`crate::diagnose::refute`).
     fn write_steps(&self, s: &mut String) {
         if self.steps.is_empty() {
             let _ = writeln!(s, "\nNo significant missing effect.");
@@ -179,7 +179,7 @@ impl Diagnosis {
         if !self.refuted_steps.is_empty() {
             let _ = writeln!(
                 s,
-                "Dropped (refuted by the machine-level check; the search run again without them):"
+                "Dropped by the machine-level check (the search ended before the first step it refutes):"
             );
             for r in &self.refuted_steps {
                 let _ = writeln!(s, "  {}", r.line());

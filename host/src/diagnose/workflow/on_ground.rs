@@ -207,10 +207,6 @@ impl Search<'_> {
         let mut fitted: Vec<(foundation::Fitted, f64)> = [bases.shared, bases.sub_base]
             .into_iter()
             .flatten()
-            .filter(|f| {
-                let at = &prep.bearings[f.grouping.groups[0][0]];
-                !super::search::excluded(opts, f.kind.effect(), at)
-            })
             .map(|f| {
                 let c = criterion(&f.prediction, &bases.prep, f.grouping.q);
                 (f, c)

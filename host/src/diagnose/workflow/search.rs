@@ -7,7 +7,7 @@ use super::{written_tables, Options, Outcome};
 use crate::diagnose::backward::Chosen;
 use crate::diagnose::bases::BaseOn;
 use crate::diagnose::data::Prepared;
-use crate::diagnose::forward::{step, StepOutcome};
+use crate::diagnose::forward::step;
 use crate::diagnose::foundation::FoundationFit;
 use crate::diagnose::gap::{Gap, Prediction};
 use crate::diagnose::locate::{locate, Location};
@@ -128,36 +128,6 @@ impl Search<'_> {
     }
 }
 
-/// Whether `opts` excludes `effect` at bearing `bearing`
-/// ([`Options::excluded`]).
-pub(super) fn excluded(opts: &Options, effect: &str, bearing: &str) -> bool {
-    opts.excluded
-        .iter()
-        .any(|(e, b)| e == effect && b == bearing)
-}
-
-/// `outcome` of `prep` without the candidates `opts` excludes
-/// ([`Options::excluded`]): never chosen, never a runner-up. `tried` is
-/// kept: on rigid ground their tests were made and count in the
-/// Bonferroni correction (`p_adjusted` is already over all of them).
-fn without_excluded(prep: &Prepared, mut outcome: StepOutcome, opts: &Options) -> StepOutcome {
-    if opts.excluded.is_empty() {
-        return outcome;
-    }
-    outcome.ranked.retain(|e| {
-        !excluded(
-            opts,
-            e.candidate.effect.name(),
-            &prep.bearings[e.candidate.bearing],
-        )
-    });
-    outcome.accepted = outcome
-        .ranked
-        .first()
-        .is_some_and(|e| e.evidence.delta_bic > 0.0 && e.evidence.p_adjusted < opts.alpha);
-    outcome
-}
-
 /// The search of [`super::diagnose`] on the arranged data `prep` of `run`.
 pub(super) fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Outcome> {
     let mut state = State::base(&prep, &opts.base)?;
@@ -192,7 +162,7 @@ pub(super) fn search(run: &RunDir, prep: Prepared, opts: &Options) -> Result<Out
     let mut visited: Vec<(Kept, usize)> = vec![(s.kept(), 0)];
     for round in 0..opts.max_steps {
         ticker.tick(round);
-        let outcome = without_excluded(&prep, step(&prep, &s.state, opts.alpha), opts);
+        let outcome = step(&prep, &s.state, opts.alpha);
         // With a base chosen the search goes on: the corrections among the
         // candidates, each tested by the drop of the refitted base's χ²,
         // then the backward check on the base.
