@@ -1,7 +1,7 @@
 //! `plinth diagnose DIR [--machine MACHINE.toml] [--base ...] [--json] [--plots DIR]`.
 
-use super::machine::MachineCheck;
 use super::plots::{write_machine_figure, write_pedestal_figures};
+use super::refute::diagnose_checked;
 use super::workflow::{diagnose, Options};
 use crate::rundir::RunDir;
 use crate::sim::machine::BearingModel;
@@ -112,11 +112,24 @@ pub fn run(args: &Args) -> Result<()> {
         band.select(&mut run)
             .map_err(|e| anyhow::anyhow!("{}: {e}", args.dir.display()))?;
     }
-    let mut outcome = diagnose(&run, &options).with_context(|| args.dir.display().to_string())?;
-    if let (Some(path), Some(machine)) = (&args.machine, machine) {
-        // Every step's model re-simulated and the final gap judged.
-        let check = MachineCheck::of(&machine, &outcome)
-            .with_context(|| format!("--machine {}", path.display()))?;
+    let checked = match (&args.machine, &machine) {
+        // Every step's model re-simulated and the final gap judged; the
+        // steps the check refutes dropped and searched again without
+        // (`super::refute`).
+        (Some(path), Some(machine)) => {
+            let (outcome, check) =
+                diagnose_checked(&run, &options, machine).with_context(|| {
+                    format!("{} with --machine {}", args.dir.display(), path.display())
+                })?;
+            (outcome, Some(check))
+        }
+        _ => (
+            diagnose(&run, &options).with_context(|| args.dir.display().to_string())?,
+            None,
+        ),
+    };
+    let mut outcome = checked.0;
+    if let Some(check) = checked.1 {
         for w in &check.warnings {
             eprintln!("warning: {w}");
         }

@@ -30,6 +30,8 @@
 //! - [`trust`]: the verdict, and whether the numbers can be trusted;
 //! - [`report`]: the diagnosis as JSON and text;
 //! - [`machine`]: the machine-level re-simulation (`--machine`);
+//! - [`refute`]: steps the machine-level check refutes dropped, with the
+//!   steps chosen after them;
 //! - [`base_floor`]: a chosen base's uncertainty in its noise floor;
 //! - [`plots`]: measured-versus-predicted figures;
 //! - [`cli`]: the `plinth diagnose` command.
@@ -56,6 +58,7 @@ pub mod model;
 pub mod noise;
 pub mod outliers;
 pub mod plots;
+pub mod refute;
 pub mod report;
 pub mod state;
 pub mod summaries;

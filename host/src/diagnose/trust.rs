@@ -418,46 +418,90 @@ pub const MACHINE_STEP_NOISE_SD: f64 = 2.33;
 pub fn judge_steps(d: &mut super::report::Diagnosis, support: &[(String, String)]) {
     let mut unexplained = Vec::new();
     for (i, s) in d.steps.iter().enumerate() {
-        // A sub-base above the range is re-simulated as one chain of a
-        // family the data do not choose between (`super::machine`'s
-        // `put_support`: only K, M, q per direction are fitted), so the
-        // machine cannot judge it; its values are untrusted anyway
-        // ([`above_range_reason`]).
-        if s.dropped.is_some() || above_range_reason(s).is_some() {
-            continue;
-        }
-        let (Some(before), Some(after)) = (s.machine_gap_before, s.machine_gap_after) else {
+        let Some(r) = refutation(s) else {
             continue;
         };
-        if after < before {
-            continue;
-        }
-        let noise = s
-            .machine_gap_change_sd
-            .filter(|sd| sd.is_finite() && *sd > 0.0);
-        if noise.is_some_and(|sd| after - before <= MACHINE_STEP_NOISE_SD * sd) {
-            continue;
-        }
-        let by = noise.map_or(String::new(), |sd| {
-            format!(
-                ", a rise of {:.1} times the change's own noise {sd:.4}, above {MACHINE_STEP_NOISE_SD}",
-                (after - before) / sd
-            )
-        });
         let why = format!(
-            "step {}, {} at {}, did not lower the machine-level gap ({before:.4} → {after:.4}{by}): the re-simulated machine is no closer to the measurements with it, so the effect is not shown to be there",
+            "step {}, {} at {}, did not lower the machine-level gap ({}): the re-simulated machine is no closer to the measurements with it, so the effect is not shown to be there",
             i + 1,
             s.effect,
-            s.bearing
+            s.bearing,
+            r.words()
         );
         d.verdict += &format!(" But {why}; the identified parameters are not to be trusted.");
         d.trust_reasons.push(why);
         d.trusted = false;
         unexplained.extend(support.iter().filter(|(b, _)| acts_at(s, b)).cloned());
     }
+    // Steps the first search chose from the first one the machine-level
+    // check refuted on, dropped (`super::refute`): what they were chosen on
+    // is not explained by the library.
+    for r in &d.refuted_steps {
+        let why = r.reason();
+        d.verdict += &format!(" {why}; the identified parameters are not to be trusted.");
+        d.trust_reasons.push(why);
+        d.trusted = false;
+    }
     for (_, why) in unexplained {
         if !d.trust_reasons.contains(&why) {
             d.trust_reasons.push(why);
         }
     }
+}
+
+/// How the machine-level check refutes a step ([`refutation`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Refutation {
+    /// Machine-level gap of the model before the step [-].
+    pub machine_gap_before: f64,
+    /// Machine-level gap of the model after it [-].
+    pub machine_gap_after: f64,
+    /// Standard deviation of the change (`Step::machine_gap_change_sd`),
+    /// where known [-].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub machine_gap_change_sd: Option<f64>,
+}
+
+impl Refutation {
+    /// "before → after" with the rise in its noise where known.
+    pub fn words(&self) -> String {
+        let (before, after) = (self.machine_gap_before, self.machine_gap_after);
+        let by = self.machine_gap_change_sd.map_or(String::new(), |sd| {
+            format!(
+                ", a rise of {:.1} times the change's own noise {sd:.4}, above {MACHINE_STEP_NOISE_SD}",
+                (after - before) / sd
+            )
+        });
+        format!("{before:.4} → {after:.4}{by}")
+    }
+}
+
+/// Whether the machine-level check (`--machine`, its gaps written into the
+/// step) refutes kept step `s`: its machine-level gap did not fall, and
+/// rose by more than [`MACHINE_STEP_NOISE_SD`] standard deviations of its
+/// change where that noise is known (any rise where it is not). `None`
+/// for a removed step, one without machine-level gaps, and a sub-base
+/// above the range: it is re-simulated as one chain of a family the data
+/// do not choose between (`super::machine`'s `put_support`: only K, M, q
+/// per direction are fitted), so the machine cannot judge it; its values
+/// are untrusted anyway ([`above_range_reason`]).
+pub fn refutation(s: &super::report::Step) -> Option<Refutation> {
+    if s.dropped.is_some() || above_range_reason(s).is_some() {
+        return None;
+    }
+    let (before, after) = (s.machine_gap_before?, s.machine_gap_after?);
+    if after < before {
+        return None;
+    }
+    let noise = s
+        .machine_gap_change_sd
+        .filter(|sd| sd.is_finite() && *sd > 0.0);
+    if noise.is_some_and(|sd| after - before <= MACHINE_STEP_NOISE_SD * sd) {
+        return None;
+    }
+    Some(Refutation {
+        machine_gap_before: before,
+        machine_gap_after: after,
+        machine_gap_change_sd: noise,
+    })
 }

@@ -17,10 +17,18 @@
 //! report says, per bearing, that the values are the support's and how far
 //! the pedestal's own k and m could lie from them (`trusted` is about the
 //! support's values; docs/diagnose-sub-base.md, "Session 47 (apparent17)").
+//!
+//! The same holds of a support whose stiffness drifts over the run (in a
+//! run-down time and speed are tied: the drift reads as a mass term, with a
+//! fit as good as a constant support's): the condition is `plinth
+//! identify`'s ([`crate::identify::conditional::drift`]), stated with its
+//! size per bearing whose values are the base model's
+//! (docs/diagnose-verdict.md, "Session 50 (refute50)").
 
 use super::acts_at;
 use crate::diagnose::data::Prepared;
 use crate::diagnose::report::Diagnosis;
+use crate::identify::conditional::drift::{self, DriftSensitivity};
 use crate::identify::conditional::sub_base::{self, SubBaseBound};
 use crate::identify::conditional::APPARENT;
 use serde::Serialize;
@@ -35,6 +43,10 @@ pub struct Conditional {
     /// acts there) and whose support-mode test was made, what the run
     /// excludes of a sub-base above it.
     pub sub_base: Vec<SubBaseBound>,
+    /// Per bearing whose final values are its base model's (as
+    /// `sub_base`), how far a drift of its support's stiffness over the
+    /// run would move them ([`drift::of_fit`] of its base model's fit).
+    pub support_drift: Vec<DriftSensitivity>,
 }
 
 impl Conditional {
@@ -43,6 +55,9 @@ impl Conditional {
         let mut out = format!("\nConditional on: {}\n", self.statement);
         for b in &self.sub_base {
             out.push_str(&format!("  {}\n", b.message()));
+        }
+        for d in self.support_drift.iter().filter(|d| d.matters()) {
+            out.push_str(&format!("  {}\n", d.message()));
         }
         out
     }
@@ -61,17 +76,29 @@ fn stiffness_and_mass(d: &Diagnosis, name: &str) -> Option<([f64; 2], [f64; 2])>
     Some((k, m))
 }
 
+/// The bearings of `prep` (index, name) whose final values in `d` are
+/// their base model's: no kept step acts there.
+fn as_base_model<'a>(
+    prep: &'a Prepared,
+    d: &'a Diagnosis,
+) -> impl Iterator<Item = (usize, &'a String)> + 'a {
+    prep.bearings.iter().enumerate().filter(|(_, name)| {
+        !d.steps
+            .iter()
+            .any(|s| s.dropped.is_none() && acts_at(s, name))
+    })
+}
+
 /// What diagnosis `d` of `prep` is conditional on.
 pub fn of(prep: &Prepared, d: &Diagnosis) -> Conditional {
-    let sub_base = prep
-        .bearings
-        .iter()
-        .enumerate()
-        .filter(|(_, name)| {
-            !d.steps
-                .iter()
-                .any(|s| s.dropped.is_none() && acts_at(s, name))
+    let support_drift = as_base_model(prep, d)
+        .filter_map(|(b, name)| {
+            let fit = prep.base_fits.iter().find(|f| f.bearing == *name)?;
+            let obs: Vec<_> = prep.points.get(b)?.iter().flatten().cloned().collect();
+            drift::of_fit(fit, &obs)
         })
+        .collect();
+    let sub_base = as_base_model(prep, d)
         .filter_map(|(b, name)| {
             let t = prep.support_modes.get(b).copied().flatten()?;
             let (k, m) = stiffness_and_mass(d, name)?;
@@ -87,8 +114,10 @@ pub fn of(prep: &Prepared, d: &Diagnosis) -> Conditional {
         .collect();
     Conditional {
         statement: format!(
-            "{APPARENT} `trusted` judges the values as the support's: the run cannot tell such a support from a pedestal that has the printed values. At a bearing where an effect was named the values are the model's with that effect."
+            "{APPARENT} `trusted` judges the values as the support's: the run cannot tell such a support from a pedestal that has the printed values. At a bearing where an effect was named the values are the model's with that effect. {}",
+            drift::STATEMENT
         ),
         sub_base,
+        support_drift,
     }
 }

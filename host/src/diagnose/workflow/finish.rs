@@ -211,6 +211,7 @@ impl Search<'_> {
             flipped_speeds_hz: by_name(prep, &prep.flipped_speeds_hz),
             outlier_speeds_hz: BTreeMap::new(),
             outliers_explained_hz: BTreeMap::new(),
+            refuted_steps: Vec::new(),
         };
         // The profiled base (values after the joint refit, profile ±, a
         // parameter the data do not bound) into the step that chose it and
