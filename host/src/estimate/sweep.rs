@@ -78,12 +78,29 @@ impl Averaging {
     }
 }
 
-/// Writes [`AVERAGING_FILE`] into `dir` for rows that are consecutive
-/// blocks of `revolutions` revolutions ([`Averaging::consecutive_text`]).
-pub fn write_consecutive(dir: &Path, revolutions: u32) -> Result<(), RunDirError> {
+/// Writes [`AVERAGING_FILE`] into `dir` for `measurements` that are
+/// consecutive blocks of `revolutions` revolutions
+/// ([`Averaging::consecutive_text`]); where a row lacks the noise columns
+/// (the file then has none, and the count needs them) none is written and
+/// an earlier one in `dir` is removed. Returns whether it was written.
+pub fn write_consecutive(
+    dir: &Path,
+    measurements: &[Measurement],
+    revolutions: u32,
+) -> Result<bool, RunDirError> {
     let path = dir.join(AVERAGING_FILE);
+    if measurements.is_empty() || measurements.iter().any(|m| m.noise_sd.is_none()) {
+        return match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(RunDirError::Io {
+                file: path,
+                source: e,
+            }),
+            _ => Ok(false),
+        };
+    }
     std::fs::write(&path, Averaging::consecutive_text(revolutions))
-        .map_err(|source| RunDirError::Io { file: path, source })
+        .map_err(|source| RunDirError::Io { file: path, source })?;
+    Ok(true)
 }
 
 /// Reads [`AVERAGING_FILE`] of `dir`, `None` when there is none. Errors
