@@ -102,9 +102,9 @@ fn sub_base_at_b2_is_untrusted_by_identify_and_named_by_diagnose() {
 /// lumped), yet the verdict is trusted: k_y −18.8 % (−35 ±), m +16 %
 /// (+19 ±), k_z −7 % (−6 ±) on seed 9500; 3 of 17 seeds alike. What a
 /// user must get: a trusted verdict only where the final values are right
-/// within 3 ±.
+/// within 3 ±. Since session 50 (halfsub50) such a one-direction sub-base
+/// untrusts the verdict (`diagnose/trust/support.rs`).
 #[test]
-#[ignore = "finding 1 of docs/unseen-ten.md: a sub-base fitted in one direction only (the other `not_detected`, its mode above the run) leaves that direction's apparent k, m; diagnose trusts them, B2 k_y 35 ± and m 19 ± off"]
 fn sub_base_detected_in_one_direction_only_is_not_trusted_when_off() {
     let run = stored("sub-base-9500");
     let d = unseen::diagnosis_with_machine_check(DATA, MACHINE, &run);
