@@ -323,11 +323,13 @@ pub fn estimable(tau_std_err: f64, top_speed: f64) -> bool {
 /// from its linearisation 1 − iΩτ by 0.49, half the delay's own effect.
 pub const MAX_LINEAR_PHASE: f64 = 1.0;
 
-/// The ± of every column of the whitened Jacobian `jac` from its
-/// information (JᵀJ)⁻¹ [each column's unit], the columns scaled to unit
-/// norm first (their units differ by many orders); `None` when it is
-/// singular or has no more rows than columns.
-pub fn information_std_errs(jac: &DMatrix<f64>) -> Option<Vec<f64>> {
+/// The whitened Jacobian `jac`'s columns scaled to unit norm (their units
+/// differ by many orders) and decomposed: (the columns' norms, the
+/// singular values, Vᵀ); `None` when it has no more rows than columns, a
+/// column is zero or not finite, or a singular value is below 1e-13 of
+/// the largest (the information is singular). One definition for every
+/// rule that reads θ̂'s information from its Jacobian.
+pub fn scaled_svd(jac: &DMatrix<f64>) -> Option<(Vec<f64>, DVector<f64>, DMatrix<f64>)> {
     let (n, p) = jac.shape();
     if n <= p || p == 0 {
         return None;
@@ -346,11 +348,20 @@ pub fn information_std_errs(jac: &DMatrix<f64>) -> Option<Vec<f64>> {
     if svd.singular_values.iter().any(|&s| s <= 1e-13 * smax) {
         return None;
     }
+    Some((norms, svd.singular_values, v_t))
+}
+
+/// The ± of every column of the whitened Jacobian `jac` from its
+/// information (JᵀJ)⁻¹ [each column's unit] ([`scaled_svd`]); `None` when
+/// it is singular or has no more rows than columns.
+pub fn information_std_errs(jac: &DMatrix<f64>) -> Option<Vec<f64>> {
+    let (norms, singular_values, v_t) = scaled_svd(jac)?;
+    let p = norms.len();
     Some(
         (0..p)
             .map(|i| {
                 let var: f64 = (0..p)
-                    .map(|k| (v_t[(k, i)] / svd.singular_values[k]).powi(2))
+                    .map(|k| (v_t[(k, i)] / singular_values[k]).powi(2))
                     .sum();
                 var.sqrt() / norms[i]
             })

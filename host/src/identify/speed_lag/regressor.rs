@@ -22,6 +22,7 @@
 //! Δ̂(θ̂ − u_k))/2)², u_k the k-th principal direction scaled to its ±.
 
 use super::linearise::{joint, terms, Terms};
+use crate::estimate::lack_of_fit::delay_unknown::scaled_svd;
 use crate::estimate::Observation;
 use crate::rundir::BearingSchedule;
 use nalgebra::DMatrix;
@@ -43,33 +44,19 @@ pub struct Fitted<'a> {
 
 /// The square-root directions of Cov(θ̂) from the whitened Jacobian `jac`
 /// (one per column, in θ units over the columns: Cov = Σ_k u_k·u_kᵀ),
-/// `scale` times; `None` where the columns are degenerate.
+/// `scale` times; `None` where the columns are degenerate ([`scaled_svd`]).
 fn directions(jac: &DMatrix<f64>, scale: f64) -> Option<Vec<Vec<f64>>> {
-    let (n, p) = jac.shape();
-    if n <= p || p == 0 {
-        return None;
-    }
-    let norms: Vec<f64> = jac.column_iter().map(|c| c.norm()).collect();
-    if !norms.iter().all(|v| v.is_finite() && *v > 0.0) {
-        return None;
-    }
-    let mut scaled = jac.clone();
-    for (mut c, s) in scaled.column_iter_mut().zip(&norms) {
-        c /= *s;
-    }
-    let svd = scaled.svd(false, true);
-    let v_t = svd.v_t?;
-    let smax = svd.singular_values.max();
-    (0..p)
-        .map(|k| {
-            let sv = svd.singular_values[k];
-            (sv > 1e-13 * smax).then(|| {
+    let (norms, singular_values, v_t) = scaled_svd(jac)?;
+    let p = norms.len();
+    Some(
+        (0..p)
+            .map(|k| {
                 (0..p)
-                    .map(|i| scale * v_t[(k, i)] / sv / norms[i])
+                    .map(|i| scale * v_t[(k, i)] / singular_values[k] / norms[i])
                     .collect()
             })
-        })
-        .collect()
+            .collect(),
+    )
 }
 
 /// Var(Δ̂) from the bearings' θ̂ errors [Hz²] (module docs): `bearings`
