@@ -24,7 +24,6 @@ pub mod params;
 pub mod pedestal;
 pub mod robust;
 pub mod serial;
-pub mod sweep;
 
 pub use params::Pedestal;
 

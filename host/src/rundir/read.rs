@@ -45,9 +45,8 @@ fn measurement(r: TableRow) -> Measurement {
 
 impl RunDir {
     /// Reads and checks a run directory: `measurements.csv` and
-    /// `bearings.csv` are required, `truth.json`, `resolution.csv`
-    /// ([`super::resolution`]) and `averaging.toml`
-    /// ([`crate::estimate::sweep`]) are optional. Every
+    /// `bearings.csv` are required, `truth.json` and `resolution.csv`
+    /// ([`super::resolution`]) are optional. Every
     /// measurement's bearing must have rows in `bearings.csv` that cover its
     /// speed. Columns are found by header name; header columns Plinth does
     /// not know are ignored (formats.md allows new optional columns).
@@ -74,8 +73,6 @@ impl RunDir {
             bearing_column,
         } = m_table;
         super::resolution::read_into(dir, &mut measurements, &m_path)?;
-        // A phasor averaged over a span of speed: its error in its noise.
-        crate::estimate::sweep::read_into(dir, &mut measurements, &m_path)?;
         let run = RunDir {
             measurements,
             bearings,

@@ -334,13 +334,6 @@ pub fn finish(
         .run
         .write(out)
         .with_context(|| format!("cannot write the run directory {}", out.display()))?;
-    // Each row the mean of a block of revolutions, the blocks consecutive.
-    crate::estimate::sweep::write_consecutive(
-        out,
-        &derived.run.measurements,
-        config.averaging.revolutions.into(),
-    )
-    .with_context(|| format!("cannot write the run directory {}", out.display()))?;
     let fit = |options: crate::identify::Options| {
         if derived.run.measurements.is_empty() {
             (None, Some("no phasor frames were received".to_string()))
